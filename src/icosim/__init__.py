@@ -1,0 +1,38 @@
+"""icosim: implicit co-simulation methods with algebraic constraints.
+
+A replication of Schweizer et al., *Implicit co-simulation methods: stability
+and convergence analysis for solver coupling approaches with algebraic
+constraints*: the linear two-mass test model, three coupling methods
+(Baumgarte, weighted multiplier, projection), three decompositions
+(force/force, force/displacement, displacement/displacement), Lagrange
+approximation of any order k, and the spectral radius of the recurrence in
+float64 and at arbitrary precision.
+"""
+
+from importlib.metadata import PackageNotFoundError, version
+
+from .coupling import baumgarte, make_method, projection, weighted_multiplier
+from .model import Coefficients, ParameterError, PhysicalModel, TestModel
+from .oscillator import LinearCosimulation
+from .stability import amplification_matrix, spectral_radius, spectral_radius_float64, spectral_radius_mp
+
+try:
+    __version__ = version("icosim")
+except PackageNotFoundError:  # running from a source tree
+    __version__ = "0+unknown"
+
+__all__ = [
+    "Coefficients",
+    "LinearCosimulation",
+    "ParameterError",
+    "PhysicalModel",
+    "TestModel",
+    "amplification_matrix",
+    "baumgarte",
+    "make_method",
+    "projection",
+    "spectral_radius",
+    "spectral_radius_float64",
+    "spectral_radius_mp",
+    "weighted_multiplier",
+]
