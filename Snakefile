@@ -1,0 +1,25 @@
+# icosim: replication of Schweizer et al., "Implicit co-simulation methods" (stability,
+# convergence and the double pendulum).  `snakemake -c2` builds everything configured.
+from snakemake.utils import min_version
+
+min_version("8.0")
+
+
+configfile: "config/config.yaml"
+configfile: "config/stability.yaml"
+configfile: "config/convergence.yaml"
+configfile: "config/pendulum.yaml"
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/stability.smk"
+include: "workflow/rules/convergence.smk"
+include: "workflow/rules/pendulum.smk"
+include: "workflow/rules/report.smk"
+
+
+rule all:
+    default_target: True
+    input:
+        ALL_TARGETS,
+        REPORT_HTML,

@@ -1,0 +1,69 @@
+"""Building blocks of the self-contained HTML report (no Snakemake here).
+
+Each part of the workflow renders one *section* (an HTML fragment with its
+figures embedded as base64 PNG) from its datasets and claim verdicts; the
+report rule assembles the sections into ``reports/icosim_report.html``.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+from pathlib import Path
+
+__all__ = ["embed_png", "figure", "table", "section", "verdict_badge", "page", "escape"]
+
+escape = html.escape
+
+STYLE = """
+body{font-family:system-ui,sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222}
+h1,h2,h3{font-weight:600} figure{margin:1.5em 0} figure img{max-width:100%;border:1px solid #ddd}
+figcaption{font-size:.9em;color:#444;margin-top:.4em}
+table{border-collapse:collapse;font-size:.9em;margin:1em 0} th,td{border:1px solid #ccc;padding:.3em .6em;vertical-align:top}
+th{background:#f4f4f4} .pass{color:#0a0;font-weight:600} .fail{color:#c00;font-weight:600}
+.undecided{color:#a60;font-weight:600} code{font-size:.9em} .note{font-size:.9em;color:#444}
+"""
+
+
+def embed_png(path) -> str:
+    """``data:`` URI of a PNG file, so the page needs no other files."""
+    data = base64.b64encode(Path(path).read_bytes()).decode("ascii")
+    return f"data:image/png;base64,{data}"
+
+
+def figure(png_path, caption_html: str, alt: str = "") -> str:
+    return (
+        f'<figure><img src="{embed_png(png_path)}" alt="{escape(alt or Path(png_path).stem)}">'
+        f"<figcaption>{caption_html}</figcaption></figure>"
+    )
+
+
+def verdict_badge(verdict: str) -> str:
+    """``pass`` / ``fail`` / ``undecided`` rendered with a colour."""
+    cls = {"pass": "pass", "fail": "fail"}.get(verdict, "undecided")
+    return f'<span class="{cls}">{escape(verdict)}</span>'
+
+
+def table(header, rows, *, raw_columns=()) -> str:
+    """An HTML table; cells in ``raw_columns`` (indices) are inserted unescaped."""
+    head = "".join(f"<th>{escape(str(h))}</th>" for h in header)
+    body = []
+    for row in rows:
+        cells = "".join(
+            f"<td>{c if i in raw_columns else escape(str(c))}</td>" for i, c in enumerate(row)
+        )
+        body.append(f"<tr>{cells}</tr>")
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
+
+
+def section(title: str, body_html: str, anchor: str) -> str:
+    return f'<section id="{escape(anchor)}"><h2>{escape(title)}</h2>{body_html}</section>'
+
+
+def page(title: str, sections_html: list[str], provenance_html: str = "") -> str:
+    toc = ""
+    return (
+        "<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
+        f"<title>{escape(title)}</title><style>{STYLE}</style></head><body>"
+        f"<h1>{escape(title)}</h1>{toc}{''.join(sections_html)}{provenance_html}</body></html>"
+    )
