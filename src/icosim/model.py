@@ -94,6 +94,8 @@ class TestModel:
     system, hence the sign conventions above; they are checked on creation.
     """
 
+    __test__ = False  # not a pytest test class, despite the name
+
     lr1: object
     li1: object
     am21: object = 1.0

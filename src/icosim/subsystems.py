@@ -68,7 +68,8 @@ class OscillatorSubsystem:
         self.stiffness, self.damping = kk, dd
         self.gain = be.asarray(self.gain)
         n = self.k + 1
-        shape = np.broadcast_shapes(kk.shape, dd.shape)
+        # a kinematic subsystem's propagator does not depend on its parameters
+        shape = np.broadcast_shapes(kk.shape, dd.shape) if self.kind == FORCE else ()
         zero, one = be.const(0), be.const(1)
         # A kinematic subsystem's state is a double integrator of its input:
         # its own dynamics only enter the multiplier (an output).
@@ -174,4 +175,5 @@ class OscillatorSubsystem:
 
 
 def _matvec(A, x):
-    return (A @ x[..., :, None])[..., 0]
+    """``A @ x`` over leading axes; a broadcast sum beats batched matmul for 2 x n."""
+    return sum(A[..., :, j] * x[..., None, j] for j in range(A.shape[-1]))

@@ -1,0 +1,427 @@
+"""The co-simulation engine checked against independent routes (issue: engine).
+
+Every number asserted here comes from an independent computation: numerical
+quadrature of the subsystem ODEs, closed forms worked out by hand, the
+growth rate of plain time stepping, 128-digit arithmetic, or the exact
+monolithic solution.
+"""
+
+from fractions import Fraction
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from icosim import (
+    LinearCosimulation,
+    ParameterError,
+    PhysicalModel,
+    TestModel,
+    baumgarte,
+    make_method,
+    projection,
+    spectral_radius,
+    spectral_radius_float64,
+    spectral_radius_mp,
+    weighted_multiplier,
+)
+from icosim.backend import Float64, Multiprecision
+from icosim.exact import MonolithicSolution, consistent_start
+from icosim.lagrange import corrector_nodes, predictor_nodes, weights_at
+from icosim.macrostep import simulate
+from icosim.stability import amplification_matrix, is_stable
+from icosim.subsystems import OscillatorSubsystem
+
+SCHEMES = [
+    (baumgarte(mu=1, index=1), "ff"),
+    (baumgarte(mu=1, index=2), "fd"),
+    (weighted_multiplier(1, 1), "ff"),
+    (weighted_multiplier(0.5, 0.25), "fd"),
+    (projection(), "ff"),
+    (projection(), "fd"),
+    (projection(), "dd"),
+]
+
+
+# -- Lagrange polynomials ------------------------------------------------------
+@pytest.mark.parametrize("k", [0, 1, 2, 3, 5])
+def test_lagrange_weights_reproduce_polynomials_of_degree_k(k):
+    for nodes in (predictor_nodes(k), corrector_nodes(k)):
+        for degree in range(k + 1):
+            p = lambda t: Fraction(t) ** degree + 3 * Fraction(t) - 2  # noqa: E731
+            p = (lambda d: (lambda t: Fraction(t) ** d))(degree)
+            for tau in (Fraction(1), Fraction(1, 3), Fraction(-7, 2)):
+                value = sum(w * p(t) for w, t in zip(weights_at(nodes, tau), nodes))
+                assert value == p(tau)
+
+
+def test_extrapolation_weights_known_values():
+    # linear extrapolation 2 e_N - e_N-1, quadratic 3 e_N - 3 e_N-1 + e_N-2
+    assert weights_at(predictor_nodes(1), 1) == (2, -1)
+    assert weights_at(predictor_nodes(2), 1) == (3, -3, 1)
+
+
+# -- exact subsystem propagation against numerical quadrature ------------------
+@pytest.mark.parametrize(
+    "kind,stiffness,damping,gain",
+    [
+        ("force", 2.0, 0.6, 1.0),  # underdamped
+        ("force", 4.0, 4.0, -0.5),  # critically damped
+        ("force", 1.0, 9.0, 2.0),  # overdamped
+        ("force", 0.0, 0.0, 1.0),  # free mass
+        ("kinematic", 3.0, 0.2, -0.25),
+    ],
+)
+@pytest.mark.parametrize("k", [0, 1, 2])
+def test_subsystem_step_matches_ode_solution(kind, stiffness, damping, gain, k):
+    sub = OscillatorSubsystem(kind, stiffness, damping, gain, 0, k, Float64())
+    rng = np.random.default_rng(k)
+    s0, U = rng.standard_normal(2), rng.standard_normal(k + 1)
+    nodes = corrector_nodes(k)
+    coeffs = np.polyfit(np.array(nodes, float), U, k) if k else U
+
+    def u(t):
+        return np.polyval(coeffs, t)
+
+    def rhs(t, s):
+        acc = -stiffness * s[0] - damping * s[1] + gain * u(t) if kind == "force" else u(t)
+        return [s[1], acc]
+
+    ref = solve_ivp(rhs, (0, 1), s0, rtol=1e-12, atol=1e-13).y[:, -1]
+    s1, y = sub.step(s0, U, nodes)
+    np.testing.assert_allclose(s1, ref, rtol=1e-9, atol=1e-11)
+    acc_ref = rhs(1.0, ref)[1]
+    assert y[2] == pytest.approx(acc_ref, rel=1e-8, abs=1e-10)
+    if kind == "kinematic":  # the multiplier realises v' = u through the equation of motion
+        assert y[3] == pytest.approx((u(1.0) + stiffness * ref[0] + damping * ref[1]) / gain, rel=1e-8)
+
+
+def test_corrector_with_predicted_value_reproduces_predictor():
+    """Eq. (15) linearises about e_p: the interpolation polynomial through the
+    predicted value is the extrapolation polynomial, so y*(e_p) = y_p exactly."""
+    c = TestModel(-0.3, 0.8, 2.0, 1.5, 0.7).coefficients()
+    rng = np.random.default_rng(3)
+    for dec in ("ff", "fd", "dd"):
+        for k in (0, 1, 2, 3):
+            prob = LinearCosimulation(c, dec, k)
+            state = rng.standard_normal((2, 2))
+            hist = rng.standard_normal((k + 1, prob.n_coupling))
+            y_pred = prob.predict(state, hist)
+            _, y_corr = prob.correct(state, hist, prob.extrapolate(hist))
+            np.testing.assert_allclose(y_corr, y_pred, rtol=1e-12, atol=1e-12)
+
+
+# -- spectral radius against the growth rate of time stepping -----------------
+def _growth_rate(prob, method, n_chunks=30, chunk=20, seed=0):
+    """Average growth factor per macro step of plain time stepping.
+
+    Power iteration: run ``chunk`` steps, record the growth of the norm of
+    (state, coupling history), rescale, repeat; the second half is averaged,
+    which also averages out the oscillation of a complex dominant pair.
+    """
+    rng = np.random.default_rng(seed)
+    state = rng.standard_normal((2, 2))
+    hist = rng.standard_normal((prob.k + 1, prob.n_coupling))
+    logs = []
+    for _ in range(n_chunks):
+        norm0 = np.linalg.norm(prob.pack(state, hist))
+        traj = simulate(prob, method, state / norm0, hist / norm0, chunk)
+        assert traj.diverged_at is None
+        state = traj.states[-1]
+        hist = np.stack([traj.coupling[-1 - j] for j in range(prob.k + 1)])
+        logs.append(np.log(np.linalg.norm(prob.pack(state, hist))))
+    return float(np.exp(np.mean(logs[n_chunks // 2 :]) / chunk))
+
+
+@pytest.mark.parametrize("method,dec", SCHEMES)
+@pytest.mark.parametrize("k", [0, 1, 2, 3])
+def test_spectral_radius_equals_growth_rate_of_time_stepping(method, dec, k):
+    # a point where the coupling, not the physics, decides: undamped subsystem 2
+    # rate ratios 2 and strong damping in subsystem 1
+    model = TestModel(-0.05, 0.9, 2.0, 2.0, 2.0)
+    rho, _ = spectral_radius_float64(model, method, dec, k)
+    prob = LinearCosimulation(model.coefficients(), dec, k)
+    assert _growth_rate(prob, method) == pytest.approx(float(rho), rel=3e-3)
+
+
+# -- a closed form worked out by hand ------------------------------------------
+def _dd_projection_k0_closed_form(model):
+    """Displacement/displacement projection, k = 0, by hand.
+
+    Both masses follow the same constant acceleration a over the step:
+    x+ = x + v + a/2, v+ = v + a.  The force balance mu_2 = mu_1 at T_N+1 with
+    mu_1 = a + k1 x+ + d1 v+ and mu_2 = -am21 (a + k2 x+ + d2 v+) gives
+    a = -(K x + (K + D) v) / S with K = k1 + am21 k2, D = d1 + am21 d2,
+    S = 1 + am21 + K/2 + D (the predictor drops out: the model is linear).
+    """
+    c = model.coefficients()
+    K = c.k1 + c.am21 * c.k2
+    D = c.delta1 + c.am21 * c.delta2
+    S = 1 + c.am21 + K / 2 + D
+    M = np.array([[1 - K / (2 * S), 1 - (K + D) / (2 * S)], [-K / S, 1 - (K + D) / S]])
+    return np.max(np.abs(np.linalg.eigvals(M)))
+
+
+def test_dd_projection_k0_matches_closed_form():
+    rng = np.random.default_rng(7)
+    for _ in range(40):
+        model = TestModel(
+            -2 * rng.random(), 2 * rng.random(), 10 ** rng.uniform(-2, 2), 3 * rng.random(), 3 * rng.random()
+        )
+        rho, _ = spectral_radius_float64(model, projection(), "dd", 0)
+        assert float(rho) == pytest.approx(_dd_projection_k0_closed_form(model), rel=1e-12, abs=1e-14)
+
+
+def _ff_index3_k0_closed_form(model):
+    """Force/force, index 3 (Baumgarte beta = gamma = 0), k = 0, by hand.
+
+    With a constant force lambda over the step, subsystem i ends at
+    s_i+ = Phi_i s_i + g_i r_i lambda, where r_i is the response to a unit
+    constant force.  Position-level condition x_2+ = x_1+ fixes lambda; the
+    recurrence is linear in (x1, v1, x2, v2) (lambda_N drops out).  Phi_i and
+    r_i are evaluated here with the scipy matrix exponential of the
+    subsystem's own 3x3 augmented system, independently of the engine.
+    """
+    import scipy.linalg
+
+    c = model.coefficients()
+    blocks = []
+    for k_, d_, g_ in ((c.k1, c.delta1, 1.0), (c.k2, c.delta2, -1.0 / c.am21)):
+        A = np.array([[0, 1, 0], [-k_, -d_, g_], [0, 0, 0]], dtype=float)
+        E = scipy.linalg.expm(A)
+        blocks.append((E[:2, :2], E[:2, 2]))
+    (P1, r1), (P2, r2) = blocks
+    # lambda = -(x2p - x1p)/(r2x - r1x) with the homogeneous parts x_ip = (P_i s_i)_x
+    denom = r2[0] - r1[0]
+    M = np.zeros((4, 4))
+    M[0:2, 0:2], M[2:4, 2:4] = P1, P2
+    lam_row = np.concatenate([P1[0], -P2[0]]) / denom  # lambda = (x1p - x2p)/denom
+    M[0:2] += np.outer(r1, lam_row)
+    M[2:4] += np.outer(r2, lam_row)
+    return np.max(np.abs(np.linalg.eigvals(M)))
+
+
+def test_ff_index3_k0_matches_closed_form():
+    rng = np.random.default_rng(11)
+    for _ in range(40):
+        model = TestModel(
+            -2 * rng.random(), 2 * rng.random(), 10 ** rng.uniform(-1, 1), 3 * rng.random(), 3 * rng.random()
+        )
+        rho, _ = spectral_radius_float64(model, baumgarte(index=3), "ff", 0)
+        assert float(rho) == pytest.approx(_ff_index3_k0_closed_form(model), rel=1e-10, abs=1e-12)
+
+
+# -- method identities and refusals -------------------------------------------
+@pytest.mark.parametrize("dec", ["ff", "fd"])
+@pytest.mark.parametrize("k", [0, 1, 2])
+def test_index3_baumgarte_and_weighted_multiplier_are_identical(dec, k):
+    lr, li = np.meshgrid(np.linspace(-2, 0, 9), np.linspace(0, 2, 9), indexing="ij")
+    model = TestModel(lr, li, 2.0, 2.0, 2.0)
+    Mb = amplification_matrix(model, baumgarte(index=3), dec, k)
+    Mw = amplification_matrix(model, weighted_multiplier(index=3), dec, k)
+    np.testing.assert_array_equal(Mb, Mw)
+    Mb2 = amplification_matrix(model, baumgarte(beta=0, gamma=0), dec, k)
+    np.testing.assert_array_equal(Mb, Mb2)
+
+
+def test_weighted_multiplier_is_the_weighted_sum_of_level_corrections():
+    """Eq. (24): lambda = (lambda_pos + a lambda_vel + b lambda_acc)/(1 + a + b)."""
+    model = TestModel(-0.4, 1.1, 2.0, 0.5, 1.5)
+    a, b = 0.7, 2.5
+    Mw = amplification_matrix(model, weighted_multiplier(a, b), "ff", 1)
+    # the corrected lambda is linear in the levels' corrections, and so is the step
+    Mp = amplification_matrix(model, baumgarte(beta=0, gamma=0), "ff", 1)
+    Mv = amplification_matrix(model, weighted_multiplier(0, 1e300), "ff", 1)  # b dominates: acc level
+    Mvel = amplification_matrix(model, weighted_multiplier(1e300, 0), "ff", 1)  # a dominates: vel level
+    np.testing.assert_allclose(Mw, (Mp + a * Mvel + b * Mv) / (1 + a + b), rtol=1e-9, atol=1e-12)
+
+
+def test_baumgarte_index_parameters():
+    assert baumgarte(mu=0.5, index=1).params["beta"] == 1.0
+    assert baumgarte(mu=0.5, index=1).params["gamma"] == 0.25
+    assert baumgarte(mu=0.5, index=2).params["gamma"] == 0.0
+    assert baumgarte(index=3).params == {"beta": 0.0, "gamma": 0.0, "index": 3}
+
+
+@pytest.mark.parametrize("method", [baumgarte(mu=1, index=1), weighted_multiplier(1, 1)])
+def test_displacement_displacement_refused_for_baumgarte_and_weighted(method):
+    with pytest.raises(ParameterError, match="position level"):
+        amplification_matrix(TestModel(-1, 1), method, "dd", 0)
+
+
+@pytest.mark.parametrize(
+    "kwargs,match",
+    [
+        (dict(name="nope"), "method must be one of"),
+        (dict(name="baumgarte", index=1), "needs --mu"),
+        (dict(name="baumgarte", index=4, mu=1), "index must be 1, 2 or 3"),
+        (dict(name="baumgarte", beta=-1, gamma=0), ">= 0"),
+        (dict(name="weighted", a=1), "needs --a and --b"),
+        (dict(name="weighted", a=float("nan"), b=1), "finite"),
+        (dict(name="projection", a=1), "not used by method"),
+    ],
+)
+def test_method_parameter_errors_name_the_parameter(kwargs, match):
+    with pytest.raises(ParameterError, match=match):
+        make_method(kwargs.pop("name"), **kwargs)
+
+
+# -- test model conversions ------------------------------------------------------
+def test_test_model_physical_round_trip():
+    model = TestModel(-0.3, 1.7, 2.5, 0.4, 1.9)
+    back = model.to_physical(m1=3.0, H=0.01).test_model()
+    for name in ("lr1", "li1", "am21", "alr21", "ali21"):
+        assert getattr(back, name) == pytest.approx(getattr(model, name), rel=1e-12)
+    c1, c2 = model.coefficients(), model.to_physical(m1=3.0, H=0.01).coefficients()
+    for name in ("k1", "delta1", "k2", "delta2", "am21"):
+        assert getattr(c2, name) == pytest.approx(getattr(c1, name), rel=1e-12)
+
+
+def test_overdamped_physical_model_is_accepted_but_has_no_eq71_form():
+    pm = PhysicalModel(1.0, 2.0, 1.0, 1.0, 10.0, 1.0, 0.1)
+    assert pm.overdamped[0] and not pm.overdamped[1]
+    rho, _ = spectral_radius_float64(pm, projection(), "ff", 1)
+    assert np.isfinite(rho)
+    with pytest.raises(ParameterError, match="overdamped"):
+        pm.test_model()
+
+
+@pytest.mark.parametrize(
+    "kwargs,name",
+    [(dict(lr1=0.1, li1=1), "lr1"), (dict(lr1=-1, li1=-1), "li1"), (dict(lr1=-1, li1=1, am21=0), "am21"),
+     (dict(lr1=-1, li1=float("nan")), "li1"), (dict(lr1=-1, li1=1, ali21=-2), "ali21")],
+)
+def test_test_model_validation_names_the_parameter(kwargs, name):
+    with pytest.raises(ParameterError, match=rf"^{name} "):
+        TestModel(**kwargs)
+
+
+# -- float64 against 128 digits ---------------------------------------------------
+@pytest.mark.parametrize("method,dec", SCHEMES)
+def test_float64_agrees_with_128_digits_where_trusted(method, dec):
+    rng = np.random.default_rng(5)
+    lr, li = -2 * rng.random(6), 2 * rng.random(6)
+    model = TestModel(lr, li, 2.0, 2.0, 2.0)
+    for k in (0, 2):
+        rho, err = spectral_radius_float64(model, method, dec, k)
+        trusted = np.isfinite(rho) & (np.abs(rho - 1) > err)
+        assert trusted.any()
+        for i in np.flatnonzero(trusted):
+            ref = float(spectral_radius_mp(TestModel(lr[i], li[i], 2.0, 2.0, 2.0), method, dec, k, 128))
+            # the error estimate is honest and float64 is accurate here
+            assert abs(rho[i] - ref) <= err[i]
+            assert rho[i] == pytest.approx(ref, rel=1e-9)
+
+
+def test_multiprecision_results_are_consistent_across_precisions():
+    point = TestModel(-1e3, 1e3, 1e3, 2.0, 0.5)  # exp(-1000)-sized entries need guard digits
+    method = weighted_multiplier(1, 1)
+    r128 = spectral_radius_mp(point, method, "ff", 0, 128)
+    r200 = spectral_radius_mp(point, method, "ff", 0, 200)
+    assert abs(float(r128) - float(r200)) <= 1e-60 * max(1.0, float(r200))
+
+
+# -- the precision policy at the origin and at the extremes -----------------------
+EXTREME_SCHEMES = [
+    (weighted_multiplier(1, 1), "ff", 0),
+    (weighted_multiplier(1, 1), "ff", 2),
+    (baumgarte(mu=1, index=1), "fd", 1),
+    (baumgarte(mu=1, index=2), "ff", 2),
+    (projection(), "fd", 2),
+    (projection(), "dd", 1),
+]
+
+
+def _extreme_points():
+    near_origin = [(-a, b) for a in (1e-4, 1e-3, 1e-2) for b in (0.0, 1e-4, 1e-3, 1e-2)]
+    large = [(-a, b) for a in (1e-4, 1.0, 100.0, 1e3) for b in (1e-4, 1.0, 100.0, 1e3)]
+    return np.array(near_origin + large)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("method,dec,k", EXTREME_SCHEMES)
+@pytest.mark.parametrize("am21", [1e-3, 1.0, 1e3])
+def test_precision_policy_classifies_like_128_digits_at_the_extremes(method, dec, k, am21):
+    pts = _extreme_points()
+    model = TestModel(pts[:, 0], pts[:, 1], am21, 2.0, 0.5)
+    res = spectral_radius(model, method, dec, k)
+    assert np.all(np.isfinite(res.rho))
+    ref = np.array([float(spectral_radius_mp(TestModel(p[0], p[1], am21, 2.0, 0.5), method, dec, k)) for p in pts])
+    assert np.all(np.isfinite(ref))
+    np.testing.assert_array_equal(res.stable, is_stable(ref, np.full(ref.shape, 128)))
+
+
+def test_float64_fails_outright_at_the_extremes_and_the_policy_catches_it():
+    """Velocity-level corrections at k = 0 divide quantities that both decay like
+    exp(lr1): at lr1 = -1000 float64 underflows to 0/0."""
+    pts = _extreme_points()
+    model = TestModel(pts[:, 0], pts[:, 1], 1.0, 2.0, 0.5)
+    method = weighted_multiplier(1, 1)
+    raw, err = spectral_radius_float64(model, method, "ff", 0)
+    failed = ~np.isfinite(raw)
+    assert failed.any()
+    res = spectral_radius(model, method, "ff", 0)
+    assert np.all(res.digits[failed] == 128)
+    assert np.all(np.isfinite(res.rho))
+
+
+def test_origin_is_marginal_and_decided_at_high_precision():
+    # a free mass: a Jordan block at eigenvalue 1, float64 only gets rho to ~1e-8
+    res = spectral_radius(TestModel(0.0, 0.0, 2.0, 2.0, 2.0), baumgarte(mu=1, index=1), "ff", 2)
+    assert res.digits == 128
+    assert abs(res.rho - 1) < 1e-30
+    assert res.stable
+
+
+def test_mp_backend_does_not_touch_global_mpmath_precision():
+    import mpmath
+
+    before = mpmath.mp.dps
+    Multiprecision(200).asarray([1.0])
+    spectral_radius_mp(TestModel(-0.5, 0.5), projection(), "ff", 1, 64)
+    assert mpmath.mp.dps == before
+
+
+# -- convergence of the trajectory as H -> 0 --------------------------------------
+@pytest.mark.parametrize(
+    "method,dec,k,order",
+    [
+        (projection(), "ff", 0, 2),
+        (projection(), "ff", 2, 4),
+        (baumgarte(index=3), "ff", 0, 2),
+        (projection(), "dd", 1, 2),
+        (weighted_multiplier(1, 1), "fd", 1, 2),
+    ],
+)
+def test_trajectory_converges_to_exact_monolithic_solution(method, dec, k, order):
+    T, errors = 0.5, []
+    Hs = [2e-3, 1e-3, 5e-4]
+    for H in Hs:
+        c = PhysicalModel(1.0, 2.0, 1000.0, 1000.0, 10.0, 10.0, H).coefficients()
+        prob = LinearCosimulation(c, dec, k)
+        sol = MonolithicSolution(c, 0.1, 0.0)
+        state, hist = consistent_start(prob, sol)
+        n = int(round(T / H))
+        traj = simulate(prob, method, state, hist, n)
+        assert traj.diverged_at is None
+        states = np.array(traj.states)
+        exact = sol.state(np.arange(n + 1))
+        errors.append(max(np.max(np.abs(states[:, i, 0] - exact[:, 0])) for i in range(2)))
+    errors = np.array(errors)
+    assert np.all(np.diff(errors) < 0)
+    observed = np.log2(errors[:-1] / errors[1:])
+    assert np.all(observed > order - 0.3)
+
+
+@pytest.mark.parametrize(
+    "A", [[[0, 1], [-3, -0.4]], [[0, 1], [-1, -2]], [[0, 1], [-1, -5]], [[0, 1], [0, 0]], [[0, 1], [-4, 0]]]
+)
+def test_closed_form_2x2_exponential_matches_scipy(A):
+    import scipy.linalg
+
+    from icosim.exact import expm_2x2
+
+    A = np.array(A, dtype=float)
+    ts = np.linspace(-3, 7, 23)
+    ref = np.array([scipy.linalg.expm(t * A) for t in ts])
+    np.testing.assert_allclose(expm_2x2(A, ts), ref, rtol=1e-11, atol=1e-12)
