@@ -259,6 +259,8 @@ def test_displacement_displacement_refused_for_baumgarte_and_weighted(method):
         (dict(name="weighted", a=1), "needs --a and --b"),
         (dict(name="weighted", a=float("nan"), b=1), "finite"),
         (dict(name="projection", a=1), "not used by method"),
+        (dict(name="weighted", a=1, b=0, index=1), "index 1 needs b > 0"),
+        (dict(name="weighted", a=1, b=1, index=3), "index 3 means a = b = 0"),
     ],
 )
 def test_method_parameter_errors_name_the_parameter(kwargs, match):
@@ -425,3 +427,16 @@ def test_closed_form_2x2_exponential_matches_scipy(A):
     ts = np.linspace(-3, 7, 23)
     ref = np.array([scipy.linalg.expm(t * A) for t in ts])
     np.testing.assert_allclose(expm_2x2(A, ts), ref, rtol=1e-11, atol=1e-12)
+
+
+def test_small_solver_keeps_multiprecision():
+    from icosim.coupling import solve_small
+
+    be = Multiprecision(60)
+    rng = np.random.default_rng(2)
+    J = rng.standard_normal((3, 3)) + 3 * np.eye(3)
+    x_true = rng.standard_normal(3)
+    Jm, bm = be.asarray(J), be.asarray(J) @ be.asarray(x_true)
+    x = solve_small(Jm, bm)
+    assert all(abs(xi - be.const(float(xt))) < be.const(1e-50) for xi, xt in zip(x, x_true))
+    np.testing.assert_allclose(solve_small(J, J @ x_true), x_true, rtol=1e-12)

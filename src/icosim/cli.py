@@ -94,6 +94,8 @@ def build_parser() -> argparse.ArgumentParser:
         "float64 rechecked at 128 digits where float64 cannot be trusted)",
     )
     g.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.set_defaults(subparser=None)
+    rho.set_defaults(subparser=rho)
     return parser
 
 
@@ -170,8 +172,7 @@ def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command == "rho":
-        rho_parser = parser._subparsers._group_actions[0].choices["rho"]
-        return _rho(args, rho_parser)
+        return _rho(args, args.subparser)
     return 2  # pragma: no cover - argparse enforces a command
 
 

@@ -184,13 +184,27 @@ def solve_small(J, b):
         return np.stack([x0, x1], axis=-1)
     if J.dtype != object:
         return np.linalg.solve(J, b[..., None])[..., 0]
-    import mpmath
-
     out = np.empty(b.shape, dtype=object)
     for idx in np.ndindex(b.shape[:-1]):
-        x = mpmath.lu_solve(mpmath.matrix(J[idx].tolist()), mpmath.matrix(b[idx].tolist()))
-        out[idx] = list(x)
+        out[idx] = _gauss(J[idx].tolist(), b[idx].tolist())
     return out
+
+
+def _gauss(A, y):
+    """Gaussian elimination with partial pivoting in the numbers' own arithmetic
+    (so mpmath values keep their context's precision)."""
+    n = len(y)
+    A = [row[:] + [y[i]] for i, row in enumerate(A)]
+    for col in range(n):
+        piv = max(range(col, n), key=lambda r: abs(A[r][col]))
+        A[col], A[piv] = A[piv], A[col]
+        for r in range(col + 1, n):
+            f = A[r][col] / A[col][col]
+            A[r] = [a - f * p for a, p in zip(A[r], A[col])]
+    x = [None] * n
+    for r in range(n - 1, -1, -1):
+        x[r] = (A[r][n] - sum(A[r][c] * x[c] for c in range(r + 1, n))) / A[r][r]
+    return x
 
 
 def _finite(name, value):
