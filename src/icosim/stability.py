@@ -32,7 +32,8 @@ working digits.
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass
+import time
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -179,12 +180,18 @@ def is_stable(rho, digits):
 
 @dataclass
 class StabilityResult:
-    """Per point: spectral radius, float64 error estimate, the digits that decided it."""
+    """Per point: spectral radius, float64 error estimate, the digits that decided it.
+
+    ``seconds`` and ``cpu_seconds`` split the cost into the float64 pass and the
+    multiprecision rechecks (keys ``float64`` and ``mp``).
+    """
 
     rho: np.ndarray
     err: np.ndarray
     digits: np.ndarray
     stable: np.ndarray
+    seconds: dict = field(default_factory=dict)
+    cpu_seconds: dict = field(default_factory=dict)
 
     @property
     def n_high_precision(self) -> int:
@@ -205,6 +212,7 @@ def spectral_radius(model: TestModel, method, decomposition, k, *, digits: int =
     names = ("lr1", "li1", "am21", "alr21", "ali21")
     arrays = np.broadcast_arrays(*(np.asarray(getattr(model, n), dtype=float) for n in names))
     shape = arrays[0].shape
+    t0, c0 = time.perf_counter(), time.process_time()
     if policy == "mp":
         rho = np.full(shape, np.nan)
         err = np.full(shape, np.inf)
@@ -214,10 +222,19 @@ def spectral_radius(model: TestModel, method, decomposition, k, *, digits: int =
         trusted = np.isfinite(rho) & (np.abs(rho - 1) > err)
         recheck = ~trusted if policy == "auto" else np.zeros(shape, dtype=bool)
     digits_used = np.full(shape, FLOAT64_DIGITS, dtype=int)
+    t1, c1 = time.perf_counter(), time.process_time()
     for idx in np.ndindex(shape):
         if not recheck[idx]:
             continue
         point = TestModel(*(float(a[idx]) for a in arrays))
         rho[idx] = float(spectral_radius_mp(point, method, decomposition, k, digits))
         digits_used[idx] = digits
-    return StabilityResult(rho=rho, err=err, digits=digits_used, stable=is_stable(rho, digits_used))
+    t2, c2 = time.perf_counter(), time.process_time()
+    return StabilityResult(
+        rho=rho,
+        err=err,
+        digits=digits_used,
+        stable=is_stable(rho, digits_used),
+        seconds={"float64": t1 - t0, "mp": t2 - t1},
+        cpu_seconds={"float64": c1 - c0, "mp": c2 - c1},
+    )
