@@ -1,0 +1,185 @@
+"""Stability plots (paper Figs. 9-20) drawn from panel datasets.
+
+Layout as in the paper: one row per parameter set, one column per
+approximation order ``k``; zoom panels near the origin get extra columns on
+the right (one per ``k`` that has zooms), aligned with their rows.  Each panel
+shows the spectral radius as a colour field (green stable, red unstable,
+yellow at ``rho = 1``), the ``rho = 1`` boundary, and -- in the paper's style
+-- optionally green dots at the stable grid points instead of the field.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.colors import TwoSlopeNorm
+from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
+
+__all__ = ["stability_figure", "panel_layout", "row_labels", "STYLES"]
+
+STYLES = ("field", "dots")
+ROW_PARAMETERS = ("am21", "alr21", "ali21", "mu", "beta", "gamma", "a", "b")
+SYMBOLS = {
+    "am21": r"$\alpha_{m21}$",
+    "alr21": r"$\alpha_{\lambda r21}$",
+    "ali21": r"$\alpha_{\lambda i21}$",
+    "mu": r"$\bar\mu$",
+    "beta": r"$\bar\beta$",
+    "gamma": r"$\bar\gamma$",
+    "a": "$a$",
+    "b": "$b$",
+}
+RATIOS = ("am21", "alr21", "ali21")
+
+
+def panel_layout(panels):
+    """Map each dataset to ``(row_index, column_index)`` and name the columns.
+
+    Columns: every ``k`` of the full views in increasing order, then one
+    column per ``k`` that has zoom views.  Rows follow the ``row`` attribute.
+    """
+    rows = sorted({int(ds.attrs["row"]) for ds in panels})
+    full_k = sorted({int(ds.attrs["k"]) for ds in panels if ds.attrs["view"] == "full"})
+    zoom_k = sorted({int(ds.attrs["k"]) for ds in panels if ds.attrs["view"] == "zoom"})
+    columns = [("full", k) for k in full_k] + [("zoom", k) for k in zoom_k]
+    place = {}
+    for i, ds in enumerate(panels):
+        key = (rows.index(int(ds.attrs["row"])), columns.index((ds.attrs["view"], int(ds.attrs["k"]))))
+        if key in place.values():
+            raise ValueError(
+                f"two datasets for row {ds.attrs['row']}, k = {ds.attrs['k']}, view {ds.attrs['view']}"
+            )
+        place[i] = key
+    return rows, columns, place
+
+
+def row_labels(panels) -> dict:
+    """Row number -> label with the parameters that change between rows.
+
+    If the rows change a ratio, the whole ratio triple is shown (as the paper
+    lists parameter sets); otherwise the method parameters that change.
+    """
+    by_row = {int(ds.attrs["row"]): ds.attrs for ds in panels}
+    varied = [p for p in ROW_PARAMETERS if len({by_row[r].get(p) for r in by_row}) > 1]
+    if "mu" in varied:  # beta and gamma follow from mu
+        varied = [p for p in varied if p not in ("beta", "gamma")]
+    keys = list(RATIOS) if (not varied or any(p in RATIOS for p in varied)) else varied
+    return {
+        r: ", ".join(f"{SYMBOLS[p]} = {float(attrs[p]):g}" for p in keys if p in attrs)
+        for r, attrs in by_row.items()
+    }
+
+
+def _draw_panel(ax, ds, *, style, norm, cmap, dots_stride):
+    lr1 = ds["lr1"].values
+    li1 = ds["li1"].values
+    rho = ds["rho"].values
+    stable = ds["stable"].values.astype(bool)
+    mappable = None
+    if style == "field":
+        shown = np.where(np.isfinite(rho), np.minimum(rho, norm.vmax), np.nan)
+        mappable = ax.pcolormesh(lr1, li1, shown.T, norm=norm, cmap=cmap, shading="nearest", rasterized=True)
+    else:
+        sel = (slice(None, None, dots_stride), slice(None, None, dots_stride))
+        LR, LI = np.meshgrid(lr1, li1, indexing="ij")
+        # always include the end points (the undamped axis lr1 = 0 and li1 = 0)
+        idx_r = np.unique(np.r_[np.arange(lr1.size)[sel[0]], lr1.size - 1])
+        idx_i = np.unique(np.r_[np.arange(li1.size)[sel[1]], li1.size - 1])
+        sub = np.ix_(idx_r, idx_i)
+        s = stable[sub]
+        ax.scatter(LR[sub][s], LI[sub][s], s=6, facecolors="none", edgecolors="#1a9641", linewidths=0.6)
+    finite = np.where(np.isfinite(rho), rho, np.inf)
+    if np.nanmin(finite) < 1 < np.nanmax(finite):
+        ax.contour(lr1, li1, np.minimum(finite, 1e6).T, levels=[1.0], colors="k", linewidths=0.7)
+    ax.set_xlim(lr1[0], lr1[-1])
+    ax.set_ylim(li1[0], li1[-1])
+    ax.tick_params(labelsize=6, length=2)
+    return mappable
+
+
+def stability_figure(
+    panels,
+    *,
+    title: str = "",
+    style: str = "field",
+    rho_max: float = 2.0,
+    dots_stride: int = 4,
+    panel_size: float = 2.1,
+) -> Figure:
+    """Draw one figure of the paper from its panel datasets.
+
+    Parameters
+    ----------
+    panels : list of :class:`xarray.Dataset` written by :func:`icosim.sweep.stability_panel`.
+    style : ``"field"`` (rho colour field and boundary) or ``"dots"`` (the
+        paper's green dots at stable points, every ``dots_stride``-th grid point).
+    rho_max : top of the colour scale; larger values use the top colour.
+    """
+    if style not in STYLES:
+        raise ValueError(f"style must be one of {', '.join(STYLES)}, got {style!r}")
+    if not panels:
+        raise ValueError("no panels to draw")
+    rows, columns, place = panel_layout(panels)
+    labels = row_labels(panels)
+    fig = Figure(
+        figsize=(panel_size * len(columns) + 1.2, panel_size * len(rows) + 0.7), layout="constrained"
+    )
+    axes = fig.subplots(len(rows), len(columns), squeeze=False)
+    occupied = set(place.values())
+    for (i, j), ax in np.ndenumerate(axes):
+        if (i, j) not in occupied:
+            ax.set_axis_off()
+    norm = TwoSlopeNorm(vmin=0.0, vcenter=1.0, vmax=rho_max)
+    cmap = _cmap()
+    mappable = None
+    for n, ds in enumerate(panels):
+        i, j = place[n]
+        ax = axes[i, j]
+        m = _draw_panel(ax, ds, style=style, norm=norm, cmap=cmap, dots_stride=dots_stride)
+        mappable = mappable or m
+        view, k = columns[j]
+        if i == 0 or (i - 1, j) not in occupied:
+            ax.set_title(f"k = {k}" + (" (zoom)" if view == "zoom" else ""), fontsize=8)
+        if j == 0:
+            ax.set_ylabel(labels[rows[i]] + "\n" + r"$\bar\lambda_{i1}$", fontsize=7)
+        if i == len(rows) - 1 or (i + 1, j) not in occupied:
+            ax.set_xlabel(r"$\bar\lambda_{r1}$", fontsize=7)
+    _mark_zoom_regions(panels, place, columns, axes)
+    if mappable is not None:
+        fig.colorbar(mappable, ax=axes, shrink=0.6, extend="max", label=r"spectral radius $\rho$")
+    if title:
+        fig.suptitle(title, fontsize=9)
+    return fig
+
+
+def _mark_zoom_regions(panels, place, columns, axes):
+    """Outline each zoom's region on the full panel of the same row and k."""
+    full = {
+        (ds.attrs["row"], ds.attrs["k"]): place[n]
+        for n, ds in enumerate(panels)
+        if ds.attrs["view"] == "full"
+    }
+    for ds in panels:
+        if ds.attrs["view"] != "zoom":
+            continue
+        target = full.get((ds.attrs["row"], ds.attrs["k"]))
+        if target is None:
+            continue
+        lr1, li1 = ds["lr1"].values, ds["li1"].values
+        axes[target].add_patch(
+            Rectangle(
+                (lr1[0], li1[0]),
+                lr1[-1] - lr1[0],
+                li1[-1] - li1[0],
+                fill=False,
+                edgecolor="#2c7bb6",
+                linewidth=0.8,
+                clip_on=False,
+            )
+        )
+
+
+def _cmap():
+    from matplotlib import colormaps
+
+    return colormaps["RdYlGn_r"].with_extremes(bad="#9e9e9e")  # grey: non-finite rho

@@ -1,0 +1,330 @@
+"""Stability panels: the spectral radius over a (lr1, li1) grid as a NetCDF-ready dataset.
+
+One *panel* is one plot of the paper's Figs. 9-20: a coupling method with its
+parameters, a decomposition, the approximation order ``k`` and the three fixed
+ratios ``(am21, alr21, ali21)`` of Eq. (71), evaluated over a grid of
+``lr1`` (real part) and ``li1`` (imaginary part of subsystem 1's eigenvalue).
+
+The names below are a contract other tools read: data variable ``rho`` over the
+coordinates ``lr1`` and ``li1``; attributes ``figure``, ``method``,
+``decomposition``, ``k``, ``am21``, ``alr21``, ``ali21`` and the method
+parameters under their command-line names (``beta``, ``gamma``, ``mu``,
+``index``, ``a``, ``b``).  A panel also records ``row`` (1-based, as in the
+paper), ``view`` (``full`` or ``zoom``), the precision that decided each point
+(``digits``) and how long the float64 pass and the multiprecision rechecks took
+(``seconds_float64``, ``seconds_mp``, ``n_high_precision``), so the cost of the
+precision policy is measured on every run.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import stability as _stability
+from .coupling import DECOMPOSITIONS, METHODS, make_method
+from .model import ParameterError, TestModel
+
+__all__ = [
+    "PanelSpec",
+    "stability_panel",
+    "grid_axis",
+    "panel_id",
+    "figure_panels",
+    "row_label",
+    "RATIOS",
+    "METHOD_PARAMS",
+    "ROW_KEYS",
+    "VIEWS",
+]
+
+#: The three fixed ratios of Eq. (71) that a panel holds constant.
+RATIOS = ("am21", "alr21", "ali21")
+#: Method parameters under their command-line names.
+METHOD_PARAMS = ("mu", "beta", "gamma", "index", "a", "b")
+#: What a row of a figure may change.
+ROW_KEYS = RATIOS + ("mu", "beta", "gamma", "a", "b")
+#: A panel shows the whole parameter range or a zoom near the origin.
+VIEWS = ("full", "zoom")
+
+LONG_NAMES = {
+    "lr1": "real part of the eigenvalue of subsystem 1, lambda_bar_r1 = -d_bar_1/2",
+    "li1": "imaginary part of the eigenvalue of subsystem 1, lambda_bar_i1 = sqrt(4 c_bar_1 - d_bar_1^2)/2",
+    "rho": "spectral radius of the co-simulation recurrence (one macro step)",
+    "stable": "numerically stable point, rho <= 1",
+    "digits": "decimal digits of the arithmetic that decided the point",
+    "rho_float64_error": "error estimate of the float64 spectral radius",
+}
+
+
+def grid_axis(bounds, n: int) -> np.ndarray:
+    """``n`` equally spaced values from ``bounds[0]`` to ``bounds[1]`` (both included).
+
+    The end points are set exactly, so the undamped axis ``lr1 = 0`` and the
+    axis ``li1 = 0`` are on the grid whatever the spacing.
+    """
+    lo, hi = (float(b) for b in bounds)
+    if not lo < hi:
+        raise ParameterError(f"grid bounds must be increasing, got {list(bounds)!r}")
+    if int(n) != n or n < 2:
+        raise ParameterError(f"grid size n must be an integer >= 2, got {n!r}")
+    axis = np.linspace(lo, hi, int(n))
+    axis[0], axis[-1] = lo, hi
+    return axis
+
+
+@dataclass(frozen=True)
+class PanelSpec:
+    """Everything that determines one panel (and nothing else).
+
+    ``method_params`` are the parameters as given in the configuration
+    (e.g. ``{"index": 1, "mu": 1.0}``); the dataset records the resolved set
+    (``beta``, ``gamma`` included).
+    """
+
+    figure: str
+    row: int
+    k: int
+    view: str
+    method: str
+    method_params: dict
+    decomposition: str
+    am21: float
+    alr21: float
+    ali21: float
+    lr1: tuple  # (start, stop)
+    li1: tuple
+    n: int
+    digits: int = 128
+    policy: str = "auto"
+
+    @classmethod
+    def from_params(cls, params: dict) -> "PanelSpec":
+        """Build from the plain dict a workflow passes (keys as the field names)."""
+        known = {f for f in cls.__dataclass_fields__}
+        unknown = sorted(set(params) - known)
+        if unknown:
+            raise ParameterError(f"unknown panel parameter(s) {unknown}; allowed: {sorted(known)}")
+        p = dict(params)
+        p["lr1"] = tuple(p["lr1"])
+        p["li1"] = tuple(p["li1"])
+        return cls(**p)
+
+    def __post_init__(self):
+        if self.method not in METHODS:
+            raise ParameterError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
+        if self.decomposition not in DECOMPOSITIONS:
+            raise ParameterError(
+                f"decomposition must be one of {', '.join(DECOMPOSITIONS)}, got {self.decomposition!r}"
+            )
+        if self.view not in VIEWS:
+            raise ParameterError(f"view must be one of {', '.join(VIEWS)}, got {self.view!r}")
+        if int(self.k) != self.k or self.k < 0:
+            raise ParameterError(f"k must be an integer >= 0, got {self.k!r}")
+        if self.policy not in ("auto", "float64", "mp"):
+            raise ParameterError(f"policy must be 'auto', 'float64' or 'mp', got {self.policy!r}")
+
+    def coupling_method(self):
+        return make_method(self.method, **self.method_params)
+
+    def as_dict(self) -> dict:
+        d = {f: getattr(self, f) for f in self.__dataclass_fields__}
+        d["lr1"], d["li1"] = list(self.lr1), list(self.li1)
+        return d
+
+
+def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
+    """Compute one panel and return it as an :class:`xarray.Dataset`.
+
+    ``provenance`` are extra global attributes (normally
+    :func:`icosim.datasets.provenance_attrs` of the job's configuration).
+    """
+    import xarray as xr
+
+    method = spec.coupling_method()
+    method.check_decomposition(DECOMPOSITIONS[spec.decomposition])
+    lr1 = grid_axis(spec.lr1, spec.n)
+    li1 = grid_axis(spec.li1, spec.n)
+    LR, LI = np.meshgrid(lr1, li1, indexing="ij")
+    model = TestModel(LR, LI, spec.am21, spec.alr21, spec.ali21)
+
+    result = _stability.spectral_radius(
+        model, method, spec.decomposition, spec.k, digits=spec.digits, policy=spec.policy
+    )
+
+    dims = ("lr1", "li1")
+    ds = xr.Dataset(
+        {
+            "rho": (
+                dims,
+                np.asarray(result.rho, dtype=float),
+                {"long_name": LONG_NAMES["rho"], "units": "1"},
+            ),
+            "stable": (
+                dims,
+                np.asarray(result.stable, dtype=bool),
+                {
+                    "long_name": LONG_NAMES["stable"],
+                    "comment": "with multiprecision a point counts as stable if rho <= 1 + 10**(-digits/2) "
+                    "(an eigenvalue 1 of a Jordan block is computed to about half the working digits)",
+                },
+            ),
+            "digits": (
+                dims,
+                np.asarray(result.digits, dtype=np.int16),
+                {
+                    "long_name": LONG_NAMES["digits"],
+                    "units": "1",
+                    "comment": f"{_stability.FLOAT64_DIGITS} = float64; larger = mpmath recheck of a point "
+                    "float64 could not decide",
+                },
+            ),
+            "rho_float64_error": (
+                dims,
+                np.asarray(result.err, dtype=float),
+                {
+                    "long_name": LONG_NAMES["rho_float64_error"],
+                    "units": "1",
+                    "comment": "spread of float64 results under rounding-size disturbances times a safety "
+                    "factor (icosim.stability); a point is rechecked if |rho - 1| <= this or rho is not finite",
+                },
+            ),
+        },
+        coords={
+            "lr1": ("lr1", lr1, {"long_name": LONG_NAMES["lr1"], "units": "1"}),
+            "li1": ("li1", li1, {"long_name": LONG_NAMES["li1"], "units": "1"}),
+        },
+    )
+    attrs = dict(provenance or {})
+    attrs.update(
+        figure=str(spec.figure),
+        row=int(spec.row),
+        view=spec.view,
+        method=spec.method,
+        decomposition=spec.decomposition,
+        k=int(spec.k),
+        am21=float(spec.am21),
+        alr21=float(spec.alr21),
+        ali21=float(spec.ali21),
+    )
+    for name, value in method.params.items():  # beta, gamma, mu, index, a, b as resolved
+        attrs[name] = int(value) if name == "index" else float(value)
+    attrs.update(
+        precision_policy=spec.policy,
+        mp_digits=int(spec.digits),
+        n_points=int(LR.size),
+        n_high_precision=int(result.n_high_precision),
+        # rechecked points on the undamped axis lr1 = 0, where rho = 1 to working precision
+        n_high_precision_undamped=int(
+            np.sum((np.asarray(result.digits) > _stability.FLOAT64_DIGITS) & (LR == 0))
+        ),
+        n_stable=int(np.sum(result.stable)),
+        seconds_total=float(sum(result.seconds.values())),
+        seconds_mp=float(result.seconds["mp"]),
+        seconds_float64=float(result.seconds["float64"]),
+        cpu_seconds_total=float(sum(result.cpu_seconds.values())),
+        cpu_seconds_mp=float(result.cpu_seconds["mp"]),
+        cpu_seconds_float64=float(result.cpu_seconds["float64"]),
+    )
+    ds.attrs = attrs
+    return ds
+
+
+def panel_id(row: int, k: int, view: str) -> str:
+    """File stem of a panel inside its figure's folder, e.g. ``r4_k2_zoom``."""
+    return f"r{int(row)}_k{int(k)}_{view}"
+
+
+def row_label(figure_cfg: dict, row: int) -> str:
+    """What distinguishes row ``row`` (1-based) of a figure, in the paper's symbols.
+
+    Figures whose rows vary the ratios are labelled by the full ratio triple;
+    figures whose rows vary a method parameter by that parameter.
+    """
+    rows = figure_cfg["rows"]
+    varied = sorted({key for r in rows for key in r}, key=ROW_KEYS.index)
+    values = {**figure_cfg["ratios"], **figure_cfg["params"], **rows[row - 1]}
+    symbols = {
+        "am21": "αm21",
+        "alr21": "αλr21",
+        "ali21": "αλi21",
+        "mu": "μ̄",
+        "beta": "β̄",
+        "gamma": "γ̄",
+        "a": "a",
+        "b": "b",
+    }
+    if any(key in RATIOS for key in varied) or not varied:
+        keys = list(RATIOS)
+    else:
+        keys = varied
+    return ", ".join(f"{symbols[key]} = {values[key]:g}" for key in keys)
+
+
+def figure_panels(
+    figure: str, figure_cfg: dict, *, grid: dict, zoom_grid: dict, precision: dict
+) -> list[PanelSpec]:
+    """The panels of one figure as configured (rows x k, plus the zooms).
+
+    ``figure_cfg`` has the layout of ``config/stability.yaml`` (``method``,
+    ``decomposition``, ``params``, ``ratios``, ``rows``, ``k``, optional
+    ``zoom``).  Every panel's method is built once here, so a parameter the
+    method does not accept is reported with the figure and row before any job
+    runs.
+    """
+    where = f"stability.figures.{figure}"
+    n_rows = len(figure_cfg["rows"])
+    for axis, bounds in (("lr1", grid["lr1"]), ("lr1", zoom_grid["lr1"])):
+        if max(bounds) > 0:
+            raise ParameterError(
+                f"stability grid {axis} must lie in lr1 <= 0 (a damped subsystem), got {bounds}"
+            )
+    for bounds in (grid["li1"], zoom_grid["li1"]):
+        if min(bounds) < 0:
+            raise ParameterError(f"stability grid li1 must lie in li1 >= 0, got {bounds}")
+    zoom = figure_cfg.get("zoom") or {"rows": [], "k": []}
+    bad_rows = [r for r in zoom["rows"] if not 1 <= r <= n_rows]
+    if bad_rows:
+        raise ParameterError(f"{where}.zoom.rows: {bad_rows} not among the figure's rows 1..{n_rows}")
+    bad_k = [k for k in zoom["k"] if k not in figure_cfg["k"]]
+    if bad_k:
+        raise ParameterError(f"{where}.zoom.k: {bad_k} not among the figure's k {figure_cfg['k']}")
+    panels = []
+    for row, overrides in enumerate(figure_cfg["rows"], start=1):
+        values = {**figure_cfg["ratios"], **figure_cfg["params"], **overrides}
+        missing = [r for r in RATIOS if r not in values]
+        if missing:
+            raise ParameterError(
+                f"{where}: row {row} has no value for {', '.join(missing)} (give it in ratios)"
+            )
+        method_params = {key: values[key] for key in METHOD_PARAMS if key in values}
+        try:
+            make_method(figure_cfg["method"], **method_params).check_decomposition(
+                DECOMPOSITIONS[figure_cfg["decomposition"]]
+            )
+        except ParameterError as err:
+            raise ParameterError(f"{where}, row {row}: {err}") from None
+        views = [("full", grid)]
+        for k in figure_cfg["k"]:
+            for view, g in views + ([("zoom", zoom_grid)] if row in zoom["rows"] and k in zoom["k"] else []):
+                panels.append(
+                    PanelSpec(
+                        figure=str(figure),
+                        row=row,
+                        k=int(k),
+                        view=view,
+                        method=figure_cfg["method"],
+                        method_params=method_params,
+                        decomposition=figure_cfg["decomposition"],
+                        am21=float(values["am21"]),
+                        alr21=float(values["alr21"]),
+                        ali21=float(values["ali21"]),
+                        lr1=tuple(float(v) for v in g["lr1"]),
+                        li1=tuple(float(v) for v in g["li1"]),
+                        n=int(g["n"]),
+                        digits=int(precision["digits"]),
+                        policy=precision["policy"],
+                    )
+                )
+    return panels

@@ -1,0 +1,305 @@
+"""The claim machinery (icosim.claims) and the stability claims file.
+
+Synthetic panels with a known stable region test each check kind's pass /
+fail / undecided logic; one real coarse panel computed with the engine checks
+a claim end to end.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+import yaml
+
+from icosim.claims import (
+    CHECKS,
+    evaluate,
+    evaluate_claim,
+    grid_resolution,
+    load_claims,
+    parse_claims,
+    select,
+    stable_share,
+)
+from icosim.model import ParameterError
+from icosim.sweep import PanelSpec, figure_panels, stability_panel
+
+ROOT = Path(__file__).resolve().parents[1]
+CLAIMS_FILE = ROOT / "config" / "claims" / "stability.yaml"
+CONFIG_FILE = ROOT / "config" / "stability.yaml"
+
+
+def panel(stable_cols: int, n: int = 11, lr=(-2.0, 0.0), li=(0.0, 2.0), **attrs):
+    """A synthetic panel on an n x n grid whose first `stable_cols` lr1 columns are stable."""
+    lr1 = np.linspace(*lr, n)
+    li1 = np.linspace(*li, n)
+    stable = np.zeros((n, n), dtype=bool)
+    stable[:stable_cols, :] = True
+    rho = np.where(stable, 0.5, 1.5)
+    base = {"figure": "9", "row": 1, "k": 0, "view": "full", "am21": 1.0, "alr21": 1.0, "ali21": 1.0}
+    base.update(attrs)
+    return xr.Dataset(
+        {"rho": (("lr1", "li1"), rho), "stable": (("lr1", "li1"), stable)},
+        coords={"lr1": lr1, "li1": li1},
+        attrs=base,
+    )
+
+
+def claim(check, **extra):
+    item = {"id": "c", "source": "test", "statement": "test", "figures": ["9"], "check": check}
+    item.update(extra)
+    return parse_claims([item])[0]
+
+
+# -- selection and shares ----------------------------------------------------------------
+
+
+def test_select_matches_numbers_numerically_and_lists():
+    ds = [panel(5, row=r, k=k, am21=10.0 if r == 2 else 1.0) for r in (1, 2) for k in (0, 1)]
+    assert len(select(ds, {"figure": 9})) == 4  # "9" == 9
+    assert len(select(ds, {"am21": 10})) == 2  # 10 == 10.0
+    assert len(select(ds, {"k": [0, 1], "row": 2})) == 2
+    assert select(ds, {"method": "weighted"}) == []  # attribute absent: no match
+
+
+def test_stable_share_counts_points_and_region():
+    ds = panel(4, n=11)  # columns lr1 = -2.0 ... -1.4 stable
+    share, s, n = stable_share(ds)
+    assert (s, n) == (44, 121) and share == pytest.approx(44 / 121)
+    share, s, n = stable_share(ds, {"lr1": [-2.0, -1.5]})  # 3 columns, all stable
+    assert (s, n) == (33, 33)
+    _, _, n = stable_share(ds, {"exclude_undamped": True})
+    assert n == 110  # the column lr1 = 0 is left out
+    with pytest.raises(ParameterError, match="region"):
+        stable_share(ds, {"lr2": [0, 1]})
+    with pytest.raises(ParameterError, match="no grid point"):
+        stable_share(ds, {"lr1": [0.5, 1.0]})
+
+
+def test_grid_resolution_is_one_spacing_of_the_coarsest_grid():
+    assert grid_resolution([panel(1, n=11), panel(1, n=21)]) == pytest.approx(0.1)
+
+
+# -- check kinds -----------------------------------------------------------------------------
+
+
+def test_stable_fraction_pass_fail_and_missing_data():
+    ds = [panel(11, row=1), panel(0, row=2)]
+    only_stable = {"kind": "stable_fraction", "select": {"figure": "9", "row": 1}, "op": "==", "value": 1}
+    assert evaluate_claim(claim(only_stable), ds).verdict == "pass"
+    none_stable = {**only_stable, "select": {"row": 2}, "value": 0}
+    assert evaluate_claim(claim(none_stable), ds).verdict == "pass"
+    assert evaluate_claim(claim({**only_stable, "select": {"row": [1, 2]}}), ds).verdict == "fail"
+    missing = evaluate_claim(claim({**only_stable, "select": {"figure": "99"}}), ds)
+    assert missing.verdict == "undecided" and "no dataset" in missing.measured
+
+
+def test_unstable_near_origin_ignores_the_undamped_axis_but_reports_it():
+    ds = panel(10, n=11)  # only the column lr1 = 0 is unstable
+    near_origin = {
+        "kind": "stable_fraction",
+        "select": {"figure": "9"},
+        "region": {"lr1": [-0.5, 0.0], "li1": [0.0, 0.5], "exclude_undamped": True},
+        "op": "<",
+        "value": 1,
+    }
+    v = evaluate_claim(claim(near_origin), [ds])
+    assert v.verdict == "fail"  # every damped point is stable
+    assert "undamped axis" in v.measured
+    ds9 = panel(9, n=11)  # the column lr1 = -0.2 is unstable too
+    v = evaluate_claim(claim(near_origin), [ds9])
+    assert v.verdict == "pass"
+    (entry,) = v.numbers.values()
+    assert entry["nearest_unstable_to_origin"] == pytest.approx(0.2)
+
+
+@pytest.mark.parametrize(
+    "cols_a, cols_b, relation, expected",
+    [
+        (8, 5, "greater", "pass"),
+        (5, 8, "greater", "fail"),
+        (6, 5, "greater", "undecided"),  # one column = one grid spacing: not resolved
+        (5, 8, "less", "pass"),
+        (6, 6, "similar", "pass"),
+        (9, 3, "similar", "fail"),
+    ],
+)
+def test_compare_relations(cols_a, cols_b, relation, expected):
+    ds = [panel(cols_a, figure="12"), panel(cols_b, figure="9")]
+    check = {"kind": "compare", "a": {"figure": "12"}, "b": {"figure": "9"}, "relation": relation}
+    if relation == "similar":
+        check["within"] = 0.05
+    assert evaluate_claim(claim(check), ds).verdict == expected
+
+
+def test_compare_against_each_of_several_groups():
+    ds = [panel(9, figure="15"), panel(4, figure="11"), panel(11, figure="14")]
+    check = {
+        "kind": "compare",
+        "a": {"figure": "15"},
+        "b": [{"figure": "11"}, {"figure": "14"}],
+        "relation": "greater",
+    }
+    v = evaluate_claim(claim(check), ds)
+    assert v.verdict == "fail"  # better than Fig. 11, worse than Fig. 14
+    assert len(v.numbers["b"]) == 2
+
+
+@pytest.mark.parametrize(
+    "shares, direction, expected",
+    [
+        ((3, 6, 9), "increasing", "pass"),
+        ((9, 6, 3), "increasing", "fail"),
+        ((3, 3, 9), "increasing", "pass"),  # a flat step does not break a trend
+        ((3, 9, 6), "increasing", "fail"),  # a step back beyond the resolution does
+        ((5, 5, 5), "decreasing", "undecided"),
+    ],
+)
+def test_trend(shares, direction, expected):
+    ds = [
+        panel(c, figure="19", row=r, mu=mu)
+        for r, (c, mu) in enumerate(zip(shares, (0.25, 1.0, 5.0)), start=1)
+    ]
+    check = {
+        "kind": "trend",
+        "select": {"figure": "19"},
+        "along": "mu",
+        "direction": direction,
+        "label": "mu",
+    }
+    assert evaluate_claim(claim(check), ds).verdict == expected
+
+
+def test_each_fills_open_attributes_only_and_combines_verdicts():
+    ds = [panel(11, k=0), panel(11, k=1), panel(2, k=2)]
+    check = {"kind": "stable_fraction", "select": {"figure": "9"}, "op": "==", "value": 1}
+    assert evaluate_claim(claim(check, each={"k": [0, 1]}), ds).verdict == "pass"
+    v = evaluate_claim(claim(check, each={"k": [0, 1, 2]}), ds)
+    assert v.verdict == "fail" and set(v.numbers) == {"k = 0", "k = 1", "k = 2"}
+    # b keeps its own k = 0, a gets each k
+    cmp = {"kind": "compare", "a": {"figure": "9"}, "b": {"figure": "9", "k": 0}, "relation": "less"}
+    v = evaluate_claim(claim(cmp, each={"k": [2]}), ds)
+    assert v.verdict == "pass"
+
+
+# -- parsing ------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "item, message",
+    [
+        ({"colour": "red"}, "unknown key"),
+        ({"check": {"kind": "nonsense"}}, "check.kind"),
+        ({"reference": "maybe"}, "reference"),
+        ({"each": {"k": 1}}, "each"),
+    ],
+)
+def test_parse_claims_names_the_bad_key(item, message):
+    base = {
+        "id": "x",
+        "source": "s",
+        "statement": "t",
+        "figures": ["9"],
+        "check": {"kind": "stable_fraction"},
+    }
+    with pytest.raises(ParameterError, match=message):
+        parse_claims([{**base, **item}])
+
+
+def test_parse_claims_rejects_duplicates_and_missing_keys():
+    base = {"id": "x", "source": "s", "statement": "t", "figures": ["9"], "check": {"kind": "trend"}}
+    with pytest.raises(ParameterError, match="duplicate"):
+        parse_claims([base, base])
+    with pytest.raises(ParameterError, match="missing"):
+        parse_claims([{k: v for k, v in base.items() if k != "source"}])
+
+
+# -- the stability claims file -------------------------------------------------------------------
+
+
+def test_stability_claims_file_is_consistent_with_the_configuration():
+    claims = load_claims(CLAIMS_FILE)
+    cfg = yaml.safe_load(CONFIG_FILE.read_text())["stability"]
+    figures = cfg["figures"]
+    assert {c.check["kind"] for c in claims} <= set(CHECKS)
+    for c in claims:
+        assert set(c.figures) <= set(figures), c.id
+        assert c.reference in ("pass", "fail", "undecided"), f"{c.id}: no full-resolution reference verdict"
+        # every selector names a configured figure, and its rows / k / view exist there
+        check = c.check
+        selectors = [check[key] for key in ("select", "a") if key in check]
+        b = check.get("b", [])
+        selectors += b if isinstance(b, list) else [b]
+        for sel in selectors:
+            fig = figures[str(sel["figure"])]
+            if "row" in sel:
+                assert 1 <= sel["row"] <= len(fig["rows"]), c.id
+            for k in [sel["k"]] if "k" in sel else c.each.get("k", []):
+                assert k in fig["k"], c.id
+            if sel.get("view") == "zoom":
+                assert fig.get("zoom"), f"{c.id}: Fig. {sel['figure']} has no zoom panels"
+
+
+def test_the_claims_cover_the_issue_list():
+    ids = {c.id for c in load_claims(CLAIMS_FILE)}
+    for needed in (
+        "fig10_k2_unstable_near_origin",
+        "fig15_k0_only_stable",
+        "fig18_k12_no_stable_point",
+        "fig16_k12_unstable_near_origin",
+        "fd_vs_ff_baumgarte_k0",
+        "fd_vs_ff_baumgarte_k12",
+        "fig11_projection_shrinks_with_alr21",
+        "fig11_projection_shrinks_with_ali21",
+        "fig19_k0_smaller_mu_more_stable",
+        "fig19_k12_larger_mu_more_stable",
+        "fig20_k0_smaller_ab_more_stable",
+        "fig20_k12_larger_ab_more_stable",
+    ):
+        assert needed in ids
+
+
+# -- end to end on engine data ----------------------------------------------------------------------
+
+
+def test_index3_claim_on_a_coarse_engine_panel():
+    """Sect. 3.5 on real (coarse) data: index 3 is stable at k = 0 and never at k = 1."""
+    cfg = yaml.safe_load(CONFIG_FILE.read_text())["stability"]
+    coarse = {"lr1": [-2.0, 0.0], "li1": [0.0, 2.0], "n": 6}
+    specs = figure_panels(
+        "18", cfg["figures"]["18"], grid=coarse, zoom_grid=coarse, precision={"policy": "auto", "digits": 30}
+    )
+    datasets = [stability_panel(s) for s in specs if s.k in (0, 1)]
+    by_id = {c.id: c for c in load_claims(CLAIMS_FILE)}
+    verdicts = {
+        v.claim.id: v
+        for v in evaluate([by_id["fig18_k12_no_stable_point"], by_id["fig18_k0_good"]], datasets)
+    }
+    # k = 2 has no data here: the `each` over k = 1, 2 cannot pass as a whole
+    assert verdicts["fig18_k12_no_stable_point"].verdict == "undecided"
+    assert "[k = 1]" in verdicts["fig18_k12_no_stable_point"].measured
+    assert "-> pass" in verdicts["fig18_k12_no_stable_point"].measured.split(";")[0]
+    assert verdicts["fig18_k0_good"].verdict == "pass"
+    # the same machinery reports a failure when the data contradict the check
+    contrary = claim({"kind": "stable_fraction", "select": {"figure": "18", "k": 0}, "op": "==", "value": 0})
+    assert evaluate_claim(contrary, datasets).verdict == "fail"
+
+
+def test_spec_is_plain_data():
+    spec = PanelSpec(
+        figure="9",
+        row=1,
+        k=0,
+        view="full",
+        method="projection",
+        method_params={},
+        decomposition="dd",
+        am21=1,
+        alr21=1,
+        ali21=1,
+        lr1=(-2, 0),
+        li1=(0, 2),
+        n=3,
+    )
+    assert PanelSpec.from_params(spec.as_dict()) == spec

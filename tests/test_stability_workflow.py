@@ -1,0 +1,261 @@
+"""The Snakemake side of the stability part: scheduling, validation, rerun triggers, CI merge.
+
+Each test works on a copy of the workflow in a temporary directory, so it
+never touches results/ of the checkout.  Dry runs are cheap; one test runs a
+tiny real workflow (one figure, 6 panels of 4 x 4 points) to check the
+params rerun trigger.
+"""
+
+import copy
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from icosim.sweep import figure_panels, panel_id
+
+ROOT = Path(__file__).resolve().parents[1]
+SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
+if not Path(SNAKEMAKE).exists():
+    SNAKEMAKE = shutil.which("snakemake") or "snakemake"
+
+
+def copy_workflow(dest: Path) -> Path:
+    for name in ("Snakefile", "pyproject.toml"):
+        if (ROOT / name).exists():
+            shutil.copy2(ROOT / name, dest / name)
+    for name in ("config", "workflow", "src"):
+        shutil.copytree(ROOT / name, dest / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+    return dest
+
+
+def snakemake(workdir: Path, *args, check=True):
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+    proc = subprocess.run(
+        [SNAKEMAKE, "--directory", str(workdir), "--snakefile", str(workdir / "Snakefile"), *args],
+        capture_output=True,
+        text=True,
+        cwd=workdir,
+        env=env,
+        timeout=600,
+    )
+    if check and proc.returncode != 0:
+        raise AssertionError(
+            f"snakemake {' '.join(args)} failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
+        )
+    return proc
+
+
+def scheduled(proc, rule):
+    """Outputs of the jobs of `rule` in a dry-run listing."""
+    text = proc.stdout + proc.stderr
+    blocks = re.split(r"\n(?=\S*rule \w+:)", text)
+    outs = []
+    for block in blocks:
+        m = re.search(r"rule (\w+):", block)
+        if m and m.group(1) == rule:
+            out = re.search(r"output: ([^\n]+)", block)
+            outs += [o.strip() for o in out.group(1).split(",")] if out else []
+    return outs
+
+
+@pytest.fixture(scope="module")
+def workflow_copy(tmp_path_factory):
+    return copy_workflow(tmp_path_factory.mktemp("wf"))
+
+
+def stability_config():
+    return yaml.safe_load((ROOT / "config" / "stability.yaml").read_text())["stability"]
+
+
+def test_one_figure_target_schedules_only_that_figures_panels(workflow_copy):
+    proc = snakemake(workflow_copy, "-n", "results/stability/figures/fig9.png")
+    sweeps = scheduled(proc, "stability_sweep")
+    cfg = stability_config()
+    expected = {
+        f"results/stability/fig9/{panel_id(s.row, s.k, s.view)}.nc"
+        for s in figure_panels(
+            "9", cfg["figures"]["9"], grid=cfg["grid"], zoom_grid=cfg["zoom_grid"], precision=cfg["precision"]
+        )
+    }
+    assert set(sweeps) == expected
+    assert len(expected) == 4 * 3 + 1  # 4 rows x k = 0, 1, 2, plus the zoom of row 4, k = 2
+    assert scheduled(proc, "stability_figure") == [
+        "results/stability/figures/fig9.png",
+        "results/stability/figures/fig9.pdf",
+    ]
+    assert not scheduled(proc, "stability_claims")
+
+
+@pytest.mark.parametrize(
+    "override, names",
+    [
+        ({"grid": {"npoints": 5}}, ["npoints"]),
+        ({"precision": {"policy": "fastest"}}, ["fastest", "policy"]),
+        ({"figures": {"9": {"rows": [{"am21": -1.0}]}}}, ["am21"]),
+        ({"figures": {"9": {"zoom": {"rows": [7], "k": [2]}}}}, ["stability.figures.9.zoom.rows"]),
+        (
+            {"figures": {"18": {"rows": [{"a": 1.0}]}}},
+            ["stability.figures.18", "row 1", "not used by method"],
+        ),
+    ],
+)
+def test_bad_configuration_fails_before_any_job_naming_the_key(workflow_copy, tmp_path, override, names):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(yaml.safe_dump({"stability": override}))
+    proc = snakemake(workflow_copy, "-n", "--configfile", str(bad), check=False)
+    out = proc.stdout + proc.stderr
+    assert proc.returncode != 0
+    for name in names:
+        assert name in out, out[-2000:]
+    assert "rule stability_sweep" not in out  # nothing was scheduled
+
+
+def test_ci_override_keeps_every_panel_on_coarse_grids():
+    """--configfile is merged recursively (lists replaced): the CI file only coarsens grids."""
+    from snakemake.utils import update_config
+
+    full = stability_config()
+    merged = copy.deepcopy(full)
+    ci = yaml.safe_load((ROOT / "config" / "ci" / "stability.yaml").read_text())["stability"]
+    update_config(merged, ci)
+    assert merged["figures"] == full["figures"]
+    assert merged["grid"]["n"] < full["grid"]["n"] and merged["zoom_grid"]["n"] < full["zoom_grid"]["n"]
+    assert merged["grid"]["lr1"] == full["grid"]["lr1"]
+
+    def count(cfg):
+        return sum(
+            len(
+                figure_panels(f, fc, grid=cfg["grid"], zoom_grid=cfg["zoom_grid"], precision=cfg["precision"])
+            )
+            for f, fc in cfg["figures"].items()
+        )
+
+    assert count(merged) == count(full) == 144
+    assert merged["claims"]["enforce_reference"] is True
+
+
+def test_ci_override_is_what_snakemake_schedules(workflow_copy):
+    proc = snakemake(
+        workflow_copy, "results/stability/claims.json", "-n", "--configfile", "config/ci/stability.yaml"
+    )
+    assert len(scheduled(proc, "stability_sweep")) == 144
+
+
+@pytest.fixture(scope="module")
+def tiny_run(tmp_path_factory):
+    """A real run of a one-figure configuration: Fig. 18 with two rows on a 4 x 4 grid."""
+    wf = copy_workflow(tmp_path_factory.mktemp("tiny"))
+    cfg = yaml.safe_load((wf / "config" / "stability.yaml").read_text())
+    st = cfg["stability"]
+    st["grid"]["n"] = 4
+    st["zoom_grid"]["n"] = 3
+    st["figures"] = {"18": {**st["figures"]["18"], "rows": [{}, {"am21": 3.0}]}}
+    (wf / "config" / "stability.yaml").write_text(yaml.safe_dump(cfg))
+    snakemake(wf, "-c2", "results/stability/figures/fig18.png")
+    return wf
+
+
+def edit_config(wf, fn):
+    path = wf / "config" / "stability.yaml"
+    cfg = yaml.safe_load(path.read_text())
+    fn(cfg["stability"])
+    path.write_text(yaml.safe_dump(cfg))
+
+
+def test_tiny_run_writes_the_panels_and_the_figure(tiny_run):
+    for row in (1, 2):
+        for k in (0, 1, 2):
+            assert (tiny_run / f"results/stability/fig18/r{row}_k{k}_full.nc").is_file()
+    assert (tiny_run / "results/stability/figures/fig18.png").read_bytes()[:4] == b"\x89PNG"
+    assert (tiny_run / "results/stability/figures/fig18.pdf").read_bytes()[:4] == b"%PDF"
+    assert (tiny_run / "logs/stability/sweep/fig18_r1_k0_full.log").is_file()
+
+
+def test_changing_one_row_reruns_that_rows_panels_only(tiny_run):
+    proc = snakemake(tiny_run, "-n", "results/stability/figures/fig18.png")
+    assert not scheduled(proc, "stability_sweep")  # up to date
+    edit_config(tiny_run, lambda st: st["figures"]["18"]["rows"][1].update(am21=4.0))
+    proc = snakemake(tiny_run, "-n", "results/stability/figures/fig18.png")
+    assert sorted(scheduled(proc, "stability_sweep")) == [
+        f"results/stability/fig18/r2_k{k}_full.nc" for k in (0, 1, 2)
+    ]
+    edit_config(tiny_run, lambda st: st["figures"]["18"]["rows"][1].update(am21=3.0))  # back
+
+
+def test_restyling_reruns_no_sweep_and_library_edits_rerun_their_users(tiny_run):
+    edit_config(tiny_run, lambda st: st["plot"].update(style="dots"))
+    proc = snakemake(tiny_run, "-n", "results/stability/figures/fig18.png")
+    assert not scheduled(proc, "stability_sweep")
+    assert scheduled(proc, "stability_figure")
+    edit_config(tiny_run, lambda st: st["plot"].update(style="field"))
+
+    # Snakemake reruns on an input newer than the output *with different content*: edit the modules
+    with open(tiny_run / "src/icosim/figures/stability.py", "a") as fh:
+        fh.write("\n# edited by test_stability_workflow\n")
+    proc = snakemake(tiny_run, "-n", "results/stability/figures/fig18.png")
+    assert not scheduled(proc, "stability_sweep") and scheduled(proc, "stability_figure")
+    with open(tiny_run / "src/icosim/sweep.py", "a") as fh:
+        fh.write("\n# edited by test_stability_workflow\n")
+    proc = snakemake(tiny_run, "-n", "results/stability/figures/fig18.png")
+    assert len(scheduled(proc, "stability_sweep")) == 6
+
+
+def report_inputs(proc):
+    text = proc.stdout + proc.stderr
+    block = re.search(r"rule report:\n(.*?)\n\n", text, re.S).group(1)
+    inputs = re.search(r"input: ([^\n]+)", block).group(1).split(", ")
+    return [Path(f).stem for f in inputs if f.startswith("results/report/")]
+
+
+def test_report_assembles_sections_in_configured_order(workflow_copy, tmp_path):
+    proc = snakemake(workflow_copy, "reports/icosim_report.html", "-n")
+    parts = report_inputs(proc)
+    assert "stability" in parts
+    default_order = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())["report"]["sections"]
+    assert parts == [p for p in default_order if p in parts]
+    # another order, and a part left out, are followed
+    order = tmp_path / "order.yaml"
+    order.write_text(yaml.safe_dump({"report": {"title": "t", "sections": ["pendulum", "stability"]}}))
+    proc = snakemake(workflow_copy, "reports/icosim_report.html", "-n", "--configfile", str(order))
+    parts = report_inputs(proc)
+    assert parts[-1] == "stability" and "convergence" not in parts
+
+
+def test_enforced_references_fail_the_claims_job_when_not_reproduced(tiny_run):
+    """The CI mechanism: with enforce_reference, a `ci: true` claim whose verdict differs from
+    its recorded reference fails the run; a reproduced one lets it pass."""
+    edit_config(tiny_run, lambda st: st["claims"].update(enforce_reference=True))
+    claims_path = tiny_run / "config/claims/stability.yaml"
+    claim = {
+        "id": "fig18_k0_good",
+        "source": "Sect. 3.5",
+        "statement": "Index 3 with k = 0 achieves a good stability behaviour.",
+        "figures": ["18"],
+        "check": {
+            "kind": "stable_fraction",
+            "select": {"figure": "18", "k": 0, "view": "full"},
+            "op": ">=",
+            "value": 0.9,
+        },
+        "ci": True,
+    }
+    claims_path.write_text(yaml.safe_dump({"claims": [{**claim, "reference": "fail"}]}))
+    proc = snakemake(tiny_run, "results/stability/claims.json", "-c1", check=False)
+    assert proc.returncode != 0
+    log = (tiny_run / "logs/stability/claims.log").read_text() + proc.stdout + proc.stderr
+    assert "fig18_k0_good" in log and "reference fail" in log
+    assert not (tiny_run / "results/stability/claims.json").exists()
+    claims_path.write_text(yaml.safe_dump({"claims": [{**claim, "reference": "pass"}]}))
+    snakemake(tiny_run, "results/stability/claims.json", "-c1")
+    verdicts = json.loads((tiny_run / "results/stability/claims.json").read_text())["claims"]
+    assert [(v["id"], v["verdict"], v["matches_reference"]) for v in verdicts] == [
+        ("fig18_k0_good", "pass", True)
+    ]
+    edit_config(tiny_run, lambda st: st["claims"].update(enforce_reference=False))

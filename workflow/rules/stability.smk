@@ -1,0 +1,147 @@
+# Stability plots, paper Figs. 9-20: one job per panel (figure x row x k x view) writing
+# results/stability/fig<figure>/r<row>_k<k>_<view>.nc, one plot job per figure, the paper's
+# claims checked against the datasets, and the stability section of the report.
+import sys
+
+sys.path.insert(0, str(Path(workflow.basedir) / "src"))
+from icosim.sweep import figure_panels, panel_id  # noqa: E402
+
+validate(config["stability"], "../schemas/stability.schema.yaml")
+
+STABILITY = config["stability"]
+# figure numbers are names ("9"), also if written unquoted in the YAML
+STABILITY["figures"] = {str(fig): cfg for fig, cfg in STABILITY["figures"].items()}
+
+# (figure, panel id) -> icosim.sweep.PanelSpec, for every configured panel.  Built here so
+# that a parameter a method does not take fails before any job runs, naming the figure/row.
+STABILITY_PANELS = {
+    (fig, panel_id(spec.row, spec.k, spec.view)): spec
+    for fig, fig_cfg in STABILITY["figures"].items()
+    for spec in figure_panels(
+        fig,
+        fig_cfg,
+        grid=STABILITY["grid"],
+        zoom_grid=STABILITY["zoom_grid"],
+        precision=STABILITY["precision"],
+    )
+}
+
+
+# figure -> its panel files (a figure's plot job gathers exactly these)
+STABILITY_PANEL_FILES = {fig: [] for fig in STABILITY["figures"]}
+for fig, pid in STABILITY_PANELS:
+    STABILITY_PANEL_FILES[fig].append(f"results/stability/fig{fig}/{pid}.nc")
+
+STABILITY_ALL_PANELS = [
+    f"results/stability/fig{fig}/{pid}.nc" for (fig, pid) in STABILITY_PANELS
+]
+STABILITY_FIGURES = [
+    f"results/stability/figures/fig{fig}.{ext}"
+    for fig in STABILITY["figures"]
+    for ext in ("png", "pdf")
+]
+STABILITY_CLAIMS = "results/stability/claims.json"
+STABILITY_SECTION = "results/report/stability.html"
+
+
+rule stability_sweep:
+    input:
+        lib=ENGINE + lib("sweep"),
+    output:
+        "results/stability/fig{figure}/{panel}.nc",
+    log:
+        "logs/stability/sweep/fig{figure}_{panel}.log",
+    wildcard_constraints:
+        figure=r"\d+",
+        panel=r"r\d+_k\d+_(full|zoom)",
+    """Spectral radius over the (lr1, li1) grid of one panel (float64 + mp rechecks)."""
+    conda:
+        "../envs/icosim.yaml"
+    params:
+        # exactly this panel's parameters: editing another panel does not rerun this one
+        panel=lambda w: STABILITY_PANELS[(w.figure, w.panel)].as_dict(),
+    script:
+        "../scripts/stability_sweep.py"
+
+
+rule stability_figure:
+    input:
+        panels=lambda w: STABILITY_PANEL_FILES[w.figure],
+        lib=lib("figures/__init__", "figures/stability", "datasets"),
+    output:
+        png=report(
+            "results/stability/figures/fig{figure}.png",
+            caption="../report/stability_figure.rst",
+            category="Stability (Figs. 9-20)",
+            subcategory="Fig. {figure}",
+            labels={"figure": "{figure}", "format": "PNG"},
+        ),
+        pdf="results/stability/figures/fig{figure}.pdf",
+    log:
+        "logs/stability/figure/fig{figure}.log",
+    wildcard_constraints:
+        figure=r"\d+",
+    """One figure of the paper (rows x k, plus zooms) from its panels; PNG and PDF."""
+    conda:
+        "../envs/icosim.yaml"
+    params:
+        title=lambda w: f"Fig. {w.figure}: {STABILITY['figures'][w.figure]['title']}",
+        style=STABILITY["plot"]["style"],
+        rho_max=STABILITY["plot"]["rho_max"],
+        dots_stride=STABILITY["plot"]["dots_stride"],
+        dpi=STABILITY["plot"]["dpi"],
+    script:
+        "../scripts/stability_figure.py"
+
+
+rule stability_claims:
+    input:
+        panels=STABILITY_ALL_PANELS,
+        claims="config/claims/stability.yaml",
+        lib=lib("claims", "datasets", "model"),
+    output:
+        json=STABILITY_CLAIMS,
+        tsv=report(
+            "results/stability/claims.tsv",
+            caption="../report/stability_claims.rst",
+            category="Stability (Figs. 9-20)",
+            subcategory="Claims",
+            labels={"table": "claims of Sects. 3.1-3.6 and 5"},
+        ),
+    log:
+        "logs/stability/claims.log",
+    """The paper's stability claims (config/claims/stability.yaml) evaluated on the datasets."""
+    conda:
+        "../envs/icosim.yaml"
+    params:
+        enforce_reference=STABILITY["claims"]["enforce_reference"],
+    script:
+        "../scripts/stability_claims.py"
+
+
+rule stability_report_section:
+    input:
+        figures=[f for f in STABILITY_FIGURES if f.endswith(".png")],
+        panels=STABILITY_ALL_PANELS,
+        claims=STABILITY_CLAIMS,
+        lib=lib("report", "datasets", "sweep"),
+    output:
+        STABILITY_SECTION,
+    log:
+        "logs/stability/report_section.log",
+    """HTML fragment of the report: decisions, precision and timing, claims, figures."""
+    conda:
+        "../envs/icosim.yaml"
+    params:
+        figures=STABILITY["figures"],
+        grid=STABILITY["grid"],
+        zoom_grid=STABILITY["zoom_grid"],
+        precision=STABILITY["precision"],
+        style=STABILITY["plot"]["style"],
+        decisions=STABILITY.get("decisions", []),
+    script:
+        "../scripts/stability_report_section.py"
+
+
+ALL_TARGETS.extend(STABILITY_FIGURES + [STABILITY_CLAIMS])
+REPORT_SECTIONS["stability"] = STABILITY_SECTION
