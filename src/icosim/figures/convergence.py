@@ -1,0 +1,164 @@
+"""Convergence plots (paper Figs. 21-23) and work-precision diagrams, drawn from datasets.
+
+Layout as in the paper: one column per parameter set (Fig. 21: ``mu``;
+Fig. 22: ``(a, b)``), one row per index, one curve per ``k``.  The NRMSE of
+stable runs is drawn over ``H`` on log-log axes; a run that is unstable at
+some ``H`` is drawn as an ``x`` marker pinned to the top of the panel -- never
+as an error value.  The points of the fitted (asymptotic) range are filled,
+the fitted order is in the legend, and dotted auxiliary lines show
+``O(H^p)`` as in the paper.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+
+__all__ = ["convergence_figure", "work_precision_figure", "K_COLOURS"]
+
+K_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink")
+PARAM_LABELS = {"mu": r"$\mu$ = {v:g} s", "a": "$a$ = {v:g}", "b": "$b$ = {v:g}"}
+
+
+def _column_label(column: dict) -> str:
+    return ", ".join(PARAM_LABELS.get(k, f"{k} = {{v:g}}").format(v=v) for k, v in column.items())
+
+
+def _limits(datasets):
+    vals = np.concatenate([ds["nrmse"].values.ravel() for ds in datasets])
+    vals = vals[np.isfinite(vals) & (vals > 0)]
+    if vals.size == 0:
+        return 1e-12, 10.0
+    ylo = 10 ** np.floor(np.log10(vals.min()) - 0.3)
+    top = max(vals.max(), 1e-3) * 2
+    # the data fill the lower 78 % of the height: the unstable markers sit above them
+    return ylo, ylo * (top / ylo) ** (1 / 0.78)
+
+
+def _guides(ax, H, orders, ylo, yhi):
+    """Dotted O(H^p) lines from the lower-left corner, labelled where they leave the panel."""
+    h0, h1 = float(np.min(H)), float(np.max(H))
+    y0 = ylo * 3
+    for p in orders:
+        h_end = min(h1, h0 * (yhi / 3 / y0) ** (1 / p))
+        hh = np.geomspace(h0, h_end, 20)
+        ax.plot(hh, y0 * (hh / h0) ** p, ls=":", color="0.45", lw=0.9, zorder=1)
+        ax.text(h_end, y0 * (h_end / h0) ** p, f" $H^{p}$", fontsize=7, color="0.35", va="center", ha="left")
+
+
+def _draw_cell(ax, ds, index, guide_orders, ylo, yhi):
+    sub = ds.sel(index=index)
+    H = ds["H"].values
+    for j, k in enumerate(ds["k"].values):
+        colour = K_COLOURS[j % len(K_COLOURS)]
+        err = sub["nrmse"].values[j]
+        unstable = sub["unstable"].values[j].astype(bool)
+        used = sub["fit_used"].values[j].astype(bool)
+        order = float(sub["order"].values[j])
+        label = f"k = {int(k)}: " + (
+            f"$p$ = {order:.2f}" if np.isfinite(order) else ("unstable" if unstable.all() else "no fit")
+        )
+        ax.plot(H, err, "-", color=colour, lw=1.2, label=label, zorder=3)
+        ax.plot(H[~used], err[~used], "o", mfc="white", mec=colour, ms=3.5, zorder=4)
+        ax.plot(H[used], err[used], "o", color=colour, ms=3.5, zorder=4)
+        if unstable.any():  # pinned to the top of the panel, never at an error value
+            ax.plot(
+                H[unstable],
+                np.full(unstable.sum(), 0.96 - 0.05 * j),
+                "x",
+                color=colour,
+                ms=5,
+                mew=1.4,
+                transform=ax.get_xaxis_transform(),
+                clip_on=False,
+                zorder=5,
+            )
+    _guides(ax, H, guide_orders, ylo, yhi)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_ylim(ylo, yhi)
+    ax.grid(True, which="major", lw=0.4, alpha=0.5)
+    ax.legend(loc="lower right", fontsize=7, framealpha=0.85)
+
+
+def convergence_figure(datasets: dict, layout, *, columns, rows, title="", guide_orders=(1, 2, 3, 4)):
+    """One figure: ``layout[c][r] = (panel, index)`` into ``datasets[panel]``.
+
+    ``columns`` are the column parameter dicts (titles), ``rows`` the row
+    labels.
+    """
+    n_cols, n_rows = len(layout), len(rows)
+    ylo, yhi = _limits(list(datasets.values()))
+    fig = Figure(figsize=(4.0 * n_cols + 0.6, 3.2 * n_rows + 0.9), layout="constrained")
+    axes = fig.subplots(n_rows, n_cols, squeeze=False, sharex=True, sharey=True)
+    for c, col in enumerate(layout):
+        for r, (panel, index) in enumerate(col):
+            ax = axes[r, c]
+            ds = datasets[panel]
+            _draw_cell(ax, ds, index, guide_orders, ylo, yhi)
+            head = _column_label(columns[c])
+            if ds.attrs.get("shared_across_columns") and n_cols > 1:
+                head = f"{head} (index {index} does not use it)" if head else ""
+            ax.set_title(f"{rows[r]}" + (f"; {head}" if head else ""), fontsize=9)
+            if r == n_rows - 1:
+                ax.set_xlabel("macro-step size $H$ (s)")
+            if c == 0:
+                ax.set_ylabel(r"NRMSE $\varepsilon_{glo}$, Eq. (72)")
+    handles = [
+        Line2D([], [], ls="none", marker="o", color="0.3", label="in the fitted (asymptotic) range"),
+        Line2D([], [], ls="none", marker="o", mfc="white", mec="0.3", label="outside the fitted range"),
+        Line2D(
+            [], [], ls="none", marker="x", color="0.3", mew=1.4, label="unstable at this H (no error shown)"
+        ),
+        Line2D([], [], ls=":", color="0.45", label="auxiliary lines $O(H^p)$"),
+    ]
+    fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=8, frameon=False)
+    if title:
+        fig.suptitle(title, fontsize=11)
+    return fig
+
+
+def work_precision_figure(wp, *, title=""):
+    """CPU time per simulated second over NRMSE, one panel per decomposition, one line per scheme."""
+    decs = [d for d in ("ff", "fd", "dd") if d in set(wp["decomposition"].values.tolist())]
+    fig = Figure(figsize=(5.2 * len(decs), 4.6), layout="constrained")
+    axes = fig.subplots(1, len(decs), squeeze=False, sharey=True)[0]
+    families = sorted({s.split(" k=")[0].split(" ", 1)[1] for s in wp["scheme"].values.tolist()})
+    colours = {f: f"C{i % 10}" for i, f in enumerate(families)}
+    markers = ("o", "s", "^", "D", "v")
+    for ax, dec in zip(axes, decs):
+        for s in range(wp.sizes["scheme"]):
+            if str(wp["decomposition"].values[s]) != dec:
+                continue
+            label = str(wp["scheme"].values[s])
+            err = wp["nrmse"].values[s]
+            cost = wp["cpu_seconds_per_simulated_second"].values[s]
+            ok = np.isfinite(err) & np.isfinite(cost)
+            if not ok.any():
+                continue
+            fam = label.split(" k=")[0].split(" ", 1)[1]
+            k = int(wp["k"].values[s])
+            ax.plot(
+                err[ok],
+                cost[ok],
+                ls=("-", "--", "-.", ":")[k % 4],
+                marker=markers[k % len(markers)],
+                ms=3.5,
+                color=colours[fam],
+                label=label.split(" ", 1)[1],
+            )
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.invert_xaxis()  # more accurate to the right
+        ax.grid(True, lw=0.4, alpha=0.5)
+        ax.set_xlabel(r"NRMSE $\varepsilon_{glo}$, Eq. (72)")
+        ax.set_title(
+            {"ff": "force/force", "fd": "force/displacement", "dd": "displacement/displacement"}[dec],
+            fontsize=10,
+        )
+        ax.legend(fontsize=6.5, loc="upper left")
+    axes[0].set_ylabel("CPU time per simulated second (s)")
+    if title:
+        fig.suptitle(title, fontsize=11)
+    return fig

@@ -1,0 +1,246 @@
+"""Unit tests of icosim.convergence: Eq. (72), the order fit, stepping, unstable detection."""
+
+import numpy as np
+import pytest
+import xarray as xr
+import yaml
+from pathlib import Path
+
+import icosim
+from icosim.convergence import (
+    PanelSpec, Setup, Study, dimensional_method, fastest_schemes, figure_layout, figure_panels, fit_order,
+    iterate_linear_map, method_attrs, nrmse, resolve_scheme, run_panel, step_counts, time_macro_steps,
+)
+from icosim.model import ParameterError
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+# ------------------------------------------------------------------ Eq. (72)
+def _signals(n=400):
+    t = np.linspace(0.01, 1, n)
+    return np.stack([np.exp(-t) * np.cos(9 * t), np.exp(-t) * np.cos(9 * t) + 0.1, np.sin(7 * t), np.cos(5 * t) * t], -1)
+
+
+def test_nrmse_constant_offset_matches_variance_formula():
+    ref = _signals()
+    delta = np.array([1e-3, -2e-3, 5e-4, 0.0])
+    # independent: mean squared offset over the population variance (numpy.var), summed, root
+    expected = np.sqrt(np.sum(delta**2 / np.var(ref, axis=0)))
+    assert nrmse(ref, ref + delta) == pytest.approx(expected, rel=1e-12)
+
+
+def test_nrmse_relative_scaling_and_zero():
+    ref = _signals()
+    eps = 1e-4
+    expected = eps * np.sqrt(np.sum(np.mean(ref**2, 0) / np.var(ref, 0)))
+    assert nrmse(ref, ref * (1 + eps)) == pytest.approx(expected, rel=1e-9)
+    assert nrmse(ref, ref) == 0.0
+
+
+def test_nrmse_bad_input():
+    ref = _signals()
+    assert np.isnan(nrmse(ref, np.full_like(ref, np.inf)))
+    with pytest.raises(ValueError, match="same shape"):
+        nrmse(ref, ref[:-1])
+    with pytest.raises(ValueError, match="constant"):
+        nrmse(np.ones((10, 4)), np.ones((10, 4)))
+
+
+# ------------------------------------------------------------------ setup, reference, methods
+def test_step_counts_end_exactly_at_end_time():
+    n = step_counts(1.0, 1e-5, 1e-2, 16)
+    assert n[0] == 100 and n[-1] == 100000 and len(n) == 16
+    with pytest.raises(ParameterError, match="H_min"):
+        step_counts(1.0, 1e-2, 1e-5, 16)
+
+
+def test_reference_matches_closed_form():
+    s = Setup()
+    study = Study(s, [50, 200])
+    M, C, D = s.m1 + s.m2, s.c1 + s.c2, s.d1 + s.d2
+    delta, omega = D / (2 * M), np.sqrt(C / M - (D / (2 * M)) ** 2)
+    for i, H in enumerate(study.H):
+        t = H * np.arange(1, study.n_steps[i] + 1)
+        x = np.exp(-delta * t) * (s.x0 * np.cos(omega * t) + (s.v0 + delta * s.x0) / omega * np.sin(omega * t))
+        v = np.gradient(x, t)  # checked loosely; exact velocity below
+        v_exact = np.exp(-delta * t) * (-s.x0 * omega * np.sin(omega * t) + (s.v0 + delta * s.x0) * np.cos(omega * t)) - delta * x
+        ref = study.reference(i)
+        np.testing.assert_allclose(ref[:, 0], x, atol=1e-14)
+        np.testing.assert_allclose(ref[:, 1], x, atol=1e-14)
+        np.testing.assert_allclose(ref[:, 2], v_exact, atol=1e-12)
+        assert np.max(np.abs(v[5:-5] - v_exact[5:-5])) < 0.05 * np.max(np.abs(v_exact))
+
+
+def test_dimensional_baumgarte_parameters():
+    m = dimensional_method("baumgarte", 1e-3, index=1, mu=5e-3)
+    assert m.params["beta"] == pytest.approx(10.0) and m.params["gamma"] == pytest.approx(25.0)
+    attrs = method_attrs("baumgarte", index=1, mu=5e-3)
+    assert attrs["beta"] == pytest.approx(1e-2) and attrs["gamma"] == pytest.approx(2.5e-5)
+    assert dimensional_method("weighted", 1e-3, a=1.0, b=1.0).params == {"a": 1.0, "b": 1.0, "index": 1}
+
+
+# ------------------------------------------------------------------ stepping
+@pytest.mark.parametrize("method,params,dec,k", [
+    ("baumgarte", {"index": 1, "mu": 5e-3}, "ff", 1),
+    ("weighted", {"index": 1, "a": 1.0, "b": 1.0}, "fd", 1),
+    ("projection", {}, "dd", 2),
+    ("projection", {}, "ff", 0),
+])
+def test_matrix_stepping_equals_simulate(method, params, dec, k):
+    """The amplification-matrix path is the same macro-step algorithm (by linearity)."""
+    study = Study(Setup(end_time=0.3), [300, 600])  # 600 > one block of powers
+    for i, H in enumerate(study.H):
+        m = dimensional_method(method, H, **params)
+        fast, d1 = study._states(m, dec, k, H, int(study.n_steps[i]), "matrix")
+        slow, d2 = study._states(m, dec, k, H, int(study.n_steps[i]), "simulate")
+        assert d1 is None and d2 is None
+        # round-off only: ~eps per step amplified by the conditioning of the corrections
+        # (an algorithmic difference would show at the size of the error, >= 1e-9 here)
+        np.testing.assert_allclose(fast, slow, rtol=0, atol=1e-10 * Setup().x0)
+    a = study.run(method, params, dec, k, stepping="matrix")
+    b = study.run(method, params, dec, k, stepping="simulate")
+    np.testing.assert_allclose(a.nrmse, b.nrmse, rtol=1e-6)
+
+
+def test_iterate_linear_map_powers_and_bound():
+    rng = np.random.default_rng(1)
+    M = rng.standard_normal((5, 5))
+    M *= 0.9 / np.max(np.abs(np.linalg.eigvals(M)))
+    w0 = rng.standard_normal(5)
+    W, d = iterate_linear_map(M, w0, 700, block=64)
+    assert d is None and W.shape == (701, 5)
+    w = w0.copy()
+    for n in range(700):
+        w = M @ w
+    np.testing.assert_allclose(W[-1], w, atol=1e-12)
+    # doubling: |w_n| = 2^n exceeds 100 first at n = 7
+    W, d = iterate_linear_map(2 * np.eye(5), np.ones(5), 50, bound=100.0, block=4)
+    assert d == 7 and W.shape == (7, 5)
+
+
+# ------------------------------------------------------------------ unstable detection
+def test_diverging_run_is_unstable_and_has_no_error():
+    study = Study(Setup(), [100, 200, 400])
+    r = study.run("baumgarte", {"index": 3}, "ff", 1)
+    assert r.unstable.all()
+    assert np.isnan(r.nrmse).all()
+    assert (r.spectral_radius > 1).all()
+
+
+def test_slowly_growing_run_flagged_by_spectral_radius():
+    """Index 2, k = 1, mu = 5e-3 at small H grows too slowly to leave the bound within 1 s:
+    its finished error looks small, but the spectral radius exceeds 1 -- unstable, NaN."""
+    study = Study(Setup(), [50000, 100000])
+    r = study.run("baumgarte", {"index": 2, "mu": 5e-3}, "ff", 1)
+    assert (r.diverged_at == -1).all()
+    assert np.isfinite(r.nrmse_unfiltered).all() and (r.nrmse_unfiltered < 1e-2).all()
+    assert (r.spectral_radius > 1).all() and r.unstable.all() and np.isnan(r.nrmse).all()
+
+
+# ------------------------------------------------------------------ order fit
+def test_fit_recovers_order_and_stops_before_floor():
+    H = np.logspace(-5, -2, 16)
+    n = np.round(1 / H)
+    rng = np.random.default_rng(0)
+    err = 3.0 * H**3 * (1 + 1e-3 * rng.standard_normal(H.size))
+    floor = 1e-11 * (1 + rng.random(H.size))  # round-off floor: noisy, not decreasing
+    f = fit_order(H, err + floor, n)
+    assert f.order == pytest.approx(3.0, abs=0.05)
+    assert f.H_min > 1e-4  # the floor points are not in the fitted range
+    assert f.H_max == pytest.approx(H.max())
+
+
+def test_fit_ignores_preasymptotic_range_and_nan():
+    H = np.logspace(-4, -1, 16)
+    err = H**2 + 1e3 * H**4  # order 2 for small H, 4 at large H
+    err[3] = np.nan  # an unstable point
+    f = fit_order(H, err)
+    assert f.order == pytest.approx(2.0, abs=0.1)
+    assert f.H_max < 2e-2 and not f.used[3] and not f.used[-4:].any()  # slope > 2.25 there
+
+
+def test_fit_too_few_points():
+    f = fit_order(np.array([1e-3, 2e-3, 4e-3]), np.array([1e-6, 4e-6, np.nan]))
+    assert np.isnan(f.order) and "fewer than" in f.reason
+
+
+# ------------------------------------------------------------------ panels, datasets, work-precision
+def _config():
+    return yaml.safe_load((ROOT / "config" / "convergence.yaml").read_text())["convergence"]
+
+
+def test_panels_share_the_index3_row():
+    cfg = _config()
+    specs = figure_panels("21", cfg["figures"]["21"], cfg["k"])
+    ff = [s for s in specs if s.decomposition == "ff"]
+    assert [s.panel for s in ff] == ["mu0.00025", "mu0.001", "mu0.005", "index3"]
+    assert ff[-1].shared and ff[-1].rows == ({"index": 3},)
+    layout = figure_layout("21", cfg["figures"]["21"], "ff", cfg["k"])
+    assert layout[1] == [("mu0.001", 1), ("mu0.001", 2), ("index3", 3)]
+    assert PanelSpec.from_dict(ff[0].as_dict()) == ff[0]
+
+
+def test_bad_parameters_name_the_figure():
+    with pytest.raises(ParameterError, match="figure 9.*mu"):
+        figure_panels("9", {"method": "weighted", "columns": [{"mu": 1.0}], "rows": [{"index": 1}],
+                            "decompositions": ["ff"]}, [0])
+    with pytest.raises(ParameterError, match="decomposition 'dd'"):
+        figure_panels("9", {"method": "baumgarte", "columns": [{"mu": 1e-3}], "rows": [{"index": 1}],
+                            "decompositions": ["dd"]}, [0])
+    with pytest.raises(ParameterError, match="exactly one column"):
+        resolve_scheme({"figure": "21", "mu": 7.0, "index": 1}, _config()["figures"], [0])
+
+
+def test_schema_rejects_unknown_key():
+    from snakemake.utils import validate
+    from snakemake.exceptions import WorkflowError
+
+    cfg = _config()
+    cfg["step_sizes"]["H_mni"] = 1e-5
+    with pytest.raises(WorkflowError, match="H_mni"):
+        validate(cfg, str(ROOT / "workflow" / "schemas" / "convergence.schema.yaml"))
+
+
+def test_panel_dataset_and_work_precision():
+    spec = PanelSpec("23", "ff", "all", "projection", {}, ({},), (0, 1))
+    study = Study(Setup(end_time=0.2), step_counts(0.2, 2e-4, 2e-2, 5))
+    ds = run_panel(spec, study, {"min_points": 3})
+    assert ds["nrmse"].dims == ("index", "k", "H") and ds["H"].attrs["units"] == "s"
+    assert ds.attrs["figure"] == "23" and ds.attrs["method"] == "projection" and ds.attrs["decomposition"] == "ff"
+    assert np.all(np.diff(ds["order"].values[0]) > 0.5)  # k = 1 converges faster than k = 0
+    entries = resolve_scheme({"figure": "23"}, {"23": {"method": "projection", "columns": [{}], "rows": [{}],
+                                                       "decompositions": ["ff"]}}, [0, 1])
+    wp = icosim.convergence.work_precision(entries, {("ff", "23", "all"): ds}, study.setup, steps=2, repeats=1, warmup_steps=1)
+    cost = wp["cpu_seconds_per_simulated_second"].values
+    assert np.all(cost[np.isfinite(wp["nrmse"].values)] > 0)
+    ranking = fastest_schemes(wp, [1.0])[0]["ranking"]
+    assert [r[0] for r in ranking] and all(a[1] <= b[1] for a, b in zip(ranking, ranking[1:]))
+
+
+def test_time_macro_steps_positive():
+    t = time_macro_steps(Setup(), 1e-3, "projection", {}, "ff", 0, steps=3, repeats=2, warmup_steps=1)
+    assert t["seconds_per_step"] > 0 and t["seconds_per_simulated_second"] == pytest.approx(t["seconds_per_step"] / 1e-3)
+
+
+def test_figure_never_draws_unstable_as_error():
+    from icosim.figures.convergence import convergence_figure
+
+    H = np.array([1e-3, 2e-3, 4e-3, 8e-3])
+    err = np.array([[[1e-6, 4e-6, np.nan, np.nan]]])
+    unstable = np.array([[[False, False, True, True]]])
+    ds = xr.Dataset(
+        {"nrmse": (("index", "k", "H"), err), "unstable": (("index", "k", "H"), unstable),
+         "fit_used": (("index", "k", "H"), np.zeros_like(unstable)), "order": (("index", "k"), [[np.nan]])},
+        coords={"H": H, "index": [1], "k": [0]},
+    )
+    fig = convergence_figure({"p": ds}, [[("p", 1)]], columns=[{}], rows=["index 1"], guide_orders=[2])
+    ax = fig.axes[0]
+    xs = [line for line in ax.get_lines() if line.get_marker() == "x"]
+    assert len(xs) == 1 and list(xs[0].get_xdata()) == [4e-3, 8e-3]
+    assert xs[0].get_transform() == ax.get_xaxis_transform()  # axes height, not an error value
+    data_lines = [line for line in ax.get_lines() if line.get_marker() in ("o", "None", "") and line.get_linestyle() != ":"]
+    for line in data_lines:
+        y = np.asarray(line.get_ydata(), float)
+        x = np.asarray(line.get_xdata(), float)
+        assert not np.any(np.isfinite(y) & np.isin(x, [4e-3, 8e-3]))

@@ -1,0 +1,208 @@
+# Convergence plots, paper Figs. 21-23 (Sect. 3.7): one job per panel (figure x decomposition x
+# column) writing results/convergence/<dec>/fig<figure>_<panel>.nc, one plot job per figure and
+# decomposition, the work-precision timing and diagram, the paper's order claims checked
+# against the datasets, and the convergence section of the report.
+import sys
+
+sys.path.insert(0, str(Path(workflow.basedir) / "src"))
+from icosim.convergence import (
+    figure_layout,
+    figure_panels,
+    resolve_scheme,
+)  # noqa: E402
+
+validate(config["convergence"], "../schemas/convergence.schema.yaml")
+
+CONVERGENCE = config["convergence"]
+CONV_SETUP = {
+    **CONVERGENCE["model"],
+    **CONVERGENCE["initial_conditions"],
+    "end_time": CONVERGENCE["end_time"],
+    "growth_bound": CONVERGENCE["unstable"]["growth_bound"],
+}
+
+# (decomposition, figure, panel) -> icosim.convergence.PanelSpec.  Built here so that a
+# parameter a method does not take fails before any job runs, naming the figure.
+CONV_PANELS = {
+    (spec.decomposition, spec.figure, spec.panel): spec
+    for fig, fig_cfg in CONVERGENCE["figures"].items()
+    for spec in figure_panels(fig, fig_cfg, CONVERGENCE["k"])
+}
+CONV_WP_ENTRIES = [
+    entry
+    for scheme in CONVERGENCE["work_precision"]["schemes"]
+    for entry in resolve_scheme(scheme, CONVERGENCE["figures"], CONVERGENCE["k"])
+]
+
+
+CONV_PANEL_FILE = "results/convergence/{}/fig{}_{}.nc"  # decomposition, figure, panel
+CONV_ALL_PANELS = [CONV_PANEL_FILE.format(*key) for key in CONV_PANELS]
+# (decomposition, figure) -> the panel files one figure is drawn from
+CONV_FIGURE_PANELS = {
+    key[:2]: [CONV_PANEL_FILE.format(*k) for k in CONV_PANELS if k[:2] == key[:2]]
+    for key in CONV_PANELS
+}
+CONV_FIGURES = sorted(
+    {f"results/convergence/figures/fig{fig}_{dec}.png" for dec, fig, _ in CONV_PANELS}
+)
+CONV_WP = "results/convergence/work_precision.nc"
+CONV_WP_FIGURE = "results/convergence/figures/work_precision.png"
+CONV_CLAIMS = "results/convergence/claims.json"
+CONV_SECTION = "results/report/convergence.html"
+
+
+rule convergence_panel:
+    input:
+        lib=ENGINE + lib("convergence"),
+    output:
+        "results/convergence/{dec}/fig{figure}_{panel}.nc",
+    log:
+        "logs/convergence/panel/{dec}_fig{figure}_{panel}.log",
+    wildcard_constraints:
+        dec="ff|fd|dd",
+        figure=r"\d+",
+    """NRMSE of Eq. (72) over H for every row (index) and k of one figure column."""
+    conda:
+        "../envs/icosim.yaml"
+    params:
+        # exactly this panel's parameters: editing another panel does not rerun this one
+        panel=lambda w: CONV_PANELS[(w.dec, w.figure, w.panel)].as_dict(),
+        setup=CONV_SETUP,
+        step_sizes=CONVERGENCE["step_sizes"],
+        stepping=CONVERGENCE["stepping"],
+        spectral_policy=CONVERGENCE["unstable"]["spectral_policy"],
+        digits=CONVERGENCE["unstable"]["digits"],
+        fit=CONVERGENCE["fit"],
+    script:
+        "../scripts/convergence_panel.py"
+
+
+rule convergence_figure:
+    input:
+        panels=lambda w: CONV_FIGURE_PANELS[(w.dec, w.figure)],
+        lib=lib("figures", "datasets"),
+    output:
+        png=report(
+            "results/convergence/figures/fig{figure}_{dec}.png",
+            caption="../report/convergence_figure.rst",
+            category="Convergence (Figs. 21-23)",
+            subcategory="Fig. {figure}",
+            labels={"figure": "{figure}", "decomposition": "{dec}"},
+        ),
+        pdf="results/convergence/figures/fig{figure}_{dec}.pdf",
+    log:
+        "logs/convergence/figure/fig{figure}_{dec}.log",
+    wildcard_constraints:
+        dec="ff|fd|dd",
+        figure=r"\d+",
+    """One convergence figure (rows = index, columns = parameter set) for one decomposition."""
+    conda:
+        "../envs/icosim.yaml"
+    params:
+        title=lambda w: f"Fig. {w.figure} ({w.dec}): {CONVERGENCE['figures'][w.figure]['title']}",
+        layout=lambda w: figure_layout(
+            w.figure, CONVERGENCE["figures"][w.figure], w.dec, CONVERGENCE["k"]
+        ),
+        columns=lambda w: CONVERGENCE["figures"][w.figure]["columns"],
+        guide_orders=CONVERGENCE["plot"]["guide_orders"],
+        dpi=CONVERGENCE["plot"]["dpi"],
+    script:
+        "../scripts/convergence_figure.py"
+
+
+rule convergence_work_precision:
+    input:
+        panels=sorted(
+            {
+                CONV_PANEL_FILE.format(e["decomposition"], e["figure"], e["panel"])
+                for e in CONV_WP_ENTRIES
+            }
+        ),
+        lib=ENGINE + lib("convergence"),
+    output:
+        CONV_WP,
+    log:
+        "logs/convergence/work_precision.log",
+    """CPU time of the engine's co-simulation stepping per simulated second, per scheme and H."""
+    conda:
+        "../envs/icosim.yaml"
+    params:
+        entries=CONV_WP_ENTRIES,
+        setup=CONV_SETUP,
+        steps=CONVERGENCE["work_precision"]["steps"],
+        repeats=CONVERGENCE["work_precision"]["repeats"],
+        warmup_steps=CONVERGENCE["work_precision"]["warmup_steps"],
+    script:
+        "../scripts/convergence_work_precision.py"
+
+
+rule convergence_work_precision_figure:
+    input:
+        wp=CONV_WP,
+        lib=lib("figures", "datasets"),
+    output:
+        png=report(
+            CONV_WP_FIGURE,
+            caption="../report/convergence_work_precision.rst",
+            category="Convergence (Figs. 21-23)",
+            subcategory="Work-precision",
+        ),
+        pdf=CONV_WP_FIGURE.replace(".png", ".pdf"),
+    log:
+        "logs/convergence/work_precision_figure.log",
+    """Work-precision diagram: log-log CPU time per simulated second over NRMSE."""
+    conda:
+        "../envs/icosim.yaml"
+    params:
+        dpi=CONVERGENCE["plot"]["dpi"],
+    script:
+        "../scripts/convergence_work_precision_figure.py"
+
+
+rule convergence_claims:
+    input:
+        panels=CONV_ALL_PANELS,
+        claims="config/claims/convergence.yaml",
+        lib=lib("convergence", "datasets"),
+    output:
+        CONV_CLAIMS,
+    log:
+        "logs/convergence/claims.log",
+    """The paper's order claims (config/claims/convergence.yaml) evaluated on the datasets."""
+    conda:
+        "../envs/icosim.yaml"
+    params:
+        enforce_reference=CONVERGENCE["claims"]["enforce_reference"],
+    script:
+        "../scripts/convergence_claims.py"
+
+
+rule convergence_report_section:
+    input:
+        figures=CONV_FIGURES,
+        wp_figure=CONV_WP_FIGURE,
+        wp=CONV_WP,
+        claims=CONV_CLAIMS,
+        panels=CONV_ALL_PANELS,
+        lib=lib("report", "convergence", "datasets"),
+    output:
+        CONV_SECTION,
+    log:
+        "logs/convergence/report_section.log",
+    """HTML fragment of the report: decisions, figures, claims table, work-precision."""
+    conda:
+        "../envs/icosim.yaml"
+    params:
+        setup=CONV_SETUP,
+        step_sizes=CONVERGENCE["step_sizes"],
+        stepping=CONVERGENCE["stepping"],
+        fit=CONVERGENCE["fit"],
+        unstable=CONVERGENCE["unstable"],
+        targets=CONVERGENCE["work_precision"]["targets"],
+        figures=CONVERGENCE["figures"],
+    script:
+        "../scripts/convergence_report_section.py"
+
+
+ALL_TARGETS.extend(CONV_FIGURES + [CONV_WP_FIGURE, CONV_CLAIMS])
+REPORT_SECTIONS["convergence"] = CONV_SECTION

@@ -1,0 +1,30 @@
+"""Snakemake job: one convergence panel (rows x k of one column) -> NetCDF (thin: icosim.convergence)."""
+
+import json
+import logging
+
+from icosim.convergence import PanelSpec, Setup, Study, run_panel, step_counts
+from icosim.datasets import provenance_attrs, write_netcdf
+
+snakemake = snakemake  # noqa: F821 (injected by Snakemake)
+
+logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+p = snakemake.params
+job = {k: p[k] for k in ("panel", "setup", "step_sizes", "stepping", "spectral_policy", "digits", "fit")}
+logging.info("panel parameters: %s", json.dumps(job, sort_keys=True))
+
+spec = PanelSpec.from_dict(p.panel)
+setup = Setup(**p.setup)
+n_steps = step_counts(setup.end_time, p.step_sizes["H_min"], p.step_sizes["H_max"], p.step_sizes["num"])
+study = Study(setup, n_steps, spectral_policy=p.spectral_policy, digits=p.digits)
+title = f"Fig. {spec.figure} ({spec.decomposition}), panel {spec.panel}: NRMSE of Eq. (72) over the macro-step size"
+ds = run_panel(spec, study, p.fit, stepping=p.stepping,
+               provenance=provenance_attrs(job, title=title, command="snakemake rule convergence_panel"))
+write_netcdf(ds, snakemake.output[0])
+
+for i, index in enumerate(ds["index"].values):
+    for j, k in enumerate(ds["k"].values):
+        logging.info("index %d k %d: order %.3f on [%.3g, %.3g] s, %d unstable of %d step sizes",
+                     index, k, ds["order"].values[i, j], ds["fit_H_min"].values[i, j], ds["fit_H_max"].values[i, j],
+                     int(ds["unstable"].values[i, j].sum()), ds.sizes["H"])
+logging.info("%.2f s", ds.attrs["seconds_total"])

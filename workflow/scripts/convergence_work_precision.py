@@ -1,0 +1,26 @@
+"""Snakemake job: time the co-simulation stepping per scheme and H (error from the panel datasets)."""
+
+import json
+import logging
+
+from icosim.convergence import Setup, work_precision
+from icosim.datasets import open_dataset, provenance_attrs, write_netcdf
+
+snakemake = snakemake  # noqa: F821 (injected by Snakemake)
+
+logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+p = snakemake.params
+job = {k: p[k] for k in ("entries", "setup", "steps", "repeats", "warmup_steps")}
+logging.info("parameters: %s", json.dumps(job, sort_keys=True))
+datasets = {}
+for path in snakemake.input.panels:
+    ds = open_dataset(path)
+    datasets[(ds.attrs["decomposition"], str(ds.attrs["figure"]), ds.attrs["panel"])] = ds
+wp = work_precision(p.entries, datasets, Setup(**p.setup), steps=p.steps, repeats=p.repeats,
+                    warmup_steps=p.warmup_steps,
+                    provenance=provenance_attrs(job, title="Work-precision of the co-simulation schemes",
+                                                command="snakemake rule convergence_work_precision"))
+write_netcdf(wp, snakemake.output[0])
+for s in range(wp.sizes["scheme"]):
+    logging.info("%s: %.3g ms per macro step (median over H)", wp["scheme"].values[s],
+                 1e3 * float(wp["cpu_seconds_per_step"][s].median(skipna=True)))
