@@ -1,0 +1,18 @@
+"""Snakemake job: error of every run against the monolithic reference -> PNG."""
+
+import logging
+
+from icosim.datasets import open_dataset
+from icosim.figures import save_figure
+from icosim.figures.pendulum import error_figure
+
+snakemake = snakemake  # noqa: F821 (injected by Snakemake)
+
+logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+runs_by_k = {}
+for path in snakemake.input.runs:
+    ds = open_dataset(path)
+    runs_by_k.setdefault(int(ds.attrs["k"]), []).append(ds)
+reference = open_dataset(snakemake.input.reference)
+save_figure(error_figure(runs_by_k, reference), snakemake.output[0], dpi=snakemake.params.dpi)
+logging.info("%d runs drawn", sum(len(v) for v in runs_by_k.values()))
