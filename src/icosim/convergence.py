@@ -340,14 +340,14 @@ class Study:
 
     def _spectral_radii(self, methods, decomposition, k):
         """Spectral radius per H (one batched call when the method does not depend on H)."""
-        models = self.setup.model(self.H).test_model()
+        models = self.setup.model(self.H)  # physical: overdamped subsystems are fine
         if all(m.params == methods[0].params for m in methods):
             res = spectral_radius(models, methods[0], decomposition, k, digits=self.digits, policy=self.spectral_policy)
             return np.asarray(res.rho, float), np.asarray(res.digits)
         rho = np.empty(self.H.size)
         digits = np.empty(self.H.size, dtype=int)
         for i, m in enumerate(methods):
-            model_i = self.setup.model(self.H[i]).test_model()
+            model_i = self.setup.model(self.H[i])
             res = spectral_radius(model_i, m, decomposition, k, digits=self.digits, policy=self.spectral_policy)
             rho[i], digits[i] = float(res.rho), int(res.digits)
         return rho, digits

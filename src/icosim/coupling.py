@@ -136,32 +136,42 @@ class CouplingMethod:
         for weight, levels in self.solves:
             if weight == 0:
                 continue  # an unused level may be singular (e.g. velocity at k = 0)
-            r, J = _combine(levels, residuals, jacobians)
+            r = _conditions(levels, residuals, axis=-1)
+            J = _conditions(levels, jacobians, axis=-2)
             de = solve_small(J, -r)
             term = de if weight == 1 else backend.const(weight) * de
             total = term if total is None else total + term
         return e_pred + total
 
+    def condition_residuals(self, residuals):
+        """The conditions this method drives to zero (every solve's rows, concatenated).
 
-def _combine(levels, residuals, jacobians):
-    r_rows, J_rows = [], []
-    if residuals["pos"].shape[-1]:
-        r_c = J_c = None
+        Used to stop corrector iterations: Baumgarte, for example, enforces
+        ``g + beta g' + gamma g''``, not each level on its own.
+        """
+        rows = [_conditions(levels, residuals, axis=-1) for weight, levels in self.solves if weight != 0]
+        return np.concatenate(rows, axis=-1)
+
+
+def _conditions(levels, parts, axis):
+    """Stack the constraint-level combination and the force-balance rows.
+
+    ``parts`` maps ``pos``/``vel``/``acc``/``force`` to residuals (rows on the
+    last axis) or Jacobians (rows on axis -2); ``levels`` are the weights of
+    the three constraint levels.
+    """
+    rows = []
+    if parts["pos"].shape[axis]:
+        combined = None
         for w, key in zip(levels, ("pos", "vel", "acc")):
             if w == 0:
                 continue
-            rr = residuals[key] if w == 1 else w * residuals[key]
-            JJ = jacobians[key] if w == 1 else w * jacobians[key]
-            r_c = rr if r_c is None else r_c + rr
-            J_c = JJ if J_c is None else J_c + JJ
-        r_rows.append(r_c)
-        J_rows.append(J_c)
-    if residuals["force"].shape[-1]:
-        r_rows.append(residuals["force"])
-        J_rows.append(jacobians["force"])
-    r = r_rows[0] if len(r_rows) == 1 else np.concatenate(r_rows, axis=-1)
-    J = J_rows[0] if len(J_rows) == 1 else np.concatenate(J_rows, axis=-2)
-    return r, J
+            term = parts[key] if w == 1 else w * parts[key]
+            combined = term if combined is None else combined + term
+        rows.append(combined)
+    if parts["force"].shape[axis]:
+        rows.append(parts["force"])
+    return rows[0] if len(rows) == 1 else np.concatenate(rows, axis=axis)
 
 
 def solve_small(J, b):

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["macro_step", "simulate", "Trajectory"]
+__all__ = ["macro_step", "simulate", "Trajectory", "StepFailure"]
 
 
 def macro_step(problem, method, state, history, *, iterations: int = 1, tol: float | None = None):
@@ -47,7 +47,9 @@ def macro_step(problem, method, state, history, *, iterations: int = 1, tol: flo
         (semi-implicit; exact for the linear model because the sensitivities
         are constant).  More steps re-linearise about the latest coupling
         variables (fully implicit for nonlinear subsystems).
-    tol : stop iterating once the largest absolute residual is below ``tol``.
+    tol : stop iterating once the largest absolute residual of the conditions
+        the method enforces (:meth:`~icosim.coupling.CouplingMethod.condition_residuals`)
+        is below ``tol``.
 
     Returns
     -------
@@ -57,7 +59,7 @@ def macro_step(problem, method, state, history, *, iterations: int = 1, tol: flo
     y = problem.predict(state, history)
     for it in range(max(1, iterations)):
         r = problem.residuals(y)
-        if it > 0 and tol is not None and _max_abs(r) <= tol:
+        if it > 0 and tol is not None and _max_abs(method.condition_residuals(r)) <= tol:
             break
         J = problem.jacobians(state, history, e, y)
         e = method.corrected_coupling(e, r, J, problem.backend)
@@ -67,9 +69,16 @@ def macro_step(problem, method, state, history, *, iterations: int = 1, tol: flo
     return state_new, problem.shift(history, e), y
 
 
-def _max_abs(residuals):
-    vals = [np.max(np.abs(np.asarray(v, dtype=float))) for v in residuals.values() if np.size(v)]
-    return max(vals) if vals else 0.0
+def _max_abs(values):
+    return float(np.max(np.abs(np.asarray(values, dtype=float)))) if np.size(values) else 0.0
+
+
+class StepFailure(RuntimeError):
+    """A macro step could not be computed (e.g. a subsystem integration failed).
+
+    :func:`simulate` records it as a *failed* run, distinct from a diverged one:
+    a failure says nothing about the stability of the coupling.
+    """
 
 
 @dataclass
@@ -77,32 +86,47 @@ class Trajectory:
     """States, coupling variables and outputs at ``T_0 ... T_n``.
 
     ``states[n]``, ``coupling[n]`` and ``outputs[n]`` belong to ``T_n``
-    (``outputs[0]`` is None: no step has produced it).  ``diverged_at`` is the
-    first step whose state was not finite or exceeded ``bound`` (None if none).
+    (``outputs[0]`` is None: no step has produced it).  The run ends early
+    when step ``n`` diverges (``diverged_at = n``) or fails (``failed_at = n``);
+    ``reason`` says why.  The lists then end at the last good step.
     """
 
     states: list
     coupling: list
     outputs: list
     diverged_at: int | None = None
+    failed_at: int | None = None
+    reason: str | None = None
 
 
-def simulate(problem, method, state, history, n_steps: int, *, bound: float | None = None, **step_kw):
+def simulate(problem, method, state, history, n_steps: int, *, bound: float | None = None, check=None, **step_kw):
     """Run ``n_steps`` macro steps from ``state`` and the coupling history.
 
-    Stops early (and records ``diverged_at``) when the state stops being
-    finite or its magnitude exceeds ``bound``: an unstable run is reported,
-    never silently continued.
+    A step diverges when its state is not finite, its magnitude exceeds
+    ``bound``, or ``check(state, history, y)`` returns a reason (a string);
+    a step fails when it raises :class:`StepFailure`.  Either stops the run and
+    is recorded: an unstable run is reported, never silently continued.
+    ``step_kw`` go to :func:`macro_step` (``iterations``, ``tol``).
     """
     states, coupling, outputs = [state], [history[..., 0, :]], [None]
-    diverged = None
-    for n in range(n_steps):
-        state, history, y = macro_step(problem, method, state, history, **step_kw)
+    diverged = failed = reason = None
+    for n in range(1, n_steps + 1):
+        try:
+            state, history, y = macro_step(problem, method, state, history, **step_kw)
+        except StepFailure as exc:
+            failed, reason = n, str(exc)
+            break
         mag = np.max(np.abs(np.asarray(state, dtype=float)))
-        if not np.isfinite(mag) or (bound is not None and mag > bound):
-            diverged = n + 1
+        if not np.isfinite(mag):
+            diverged, reason = n, "state not finite"
+        elif bound is not None and mag > bound:
+            diverged, reason = n, f"|state| > {bound:g}"
+        elif check is not None:
+            reason = check(state, history, y)
+            diverged = n if reason else None
+        if diverged:
             break
         states.append(state)
         coupling.append(history[..., 0, :])
         outputs.append(y)
-    return Trajectory(states, coupling, outputs, diverged)
+    return Trajectory(states, coupling, outputs, diverged, failed, reason)

@@ -35,6 +35,7 @@ import copy
 import time
 from dataclasses import dataclass, field
 
+import mpmath
 import numpy as np
 
 from .backend import FLOAT64_DIGITS, Float64, Multiprecision
@@ -197,19 +198,34 @@ class StabilityResult:
     def n_high_precision(self) -> int:
         return int(np.sum(self.digits > FLOAT64_DIGITS))
 
+    @property
+    def n_failed(self) -> int:
+        """Points that no precision could decide (``rho`` is nan, ``digits`` -1)."""
+        return int(np.sum(self.digits < 0))
 
-def spectral_radius(model: TestModel, method, decomposition, k, *, digits: int = 128, policy: str = "auto"):
-    """Spectral radius over arrays of Eq. (71) parameters with the precision policy.
+
+def spectral_radius(model, method, decomposition, k, *, digits: int = 128, policy: str = "auto"):
+    """Spectral radius over arrays of parameter points with the precision policy.
 
     Parameters
     ----------
-    model : :class:`TestModel` (its attributes broadcast to the grid).
+    model : :class:`TestModel` (Eq. 71; its attributes broadcast to the grid),
+        or :class:`~icosim.model.PhysicalModel` / :class:`~icosim.model.Coefficients`
+        (any damping, overdamped included).
     policy : ``"auto"`` (float64, recheck untrusted points at ``digits``),
         ``"float64"`` (no recheck) or ``"mp"`` (every point at ``digits``).
+
+    A point whose multiprecision recheck fails (a singular coupling condition
+    in exact arithmetic) gets ``rho = nan`` and ``digits = -1`` instead of
+    aborting the grid; :attr:`StabilityResult.n_failed` counts them.
     """
     if policy not in ("auto", "float64", "mp"):
         raise ValueError(f"policy must be 'auto', 'float64' or 'mp', got {policy!r}")
-    names = ("lr1", "li1", "am21", "alr21", "ali21")
+    if isinstance(model, TestModel):
+        names, point_type = ("lr1", "li1", "am21", "alr21", "ali21"), TestModel
+    else:  # exact conversion happens per point in spectral_radius_mp
+        model = _as_coefficients(model)
+        names, point_type = ("k1", "delta1", "k2", "delta2", "am21"), Coefficients
     arrays = np.broadcast_arrays(*(np.asarray(getattr(model, n), dtype=float) for n in names))
     shape = arrays[0].shape
     t0, c0 = time.perf_counter(), time.process_time()
@@ -218,7 +234,7 @@ def spectral_radius(model: TestModel, method, decomposition, k, *, digits: int =
         err = np.full(shape, np.inf)
         recheck = np.ones(shape, dtype=bool)
     else:
-        rho, err = spectral_radius_float64(TestModel(*arrays), method, decomposition, k)
+        rho, err = spectral_radius_float64(point_type(*arrays), method, decomposition, k)
         trusted = np.isfinite(rho) & (np.abs(rho - 1) > err)
         recheck = ~trusted if policy == "auto" else np.zeros(shape, dtype=bool)
     digits_used = np.full(shape, FLOAT64_DIGITS, dtype=int)
@@ -226,9 +242,12 @@ def spectral_radius(model: TestModel, method, decomposition, k, *, digits: int =
     for idx in np.ndindex(shape):
         if not recheck[idx]:
             continue
-        point = TestModel(*(float(a[idx]) for a in arrays))
-        rho[idx] = float(spectral_radius_mp(point, method, decomposition, k, digits))
-        digits_used[idx] = digits
+        point = point_type(*(float(a[idx]) for a in arrays))
+        try:
+            rho[idx] = float(spectral_radius_mp(point, method, decomposition, k, digits))
+            digits_used[idx] = digits
+        except (ArithmeticError, mpmath.libmp.NoConvergence):
+            rho[idx], digits_used[idx] = np.nan, -1
     t2, c2 = time.perf_counter(), time.process_time()
     return StabilityResult(
         rho=rho,
