@@ -393,13 +393,21 @@ def test_mp_backend_does_not_touch_global_mpmath_precision():
         (baumgarte(index=3), "ff", 0, 2),
         (projection(), "dd", 1, 2),
         (weighted_multiplier(1, 1), "fd", 1, 2),
+        (weighted_multiplier(1, 1), "ff", 0, 2),
+        (baumgarte(beta=2 * 5e-3, gamma=25e-6), "ff", 1, 2),  # dimensional mu = 5e-3 s: see below
+        (baumgarte(beta=0.0, gamma=0.0), "ff", 0, 2),
     ],
 )
 def test_trajectory_converges_to_exact_monolithic_solution(method, dec, k, order):
     T, errors = 0.5, []
     Hs = [2e-3, 1e-3, 5e-4]
+    dimensional = method
     for H in Hs:
         c = PhysicalModel(1.0, 2.0, 1000.0, 1000.0, 10.0, 10.0, H).coefficients()
+        if dimensional.name == "baumgarte" and dimensional.params["beta"]:
+            # beta, gamma given in s and s^2: the engine takes beta/H and gamma/H^2
+            p = dimensional.params
+            method = baumgarte(beta=p["beta"] / H, gamma=p["gamma"] / H**2)
         prob = LinearCosimulation(c, dec, k)
         sol = MonolithicSolution(c, 0.1, 0.0)
         state, hist = consistent_start(prob, sol)
@@ -440,3 +448,117 @@ def test_small_solver_keeps_multiprecision():
     x = solve_small(Jm, bm)
     assert all(abs(xi - be.const(float(xt))) < be.const(1e-50) for xi, xt in zip(x, x_true))
     np.testing.assert_allclose(solve_small(J, J @ x_true), x_true, rtol=1e-12)
+
+
+def _fd_k0_closed_form(model, level_weights, project):
+    """Force/displacement, k = 0, by hand (Eqs. 33-53 with constant inputs).
+
+    Subsystem 1 is force driven: ``s1+ = Phi1 s1 + r1 lambda`` (scipy's expm of
+    its own 3x3 augmented system).  Subsystem 2 follows a constant acceleration
+    ``a``: ``x2+ = x2 + v2 + a/2``, ``v2+ = v2 + a``, with multiplier
+    ``mu2 = -am21 (a + k2 x2+ + d2 v2+)``.  Each level's correction solves the
+    2x2 system (level condition, ``mu2 - lambda = 0``) linearised about the
+    predicted (lambda_N, a_N); the weighted sum of corrections gives the new
+    coupling variables; projection (Eq. 55) if asked.
+    """
+    import scipy.linalg
+
+    c = model.coefficients()
+    E = scipy.linalg.expm(np.array([[0, 1, 0], [-c.k1, -c.delta1, 1.0], [0, 0, 0]]))
+    Phi1, r1 = E[:2, :2], E[:2, 2]
+    am, k1, d1, k2, d2 = c.am21, c.k1, c.delta1, c.k2, c.delta2
+
+    def subsystems(w, lam, acc):
+        s1 = Phi1 @ w[0:2] + r1 * lam
+        s2 = np.array([w[2] + w[3] + acc / 2, w[3] + acc])
+        return s1, s2, -k1 * s1[0] - d1 * s1[1] + lam, acc, -am * (acc + k2 * s2[0] + d2 * s2[1])
+
+    def step(w):
+        lam_p, acc_p = w[4], w[5]
+        s1, s2, a1, a2, mu2 = subsystems(w, lam_p, acc_p)
+        res = {"pos": s2[0] - s1[0], "vel": s2[1] - s1[1], "acc": a2 - a1}
+        d_lam = {"pos": -r1[0], "vel": -r1[1], "acc": -(-k1 * r1[0] - d1 * r1[1] + 1)}
+        d_acc = {"pos": 0.5, "vel": 1.0, "acc": 1.0}
+        d_mu2 = -am * (1 + k2 / 2 + d2)
+        e = np.array([lam_p, acc_p])
+        for level, weight in level_weights.items():
+            J = np.array([[d_lam[level], d_acc[level]], [-1.0, d_mu2]])
+            e = e + weight * np.linalg.solve(J, -np.array([res[level], mu2 - lam_p]))
+        s1, s2, *_ = subsystems(w, e[0], e[1])
+        if project:
+            s1 = s2 = (s1 + am * s2) / (1 + am)
+        return np.concatenate([s1, s2, e])
+
+    M = np.column_stack([step(col) for col in np.eye(6)])
+    return np.max(np.abs(np.linalg.eigvals(M)))
+
+
+@pytest.mark.parametrize(
+    "method,weights,project",
+    [
+        (weighted_multiplier(1, 1), {"pos": 1 / 3, "vel": 1 / 3, "acc": 1 / 3}, False),
+        (weighted_multiplier(0.5, 2), {"pos": 1 / 3.5, "vel": 0.5 / 3.5, "acc": 2 / 3.5}, False),
+        (projection(), {"acc": 1.0}, True),
+        (baumgarte(index=3), {"pos": 1.0}, False),
+    ],
+)
+def test_fd_k0_matches_closed_form(method, weights, project):
+    rng = np.random.default_rng(0)
+    for _ in range(25):
+        model = TestModel(
+            -2 * rng.random(), 2 * rng.random(), 10 ** rng.uniform(-1, 1), 3 * rng.random(), 3 * rng.random()
+        )
+        rho, _ = spectral_radius_float64(model, method, "fd", 0)
+        assert float(rho) == pytest.approx(_fd_k0_closed_form(model, weights, project), rel=1e-10, abs=1e-12)
+
+
+def test_corrector_iterations_stop_when_the_coupling_variables_settle():
+    """For the linear model one corrector step is exact (constant sensitivities,
+    Sect. 2.1.1), so with a tolerance the second pass changes nothing and stops."""
+    from icosim.macrostep import macro_step
+
+    c = TestModel(-0.3, 0.9, 2.0, 2.0, 2.0).coefficients()
+    for method, dec in ((baumgarte(mu=1, index=1), "ff"), (weighted_multiplier(1, 1), "fd"), (projection(), "dd")):
+        prob = LinearCosimulation(c, dec, 2)
+        calls = []
+        original = prob.correct
+        prob.correct = lambda *a, _o=original: calls.append(1) or _o(*a)
+        rng = np.random.default_rng(1)
+        state, hist = rng.standard_normal((2, 2)), rng.standard_normal((3, prob.n_coupling))
+        one = macro_step(prob, method, state, hist)
+        calls.clear()
+        more = macro_step(prob, method, state, hist, iterations=5, tol=1e-9)
+        assert len(calls) == 1
+        np.testing.assert_allclose(more[0], one[0], rtol=1e-12, atol=1e-12)
+        if method.name != "weighted":  # Baumgarte and projection satisfy their conditions
+            y = prob.correct(state, hist, more[1][0])[1]
+            assert np.max(np.abs(method.condition_residuals(prob.residuals(y)))) < 1e-12
+        calls.clear()
+        macro_step(prob, method, state, hist, iterations=3)  # no tol: every pass runs
+        assert len(calls) == 3
+
+
+def test_policy_accepts_physical_models_including_overdamped():
+    H = np.array([1e-3, 1e-2, 1e-1])
+    pm = PhysicalModel(1.0, 2.0, 1000.0, 1000.0, 200.0, 10.0, H)  # subsystem 1 overdamped
+    res = spectral_radius(pm, projection(), "ff", 1)
+    for i, h in enumerate(H):
+        ref = spectral_radius_mp(PhysicalModel(1.0, 2.0, 1000.0, 1000.0, 200.0, 10.0, h), projection(), "ff", 1, 40)
+        assert res.rho[i] == pytest.approx(float(ref), rel=1e-9)
+
+
+def test_policy_survives_a_point_no_precision_can_decide(monkeypatch):
+    import icosim.stability as st
+
+    original = st.spectral_radius_mp
+
+    def fails_at_origin(point, *args, **kwargs):
+        if float(point.lr1) == 0 and float(point.li1) == 0:
+            raise ZeroDivisionError
+        return original(point, *args, **kwargs)
+
+    monkeypatch.setattr(st, "spectral_radius_mp", fails_at_origin)
+    model = TestModel(np.array([0.0, 0.0, -0.5]), np.array([0.0, 0.3, 0.5]), 2.0, 2.0, 2.0)
+    res = st.spectral_radius(model, baumgarte(mu=1, index=1), "ff", 2)
+    assert res.n_failed == 1 and res.digits[0] == -1 and np.isnan(res.rho[0]) and not res.stable[0]
+    assert np.all(np.isfinite(res.rho[1:]))

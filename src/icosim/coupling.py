@@ -144,10 +144,12 @@ class CouplingMethod:
         return e_pred + total
 
     def condition_residuals(self, residuals):
-        """The conditions this method drives to zero (every solve's rows, concatenated).
+        """The conditions of every solve of this method, concatenated.
 
-        Used to stop corrector iterations: Baumgarte, for example, enforces
-        ``g + beta g' + gamma g''``, not each level on its own.
+        After a converged corrector they vanish for Baumgarte (``g + beta g' +
+        gamma g''``) and projection (acceleration level); the weighted
+        multiplier's result is a weighted mean of three solutions and satisfies
+        none of its three conditions on its own.
         """
         rows = [_conditions(levels, residuals, axis=-1) for weight, levels in self.solves if weight != 0]
         return np.concatenate(rows, axis=-1)

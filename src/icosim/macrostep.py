@@ -47,9 +47,12 @@ def macro_step(problem, method, state, history, *, iterations: int = 1, tol: flo
         (semi-implicit; exact for the linear model because the sensitivities
         are constant).  More steps re-linearise about the latest coupling
         variables (fully implicit for nonlinear subsystems).
-    tol : stop iterating once the largest absolute residual of the conditions
-        the method enforces (:meth:`~icosim.coupling.CouplingMethod.condition_residuals`)
-        is below ``tol``.
+    tol : stop iterating once an iteration changes no coupling variable by
+        more than ``tol`` (in the coupling variables' own units).  The change,
+        not a residual, is the criterion: the weighted multiplier's corrected
+        variables are a weighted mean of three solutions and satisfy none of the
+        three conditions on its own; its iteration converges where the weighted
+        correction vanishes.
 
     Returns
     -------
@@ -59,10 +62,11 @@ def macro_step(problem, method, state, history, *, iterations: int = 1, tol: flo
     y = problem.predict(state, history)
     for it in range(max(1, iterations)):
         r = problem.residuals(y)
-        if it > 0 and tol is not None and _max_abs(method.condition_residuals(r)) <= tol:
-            break
         J = problem.jacobians(state, history, e, y)
-        e = method.corrected_coupling(e, r, J, problem.backend)
+        e_new = method.corrected_coupling(e, r, J, problem.backend)
+        if it > 0 and tol is not None and _max_abs(e_new - e) <= tol:
+            break  # converged: the corrector already ran with (nearly) e_new
+        e = e_new
         state_new, y = problem.correct(state, history, e)
     if method.projection:
         state_new = problem.project(state_new)
