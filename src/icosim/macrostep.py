@@ -108,7 +108,8 @@ def simulate(problem, method, state, history, n_steps: int, *, bound: float | No
 
     A step diverges when its state is not finite, its magnitude exceeds
     ``bound``, or ``check(state, history, y)`` returns a reason (a string);
-    a step fails when it raises :class:`StepFailure`.  Either stops the run and
+    a step fails when it raises :class:`StepFailure` or a singular linear
+    system (:class:`numpy.linalg.LinAlgError`).  Either stops the run and
     is recorded: an unstable run is reported, never silently continued.
     ``step_kw`` go to :func:`macro_step` (``iterations``, ``tol``).
     """
@@ -117,8 +118,8 @@ def simulate(problem, method, state, history, n_steps: int, *, bound: float | No
     for n in range(1, n_steps + 1):
         try:
             state, history, y = macro_step(problem, method, state, history, **step_kw)
-        except StepFailure as exc:
-            failed, reason = n, str(exc)
+        except (StepFailure, np.linalg.LinAlgError) as exc:  # e.g. a singular coupling solve
+            failed, reason = n, str(exc) or type(exc).__name__
             break
         mag = np.max(np.abs(np.asarray(state, dtype=float)))
         if not np.isfinite(mag):
