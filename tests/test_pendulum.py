@@ -15,11 +15,12 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from icosim import ParameterError, make_method
-from icosim.macrostep import macro_step
+from icosim.macrostep import StepFailure, macro_step
 from icosim.pendulum import (
     Monolithic,
     PendulumCosimulation,
     PendulumParameters,
+    ProjectionError,
     _constraint_jacobian,
     _Link1,
     _Link2,
@@ -30,7 +31,7 @@ from icosim.pendulum import (
     reference_solution,
     run_cosimulation,
 )
-from icosim.radau import radau_batch
+from icosim.radau import MU_REAL, IntegrationError, radau_batch
 
 P = PendulumParameters()
 H = 1e-3
@@ -233,6 +234,26 @@ def test_projection_satisfies_constraints_and_is_the_mass_weighted_projection():
     np.testing.assert_allclose(project_state(P, out), out, atol=1e-14)
 
 
+def test_projection_that_does_not_converge_raises_a_step_failure():
+    """No unprojected state is ever returned: too few Gauss-Newton iterations or a non-finite state raise."""
+    state = Monolithic(P).cosim_state(np.array([0.6, -0.9, 1.7, -2.3]))
+    disturbed = state + np.array([0.2, 0.0, 0.1, -0.1, 0.3, 0.0, 0.0, 0.0])
+    with pytest.raises(ProjectionError, match="Gauss-Newton"):
+        project_state(P, disturbed, max_iter=1)
+    assert np.max(np.abs(joint_constraint(P, project_state(P, disturbed)))) < 1e-14  # enough iterations: fine
+    with pytest.raises(ProjectionError):
+        project_state(P, np.where(np.arange(8) == 2, np.nan, state))
+    assert issubclass(ProjectionError, StepFailure)
+
+
+def test_singular_newton_matrix_is_an_integration_error():
+    """Radau's Newton matrix MU/h I - J singular (J = MU/h I): an IntegrationError (a StepFailure), not LinAlgError."""
+    A = MU_REAL / 0.5 * np.eye(2)
+    with pytest.raises(IntegrationError, match="singular"):
+        radau_batch(lambda t, y: y @ A.T, 0.0, 0.5, np.ones(2), jac=lambda t, y: np.broadcast_to(A, (1, 2, 2)))
+    assert issubclass(IntegrationError, StepFailure)
+
+
 # -- options and bad input ------------------------------------------------------------------
 def test_fully_implicit_corrector_reduces_the_residual():
     """Corrector iterations (fully implicit) drive the Baumgarte condition far below one step's residual."""
@@ -249,6 +270,34 @@ def test_fully_implicit_corrector_reduces_the_residual():
     semi = baumgarte_residual(macro_step(prob, method, state, hist)[2], prob)
     full = baumgarte_residual(macro_step(prob, method, state, hist, iterations=4, tol=1e-15)[2], prob)
     assert full < 1e-3 * semi
+
+
+@pytest.mark.parametrize(
+    "method_name, kw, decomposition",
+    [("baumgarte", {"index": 1, "mu": 1e-3}, "fd"), ("projection", {}, "ff"), ("projection", {}, "dd")],
+)
+def test_fully_implicit_option_stops_early_with_the_conditions_met(method_name, kw, decomposition):
+    """iterations = 6, tol = 1e-8: the corrector passes stop once the method's conditions are below tol
+    (here after the second pass: one pass leaves a residual above tol, one re-linearisation meets it)."""
+    method = make_method(method_name, **kw)
+    state = Monolithic(P).cosim_state(np.array([0.5, -1.2, 3.0, -4.0]))
+    hist = consistent_history(P, decomposition, 1, H)
+    prob = PendulumCosimulation(P, decomposition, 1, H)
+    residual_of_pass = []
+    correct = prob.correct
+
+    def counting_correct(*args):
+        state_new, y = correct(*args)
+        residual_of_pass.append(np.max(np.abs(method.condition_residuals(prob.residuals(y)))))
+        return state_new, y
+
+    prob.correct = counting_correct
+    tol = 1e-8
+    _, _, y = macro_step(prob, method, state, hist, iterations=6, tol=tol)
+    assert 2 <= len(residual_of_pass) < 6
+    assert residual_of_pass[0] > tol  # the semi-implicit step alone does not meet tol here
+    assert np.max(np.abs(method.condition_residuals(prob.residuals(y)))) <= tol
+    assert residual_of_pass[-1] <= tol
 
 
 def test_bad_input_is_refused_with_the_name():

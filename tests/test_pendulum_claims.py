@@ -14,12 +14,17 @@ import numpy as np
 import pytest
 import yaml
 
+import icosim.pendulum
 from icosim import make_method
+from icosim.radau import IntegrationError
 from icosim.pendulum import (
     PendulumParameters,
+    claim_verdict,
     configured_runs,
     expected_outcome,
+    linear_test_model_rho,
     load_claims,
+    pendulum_test_model,
     reference_dataset,
     run_cosimulation,
     run_dataset,
@@ -59,6 +64,7 @@ def test_the_claim_covers_exactly_the_configured_exceptions():
 def test_sect4_stability_claim(run):
     method_name, decomposition, k = run
     result = _run(method_name, decomposition, k)
+    assert result.status in ("stable", "diverged"), result.reason  # a failed run would decide nothing
     observed = "unstable" if result.diverged else "stable"
     for claim in CLAIMS:
         assert observed == expected_outcome(claim, method_name, decomposition, k), (claim["id"], run, result.reason)
@@ -92,10 +98,14 @@ def test_summary_and_dataset_contract():
         )
         for name in ("phi1", "phi2", "g_cax", "g_cay", "lambda_cax", "lambda_cay"):
             assert ds[name].dims == ("t",)
-        for attr in ("method", "decomposition", "k", "diverged", "t_diverged"):
+        for attr in ("method", "decomposition", "k", "status", "reason", "diverged", "t_diverged", "failed"):
             assert attr in ds.attrs
         assert ds.attrs["tol"] == "none"
+        assert ds.attrs["status"] == ("diverged" if res.diverged else "stable")
+        assert ds.attrs["failed"] == 0 and np.isnan(ds.attrs["t_failed"])
+        assert f"n_split = {ds.attrs['n_split']} " in ds.attrs["sensitivities"]
         runs.append(ds)
+    assert runs[0].attrs["method_a"] == 1.0 and runs[0].attrs["method_a_units"] == "1"
     assert ref.attrs["method"] == "monolithic"
     assert np.max(np.abs(ref["g_cax"].values)) < 1e-14
     summary = summarize(runs, ref, CLAIMS)
@@ -103,6 +113,60 @@ def test_summary_and_dataset_contract():
     assert list(summary["observed"].values) == ["unstable", "stable"]
     assert list(summary[f"verdict_{cid}"].values) == ["pass", "pass"]
     assert summary["err_phi1"].values[1] < 1e-4
+    assert claim_verdict(summary, CLAIMS[0], [("weighted", "ff", 2), ("projection", "dd", 0)]) == "pass"
+    # a configured run that is missing leaves the claim undecided
+    assert claim_verdict(summary, CLAIMS[0], [("weighted", "ff", 2), ("weighted", "fd", 2)]) == "undecided"
+
+
+def test_failed_integration_is_not_counted_as_unstable(monkeypatch):
+    """A subsystem integration that fails is a failed run (not diverged): the claim gets no pass from it.
+
+    weighted/ff/k = 2 is expected unstable, so counting a solver failure as a divergence would make it pass."""
+    real_radau, calls = icosim.pendulum.radau_batch, []
+    fail_at_step = 11  # four integrations per macro step (predictor+sensitivities and corrector, two links)
+
+    def failing_radau(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 4 * (fail_at_step - 1) + 1:
+            raise IntegrationError("injected failure")
+        return real_radau(*args, **kwargs)
+
+    monkeypatch.setattr(icosim.pendulum, "radau_batch", failing_radau)
+    t_end = 0.05
+    res = _run("weighted", "ff", 2, t_end=t_end)
+    assert res.status == "failed" and res.failed and not res.diverged
+    assert res.t_failed == pytest.approx(fail_at_step * CFG["H"]) and np.isnan(res.t_diverged)
+    assert res.t[-1] == pytest.approx((fail_at_step - 1) * CFG["H"]) and "injected failure" in res.reason
+    method = make_method("weighted", **CFG["methods"]["weighted"])
+    ds = run_dataset(res, method, "ff", 2, {"H": CFG["H"]}, {"title": "test"})
+    assert (ds.attrs["status"], ds.attrs["failed"], ds.attrs["diverged"]) == ("failed", 1, 0)
+    assert "injected failure" in ds.attrs["reason"]
+    ref = reference_dataset(PendulumParameters(**CFG["model"]), CFG["H"], t_end, {"title": "test"})
+    summary = summarize([ds], ref, CLAIMS)
+    cid = CLAIMS[0]["id"]
+    assert str(summary["observed"].values[0]) == "failed"
+    assert str(summary[f"verdict_{cid}"].values[0]) == "undecided"
+    assert claim_verdict(summary, CLAIMS[0], [("weighted", "ff", 2)]) == "undecided"
+
+
+def test_linear_test_model_at_the_pendulum_point_predicts_the_claim():
+    """Sect. 3 <-> Sect. 4: at lr1 = -d H/(2 m) the test model's rho exceeds 1 exactly for the configurations
+    the claim calls unstable (the paper's explanation of Fig. 8)."""
+    params = PendulumParameters(**CFG["model"])
+    model = pendulum_test_model(params, CFG["H"])
+    np.testing.assert_allclose(model.lr1, -params.d * CFG["H"] / (2 * params.m1))
+    # modal frequencies of two hinged uniform rods, undamped (M, K of the linearisation), bracket the damped ones
+    m, l, g, J = params.m1, params.l1, params.g, params.J1
+    M = np.array([[J + m * l**2 / 4 + m * l**2, m * l**2 / 2], [m * l**2 / 2, J + m * l**2 / 4]])
+    K = np.diag([1.5 * m * g * l, 0.5 * m * g * l])
+    omega0 = np.sort(np.sqrt(np.linalg.eigvals(np.linalg.solve(M, K)).real))
+    assert np.all(model.li1 / CFG["H"] < omega0) and np.all(model.li1 / CFG["H"] > 0.9 * omega0)
+    for method_name, dec, k in RUNS:
+        rho, _ = linear_test_model_rho(
+            params, CFG["H"], make_method(method_name, **CFG["methods"][method_name]), dec, k
+        )
+        expected = expected_outcome(CLAIMS[0], method_name, dec, k)
+        assert (rho > 1) == (expected == "unstable"), (method_name, dec, k, rho)
 
 
 @pytest.mark.parametrize(

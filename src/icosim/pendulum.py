@@ -117,6 +117,19 @@ positions minimise ``(q - q*)^T M (q - q*)`` subject to ``g_c(q) = 0``
 velocities are projected linearly onto ``G(q) q' = 0`` in the same metric.
 For the linear model this reduces to Eq. (30).
 
+Linearisation and corrector: step sequences
+-------------------------------------------
+The finite-difference batch shares one Radau step sequence, but the corrector
+pass integrates its single member alone, with its own step sequence.  When
+these differ, the map that was linearised and the map the corrector evaluates
+differ by the integration error, O(rtol) relative: the corrected coupling
+variables then satisfy the conditions only to that level, not to round-off.
+In practice a macro step is one Radau step (the first trial step is the whole
+macro step) for every member, and then both sequences coincide exactly;
+:attr:`PendulumCosimulation.stats` counts in ``split`` the integrations that
+needed more than one step or rejected one, and every run dataset stores that
+count (``n_split``) with the attribute ``sensitivities`` saying so.
+
 Starting values, reference, divergence
 --------------------------------------
 Both links start at the consistent initial state; the coupling history at
@@ -124,10 +137,16 @@ Both links start at the consistent initial state; the coupling history at
 backwards from ``t = 0``), as for the linear model
 (:func:`icosim.exact.consistent_start`).  The monolithic reference is the
 pendulum in minimal coordinates ``(phi_1, phi_2)`` (:class:`Monolithic`),
-integrated at tight tolerance.  A run stops cleanly at the first macro step
-that is not finite, exceeds the bounds on ``|g_c|``, ``|lambda_c|`` or the
-angular rates, or whose subsystem integration fails
-(:func:`run_cosimulation`); the stored series end at the step before.
+integrated at tight tolerance.  A run (:func:`run_cosimulation`, through
+:func:`icosim.macrostep.simulate`) stops cleanly at the first macro step that
+is not finite or exceeds the bounds on ``|g_c|``, ``|lambda_c|`` or the
+angular rates (status ``diverged``), or that cannot be computed: a subsystem
+integration fails (:class:`icosim.radau.IntegrationError`), the projection does
+not converge (:class:`ProjectionError`) or the coupling system is singular
+(:class:`CouplingSolveError`), all :class:`icosim.macrostep.StepFailure`
+(status ``failed``: it says nothing about stability, and a claim about
+stability is ``undecided`` for such a run).  The stored series end at the step
+before.
 """
 
 from __future__ import annotations
@@ -141,9 +160,9 @@ import numpy as np
 from .backend import Float64
 from .coupling import CouplingMethod, get_decomposition
 from .lagrange import corrector_nodes, monomial_coefficients, predictor_nodes, weights_at
-from .macrostep import macro_step
+from .macrostep import StepFailure, simulate
 from .model import ParameterError
-from .radau import IntegrationError, _fd_jacobian, radau_batch
+from .radau import _fd_jacobian, radau_batch
 
 __all__ = [
     "PendulumParameters",
@@ -155,6 +174,10 @@ __all__ = [
     "consistent_history",
     "joint_constraint",
     "project_state",
+    "ProjectionError",
+    "CouplingSolveError",
+    "linear_test_model_rho",
+    "pendulum_test_model",
     "run_name",
     "run_dataset",
     "reference_dataset",
@@ -400,7 +423,8 @@ class PendulumCosimulation:
         self.C_corr = np.array(monomial_coefficients(corrector_nodes(k)), dtype=float)
         self._cache = None
         self._jac0 = {}
-        self.stats = {"integrations": 0, "steps": 0, "rejected": 0, "fev": 0}
+        # split: integrations that took more than one step or rejected one (see the module docstring)
+        self.stats = {"integrations": 0, "steps": 0, "rejected": 0, "fev": 0, "split": 0}
 
     # -- helpers --------------------------------------------------------------
     def _split(self, state):
@@ -428,6 +452,7 @@ class PendulumCosimulation:
         st["steps"] += r.n_steps
         st["rejected"] += r.n_rejected
         st["fev"] += r.n_fev
+        st["split"] += r.n_steps > 1 or r.n_rejected > 0
         u1 = coef.sum(axis=1)  # input at tau = 1
         return r.y, link.outputs(r.y, r.f, u1)
 
@@ -542,27 +567,45 @@ def _constraint_jacobian(p, q):
     )
 
 
+class ProjectionError(StepFailure):
+    """The projection onto the joint constraint did not converge (or met a singular system)."""
+
+
+class CouplingSolveError(StepFailure):
+    """The linear system for the corrected coupling variables is singular."""
+
+
 def project_state(p: PendulumParameters, state, *, tol: float = 1e-14, max_iter: int = 20):
-    """Mass-weighted projection of positions, then velocities, onto ``g_c = 0``, ``g_c' = 0``."""
+    """Mass-weighted projection of positions, then velocities, onto ``g_c = 0``, ``g_c' = 0``.
+
+    Raises :class:`ProjectionError` if Gauss-Newton does not bring ``|g_c|`` to
+    ``tol`` (m) within ``max_iter`` iterations: an unprojected state is never returned.
+    """
     pos, vel = [0, 2, 3, 4], [1, 5, 6, 7]
     q_star = state[pos]
     Minv = 1.0 / np.array([p.JO1, p.m2, p.m2, p.J2])
     q = q_star.copy()
-    for _ in range(max_iter):
-        s = state.copy()
-        s[pos] = q
-        g = joint_constraint(p, s)
-        if np.max(np.abs(g)) <= tol:
-            break
+    g = None
+    try:
+        for _ in range(max_iter + 1):
+            s = state.copy()
+            s[pos] = q
+            g = joint_constraint(p, s)
+            if np.max(np.abs(g)) <= tol or not np.all(np.isfinite(g)):
+                break
+            G = _constraint_jacobian(p, q)
+            # KKT fixed point: q = q* - M^-1 G^T nu, linearised g(q) + G (q_new - q) = 0
+            nu = np.linalg.solve((G * Minv) @ G.T, g + G @ (q_star - q))
+            q = q_star - Minv * (G.T @ nu)
+        if not np.max(np.abs(g)) <= tol:  # also catches nan
+            raise ProjectionError(
+                f"projection: |g_c| = {np.max(np.abs(g)):.3g} m > {tol:g} m after {max_iter} Gauss-Newton iterations"
+            )
         G = _constraint_jacobian(p, q)
-        # KKT fixed point: q = q* - M^-1 G^T nu, linearised g(q) + G (q_new - q) = 0
-        nu = np.linalg.solve((G * Minv) @ G.T, g + G @ (q_star - q))
-        q = q_star - Minv * (G.T @ nu)
-        if not np.all(np.isfinite(q)):
-            break
-    G = _constraint_jacobian(p, q)
-    v = state[vel]
-    nu = np.linalg.solve((G * Minv) @ G.T, G @ v)
+        v = state[vel]
+        nu = np.linalg.solve((G * Minv) @ G.T, G @ v)
+    except np.linalg.LinAlgError as exc:
+        raise ProjectionError(f"projection: singular constraint Jacobian ({exc})") from exc
     out = state.copy()
     out[pos] = q
     out[vel] = v - Minv * (G.T @ nu)
@@ -700,15 +743,60 @@ def consistent_history(params: PendulumParameters, decomposition: str, k: int, H
 # -- a whole run ------------------------------------------------------------------
 @dataclass
 class RunResult:
-    """Time series of one co-simulation run up to the end time or to divergence."""
+    """Time series of one co-simulation run up to the end time, divergence or failure.
+
+    ``status`` is ``stable`` (reached the end time), ``diverged`` (a step
+    exceeded a bound or was not finite, at ``t_diverged``) or ``failed`` (a
+    step could not be computed, at ``t_failed``); ``reason`` says why.
+    """
 
     t: np.ndarray
     series: dict  # name -> array over t (VARIABLES plus g_cax_corrector, g_cay_corrector)
-    diverged: bool
-    t_diverged: float  # nan if not diverged
+    status: str
+    t_diverged: float  # nan unless diverged
+    t_failed: float  # nan unless failed
     reason: str
     stats: dict
     wall_time: float
+
+    @property
+    def diverged(self) -> bool:
+        return self.status == "diverged"
+
+    @property
+    def failed(self) -> bool:
+        return self.status == "failed"
+
+
+class _SingularSolveAsFailure:
+    """A coupling method whose singular linear solve is a failed step (:class:`CouplingSolveError`)."""
+
+    def __init__(self, method: CouplingMethod):
+        self._method = method
+
+    def __getattr__(self, name):
+        return getattr(self._method, name)
+
+    def corrected_coupling(self, *args, **kwargs):
+        try:
+            return self._method.corrected_coupling(*args, **kwargs)
+        except np.linalg.LinAlgError as exc:
+            raise CouplingSolveError(f"singular coupling system ({exc})") from exc
+
+
+def _series_row(p: PendulumParameters, state, g_corrector, lam) -> dict:
+    """One time point of the stored series."""
+    g = joint_constraint(p, state)
+    return dict(
+        phi1=state[0],
+        phi2=state[4],
+        g_cax=g[0],
+        g_cay=g[1],
+        lambda_cax=lam[0],
+        lambda_cay=lam[1],
+        g_cax_corrector=g_corrector[0],
+        g_cay_corrector=g_corrector[1],
+    )
 
 
 def run_cosimulation(
@@ -729,13 +817,14 @@ def run_cosimulation(
     max_multiplier: float = 1e3,
     max_rate: float = 1e2,
 ) -> RunResult:
-    """Co-simulate from ``t = 0`` to ``t_end`` with macro step ``H``.
+    """Co-simulate from ``t = 0`` to ``t_end`` with macro step ``H`` (:func:`icosim.macrostep.simulate`).
 
-    The run stops at the first macro step whose state, coupling variables or
-    outputs are not finite, whose joint constraint exceeds ``max_constraint``
-    (m), whose joint force exceeds ``max_multiplier`` (N), whose angular rates
-    exceed ``max_rate`` (rad/s), or whose subsystem integration fails: that
-    step's time is ``t_diverged`` and the series end at the step before.
+    The run *diverges* at the first macro step whose state, coupling variables
+    or outputs are not finite, whose joint constraint (after the step or after
+    the corrector) exceeds ``max_constraint`` (m), whose joint force exceeds
+    ``max_multiplier`` (N) or whose angular rates exceed ``max_rate`` (rad/s);
+    it *fails* at the first step that raises a
+    :class:`~icosim.macrostep.StepFailure`.  The series end at the step before.
     """
     dec = get_decomposition(decomposition)
     method.check_decomposition(dec)
@@ -757,63 +846,49 @@ def run_cosimulation(
     problem = PendulumCosimulation(params, dec.name, k, H, rtol=rtol, atol=atol, fd_step=fd_step, newton_tol=newton_tol)
     state = params.initial_state()
     history = consistent_history(params, dec.name, k, H)
-    lam0 = consistent_history(params, "ff", 0, H)[0]
-    names = list(VARIABLES) + ["g_cax_corrector", "g_cay_corrector"]
-    out = {name: np.empty(n_steps + 1) for name in names}
-    g0 = problem.constraint(state)
-    first = dict(
-        phi1=state[0],
-        phi2=state[4],
-        g_cax=g0[0],
-        g_cay=g0[1],
-        lambda_cax=lam0[0],
-        lambda_cay=lam0[1],
-        g_cax_corrector=g0[0],
-        g_cay_corrector=g0[1],
-    )
-    for name in names:
-        out[name][0] = first[name]
-    diverged, t_div, reason, n_done = False, math.nan, "", n_steps
+
+    def joint_force(e, y):
+        return y[1, 3] if dec.name == "dd" else e[:2]
+
+    def check(state, history, y):
+        """Reason for divergence of a step, or None."""
+        g = problem.constraint(state)
+        g_corr = y[0, 0] - y[1, 0]
+        lam = joint_force(history[0], y)
+        if not np.all(np.isfinite(np.concatenate([state, history[0], g, g_corr, lam]))):
+            return "not finite"
+        if np.max(np.abs(g)) > max_constraint or np.max(np.abs(g_corr)) > max_constraint:
+            return f"|g_c| > {max_constraint} m"
+        if np.max(np.abs(lam)) > max_multiplier:
+            return f"|lambda_c| > {max_multiplier} N"
+        if max(abs(state[1]), abs(state[7])) > max_rate:
+            return f"|omega| > {max_rate} rad/s"
+        return None
+
     t0 = time.perf_counter()
     with np.errstate(all="ignore"):
-        for n in range(n_steps):
-            try:
-                state_new, history_new, y = macro_step(problem, method, state, history, iterations=iterations, tol=tol)
-            except (IntegrationError, np.linalg.LinAlgError) as exc:
-                diverged, reason = True, f"{type(exc).__name__}: {exc}"
-            else:
-                g = problem.constraint(state_new)
-                g_corr = y[0, 0] - y[1, 0]
-                lam = y[1, 3] if dec.name == "dd" else history_new[0, :2]
-                values = np.concatenate([state_new, history_new[0], g, g_corr, lam])
-                if not np.all(np.isfinite(values)):
-                    diverged, reason = True, "not finite"
-                elif np.max(np.abs(g)) > max_constraint or np.max(np.abs(g_corr)) > max_constraint:
-                    diverged, reason = True, f"|g_c| > {max_constraint} m"
-                elif np.max(np.abs(lam)) > max_multiplier:
-                    diverged, reason = True, f"|lambda_c| > {max_multiplier} N"
-                elif max(abs(state_new[1]), abs(state_new[7])) > max_rate:
-                    diverged, reason = True, f"|omega| > {max_rate} rad/s"
-            if diverged:
-                t_div, n_done = (n + 1) * H, n
-                break
-            state, history = state_new, history_new
-            row = dict(
-                phi1=state[0],
-                phi2=state[4],
-                g_cax=g[0],
-                g_cay=g[1],
-                lambda_cax=lam[0],
-                lambda_cay=lam[1],
-                g_cax_corrector=g_corr[0],
-                g_cay_corrector=g_corr[1],
-            )
-            for name in names:
-                out[name][n + 1] = row[name]
+        traj = simulate(
+            problem,
+            _SingularSolveAsFailure(method),
+            state,
+            history,
+            n_steps,
+            check=check,
+            iterations=iterations,
+            tol=tol,
+        )
     wall = time.perf_counter() - t0
-    t = H * np.arange(n_done + 1)
-    series = {name: arr[: n_done + 1] for name, arr in out.items()}
-    return RunResult(t, series, diverged, t_div, reason, dict(problem.stats, macro_steps=n_done), wall)
+    g0 = problem.constraint(state)
+    rows = [_series_row(params, state, g0, consistent_history(params, "ff", 0, H)[0])]
+    for s, e, y in zip(traj.states[1:], traj.coupling[1:], traj.outputs[1:]):
+        rows.append(_series_row(params, s, y[0, 0] - y[1, 0], joint_force(e, y)))
+    n_done = len(rows) - 1
+    series = {name: np.array([row[name] for row in rows], dtype=float) for name in rows[0]}
+    status = "failed" if traj.failed_at else "diverged" if traj.diverged_at else "stable"
+    t_div = traj.diverged_at * H if traj.diverged_at else math.nan
+    t_fail = traj.failed_at * H if traj.failed_at else math.nan
+    stats = dict(problem.stats, macro_steps=n_done)
+    return RunResult(H * np.arange(n_done + 1), series, status, t_div, t_fail, traj.reason or "", stats, wall)
 
 
 # -- datasets, summary and claims ------------------------------------------------------
@@ -839,6 +914,10 @@ def _series_dataset(t, series, attrs):
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
 
+#: Units of the dimensional method parameters (the pendulum works in SI units).
+_METHOD_UNITS = {"mu": "s", "beta": "s", "gamma": "s2", "a": "1", "b": "1"}
+
+
 def run_dataset(
     result: RunResult, method: CouplingMethod, decomposition: str, k: int, settings: dict, provenance: dict
 ):
@@ -852,13 +931,25 @@ def run_dataset(
         method=method.name,
         decomposition=decomposition,
         k=int(k),
+        status=result.status,
+        reason=result.reason or "none",
         diverged=int(result.diverged),
         t_diverged=float(result.t_diverged),
-        divergence_reason=result.reason or "none",
+        failed=int(result.failed),
+        t_failed=float(result.t_failed),
         wall_time_s=float(result.wall_time),
+        sensitivities=(
+            "forward differences w.r.t. e_N+1, step fd_step * max(1, |e_j|), in one batched Radau call per link "
+            "(shared step sequence); the corrector "
+            "integrates alone with its own step sequence, which differs from the batch's only in the "
+            f"n_split = {int(result.stats.get('split', 0))} integrations that took more than one step "
+            "(then an O(rtol) mismatch between linearisation and corrector)"
+        ),
     )
     for key, value in method.params.items():
         attrs[f"method_{key}"] = value
+        if key in _METHOD_UNITS:  # SI units: unlike the stability datasets' dimensionless mu_bar = mu/H
+            attrs[f"method_{key}_units"] = _METHOD_UNITS[key]
     for key, value in settings.items():
         attrs[key] = "none" if value is None else value
     for key, value in result.stats.items():
@@ -893,8 +984,11 @@ def reference_dataset(
         method="monolithic",
         decomposition="none",
         k=-1,
+        status="stable",
         diverged=0,
         t_diverged=math.nan,
+        failed=0,
+        t_failed=math.nan,
         integrator=f"scipy solve_ivp {method}",
         rtol=rtol,
         atol=atol,
@@ -972,12 +1066,59 @@ def configured_runs(cfg: dict) -> list:
     return runs
 
 
-def summarize(runs: list, reference, claims: list):
-    """One row per run: divergence, errors against the reference, claim expectation and verdict.
+def pendulum_test_model(params: PendulumParameters, H: float):
+    """The pendulum's point in the parameter plane of Sect. 3: a :class:`~icosim.TestModel` with two points.
+
+    As in the paper's explanation of Fig. 8, ``lr1 = -d H / (2 m1)`` (the
+    damping per unit mass of one link, in macro steps).  ``li1 = omega H`` for
+    the two modal frequencies ``omega`` of the pendulum linearised about its
+    hanging rest (imaginary parts of the eigenvalues of the monolithic model's
+    Jacobian, central differences): the two points bracket the frequencies the
+    swinging pendulum passes through.  Ratios: ``am21 = m2/m1``,
+    ``alr21 = m1/m2`` (the same damping ``d`` on each link), ``ali21 = 1``.
+    """
+    from .model import TestModel
+
+    mono = Monolithic(params)
+    y0 = np.array([-math.pi / 2, -math.pi / 2, 0.0, 0.0])
+    h = 1e-6
+    jac = np.array([(mono.rhs(0, y0 + h * ej) - mono.rhs(0, y0 - h * ej)) / (2 * h) for ej in np.eye(4)]).T
+    omegas = np.sort(np.unique(np.round(np.abs(np.linalg.eigvals(jac).imag), 12)))
+    omegas = omegas[omegas > 0]
+    lr1 = -params.d * H / (2 * params.m1)
+    return TestModel(np.full(omegas.shape, lr1), omegas * H, params.m2 / params.m1, params.m1 / params.m2, 1.0)
+
+
+def linear_test_model_rho(params: PendulumParameters, H: float, method: CouplingMethod, decomposition: str, k: int):
+    """Largest spectral radius of the linear test model (Sect. 3) at the pendulum's points
+    (:func:`pendulum_test_model`), for the dimensionless form of ``method``.
+
+    Baumgarte's parameters are in seconds here and become ``beta_bar = beta/H``,
+    ``gamma_bar = gamma/H^2``; the weighted multiplier's ``a``, ``b`` are
+    dimensionless already.  Returns ``(rho, model)``.
+    """
+    from .coupling import make_method
+    from .stability import spectral_radius
+
+    if method.name == "baumgarte":
+        dimensionless = make_method("baumgarte", beta=method.params["beta"] / H, gamma=method.params["gamma"] / H**2)
+    else:
+        dimensionless = method
+    model = pendulum_test_model(params, H)
+    result = spectral_radius(model, dimensionless, decomposition, int(k))
+    return float(np.max(result.rho)), model
+
+
+def summarize(runs: list, reference, claims: list, rho_test_model: dict | None = None):
+    """One row per run: status, errors against the reference, claim expectation and verdict.
 
     ``runs`` are run datasets, ``reference`` the monolithic one, ``claims`` the
     list from ``config/claims/pendulum.yaml``.  Errors are maxima over the
-    computed part of the run (up to divergence).
+    computed part of the run (up to divergence or failure).  A run is observed
+    ``unstable`` if it diverged, ``failed`` if a step could not be computed:
+    its verdict is then ``undecided`` (a solver failure proves no instability).
+    ``rho_test_model`` (run name -> spectral radius of the linear test model,
+    :func:`linear_test_model_rho`) adds that column.
     """
     import xarray as xr
 
@@ -994,13 +1135,18 @@ def summarize(runs: list, reference, claims: list):
         }
         g = np.hypot(ds["g_cax"].values, ds["g_cay"].values)
         g_corr = np.hypot(ds["g_cax_corrector"].values, ds["g_cay_corrector"].values)
-        observed = "unstable" if int(ds.attrs["diverged"]) else "stable"
+        status = str(ds.attrs["status"])
+        observed = {"stable": "stable", "diverged": "unstable", "failed": "failed"}[status]
         row = dict(
             method=ds.attrs["method"],
             decomposition=ds.attrs["decomposition"],
             k=int(ds.attrs["k"]),
+            status=status,
+            reason=str(ds.attrs.get("reason", "none")),
             diverged=int(ds.attrs["diverged"]),
             t_diverged=float(ds.attrs["t_diverged"]),
+            failed=int(ds.attrs["failed"]),
+            t_failed=float(ds.attrs["t_failed"]),
             t_last=float(ds["t"].values[-1]),
             err_phi1=err["phi1"],
             err_phi2=err["phi2"],
@@ -1010,10 +1156,14 @@ def summarize(runs: list, reference, claims: list):
             wall_time_s=float(ds.attrs.get("wall_time_s", math.nan)),
             observed=observed,
         )
+        if rho_test_model is not None:
+            row["rho_test_model"] = float(rho_test_model[run_name(row["method"], row["decomposition"], row["k"])])
         for claim in claims:
             exp = expected_outcome(claim, row["method"], row["decomposition"], row["k"])
             row[f"expected_{claim['id']}"] = exp
-            row[f"verdict_{claim['id']}"] = "pass" if exp == observed else "fail"
+            row[f"verdict_{claim['id']}"] = (
+                "undecided" if observed == "failed" else "pass" if exp == observed else "fail"
+            )
         rows.append(row)
     names = [run_name(r["method"], r["decomposition"], r["k"]) for r in rows]
     data = {key: ("run", [r[key] for r in rows]) for key in rows[0] if key not in ("method", "decomposition", "k")}
@@ -1025,6 +1175,7 @@ def summarize(runs: list, reference, claims: list):
     }
     units = {
         "t_diverged": "s",
+        "t_failed": "s",
         "t_last": "s",
         "err_phi1": "rad",
         "err_phi2": "rad",
@@ -1041,18 +1192,22 @@ def summarize(runs: list, reference, claims: list):
     ds["err_lambda"].attrs["long_name"] = "max |lambda_c - lambda_c_ref| (both components)"
     ds["max_g"].attrs["long_name"] = "max |g_c| of the stored states"
     ds["max_g_corrector"].attrs["long_name"] = "max |g_c| after the corrector, before any projection"
+    if rho_test_model is not None:
+        ds["rho_test_model"].attrs[
+            "long_name"
+        ] = "largest spectral radius of the linear test model (Sect. 3) at the pendulum's points (lr1, li1)"
+        ds["rho_test_model"].attrs["units"] = "1"
     return ds
 
 
 def claim_verdict(summary, claim: dict, configurations: list) -> str:
-    """``pass`` if every configuration behaves as claimed, ``fail`` if one does not,
-    ``undecided`` if a claimed configuration was not run."""
+    """``fail`` if a configuration does not behave as claimed; otherwise ``undecided`` if
+    a claimed configuration was not run or failed (no verdict of its own), else ``pass``."""
     have = {
         (m, d, int(k))
         for m, d, k in zip(summary["method"].values, summary["decomposition"].values, summary["k"].values)
     }
-    for m, d, k in configurations:
-        if (m, d, int(k)) not in have:
-            return "undecided"
-    verdicts = list(summary[f"verdict_{claim['id']}"].values)
-    return "pass" if all(v == "pass" for v in verdicts) else "fail"
+    verdicts = {str(v) for v in summary[f"verdict_{claim['id']}"].values}
+    if any((m, d, int(k)) not in have for m, d, k in configurations):
+        verdicts.add("undecided")
+    return "fail" if "fail" in verdicts else "undecided" if "undecided" in verdicts else "pass"

@@ -41,6 +41,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .macrostep import StepFailure
+
 __all__ = ["radau_batch", "RadauResult", "IntegrationError"]
 
 S6 = 6**0.5
@@ -75,8 +77,13 @@ MAX_FACTOR = 10.0
 EPS = float(np.finfo(float).eps)
 
 
-class IntegrationError(RuntimeError):
-    """The step size fell below round-off level or the solution stopped being finite."""
+class IntegrationError(StepFailure):
+    """The step size fell below round-off level, the solution stopped being finite or a
+    Newton matrix was singular.
+
+    A :class:`~icosim.macrostep.StepFailure`: a co-simulation run records it as
+    *failed*, not as diverged (a solver failure says nothing about stability).
+    """
 
 
 @dataclass
@@ -157,7 +164,8 @@ def radau_batch(
     Raises
     ------
     IntegrationError
-        If the step size falls below round-off level or values stop being finite.
+        If the step size falls below round-off level, values stop being finite
+        or a Newton matrix is singular.
     """
     if not (np.isfinite(rtol) and np.isfinite(atol) and rtol > 0 and atol > 0):
         raise ValueError(f"rtol and atol must be finite and > 0, got rtol={rtol!r}, atol={atol!r}")
@@ -199,8 +207,11 @@ def radau_batch(
             h = t_new - t
             h_abs = abs(h)
             scale = atol + np.abs(y) * rtol  # (B, n)
-            inv_real = np.linalg.inv(MU_REAL / h * eye - J)
-            inv_complex = np.linalg.inv(MU_COMPLEX / h * eye - J)
+            try:
+                inv_real = np.linalg.inv(MU_REAL / h * eye - J)
+                inv_complex = np.linalg.inv(MU_COMPLEX / h * eye - J)
+            except np.linalg.LinAlgError as exc:
+                raise IntegrationError(f"singular Newton matrix at t = {t:.17g}: {exc}") from exc
             converged, n_iter, Z, fev = _collocation(fun, t, y, h, scale, newton_tol, inv_real, inv_complex)
             n_fev += fev
             if not converged:

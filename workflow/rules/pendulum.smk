@@ -37,13 +37,13 @@ PENDULUM_DATASETS_OF_K = {
 
 
 rule pendulum_reference:
+    """Monolithic reference (minimal coordinates) on the macro-time grid."""
     input:
         lib=PENDULUM_LIB,
     output:
         PENDULUM_REFERENCE,
     log:
         "logs/pendulum/reference.log",
-    """Monolithic reference (minimal coordinates) on the macro-time grid."""
     conda:
         "../envs/icosim.yaml"
     params:
@@ -56,6 +56,7 @@ rule pendulum_reference:
 
 
 rule pendulum_run:
+    """One co-simulation run (method, decomposition, k) up to t_end or divergence."""
     input:
         lib=PENDULUM_LIB,
     output:
@@ -66,7 +67,6 @@ rule pendulum_run:
         method="baumgarte|weighted|projection",
         decomposition="ff|fd|dd",
         k=r"\d+",
-    """One co-simulation run (method, decomposition, k) up to t_end or divergence."""
     conda:
         "../envs/icosim.yaml"
     params:
@@ -83,23 +83,28 @@ rule pendulum_run:
 
 
 rule pendulum_summary:
+    """Errors against the reference, the claim of Sect. 4 and the linear test model's rho, one row per run."""
     input:
         runs=PENDULUM_DATASETS,
         reference=PENDULUM_REFERENCE,
         claims=PENDULUM["claims"],
-        lib=lib("pendulum", "datasets"),
+        lib=PENDULUM_LIB + lib("stability", "oscillator"),
     output:
         PENDULUM_SUMMARY,
     log:
         "logs/pendulum/summary.log",
-    """Errors against the reference and the claim of Sect. 4, one row per run."""
     conda:
         "../envs/icosim.yaml"
+    params:
+        model=PENDULUM["model"],
+        H=PENDULUM["H"],
+        methods=PENDULUM["methods"],
     script:
         "../scripts/pendulum_summary.py"
 
 
 rule pendulum_figure:
+    """Fig. 6, 7 or 8 (k = 0, 1, 2): six panels over t, one line per configuration."""
     input:
         runs=lambda w: PENDULUM_DATASETS_OF_K[int(w.k)],
         reference=PENDULUM_REFERENCE,
@@ -116,7 +121,6 @@ rule pendulum_figure:
         "logs/pendulum/figure_k{k}.log",
     wildcard_constraints:
         k=r"\d+",
-    """Fig. 6, 7 or 8 (k = 0, 1, 2): six panels over t, one line per configuration."""
     conda:
         "../envs/icosim.yaml"
     params:
@@ -130,6 +134,7 @@ rule pendulum_figure:
 
 
 rule pendulum_error_figure:
+    """|phi - phi_ref| of every run against the monolithic reference, one column per k."""
     input:
         runs=PENDULUM_DATASETS,
         reference=PENDULUM_REFERENCE,
@@ -138,7 +143,6 @@ rule pendulum_error_figure:
         PENDULUM_ERROR_FIGURE,
     log:
         "logs/pendulum/error_figure.log",
-    """|phi - phi_ref| of every run against the monolithic reference, one column per k."""
     conda:
         "../envs/icosim.yaml"
     params:
@@ -148,6 +152,7 @@ rule pendulum_error_figure:
 
 
 rule pendulum_report_section:
+    """HTML fragment of the report: set-up, dd formulation, claim verdicts, errors, figures."""
     input:
         figures=[f for f in PENDULUM_FIGURES if f.endswith(".png")],
         error_figure=PENDULUM_ERROR_FIGURE,
@@ -159,7 +164,6 @@ rule pendulum_report_section:
         PENDULUM_SECTION,
     log:
         "logs/pendulum/report_section.log",
-    """HTML fragment of the report: set-up, dd formulation, claim verdicts, errors, figures."""
     conda:
         "../envs/icosim.yaml"
     params:

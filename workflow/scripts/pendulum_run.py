@@ -47,7 +47,6 @@ settings = {
     "rtol": p.integrator["rtol"],
     "atol": p.integrator["atol"],
     "newton_tol": p.integrator["newton_tol"],
-    "sensitivities": "forward differences w.r.t. e_N+1, step fd_step * max(1, |e_j|)",
     "fd_step": p.sensitivities["fd_step"],
     "corrector_iterations": p.corrector["iterations"],
     "corrector_tol": p.corrector["tol"],

@@ -5,8 +5,9 @@ Six panels over time -- ``phi1``, ``phi2``, ``g_cax``, ``g_cay``,
 configuration and the monolithic reference.  The builders only draw the
 datasets they are given.
 
-A diverged run ends at its last stored step (the datasets hold no NaN) and is
-marked there with a cross and ``diverged`` in the legend.  The y-limits of the
+A diverged or failed run ends at its last stored step (the datasets hold no
+NaN) and is marked there with a cross (diverged) or a circle (failed: a step
+could not be computed) and says so in the legend.  The y-limits of the
 constraint and multiplier panels follow the runs that did *not* diverge (and
 the reference), so a blow-up does not flatten the other curves; the diverged
 curves are clipped at the panel edge.
@@ -53,7 +54,7 @@ def pendulum_figure(runs, reference, *, k: int, title: str | None = None):
 
     fig = Figure(figsize=(12, 10.5), layout="constrained")
     axes = fig.subplots(3, 2, sharex=True).ravel()
-    stable = [ds for ds in runs if not int(ds.attrs["diverged"])]
+    stable = [ds for ds in runs if ds.attrs.get("status", "stable") == "stable"]
     for ax, (name, ylabel) in zip(axes, PANELS):
         ax.plot(
             reference["t"], reference[name], color="black", lw=2.6, alpha=0.35, label="monolithic reference"
@@ -61,19 +62,20 @@ def pendulum_figure(runs, reference, *, k: int, title: str | None = None):
         ends = []
         for ds in runs:
             m, d = ds.attrs["method"], ds.attrs["decomposition"]
-            diverged = int(ds.attrs["diverged"])
+            status = ds.attrs.get("status", "stable")
             lab = label(ds) + (
-                f" (diverged at t = {float(ds.attrs['t_diverged']):.3f} s)" if diverged else ""
+                f" ({status} at t = {float(ds.attrs['t_' + status]):.3f} s)" if status != "stable" else ""
             )
             ax.plot(ds["t"], ds[name], ls=_STYLES.get(d, "-"), color=_COLOURS.get(m), lw=1.1, label=lab)
-            if diverged:
-                ends.append((float(ds["t"][-1]), float(ds[name][-1]), _COLOURS.get(m)))
+            if status != "stable":
+                marker = "x" if status == "diverged" else "o"
+                ends.append((float(ds["t"][-1]), float(ds[name][-1]), _COLOURS.get(m), marker))
         if name.startswith(("g_", "lambda_")):
             basis = [ds[name].values for ds in stable] + [reference[name].values]
             ax.set_ylim(*_limits(basis))
         lo, hi = ax.get_ylim()
-        for t_end, value, colour in ends:  # the last stored step, clipped into view
-            ax.plot(t_end, min(max(value, lo), hi), "x", color=colour, ms=9, mew=2, clip_on=False)
+        for t_end, value, colour, marker in ends:  # the last stored step, clipped into view
+            ax.plot(t_end, min(max(value, lo), hi), marker, color=colour, ms=9, mew=2, mfc="none", clip_on=False)
         ax.set_ylabel(ylabel)
         ax.grid(True, alpha=0.3)
         if name.startswith("g_"):
