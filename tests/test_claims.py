@@ -185,6 +185,8 @@ def test_each_fills_open_attributes_only_and_combines_verdicts():
 
 # -- parsing ------------------------------------------------------------------------------------
 
+GOOD_CHECK = {"kind": "stable_fraction", "select": {"figure": "9"}, "op": "<", "value": 1}
+
 
 @pytest.mark.parametrize(
     "item, message",
@@ -193,6 +195,14 @@ def test_each_fills_open_attributes_only_and_combines_verdicts():
         ({"check": {"kind": "nonsense"}}, "check.kind"),
         ({"reference": "maybe"}, "reference"),
         ({"each": {"k": 1}}, "each"),
+        # the check's own parameters are checked against its function when the file is read
+        ({"check": {**GOOD_CHECK, "opp": "<"}}, r"x.*unknown key.*opp"),
+        ({"check": {k: v for k, v in GOOD_CHECK.items() if k != "value"}}, r"x.*lacks \['value'\]"),
+        ({"check": {**GOOD_CHECK, "op": "=<"}}, r"x.*check.op must be one of"),
+        ({"check": {**GOOD_CHECK, "region": {"lr": [0, 1]}}}, r"x.*region.*lr"),
+        ({"check": {"kind": "compare", "a": {}, "b": {}, "relation": "bigger"}}, r"x.*check.relation"),
+        ({"check": {"kind": "compare", "a": {}, "b": {}, "relation": "similar"}}, r"x.*within"),
+        ({"check": {"kind": "trend", "select": {}, "along": "row", "direction": "up"}}, r"x.*check.direction"),
     ],
 )
 def test_parse_claims_names_the_bad_key(item, message):
@@ -201,14 +211,16 @@ def test_parse_claims_names_the_bad_key(item, message):
         "source": "s",
         "statement": "t",
         "figures": ["9"],
-        "check": {"kind": "stable_fraction"},
+        "check": GOOD_CHECK,
     }
+    parse_claims([base])  # the base itself is well formed
     with pytest.raises(ParameterError, match=message):
         parse_claims([{**base, **item}])
 
 
 def test_parse_claims_rejects_duplicates_and_missing_keys():
-    base = {"id": "x", "source": "s", "statement": "t", "figures": ["9"], "check": {"kind": "trend"}}
+    check = {"kind": "trend", "select": {}, "along": "row", "direction": "increasing"}
+    base = {"id": "x", "source": "s", "statement": "t", "figures": ["9"], "check": check}
     with pytest.raises(ParameterError, match="duplicate"):
         parse_claims([base, base])
     with pytest.raises(ParameterError, match="missing"):

@@ -9,7 +9,8 @@ from pathlib import Path
 import icosim
 from icosim.convergence import (
     PanelSpec, Setup, Study, dimensional_method, fastest_schemes, figure_layout, figure_panels, fit_order,
-    iterate_linear_map, method_attrs, nrmse, resolve_scheme, run_panel, step_counts, time_macro_steps,
+    iterate_linear_map, load_claims, method_attrs, nrmse, oscillation_summary, parse_claims, resolve_scheme,
+    run_panel, step_cost, step_counts, study_from_config, time_macro_steps,
 )
 from icosim.model import ParameterError
 
@@ -45,6 +46,38 @@ def test_nrmse_bad_input():
         nrmse(ref, ref[:-1])
     with pytest.raises(ValueError, match="constant"):
         nrmse(np.ones((10, 4)), np.ones((10, 4)))
+
+
+def test_partial_nrmse_of_a_run_match_an_independent_computation():
+    """nrmse_x, nrmse_v, nrmse_lambda of a panel against Eq. (72) recomputed here from the engine's
+    time stepper (simulate, not the matrix path) and numpy's population variance."""
+    setup = Setup(end_time=0.2)
+    study = Study(setup, [100, 200])
+    r = study.run("baumgarte", {"index": 1, "mu": 5e-3}, "fd", 1)
+    for i, (H, N) in enumerate(zip(study.H, study.n_steps)):
+        m = dimensional_method("baumgarte", H, index=1, mu=5e-3)
+        c = setup.model(H).coefficients()
+        prob = icosim.LinearCosimulation(c, "fd", 1)
+        sol = icosim.exact.MonolithicSolution(c, setup.x0, setup.v0 * H)
+        traj = icosim.macrostep.simulate(prob, m, *icosim.exact.consistent_start(prob, sol), int(N))
+        states = np.array(traj.states[1:])  # (N, subsystem, (x, v_bar))
+        lam = np.array(traj.coupling[1:])[:, 0]  # lambda_c is the first fd coupling variable
+        exact = sol.state(np.arange(1, N + 1, dtype=float))
+
+        def ratio(ref, num):
+            return np.sum((ref - num) ** 2) / (ref.size * np.var(ref))
+
+        rx = ratio(exact[:, 0], states[:, 0, 0]) + ratio(exact[:, 0], states[:, 1, 0])
+        rv = ratio(exact[:, 1] / H, states[:, 0, 1] / H) + ratio(exact[:, 1] / H, states[:, 1, 1] / H)
+        assert r.nrmse_x[i] == pytest.approx(np.sqrt(rx), rel=1e-6)
+        assert r.nrmse_v[i] == pytest.approx(np.sqrt(rv), rel=1e-6)
+        assert r.nrmse[i] == pytest.approx(np.sqrt(rx + rv), rel=1e-6)  # the main reading of Eq. (72)
+        # lambda_bar = lambda H^2 / m1 on both sides: the ratio is scale-free
+        assert r.nrmse_lambda[i] == pytest.approx(np.sqrt(ratio(exact[:, 3], lam)), rel=1e-6)
+    # the other reading (two roots added) lies within [1, sqrt 2] times the main one
+    assert np.all(r.nrmse <= r.nrmse_x + r.nrmse_v) and np.all(r.nrmse_x + r.nrmse_v <= np.sqrt(2) * r.nrmse)
+    # dd has no multiplier among its coupling variables
+    assert np.isnan(study.run("projection", {}, "dd", 0).nrmse_lambda).all()
 
 
 # ------------------------------------------------------------------ setup, reference, methods
@@ -216,11 +249,47 @@ def test_panel_dataset_and_work_precision():
     assert np.all(cost[np.isfinite(wp["nrmse"].values)] > 0)
     ranking = fastest_schemes(wp, [1.0])[0]["ranking"]
     assert [r[0] for r in ranking] and all(a[1] <= b[1] for a, b in zip(ranking, ranking[1:]))
+    assert wp["subsystem_integrations_per_step"].values.tolist() == [4, 4]
+    assert wp["coupling_solves_per_step"].values.tolist() == [1, 1]
+    assert "Python overhead" in wp.attrs["cost_caveat"]
+    assert "mu and beta in s" in ds.attrs["method_parameters_units"]
 
 
-def test_time_macro_steps_positive():
-    t = time_macro_steps(Setup(), 1e-3, "projection", {}, "ff", 0, steps=3, repeats=2, warmup_steps=1)
-    assert t["seconds_per_step"] > 0 and t["seconds_per_simulated_second"] == pytest.approx(t["seconds_per_step"] / 1e-3)
+def test_time_macro_steps_times_the_documented_runs(monkeypatch):
+    """The timing runs what it says: one warm-up of `warmup_steps`, then `repeats` runs of `steps`
+    macro steps of the engine's simulate, each from the exact consistent start."""
+    import icosim.convergence as conv
+
+    calls = []
+    real = conv.simulate
+
+    def recording(problem, method, state, history, n_steps, **kw):
+        calls.append((n_steps, problem.decomposition.name, problem.k, method.params.get("beta")))
+        np.testing.assert_allclose(state[:, 0], Setup().x0)  # exact start, both subsystems
+        return real(problem, method, state, history, n_steps, **kw)
+
+    monkeypatch.setattr(conv, "simulate", recording)
+    time_macro_steps(Setup(), 1e-3, "baumgarte", {"index": 1, "mu": 5e-3}, "fd", 1, steps=3, repeats=2,
+                     warmup_steps=4)
+    # beta is handed on dimensionless: 2 mu / H = 10
+    assert calls == [(4, "fd", 1, pytest.approx(10.0))] + [(3, "fd", 1, pytest.approx(10.0))] * 2
+    with pytest.raises(ParameterError, match="steps"):
+        time_macro_steps(Setup(), 1e-3, "projection", {}, "ff", 0, steps=0)
+
+
+@pytest.mark.parametrize("method,params,solves,projections", [
+    ("baumgarte", {"index": 1, "mu": 1e-3}, 1, 0),  # one solve, levels (1, beta, gamma)
+    ("baumgarte", {"index": 3}, 1, 0),
+    ("weighted", {"index": 1, "a": 1.0, "b": 1.0}, 3, 0),  # position, velocity, acceleration level
+    ("weighted", {"index": 2, "a": 1.0}, 2, 0),  # b = 0: the acceleration solve drops out
+    ("projection", {}, 1, 1),  # acceleration level, then the projection
+])
+@pytest.mark.parametrize("dec", ["ff", "fd"])
+def test_step_cost_counts_the_work_of_one_macro_step(method, params, solves, projections, dec):
+    """Counted on the engine's macro step: predictor + corrector of each subsystem = 4 integrations;
+    the coupling solves are those of the method's definition (Sect. 2) with a nonzero weight."""
+    cost = step_cost(method, params, dec, 1)
+    assert cost == {"subsystem_integrations": 4, "coupling_solves": solves, "projections": projections}
 
 
 def test_figure_never_draws_unstable_as_error():
@@ -244,3 +313,118 @@ def test_figure_never_draws_unstable_as_error():
         y = np.asarray(line.get_ydata(), float)
         x = np.asarray(line.get_xdata(), float)
         assert not np.any(np.isfinite(y) & np.isin(x, [4e-3, 8e-3]))
+
+
+# ------------------------------------------------------------------ configuration checked before any job
+@pytest.mark.parametrize("change,message", [
+    (lambda c: c["step_sizes"].update(H_min=1e-2, H_max=1e-3), r"convergence\.step_sizes: need 0 < H_min < H_max"),
+    (lambda c: c["step_sizes"].update(H_min=1e-2, H_max=1e-2), r"convergence\.step_sizes: need 0 < H_min < H_max"),
+    (lambda c: c["step_sizes"].update(H_max=2.0), r"convergence\.step_sizes\.H_max = 2\.0 must be at most convergence\.end_time"),
+    (lambda c: c.update(end_time=1e-3), r"convergence\.step_sizes\.H_max .* convergence\.end_time"),
+    (lambda c: c["initial_conditions"].update(x0=0.0, v0=0.0), r"convergence\.initial_conditions: x0 and v0 are both zero"),
+    (lambda c: c["initial_conditions"].update(v0=float("nan")), r"convergence\.initial_conditions\.v0"),
+    (lambda c: c["model"].update(m1=-1.0), r"convergence\.model: m1"),
+    (lambda c: c["unstable"].update(growth_bound=1.0), r"convergence\.unstable\.growth_bound"),
+    (lambda c: c["step_sizes"].update(H_min=0.45, H_max=0.5, num=4), r"convergence\.step_sizes: .* only the step count"),
+    (lambda c: c["fit"].update(min_points=20), r"convergence\.fit\.min_points = 20 exceeds the 16 step sizes"),
+])
+def test_bad_configuration_is_refused_naming_the_key(change, message):
+    cfg = _config()
+    study_from_config(cfg)  # the shipped configuration is fine
+    change(cfg)
+    with pytest.raises(ParameterError, match=message):
+        study_from_config(cfg)
+
+
+def test_study_from_config_is_the_study_the_jobs_run():
+    cfg = _config()
+    study = study_from_config(cfg)
+    s = cfg["step_sizes"]
+    np.testing.assert_array_equal(study.n_steps, step_counts(cfg["end_time"], s["H_min"], s["H_max"], s["num"]))
+    assert study.setup.x0 == cfg["initial_conditions"]["x0"] and study.digits == cfg["unstable"]["digits"]
+
+
+def test_oscillation_summary_matches_the_monolithic_eigenvalues():
+    """Frequency and decay of the report's text against the eigenvalues of the rigidly coupled system."""
+    s = Setup()
+    M, C, D = s.m1 + s.m2, s.c1 + s.c2, s.d1 + s.d2
+    ev = np.linalg.eigvals(np.array([[0.0, 1.0], [-C / M, -D / M]]))
+    o = oscillation_summary(s)
+    assert o["omega"] == pytest.approx(abs(ev.imag).max(), rel=1e-12)
+    assert o["decay"] == pytest.approx(np.exp(ev.real.max() * s.end_time), rel=1e-12)
+    assert o["periods"] == pytest.approx(s.end_time * abs(ev.imag).max() / (2 * np.pi), rel=1e-12)
+    assert oscillation_summary(Setup(d1=200.0, d2=200.0))["overdamped"]
+
+
+# ------------------------------------------------------------------ claims checked before any job
+def _claims_doc():
+    return yaml.safe_load((ROOT / "config" / "claims" / "convergence.yaml").read_text())
+
+
+def test_claims_file_matches_the_configuration():
+    doc = load_claims(ROOT / "config" / "claims" / "convergence.yaml", _config())
+    assert doc["tolerance"] == _claims_doc()["tolerance"] and len(doc["claims"]) == len(_claims_doc()["claims"])
+
+
+@pytest.mark.parametrize("change,message", [
+    (lambda c: c.update(colour="red"), r"baumgarte_index2.*unknown key.*colour"),
+    (lambda c: c.pop("expect"), r"baumgarte_index2.*missing key.*expect"),
+    (lambda c: c["select"].update(mux=1e-3), r"baumgarte_index2.*select: unknown key.*mux"),
+    (lambda c: c["expect"][0].pop("k"), r"baumgarte_index2.*expect\[0\]\.k must be an integer"),
+    (lambda c: c["expect"][0].update(order="two"), r"baumgarte_index2.*expect\[0\]\.order must be a number"),
+    (lambda c: c["expect"][0].pop("order"), r"baumgarte_index2.*expect\[0\]: give exactly one of"),
+    (lambda c: c["expect"][1].update(order=2), r"baumgarte_index2.*expect\[1\]: give exactly one of"),
+    (lambda c: c["expect"][0].update(ordre=2), r"baumgarte_index2.*expect\[0\]: unknown key.*ordre"),
+    (lambda c: c.update(reference="maybe"), r"baumgarte_index2.*reference must be one of"),
+    (lambda c: c["select"].update(figure="24"), r"baumgarte_index2.*expect\[0\]: no configured curve matches"),
+    (lambda c: c["select"].update(decomposition="dd"), r"baumgarte_index2.*no configured curve matches"),
+    (lambda c: c["expect"][0].update(k=7), r"baumgarte_index2.*expect\[0\]: no configured curve matches .* k = 7"),
+])
+def test_malformed_claims_name_the_claim_and_key(change, message):
+    doc = _claims_doc()
+    claim = next(c for c in doc["claims"] if c["id"] == "baumgarte_index2")
+    change(claim)
+    with pytest.raises(ParameterError, match=message):
+        parse_claims(doc, cfg=_config())
+
+
+def test_claims_tolerance_and_duplicates():
+    doc = _claims_doc()
+    with pytest.raises(ParameterError, match="tolerance"):
+        parse_claims({**doc, "tolerance": -1})
+    with pytest.raises(ParameterError, match="duplicate id"):
+        parse_claims({**doc, "claims": doc["claims"] + doc["claims"][:1]})
+
+
+# ------------------------------------------------------------------ theory: Baumgarte index 1, k = 0, fixed mu
+@pytest.mark.parametrize("ratio", [0.1, 0.01])
+def test_baumgarte_index1_k0_has_the_drift_mode_of_time_scale_mu(ratio):
+    """Why Baumgarte index 1 with k = 0 and a fixed dimensional mu is of order 1 as H -> 0.
+
+    Theory (rigid masses; the springs and dampers only perturb it): with k = 0 the relative
+    acceleration a of the gap g = x2 - x1 is constant over a macro step, and the Baumgarte
+    condition g + 2 mu g' + mu^2 g'' = 0 at T_N+1 gives the recurrence
+    g+ = g + H g' + H^2 a / 2, g'+ = g' + H a, a = -(g + (H + 2 mu) g') / (mu^2 + 2 mu H + H^2 / 2).
+    With r = H / mu its eigenvalues are the pair
+    z = [(1 + r - r^2/4) +- i sqrt(r^3/2 - r^4/16)] / (1 + 2 r + r^2/2),
+    of modulus |z| = (1 + 2 r + r^2/2)^(-1/2) = 1 - r + (5/4) r^2 + O(r^3): the constraint drift decays
+    like exp(-t / mu), on the time scale mu, not H, so a start-up gap of O(H) is corrected only over
+    mu / H steps and the global error keeps O(H).  (The eigenvalue itself is 1 - r +- i r^(3/2)/sqrt 2
+    + O(r^2): a split double root; its modulus, which sets the decay, is 1 - r + O(r^2).)
+    """
+    mu = 1.0e-3
+    H = ratio * mu
+    c = icosim.PhysicalModel(**icosim.convergence.PAPER_MODEL, H=H).coefficients()
+    M = icosim.stability.amplification_matrix(c, icosim.make_method("baumgarte", beta=2 * mu / H, gamma=mu**2 / H**2), "ff", 0)
+    ev = np.linalg.eigvals(M)
+    r = ratio
+    z_rigid = ((1 + r - r**2 / 4) + 1j * np.sqrt(r**3 / 2 - r**4 / 16)) / (1 + 2 * r + r**2 / 2)
+    z = ev[np.argmin(np.abs(ev - z_rigid))]
+    # the O(r^2) term of |z| is (5/4) r^2 (+ O(r^3)); 3/2 r^2 bounds it at both ratios, while a
+    # different first-order term (1 - r/2, 1 - 2r) would be off by r/2 >= 50 r^2
+    assert abs(abs(z) - (1 - r)) <= 1.5 * r**2
+    assert abs(z.real - (1 - r)) <= 1.5 * r**2
+    assert np.conj(z) == pytest.approx(ev[np.argmin(np.abs(ev - np.conj(z)))])  # a complex pair
+    # the springs and dampers (d H / m ~ 1e-3 here) move the pair by a small fraction of its distance
+    # from 1 - r
+    assert abs(z - z_rigid) <= 0.02 * abs(z_rigid - (1 - r))

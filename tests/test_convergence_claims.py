@@ -6,6 +6,12 @@ Asserted per claim marked `ci: true`: its verdict equals the full run's `referen
 fitted order is within the claims' tolerance of the paper's order, or of the `observed` order
 where this replication finds (and explains) a different one; `unstable` expectations are
 unstable at every step size.
+
+The comparisons with `reference` and `observed` are *regression checks*: they pin what this
+code found on the full run, so a change in behaviour is noticed.  They are not evidence that
+the findings are right; that rests on the theory tests (e.g.
+test_convergence.py::test_baumgarte_index1_k0_has_the_drift_mode_of_time_scale_mu for the
+order-1 disagreement of Baumgarte index 1, k = 0) and on the independent computations there.
 """
 
 from pathlib import Path
@@ -55,11 +61,13 @@ def test_ci_range_is_at_least_two_decades_with_ten_sizes():
 
 @pytest.mark.parametrize("claim", CI_CLAIMS, ids=[c["id"] for c in CI_CLAIMS])
 def test_claim_verdict_matches_full_run(claim, results):
+    """Regression check: the reduced CI range reproduces the recorded full-run verdict."""
     assert results[claim["id"]]["verdict"] == claim["reference"]
 
 
 @pytest.mark.parametrize("claim", CI_CLAIMS, ids=[c["id"] for c in CI_CLAIMS])
 def test_fitted_orders(claim, results):
+    """Regression check: fitted orders stay at the paper's order or at the recorded `observed` one."""
     tol = CLAIMS["tolerance"]
     expect = {e["k"]: e for e in claim["expect"]}
     checked = 0

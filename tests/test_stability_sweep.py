@@ -27,6 +27,7 @@ from icosim.sweep import (
     grid_axis,
     panel_id,
     row_label,
+    row_label_keys,
     stability_panel,
 )  # noqa: E402
 
@@ -177,6 +178,49 @@ def test_figure_errors_name_the_figure_and_key(change, message):
     change(fc)
     with pytest.raises(ParameterError, match=message):
         figure_panels("15", fc, grid=COARSE, zoom_grid=ZOOM, precision=PREC)
+
+
+@pytest.mark.parametrize(
+    "name, grid, message",
+    [
+        ("grid", {**COARSE, "lr1": [0.0, -2.0]}, r"stability\.grid\.lr1 must be increasing"),
+        ("grid", {**COARSE, "li1": [1.0, 1.0]}, r"stability\.grid\.li1 must be increasing"),
+        ("zoom_grid", {**ZOOM, "n": 1}, r"stability\.zoom_grid\.n must be an integer >= 2"),
+        ("zoom_grid", {**ZOOM, "li1": [-0.1, 0.2]}, r"stability\.zoom_grid\.li1 must lie in li1 >= 0"),
+        ("grid", {**COARSE, "lr1": [-2.0]}, r"stability\.grid\.lr1 must be \[start, stop\]"),
+    ],
+)
+def test_bad_grids_are_refused_naming_the_key(name, grid, message):
+    grids = {"grid": COARSE, "zoom_grid": ZOOM, name: grid}
+    with pytest.raises(ParameterError, match=message):
+        figure_panels("15", CFG["figures"]["15"], precision=PREC, **grids)
+
+
+def test_figure_and_report_label_rows_by_one_rule():
+    """The figure's row labels come from the keys stored in the panels, chosen by
+    icosim.sweep.row_label_keys -- the rule of the report's sweep.row_label."""
+    tiny = {**COARSE, "n": 2}
+    for fig, fc in CFG["figures"].items():
+        specs = [s for s in figure_panels(fig, fc, grid=tiny, zoom_grid=ZOOM, precision={"policy": "float64",
+                                                                                          "digits": 30})
+                 if s.k == fc["k"][0] and s.view == "full"]
+        panels = [stability_panel(s) for s in specs]
+        tex = row_labels(panels)
+        for ds in panels:
+            row = ds.attrs["row"]
+            assert ds.attrs["row_label"] == row_label(fc, row), (fig, row)
+            assert ds.attrs["row_label_keys"].split() == list(row_label_keys(fc))
+            # same parameters and values, typeset in TeX
+            values = [part.split(" = ")[1] for part in row_label(fc, row).split(", ")]
+            assert [part.split(" = ")[1] for part in tex[row].split(", ")] == values, (fig, row)
+            assert "mu_bar = mu/H" in ds.attrs["method_parameters_units"]
+
+
+def test_figure_refuses_panels_without_row_label_keys(fig16_panels):
+    ds = fig16_panels[0].copy()
+    ds.attrs = {k: v for k, v in ds.attrs.items() if k != "row_label_keys"}
+    with pytest.raises(ValueError, match="row_label_keys"):
+        row_labels([ds])
 
 
 def test_positive_lr1_grid_is_refused():

@@ -104,10 +104,23 @@ def test_one_figure_target_schedules_only_that_figures_panels(workflow_copy):
             {"figures": {"18": {"rows": [{"a": 1.0}]}}},
             ["stability.figures.18", "row 1", "not used by method"],
         ),
+        # grids are checked when the workflow is parsed, not in the sweep jobs
+        ({"grid": {"lr1": [0.0, -2.0]}}, ["stability.grid.lr1 must be increasing"]),
+        ({"zoom_grid": {"li1": [0.2, 0.2]}}, ["stability.zoom_grid.li1 must be increasing"]),
+        ({"zoom_grid": {"lr1": [-0.2, 0.1]}}, ["stability.zoom_grid.lr1 must lie in lr1 <= 0"]),
+        ({"grid": {"li1": [-1.0, 2.0]}}, ["stability.grid.li1 must lie in li1 >= 0"]),
+        # the claims file is read (and checked) when the workflow is parsed
+        ({"claims": {"file": "BADCLAIMS"}}, ["fig9_wide_stable_range", "check (stable_fraction) lacks ['op']"]),
     ],
 )
 def test_bad_configuration_fails_before_any_job_naming_the_key(workflow_copy, tmp_path, override, names):
     bad = tmp_path / "bad.yaml"
+    if override.get("claims", {}).get("file") == "BADCLAIMS":
+        # the shipped claims with one check parameter left out
+        doc = yaml.safe_load((ROOT / "config" / "claims" / "stability.yaml").read_text())
+        del doc["claims"][0]["check"]["op"]
+        (tmp_path / "claims.yaml").write_text(yaml.safe_dump(doc))
+        override = {"claims": {"file": str(tmp_path / "claims.yaml")}}
     bad.write_text(yaml.safe_dump({"stability": override}))
     proc = snakemake(workflow_copy, "-n", "--configfile", str(bad), check=False)
     out = proc.stdout + proc.stderr

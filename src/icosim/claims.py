@@ -30,6 +30,7 @@ moves by one grid spacing across the whole plot).  Smaller differences are
 
 from __future__ import annotations
 
+import inspect
 import math
 from dataclasses import dataclass, field
 
@@ -145,10 +146,15 @@ def parse_claims(items, *, where: str = "claims") -> list[Claim]:
         if item["id"] in seen:
             raise ParameterError(f"{label}: duplicate id {item['id']!r}")
         seen.add(item["id"])
+        if not isinstance(item["check"], dict):
+            raise ParameterError(f"{label}: check must be a mapping with a kind and its parameters")
         check = dict(item["check"])
         kind = check.get("kind")
         if kind not in CHECKS:
             raise ParameterError(f"{label}: check.kind must be one of {sorted(CHECKS)}, got {kind!r}")
+        _check_parameters(label, kind, {k: v for k, v in check.items() if k != "kind"})
+        if not isinstance(item["figures"], list) or not item["figures"]:
+            raise ParameterError(f"{label}: figures must be a non-empty list of figure numbers")
         reference = item.get("reference")
         if reference is not None and reference not in VERDICTS:
             raise ParameterError(f"{label}: reference must be one of {VERDICTS}, got {reference!r}")
@@ -169,6 +175,41 @@ def parse_claims(items, *, where: str = "claims") -> list[Claim]:
             )
         )
     return claims
+
+
+#: Allowed values of the checks' choice parameters (checked when the claims are read).
+CHOICES = {
+    ("stable_fraction", "op"): ("==", ">=", "<=", ">", "<"),
+    ("compare", "relation"): ("greater", "less", "similar"),
+    ("trend", "direction"): ("increasing", "decreasing"),
+}
+
+
+def _check_parameters(label: str, kind: str, params: dict):
+    """The check's parameters against its function's signature: unknown, missing, bad choices."""
+    sig = inspect.signature(CHECKS[kind])
+    names = [n for n in sig.parameters if n != "datasets"]
+    unknown = sorted(set(params) - set(names))
+    if unknown:
+        raise ParameterError(f"{label}: check ({kind}) has unknown key(s) {unknown}; allowed: {names}")
+    missing = [n for n in names if sig.parameters[n].default is inspect.Parameter.empty and n not in params]
+    if missing:
+        raise ParameterError(f"{label}: check ({kind}) lacks {missing}")
+    for (k, name), allowed in CHOICES.items():
+        if k == kind and name in params and params[name] not in allowed:
+            raise ParameterError(f"{label}: check.{name} must be one of {list(allowed)}, got {params[name]!r}")
+    for name in ("select", "a", "b", "region"):
+        value = params.get(name)
+        if value is None:
+            continue
+        items = value if (name == "b" and isinstance(value, list)) else [value]
+        if not all(isinstance(v, dict) for v in items):
+            raise ParameterError(f"{label}: check.{name} must be a mapping of attribute -> value")
+    unknown = sorted(set(params.get("region") or {}) - {"lr1", "li1", "exclude_undamped"})
+    if unknown:
+        raise ParameterError(f"{label}: check.region has unknown key(s) {unknown}; allowed: lr1, li1, exclude_undamped")
+    if kind == "compare" and params.get("relation") == "similar" and params.get("within") is None:
+        raise ParameterError(f"{label}: check (compare) with relation 'similar' needs `within`")
 
 
 def load_claims(path, key: str = "claims") -> list[Claim]:

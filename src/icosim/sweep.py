@@ -33,6 +33,10 @@ __all__ = [
     "panel_id",
     "figure_panels",
     "row_label",
+    "row_label_keys",
+    "format_row_label",
+    "ROW_SYMBOLS",
+    "METHOD_PARAMETERS_UNITS",
     "RATIOS",
     "METHOD_PARAMS",
     "ROW_KEYS",
@@ -47,6 +51,22 @@ METHOD_PARAMS = ("mu", "beta", "gamma", "index", "a", "b")
 ROW_KEYS = RATIOS + ("mu", "beta", "gamma", "a", "b")
 #: A panel shows the whole parameter range or a zoom near the origin.
 VIEWS = ("full", "zoom")
+#: The method parameters of a panel are the engine's dimensionless ones.
+METHOD_PARAMETERS_UNITS = (
+    "dimensionless (beta_bar = beta/H, gamma_bar = gamma/H^2, mu_bar = mu/H; a, b dimensionless): "
+    "the attributes mu, beta, gamma are mu_bar, beta_bar, gamma_bar"
+)
+#: Symbols of the row parameters (plain text; the figures use their TeX form).
+ROW_SYMBOLS = {
+    "am21": "αm21",
+    "alr21": "αλr21",
+    "ali21": "αλi21",
+    "mu": "μ̄",
+    "beta": "β̄",
+    "gamma": "γ̄",
+    "a": "a",
+    "b": "b",
+}
 
 LONG_NAMES = {
     "lr1": "real part of the eigenvalue of subsystem 1, lambda_bar_r1 = -d_bar_1/2",
@@ -98,6 +118,8 @@ class PanelSpec:
     n: int
     digits: int = 128
     policy: str = "auto"
+    #: the parameters that tell this figure's rows apart (:func:`row_label_keys`)
+    row_keys: tuple = RATIOS
 
     @classmethod
     def from_params(cls, params: dict) -> "PanelSpec":
@@ -109,6 +131,8 @@ class PanelSpec:
         p = dict(params)
         p["lr1"] = tuple(p["lr1"])
         p["li1"] = tuple(p["li1"])
+        if "row_keys" in p:
+            p["row_keys"] = tuple(p["row_keys"])
         return cls(**p)
 
     def __post_init__(self):
@@ -124,6 +148,9 @@ class PanelSpec:
             raise ParameterError(f"k must be an integer >= 0, got {self.k!r}")
         if self.policy not in ("auto", "float64", "mp"):
             raise ParameterError(f"policy must be 'auto', 'float64' or 'mp', got {self.policy!r}")
+        bad = [key for key in self.row_keys if key not in ROW_KEYS]
+        if bad or not self.row_keys:
+            raise ParameterError(f"row_keys must be a non-empty list of {', '.join(ROW_KEYS)}, got {list(self.row_keys)}")
 
     def coupling_method(self):
         return make_method(self.method, **self.method_params)
@@ -131,6 +158,7 @@ class PanelSpec:
     def as_dict(self) -> dict:
         d = {f: getattr(self, f) for f in self.__dataclass_fields__}
         d["lr1"], d["li1"] = list(self.lr1), list(self.li1)
+        d["row_keys"] = list(self.row_keys)
         return d
 
 
@@ -210,6 +238,10 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
     )
     for name, value in method.params.items():  # beta, gamma, mu, index, a, b as resolved
         attrs[name] = int(value) if name == "index" else float(value)
+    attrs["method_parameters_units"] = METHOD_PARAMETERS_UNITS
+    # what tells the rows of the figure apart: the figure labels its rows from these
+    attrs["row_label_keys"] = " ".join(spec.row_keys)
+    attrs["row_label"] = format_row_label(spec.row_keys, attrs)
     attrs.update(
         precision_policy=spec.policy,
         mp_digits=int(spec.digits),
@@ -236,30 +268,50 @@ def panel_id(row: int, k: int, view: str) -> str:
     return f"r{int(row)}_k{int(k)}_{view}"
 
 
-def row_label(figure_cfg: dict, row: int) -> str:
-    """What distinguishes row ``row`` (1-based) of a figure, in the paper's symbols.
+def row_label_keys(figure_cfg: dict) -> tuple:
+    """The parameters that tell a figure's rows apart -- the one rule for row labels.
 
-    Figures whose rows vary the ratios are labelled by the full ratio triple;
-    figures whose rows vary a method parameter by that parameter.
+    Figures whose rows vary the ratios are labelled by the full ratio triple
+    (as the paper lists parameter sets); figures whose rows vary a method
+    parameter by the parameters the rows set.  The keys are stored in every
+    panel (attribute ``row_label_keys``), so the figure, the report and any
+    other reader label rows alike.
     """
-    rows = figure_cfg["rows"]
-    varied = sorted({key for r in rows for key in r}, key=ROW_KEYS.index)
-    values = {**figure_cfg["ratios"], **figure_cfg["params"], **rows[row - 1]}
-    symbols = {
-        "am21": "αm21",
-        "alr21": "αλr21",
-        "ali21": "αλi21",
-        "mu": "μ̄",
-        "beta": "β̄",
-        "gamma": "γ̄",
-        "a": "a",
-        "b": "b",
-    }
+    varied = sorted({key for r in figure_cfg["rows"] for key in r}, key=ROW_KEYS.index)
     if any(key in RATIOS for key in varied) or not varied:
-        keys = list(RATIOS)
-    else:
-        keys = varied
-    return ", ".join(f"{symbols[key]} = {values[key]:g}" for key in keys)
+        return RATIOS
+    return tuple(varied)
+
+
+def format_row_label(keys, values: dict, symbols: dict | None = None) -> str:
+    """``"symbol = value, ..."`` for ``keys`` (plain-text symbols unless given)."""
+    symbols = symbols or ROW_SYMBOLS
+    return ", ".join(f"{symbols[key]} = {float(values[key]):g}" for key in keys)
+
+
+def row_label(figure_cfg: dict, row: int) -> str:
+    """What distinguishes row ``row`` (1-based) of a figure, in the paper's symbols."""
+    values = {**figure_cfg["ratios"], **figure_cfg["params"], **figure_cfg["rows"][row - 1]}
+    return format_row_label(row_label_keys(figure_cfg), values)
+
+
+def _check_grid(name: str, g: dict, *, where: str = "stability"):
+    """A grid of ``config/stability.yaml``: ordered ranges in the plotted quadrant, ``n >= 2``."""
+    for axis in ("lr1", "li1"):
+        bounds = g[axis]
+        if len(bounds) != 2 or not all(np.isfinite(float(b)) for b in bounds):
+            raise ParameterError(f"{where}.{name}.{axis} must be [start, stop] (two finite numbers), got {bounds!r}")
+        if not float(bounds[0]) < float(bounds[1]):
+            raise ParameterError(f"{where}.{name}.{axis} must be increasing, [start, stop] with start < stop, "
+                                 f"got {list(bounds)!r}")
+    if max(g["lr1"]) > 0:
+        raise ParameterError(f"{where}.{name}.lr1 must lie in lr1 <= 0 (a damped subsystem), got {list(g['lr1'])!r}")
+    if min(g["li1"]) < 0:
+        raise ParameterError(f"{where}.{name}.li1 must lie in li1 >= 0, got {list(g['li1'])!r}")
+    if int(g["n"]) != g["n"] or g["n"] < 2:
+        raise ParameterError(f"{where}.{name}.n must be an integer >= 2, got {g['n']!r}")
+    for axis in ("lr1", "li1"):
+        grid_axis(g[axis], g["n"])  # the grid the sweep job will build
 
 
 def figure_panels(
@@ -275,14 +327,9 @@ def figure_panels(
     """
     where = f"stability.figures.{figure}"
     n_rows = len(figure_cfg["rows"])
-    for axis, bounds in (("lr1", grid["lr1"]), ("lr1", zoom_grid["lr1"])):
-        if max(bounds) > 0:
-            raise ParameterError(
-                f"stability grid {axis} must lie in lr1 <= 0 (a damped subsystem), got {bounds}"
-            )
-    for bounds in (grid["li1"], zoom_grid["li1"]):
-        if min(bounds) < 0:
-            raise ParameterError(f"stability grid li1 must lie in li1 >= 0, got {bounds}")
+    _check_grid("grid", grid)
+    _check_grid("zoom_grid", zoom_grid)
+    row_keys = row_label_keys(figure_cfg)
     zoom = figure_cfg.get("zoom") or {"rows": [], "k": []}
     bad_rows = [r for r in zoom["rows"] if not 1 <= r <= n_rows]
     if bad_rows:
@@ -325,6 +372,7 @@ def figure_panels(
                         n=int(g["n"]),
                         digits=int(precision["digits"]),
                         policy=precision["policy"],
+                        row_keys=row_keys,
                     )
                 )
     return panels

@@ -8,12 +8,17 @@ sys.path.insert(0, str(Path(workflow.basedir) / "src"))
 from icosim.convergence import (
     figure_layout,
     figure_panels,
+    load_claims,
     resolve_scheme,
+    study_from_config,
 )  # noqa: E402
 
 validate(config["convergence"], "../schemas/convergence.schema.yaml")
 
 CONVERGENCE = config["convergence"]
+# Model, initial conditions, end time and step sizes are checked here (H_min >= H_max, H_max
+# beyond the end time, x0 = v0 = 0, ...): a bad value fails before any job, naming its key.
+study_from_config(CONVERGENCE)
 CONV_SETUP = {
     **CONVERGENCE["model"],
     **CONVERGENCE["initial_conditions"],
@@ -33,6 +38,10 @@ CONV_WP_ENTRIES = [
     for scheme in CONVERGENCE["work_precision"]["schemes"]
     for entry in resolve_scheme(scheme, CONVERGENCE["figures"], CONVERGENCE["k"])
 ]
+# A malformed claims file, or a claim that selects no configured curve, fails here, naming
+# the claim id and key (not in the claims job after every panel has run).
+CONV_CLAIMS_FILE = CONVERGENCE["claims"]["file"]
+load_claims(CONV_CLAIMS_FILE, CONVERGENCE)
 
 
 CONV_PANEL_FILE = "results/convergence/{}/fig{}_{}.nc"  # decomposition, figure, panel
@@ -52,6 +61,7 @@ CONV_SECTION = "results/report/convergence.html"
 
 
 rule convergence_panel:
+    """NRMSE of Eq. (72) over H for every row (index) and k of one figure column."""
     input:
         lib=ENGINE + lib("convergence"),
     output:
@@ -61,7 +71,6 @@ rule convergence_panel:
     wildcard_constraints:
         dec="ff|fd|dd",
         figure=r"\d+",
-    """NRMSE of Eq. (72) over H for every row (index) and k of one figure column."""
     conda:
         "../envs/icosim.yaml"
     params:
@@ -78,6 +87,7 @@ rule convergence_panel:
 
 
 rule convergence_figure:
+    """One convergence figure (rows = index, columns = parameter set) for one decomposition."""
     input:
         panels=lambda w: CONV_FIGURE_PANELS[(w.dec, w.figure)],
         lib=lib("figures", "datasets"),
@@ -95,7 +105,6 @@ rule convergence_figure:
     wildcard_constraints:
         dec="ff|fd|dd",
         figure=r"\d+",
-    """One convergence figure (rows = index, columns = parameter set) for one decomposition."""
     conda:
         "../envs/icosim.yaml"
     params:
@@ -111,6 +120,7 @@ rule convergence_figure:
 
 
 rule convergence_work_precision:
+    """CPU time of the engine's co-simulation stepping per simulated second, per scheme and H."""
     input:
         panels=sorted(
             {
@@ -123,7 +133,6 @@ rule convergence_work_precision:
         CONV_WP,
     log:
         "logs/convergence/work_precision.log",
-    """CPU time of the engine's co-simulation stepping per simulated second, per scheme and H."""
     conda:
         "../envs/icosim.yaml"
     params:
@@ -137,6 +146,7 @@ rule convergence_work_precision:
 
 
 rule convergence_work_precision_figure:
+    """Work-precision diagram: log-log CPU time per simulated second over NRMSE."""
     input:
         wp=CONV_WP,
         lib=lib("figures", "datasets"),
@@ -150,7 +160,6 @@ rule convergence_work_precision_figure:
         pdf=CONV_WP_FIGURE.replace(".png", ".pdf"),
     log:
         "logs/convergence/work_precision_figure.log",
-    """Work-precision diagram: log-log CPU time per simulated second over NRMSE."""
     conda:
         "../envs/icosim.yaml"
     params:
@@ -160,15 +169,15 @@ rule convergence_work_precision_figure:
 
 
 rule convergence_claims:
+    """The paper's order claims (config/claims/convergence.yaml) evaluated on the datasets."""
     input:
         panels=CONV_ALL_PANELS,
-        claims="config/claims/convergence.yaml",
+        claims=CONV_CLAIMS_FILE,
         lib=lib("convergence", "datasets"),
     output:
         CONV_CLAIMS,
     log:
         "logs/convergence/claims.log",
-    """The paper's order claims (config/claims/convergence.yaml) evaluated on the datasets."""
     conda:
         "../envs/icosim.yaml"
     params:
@@ -178,6 +187,7 @@ rule convergence_claims:
 
 
 rule convergence_report_section:
+    """HTML fragment of the report: decisions, figures, claims table, work-precision."""
     input:
         figures=CONV_FIGURES,
         wp_figure=CONV_WP_FIGURE,
@@ -189,7 +199,6 @@ rule convergence_report_section:
         CONV_SECTION,
     log:
         "logs/convergence/report_section.log",
-    """HTML fragment of the report: decisions, figures, claims table, work-precision."""
     conda:
         "../envs/icosim.yaml"
     params:

@@ -4,6 +4,7 @@
 import sys
 
 sys.path.insert(0, str(Path(workflow.basedir) / "src"))
+from icosim.claims import load_claims  # noqa: E402
 from icosim.sweep import figure_panels, panel_id  # noqa: E402
 
 validate(config["stability"], "../schemas/stability.schema.yaml")
@@ -28,6 +29,12 @@ STABILITY_PANELS = {
 
 
 # figure -> its panel files (a figure's plot job gathers exactly these)
+# The claims file is read here, so a malformed claim (unknown key, check parameter, op,
+# relation, ...) fails before any job runs, naming the claim and the key.  A claim about a
+# figure left out of the configuration is no error: it is reported undecided (no data).
+STABILITY_CLAIMS_FILE = STABILITY["claims"]["file"]
+load_claims(STABILITY_CLAIMS_FILE)
+
 STABILITY_PANEL_FILES = {fig: [] for fig in STABILITY["figures"]}
 for fig, pid in STABILITY_PANELS:
     STABILITY_PANEL_FILES[fig].append(f"results/stability/fig{fig}/{pid}.nc")
@@ -45,6 +52,7 @@ STABILITY_SECTION = "results/report/stability.html"
 
 
 rule stability_sweep:
+    """Spectral radius over the (lr1, li1) grid of one panel (float64 + mp rechecks)."""
     input:
         lib=ENGINE + lib("sweep"),
     output:
@@ -54,7 +62,6 @@ rule stability_sweep:
     wildcard_constraints:
         figure=r"\d+",
         panel=r"r\d+_k\d+_(full|zoom)",
-    """Spectral radius over the (lr1, li1) grid of one panel (float64 + mp rechecks)."""
     conda:
         "../envs/icosim.yaml"
     params:
@@ -65,6 +72,7 @@ rule stability_sweep:
 
 
 rule stability_figure:
+    """One figure of the paper (rows x k, plus zooms) from its panels; PNG and PDF."""
     input:
         panels=lambda w: STABILITY_PANEL_FILES[w.figure],
         lib=lib("figures/__init__", "figures/stability", "datasets"),
@@ -81,7 +89,6 @@ rule stability_figure:
         "logs/stability/figure/fig{figure}.log",
     wildcard_constraints:
         figure=r"\d+",
-    """One figure of the paper (rows x k, plus zooms) from its panels; PNG and PDF."""
     conda:
         "../envs/icosim.yaml"
     params:
@@ -95,9 +102,10 @@ rule stability_figure:
 
 
 rule stability_claims:
+    """The paper's stability claims (config/claims/stability.yaml) evaluated on the datasets."""
     input:
         panels=STABILITY_ALL_PANELS,
-        claims="config/claims/stability.yaml",
+        claims=STABILITY_CLAIMS_FILE,
         lib=lib("claims", "datasets", "model"),
     output:
         json=STABILITY_CLAIMS,
@@ -110,7 +118,6 @@ rule stability_claims:
         ),
     log:
         "logs/stability/claims.log",
-    """The paper's stability claims (config/claims/stability.yaml) evaluated on the datasets."""
     conda:
         "../envs/icosim.yaml"
     params:
@@ -120,6 +127,7 @@ rule stability_claims:
 
 
 rule stability_report_section:
+    """HTML fragment of the report: decisions, precision and timing, claims, figures."""
     input:
         figures=[f for f in STABILITY_FIGURES if f.endswith(".png")],
         panels=STABILITY_ALL_PANELS,
@@ -129,7 +137,6 @@ rule stability_report_section:
         STABILITY_SECTION,
     log:
         "logs/stability/report_section.log",
-    """HTML fragment of the report: decisions, precision and timing, claims, figures."""
     conda:
         "../envs/icosim.yaml"
     params:

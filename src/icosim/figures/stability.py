@@ -18,7 +18,6 @@ from matplotlib.patches import Rectangle
 __all__ = ["stability_figure", "panel_layout", "row_labels", "STYLES"]
 
 STYLES = ("field", "dots")
-ROW_PARAMETERS = ("am21", "alr21", "ali21", "mu", "beta", "gamma", "a", "b")
 SYMBOLS = {
     "am21": r"$\alpha_{m21}$",
     "alr21": r"$\alpha_{\lambda r21}$",
@@ -29,7 +28,6 @@ SYMBOLS = {
     "a": "$a$",
     "b": "$b$",
 }
-RATIOS = ("am21", "alr21", "ali21")
 
 
 def panel_layout(panels):
@@ -54,20 +52,24 @@ def panel_layout(panels):
 
 
 def row_labels(panels) -> dict:
-    """Row number -> label with the parameters that change between rows.
+    """Row number -> label, from the panels' ``row_label_keys`` attribute.
 
-    If the rows change a ratio, the whole ratio triple is shown (as the paper
-    lists parameter sets); otherwise the method parameters that change.
+    The keys are decided once, by :func:`icosim.sweep.row_label_keys` (the rule
+    the report uses as well), and stored in every panel; here they are only
+    typeset with the TeX symbols.
     """
-    by_row = {int(ds.attrs["row"]): ds.attrs for ds in panels}
-    varied = [p for p in ROW_PARAMETERS if len({by_row[r].get(p) for r in by_row}) > 1]
-    if "mu" in varied:  # beta and gamma follow from mu
-        varied = [p for p in varied if p not in ("beta", "gamma")]
-    keys = list(RATIOS) if (not varied or any(p in RATIOS for p in varied)) else varied
-    return {
-        r: ", ".join(f"{SYMBOLS[p]} = {float(attrs[p]):g}" for p in keys if p in attrs)
-        for r, attrs in by_row.items()
-    }
+    from ..sweep import format_row_label
+
+    labels = {}
+    for ds in panels:
+        keys = ds.attrs.get("row_label_keys")
+        if not keys:
+            raise ValueError(
+                f"panel of figure {ds.attrs.get('figure')} row {ds.attrs.get('row')} has no row_label_keys "
+                "attribute (written by icosim.sweep.stability_panel): recompute it"
+            )
+        labels[int(ds.attrs["row"])] = format_row_label(keys.split(), ds.attrs, SYMBOLS)
+    return labels
 
 
 def _draw_panel(ax, ds, *, style, norm, cmap, dots_stride):
