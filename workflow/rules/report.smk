@@ -17,6 +17,7 @@ REPORT_PARTS = {
 
 
 rule report:
+    """Self-contained HTML page: every part's section (figures, claims) and provenance."""
     input:
         sections=list(REPORT_PARTS.values()),
         configfiles=[
@@ -27,7 +28,6 @@ rule report:
         REPORT_HTML,
     log:
         "logs/report/report.log",
-    """Self-contained HTML page: every part's section (figures, claims) and provenance."""
     conda:
         "../envs/icosim.yaml"
     params:
