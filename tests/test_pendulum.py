@@ -321,3 +321,16 @@ def test_bad_input_is_refused_with_the_name():
     cfg["configurations"] = [{"method": "baumgarte", "decomposition": "ff"}]
     with pytest.raises(ParameterError, match="baumgarte"):
         configured_runs(cfg)
+
+
+def test_reference_dataset_keeps_the_naming_contract_after_a_netcdf_round_trip(tmp_path):
+    """Other tools read phi1, phi2, g_cax, g_cay, lambda_cax, lambda_cay as data variables over t."""
+    from icosim.datasets import open_dataset, write_netcdf
+    from icosim.pendulum import PendulumParameters, reference_dataset
+
+    ds = reference_dataset(PendulumParameters(), 1e-3, 0.01, {"title": "test"})
+    write_netcdf(ds, tmp_path / "reference.nc")
+    back = open_dataset(tmp_path / "reference.nc")
+    for name in ("phi1", "phi2", "g_cax", "g_cay", "lambda_cax", "lambda_cay"):
+        assert name in back.data_vars and back[name].dims == ("t",)
+    assert list(back.coords) == ["t"] and back.attrs["method"] == "monolithic"

@@ -994,7 +994,7 @@ def reference_dataset(
         atol=atol,
         H=H,
         t_end=t_end,
-        coordinates="minimal coordinates phi1, phi2 (joint constraint satisfied exactly)",
+        formulation="minimal coordinates phi1, phi2 (joint constraint satisfied exactly)",  # not "coordinates": CF reserves it
         wall_time_s=wall,
     )
     return _series_dataset(t, series, attrs)
