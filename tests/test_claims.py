@@ -14,13 +14,18 @@ import yaml
 
 from icosim.claims import (
     CHECKS,
+    claims_table,
+    enforce_references,
     evaluate,
     evaluate_claim,
     grid_resolution,
     load_claims,
     parse_claims,
+    read_verdicts,
+    reference_mismatches,
     select,
     stable_share,
+    write_verdicts,
 )
 from icosim.model import ParameterError
 from icosim.sweep import PanelSpec, figure_panels, stability_panel
@@ -315,3 +320,79 @@ def test_spec_is_plain_data():
         n=3,
     )
     assert PanelSpec.from_params(spec.as_dict()) == spec
+
+
+# -- one mechanism for every part -------------------------------------------------------------------
+
+PART_FILES = {part: ROOT / "config" / "claims" / f"{part}.yaml" for part in ("stability", "convergence", "pendulum")}
+PART_KINDS = {
+    "stability": {"stable_fraction", "compare", "trend"},
+    "convergence": {"convergence_order"},
+    "pendulum": {"pendulum_stability"},
+}
+
+
+@pytest.mark.parametrize("part", sorted(PART_FILES))
+def test_every_claims_file_parses_with_the_one_parser(part):
+    doc = yaml.safe_load(PART_FILES[part].read_text())
+    claims = load_claims(PART_FILES[part])
+    assert [c.id for c in claims] == [item["id"] for item in doc["claims"]]
+    assert {c.check["kind"] for c in claims} <= PART_KINDS[part]
+    for c, item in zip(claims, doc["claims"]):
+        assert c.statement == item["statement"] and c.source == item["source"] and c.note == item.get("note", "")
+
+
+@pytest.mark.parametrize(
+    "part, change, key",
+    [
+        ("stability", lambda c: c.update(colour="red"), "colour"),
+        ("stability", lambda c: c["check"].update(valeu=1), "valeu"),
+        ("convergence", lambda c: c.update(colour="red"), "colour"),
+        ("convergence", lambda c: c["check"]["expect"][0].update(ordre=2), "ordre"),
+        ("convergence", lambda c: c.update(ci="yes"), "ci"),
+        ("pendulum", lambda c: c.update(colour="red"), "colour"),
+        ("pendulum", lambda c: c["check"].update(default="fine"), "default"),
+        ("pendulum", lambda c: c["check"]["exceptions"][0].update(expected="wobbly"), r"exceptions\[0\]\.expected"),
+        ("pendulum", lambda c: c["check"].update(kind="divergence"), "check.kind"),
+    ],
+)
+def test_a_malformed_claim_in_any_file_is_refused_naming_id_and_key(tmp_path, part, change, key):
+    doc = yaml.safe_load(PART_FILES[part].read_text())
+    item = doc["claims"][-1]
+    change(item)
+    path = tmp_path / "claims.yaml"
+    path.write_text(yaml.safe_dump(doc))
+    with pytest.raises(ParameterError, match=rf"\({item['id']}\).*{key}"):
+        load_claims(path)
+
+
+def test_unknown_top_level_key_is_refused(tmp_path):
+    doc = yaml.safe_load(PART_FILES["convergence"].read_text())
+    path = tmp_path / "claims.yaml"
+    path.write_text(yaml.safe_dump({**doc, "tolerance": 0.25}))
+    with pytest.raises(ParameterError, match="unknown top-level key.*tolerance"):
+        load_claims(path)
+
+
+def test_writer_references_and_table(tmp_path):
+    """JSON/TSV written from the verdicts; a ci claim off its reference stops the job; the table shows both."""
+    ds = [panel(5, k=0)]
+    good = claim({**GOOD_CHECK}, ci=True, reference="pass")  # 5 of 11 columns stable: "< 1" holds
+    off = parse_claims(
+        [{"id": "d", "source": "s", "statement": "t", "figures": ["9"], "check": GOOD_CHECK, "ci": True,
+          "reference": "fail"}]
+    )[0]
+    verdicts = evaluate([good, off], ds)
+    assert [v.verdict for v in verdicts] == ["pass", "pass"]
+    assert [v.claim.id for v in reference_mismatches(verdicts)] == ["d"]
+    enforce_references(verdicts, False)  # not enforced: no error
+    with pytest.raises(SystemExit, match="d: verdict pass, reference fail"):
+        enforce_references(verdicts, True)
+    records = write_verdicts(verdicts, tmp_path / "c.json", tmp_path / "c.tsv")
+    assert read_verdicts(tmp_path / "c.json") == records
+    assert records[0]["numbers"]["Fig. 9 row 1 k=0"]["n_stable"] == 5 * 11
+    tsv = (tmp_path / "c.tsv").read_text().splitlines()
+    assert tsv[0].split("\t")[:5] == ["id", "source", "figures", "statement", "verdict"]
+    assert tsv[2].split("\t")[4:6] == ["pass", "fail"]
+    html = claims_table(records, note_header="how read")
+    assert "NOT reproduced" in html and "how read" in html and html.count('class="pass"') == 2

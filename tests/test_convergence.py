@@ -7,9 +7,10 @@ import yaml
 from pathlib import Path
 
 import icosim
+from icosim.claims import load_claims, parse_claims
 from icosim.convergence import (
     PanelSpec, Setup, Study, dimensional_method, fastest_schemes, figure_layout, figure_panels, fit_order,
-    iterate_linear_map, load_claims, method_attrs, nrmse, oscillation_summary, parse_claims, resolve_scheme,
+    iterate_linear_map, method_attrs, nrmse, oscillation_summary, resolve_scheme, check_claims_against_config,
     run_panel, step_cost, step_counts, study_from_config, time_macro_steps,
 )
 from icosim.model import ParameterError
@@ -362,38 +363,44 @@ def _claims_doc():
 
 
 def test_claims_file_matches_the_configuration():
-    doc = load_claims(ROOT / "config" / "claims" / "convergence.yaml", _config())
-    assert doc["tolerance"] == _claims_doc()["tolerance"] and len(doc["claims"]) == len(_claims_doc()["claims"])
+    claims = load_claims(ROOT / "config" / "claims" / "convergence.yaml")
+    check_claims_against_config(claims, _config())
+    assert [c.id for c in claims] == [c["id"] for c in _claims_doc()["claims"]]
+    assert {c.check["kind"] for c in claims} == {"convergence_order"}
+
+
+def _parse_and_match(doc):
+    check_claims_against_config(parse_claims(doc["claims"]), _config())
 
 
 @pytest.mark.parametrize("change,message", [
     (lambda c: c.update(colour="red"), r"baumgarte_index2.*unknown key.*colour"),
-    (lambda c: c.pop("expect"), r"baumgarte_index2.*missing key.*expect"),
-    (lambda c: c["select"].update(mux=1e-3), r"baumgarte_index2.*select: unknown key.*mux"),
-    (lambda c: c["expect"][0].pop("k"), r"baumgarte_index2.*expect\[0\]\.k must be an integer"),
-    (lambda c: c["expect"][0].update(order="two"), r"baumgarte_index2.*expect\[0\]\.order must be a number"),
-    (lambda c: c["expect"][0].pop("order"), r"baumgarte_index2.*expect\[0\]: give exactly one of"),
-    (lambda c: c["expect"][1].update(order=2), r"baumgarte_index2.*expect\[1\]: give exactly one of"),
-    (lambda c: c["expect"][0].update(ordre=2), r"baumgarte_index2.*expect\[0\]: unknown key.*ordre"),
+    (lambda c: c["check"].pop("expect"), r"baumgarte_index2.*check \(convergence_order\) lacks \['expect'\]"),
+    (lambda c: c["check"]["select"].update(mux=1e-3), r"baumgarte_index2.*select: unknown key.*mux"),
+    (lambda c: c["check"]["expect"][0].pop("k"), r"baumgarte_index2.*expect\[0\]\.k must be an integer"),
+    (lambda c: c["check"]["expect"][0].update(order="two"), r"baumgarte_index2.*expect\[0\]\.order must be a number"),
+    (lambda c: c["check"]["expect"][0].pop("order"), r"baumgarte_index2.*expect\[0\]: give exactly one of"),
+    (lambda c: c["check"]["expect"][1].update(order=2), r"baumgarte_index2.*expect\[1\]: give exactly one of"),
+    (lambda c: c["check"]["expect"][0].update(ordre=2), r"baumgarte_index2.*expect\[0\]: unknown key.*ordre"),
     (lambda c: c.update(reference="maybe"), r"baumgarte_index2.*reference must be one of"),
-    (lambda c: c["select"].update(figure="24"), r"baumgarte_index2.*expect\[0\]: no configured curve matches"),
-    (lambda c: c["select"].update(decomposition="dd"), r"baumgarte_index2.*no configured curve matches"),
-    (lambda c: c["expect"][0].update(k=7), r"baumgarte_index2.*expect\[0\]: no configured curve matches .* k = 7"),
+    (lambda c: c["check"].update(tolerance=-1), r"baumgarte_index2.*tolerance must be a number > 0"),
+    (lambda c: c["check"]["select"].update(figure="24"), r"baumgarte_index2.*expect\[0\]: no configured curve matches"),
+    (lambda c: c["check"]["select"].update(decomposition="dd"), r"baumgarte_index2.*no configured curve matches"),
+    (lambda c: c["check"]["expect"][0].update(k=7), r"baumgarte_index2.*expect\[0\]: no configured curve matches .* k = 7"),
 ])
 def test_malformed_claims_name_the_claim_and_key(change, message):
     doc = _claims_doc()
+    _parse_and_match(doc)  # the shipped file itself passes
     claim = next(c for c in doc["claims"] if c["id"] == "baumgarte_index2")
     change(claim)
     with pytest.raises(ParameterError, match=message):
-        parse_claims(doc, cfg=_config())
+        _parse_and_match(doc)
 
 
-def test_claims_tolerance_and_duplicates():
+def test_claims_duplicates():
     doc = _claims_doc()
-    with pytest.raises(ParameterError, match="tolerance"):
-        parse_claims({**doc, "tolerance": -1})
     with pytest.raises(ParameterError, match="duplicate id"):
-        parse_claims({**doc, "claims": doc["claims"] + doc["claims"][:1]})
+        parse_claims(doc["claims"] + doc["claims"][:1])
 
 
 # ------------------------------------------------------------------ theory: Baumgarte index 1, k = 0, fixed mu

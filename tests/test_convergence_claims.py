@@ -21,11 +21,12 @@ import pytest
 import yaml
 from snakemake.utils import update_config
 
-from icosim.convergence import Setup, Study, evaluate_claims, figure_panels, run_panel, step_counts
+from icosim.claims import evaluate, load_claims
+from icosim.convergence import Setup, Study, figure_panels, run_panel, step_counts
 
 ROOT = Path(__file__).resolve().parents[1]
-CLAIMS = yaml.safe_load((ROOT / "config" / "claims" / "convergence.yaml").read_text())
-CI_CLAIMS = [c for c in CLAIMS["claims"] if c.get("ci")]
+CLAIMS = load_claims(ROOT / "config" / "claims" / "convergence.yaml")
+CI_CLAIMS = [c for c in CLAIMS if c.ci]
 
 
 def _ci_config():
@@ -42,16 +43,15 @@ def results():
     s = cfg["step_sizes"]
     study = Study(setup, step_counts(setup.end_time, s["H_min"], s["H_max"], s["num"]),
                   spectral_policy=cfg["unstable"]["spectral_policy"], digits=cfg["unstable"]["digits"])
-    figures = {str(c["select"]["figure"]) for c in CI_CLAIMS}
-    decs = {c["select"]["decomposition"] for c in CI_CLAIMS}
+    figures = {str(c.check["select"]["figure"]) for c in CI_CLAIMS}
+    decs = {c.check["select"]["decomposition"] for c in CI_CLAIMS}
     datasets = [
         run_panel(spec, study, cfg["fit"])
         for fig in sorted(figures)
         for spec in figure_panels(fig, cfg["figures"][fig], cfg["k"])
         if spec.decomposition in decs
     ]
-    claims = {**CLAIMS, "claims": CI_CLAIMS}
-    return {r["id"]: r for r in evaluate_claims(claims, datasets)}
+    return {v.claim.id: v for v in evaluate(CI_CLAIMS, datasets)}
 
 
 def test_ci_range_is_at_least_two_decades_with_ten_sizes():
@@ -59,19 +59,19 @@ def test_ci_range_is_at_least_two_decades_with_ten_sizes():
     assert s["num"] >= 10 and s["H_max"] / s["H_min"] >= 100
 
 
-@pytest.mark.parametrize("claim", CI_CLAIMS, ids=[c["id"] for c in CI_CLAIMS])
+@pytest.mark.parametrize("claim", CI_CLAIMS, ids=[c.id for c in CI_CLAIMS])
 def test_claim_verdict_matches_full_run(claim, results):
     """Regression check: the reduced CI range reproduces the recorded full-run verdict."""
-    assert results[claim["id"]]["verdict"] == claim["reference"]
+    assert results[claim.id].verdict == claim.reference
 
 
-@pytest.mark.parametrize("claim", CI_CLAIMS, ids=[c["id"] for c in CI_CLAIMS])
+@pytest.mark.parametrize("claim", CI_CLAIMS, ids=[c.id for c in CI_CLAIMS])
 def test_fitted_orders(claim, results):
     """Regression check: fitted orders stay at the paper's order or at the recorded `observed` one."""
-    tol = CLAIMS["tolerance"]
-    expect = {e["k"]: e for e in claim["expect"]}
+    tol = claim.check["tolerance"]
+    expect = {e["k"]: e for e in claim.check["expect"]}
     checked = 0
-    for row in results[claim["id"]]["rows"]:
+    for row in results[claim.id].numbers["rows"]:
         exp = expect[row["k"]]
         if exp.get("unstable"):
             assert row["stable_H"] == "none", f"{row['curve']}: stable at {row['stable_H']}"
@@ -86,4 +86,4 @@ def test_fitted_orders(claim, results):
             got = row["order_second_half"]
             assert abs(got - exp["observed_second_half"]) <= tol, f"{row['curve']}: second half {got:.3f}"
         checked += 1
-    assert checked or all(e.get("unstable") for e in claim["expect"]) or results[claim["id"]]["verdict"] == "undecided"
+    assert checked or all(e.get("unstable") for e in claim.check["expect"]) or results[claim.id].verdict == "undecided"

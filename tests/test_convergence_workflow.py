@@ -23,7 +23,7 @@ def workflow_copy(tmp_path_factory):
 
 def _bad_claims(tmp_path):
     doc = yaml.safe_load((ROOT / "config" / "claims" / "convergence.yaml").read_text())
-    doc["claims"][3]["expect"][1]["unstable"] = "yes"
+    doc["claims"][3]["check"]["expect"][1]["unstable"] = "yes"
     path = tmp_path / "claims.yaml"
     path.write_text(yaml.safe_dump(doc))
     return str(path)
@@ -58,25 +58,29 @@ def test_claims_job_raises_before_writing_on_a_reference_mismatch(tmp_path):
     study = Study(Setup(end_time=0.2), step_counts(0.2, 2e-4, 2e-2, 5))
     panel = tmp_path / "panel.nc"
     write_netcdf(run_panel(spec, study, {"min_points": 3}), panel)
-    claim = {"id": "proj", "statement": "s", "select": {"figure": "23", "decomposition": "ff"},
-             "expect": [{"k": 0, "order": 2}], "ci": True}
+    claim = {"id": "proj", "source": "s", "statement": "s", "figures": ["23"], "ci": True,
+             "check": {"kind": "convergence_order", "tolerance": 0.25,
+                       "select": {"figure": "23", "decomposition": "ff"}, "expect": [{"k": 0, "order": 2}]}}
     out = tmp_path / "claims.json"
 
     def run(reference, enforce):
         (tmp_path / "c.yaml").write_text(yaml.safe_dump({"claims": [{**claim, "reference": reference}]}))
         job = SimpleNamespace(
-            input=SimpleNamespace(claims=str(tmp_path / "c.yaml"), panels=[str(panel)]),
-            output=[str(out)], log=[str(tmp_path / "log")], params=SimpleNamespace(enforce_reference=enforce),
+            input=SimpleNamespace(claims=str(tmp_path / "c.yaml"), datasets=[str(panel)]),
+            output=SimpleNamespace(json=str(out), tsv=str(tmp_path / "claims.tsv")), log=[str(tmp_path / "log")],
+            params=SimpleNamespace(enforce_reference=enforce),
         )
-        runpy.run_path(str(ROOT / "workflow" / "scripts" / "convergence_claims.py"), init_globals={"snakemake": job})
+        runpy.run_path(str(ROOT / "workflow" / "scripts" / "claims.py"), init_globals={"snakemake": job})
 
     run("undecided", enforce=False)  # no enforcement: the verdict is written whatever it is
     assert out.exists()
     verdict = yaml.safe_load(out.read_text())["claims"][0]["verdict"]
     assert verdict in ("pass", "fail")
     out.unlink()
+    (tmp_path / "claims.tsv").unlink()
     with pytest.raises(SystemExit, match="proj"):
         run("undecided", enforce=True)
-    assert not out.exists()
+    assert not out.exists() and not (tmp_path / "claims.tsv").exists()
     run(verdict, enforce=True)
     assert out.exists()
+    assert "proj\t" in (tmp_path / "claims.tsv").read_text()

@@ -16,14 +16,13 @@ import yaml
 
 import icosim.pendulum
 from icosim import make_method
+from icosim.claims import evaluate_claim, load_claims, parse_claims
 from icosim.radau import IntegrationError
 from icosim.pendulum import (
     PendulumParameters,
-    claim_verdict,
     configured_runs,
     expected_outcome,
     linear_test_model_rho,
-    load_claims,
     pendulum_test_model,
     reference_dataset,
     run_cosimulation,
@@ -36,6 +35,11 @@ CFG = yaml.safe_load((ROOT / "config" / "pendulum.yaml").read_text())["pendulum"
 CLAIMS = load_claims(ROOT / CFG["claims"])
 RUNS = configured_runs(CFG)
 T_CLAIM = 0.4
+
+
+def _claim_with(**check):
+    """The shipped claim with some check parameters replaced."""
+    return parse_claims([{**CLAIMS[0].as_dict(), "check": {**CLAIMS[0].check, **check}}])[0]
 
 
 def _run(method_name, decomposition, k, t_end=T_CLAIM):
@@ -56,7 +60,8 @@ def _run(method_name, decomposition, k, t_end=T_CLAIM):
 def test_the_claim_covers_exactly_the_configured_exceptions():
     """Every exception of the claim names a configured run (no typo silently ignored)."""
     for claim in CLAIMS:
-        for ex in claim["check"].get("exceptions", []):
+        assert claim.check["kind"] == "pendulum_stability"
+        for ex in claim.check.get("exceptions", []):
             assert (ex["method"], ex["decomposition"], int(ex["k"])) in RUNS
 
 
@@ -67,7 +72,7 @@ def test_sect4_stability_claim(run):
     assert result.status in ("stable", "diverged"), result.reason  # a failed run would decide nothing
     observed = "unstable" if result.diverged else "stable"
     for claim in CLAIMS:
-        assert observed == expected_outcome(claim, method_name, decomposition, k), (claim["id"], run, result.reason)
+        assert observed == expected_outcome(claim.check, method_name, decomposition, k), (claim.id, run, result.reason)
     # the stored series never hold NaN, and a diverged run ends before its divergence time
     for values in result.series.values():
         assert np.all(np.isfinite(values))
@@ -109,13 +114,20 @@ def test_summary_and_dataset_contract():
     assert ref.attrs["method"] == "monolithic"
     assert np.max(np.abs(ref["g_cax"].values)) < 1e-14
     summary = summarize(runs, ref, CLAIMS)
-    cid = CLAIMS[0]["id"]
+    cid = CLAIMS[0].id
     assert list(summary["observed"].values) == ["unstable", "stable"]
     assert list(summary[f"verdict_{cid}"].values) == ["pass", "pass"]
     assert summary["err_phi1"].values[1] < 1e-4
-    assert claim_verdict(summary, CLAIMS[0], [("weighted", "ff", 2), ("projection", "dd", 0)]) == "pass"
-    # a configured run that is missing leaves the claim undecided
-    assert claim_verdict(summary, CLAIMS[0], [("weighted", "ff", 2), ("weighted", "fd", 2)]) == "undecided"
+    # an exception the claim names (weighted/fd/k=2) was not run: the claim stays undecided
+    v = evaluate_claim(CLAIMS[0], [summary])
+    assert v.verdict == "undecided" and "not run: weighted_fd_k2" in v.measured
+    assert v.numbers["runs"]["weighted_ff_k2"] == {"expected": "unstable", "observed": "unstable", "verdict": "pass"}
+    # the same claim restricted to the runs made passes ...
+    only_ff = _claim_with(exceptions=[{"method": "weighted", "decomposition": "ff", "k": 2, "expected": "unstable"}])
+    assert evaluate_claim(only_ff, [summary]).verdict == "pass"
+    # ... and fails when the data contradict it
+    all_stable = _claim_with(exceptions=[])
+    assert evaluate_claim(all_stable, [summary]).verdict == "fail"
 
 
 def test_failed_integration_is_not_counted_as_unstable(monkeypatch):
@@ -143,10 +155,11 @@ def test_failed_integration_is_not_counted_as_unstable(monkeypatch):
     assert "injected failure" in ds.attrs["reason"]
     ref = reference_dataset(PendulumParameters(**CFG["model"]), CFG["H"], t_end, {"title": "test"})
     summary = summarize([ds], ref, CLAIMS)
-    cid = CLAIMS[0]["id"]
+    cid = CLAIMS[0].id
     assert str(summary["observed"].values[0]) == "failed"
     assert str(summary[f"verdict_{cid}"].values[0]) == "undecided"
-    assert claim_verdict(summary, CLAIMS[0], [("weighted", "ff", 2)]) == "undecided"
+    only_ff = _claim_with(exceptions=[{"method": "weighted", "decomposition": "ff", "k": 2, "expected": "unstable"}])
+    assert evaluate_claim(only_ff, [summary]).verdict == "undecided"
 
 
 def test_linear_test_model_at_the_pendulum_point_predicts_the_claim():
@@ -165,7 +178,7 @@ def test_linear_test_model_at_the_pendulum_point_predicts_the_claim():
         rho, _ = linear_test_model_rho(
             params, CFG["H"], make_method(method_name, **CFG["methods"][method_name]), dec, k
         )
-        expected = expected_outcome(CLAIMS[0], method_name, dec, k)
+        expected = expected_outcome(CLAIMS[0].check, method_name, dec, k)
         assert (rho > 1) == (expected == "unstable"), (method_name, dec, k, rho)
 
 

@@ -12,6 +12,15 @@ A *claim* is a plain mapping (kept in ``config/claims/<part>.yaml``)::
     reference: pass                         # verdict of the full-resolution run (recorded)
     note: how the words were turned into a check
 
+One mechanism serves every part: the stability checks are defined here, the
+convergence checks in :mod:`icosim.convergence` (``convergence_order``), the
+pendulum's in :mod:`icosim.pendulum` (``pendulum_stability``); each registers
+its kinds with :func:`register_check`.  :func:`parse_claims` validates every
+claims file the same way, :func:`evaluate` gives one :class:`Verdict` per
+claim, :func:`write_verdicts` writes JSON and TSV, :func:`enforce_references`
+fails a CI run whose ``ci: true`` claims do not reproduce their ``reference``,
+and :func:`claims_table` renders the report table.
+
 ``check.kind`` names a function in :data:`CHECKS`; it receives the check's
 parameters and the datasets and returns an :class:`Outcome`: does the claim
 hold (``True``/``False``), or can the data not decide (``None``), together with
@@ -48,7 +57,13 @@ __all__ = [
     "load_claims",
     "parse_claims",
     "select",
+    "matches",
     "evaluate",
+    "combine_holds",
+    "reference_mismatches",
+    "enforce_references",
+    "write_verdicts",
+    "claims_table",
     "evaluate_claim",
     "stable_share",
     "grid_resolution",
@@ -70,6 +85,19 @@ class Claim:
     ci: bool = False
     reference: str | None = None
     note: str = ""
+
+    def as_dict(self) -> dict:
+        return {
+            "id": self.id,
+            "source": self.source,
+            "statement": self.statement,
+            "figures": list(self.figures),
+            "check": self.check,
+            "each": self.each,
+            "note": self.note,
+            "ci": self.ci,
+            "reference": self.reference,
+        }
 
 
 @dataclass
@@ -93,17 +121,8 @@ class Verdict:
         return None if self.claim.reference is None else self.verdict == self.claim.reference
 
     def as_dict(self) -> dict:
-        c = self.claim
         return {
-            "id": c.id,
-            "source": c.source,
-            "statement": c.statement,
-            "figures": list(c.figures),
-            "check": c.check,
-            "each": c.each,
-            "note": c.note,
-            "ci": c.ci,
-            "reference": c.reference,
+            **self.claim.as_dict(),
             "verdict": self.verdict,
             "matches_reference": self.matches_reference,
             "measured": self.measured,
@@ -113,16 +132,29 @@ class Verdict:
 
 #: check kind -> function(datasets, **params) -> Outcome
 CHECKS: dict = {}
+#: check kind -> function(label, params) raising ParameterError (part-specific parameter checks)
+VALIDATORS: dict = {}
 
 
-def register_check(kind: str):
-    """Decorator: make ``fn(datasets, **params) -> Outcome`` available as ``kind``."""
+def register_check(kind: str, validate=None):
+    """Decorator: make ``fn(datasets, **params) -> Outcome`` available as ``kind``.
+
+    ``validate(label, params)``, if given, checks the parameters further when the
+    claims are read (the signature check -- unknown, missing -- is always made).
+    """
 
     def deco(fn):
         CHECKS[kind] = fn
+        if validate is not None:
+            VALIDATORS[kind] = validate
         return fn
 
     return deco
+
+
+def _register_part_checks():
+    """Import the parts that register their own check kinds (lazily: they import this module)."""
+    from . import convergence, pendulum  # noqa: F401
 
 
 # -- reading claims ------------------------------------------------------------
@@ -130,6 +162,7 @@ def register_check(kind: str):
 
 def parse_claims(items, *, where: str = "claims") -> list[Claim]:
     """Validate a list of claim mappings; errors name the claim and the key."""
+    _register_part_checks()
     if not isinstance(items, list):
         raise ParameterError(f"{where} must be a list of claims")
     claims, seen = [], set()
@@ -153,6 +186,10 @@ def parse_claims(items, *, where: str = "claims") -> list[Claim]:
         if kind not in CHECKS:
             raise ParameterError(f"{label}: check.kind must be one of {sorted(CHECKS)}, got {kind!r}")
         _check_parameters(label, kind, {k: v for k, v in check.items() if k != "kind"})
+        if kind in VALIDATORS:
+            VALIDATORS[kind](label, {k: v for k, v in check.items() if k != "kind"})
+        if not isinstance(item.get("ci", False), bool):
+            raise ParameterError(f"{label}: ci must be true or false, got {item['ci']!r}")
         if not isinstance(item["figures"], list) or not item["figures"]:
             raise ParameterError(f"{label}: figures must be a non-empty list of figure numbers")
         reference = item.get("reference")
@@ -220,6 +257,9 @@ def load_claims(path, key: str = "claims") -> list[Claim]:
         doc = yaml.safe_load(fh)
     if not isinstance(doc, dict) or key not in doc:
         raise ParameterError(f"{path}: expected a top-level key {key!r}")
+    unknown = sorted(set(doc) - {key})
+    if unknown:
+        raise ParameterError(f"{path}: unknown top-level key(s) {unknown}; allowed: {key}")
     return parse_claims(doc[key], where=f"{path}:{key}")
 
 
@@ -235,7 +275,8 @@ def _equal(have, want) -> bool:
         return str(have) == str(want)
 
 
-def _matches(attrs, selector) -> bool:
+def matches(attrs, selector) -> bool:
+    """``attrs`` (a mapping) has every attribute of ``selector`` with the value (or one of the list) given."""
     for key, want in selector.items():
         if key not in attrs:
             return False
@@ -251,7 +292,7 @@ def select(datasets, selector: dict) -> list:
     A selector value may be a list (any of the values).  Numbers compare
     numerically (``10`` matches ``10.0``), everything else as strings.
     """
-    return [ds for ds in datasets if _matches(ds.attrs, selector)]
+    return [ds for ds in datasets if matches(ds.attrs, selector)]
 
 
 _select = select  # the checks take a parameter called `select`
@@ -297,13 +338,7 @@ def evaluate_claim(claim: Claim, datasets) -> Verdict:
         parts.append(f"[{tag}] {outcome.measured} -> {_verdict(outcome.holds)}")
         numbers[tag] = outcome.numbers
         holds.append(outcome.holds)
-    if any(h is False for h in holds):
-        combined = False
-    elif all(h is True for h in holds):
-        combined = True
-    else:
-        combined = None
-    return Verdict(claim, _verdict(combined), "; ".join(parts), numbers)
+    return Verdict(claim, _verdict(combine_holds(holds)), "; ".join(parts), numbers)
 
 
 def evaluate(claims, datasets) -> list[Verdict]:
@@ -312,6 +347,104 @@ def evaluate(claims, datasets) -> list[Verdict]:
 
 def _verdict(holds) -> str:
     return {True: "pass", False: "fail"}.get(holds, "undecided")
+
+
+def combine_holds(holds) -> bool | None:
+    """Several outcomes as one: False if any is False, True if all are True, else None (undecided)."""
+    holds = list(holds)
+    return False if any(h is False for h in holds) else True if all(h is True for h in holds) else None
+
+
+# -- results: CI references, files, report table ------------------------------------------
+
+
+def reference_mismatches(verdicts) -> list[Verdict]:
+    """Claims marked ``ci: true`` whose verdict differs from their recorded ``reference``."""
+    return [v for v in verdicts if v.claim.ci and v.matches_reference is False]
+
+
+def enforce_references(verdicts, enforce: bool):
+    """With ``enforce`` (the CI configuration), stop (SystemExit, before anything is written)
+    if a ``ci: true`` claim did not reproduce its full-resolution reference verdict."""
+    mismatched = reference_mismatches(verdicts)
+    if enforce and mismatched:
+        lines = [f"  {v.claim.id}: verdict {v.verdict}, reference {v.claim.reference} ({v.measured})" for v in mismatched]
+        raise SystemExit(
+            "claims marked ci: true did not reproduce their full-resolution reference verdict:\n" + "\n".join(lines)
+        )
+
+
+def _json_default(x):
+    if isinstance(x, (np.bool_, bool)):
+        return bool(x)
+    if isinstance(x, np.integer):
+        return int(x)
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    return float(x)
+
+
+def write_verdicts(verdicts, json_path, tsv_path=None):
+    """Every verdict as JSON (``{"claims": [Verdict.as_dict(), ...]}``) and as a TSV table (atomic)."""
+    import csv
+    import json
+
+    from .datasets import atomic_path
+
+    records = [v.as_dict() for v in verdicts]
+    with atomic_path(json_path) as tmp:
+        tmp.write_text(json.dumps({"claims": records}, indent=1, default=_json_default))
+    if tsv_path is None:
+        return records
+    with atomic_path(tsv_path) as tmp, open(tmp, "w", newline="") as fh:
+        w = csv.writer(fh, delimiter="\t")
+        w.writerow(["id", "source", "figures", "statement", "verdict", "reference", "measured"])
+        for r in records:
+            w.writerow(
+                [r["id"], r["source"], " ".join(r["figures"]), r["statement"], r["verdict"], r["reference"] or "",
+                 r["measured"]]
+            )
+    return records
+
+
+def read_verdicts(path) -> list[dict]:
+    """The verdict records written by :func:`write_verdicts`."""
+    import json
+    from pathlib import Path
+
+    return json.loads(Path(path).read_text())["claims"]
+
+
+def verdict_counts(records) -> dict:
+    return {k: sum(r["verdict"] == k for r in records) for k in VERDICTS}
+
+
+def claims_table(records, *, note_header: str = "note") -> str:
+    """HTML table of verdict records (claim, source, figures, verdict and reference, measured, note)."""
+    from . import report as rp
+
+    rows = []
+    for c in records:
+        ref = c["reference"]
+        ref_note = (
+            ""
+            if ref is None
+            else f" (full-resolution reference: {ref}"
+            + (", reproduced)" if c["matches_reference"] else ", NOT reproduced at this resolution)")
+        )
+        rows.append(
+            [
+                f"<b>{rp.escape(c['id'])}</b><br>{rp.escape(c['statement'])}",
+                rp.escape(c["source"]),
+                rp.escape(", ".join(c["figures"])),
+                rp.verdict_badge(c["verdict"]) + rp.escape(ref_note),
+                rp.escape(c["measured"]),
+                rp.escape(c["note"]),
+            ]
+        )
+    return rp.table(
+        ["claim", "source", "figures", "verdict", "measured", note_header], rows, raw_columns=(0, 1, 2, 3, 4, 5)
+    )
 
 
 # -- stability measures ---------------------------------------------------------------
@@ -462,8 +595,7 @@ def check_compare(
             h = True if sign * diff > tol else (False if sign * diff < -tol else None)
         holds.append(h)
         texts.append(text)
-    combined = False if False in holds else (True if all(h is True for h in holds) else None)
-    return Outcome(combined, "; ".join(texts), numbers)
+    return Outcome(combine_holds(holds), "; ".join(texts), numbers)
 
 
 def _label(selector):

@@ -67,6 +67,7 @@ import scipy.stats
 from . import exact
 from .coupling import get_decomposition, make_method
 from .macrostep import macro_step, simulate
+from .claims import Outcome, combine_holds, matches, register_check
 from .model import ParameterError, PhysicalModel
 from .oscillator import LinearCosimulation
 from .stability import amplification_matrix, is_stable, spectral_radius
@@ -88,8 +89,8 @@ __all__ = [
     "step_cost",
     "study_from_config",
     "oscillation_summary",
-    "load_claims",
-    "parse_claims",
+    "check_convergence_order",
+    "check_claims_against_config",
 ]
 
 #: Physical parameters of the test model in Sect. 3.7.
@@ -888,20 +889,6 @@ def curves(datasets) -> list:
     return out
 
 
-def _matches(rec, select):
-    for key, want in select.items():
-        if key not in rec:
-            return False
-        have = rec[key]
-        options = want if isinstance(want, list) else [want]
-        if isinstance(have, float):
-            if not any(np.isclose(have, float(o), rtol=1e-9, atol=0) for o in options):
-                return False
-        elif str(have) not in [str(o) for o in options]:
-            return False
-    return True
-
-
 def curve_label(rec) -> str:
     parts = [rec["decomposition"], rec["method"]]
     if rec["method"] != "projection":
@@ -924,12 +911,9 @@ def stable_span(rec) -> str:
     return f"{Hs.min():.2g} to {Hs.max():.2g} s"
 
 
-#: Keys of a convergence claim, of its ``select`` and of each ``expect`` entry.
-CLAIM_KEYS = {"id", "source", "statement", "select", "expect", "ci", "reference", "note"}
-CLAIM_REQUIRED = ("id", "statement", "select", "expect")
+#: Keys of a ``convergence_order`` check's ``select`` and of each ``expect`` entry.
 SELECT_KEYS = {"figure", "decomposition", "method", "panel", "index", "mu", "a", "b", "beta", "gamma"}
 EXPECT_KEYS = {"k", "order", "unstable", "observed", "observed_tolerance", "observed_second_half"}
-VERDICTS = ("pass", "fail", "undecided")
 
 
 def _is_number(x) -> bool:
@@ -955,90 +939,62 @@ def configured_curves(cfg: dict) -> list:
     return out
 
 
-def parse_claims(doc, *, cfg: dict | None = None, where: str = "claims") -> dict:
-    """Check the structure of a convergence claims document (``tolerance``, ``claims``).
-
-    Every error names the claim id and the key.  With ``cfg`` (the
-    ``convergence`` configuration) every expectation must also select at least
-    one configured curve.  Returns the document (tolerance filled in).
-    """
-    if not isinstance(doc, dict) or not isinstance(doc.get("claims"), list):
-        raise ParameterError(f"{where}: expected a mapping with a list under 'claims'")
-    unknown = sorted(set(doc) - {"tolerance", "claims"})
-    if unknown:
-        raise ParameterError(f"{where}: unknown top-level key(s) {unknown}; allowed: claims, tolerance")
-    tol = doc.get("tolerance", 0.25)
+def _validate_order_check(label: str, params: dict):
+    """Parameters of a ``convergence_order`` check (read with the claims file; errors name claim and key)."""
+    label = f"{label}: check"
+    tol = params["tolerance"]
     if not _is_number(tol) or tol <= 0:
-        raise ParameterError(f"{where}: tolerance must be a number > 0, got {tol!r}")
-    recs = configured_curves(cfg) if cfg is not None else None
-    seen = set()
-    for i, claim in enumerate(doc["claims"]):
-        label = f"{where}: claims[{i}]"
-        if not isinstance(claim, dict):
-            raise ParameterError(f"{label} must be a mapping")
-        if "id" in claim:
-            label += f" (id {claim['id']!r})"
-        unknown = sorted(set(claim) - CLAIM_KEYS)
+        raise ParameterError(f"{label}.tolerance must be a number > 0, got {tol!r}")
+    select = params["select"]
+    if not isinstance(select, dict) or not select:
+        raise ParameterError(f"{label}.select must be a non-empty mapping of {sorted(SELECT_KEYS)}")
+    unknown = sorted(set(select) - SELECT_KEYS)
+    if unknown:
+        raise ParameterError(f"{label}.select: unknown key(s) {unknown}; allowed: {sorted(SELECT_KEYS)}")
+    expect = params["expect"]
+    if not isinstance(expect, list) or not expect:
+        raise ParameterError(f"{label}.expect must be a non-empty list of {{k: ..., order: p | unstable: true}}")
+    for j, exp in enumerate(expect):
+        elabel = f"{label}.expect[{j}]"
+        if not isinstance(exp, dict):
+            raise ParameterError(f"{elabel} must be a mapping")
+        unknown = sorted(set(exp) - EXPECT_KEYS)
         if unknown:
-            raise ParameterError(f"{label}: unknown key(s) {unknown}; allowed: {sorted(CLAIM_KEYS)}")
-        missing = [key for key in CLAIM_REQUIRED if key not in claim]
-        if missing:
-            raise ParameterError(f"{label}: missing key(s) {missing}")
-        if claim["id"] in seen:
-            raise ParameterError(f"{label}: duplicate id")
-        seen.add(claim["id"])
-        if claim.get("reference") not in VERDICTS + (None,):
-            raise ParameterError(f"{label}.reference must be one of {VERDICTS}, got {claim['reference']!r}")
-        if not isinstance(claim.get("ci", False), bool):
-            raise ParameterError(f"{label}.ci must be true or false, got {claim['ci']!r}")
-        select = claim["select"]
-        if not isinstance(select, dict) or not select:
-            raise ParameterError(f"{label}.select must be a non-empty mapping of {sorted(SELECT_KEYS)}")
-        unknown = sorted(set(select) - SELECT_KEYS)
-        if unknown:
-            raise ParameterError(f"{label}.select: unknown key(s) {unknown}; allowed: {sorted(SELECT_KEYS)}")
-        if "k" in select:
-            raise ParameterError(f"{label}.select: give k per entry of expect, not in select")
-        expect = claim["expect"]
-        if not isinstance(expect, list) or not expect:
-            raise ParameterError(f"{label}.expect must be a non-empty list of {{k: ..., order: p | unstable: true}}")
-        for j, exp in enumerate(expect):
-            elabel = f"{label}.expect[{j}]"
-            if not isinstance(exp, dict):
-                raise ParameterError(f"{elabel} must be a mapping")
-            unknown = sorted(set(exp) - EXPECT_KEYS)
-            if unknown:
-                raise ParameterError(f"{elabel}: unknown key(s) {unknown}; allowed: {sorted(EXPECT_KEYS)}")
-            if not isinstance(exp.get("k"), int) or isinstance(exp.get("k"), bool) or exp["k"] < 0:
-                raise ParameterError(f"{elabel}.k must be an integer >= 0, got {exp.get('k')!r}")
-            if ("order" in exp) == bool(exp.get("unstable")):
-                raise ParameterError(f"{elabel}: give exactly one of order: p or unstable: true")
-            if "unstable" in exp and exp["unstable"] is not True:
-                raise ParameterError(f"{elabel}.unstable must be true (or left out), got {exp['unstable']!r}")
-            for key in ("order", "observed", "observed_second_half", "observed_tolerance"):
-                if key in exp and not _is_number(exp[key]):
-                    raise ParameterError(f"{elabel}.{key} must be a number, got {exp[key]!r}")
-            if "observed_tolerance" in exp and exp["observed_tolerance"] <= 0:
-                raise ParameterError(f"{elabel}.observed_tolerance must be > 0")
-            if recs is not None and not any(_matches(r, {**select, "k": exp["k"]}) for r in recs):
-                raise ParameterError(f"{elabel}: no configured curve matches select {select} with k = {exp['k']} "
-                                     "(check figure, decomposition, method, parameters and the configured k)")
-    return {**doc, "tolerance": float(tol)}
+            raise ParameterError(f"{elabel}: unknown key(s) {unknown}; allowed: {sorted(EXPECT_KEYS)}")
+        if not isinstance(exp.get("k"), int) or isinstance(exp.get("k"), bool) or exp["k"] < 0:
+            raise ParameterError(f"{elabel}.k must be an integer >= 0, got {exp.get('k')!r}")
+        if ("order" in exp) == bool(exp.get("unstable")):
+            raise ParameterError(f"{elabel}: give exactly one of order: p or unstable: true")
+        if "unstable" in exp and exp["unstable"] is not True:
+            raise ParameterError(f"{elabel}.unstable must be true (or left out), got {exp['unstable']!r}")
+        for key in ("order", "observed", "observed_second_half", "observed_tolerance"):
+            if key in exp and not _is_number(exp[key]):
+                raise ParameterError(f"{elabel}.{key} must be a number, got {exp[key]!r}")
+        if "observed_tolerance" in exp and exp["observed_tolerance"] <= 0:
+            raise ParameterError(f"{elabel}.observed_tolerance must be > 0")
 
 
-def load_claims(path, cfg: dict | None = None) -> dict:
-    """Read and check ``config/claims/convergence.yaml`` (see :func:`parse_claims`)."""
-    import yaml
+def check_claims_against_config(claims, cfg: dict):
+    """Every expectation of every ``convergence_order`` claim selects at least one curve the
+    ``convergence`` configuration will produce (checked before any job runs)."""
+    recs = configured_curves(cfg)
+    for claim in claims:
+        if claim.check["kind"] != "convergence_order":
+            continue
+        select = claim.check["select"]
+        for j, exp in enumerate(claim.check["expect"]):
+            if not any(matches(r, {**select, "k": exp["k"]}) for r in recs):
+                raise ParameterError(
+                    f"claim {claim.id}: check.expect[{j}]: no configured curve matches select {select} with "
+                    f"k = {exp['k']} (check figure, decomposition, method, parameters and the configured k)"
+                )
 
-    with open(path) as fh:
-        doc = yaml.safe_load(fh)
-    return parse_claims(doc, cfg=cfg, where=str(path))
 
+@register_check("convergence_order", validate=_validate_order_check)
+def check_convergence_order(datasets, *, select: dict, expect: list, tolerance: float):
+    """The paper's convergence claims (config/claims/convergence.yaml) on the panel datasets.
 
-def evaluate_claims(claims: dict, datasets) -> list:
-    """Verdicts of the paper's convergence claims (config/claims/convergence.yaml) on the data.
-
-    Each expectation is checked on every selected curve:
+    Each expectation is checked on every curve ``select`` picks with its ``k``:
 
     * ``order: p`` -- pass if the fitted order is within ``tolerance`` of
       ``p``, fail otherwise; undecided if no order could be fitted (too few
@@ -1046,47 +1002,45 @@ def evaluate_claims(claims: dict, datasets) -> list:
     * ``unstable: true`` -- pass if unstable at every step size, fail if
       stable at every one, undecided if stable at some.
 
-    Returns one dict per claim with ``verdict`` (fail if any row fails, pass
-    if all pass, else undecided) and ``rows``.
+    The claim fails if any curve fails, passes if all pass, else is undecided;
+    ``numbers["rows"]`` holds one record per curve.
     """
-    claims = parse_claims(claims)
-    tol = claims["tolerance"]
     recs = curves(datasets)
-    results = []
-    for claim in claims["claims"]:
-        rows = []
-        for exp in claim["expect"]:
-            select = {**claim["select"], "k": exp["k"]}
-            matched = [r for r in recs if _matches(r, select)]
-            if not matched:
-                raise ParameterError(f"claim {claim['id']}: no curve matches {select}")
-            for rec in matched:
-                row = {"curve": curve_label(rec), "k": rec["k"], "order": rec["order"],
-                       "order_second_half": rec["order_second_half"], "fit_H_min": rec["fit_H_min"],
-                       "fit_H_max": rec["fit_H_max"], "stable_H": stable_span(rec), "observed": exp.get("observed")}
-                # local slopes of the stable points from the fitted range upward (round-off floor left out)
-                keep = ~rec["unstable"] & (rec["H"] >= rec["fit_H_min"] if np.isfinite(rec["fit_H_min"]) else True)
-                slopes = local_slopes(rec["H"][keep], rec["nrmse"][keep])
-                slopes = slopes[np.isfinite(slopes)]
-                row["local_slopes"] = (float(slopes.min()), float(slopes.max())) if slopes.size else None
-                if exp.get("unstable"):
-                    row["claimed"] = "unstable"
-                    n_u = int(rec["unstable"].sum())
-                    row["verdict"] = "pass" if n_u == rec["unstable"].size else "fail" if n_u == 0 else "undecided"
-                else:
-                    p = float(exp["order"])
-                    row["claimed"] = f"O(H^{p:g})"
-                    if not np.isfinite(rec["order"]):
-                        row["verdict"] = "undecided"
-                    else:
-                        row["verdict"] = "pass" if abs(rec["order"] - p) <= tol else "fail"
-                rows.append(row)
-        verdicts = [r["verdict"] for r in rows]
-        verdict = "fail" if "fail" in verdicts else "pass" if all(v == "pass" for v in verdicts) else "undecided"
-        results.append({"id": claim["id"], "source": claim.get("source", ""), "statement": claim["statement"],
-                        "verdict": verdict, "reference": claim.get("reference"), "note": claim.get("note", ""),
-                        "rows": rows})
-    return results
+    rows = []
+    for exp in expect:
+        sel = {**select, "k": exp["k"]}
+        matched = [r for r in recs if matches(r, sel)]
+        if not matched:
+            raise ParameterError(f"convergence_order: no curve matches {sel}")
+        for rec in matched:
+            row = {"curve": curve_label(rec), "k": rec["k"], "order": rec["order"],
+                   "order_second_half": rec["order_second_half"], "fit_H_min": rec["fit_H_min"],
+                   "fit_H_max": rec["fit_H_max"], "stable_H": stable_span(rec), "observed": exp.get("observed")}
+            # local slopes of the stable points from the fitted range upward (round-off floor left out)
+            keep = ~rec["unstable"] & (rec["H"] >= rec["fit_H_min"] if np.isfinite(rec["fit_H_min"]) else True)
+            slopes = local_slopes(rec["H"][keep], rec["nrmse"][keep])
+            slopes = slopes[np.isfinite(slopes)]
+            row["local_slopes"] = (float(slopes.min()), float(slopes.max())) if slopes.size else None
+            if exp.get("unstable"):
+                row["claimed"] = "unstable"
+                n_u = int(rec["unstable"].sum())
+                holds = True if n_u == rec["unstable"].size else False if n_u == 0 else None
+            else:
+                p = float(exp["order"])
+                row["claimed"] = f"O(H^{p:g})"
+                holds = None if not np.isfinite(rec["order"]) else bool(abs(rec["order"] - p) <= tolerance)
+            row["verdict"] = {True: "pass", False: "fail"}.get(holds, "undecided")
+            row["holds"] = holds
+            rows.append(row)
+    measured = "; ".join(
+        f"{r['curve']}: {r['claimed']}, "
+        + (f"stable H {r['stable_H']}" if r["claimed"] == "unstable" or not np.isfinite(r["order"])
+           else f"fitted order {r['order']:.2f}")
+        + f" -> {r['verdict']}"
+        for r in rows
+    )
+    holds = combine_holds(r.pop("holds") for r in rows)
+    return Outcome(holds, measured, {"rows": rows, "tolerance": tolerance})
 
 
 # --------------------------------------------------------------------------- work-precision

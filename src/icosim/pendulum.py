@@ -158,6 +158,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .backend import Float64
+from .claims import Outcome, combine_holds, register_check
 from .coupling import CouplingMethod, get_decomposition
 from .lagrange import corrector_nodes, monomial_coefficients, predictor_nodes, weights_at
 from .macrostep import StepFailure, simulate
@@ -182,10 +183,10 @@ __all__ = [
     "run_dataset",
     "reference_dataset",
     "configured_runs",
-    "load_claims",
     "expected_outcome",
+    "run_verdict",
+    "check_pendulum_stability",
     "summarize",
-    "claim_verdict",
     "VARIABLES",
     "COUPLING_VARIABLES",
 ]
@@ -1000,40 +1001,71 @@ def reference_dataset(
     return _series_dataset(t, series, attrs)
 
 
-def load_claims(path) -> list:
-    """The claims list of ``config/claims/pendulum.yaml``, checked for the keys it needs."""
-    import yaml
-
-    with open(path) as fh:
-        data = yaml.safe_load(fh)
-    if not isinstance(data, dict) or not isinstance(data.get("claims"), list):
-        raise ParameterError(f"{path}: expected a mapping with a list under 'claims'")
-    for i, claim in enumerate(data["claims"]):
-        where = f"{path}: claims[{i}]"
-        for key in ("id", "statement", "check"):
-            if key not in claim:
-                raise ParameterError(f"{where} lacks {key!r}")
-        check = claim["check"]
-        if check.get("kind") != "divergence":
-            raise ParameterError(f"{where}.check.kind must be 'divergence', got {check.get('kind')!r}")
-        if check.get("default") not in ("stable", "unstable"):
-            raise ParameterError(f"{where}.check.default must be 'stable' or 'unstable', got {check.get('default')!r}")
-        for j, ex in enumerate(check.get("exceptions", [])):
-            missing = {"method", "decomposition", "k", "expected"} - set(ex)
-            if missing:
-                raise ParameterError(f"{where}.check.exceptions[{j}] lacks {', '.join(sorted(missing))}")
-            if ex["expected"] not in ("stable", "unstable"):
-                raise ParameterError(f"{where}.check.exceptions[{j}].expected must be 'stable' or 'unstable'")
-    return data["claims"]
+OUTCOMES = ("stable", "unstable")
 
 
-def expected_outcome(claim: dict, method: str, decomposition: str, k: int) -> str:
-    """``stable`` or ``unstable`` according to a claim with a default and exceptions."""
-    check = claim["check"]
+def _validate_stability_check(label: str, params: dict):
+    """Parameters of a ``pendulum_stability`` check (read with the claims file; errors name claim and key)."""
+    if params["default"] not in OUTCOMES:
+        raise ParameterError(f"{label}: check.default must be one of {list(OUTCOMES)}, got {params['default']!r}")
+    exceptions = params.get("exceptions", [])
+    if not isinstance(exceptions, list):
+        raise ParameterError(f"{label}: check.exceptions must be a list of {{method, decomposition, k, expected}}")
+    for j, ex in enumerate(exceptions):
+        where = f"{label}: check.exceptions[{j}]"
+        keys = {"method", "decomposition", "k", "expected"}
+        if not isinstance(ex, dict) or set(ex) != keys:
+            got = sorted(ex) if isinstance(ex, dict) else ex
+            raise ParameterError(f"{where} must have exactly the keys {sorted(keys)}, got {got}")
+        if ex["expected"] not in OUTCOMES:
+            raise ParameterError(f"{where}.expected must be one of {list(OUTCOMES)}, got {ex['expected']!r}")
+
+
+def expected_outcome(check: dict, method: str, decomposition: str, k: int) -> str:
+    """``stable`` or ``unstable`` according to a ``pendulum_stability`` check (default and exceptions)."""
     for ex in check.get("exceptions", []):
         if ex["method"] == method and ex["decomposition"] == decomposition and int(ex["k"]) == int(k):
             return ex["expected"]
     return check["default"]
+
+
+def run_verdict(expected: str, observed: str) -> str:
+    """One run against the claim: a failed run (no step computed) decides nothing."""
+    return "undecided" if observed == "failed" else "pass" if expected == observed else "fail"
+
+
+@register_check("pendulum_stability", validate=_validate_stability_check)
+def check_pendulum_stability(datasets, *, default: str, exceptions: list | None = None):
+    """Sect. 4: every run behaves as claimed (``default``, or its entry of ``exceptions``).
+
+    ``datasets`` are summaries (:func:`summarize`, one row per run).  Fails if a
+    run does not behave as claimed; otherwise undecided if a run failed (no
+    verdict of its own) or a configuration named in ``exceptions`` was not run;
+    else passes.
+    """
+    check = {"default": default, "exceptions": exceptions or []}
+    numbers, holds, have = {}, [], set()
+    for ds in datasets:
+        for m, d, k, observed in zip(
+            ds["method"].values, ds["decomposition"].values, ds["k"].values, ds["observed"].values
+        ):
+            m, d, k, observed = str(m), str(d), int(k), str(observed)
+            have.add((m, d, k))
+            expected = expected_outcome(check, m, d, k)
+            verdict = run_verdict(expected, observed)
+            numbers[run_name(m, d, k)] = {"expected": expected, "observed": observed, "verdict": verdict}
+            holds.append({"pass": True, "fail": False}.get(verdict))
+    missing = [run_name(ex["method"], ex["decomposition"], ex["k"]) for ex in check["exceptions"]
+               if (ex["method"], ex["decomposition"], int(ex["k"])) not in have]
+    holds += [None] * len(missing)
+    counts = {v: sum(n["verdict"] == v for n in numbers.values()) for v in ("pass", "fail", "undecided")}
+    text = (
+        f"{len(numbers)} runs: {counts['pass']} as claimed, {counts['fail']} not, {counts['undecided']} failed"
+        + "".join(f"; {name}: expected {n['expected']}, observed {n['observed']}"
+                  for name, n in numbers.items() if n["verdict"] != "pass")
+        + (f"; not run: {', '.join(missing)}" if missing else "")
+    )
+    return Outcome(combine_holds(holds), text, {"runs": numbers, "not_run": missing})
 
 
 def configured_runs(cfg: dict) -> list:
@@ -1113,7 +1145,8 @@ def summarize(runs: list, reference, claims: list, rho_test_model: dict | None =
     """One row per run: status, errors against the reference, claim expectation and verdict.
 
     ``runs`` are run datasets, ``reference`` the monolithic one, ``claims`` the
-    list from ``config/claims/pendulum.yaml``.  Errors are maxima over the
+    :class:`~icosim.claims.Claim` list of ``config/claims/pendulum.yaml`` (each
+    ``pendulum_stability`` claim adds ``expected_<id>`` and ``verdict_<id>``).  Errors are maxima over the
     computed part of the run (up to divergence or failure).  A run is observed
     ``unstable`` if it diverged, ``failed`` if a step could not be computed:
     its verdict is then ``undecided`` (a solver failure proves no instability).
@@ -1159,11 +1192,11 @@ def summarize(runs: list, reference, claims: list, rho_test_model: dict | None =
         if rho_test_model is not None:
             row["rho_test_model"] = float(rho_test_model[run_name(row["method"], row["decomposition"], row["k"])])
         for claim in claims:
-            exp = expected_outcome(claim, row["method"], row["decomposition"], row["k"])
-            row[f"expected_{claim['id']}"] = exp
-            row[f"verdict_{claim['id']}"] = (
-                "undecided" if observed == "failed" else "pass" if exp == observed else "fail"
-            )
+            if claim.check["kind"] != "pendulum_stability":
+                continue
+            exp = expected_outcome(claim.check, row["method"], row["decomposition"], row["k"])
+            row[f"expected_{claim.id}"] = exp
+            row[f"verdict_{claim.id}"] = run_verdict(exp, observed)
         rows.append(row)
     names = [run_name(r["method"], r["decomposition"], r["k"]) for r in rows]
     data = {key: ("run", [r[key] for r in rows]) for key in rows[0] if key not in ("method", "decomposition", "k")}
@@ -1198,16 +1231,3 @@ def summarize(runs: list, reference, claims: list, rho_test_model: dict | None =
         ] = "largest spectral radius of the linear test model (Sect. 3) at the pendulum's points (lr1, li1)"
         ds["rho_test_model"].attrs["units"] = "1"
     return ds
-
-
-def claim_verdict(summary, claim: dict, configurations: list) -> str:
-    """``fail`` if a configuration does not behave as claimed; otherwise ``undecided`` if
-    a claimed configuration was not run or failed (no verdict of its own), else ``pass``."""
-    have = {
-        (m, d, int(k))
-        for m, d, k in zip(summary["method"].values, summary["decomposition"].values, summary["k"].values)
-    }
-    verdicts = {str(v) for v in summary[f"verdict_{claim['id']}"].values}
-    if any((m, d, int(k)) not in have for m, d, k in configurations):
-        verdicts.add("undecided")
-    return "fail" if "fail" in verdicts else "undecided" if "undecided" in verdicts else "pass"

@@ -5,10 +5,11 @@
 import sys
 
 sys.path.insert(0, str(Path(workflow.basedir) / "src"))
+from icosim.claims import load_claims  # noqa: E402
 from icosim.convergence import (
+    check_claims_against_config,
     figure_layout,
     figure_panels,
-    load_claims,
     resolve_scheme,
     study_from_config,
 )  # noqa: E402
@@ -41,7 +42,7 @@ CONV_WP_ENTRIES = [
 # A malformed claims file, or a claim that selects no configured curve, fails here, naming
 # the claim id and key (not in the claims job after every panel has run).
 CONV_CLAIMS_FILE = CONVERGENCE["claims"]["file"]
-load_claims(CONV_CLAIMS_FILE, CONVERGENCE)
+check_claims_against_config(load_claims(CONV_CLAIMS_FILE), CONVERGENCE)
 
 
 CONV_PANEL_FILE = "results/convergence/{}/fig{}_{}.nc"  # decomposition, figure, panel
@@ -171,11 +172,12 @@ rule convergence_work_precision_figure:
 rule convergence_claims:
     """The paper's order claims (config/claims/convergence.yaml) evaluated on the datasets."""
     input:
-        panels=CONV_ALL_PANELS,
+        datasets=CONV_ALL_PANELS,
         claims=CONV_CLAIMS_FILE,
-        lib=lib("convergence", "datasets"),
+        lib=lib("claims", "convergence", "pendulum", "datasets", "model", "report"),
     output:
-        CONV_CLAIMS,
+        json=CONV_CLAIMS,
+        tsv="results/convergence/claims.tsv",
     log:
         "logs/convergence/claims.log",
     conda:
@@ -183,7 +185,7 @@ rule convergence_claims:
     params:
         enforce_reference=CONVERGENCE["claims"]["enforce_reference"],
     script:
-        "../scripts/convergence_claims.py"
+        "../scripts/claims.py"
 
 
 rule convergence_report_section:
@@ -194,7 +196,7 @@ rule convergence_report_section:
         wp=CONV_WP,
         claims=CONV_CLAIMS,
         panels=CONV_ALL_PANELS,
-        lib=lib("report", "convergence", "datasets"),
+        lib=lib("report", "convergence", "datasets", "claims"),
     output:
         CONV_SECTION,
     log:

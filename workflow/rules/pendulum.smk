@@ -5,7 +5,8 @@
 import sys
 
 sys.path.insert(0, str(Path(workflow.basedir) / "src"))
-from icosim.pendulum import configured_runs, load_claims, run_name  # noqa: E402
+from icosim.claims import load_claims  # noqa: E402
+from icosim.pendulum import configured_runs, run_name  # noqa: E402
 
 validate(config["pendulum"], "../schemas/pendulum.schema.yaml")
 
@@ -14,6 +15,7 @@ PENDULUM = config["pendulum"]
 # the weighted multiplier with dd, or an end time off the macro grid fails here, naming it.
 PENDULUM_RUNS = configured_runs(PENDULUM)
 load_claims(PENDULUM["claims"])  # a malformed claims file fails before any job runs
+PENDULUM_CLAIMS = "results/pendulum/claims.json"
 
 PENDULUM_PAPER_FIGURE = {0: 6, 1: 7, 2: 8}  # Fig. 6-8 for k = 0, 1, 2
 PENDULUM_DATASETS = [f"results/pendulum/{run_name(*r)}.nc" for r in PENDULUM_RUNS]
@@ -88,7 +90,7 @@ rule pendulum_summary:
         runs=PENDULUM_DATASETS,
         reference=PENDULUM_REFERENCE,
         claims=PENDULUM["claims"],
-        lib=PENDULUM_LIB + lib("stability", "oscillator"),
+        lib=PENDULUM_LIB + lib("stability", "oscillator", "claims"),
     output:
         PENDULUM_SUMMARY,
     log:
@@ -151,6 +153,26 @@ rule pendulum_error_figure:
         "../scripts/pendulum_error_figure.py"
 
 
+rule pendulum_claims:
+    """The claim of Sect. 4 (config/claims/pendulum.yaml) evaluated on the run summary."""
+    input:
+        datasets=[PENDULUM_SUMMARY],
+        claims=PENDULUM["claims"],
+        lib=lib("claims", "convergence", "pendulum", "datasets", "model", "report"),
+    output:
+        json=PENDULUM_CLAIMS,
+        tsv="results/pendulum/claims.tsv",
+    log:
+        "logs/pendulum/claims.log",
+    conda:
+        "../envs/icosim.yaml"
+    params:
+        # the pendulum's claim records no CI reference (config/pendulum.yaml has no enforce_reference)
+        enforce_reference=False,
+    script:
+        "../scripts/claims.py"
+
+
 rule pendulum_report_section:
     """HTML fragment of the report: set-up, dd formulation, claim verdicts, errors, figures."""
     input:
@@ -158,8 +180,8 @@ rule pendulum_report_section:
         error_figure=PENDULUM_ERROR_FIGURE,
         summary=PENDULUM_SUMMARY,
         reference=PENDULUM_REFERENCE,
-        claims=PENDULUM["claims"],
-        lib=lib("report", "pendulum", "datasets"),
+        claims=PENDULUM_CLAIMS,
+        lib=lib("report", "pendulum", "datasets", "claims"),
     output:
         PENDULUM_SECTION,
     log:
@@ -173,5 +195,7 @@ rule pendulum_report_section:
         "../scripts/pendulum_report_section.py"
 
 
-ALL_TARGETS.extend(PENDULUM_FIGURES + [PENDULUM_ERROR_FIGURE, PENDULUM_SUMMARY])
+ALL_TARGETS.extend(
+    PENDULUM_FIGURES + [PENDULUM_ERROR_FIGURE, PENDULUM_SUMMARY, PENDULUM_CLAIMS]
+)
 REPORT_SECTIONS["pendulum"] = PENDULUM_SECTION

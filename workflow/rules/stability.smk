@@ -104,9 +104,9 @@ rule stability_figure:
 rule stability_claims:
     """The paper's stability claims (config/claims/stability.yaml) evaluated on the datasets."""
     input:
-        panels=STABILITY_ALL_PANELS,
+        datasets=STABILITY_ALL_PANELS,
         claims=STABILITY_CLAIMS_FILE,
-        lib=lib("claims", "datasets", "model"),
+        lib=lib("claims", "convergence", "pendulum", "datasets", "model", "report"),
     output:
         json=STABILITY_CLAIMS,
         tsv=report(
@@ -123,7 +123,7 @@ rule stability_claims:
     params:
         enforce_reference=STABILITY["claims"]["enforce_reference"],
     script:
-        "../scripts/stability_claims.py"
+        "../scripts/claims.py"
 
 
 rule stability_report_section:

@@ -5,13 +5,13 @@ Everything shown comes from generated files: the figures, the claim verdicts
 datasets' attributes; the decisions are read from the configuration passed as params.
 """
 
-import json
 import logging
 from pathlib import Path
 
 import numpy as np
 
 from icosim import report as rp
+from icosim.claims import claims_table, read_verdicts, verdict_counts
 from icosim.convergence import Setup, fastest_schemes, oscillation_summary, step_counts
 from icosim.datasets import atomic_path, open_dataset
 
@@ -75,34 +75,33 @@ body = [
 ]
 
 # -- claims -------------------------------------------------------------------------------------
-claims = json.loads(Path(snakemake.input.claims).read_text())
+claims = read_verdicts(snakemake.input.claims)
 rows = []
-for c in claims["claims"]:
+for c in claims:
     first = True
-    for r in c["rows"]:
+    for r in c["numbers"]["rows"]:
         order = r["order"]
         measured = "—" if order is None or not np.isfinite(order) else f"{order:.2f} on [{r['fit_H_min']:.2g}, {r['fit_H_max']:.2g}] s"
         slopes = "—" if not r["local_slopes"] else f"{r['local_slopes'][0]:.2f} … {r['local_slopes'][1]:.2f}"
         second = r["order_second_half"]
         second = "—" if second is None or not np.isfinite(second) else f"{second:.2f}"
-        rows.append([
-            (f"<b>{esc(c['id'])}</b> ({esc(c['source'])})<br>{esc(c['statement'])}<br>claim verdict: "
-             + rp.verdict_badge(c["verdict"]) + (f" (full-run reference: {esc(str(c['reference']))})" if c["reference"] else "")) if first else "",
-            esc(r["curve"]), esc(r["claimed"]), measured, slopes, second, esc(r["stable_H"]), rp.verdict_badge(r["verdict"]),
-            esc(c["note"]) if first else "",
-        ])
+        rows.append([esc(c["id"]) if first else "", esc(r["curve"]), esc(r["claimed"]), measured, slopes, second,
+                     esc(r["stable_H"]), rp.verdict_badge(r["verdict"])])
         first = False
-counts = {v: sum(c["verdict"] == v for c in claims["claims"]) for v in ("pass", "fail", "undecided")}
+counts = verdict_counts(claims)
+tolerances = sorted({c["numbers"]["tolerance"] for c in claims})
 body.append(
-    f"<h3>The paper's claims</h3><p>{len(claims['claims'])} claims (config/claims/convergence.yaml), each checked on "
+    f"<h3>The paper's claims</h3><p>{len(claims)} claims (config/claims/convergence.yaml), each checked on "
     f"every curve it covers: {counts['pass']} pass, {counts['fail']} fail, {counts['undecided']} undecided. An order "
-    f"passes if the fitted asymptotic order is within ±{claims['tolerance']} of the claim; it is undecided where no "
-    "order can be fitted (too few stable step sizes). 'unstable' passes if every step size is unstable. The local slopes "
-    "span neighbouring stable points from the fitted range up to the largest H (pre-asymptotic range included, round-off floor left out); 'second half' is the order of Eq. (72) "
-    "restricted to T_N in (T/2, T], a diagnostic without the start-up transient. Where the data disagree with the "
-    "paper, the data stand and the last column explains.</p>"
-    + rp.table(["claim", "curve", "paper", "fitted order (range)", "local slopes", "second half", "stable H", "verdict", "explanation"],
-               rows, raw_columns=(0, 7))
+    f"passes if the fitted asymptotic order is within ±{', '.join(f'{t:g}' for t in tolerances)} of the claim; it is "
+    "undecided where no order can be fitted (too few stable step sizes). 'unstable' passes if every step size is "
+    "unstable. Where the data disagree with the paper, the data stand and the last column explains.</p>"
+    + claims_table(claims, note_header="explanation")
+    + "<p>Per curve: the local slopes span neighbouring stable points from the fitted range up to the largest H "
+    "(pre-asymptotic range included, round-off floor left out); 'second half' is the order of Eq. (72) restricted "
+    "to T_N in (T/2, T], a diagnostic without the start-up transient.</p>"
+    + rp.table(["claim", "curve", "paper", "fitted order (range)", "local slopes", "second half", "stable H", "verdict"],
+               rows, raw_columns=(7,))
 )
 
 # -- figures --------------------------------------------------------------------------------------
@@ -155,4 +154,4 @@ body.append("<p>Which scheme reaches a given error fastest (least CPU time per s
 html = rp.section("Convergence (Figs. 21–23)", "".join(body), anchor="convergence")
 with atomic_path(snakemake.output[0]) as tmp:
     tmp.write_text(html)
-logging.info("section written: %d claims, %d figures", len(claims["claims"]), len(snakemake.input.figures))
+logging.info("section written: %d claims, %d figures", len(claims), len(snakemake.input.figures))

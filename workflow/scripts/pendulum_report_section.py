@@ -4,8 +4,8 @@ import logging
 import math
 
 
+from icosim.claims import claims_table, read_verdicts
 from icosim.datasets import atomic_path, open_dataset
-from icosim.pendulum import claim_verdict, load_claims
 from icosim.report import escape, figure, section, table, verdict_badge
 
 snakemake = snakemake  # noqa: F821 (injected by Snakemake)
@@ -15,7 +15,7 @@ cfg = snakemake.params.config
 paper_figure = {int(k): v for k, v in snakemake.params.paper_figure.items()}
 summary = open_dataset(snakemake.input.summary)
 reference = open_dataset(snakemake.input.reference)
-claims = load_claims(snakemake.input.claims)
+claims = read_verdicts(snakemake.input.claims)
 runs = [
     (str(m), str(d), int(k))
     for m, d, k in zip(summary["method"].values, summary["decomposition"].values, summary["k"].values)
@@ -101,14 +101,9 @@ for q = (φ1, x<sub>S2</sub>, y<sub>S2</sub>, φ2)) projection of the positions 
 the KKT conditions) and of the velocities onto ġ<sub>c</sub> = 0, the generalisation of Eq. (30).</p>
 """
 
-claim_html = []
+claim_html = ["<h3>The paper's claim</h3>" + claims_table(claims)]
 for claim in claims:
-    verdict = claim_verdict(summary, claim, runs)
-    claim_html.append(
-        f"<p><b>Claim {escape(claim['id'])}</b> ({escape(claim.get('source', ''))}): {escape(claim['statement'])} "
-        f"&mdash; verdict {verdict_badge(verdict)}</p>"
-        + (f"<p class='note'>{escape(claim['note'])}</p>" if claim.get("note") else "")
-    )
+    claim_html.append(f"<p>Claim <b>{escape(claim['id'])}</b>, run by run:</p>")
     rows = [
         key
         + [

@@ -5,7 +5,8 @@ import logging
 
 from icosim import make_method
 from icosim.datasets import config_json, open_dataset, provenance_attrs, write_netcdf
-from icosim.pendulum import PendulumParameters, linear_test_model_rho, load_claims, run_name, summarize
+from icosim.claims import load_claims
+from icosim.pendulum import PendulumParameters, linear_test_model_rho, run_name, summarize
 
 snakemake = snakemake  # noqa: F821 (injected by Snakemake)
 
@@ -24,12 +25,12 @@ for ds in runs:
 ds = summarize(runs, reference, claims, rho_test_model=rho)
 ds.attrs.update(
     provenance_attrs(
-        {"claims": claims, "runs": list(snakemake.input.runs), "model": dict(p.model), "H": p.H, "methods": p.methods},
+        {"claims": [c.as_dict() for c in claims], "runs": list(snakemake.input.runs), "model": dict(p.model), "H": p.H, "methods": p.methods},
         title="Double pendulum (Sect. 4): errors and claim verdicts",
         command="snakemake rule pendulum_summary",
     )
 )
-ds.attrs["claims_json"] = config_json(claims)
+ds.attrs["claims_json"] = config_json([c.as_dict() for c in claims])
 ds.attrs["test_model_lr1"] = [float(v) for v in model.lr1]
 ds.attrs["test_model_li1"] = [float(v) for v in model.li1]
 ds.attrs["test_model_ratios"] = f"am21 = {model.am21:g}, alr21 = {model.alr21:g}, ali21 = {model.ali21:g}"

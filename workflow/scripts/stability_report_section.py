@@ -5,12 +5,12 @@ Everything shown comes from generated files: the figures, the claim verdicts
 and timing); the decisions are read from the configuration passed as params.
 """
 
-import json
 import logging
 from collections import defaultdict
 from pathlib import Path
 
 from icosim import report as rp
+from icosim.claims import claims_table, read_verdicts, verdict_counts
 from icosim.datasets import atomic_path, open_dataset
 from icosim.sweep import RATIOS, row_label
 
@@ -118,39 +118,14 @@ body = [
 ]
 
 # -- claims -------------------------------------------------------------------------------------
-claims = json.loads(Path(snakemake.input.claims).read_text())["claims"]
-counts = {k: sum(c["verdict"] == k for c in claims) for k in ("pass", "fail", "undecided")}
-rows = []
-for c in claims:
-    ref = c["reference"]
-    ref_note = (
-        ""
-        if ref is None
-        else (
-            f" (full-resolution reference: {ref}"
-            + (", reproduced)" if c["matches_reference"] else ", NOT reproduced at this resolution)")
-        )
-    )
-    rows.append(
-        [
-            f"<b>{esc(c['id'])}</b><br>{esc(c['statement'])}",
-            esc(c["source"]),
-            esc(", ".join(c["figures"])),
-            rp.verdict_badge(c["verdict"]) + esc(ref_note),
-            esc(c["measured"]),
-            esc(c["note"]),
-        ]
-    )
+claims = read_verdicts(snakemake.input.claims)
+counts = verdict_counts(claims)
 body.append(
     f"<h3>The paper's claims</h3><p>{len(claims)} claims from Sects. 3.1–3.6 and 5 (config/claims/stability.yaml), "
     f"evaluated on the datasets: {counts['pass']} pass, {counts['fail']} fail, {counts['undecided']} undecided. "
     "Shares are of stable grid points; differences below the grid resolution 1/(n−1) are undecided. "
     "Where the data disagree with the paper, the data stand.</p>"
-    + rp.table(
-        ["claim", "source", "figures", "verdict", "measured", "how the words were read"],
-        rows,
-        raw_columns=(0, 1, 2, 3, 4, 5),
-    )
+    + claims_table(claims, note_header="how the words were read")
 )
 body.append(
     "<h3>Precision and cost per figure</h3>"

@@ -1,0 +1,24 @@
+"""Snakemake job (every part): the paper's claims evaluated on the part's datasets.
+
+Writes every verdict (pass / fail / undecided, with the numbers measured) as JSON
+and TSV.  The data stand: a claim the data contradict is reported, not an error.
+With ``enforce_reference`` (the CI configuration) the job fails, before writing
+anything, if a claim marked ``ci: true`` gets a verdict other than its recorded
+full-resolution ``reference``: the reduced run no longer reproduces the full one.
+"""
+
+import logging
+
+from icosim.claims import enforce_references, evaluate, load_claims, verdict_counts, write_verdicts
+from icosim.datasets import open_dataset
+
+snakemake = snakemake  # noqa: F821 (injected by Snakemake)
+
+logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+claims = load_claims(snakemake.input.claims)
+verdicts = evaluate(claims, [open_dataset(path) for path in snakemake.input.datasets])
+for v in verdicts:
+    logging.info("%-9s %-45s (reference %s) %s", v.verdict, v.claim.id, v.claim.reference, v.measured)
+enforce_references(verdicts, snakemake.params.enforce_reference)
+records = write_verdicts(verdicts, snakemake.output.json, snakemake.output.tsv)
+logging.info("%d claims: %s", len(records), verdict_counts(records))
