@@ -24,6 +24,7 @@ import numpy as np  # noqa: E402
 
 from icosim import TestModel, baumgarte, projection, spectral_radius_float64, spectral_radius_mp  # noqa: E402
 from icosim import weighted_multiplier  # noqa: E402
+from _timing import best_of  # noqa: E402  (benchmarks/ is on sys.path when run as a script)
 
 SCHEMES = [
     ("baumgarte mu=1 index 1", baumgarte(mu=1, index=1), "ff"),
@@ -33,16 +34,6 @@ SCHEMES = [
     ("projection", projection(), "fd"),
     ("projection", projection(), "dd"),
 ]
-
-
-def best_of(fn, repeat):
-    fn()  # warm-up
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def main():

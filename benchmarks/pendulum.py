@@ -26,7 +26,6 @@ for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 import json  # noqa: E402
-import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 from scipy.integrate import solve_ivp  # noqa: E402
@@ -34,6 +33,7 @@ from scipy.integrate import solve_ivp  # noqa: E402
 from icosim import make_method  # noqa: E402
 from icosim.pendulum import Monolithic, PendulumParameters, _Link2, run_cosimulation  # noqa: E402
 from icosim.radau import radau_batch  # noqa: E402
+from _timing import best_of  # noqa: E402  (benchmarks/ is on sys.path when run as a script)
 
 RUNS = [
     ("baumgarte", {"index": 1, "mu": 1e-3}, "ff", 1),
@@ -42,16 +42,6 @@ RUNS = [
     ("projection", {}, "dd", 1),
     ("projection", {}, "dd", 2),
 ]
-
-
-def best_of(fn, repeat):
-    fn()  # warm-up
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def main():
