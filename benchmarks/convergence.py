@@ -47,8 +47,10 @@ def main():
     full.run("baumgarte", {"index": 1, "mu": 5e-3}, "ff", 2)
     curve = time.perf_counter() - t0
     per_step = time_macro_steps(setup, 1e-3, "baumgarte", {"index": 1, "mu": 5e-3}, "ff", 2)["seconds_per_step"]
-    print(f"one curve (16 sizes, {n.sum()} macro steps in total): {curve:.2f} s with the matrix path; "
-          f"simulate would need about {n.sum() * per_step:.0f} s")
+    print(
+        f"one curve (16 sizes, {n.sum()} macro steps in total): {curve:.2f} s with the matrix path; "
+        f"simulate would need about {n.sum() * per_step:.0f} s"
+    )
 
     # extrapolation check: CPU time per simulated second from 20 timed steps vs a fully timed run
     H, T = 1e-3, 0.5
@@ -61,8 +63,10 @@ def main():
         t0 = time.process_time()
         st._states(m, "ff", 1, H, int(T / H), "simulate")
         best = min(best, time.process_time() - t0)
-    print(f"CPU s per simulated second, projection ff k=1, H = 1e-3: extrapolated {est:.3f}, "
-          f"full run {best / T:.3f} (ratio {best / T / est:.2f}; the full run includes the set-up)")
+    print(
+        f"CPU s per simulated second, projection ff k=1, H = 1e-3: extrapolated {est:.3f}, "
+        f"full run {best / T:.3f} (ratio {best / T / est:.2f}; the full run includes the set-up)"
+    )
 
 
 if __name__ == "__main__":

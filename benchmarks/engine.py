@@ -51,8 +51,10 @@ def main():
     rng = np.random.default_rng(0)
     points = [TestModel(-2 * rng.random(), 2 * rng.random(), 2.0, 2.0, 2.0) for _ in range(args.mp_points)]
     rows = []
-    print(f"{'scheme':28s} {'dec':3s} {'f64 grid [s]':>12s} {'+estimate [s]':>13s} "
-          f"{'mp/point [s]':>12s} {'f64/point [us]':>14s} {'ratio mp:f64':>12s}")
+    print(
+        f"{'scheme':28s} {'dec':3s} {'f64 grid [s]':>12s} {'+estimate [s]':>13s} "
+        f"{'mp/point [s]':>12s} {'f64/point [us]':>14s} {'ratio mp:f64':>12s}"
+    )
     for label, method, dec in SCHEMES:
         t_plain = best_of(lambda: spectral_radius_float64(grid, method, dec, args.k, error_estimate=False), args.repeat)
         t_est = best_of(lambda: spectral_radius_float64(grid, method, dec, args.k), args.repeat)
@@ -64,13 +66,23 @@ def main():
             mp_times.append(time.perf_counter() - t0)
         t_mp = statistics.median(mp_times)
         per_point = t_est / args.n**2
-        row = dict(scheme=label, decomposition=dec, k=args.k, grid=f"{args.n}x{args.n}",
-                   float64_grid_s=t_plain, float64_grid_with_estimate_s=t_est,
-                   mp_point_s=t_mp, digits=args.digits, float64_point_s=per_point,
-                   speed_ratio_mp_to_float64=t_mp / per_point)
+        row = dict(
+            scheme=label,
+            decomposition=dec,
+            k=args.k,
+            grid=f"{args.n}x{args.n}",
+            float64_grid_s=t_plain,
+            float64_grid_with_estimate_s=t_est,
+            mp_point_s=t_mp,
+            digits=args.digits,
+            float64_point_s=per_point,
+            speed_ratio_mp_to_float64=t_mp / per_point,
+        )
         rows.append(row)
-        print(f"{label:28s} {dec:3s} {t_plain:12.3f} {t_est:13.3f} {t_mp:12.4f} {per_point * 1e6:14.1f} "
-              f"{t_mp / per_point:12.0f}")
+        print(
+            f"{label:28s} {dec:3s} {t_plain:12.3f} {t_est:13.3f} {t_mp:12.4f} {per_point * 1e6:14.1f} "
+            f"{t_mp / per_point:12.0f}"
+        )
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(rows, fh, indent=2)

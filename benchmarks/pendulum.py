@@ -111,12 +111,12 @@ def main():
 
     print(f"Double pendulum, H = {H:g} s, T = {T:g} s ({n} macro steps), Radau IIA rtol = atol = {tol:g}")
     print(
-        f"  monolithic, same integrator, free steps : {results['monolithic_free']*1e3:8.2f} ms ({results['monolithic_free_steps']} steps)"
+        f"  monolithic, same integrator, free steps : {results['monolithic_free'] * 1e3:8.2f} ms ({results['monolithic_free_steps']} steps)"
     )
-    print(f"  monolithic, same integrator, macro grid : {results['monolithic_grid']*1e3:8.2f} ms")
-    print(f"  monolithic, scipy solve_ivp Radau       : {results['scipy_radau_free']*1e3:8.2f} ms")
+    print(f"  monolithic, same integrator, macro grid : {results['monolithic_grid'] * 1e3:8.2f} ms")
+    print(f"  monolithic, scipy solve_ivp Radau       : {results['scipy_radau_free'] * 1e3:8.2f} ms")
     print(
-        f"  one link over one macro step: scipy solve_ivp Radau {results['scipy_link_step']*1e6:.0f} us, icosim.radau {results['icosim_link_step']*1e6:.0f} us"
+        f"  one link over one macro step: scipy solve_ivp Radau {results['scipy_link_step'] * 1e6:.0f} us, icosim.radau {results['icosim_link_step'] * 1e6:.0f} us"
     )
     print(
         f"{'co-simulation run':24s} {'time [s]':>9s} {'ms/step':>8s} {'int/step':>8s} {'x mono free':>12s} {'x mono grid':>12s}"

@@ -49,9 +49,7 @@ def main(argv=None):
     ap.add_argument("--ci", action="store_true", help="use config/ci/stability.yaml (coarse grids)")
     ap.add_argument("--cores", type=int, default=2)
     ap.add_argument("--keep", type=Path, help="run in this (new) directory and keep it")
-    ap.add_argument(
-        "extra", nargs="*", help="further snakemake options (after --), e.g. -- --scheduler greedy"
-    )
+    ap.add_argument("extra", nargs="*", help="further snakemake options (after --), e.g. -- --scheduler greedy")
     args = ap.parse_args(argv)
 
     sys.path.insert(0, str(ROOT / "src"))

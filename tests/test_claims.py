@@ -162,10 +162,7 @@ def test_compare_against_each_of_several_groups():
     ],
 )
 def test_trend(shares, direction, expected):
-    ds = [
-        panel(c, figure="19", row=r, mu=mu)
-        for r, (c, mu) in enumerate(zip(shares, (0.25, 1.0, 5.0)), start=1)
-    ]
+    ds = [panel(c, figure="19", row=r, mu=mu) for r, (c, mu) in enumerate(zip(shares, (0.25, 1.0, 5.0)), start=1)]
     check = {
         "kind": "trend",
         "select": {"figure": "19"},
@@ -289,10 +286,7 @@ def test_index3_claim_on_a_coarse_engine_panel():
     )
     datasets = [stability_panel(s) for s in specs if s.k in (0, 1)]
     by_id = {c.id: c for c in load_claims(CLAIMS_FILE)}
-    verdicts = {
-        v.claim.id: v
-        for v in evaluate([by_id["fig18_k12_no_stable_point"], by_id["fig18_k0_good"]], datasets)
-    }
+    verdicts = {v.claim.id: v for v in evaluate([by_id["fig18_k12_no_stable_point"], by_id["fig18_k0_good"]], datasets)}
     # k = 2 has no data here: the `each` over k = 1, 2 cannot pass as a whole
     assert verdicts["fig18_k12_no_stable_point"].verdict == "undecided"
     assert "[k = 1]" in verdicts["fig18_k12_no_stable_point"].measured
@@ -379,8 +373,17 @@ def test_writer_references_and_table(tmp_path):
     ds = [panel(5, k=0)]
     good = claim({**GOOD_CHECK}, ci=True, reference="pass")  # 5 of 11 columns stable: "< 1" holds
     off = parse_claims(
-        [{"id": "d", "source": "s", "statement": "t", "figures": ["9"], "check": GOOD_CHECK, "ci": True,
-          "reference": "fail"}]
+        [
+            {
+                "id": "d",
+                "source": "s",
+                "statement": "t",
+                "figures": ["9"],
+                "check": GOOD_CHECK,
+                "ci": True,
+                "reference": "fail",
+            }
+        ]
     )[0]
     verdicts = evaluate([good, off], ds)
     assert [v.verdict for v in verdicts] == ["pass", "pass"]

@@ -18,8 +18,10 @@ def run(capsys, argv):
 
 
 def test_json_output_matches_library(capsys):
-    code, out = run(capsys, BASE + ["--method", "baumgarte", "--index", "1", "--mu", "1",
-                                    "--decomposition", "ff", "--k", "2", "--json"])
+    code, out = run(
+        capsys,
+        BASE + ["--method", "baumgarte", "--index", "1", "--mu", "1", "--decomposition", "ff", "--k", "2", "--json"],
+    )
     assert code == 0
     data = json.loads(out)
     expected, _ = spectral_radius_float64(TestModel(-0.5, 0.7, 2, 2, 2), baumgarte(mu=1, index=1), "ff", 2)
@@ -29,8 +31,9 @@ def test_json_output_matches_library(capsys):
 
 
 def test_digits_option_uses_multiprecision(capsys):
-    code, out = run(capsys, BASE + ["--method", "projection", "--decomposition", "dd", "--k", "1",
-                                    "--digits", "40", "--json"])
+    code, out = run(
+        capsys, BASE + ["--method", "projection", "--decomposition", "dd", "--k", "1", "--digits", "40", "--json"]
+    )
     data = json.loads(out)
     assert code == 0 and data["digits"] == 40
     ref, _ = spectral_radius_float64(TestModel(-0.5, 0.7, 2, 2, 2), __import__("icosim").projection(), "dd", 1)
@@ -70,8 +73,26 @@ def test_bad_model_parameter_names_it(capsys, flag, value):
 
 
 def test_missing_parameter_and_real_process_exit_status():
-    argv = [sys.executable, "-m", "icosim.cli", "rho", "--method", "projection", "--decomposition", "ff",
-            "--k", "0", "--lr1", "-1", "--li1", "1", "--am21", "1", "--alr21", "1"]
+    argv = [
+        sys.executable,
+        "-m",
+        "icosim.cli",
+        "rho",
+        "--method",
+        "projection",
+        "--decomposition",
+        "ff",
+        "--k",
+        "0",
+        "--lr1",
+        "-1",
+        "--li1",
+        "1",
+        "--am21",
+        "1",
+        "--alr21",
+        "1",
+    ]
     proc = subprocess.run(argv, capture_output=True, text=True)
     assert proc.returncode == 2
     assert "--ali21" in proc.stderr and "Traceback" not in proc.stderr

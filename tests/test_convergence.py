@@ -9,9 +9,25 @@ from pathlib import Path
 import icosim
 from icosim.claims import load_claims, parse_claims
 from icosim.convergence import (
-    PanelSpec, Setup, Study, dimensional_method, fastest_schemes, figure_layout, figure_panels, fit_order,
-    iterate_linear_map, method_attrs, nrmse, oscillation_summary, resolve_scheme, check_claims_against_config,
-    run_panel, step_cost, step_counts, study_from_config, time_macro_steps,
+    PanelSpec,
+    Setup,
+    Study,
+    dimensional_method,
+    fastest_schemes,
+    figure_layout,
+    figure_panels,
+    fit_order,
+    iterate_linear_map,
+    method_attrs,
+    nrmse,
+    oscillation_summary,
+    resolve_scheme,
+    check_claims_against_config,
+    run_panel,
+    step_cost,
+    step_counts,
+    study_from_config,
+    time_macro_steps,
 )
 from icosim.model import ParameterError
 
@@ -21,7 +37,9 @@ ROOT = Path(__file__).resolve().parents[1]
 # ------------------------------------------------------------------ Eq. (72)
 def _signals(n=400):
     t = np.linspace(0.01, 1, n)
-    return np.stack([np.exp(-t) * np.cos(9 * t), np.exp(-t) * np.cos(9 * t) + 0.1, np.sin(7 * t), np.cos(5 * t) * t], -1)
+    return np.stack(
+        [np.exp(-t) * np.cos(9 * t), np.exp(-t) * np.cos(9 * t) + 0.1, np.sin(7 * t), np.cos(5 * t) * t], -1
+    )
 
 
 def test_nrmse_constant_offset_matches_variance_formula():
@@ -98,7 +116,10 @@ def test_reference_matches_closed_form():
         t = H * np.arange(1, study.n_steps[i] + 1)
         x = np.exp(-delta * t) * (s.x0 * np.cos(omega * t) + (s.v0 + delta * s.x0) / omega * np.sin(omega * t))
         v = np.gradient(x, t)  # checked loosely; exact velocity below
-        v_exact = np.exp(-delta * t) * (-s.x0 * omega * np.sin(omega * t) + (s.v0 + delta * s.x0) * np.cos(omega * t)) - delta * x
+        v_exact = (
+            np.exp(-delta * t) * (-s.x0 * omega * np.sin(omega * t) + (s.v0 + delta * s.x0) * np.cos(omega * t))
+            - delta * x
+        )
         ref = study.reference(i)
         np.testing.assert_allclose(ref[:, 0], x, atol=1e-14)
         np.testing.assert_allclose(ref[:, 1], x, atol=1e-14)
@@ -115,12 +136,15 @@ def test_dimensional_baumgarte_parameters():
 
 
 # ------------------------------------------------------------------ stepping
-@pytest.mark.parametrize("method,params,dec,k", [
-    ("baumgarte", {"index": 1, "mu": 5e-3}, "ff", 1),
-    ("weighted", {"index": 1, "a": 1.0, "b": 1.0}, "fd", 1),
-    ("projection", {}, "dd", 2),
-    ("projection", {}, "ff", 0),
-])
+@pytest.mark.parametrize(
+    "method,params,dec,k",
+    [
+        ("baumgarte", {"index": 1, "mu": 5e-3}, "ff", 1),
+        ("weighted", {"index": 1, "a": 1.0, "b": 1.0}, "fd", 1),
+        ("projection", {}, "dd", 2),
+        ("projection", {}, "ff", 0),
+    ],
+)
 def test_matrix_stepping_equals_simulate(method, params, dec, k):
     """The amplification-matrix path is the same macro-step algorithm (by linearity)."""
     study = Study(Setup(end_time=0.3), [300, 600])  # 600 > one block of powers
@@ -217,11 +241,15 @@ def test_panels_share_the_index3_row():
 
 def test_bad_parameters_name_the_figure():
     with pytest.raises(ParameterError, match="figure 9.*mu"):
-        figure_panels("9", {"method": "weighted", "columns": [{"mu": 1.0}], "rows": [{"index": 1}],
-                            "decompositions": ["ff"]}, [0])
+        figure_panels(
+            "9", {"method": "weighted", "columns": [{"mu": 1.0}], "rows": [{"index": 1}], "decompositions": ["ff"]}, [0]
+        )
     with pytest.raises(ParameterError, match="decomposition 'dd'"):
-        figure_panels("9", {"method": "baumgarte", "columns": [{"mu": 1e-3}], "rows": [{"index": 1}],
-                            "decompositions": ["dd"]}, [0])
+        figure_panels(
+            "9",
+            {"method": "baumgarte", "columns": [{"mu": 1e-3}], "rows": [{"index": 1}], "decompositions": ["dd"]},
+            [0],
+        )
     with pytest.raises(ParameterError, match="exactly one column"):
         resolve_scheme({"figure": "21", "mu": 7.0, "index": 1}, _config()["figures"], [0])
 
@@ -243,9 +271,14 @@ def test_panel_dataset_and_work_precision():
     assert ds["nrmse"].dims == ("index", "k", "H") and ds["H"].attrs["units"] == "s"
     assert ds.attrs["figure"] == "23" and ds.attrs["method"] == "projection" and ds.attrs["decomposition"] == "ff"
     assert np.all(np.diff(ds["order"].values[0]) > 0.5)  # k = 1 converges faster than k = 0
-    entries = resolve_scheme({"figure": "23"}, {"23": {"method": "projection", "columns": [{}], "rows": [{}],
-                                                       "decompositions": ["ff"]}}, [0, 1])
-    wp = icosim.convergence.work_precision(entries, {("ff", "23", "all"): ds}, study.setup, steps=2, repeats=1, warmup_steps=1)
+    entries = resolve_scheme(
+        {"figure": "23"},
+        {"23": {"method": "projection", "columns": [{}], "rows": [{}], "decompositions": ["ff"]}},
+        [0, 1],
+    )
+    wp = icosim.convergence.work_precision(
+        entries, {("ff", "23", "all"): ds}, study.setup, steps=2, repeats=1, warmup_steps=1
+    )
     cost = wp["cpu_seconds_per_simulated_second"].values
     assert np.all(cost[np.isfinite(wp["nrmse"].values)] > 0)
     ranking = fastest_schemes(wp, [1.0])[0]["ranking"]
@@ -270,21 +303,23 @@ def test_time_macro_steps_times_the_documented_runs(monkeypatch):
         return real(problem, method, state, history, n_steps, **kw)
 
     monkeypatch.setattr(conv, "simulate", recording)
-    time_macro_steps(Setup(), 1e-3, "baumgarte", {"index": 1, "mu": 5e-3}, "fd", 1, steps=3, repeats=2,
-                     warmup_steps=4)
+    time_macro_steps(Setup(), 1e-3, "baumgarte", {"index": 1, "mu": 5e-3}, "fd", 1, steps=3, repeats=2, warmup_steps=4)
     # beta is handed on dimensionless: 2 mu / H = 10
     assert calls == [(4, "fd", 1, pytest.approx(10.0))] + [(3, "fd", 1, pytest.approx(10.0))] * 2
     with pytest.raises(ParameterError, match="steps"):
         time_macro_steps(Setup(), 1e-3, "projection", {}, "ff", 0, steps=0)
 
 
-@pytest.mark.parametrize("method,params,solves,projections", [
-    ("baumgarte", {"index": 1, "mu": 1e-3}, 1, 0),  # one solve, levels (1, beta, gamma)
-    ("baumgarte", {"index": 3}, 1, 0),
-    ("weighted", {"index": 1, "a": 1.0, "b": 1.0}, 3, 0),  # position, velocity, acceleration level
-    ("weighted", {"index": 2, "a": 1.0}, 2, 0),  # b = 0: the acceleration solve drops out
-    ("projection", {}, 1, 1),  # acceleration level, then the projection
-])
+@pytest.mark.parametrize(
+    "method,params,solves,projections",
+    [
+        ("baumgarte", {"index": 1, "mu": 1e-3}, 1, 0),  # one solve, levels (1, beta, gamma)
+        ("baumgarte", {"index": 3}, 1, 0),
+        ("weighted", {"index": 1, "a": 1.0, "b": 1.0}, 3, 0),  # position, velocity, acceleration level
+        ("weighted", {"index": 2, "a": 1.0}, 2, 0),  # b = 0: the acceleration solve drops out
+        ("projection", {}, 1, 1),  # acceleration level, then the projection
+    ],
+)
 @pytest.mark.parametrize("dec", ["ff", "fd"])
 def test_step_cost_counts_the_work_of_one_macro_step(method, params, solves, projections, dec):
     """Counted on the engine's macro step: predictor + corrector of each subsystem = 4 integrations;
@@ -300,8 +335,12 @@ def test_figure_never_draws_unstable_as_error():
     err = np.array([[[1e-6, 4e-6, np.nan, np.nan]]])
     unstable = np.array([[[False, False, True, True]]])
     ds = xr.Dataset(
-        {"nrmse": (("index", "k", "H"), err), "unstable": (("index", "k", "H"), unstable),
-         "fit_used": (("index", "k", "H"), np.zeros_like(unstable)), "order": (("index", "k"), [[np.nan]])},
+        {
+            "nrmse": (("index", "k", "H"), err),
+            "unstable": (("index", "k", "H"), unstable),
+            "fit_used": (("index", "k", "H"), np.zeros_like(unstable)),
+            "order": (("index", "k"), [[np.nan]]),
+        },
         coords={"H": H, "index": [1], "k": [0]},
     )
     fig = convergence_figure({"p": ds}, [[("p", 1)]], columns=[{}], rows=["index 1"], guide_orders=[2])
@@ -309,7 +348,9 @@ def test_figure_never_draws_unstable_as_error():
     xs = [line for line in ax.get_lines() if line.get_marker() == "x"]
     assert len(xs) == 1 and list(xs[0].get_xdata()) == [4e-3, 8e-3]
     assert xs[0].get_transform() == ax.get_xaxis_transform()  # axes height, not an error value
-    data_lines = [line for line in ax.get_lines() if line.get_marker() in ("o", "None", "") and line.get_linestyle() != ":"]
+    data_lines = [
+        line for line in ax.get_lines() if line.get_marker() in ("o", "None", "") and line.get_linestyle() != ":"
+    ]
     for line in data_lines:
         y = np.asarray(line.get_ydata(), float)
         x = np.asarray(line.get_xdata(), float)
@@ -317,18 +358,30 @@ def test_figure_never_draws_unstable_as_error():
 
 
 # ------------------------------------------------------------------ configuration checked before any job
-@pytest.mark.parametrize("change,message", [
-    (lambda c: c["step_sizes"].update(H_min=1e-2, H_max=1e-3), r"convergence\.step_sizes: need 0 < H_min < H_max"),
-    (lambda c: c["step_sizes"].update(H_min=1e-2, H_max=1e-2), r"convergence\.step_sizes: need 0 < H_min < H_max"),
-    (lambda c: c["step_sizes"].update(H_max=2.0), r"convergence\.step_sizes\.H_max = 2\.0 must be at most convergence\.end_time"),
-    (lambda c: c.update(end_time=1e-3), r"convergence\.step_sizes\.H_max .* convergence\.end_time"),
-    (lambda c: c["initial_conditions"].update(x0=0.0, v0=0.0), r"convergence\.initial_conditions: x0 and v0 are both zero"),
-    (lambda c: c["initial_conditions"].update(v0=float("nan")), r"convergence\.initial_conditions\.v0"),
-    (lambda c: c["model"].update(m1=-1.0), r"convergence\.model: m1"),
-    (lambda c: c["unstable"].update(growth_bound=1.0), r"convergence\.unstable\.growth_bound"),
-    (lambda c: c["step_sizes"].update(H_min=0.45, H_max=0.5, num=4), r"convergence\.step_sizes: .* only the step count"),
-    (lambda c: c["fit"].update(min_points=20), r"convergence\.fit\.min_points = 20 exceeds the 16 step sizes"),
-])
+@pytest.mark.parametrize(
+    "change,message",
+    [
+        (lambda c: c["step_sizes"].update(H_min=1e-2, H_max=1e-3), r"convergence\.step_sizes: need 0 < H_min < H_max"),
+        (lambda c: c["step_sizes"].update(H_min=1e-2, H_max=1e-2), r"convergence\.step_sizes: need 0 < H_min < H_max"),
+        (
+            lambda c: c["step_sizes"].update(H_max=2.0),
+            r"convergence\.step_sizes\.H_max = 2\.0 must be at most convergence\.end_time",
+        ),
+        (lambda c: c.update(end_time=1e-3), r"convergence\.step_sizes\.H_max .* convergence\.end_time"),
+        (
+            lambda c: c["initial_conditions"].update(x0=0.0, v0=0.0),
+            r"convergence\.initial_conditions: x0 and v0 are both zero",
+        ),
+        (lambda c: c["initial_conditions"].update(v0=float("nan")), r"convergence\.initial_conditions\.v0"),
+        (lambda c: c["model"].update(m1=-1.0), r"convergence\.model: m1"),
+        (lambda c: c["unstable"].update(growth_bound=1.0), r"convergence\.unstable\.growth_bound"),
+        (
+            lambda c: c["step_sizes"].update(H_min=0.45, H_max=0.5, num=4),
+            r"convergence\.step_sizes: .* only the step count",
+        ),
+        (lambda c: c["fit"].update(min_points=20), r"convergence\.fit\.min_points = 20 exceeds the 16 step sizes"),
+    ],
+)
 def test_bad_configuration_is_refused_naming_the_key(change, message):
     cfg = _config()
     study_from_config(cfg)  # the shipped configuration is fine
@@ -373,21 +426,33 @@ def _parse_and_match(doc):
     check_claims_against_config(parse_claims(doc["claims"]), _config())
 
 
-@pytest.mark.parametrize("change,message", [
-    (lambda c: c.update(colour="red"), r"baumgarte_index2.*unknown key.*colour"),
-    (lambda c: c["check"].pop("expect"), r"baumgarte_index2.*check \(convergence_order\) lacks \['expect'\]"),
-    (lambda c: c["check"]["select"].update(mux=1e-3), r"baumgarte_index2.*select: unknown key.*mux"),
-    (lambda c: c["check"]["expect"][0].pop("k"), r"baumgarte_index2.*expect\[0\]\.k must be an integer"),
-    (lambda c: c["check"]["expect"][0].update(order="two"), r"baumgarte_index2.*expect\[0\]\.order must be a number"),
-    (lambda c: c["check"]["expect"][0].pop("order"), r"baumgarte_index2.*expect\[0\]: give exactly one of"),
-    (lambda c: c["check"]["expect"][1].update(order=2), r"baumgarte_index2.*expect\[1\]: give exactly one of"),
-    (lambda c: c["check"]["expect"][0].update(ordre=2), r"baumgarte_index2.*expect\[0\]: unknown key.*ordre"),
-    (lambda c: c.update(reference="maybe"), r"baumgarte_index2.*reference must be one of"),
-    (lambda c: c["check"].update(tolerance=-1), r"baumgarte_index2.*tolerance must be a number > 0"),
-    (lambda c: c["check"]["select"].update(figure="24"), r"baumgarte_index2.*expect\[0\]: no configured curve matches"),
-    (lambda c: c["check"]["select"].update(decomposition="dd"), r"baumgarte_index2.*no configured curve matches"),
-    (lambda c: c["check"]["expect"][0].update(k=7), r"baumgarte_index2.*expect\[0\]: no configured curve matches .* k = 7"),
-])
+@pytest.mark.parametrize(
+    "change,message",
+    [
+        (lambda c: c.update(colour="red"), r"baumgarte_index2.*unknown key.*colour"),
+        (lambda c: c["check"].pop("expect"), r"baumgarte_index2.*check \(convergence_order\) lacks \['expect'\]"),
+        (lambda c: c["check"]["select"].update(mux=1e-3), r"baumgarte_index2.*select: unknown key.*mux"),
+        (lambda c: c["check"]["expect"][0].pop("k"), r"baumgarte_index2.*expect\[0\]\.k must be an integer"),
+        (
+            lambda c: c["check"]["expect"][0].update(order="two"),
+            r"baumgarte_index2.*expect\[0\]\.order must be a number",
+        ),
+        (lambda c: c["check"]["expect"][0].pop("order"), r"baumgarte_index2.*expect\[0\]: give exactly one of"),
+        (lambda c: c["check"]["expect"][1].update(order=2), r"baumgarte_index2.*expect\[1\]: give exactly one of"),
+        (lambda c: c["check"]["expect"][0].update(ordre=2), r"baumgarte_index2.*expect\[0\]: unknown key.*ordre"),
+        (lambda c: c.update(reference="maybe"), r"baumgarte_index2.*reference must be one of"),
+        (lambda c: c["check"].update(tolerance=-1), r"baumgarte_index2.*tolerance must be a number > 0"),
+        (
+            lambda c: c["check"]["select"].update(figure="24"),
+            r"baumgarte_index2.*expect\[0\]: no configured curve matches",
+        ),
+        (lambda c: c["check"]["select"].update(decomposition="dd"), r"baumgarte_index2.*no configured curve matches"),
+        (
+            lambda c: c["check"]["expect"][0].update(k=7),
+            r"baumgarte_index2.*expect\[0\]: no configured curve matches .* k = 7",
+        ),
+    ],
+)
 def test_malformed_claims_name_the_claim_and_key(change, message):
     doc = _claims_doc()
     _parse_and_match(doc)  # the shipped file itself passes
@@ -422,7 +487,9 @@ def test_baumgarte_index1_k0_has_the_drift_mode_of_time_scale_mu(ratio):
     mu = 1.0e-3
     H = ratio * mu
     c = icosim.PhysicalModel(**icosim.convergence.PAPER_MODEL, H=H).coefficients()
-    M = icosim.stability.amplification_matrix(c, icosim.make_method("baumgarte", beta=2 * mu / H, gamma=mu**2 / H**2), "ff", 0)
+    M = icosim.stability.amplification_matrix(
+        c, icosim.make_method("baumgarte", beta=2 * mu / H, gamma=mu**2 / H**2), "ff", 0
+    )
     ev = np.linalg.eigvals(M)
     r = ratio
     z_rigid = ((1 + r - r**2 / 4) + 1j * np.sqrt(r**3 / 2 - r**4 / 16)) / (1 + 2 * r + r**2 / 2)

@@ -38,11 +38,19 @@ def _ci_config():
 @pytest.fixture(scope="module")
 def results():
     cfg = _ci_config()
-    setup = Setup(**cfg["model"], **cfg["initial_conditions"], end_time=cfg["end_time"],
-                  growth_bound=cfg["unstable"]["growth_bound"])
+    setup = Setup(
+        **cfg["model"],
+        **cfg["initial_conditions"],
+        end_time=cfg["end_time"],
+        growth_bound=cfg["unstable"]["growth_bound"],
+    )
     s = cfg["step_sizes"]
-    study = Study(setup, step_counts(setup.end_time, s["H_min"], s["H_max"], s["num"]),
-                  spectral_policy=cfg["unstable"]["spectral_policy"], digits=cfg["unstable"]["digits"])
+    study = Study(
+        setup,
+        step_counts(setup.end_time, s["H_min"], s["H_max"], s["num"]),
+        spectral_policy=cfg["unstable"]["spectral_policy"],
+        digits=cfg["unstable"]["digits"],
+    )
     figures = {str(c.check["select"]["figure"]) for c in CI_CLAIMS}
     decs = {c.check["select"]["decomposition"] for c in CI_CLAIMS}
     datasets = [

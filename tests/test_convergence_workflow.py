@@ -58,16 +58,27 @@ def test_claims_job_raises_before_writing_on_a_reference_mismatch(tmp_path):
     study = Study(Setup(end_time=0.2), step_counts(0.2, 2e-4, 2e-2, 5))
     panel = tmp_path / "panel.nc"
     write_netcdf(run_panel(spec, study, {"min_points": 3}), panel)
-    claim = {"id": "proj", "source": "s", "statement": "s", "figures": ["23"], "ci": True,
-             "check": {"kind": "convergence_order", "tolerance": 0.25,
-                       "select": {"figure": "23", "decomposition": "ff"}, "expect": [{"k": 0, "order": 2}]}}
+    claim = {
+        "id": "proj",
+        "source": "s",
+        "statement": "s",
+        "figures": ["23"],
+        "ci": True,
+        "check": {
+            "kind": "convergence_order",
+            "tolerance": 0.25,
+            "select": {"figure": "23", "decomposition": "ff"},
+            "expect": [{"k": 0, "order": 2}],
+        },
+    }
     out = tmp_path / "claims.json"
 
     def run(reference, enforce):
         (tmp_path / "c.yaml").write_text(yaml.safe_dump({"claims": [{**claim, "reference": reference}]}))
         job = SimpleNamespace(
             input=SimpleNamespace(claims=str(tmp_path / "c.yaml"), datasets=[str(panel)]),
-            output=SimpleNamespace(json=str(out), tsv=str(tmp_path / "claims.tsv")), log=[str(tmp_path / "log")],
+            output=SimpleNamespace(json=str(out), tsv=str(tmp_path / "claims.tsv")),
+            log=[str(tmp_path / "log")],
             params=SimpleNamespace(enforce_reference=enforce),
         )
         runpy.run_path(str(ROOT / "workflow" / "scripts" / "claims.py"), init_globals={"snakemake": job})

@@ -49,7 +49,7 @@ def test_lagrange_weights_reproduce_polynomials_of_degree_k(k):
     for nodes in (predictor_nodes(k), corrector_nodes(k)):
         for degree in range(k + 1):
             p = lambda t: Fraction(t) ** degree + 3 * Fraction(t) - 2  # noqa: E731
-            p = (lambda d: (lambda t: Fraction(t) ** d))(degree)
+            p = (lambda d: lambda t: Fraction(t) ** d)(degree)
             for tau in (Fraction(1), Fraction(1, 3), Fraction(-7, 2)):
                 value = sum(w * p(t) for w, t in zip(weights_at(nodes, tau), nodes))
                 assert value == p(tau)
@@ -290,8 +290,13 @@ def test_overdamped_physical_model_is_accepted_but_has_no_eq71_form():
 
 @pytest.mark.parametrize(
     "kwargs,name",
-    [(dict(lr1=0.1, li1=1), "lr1"), (dict(lr1=-1, li1=-1), "li1"), (dict(lr1=-1, li1=1, am21=0), "am21"),
-     (dict(lr1=-1, li1=float("nan")), "li1"), (dict(lr1=-1, li1=1, ali21=-2), "ali21")],
+    [
+        (dict(lr1=0.1, li1=1), "lr1"),
+        (dict(lr1=-1, li1=-1), "li1"),
+        (dict(lr1=-1, li1=1, am21=0), "am21"),
+        (dict(lr1=-1, li1=float("nan")), "li1"),
+        (dict(lr1=-1, li1=1, ali21=-2), "ali21"),
+    ],
 )
 def test_test_model_validation_names_the_parameter(kwargs, name):
     with pytest.raises(ParameterError, match=rf"^{name} "):

@@ -128,9 +128,7 @@ def test_grid_axis_hits_the_end_points_exactly():
 def test_configured_figures_expand_to_the_papers_layout():
     counts = {}
     for fig, fc in CFG["figures"].items():
-        specs = figure_panels(
-            fig, fc, grid=CFG["grid"], zoom_grid=CFG["zoom_grid"], precision=CFG["precision"]
-        )
+        specs = figure_panels(fig, fc, grid=CFG["grid"], zoom_grid=CFG["zoom_grid"], precision=CFG["precision"])
         full = [s for s in specs if s.view == "full"]
         counts[fig] = (len(full), len(specs) - len(full))
         assert len({panel_id(s.row, s.k, s.view) for s in specs}) == len(specs)
@@ -145,9 +143,7 @@ def test_configured_figures_expand_to_the_papers_layout():
         fc = CFG["figures"][fig]
         triples = [
             (x.am21, x.alr21, x.ali21)
-            for x in figure_panels(
-                fig, fc, grid=CFG["grid"], zoom_grid=CFG["zoom_grid"], precision=CFG["precision"]
-            )
+            for x in figure_panels(fig, fc, grid=CFG["grid"], zoom_grid=CFG["zoom_grid"], precision=CFG["precision"])
             if x.k == 0 and x.view == "full"
         ]
         assert triples[0] == (1.0, 1.0, 1.0)
@@ -201,9 +197,11 @@ def test_figure_and_report_label_rows_by_one_rule():
     icosim.sweep.row_label_keys -- the rule of the report's sweep.row_label."""
     tiny = {**COARSE, "n": 2}
     for fig, fc in CFG["figures"].items():
-        specs = [s for s in figure_panels(fig, fc, grid=tiny, zoom_grid=ZOOM, precision={"policy": "float64",
-                                                                                          "digits": 30})
-                 if s.k == fc["k"][0] and s.view == "full"]
+        specs = [
+            s
+            for s in figure_panels(fig, fc, grid=tiny, zoom_grid=ZOOM, precision={"policy": "float64", "digits": 30})
+            if s.k == fc["k"][0] and s.view == "full"
+        ]
         panels = [stability_panel(s) for s in specs]
         tex = row_labels(panels)
         for ds in panels:
@@ -225,9 +223,7 @@ def test_figure_refuses_panels_without_row_label_keys(fig16_panels):
 
 def test_positive_lr1_grid_is_refused():
     with pytest.raises(ParameterError, match="lr1"):
-        figure_panels(
-            "15", CFG["figures"]["15"], grid={**COARSE, "lr1": [-1.0, 1.0]}, zoom_grid=ZOOM, precision=PREC
-        )
+        figure_panels("15", CFG["figures"]["15"], grid={**COARSE, "lr1": [-1.0, 1.0]}, zoom_grid=ZOOM, precision=PREC)
 
 
 @pytest.fixture(scope="module")

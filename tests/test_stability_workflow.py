@@ -46,9 +46,7 @@ def snakemake(workdir: Path, *args, check=True):
         timeout=600,
     )
     if check and proc.returncode != 0:
-        raise AssertionError(
-            f"snakemake {' '.join(args)} failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
-        )
+        raise AssertionError(f"snakemake {' '.join(args)} failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}")
     return proc
 
 
@@ -144,9 +142,7 @@ def test_ci_override_keeps_every_panel_on_coarse_grids():
 
     def count(cfg):
         return sum(
-            len(
-                figure_panels(f, fc, grid=cfg["grid"], zoom_grid=cfg["zoom_grid"], precision=cfg["precision"])
-            )
+            len(figure_panels(f, fc, grid=cfg["grid"], zoom_grid=cfg["zoom_grid"], precision=cfg["precision"]))
             for f, fc in cfg["figures"].items()
         )
 
@@ -155,9 +151,7 @@ def test_ci_override_keeps_every_panel_on_coarse_grids():
 
 
 def test_ci_override_is_what_snakemake_schedules(workflow_copy):
-    proc = snakemake(
-        workflow_copy, "results/stability/claims.json", "-n", "--configfile", "config/ci/stability.yaml"
-    )
+    proc = snakemake(workflow_copy, "results/stability/claims.json", "-n", "--configfile", "config/ci/stability.yaml")
     assert len(scheduled(proc, "stability_sweep")) == 144
 
 
@@ -196,9 +190,7 @@ def test_changing_one_row_reruns_that_rows_panels_only(tiny_run):
     assert not scheduled(proc, "stability_sweep")  # up to date
     edit_config(tiny_run, lambda st: st["figures"]["18"]["rows"][1].update(am21=4.0))
     proc = snakemake(tiny_run, "-n", "results/stability/figures/fig18.png")
-    assert sorted(scheduled(proc, "stability_sweep")) == [
-        f"results/stability/fig18/r2_k{k}_full.nc" for k in (0, 1, 2)
-    ]
+    assert sorted(scheduled(proc, "stability_sweep")) == [f"results/stability/fig18/r2_k{k}_full.nc" for k in (0, 1, 2)]
     edit_config(tiny_run, lambda st: st["figures"]["18"]["rows"][1].update(am21=3.0))  # back
 
 
@@ -268,7 +260,5 @@ def test_enforced_references_fail_the_claims_job_when_not_reproduced(tiny_run):
     claims_path.write_text(yaml.safe_dump({"claims": [{**claim, "reference": "pass"}]}))
     snakemake(tiny_run, "results/stability/claims.json", "-c1")
     verdicts = json.loads((tiny_run / "results/stability/claims.json").read_text())["claims"]
-    assert [(v["id"], v["verdict"], v["matches_reference"]) for v in verdicts] == [
-        ("fig18_k0_good", "pass", True)
-    ]
+    assert [(v["id"], v["verdict"], v["matches_reference"]) for v in verdicts] == [("fig18_k0_good", "pass", True)]
     edit_config(tiny_run, lambda st: st["claims"].update(enforce_reference=False))

@@ -368,7 +368,9 @@ def enforce_references(verdicts, enforce: bool):
     if a ``ci: true`` claim did not reproduce its full-resolution reference verdict."""
     mismatched = reference_mismatches(verdicts)
     if enforce and mismatched:
-        lines = [f"  {v.claim.id}: verdict {v.verdict}, reference {v.claim.reference} ({v.measured})" for v in mismatched]
+        lines = [
+            f"  {v.claim.id}: verdict {v.verdict}, reference {v.claim.reference} ({v.measured})" for v in mismatched
+        ]
         raise SystemExit(
             "claims marked ci: true did not reproduce their full-resolution reference verdict:\n" + "\n".join(lines)
         )
@@ -401,8 +403,15 @@ def write_verdicts(verdicts, json_path, tsv_path=None):
         w.writerow(["id", "source", "figures", "statement", "verdict", "reference", "measured"])
         for r in records:
             w.writerow(
-                [r["id"], r["source"], " ".join(r["figures"]), r["statement"], r["verdict"], r["reference"] or "",
-                 r["measured"]]
+                [
+                    r["id"],
+                    r["source"],
+                    " ".join(r["figures"]),
+                    r["statement"],
+                    r["verdict"],
+                    r["reference"] or "",
+                    r["measured"],
+                ]
             )
     return records
 
@@ -488,9 +497,7 @@ def stable_share(ds, region=None) -> tuple[float, int, int]:
 
 def _describe(ds) -> str:
     a = ds.attrs
-    return f"Fig. {a.get('figure')} row {a.get('row')} k={a.get('k')}" + (
-        " zoom" if a.get("view") == "zoom" else ""
-    )
+    return f"Fig. {a.get('figure')} row {a.get('row')} k={a.get('k')}" + (" zoom" if a.get("view") == "zoom" else "")
 
 
 def _nearest_unstable(ds, region):
@@ -554,9 +561,7 @@ def _group_share(datasets, selector, region):
 
 
 @register_check("compare")
-def check_compare(
-    datasets, *, a: dict, b, relation: str, within: float | None = None, region: dict | None = None
-):
+def check_compare(datasets, *, a: dict, b, relation: str, within: float | None = None, region: dict | None = None):
     """Compare the mean stable share of the panels selected by ``a`` with that of ``b``.
 
     ``relation``: ``greater`` (a more stable than b), ``less``, or ``similar``
@@ -567,9 +572,7 @@ def check_compare(
     if relation not in ("greater", "less", "similar"):
         raise ParameterError(f"compare: relation must be greater, less or similar, got {relation!r}")
     if relation == "similar" and within is None:
-        raise ParameterError(
-            "compare: relation 'similar' needs `within` (largest difference of stable shares)"
-        )
+        raise ParameterError("compare: relation 'similar' needs `within` (largest difference of stable shares)")
     sa, da, shares_a = _group_share(datasets, a, region)
     if sa is None:
         return Outcome(None, f"no dataset matches {a}")

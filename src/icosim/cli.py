@@ -110,9 +110,7 @@ def _method_from_args(args):
     extra = sorted(set(given) - set(_METHOD_ARGS[args.method]))
     if extra:
         allowed = ", ".join(f"--{a}" for a in _METHOD_ARGS[args.method]) or "none"
-        raise ParameterError(
-            f"argument --{extra[0]}: not used by --method {args.method} (its parameters: {allowed})"
-        )
+        raise ParameterError(f"argument --{extra[0]}: not used by --method {args.method} (its parameters: {allowed})")
     return make_method(args.method, **given)
 
 

@@ -203,8 +203,10 @@ def study_from_config(cfg: dict, *, where: str = "convergence") -> "Study":
         if not np.isfinite(ic[name]):
             raise ParameterError(f"{where}.initial_conditions.{name} must be a finite number, got {ic[name]!r}")
     if ic["x0"] == 0 and ic["v0"] == 0:
-        raise ParameterError(f"{where}.initial_conditions: x0 and v0 are both zero, the exact solution is "
-                             "identically zero and Eq. (72) has no denominator; give x0 or v0 != 0")
+        raise ParameterError(
+            f"{where}.initial_conditions: x0 and v0 are both zero, the exact solution is "
+            "identically zero and Eq. (72) has no denominator; give x0 or v0 != 0"
+        )
     end_time = cfg["end_time"]
     if not (np.isfinite(end_time) and end_time > 0):
         raise ParameterError(f"{where}.end_time must be a finite number > 0, got {end_time!r}")
@@ -217,18 +219,24 @@ def study_from_config(cfg: dict, *, where: str = "convergence") -> "Study":
     if not (0 < H_min < H_max):
         raise ParameterError(f"{where}.step_sizes: need 0 < H_min < H_max, got H_min = {H_min!r}, H_max = {H_max!r}")
     if H_max > end_time / 2:
-        raise ParameterError(f"{where}.step_sizes.H_max = {H_max!r} must be at most {where}.end_time / 2 = "
-                             f"{end_time / 2!r} (at least two macro steps per run)")
+        raise ParameterError(
+            f"{where}.step_sizes.H_max = {H_max!r} must be at most {where}.end_time / 2 = "
+            f"{end_time / 2!r} (at least two macro steps per run)"
+        )
     if int(num) != num or num < 2:
         raise ParameterError(f"{where}.step_sizes.num must be an integer >= 2, got {num!r}")
     n_steps = step_counts(end_time, H_min, H_max, int(num))
     if n_steps.size < 2:
-        raise ParameterError(f"{where}.step_sizes: [H_min, H_max] = [{H_min!r}, {H_max!r}] gives only the step "
-                             f"count(s) {n_steps.tolist()} after rounding N_total = end_time / H; widen the range")
+        raise ParameterError(
+            f"{where}.step_sizes: [H_min, H_max] = [{H_min!r}, {H_max!r}] gives only the step "
+            f"count(s) {n_steps.tolist()} after rounding N_total = end_time / H; widen the range"
+        )
     min_points = cfg.get("fit", {}).get("min_points")
     if min_points is not None and min_points > n_steps.size:
-        raise ParameterError(f"{where}.fit.min_points = {min_points} exceeds the {n_steps.size} step sizes of "
-                             f"{where}.step_sizes: no order could ever be fitted")
+        raise ParameterError(
+            f"{where}.fit.min_points = {min_points} exceeds the {n_steps.size} step sizes of "
+            f"{where}.step_sizes: no order could ever be fitted"
+        )
     return Study(setup, n_steps, spectral_policy=cfg["unstable"]["spectral_policy"], digits=cfg["unstable"]["digits"])
 
 
@@ -392,8 +400,10 @@ class Study:
         methods = [dimensional_method(method, H, **params) for H in self.H]
         methods[0].check_decomposition(dec)
         rho, digits = self._spectral_radii(methods, dec.name, k)
-        out = {name: np.full(nH, np.nan) for name in ("nrmse_unfiltered", "nrmse_second_half", "nrmse_x",
-                                                      "nrmse_v", "nrmse_lambda")}
+        out = {
+            name: np.full(nH, np.nan)
+            for name in ("nrmse_unfiltered", "nrmse_second_half", "nrmse_x", "nrmse_v", "nrmse_lambda")
+        }
         out["diverged_at"] = np.full(nH, -1, dtype=np.int64)
         # the constraint force is a coupling variable (first entry of e_N) with ff and fd only
         lam = dec.variables.index("lambda_c") if "lambda_c" in dec.variables else None
@@ -496,8 +506,16 @@ def local_slopes(H, error):
         return np.diff(np.log(e[order])) / np.diff(np.log(H[order]))
 
 
-def fit_order(H, error, n_steps=None, *, min_points: int = 4, tolerance: float = 0.25,
-              min_order: float = 0.5, floor_factor: float = 10.0) -> OrderFit:
+def fit_order(
+    H,
+    error,
+    n_steps=None,
+    *,
+    min_points: int = 4,
+    tolerance: float = 0.25,
+    min_order: float = 0.5,
+    floor_factor: float = 10.0,
+) -> OrderFit:
     """Order of convergence over the asymptotic range, stopping before the round-off floor.
 
     Procedure (points = finite, positive errors, i.e. stable runs):
@@ -568,8 +586,18 @@ def fit_order(H, error, n_steps=None, *, min_points: int = 4, tolerance: float =
 
 
 # --------------------------------------------------------------------------- timing
-def time_macro_steps(setup: Setup, H: float, method: str, params: dict, decomposition: str, k: int,
-                     *, steps: int = 20, repeats: int = 3, warmup_steps: int = 5) -> dict:
+def time_macro_steps(
+    setup: Setup,
+    H: float,
+    method: str,
+    params: dict,
+    decomposition: str,
+    k: int,
+    *,
+    steps: int = 20,
+    repeats: int = 3,
+    warmup_steps: int = 5,
+) -> dict:
     """CPU time of the co-simulation stepping (:func:`icosim.macrostep.simulate`).
 
     The problem is built once (its set-up, the subsystem propagators, is timed
@@ -628,6 +656,7 @@ def step_cost(method: str, params: dict, decomposition: str, k: int) -> dict:
         def wrapped(*args, **kwargs):
             calls[key] += 1
             return fn(*args, **kwargs)
+
         return wrapped
 
     for sub in problem.subsystems:
@@ -702,8 +731,16 @@ class PanelSpec:
 
     @classmethod
     def from_dict(cls, d: dict) -> "PanelSpec":
-        return cls(d["figure"], d["decomposition"], d["panel"], d["method"], dict(d["column"]),
-                   tuple(dict(r) for r in d["rows"]), tuple(d["k"]), bool(d.get("shared", False)))
+        return cls(
+            d["figure"],
+            d["decomposition"],
+            d["panel"],
+            d["method"],
+            dict(d["column"]),
+            tuple(dict(r) for r in d["rows"]),
+            tuple(d["k"]),
+            bool(d.get("shared", False)),
+        )
 
     @property
     def indices(self) -> list:
@@ -724,7 +761,9 @@ def figure_panels(figure: str, fig_cfg: dict, k) -> list:
         cells = [[effective_params(method, c, r) for r in rows] for c in columns]
     except ParameterError as exc:
         raise ParameterError(f"{where}: {exc}") from None
-    shared_rows = [j for j in range(len(rows)) if len(columns) > 1 and all(cells[i][j] == cells[0][j] for i in range(len(columns)))]
+    shared_rows = [
+        j for j in range(len(rows)) if len(columns) > 1 and all(cells[i][j] == cells[0][j] for i in range(len(columns)))
+    ]
     specs = []
     for dec in fig_cfg["decompositions"]:
         try:
@@ -763,22 +802,33 @@ def figure_layout(figure: str, fig_cfg: dict, decomposition: str, k) -> list:
     return layout
 
 
-def run_panel(spec: PanelSpec, study: Study, fit: dict | None = None, *, stepping: str = "matrix",
-              provenance: dict | None = None):
+def run_panel(
+    spec: PanelSpec, study: Study, fit: dict | None = None, *, stepping: str = "matrix", provenance: dict | None = None
+):
     """Every curve of a panel as an :class:`xarray.Dataset` (dims ``index``, ``k``, ``H``)."""
     import xarray as xr
 
     fit = dict(fit or {})
     t0 = time.perf_counter()
     nI, nK, nH = len(spec.rows), len(spec.k), study.H.size
-    names_f = ("nrmse", "nrmse_unfiltered", "nrmse_second_half", "nrmse_x", "nrmse_v", "nrmse_lambda",
-               "spectral_radius")
+    names_f = (
+        "nrmse",
+        "nrmse_unfiltered",
+        "nrmse_second_half",
+        "nrmse_x",
+        "nrmse_v",
+        "nrmse_lambda",
+        "spectral_radius",
+    )
     arr = {n: np.full((nI, nK, nH), np.nan) for n in names_f}
     arr["spectral_radius_digits"] = np.zeros((nI, nK, nH), dtype=np.int32)
     arr["diverged_at"] = np.full((nI, nK, nH), -1, dtype=np.int64)
     arr["unstable"] = np.zeros((nI, nK, nH), dtype=bool)
     arr["fit_used"] = np.zeros((nI, nK, nH), dtype=bool)
-    fits = {n: np.full((nI, nK), np.nan) for n in ("order", "order_stderr", "order_rvalue", "fit_H_min", "fit_H_max", "order_second_half")}
+    fits = {
+        n: np.full((nI, nK), np.nan)
+        for n in ("order", "order_stderr", "order_rvalue", "fit_H_min", "fit_H_max", "order_second_half")
+    }
     fit_n = np.zeros((nI, nK), dtype=np.int32)
     fit_note = np.full((nI, nK), "", dtype=object)
     for i, row in enumerate(spec.rows):
@@ -798,31 +848,100 @@ def run_panel(spec: PanelSpec, study: Study, fit: dict | None = None, *, steppin
     H_attrs = {"long_name": "macro-step size", "units": "s"}
     ds = xr.Dataset(
         {
-            "nrmse": (dims3, arr["nrmse"], {"long_name": "normalised root-mean-square error of Eq. (72) (NaN where unstable)", "units": "1"}),
-            "nrmse_unfiltered": (dims3, arr["nrmse_unfiltered"], {"long_name": "Eq. (72) of every run that finished, unstable ones included", "units": "1"}),
-            "nrmse_second_half": (dims3, arr["nrmse_second_half"], {"long_name": "Eq. (72) over T_N in (T/2, T] (diagnostic: no start-up transient)", "units": "1"}),
-            "nrmse_x": (dims3, arr["nrmse_x"], {"long_name": "position part of Eq. (72): sqrt of the sum of the x1 and x2 ratios (NaN where unstable)", "units": "1",
-                                                "comment": "nrmse = sqrt(nrmse_x^2 + nrmse_v^2); the other reading of the garbled Eq. (72) is nrmse_x + nrmse_v"}),
-            "nrmse_v": (dims3, arr["nrmse_v"], {"long_name": "velocity part of Eq. (72): sqrt of the sum of the v1 and v2 ratios (NaN where unstable)", "units": "1"}),
-            "nrmse_lambda": (dims3, arr["nrmse_lambda"], {"long_name": "Eq. (72)'s measure for the constraint force lambda_c (corrected coupling variable at T_N) against the exact multiplier (NaN where unstable, and for dd: no multiplier among the coupling variables)", "units": "1"}),
-            "unstable": (dims3, arr["unstable"], {"long_name": "run unstable: diverged, or spectral radius above 1 at this H"}),
-            "spectral_radius": (dims3, arr["spectral_radius"], {"long_name": "spectral radius of the co-simulation recurrence at this H", "units": "1"}),
-            "spectral_radius_digits": (dims3, arr["spectral_radius_digits"], {"long_name": "significant digits that decided the spectral radius (15: float64)"}),
-            "diverged_at": (dims3, arr["diverged_at"], {"long_name": "first macro step that left the growth bound or was not finite (-1: none)"}),
+            "nrmse": (
+                dims3,
+                arr["nrmse"],
+                {"long_name": "normalised root-mean-square error of Eq. (72) (NaN where unstable)", "units": "1"},
+            ),
+            "nrmse_unfiltered": (
+                dims3,
+                arr["nrmse_unfiltered"],
+                {"long_name": "Eq. (72) of every run that finished, unstable ones included", "units": "1"},
+            ),
+            "nrmse_second_half": (
+                dims3,
+                arr["nrmse_second_half"],
+                {"long_name": "Eq. (72) over T_N in (T/2, T] (diagnostic: no start-up transient)", "units": "1"},
+            ),
+            "nrmse_x": (
+                dims3,
+                arr["nrmse_x"],
+                {
+                    "long_name": "position part of Eq. (72): sqrt of the sum of the x1 and x2 ratios (NaN where unstable)",
+                    "units": "1",
+                    "comment": "nrmse = sqrt(nrmse_x^2 + nrmse_v^2); the other reading of the garbled Eq. (72) is nrmse_x + nrmse_v",
+                },
+            ),
+            "nrmse_v": (
+                dims3,
+                arr["nrmse_v"],
+                {
+                    "long_name": "velocity part of Eq. (72): sqrt of the sum of the v1 and v2 ratios (NaN where unstable)",
+                    "units": "1",
+                },
+            ),
+            "nrmse_lambda": (
+                dims3,
+                arr["nrmse_lambda"],
+                {
+                    "long_name": "Eq. (72)'s measure for the constraint force lambda_c (corrected coupling variable at T_N) against the exact multiplier (NaN where unstable, and for dd: no multiplier among the coupling variables)",
+                    "units": "1",
+                },
+            ),
+            "unstable": (
+                dims3,
+                arr["unstable"],
+                {"long_name": "run unstable: diverged, or spectral radius above 1 at this H"},
+            ),
+            "spectral_radius": (
+                dims3,
+                arr["spectral_radius"],
+                {"long_name": "spectral radius of the co-simulation recurrence at this H", "units": "1"},
+            ),
+            "spectral_radius_digits": (
+                dims3,
+                arr["spectral_radius_digits"],
+                {"long_name": "significant digits that decided the spectral radius (15: float64)"},
+            ),
+            "diverged_at": (
+                dims3,
+                arr["diverged_at"],
+                {"long_name": "first macro step that left the growth bound or was not finite (-1: none)"},
+            ),
             "fit_used": (dims3, arr["fit_used"], {"long_name": "point used in the order fit (the asymptotic range)"}),
-            "order": (dims2, fits["order"], {"long_name": "fitted order of convergence of nrmse over the asymptotic range", "units": "1"}),
-            "order_stderr": (dims2, fits["order_stderr"], {"long_name": "standard error of the fitted order", "units": "1"}),
-            "order_rvalue": (dims2, fits["order_rvalue"], {"long_name": "correlation coefficient of the order fit", "units": "1"}),
+            "order": (
+                dims2,
+                fits["order"],
+                {"long_name": "fitted order of convergence of nrmse over the asymptotic range", "units": "1"},
+            ),
+            "order_stderr": (
+                dims2,
+                fits["order_stderr"],
+                {"long_name": "standard error of the fitted order", "units": "1"},
+            ),
+            "order_rvalue": (
+                dims2,
+                fits["order_rvalue"],
+                {"long_name": "correlation coefficient of the order fit", "units": "1"},
+            ),
             "fit_H_min": (dims2, fits["fit_H_min"], {"long_name": "smallest H of the fitted range", "units": "s"}),
             "fit_H_max": (dims2, fits["fit_H_max"], {"long_name": "largest H of the fitted range", "units": "s"}),
             "fit_n_points": (dims2, fit_n, {"long_name": "number of step sizes in the fitted range"}),
             "fit_note": (dims2, fit_note.astype(str), {"long_name": "why no order was fitted (empty if fitted)"}),
-            "order_second_half": (dims2, fits["order_second_half"], {"long_name": "fitted order of nrmse_second_half", "units": "1"}),
+            "order_second_half": (
+                dims2,
+                fits["order_second_half"],
+                {"long_name": "fitted order of nrmse_second_half", "units": "1"},
+            ),
         },
         coords={
             "H": ("H", study.H, H_attrs),
             "n_steps": ("H", study.n_steps, {"long_name": "number of macro steps N_total = end_time / H"}),
-            "index": ("index", np.array(spec.indices, dtype=np.int32), {"long_name": "index of the coupling formulation"}),
+            "index": (
+                "index",
+                np.array(spec.indices, dtype=np.int32),
+                {"long_name": "index of the coupling formulation"},
+            ),
             "k": ("k", np.array(spec.k, dtype=np.int32), {"long_name": "degree of the approximation polynomials"}),
         },
     )
@@ -841,7 +960,10 @@ def run_panel(spec: PanelSpec, study: Study, fit: dict | None = None, *, steppin
         shared_across_columns=int(spec.shared),
         **{name: float(v) for name, v in spec.column.items() if name != "index"},
         **{f"model_{n}": float(getattr(s, n)) for n in PAPER_MODEL},
-        x0=s.x0, v0=s.v0, end_time=s.end_time, growth_bound=s.growth_bound,
+        x0=s.x0,
+        v0=s.v0,
+        end_time=s.end_time,
+        growth_bound=s.growth_bound,
         initial_conditions=f"x1 = x2 = {s.x0:g} m, v1 = v2 = {s.v0:g} m/s at t = 0 (consistent with the rigid link)",
         history_initialisation="coupling variables at T_0, T_-1, ..., T_-k from the exact monolithic solution "
         "(icosim.exact.consistent_start)",
@@ -894,7 +1016,11 @@ def curve_label(rec) -> str:
     if rec["method"] != "projection":
         parts.append(f"index {rec['index']}")
     for name in ("mu", "a", "b"):
-        if name in rec and np.isfinite(rec[name]) and not (rec["method"] == "weighted" and rec["index"] == 2 and name == "b"):
+        if (
+            name in rec
+            and np.isfinite(rec[name])
+            and not (rec["method"] == "weighted" and rec["index"] == 2 and name == "b")
+        ):
             parts.append(f"{name} = {rec[name]:g}")
     parts.append(f"k = {rec['k']}")
     return ", ".join(parts)
@@ -931,8 +1057,13 @@ def configured_curves(cfg: dict) -> list:
         for spec in figure_panels(str(fig), fig_cfg, cfg["k"]):
             for row, index in zip(spec.rows, spec.indices):
                 attrs = method_attrs(spec.method, **row)
-                rec = {"figure": spec.figure, "decomposition": spec.decomposition, "method": spec.method,
-                       "panel": spec.panel, "index": int(index)}
+                rec = {
+                    "figure": spec.figure,
+                    "decomposition": spec.decomposition,
+                    "method": spec.method,
+                    "panel": spec.panel,
+                    "index": int(index),
+                }
                 rec.update({n: float(v) for n, v in spec.column.items() if n != "index"})
                 rec.update({n: float(attrs.get(n, np.nan)) for n in ROW_COORDS[spec.method]})
                 out += [{**rec, "k": int(k)} for k in spec.k]
@@ -1013,9 +1144,16 @@ def check_convergence_order(datasets, *, select: dict, expect: list, tolerance: 
         if not matched:
             raise ParameterError(f"convergence_order: no curve matches {sel}")
         for rec in matched:
-            row = {"curve": curve_label(rec), "k": rec["k"], "order": rec["order"],
-                   "order_second_half": rec["order_second_half"], "fit_H_min": rec["fit_H_min"],
-                   "fit_H_max": rec["fit_H_max"], "stable_H": stable_span(rec), "observed": exp.get("observed")}
+            row = {
+                "curve": curve_label(rec),
+                "k": rec["k"],
+                "order": rec["order"],
+                "order_second_half": rec["order_second_half"],
+                "fit_H_min": rec["fit_H_min"],
+                "fit_H_max": rec["fit_H_max"],
+                "stable_H": stable_span(rec),
+                "observed": exp.get("observed"),
+            }
             # local slopes of the stable points from the fitted range upward (round-off floor left out)
             keep = ~rec["unstable"] & (rec["H"] >= rec["fit_H_min"] if np.isfinite(rec["fit_H_min"]) else True)
             slopes = local_slopes(rec["H"][keep], rec["nrmse"][keep])
@@ -1034,8 +1172,11 @@ def check_convergence_order(datasets, *, select: dict, expect: list, tolerance: 
             rows.append(row)
     measured = "; ".join(
         f"{r['curve']}: {r['claimed']}, "
-        + (f"stable H {r['stable_H']}" if r["claimed"] == "unstable" or not np.isfinite(r["order"])
-           else f"fitted order {r['order']:.2f}")
+        + (
+            f"stable H {r['stable_H']}"
+            if r["claimed"] == "unstable" or not np.isfinite(r["order"])
+            else f"fitted order {r['order']:.2f}"
+        )
         + f" -> {r['verdict']}"
         for r in rows
     )
@@ -1072,8 +1213,15 @@ def resolve_scheme(scheme: dict, figures: dict, k) -> list:
             continue
         index = spec.indices[spec.rows.index(eff)]
         for kk in spec.k:
-            entry = {"figure": fig, "decomposition": spec.decomposition, "panel": spec.panel, "index": index,
-                     "k": int(kk), "method": cfg["method"], "params": dict(eff)}
+            entry = {
+                "figure": fig,
+                "decomposition": spec.decomposition,
+                "panel": spec.panel,
+                "index": index,
+                "k": int(kk),
+                "method": cfg["method"],
+                "params": dict(eff),
+            }
             rec = {**entry, **{n: v for n, v in method_attrs(cfg["method"], **eff).items()}}
             entry["label"] = _scheme_label(rec)
             out.append(entry)
@@ -1118,8 +1266,17 @@ def work_precision(entries, datasets: dict, setup: Setup, *, steps=20, repeats=3
         for i, h in enumerate(H):
             if unstable[i] or not np.isfinite(err[i]):
                 continue  # no error to put the time against
-            t = time_macro_steps(setup, float(h), e["method"], e["params"], e["decomposition"], e["k"],
-                                 steps=steps, repeats=repeats, warmup_steps=warmup_steps)
+            t = time_macro_steps(
+                setup,
+                float(h),
+                e["method"],
+                e["params"],
+                e["decomposition"],
+                e["k"],
+                steps=steps,
+                repeats=repeats,
+                warmup_steps=warmup_steps,
+            )
             per_step[i] = t["seconds_per_step"]
             setup_s = t["setup_seconds"] if not np.isfinite(setup_s) else min(setup_s, t["setup_seconds"])
         rows.append((err, unstable, per_step, setup_s))
@@ -1129,17 +1286,48 @@ def work_precision(entries, datasets: dict, setup: Setup, *, steps=20, repeats=3
     per_step = np.array([r[2] for r in rows])
     ds = xr.Dataset(
         {
-            "nrmse": (("scheme", "H"), err, {"long_name": "NRMSE of Eq. (72) (from the panel datasets; NaN where unstable)", "units": "1"}),
+            "nrmse": (
+                ("scheme", "H"),
+                err,
+                {"long_name": "NRMSE of Eq. (72) (from the panel datasets; NaN where unstable)", "units": "1"},
+            ),
             "unstable": (("scheme", "H"), np.array([r[1] for r in rows])),
-            "cpu_seconds_per_step": (("scheme", "H"), per_step, {"long_name": "CPU time of one macro step of icosim.macrostep.simulate (min of repeats)", "units": "s"}),
-            "cpu_seconds_per_simulated_second": (("scheme", "H"), per_step / H[None, :], {"long_name": "CPU time per simulated second", "units": "s"}),
-            "setup_seconds": (("scheme",), np.array([r[3] for r in rows]), {"long_name": "CPU time to build the problem (once per run, not per simulated second)", "units": "s"}),
-            "subsystem_integrations_per_step": (("scheme",), np.array([c["subsystem_integrations"] for c in costs], dtype=np.int32),
-                                                {"long_name": "subsystem integrations per macro step (predictor and corrector of each subsystem; counted)", "units": "1"}),
-            "coupling_solves_per_step": (("scheme",), np.array([c["coupling_solves"] for c in costs], dtype=np.int32),
-                                         {"long_name": "linear solves of coupling conditions per macro step (the method's nonzero-weight solves)", "units": "1"}),
-            "projections_per_step": (("scheme",), np.array([c["projections"] for c in costs], dtype=np.int32),
-                                     {"long_name": "projection steps per macro step", "units": "1"}),
+            "cpu_seconds_per_step": (
+                ("scheme", "H"),
+                per_step,
+                {"long_name": "CPU time of one macro step of icosim.macrostep.simulate (min of repeats)", "units": "s"},
+            ),
+            "cpu_seconds_per_simulated_second": (
+                ("scheme", "H"),
+                per_step / H[None, :],
+                {"long_name": "CPU time per simulated second", "units": "s"},
+            ),
+            "setup_seconds": (
+                ("scheme",),
+                np.array([r[3] for r in rows]),
+                {"long_name": "CPU time to build the problem (once per run, not per simulated second)", "units": "s"},
+            ),
+            "subsystem_integrations_per_step": (
+                ("scheme",),
+                np.array([c["subsystem_integrations"] for c in costs], dtype=np.int32),
+                {
+                    "long_name": "subsystem integrations per macro step (predictor and corrector of each subsystem; counted)",
+                    "units": "1",
+                },
+            ),
+            "coupling_solves_per_step": (
+                ("scheme",),
+                np.array([c["coupling_solves"] for c in costs], dtype=np.int32),
+                {
+                    "long_name": "linear solves of coupling conditions per macro step (the method's nonzero-weight solves)",
+                    "units": "1",
+                },
+            ),
+            "projections_per_step": (
+                ("scheme",),
+                np.array([c["projections"] for c in costs], dtype=np.int32),
+                {"long_name": "projection steps per macro step", "units": "1"},
+            ),
         },
         coords={
             "scheme": ("scheme", np.array(labels, dtype=str)),
@@ -1150,22 +1338,32 @@ def work_precision(entries, datasets: dict, setup: Setup, *, steps=20, repeats=3
             "index": ("scheme", np.array([e["index"] for e in entries], dtype=np.int32)),
             "k": ("scheme", np.array([e["k"] for e in entries], dtype=np.int32)),
             **{
-                name: ("scheme", np.array([method_attrs(e["method"], **e["params"]).get(name, np.nan) for e in entries], dtype=float),
-                       {"units": PARAM_UNITS[name]})
+                name: (
+                    "scheme",
+                    np.array(
+                        [method_attrs(e["method"], **e["params"]).get(name, np.nan) for e in entries], dtype=float
+                    ),
+                    {"units": PARAM_UNITS[name]},
+                )
                 for name in ("mu", "beta", "gamma", "a", "b")
             },
         },
     )
     ds.attrs = dict(provenance or {})
-    ds.attrs.update(timer="time.process_time", steps=steps, repeats=repeats, warmup_steps=warmup_steps,
-                    timed="icosim.macrostep.simulate: the engine's macro-step loop (predictor, corrector, "
-                    "projection) of the linear test model; problem set-up excluded (setup_seconds)",
-                    cost_caveat="the subsystems of the linear test model are integrated exactly (matrix "
-                    "exponential blocks), so the timed cost is the coupling algorithm's Python overhead and nearly "
-                    "the same for every scheme: the diagram is close to NRMSE against 1/H. To transfer the "
-                    "comparison to numerically integrated subsystems, weigh subsystem_integrations_per_step and "
-                    "coupling_solves_per_step with their cost there.",
-                    method_parameters_units="mu and beta in s, gamma in s^2, a and b dimensionless")
+    ds.attrs.update(
+        timer="time.process_time",
+        steps=steps,
+        repeats=repeats,
+        warmup_steps=warmup_steps,
+        timed="icosim.macrostep.simulate: the engine's macro-step loop (predictor, corrector, "
+        "projection) of the linear test model; problem set-up excluded (setup_seconds)",
+        cost_caveat="the subsystems of the linear test model are integrated exactly (matrix "
+        "exponential blocks), so the timed cost is the coupling algorithm's Python overhead and nearly "
+        "the same for every scheme: the diagram is close to NRMSE against 1/H. To transfer the "
+        "comparison to numerically integrated subsystems, weigh subsystem_integrations_per_step and "
+        "coupling_solves_per_step with their cost there.",
+        method_parameters_units="mu and beta in s, gamma in s^2, a and b dimensionless",
+    )
     return ds
 
 

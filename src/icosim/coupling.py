@@ -84,12 +84,8 @@ class Decomposition:
 
 DECOMPOSITIONS = {
     "ff": Decomposition("ff", ("force", "force"), (0, 0), ("lambda_c",), "force/force"),
-    "fd": Decomposition(
-        "fd", ("force", "kinematic"), (0, 1), ("lambda_c", "a_tilde_1"), "force/displacement"
-    ),
-    "dd": Decomposition(
-        "dd", ("kinematic", "kinematic"), (0, 0), ("a_tilde",), "displacement/displacement"
-    ),
+    "fd": Decomposition("fd", ("force", "kinematic"), (0, 1), ("lambda_c", "a_tilde_1"), "force/displacement"),
+    "dd": Decomposition("dd", ("kinematic", "kinematic"), (0, 0), ("a_tilde",), "displacement/displacement"),
 }
 
 
@@ -97,9 +93,7 @@ def get_decomposition(name: str) -> Decomposition:
     try:
         return DECOMPOSITIONS[name]
     except KeyError:
-        raise ParameterError(
-            f"decomposition must be one of {', '.join(DECOMPOSITIONS)}, got {name!r}"
-        ) from None
+        raise ParameterError(f"decomposition must be one of {', '.join(DECOMPOSITIONS)}, got {name!r}") from None
 
 
 @dataclass(frozen=True)

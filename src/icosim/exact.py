@@ -29,9 +29,7 @@ class MonolithicSolution:
         c = coefficients
         self.coefficients = c
         M = 1 + c.am21
-        self.A = np.array(
-            [[0.0, 1.0], [-(c.k1 + c.am21 * c.k2) / M, -(c.delta1 + c.am21 * c.delta2) / M]], dtype=float
-        )
+        self.A = np.array([[0.0, 1.0], [-(c.k1 + c.am21 * c.k2) / M, -(c.delta1 + c.am21 * c.delta2) / M]], dtype=float)
         self.s0 = np.array([x0, v0], dtype=float)
 
     def state(self, t):

@@ -84,7 +84,9 @@ class LinearCosimulation:
         return sum(self.w_pred[j] * history[..., j, :] for j in range(self.k + 1))
 
     def _propagate(self, state, samples, nodes):
-        ss, ys = zip(*(sub.step(state[..., i, :], samples[..., :, sub.input], nodes) for i, sub in enumerate(self.subsystems)))
+        ss, ys = zip(
+            *(sub.step(state[..., i, :], samples[..., :, sub.input], nodes) for i, sub in enumerate(self.subsystems))
+        )
         return _stack(ss), _stack(ys)
 
     def predict(self, state, history):

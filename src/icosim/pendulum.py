@@ -1055,14 +1055,20 @@ def check_pendulum_stability(datasets, *, default: str, exceptions: list | None 
             verdict = run_verdict(expected, observed)
             numbers[run_name(m, d, k)] = {"expected": expected, "observed": observed, "verdict": verdict}
             holds.append({"pass": True, "fail": False}.get(verdict))
-    missing = [run_name(ex["method"], ex["decomposition"], ex["k"]) for ex in check["exceptions"]
-               if (ex["method"], ex["decomposition"], int(ex["k"])) not in have]
+    missing = [
+        run_name(ex["method"], ex["decomposition"], ex["k"])
+        for ex in check["exceptions"]
+        if (ex["method"], ex["decomposition"], int(ex["k"])) not in have
+    ]
     holds += [None] * len(missing)
     counts = {v: sum(n["verdict"] == v for n in numbers.values()) for v in ("pass", "fail", "undecided")}
     text = (
         f"{len(numbers)} runs: {counts['pass']} as claimed, {counts['fail']} not, {counts['undecided']} failed"
-        + "".join(f"; {name}: expected {n['expected']}, observed {n['observed']}"
-                  for name, n in numbers.items() if n["verdict"] != "pass")
+        + "".join(
+            f"; {name}: expected {n['expected']}, observed {n['observed']}"
+            for name, n in numbers.items()
+            if n["verdict"] != "pass"
+        )
         + (f"; not run: {', '.join(missing)}" if missing else "")
     )
     return Outcome(combine_holds(holds), text, {"runs": numbers, "not_run": missing})
@@ -1226,8 +1232,8 @@ def summarize(runs: list, reference, claims: list, rho_test_model: dict | None =
     ds["max_g"].attrs["long_name"] = "max |g_c| of the stored states"
     ds["max_g_corrector"].attrs["long_name"] = "max |g_c| after the corrector, before any projection"
     if rho_test_model is not None:
-        ds["rho_test_model"].attrs[
-            "long_name"
-        ] = "largest spectral radius of the linear test model (Sect. 3) at the pendulum's points (lr1, li1)"
+        ds["rho_test_model"].attrs["long_name"] = (
+            "largest spectral radius of the linear test model (Sect. 3) at the pendulum's points (lr1, li1)"
+        )
         ds["rho_test_model"].attrs["units"] = "1"
     return ds

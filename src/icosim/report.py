@@ -49,9 +49,7 @@ def table(header, rows, *, raw_columns=()) -> str:
     head = "".join(f"<th>{escape(str(h))}</th>" for h in header)
     body = []
     for row in rows:
-        cells = "".join(
-            f"<td>{c if i in raw_columns else escape(str(c))}</td>" for i, c in enumerate(row)
-        )
+        cells = "".join(f"<td>{c if i in raw_columns else escape(str(c))}</td>" for i, c in enumerate(row))
         body.append(f"<tr>{cells}</tr>")
     return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
 

@@ -150,7 +150,9 @@ class PanelSpec:
             raise ParameterError(f"policy must be 'auto', 'float64' or 'mp', got {self.policy!r}")
         bad = [key for key in self.row_keys if key not in ROW_KEYS]
         if bad or not self.row_keys:
-            raise ParameterError(f"row_keys must be a non-empty list of {', '.join(ROW_KEYS)}, got {list(self.row_keys)}")
+            raise ParameterError(
+                f"row_keys must be a non-empty list of {', '.join(ROW_KEYS)}, got {list(self.row_keys)}"
+            )
 
     def coupling_method(self):
         return make_method(self.method, **self.method_params)
@@ -248,9 +250,7 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
         n_points=int(LR.size),
         n_high_precision=int(result.n_high_precision),
         # rechecked points on the undamped axis lr1 = 0, where rho = 1 to working precision
-        n_high_precision_undamped=int(
-            np.sum((np.asarray(result.digits) > _stability.FLOAT64_DIGITS) & (LR == 0))
-        ),
+        n_high_precision_undamped=int(np.sum((np.asarray(result.digits) > _stability.FLOAT64_DIGITS) & (LR == 0))),
         n_stable=int(np.sum(result.stable)),
         seconds_total=float(sum(result.seconds.values())),
         seconds_mp=float(result.seconds["mp"]),
@@ -302,8 +302,9 @@ def _check_grid(name: str, g: dict, *, where: str = "stability"):
         if len(bounds) != 2 or not all(np.isfinite(float(b)) for b in bounds):
             raise ParameterError(f"{where}.{name}.{axis} must be [start, stop] (two finite numbers), got {bounds!r}")
         if not float(bounds[0]) < float(bounds[1]):
-            raise ParameterError(f"{where}.{name}.{axis} must be increasing, [start, stop] with start < stop, "
-                                 f"got {list(bounds)!r}")
+            raise ParameterError(
+                f"{where}.{name}.{axis} must be increasing, [start, stop] with start < stop, got {list(bounds)!r}"
+            )
     if max(g["lr1"]) > 0:
         raise ParameterError(f"{where}.{name}.lr1 must lie in lr1 <= 0 (a damped subsystem), got {list(g['lr1'])!r}")
     if min(g["li1"]) < 0:
@@ -314,9 +315,7 @@ def _check_grid(name: str, g: dict, *, where: str = "stability"):
         grid_axis(g[axis], g["n"])  # the grid the sweep job will build
 
 
-def figure_panels(
-    figure: str, figure_cfg: dict, *, grid: dict, zoom_grid: dict, precision: dict
-) -> list[PanelSpec]:
+def figure_panels(figure: str, figure_cfg: dict, *, grid: dict, zoom_grid: dict, precision: dict) -> list[PanelSpec]:
     """The panels of one figure as configured (rows x k, plus the zooms).
 
     ``figure_cfg`` has the layout of ``config/stability.yaml`` (``method``,
@@ -342,9 +341,7 @@ def figure_panels(
         values = {**figure_cfg["ratios"], **figure_cfg["params"], **overrides}
         missing = [r for r in RATIOS if r not in values]
         if missing:
-            raise ParameterError(
-                f"{where}: row {row} has no value for {', '.join(missing)} (give it in ratios)"
-            )
+            raise ParameterError(f"{where}: row {row} has no value for {', '.join(missing)} (give it in ratios)")
         method_params = {key: values[key] for key in METHOD_PARAMS if key in values}
         try:
             make_method(figure_cfg["method"], **method_params).check_decomposition(

@@ -18,13 +18,25 @@ setup = Setup(**p.setup)
 n_steps = step_counts(setup.end_time, p.step_sizes["H_min"], p.step_sizes["H_max"], p.step_sizes["num"])
 study = Study(setup, n_steps, spectral_policy=p.spectral_policy, digits=p.digits)
 title = f"Fig. {spec.figure} ({spec.decomposition}), panel {spec.panel}: NRMSE of Eq. (72) over the macro-step size"
-ds = run_panel(spec, study, p.fit, stepping=p.stepping,
-               provenance=provenance_attrs(job, title=title, command="snakemake rule convergence_panel"))
+ds = run_panel(
+    spec,
+    study,
+    p.fit,
+    stepping=p.stepping,
+    provenance=provenance_attrs(job, title=title, command="snakemake rule convergence_panel"),
+)
 write_netcdf(ds, snakemake.output[0])
 
 for i, index in enumerate(ds["index"].values):
     for j, k in enumerate(ds["k"].values):
-        logging.info("index %d k %d: order %.3f on [%.3g, %.3g] s, %d unstable of %d step sizes",
-                     index, k, ds["order"].values[i, j], ds["fit_H_min"].values[i, j], ds["fit_H_max"].values[i, j],
-                     int(ds["unstable"].values[i, j].sum()), ds.sizes["H"])
+        logging.info(
+            "index %d k %d: order %.3f on [%.3g, %.3g] s, %d unstable of %d step sizes",
+            index,
+            k,
+            ds["order"].values[i, j],
+            ds["fit_H_min"].values[i, j],
+            ds["fit_H_max"].values[i, j],
+            int(ds["unstable"].values[i, j].sum()),
+            ds.sizes["H"],
+        )
 logging.info("%.2f s", ds.attrs["seconds_total"])

@@ -31,11 +31,15 @@ n_runs = sum(int(ds["unstable"].size) for ds in panels)
 n_mp = sum(int((ds["spectral_radius_digits"] > 15).sum()) for ds in panels)
 osc = oscillation_summary(Setup(**s))
 if osc["overdamped"]:
-    horizon = (f"the rigidly coupled system is overdamped (decay rate {osc['delta']:.3g} 1/s), "
-               f"the amplitude decays to {100 * osc['decay']:.2g} % of its start")
+    horizon = (
+        f"the rigidly coupled system is overdamped (decay rate {osc['delta']:.3g} 1/s), "
+        f"the amplitude decays to {100 * osc['decay']:.2g} % of its start"
+    )
 else:
-    horizon = (f"{osc['periods']:.2g} periods of the coupled oscillation (ω = {osc['omega']:.3g} rad/s), "
-               f"amplitude decaying to {100 * osc['decay']:.2g} % (decay rate {osc['delta']:.3g} 1/s)")
+    horizon = (
+        f"{osc['periods']:.2g} periods of the coupled oscillation (ω = {osc['omega']:.3g} rad/s), "
+        f"amplitude decaying to {100 * osc['decay']:.2g} % (decay rate {osc['delta']:.3g} 1/s)"
+    )
 
 decisions = [
     f"Model (Sect. 3.7): m1 = {s['m1']:g} kg, m2 = {s['m2']:g} kg, c1 = {s['c1']:g} N/m, c2 = {s['c2']:g} N/m, "
@@ -54,9 +58,13 @@ decisions = [
     "nrmse_x + nrmse_v. nrmse_lambda is the same measure for the constraint force λ_c against the exact "
     "multiplier (ff, fd), where the paper warns of index-3 chattering.",
     f"Stepping: '{p.stepping}'"
-    + (" — the macro step of the linear model is a fixed linear map, built once per (H, scheme) from the engine's "
-       "macro-step algorithm (icosim.stability.amplification_matrix) and iterated; identical to icosim.macrostep.simulate "
-       "up to round-off (tested)." if p.stepping == "matrix" else " — icosim.macrostep.simulate."),
+    + (
+        " — the macro step of the linear model is a fixed linear map, built once per (H, scheme) from the engine's "
+        "macro-step algorithm (icosim.stability.amplification_matrix) and iterated; identical to icosim.macrostep.simulate "
+        "up to round-off (tested)."
+        if p.stepping == "matrix"
+        else " — icosim.macrostep.simulate."
+    ),
     f"Unstable: a run is stopped once |state| exceeds {p.unstable['growth_bound']:g} × the initial amplitude, and is "
     "also unstable where the spectral radius of the recurrence at that H exceeds 1 (policy "
     f"'{p.unstable['spectral_policy']}', mpmath at {p.unstable['digits']} digits where float64 cannot decide; "
@@ -81,12 +89,26 @@ for c in claims:
     first = True
     for r in c["numbers"]["rows"]:
         order = r["order"]
-        measured = "—" if order is None or not np.isfinite(order) else f"{order:.2f} on [{r['fit_H_min']:.2g}, {r['fit_H_max']:.2g}] s"
+        measured = (
+            "—"
+            if order is None or not np.isfinite(order)
+            else f"{order:.2f} on [{r['fit_H_min']:.2g}, {r['fit_H_max']:.2g}] s"
+        )
         slopes = "—" if not r["local_slopes"] else f"{r['local_slopes'][0]:.2f} … {r['local_slopes'][1]:.2f}"
         second = r["order_second_half"]
         second = "—" if second is None or not np.isfinite(second) else f"{second:.2f}"
-        rows.append([esc(c["id"]) if first else "", esc(r["curve"]), esc(r["claimed"]), measured, slopes, second,
-                     esc(r["stable_H"]), rp.verdict_badge(r["verdict"])])
+        rows.append(
+            [
+                esc(c["id"]) if first else "",
+                esc(r["curve"]),
+                esc(r["claimed"]),
+                measured,
+                slopes,
+                second,
+                esc(r["stable_H"]),
+                rp.verdict_badge(r["verdict"]),
+            ]
+        )
         first = False
 counts = verdict_counts(claims)
 tolerances = sorted({c["numbers"]["tolerance"] for c in claims})
@@ -100,8 +122,11 @@ body.append(
     + "<p>Per curve: the local slopes span neighbouring stable points from the fitted range up to the largest H "
     "(pre-asymptotic range included, round-off floor left out); 'second half' is the order of Eq. (72) restricted "
     "to T_N in (T/2, T], a diagnostic without the start-up transient.</p>"
-    + rp.table(["claim", "curve", "paper", "fitted order (range)", "local slopes", "second half", "stable H", "verdict"],
-               rows, raw_columns=(7,))
+    + rp.table(
+        ["claim", "curve", "paper", "fitted order (range)", "local slopes", "second half", "stable H", "verdict"],
+        rows,
+        raw_columns=(7,),
+    )
 )
 
 # -- figures --------------------------------------------------------------------------------------
@@ -111,45 +136,83 @@ for png in snakemake.input.figures:
     cfg = p.figures[fig]
     paper = {"21": "Fig. 21", "22": "Fig. 22", "23": "Fig. 23"}.get(fig, f"Fig. {fig}")
     shown = "as in the paper" if dec == "ff" else "not shown in the paper"
-    body.append(rp.figure(png, f"<b>{paper}, {esc(dec)}</b> ({shown}): {esc(cfg['title'])}. NRMSE over H; filled points: "
-                          "fitted asymptotic range, order p in the legend; ×: unstable at that H; dotted: O(H^p)."))
+    body.append(
+        rp.figure(
+            png,
+            f"<b>{paper}, {esc(dec)}</b> ({shown}): {esc(cfg['title'])}. NRMSE over H; filled points: "
+            "fitted asymptotic range, order p in the legend; ×: unstable at that H; dotted: O(H^p).",
+        )
+    )
 
 # -- work-precision -------------------------------------------------------------------------------
 wp = open_dataset(snakemake.input.wp)
-body.append("<h3>Work-precision</h3><p>" + esc(
-    f"Timed: {wp.attrs['timed']}; CPU time ({wp.attrs['timer']}), minimum of {wp.attrs['repeats']} runs of "
-    f"{wp.attrs['steps']} macro steps after {wp.attrs['warmup_steps']} warm-up steps, per step, times T/H for one simulated "
-    "second. Every macro step of the linear model costs the same, so the time per simulated second is the time per step "
-    "divided by H. Unstable step sizes are left out. The NRMSE is taken from the panel datasets.") + "</p><p><b>Caveat.</b> "
-    + esc("The subsystems of the test model are integrated exactly, so what is timed is the coupling algorithm's Python "
-          "overhead, nearly equal for all schemes: the diagram is close to NRMSE over 1/H and says little about "
-          "numerically integrated subsystems. For those, weigh the counted work per macro step below (subsystem "
-          "integrations, coupling-condition solves, projections) with their cost there.") + "</p>")
-body.append(rp.figure(snakemake.input.wp_figure, "CPU time per simulated second over NRMSE; one line per scheme, each point one H."))
+body.append(
+    "<h3>Work-precision</h3><p>"
+    + esc(
+        f"Timed: {wp.attrs['timed']}; CPU time ({wp.attrs['timer']}), minimum of {wp.attrs['repeats']} runs of "
+        f"{wp.attrs['steps']} macro steps after {wp.attrs['warmup_steps']} warm-up steps, per step, times T/H for one simulated "
+        "second. Every macro step of the linear model costs the same, so the time per simulated second is the time per step "
+        "divided by H. Unstable step sizes are left out. The NRMSE is taken from the panel datasets."
+    )
+    + "</p><p><b>Caveat.</b> "
+    + esc(
+        "The subsystems of the test model are integrated exactly, so what is timed is the coupling algorithm's Python "
+        "overhead, nearly equal for all schemes: the diagram is close to NRMSE over 1/H and says little about "
+        "numerically integrated subsystems. For those, weigh the counted work per macro step below (subsystem "
+        "integrations, coupling-condition solves, projections) with their cost there."
+    )
+    + "</p>"
+)
+body.append(
+    rp.figure(
+        snakemake.input.wp_figure, "CPU time per simulated second over NRMSE; one line per scheme, each point one H."
+    )
+)
 table_rows = []
 for entry in fastest_schemes(wp, p.targets):
     rk = entry["ranking"]
     if rk:
         best = rk[0]
         runner = "; ".join(f"{lab.split(' ', 1)[1]} ({sec:.3g} s)" for lab, sec, _ in rk[1:3])
-        table_rows.append([entry["decomposition"], f"{entry['target']:.0e}", best[0].split(" ", 1)[1], f"{best[1]:.3g}",
-                           f"{best[2]:.3g}", runner or "—"])
+        table_rows.append(
+            [
+                entry["decomposition"],
+                f"{entry['target']:.0e}",
+                best[0].split(" ", 1)[1],
+                f"{best[1]:.3g}",
+                f"{best[2]:.3g}",
+                runner or "—",
+            ]
+        )
     else:
         table_rows.append([entry["decomposition"], f"{entry['target']:.0e}", "none reaches it", "—", "—", "—"])
 per_step = wp["cpu_seconds_per_step"].median(dim="H", skipna=True).values
 cost_rows = [
-    [str(lab), f"{1e3 * t:.3g}" if np.isfinite(t) else "— (unstable at every H)", str(int(n_int)), str(int(n_sol)),
-     str(int(n_proj))]
-    for lab, t, n_int, n_sol, n_proj in zip(wp["scheme"].values, per_step, wp["subsystem_integrations_per_step"].values,
-                                            wp["coupling_solves_per_step"].values, wp["projections_per_step"].values)
+    [
+        str(lab),
+        f"{1e3 * t:.3g}" if np.isfinite(t) else "— (unstable at every H)",
+        str(int(n_int)),
+        str(int(n_sol)),
+        str(int(n_proj)),
+    ]
+    for lab, t, n_int, n_sol, n_proj in zip(
+        wp["scheme"].values,
+        per_step,
+        wp["subsystem_integrations_per_step"].values,
+        wp["coupling_solves_per_step"].values,
+        wp["projections_per_step"].values,
+    )
 ]
-body.append("<p>Which scheme reaches a given error fastest (least CPU time per simulated second among the measured step "
-            "sizes with NRMSE ≤ target):</p>"
-            + rp.table(["decomposition", "target NRMSE", "fastest scheme", "CPU s per simulated s", "at H (s)", "next two"], table_rows)
-            + "<p>Cost of one macro step (median over H) and the work it consists of (counted on the engine's macro "
-              "step):</p>"
-            + rp.table(["scheme", "ms per macro step", "subsystem integrations", "coupling solves", "projections"],
-                       cost_rows))
+body.append(
+    "<p>Which scheme reaches a given error fastest (least CPU time per simulated second among the measured step "
+    "sizes with NRMSE ≤ target):</p>"
+    + rp.table(
+        ["decomposition", "target NRMSE", "fastest scheme", "CPU s per simulated s", "at H (s)", "next two"], table_rows
+    )
+    + "<p>Cost of one macro step (median over H) and the work it consists of (counted on the engine's macro "
+    "step):</p>"
+    + rp.table(["scheme", "ms per macro step", "subsystem integrations", "coupling solves", "projections"], cost_rows)
+)
 
 html = rp.section("Convergence (Figs. 21–23)", "".join(body), anchor="convergence")
 with atomic_path(snakemake.output[0]) as tmp:

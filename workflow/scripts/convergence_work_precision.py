@@ -16,11 +16,21 @@ datasets = {}
 for path in snakemake.input.panels:
     ds = open_dataset(path)
     datasets[(ds.attrs["decomposition"], str(ds.attrs["figure"]), ds.attrs["panel"])] = ds
-wp = work_precision(p.entries, datasets, Setup(**p.setup), steps=p.steps, repeats=p.repeats,
-                    warmup_steps=p.warmup_steps,
-                    provenance=provenance_attrs(job, title="Work-precision of the co-simulation schemes",
-                                                command="snakemake rule convergence_work_precision"))
+wp = work_precision(
+    p.entries,
+    datasets,
+    Setup(**p.setup),
+    steps=p.steps,
+    repeats=p.repeats,
+    warmup_steps=p.warmup_steps,
+    provenance=provenance_attrs(
+        job, title="Work-precision of the co-simulation schemes", command="snakemake rule convergence_work_precision"
+    ),
+)
 write_netcdf(wp, snakemake.output[0])
 for s in range(wp.sizes["scheme"]):
-    logging.info("%s: %.3g ms per macro step (median over H)", wp["scheme"].values[s],
-                 1e3 * float(wp["cpu_seconds_per_step"][s].median(skipna=True)))
+    logging.info(
+        "%s: %.3g ms per macro step (median over H)",
+        wp["scheme"].values[s],
+        1e3 * float(wp["cpu_seconds_per_step"][s].median(skipna=True)),
+    )

@@ -52,28 +52,28 @@ lr1 = [float(v) for v in summary.attrs["test_model_lr1"]]
 li1 = [float(v) for v in summary.attrs["test_model_li1"]]
 t_div = [float(t) for t in summary["t_diverged"].values if not math.isnan(float(t))]
 setup = f"""
-<p>Two rigid links (m = {m['m1']:g} kg, J = {m['J1']:.5g} kg m², l = {m['l1']:g} m), gravity {m['g']:g} m/s² in −y,
-damping d<sub>x</sub> = d<sub>y</sub> = {m['d']:g} N s/m at each centre of mass, φ1(0) = {m['phi1_0']:.6g} rad,
-φ2(0) = {m['phi2_0']:.6g} rad, at rest. Link 1 (pinned to ground) is subsystem 1, link 2 subsystem 2.
-Macro step H = {cfg['H']:g} s, <b>end time {cfg['t_end']:g} s</b> (the paper gives none; it is chosen so
+<p>Two rigid links (m = {m["m1"]:g} kg, J = {m["J1"]:.5g} kg m², l = {m["l1"]:g} m), gravity {m["g"]:g} m/s² in −y,
+damping d<sub>x</sub> = d<sub>y</sub> = {m["d"]:g} N s/m at each centre of mass, φ1(0) = {m["phi1_0"]:.6g} rad,
+φ2(0) = {m["phi2_0"]:.6g} rad, at rest. Link 1 (pinned to ground) is subsystem 1, link 2 subsystem 2.
+Macro step H = {cfg["H"]:g} s, <b>end time {cfg["t_end"]:g} s</b> (the paper gives none; it is chosen so
 that an instability like the one of Fig. 8 shows well inside the horizon: here the earliest divergence is at
-t = {fmt(min(t_div), '.3f') if t_div else '–'} s). {n_div} of {len(runs)} runs diverged, {n_failed} failed
+t = {fmt(min(t_div), ".3f") if t_div else "–"} s). {n_div} of {len(runs)} runs diverged, {n_failed} failed
 (a subsystem integration, the projection or the coupling solve could not be computed: such a run says nothing about
 stability and its verdict is <i>undecided</i>).</p>
 <p><b>Method parameters</b> (a choice; SI units, so the Baumgarte μ is in seconds, μ/H = 1; the run datasets
 store it as <code>method_mu</code> with <code>method_mu_units = "s"</code>, unlike the stability datasets'
 dimensionless μ̄): {methods}.
 Corrector: {escape(mode)}.</p>
-<p><b>Subsystem integration</b>: Radau IIA (3 stages, order 5) with step-size control, rtol = {integ['rtol']:g},
-atol = {integ['atol']:g} (as in the paper), simplified Newton to {integ['newton_tol']:g} of the error scale
+<p><b>Subsystem integration</b>: Radau IIA (3 stages, order 5) with step-size control, rtol = {integ["rtol"]:g},
+atol = {integ["atol"]:g} (as in the paper), simplified Newton to {integ["newton_tol"]:g} of the error scale
 (<code>icosim.radau</code>: scipy's Radau algorithm, batched over initial values and inputs with a shared step
 sequence). <b>Sensitivities</b> of the outputs to the new coupling values e<sub>N+1</sub>: forward differences,
 re-integrating each subsystem with the interpolation polynomial through e<sub>N+1</sub> + h<sub>j</sub>
-(h<sub>j</sub> = {sens['fd_step']:g}·max(1, |e<sub>j</sub>|)), predictor and perturbations in one batched call per
-subsystem. <b>Reference</b>: the monolithic pendulum in minimal coordinates (φ1, φ2), scipy {escape(ref['method'])},
-rtol = atol = {ref['rtol']:g}. <b>Divergence</b>: a run stops at the first macro step with a non-finite value,
-|g<sub>c</sub>| &gt; {div['max_constraint']:g} m, |λ<sub>c</sub>| &gt; {div['max_multiplier']:g} N or
-|ω| &gt; {div['max_rate']:g} rad/s; its dataset ends at the step before (attributes status = diverged,
+(h<sub>j</sub> = {sens["fd_step"]:g}·max(1, |e<sub>j</sub>|)), predictor and perturbations in one batched call per
+subsystem. <b>Reference</b>: the monolithic pendulum in minimal coordinates (φ1, φ2), scipy {escape(ref["method"])},
+rtol = atol = {ref["rtol"]:g}. <b>Divergence</b>: a run stops at the first macro step with a non-finite value,
+|g<sub>c</sub>| &gt; {div["max_constraint"]:g} m, |λ<sub>c</sub>| &gt; {div["max_multiplier"]:g} N or
+|ω| &gt; {div["max_rate"]:g} rad/s; its dataset ends at the step before (attributes status = diverged,
 diverged = 1, t_diverged, reason). A step that cannot be computed ends the run likewise with status = failed
 (failed = 1, t_failed, reason). The finite-difference batch shares one Radau step sequence while the corrector
 integrates alone; the two sequences coincide whenever a macro step is a single Radau step (attribute n_split counts
@@ -81,9 +81,9 @@ the integrations where they may not: then linearisation and corrector differ by 
 <p><b>Link to Sect. 3.</b> The paper explains the instability of the weighted multiplier at k = 2 by the stability
 plot of the linear test model near the origin, at λ̄<sub>r1</sub> = −dH/(2m). Column ρ<sub>test</sub> below is the
 spectral radius of the test model (Eq. 71) with the method's dimensionless parameters (β̄ = β/H, γ̄ = γ/H²) at
-λ̄<sub>r1</sub> = {', '.join(f'{v:.3g}' for v in sorted(set(lr1)))} and λ̄<sub>i1</sub> = H·ω =
-{', '.join(f'{v:.3g}' for v in li1)} for the modal frequencies ω of the pendulum linearised about its hanging rest,
-with {escape(summary.attrs['test_model_ratios'])} (the larger ρ of the points is shown): ρ &gt; 1 predicts an
+λ̄<sub>r1</sub> = {", ".join(f"{v:.3g}" for v in sorted(set(lr1)))} and λ̄<sub>i1</sub> = H·ω =
+{", ".join(f"{v:.3g}" for v in li1)} for the modal frequencies ω of the pendulum linearised about its hanging rest,
+with {escape(summary.attrs["test_model_ratios"])} (the larger ρ of the points is shown): ρ &gt; 1 predicts an
 instability growing by the factor ρ per macro step.</p>
 <p><b>Decompositions.</b> ff: both links force-driven by λ<sub>c</sub> (2 unknowns, the joint constraint on the
 method's levels). fd: link 1 force-driven by λ<sub>c</sub>, link 2 kinematically driven on acceleration level by

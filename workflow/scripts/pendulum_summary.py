@@ -25,7 +25,13 @@ for ds in runs:
 ds = summarize(runs, reference, claims, rho_test_model=rho)
 ds.attrs.update(
     provenance_attrs(
-        {"claims": [c.as_dict() for c in claims], "runs": list(snakemake.input.runs), "model": dict(p.model), "H": p.H, "methods": p.methods},
+        {
+            "claims": [c.as_dict() for c in claims],
+            "runs": list(snakemake.input.runs),
+            "model": dict(p.model),
+            "H": p.H,
+            "methods": p.methods,
+        },
         title="Double pendulum (Sect. 4): errors and claim verdicts",
         command="snakemake rule pendulum_summary",
     )

@@ -36,8 +36,7 @@ commit_text = (
 
 sections = [Path(path).read_text() for path in snakemake.input.sections]
 files = [
-    [esc(f), f"<code>{hashlib.sha256(Path(f).read_bytes()).hexdigest()}</code>"]
-    for f in snakemake.input.configfiles
+    [esc(f), f"<code>{hashlib.sha256(Path(f).read_bytes()).hexdigest()}</code>"] for f in snakemake.input.configfiles
 ]
 merged = [[esc(part), f"<code>{sha}</code>"] for part, sha in p.config_sha256.items()]
 prec = p.precision

@@ -105,11 +105,7 @@ body = [
     "<h3>What was computed</h3><ul>"
     + "".join(f"<li>{esc(d)}</li>" for d in decisions)
     + "</ul>"
-    + (
-        "<h3>Why</h3><ul>" + "".join(f"<li>{esc(d)}</li>" for d in p.decisions) + "</ul>"
-        if p.decisions
-        else ""
-    ),
+    + ("<h3>Why</h3><ul>" + "".join(f"<li>{esc(d)}</li>" for d in p.decisions) + "</ul>" if p.decisions else ""),
     f"<p>{int(t['hp'])} of {int(t['points'])} grid points ({hp_share:.2%}) needed high precision, "
     f"{int(t['hp_axis'])} of them on the undamped axis λ̄r1 = 0 (ρ = 1 to working precision there, which float64 "
     f"cannot decide). The rechecks took {t['cpump'] / max(cpu, 1e-12):.0%} of the sweeps' compute time "

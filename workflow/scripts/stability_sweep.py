@@ -14,9 +14,7 @@ logging.info("panel parameters: %s", json.dumps(params, sort_keys=True))
 
 spec = PanelSpec.from_params(params)
 title = f"Fig. {spec.figure}, row {spec.row}, k = {spec.k} ({spec.view}): spectral radius over (lr1, li1)"
-ds = stability_panel(
-    spec, provenance=provenance_attrs(params, title=title, command="snakemake rule stability_sweep")
-)
+ds = stability_panel(spec, provenance=provenance_attrs(params, title=title, command="snakemake rule stability_sweep"))
 write_netcdf(ds, snakemake.output[0])
 
 a = ds.attrs

@@ -108,9 +108,7 @@ def convergence_figure(datasets: dict, layout, *, columns, rows, title="", guide
     handles = [
         Line2D([], [], ls="none", marker="o", color="0.3", label="in the fitted (asymptotic) range"),
         Line2D([], [], ls="none", marker="o", mfc="white", mec="0.3", label="outside the fitted range"),
-        Line2D(
-            [], [], ls="none", marker="x", color="0.3", mew=1.4, label="unstable at this H (no error shown)"
-        ),
+        Line2D([], [], ls="none", marker="x", color="0.3", mew=1.4, label="unstable at this H (no error shown)"),
         Line2D([], [], ls=":", color="0.45", label="auxiliary lines $O(H^p)$"),
     ]
     fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=8, frameon=False)

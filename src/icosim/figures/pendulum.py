@@ -56,9 +56,7 @@ def pendulum_figure(runs, reference, *, k: int, title: str | None = None):
     axes = fig.subplots(3, 2, sharex=True).ravel()
     stable = [ds for ds in runs if ds.attrs.get("status", "stable") == "stable"]
     for ax, (name, ylabel) in zip(axes, PANELS):
-        ax.plot(
-            reference["t"], reference[name], color="black", lw=2.6, alpha=0.35, label="monolithic reference"
-        )
+        ax.plot(reference["t"], reference[name], color="black", lw=2.6, alpha=0.35, label="monolithic reference")
         ends = []
         for ds in runs:
             m, d = ds.attrs["method"], ds.attrs["decomposition"]
@@ -114,9 +112,7 @@ def error_figure(runs_by_k: dict, reference, *, title: str | None = None):
             ax.grid(True, which="major", alpha=0.3)
             if j == 0:
                 ax.set_ylabel(
-                    rf"$|\{name[:-1]}_{name[-1]} - \{name[:-1]}_{{{name[-1]},ref}}|$ [rad]".replace(
-                        "\\phi", "\\varphi"
-                    )
+                    rf"$|\{name[:-1]}_{name[-1]} - \{name[:-1]}_{{{name[-1]},ref}}|$ [rad]".replace("\\phi", "\\varphi")
                 )
             if i == 0:
                 ax.set_title(f"k = {k}")

@@ -44,9 +44,7 @@ def panel_layout(panels):
     for i, ds in enumerate(panels):
         key = (rows.index(int(ds.attrs["row"])), columns.index((ds.attrs["view"], int(ds.attrs["k"]))))
         if key in place.values():
-            raise ValueError(
-                f"two datasets for row {ds.attrs['row']}, k = {ds.attrs['k']}, view {ds.attrs['view']}"
-            )
+            raise ValueError(f"two datasets for row {ds.attrs['row']}, k = {ds.attrs['k']}, view {ds.attrs['view']}")
         place[i] = key
     return rows, columns, place
 
@@ -123,9 +121,7 @@ def stability_figure(
         raise ValueError("no panels to draw")
     rows, columns, place = panel_layout(panels)
     labels = row_labels(panels)
-    fig = Figure(
-        figsize=(panel_size * len(columns) + 1.2, panel_size * len(rows) + 0.7), layout="constrained"
-    )
+    fig = Figure(figsize=(panel_size * len(columns) + 1.2, panel_size * len(rows) + 0.7), layout="constrained")
     axes = fig.subplots(len(rows), len(columns), squeeze=False)
     occupied = set(place.values())
     for (i, j), ax in np.ndenumerate(axes):
@@ -156,11 +152,7 @@ def stability_figure(
 
 def _mark_zoom_regions(panels, place, columns, axes):
     """Outline each zoom's region on the full panel of the same row and k."""
-    full = {
-        (ds.attrs["row"], ds.attrs["k"]): place[n]
-        for n, ds in enumerate(panels)
-        if ds.attrs["view"] == "full"
-    }
+    full = {(ds.attrs["row"], ds.attrs["k"]): place[n] for n, ds in enumerate(panels) if ds.attrs["view"] == "full"}
     for ds in panels:
         if ds.attrs["view"] != "zoom":
             continue
