@@ -7,13 +7,20 @@ constraints*: the linear two-mass test model, three coupling methods
 (force/force, force/displacement, displacement/displacement), Lagrange
 approximation of any order k, and the spectral radius of the recurrence in
 float64 and at arbitrary precision.
+
+The map of the package is in the README (section "Layout"); the engine is
+:mod:`icosim.macrostep` driving a :class:`icosim.problem.CosimulationProblem`
+with a coupling method of the registry :mod:`icosim.methods`.
 """
 
 from importlib.metadata import PackageNotFoundError, version
 
-from .coupling import baumgarte, make_method, projection, weighted_multiplier
+from .linear_problem import LinearCosimulation
+from .methods import make_method
+from .methods.baumgarte import baumgarte
+from .methods.projection import projection
+from .methods.weighted import weighted_multiplier
 from .model import Coefficients, ParameterError, PhysicalModel, TestModel
-from .oscillator import LinearCosimulation
 from .stability import amplification_matrix, spectral_radius, spectral_radius_float64, spectral_radius_mp
 
 try:

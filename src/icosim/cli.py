@@ -14,8 +14,9 @@ import json
 import math
 import sys
 
+from . import methods
 from .backend import FLOAT64_DIGITS
-from .coupling import DECOMPOSITIONS, METHODS
+from .decompositions import DECOMPOSITIONS, get_decomposition
 from .model import ParameterError
 
 __all__ = ["main", "build_parser"]
@@ -70,16 +71,14 @@ def build_parser() -> argparse.ArgumentParser:
         description="Spectral radius of the co-simulation recurrence for one point of the test model (Eq. 71).",
     )
     g = rho.add_argument_group("method and layout")
-    g.add_argument("--method", required=True, choices=METHODS)
+    g.add_argument("--method", required=True, choices=tuple(methods.METHODS))
     g.add_argument("--decomposition", required=True, choices=tuple(DECOMPOSITIONS))
     g.add_argument("--k", required=True, type=_nonneg_int, help="approximation order (integer >= 0)")
     g = rho.add_argument_group("method parameters")
-    g.add_argument("--index", type=int, choices=(1, 2, 3), help="index of the formulation (Baumgarte, weighted)")
-    g.add_argument("--mu", type=_float, help="Baumgarte: beta = 2 mu, gamma = mu^2 (index 1) or 0 (index 2)")
-    g.add_argument("--beta", type=_float, help="Baumgarte parameter beta_bar")
-    g.add_argument("--gamma", type=_float, help="Baumgarte parameter gamma_bar")
-    g.add_argument("--a", type=_float, help="weighted multiplier: weight of the velocity level")
-    g.add_argument("--b", type=_float, help="weighted multiplier: weight of the acceleration level")
+    with_index = ", ".join(spec.label for spec in methods.METHODS.values() if spec.takes_index)
+    g.add_argument("--index", type=int, choices=methods.indices(), help=f"index of the formulation ({with_index})")
+    for name, p in methods.parameters().items():  # every registered method's parameters
+        g.add_argument(f"--{name}", type=_float, help=p.help)
     g = rho.add_argument_group("test-model parameters (Eq. 71)")
     g.add_argument("--lr1", required=True, type=_float, help="real part of subsystem 1's eigenvalue (<= 0)")
     g.add_argument("--li1", required=True, type=_float, help="imaginary part of subsystem 1's eigenvalue (>= 0)")
@@ -99,23 +98,18 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-_METHOD_ARGS = {"baumgarte": ("index", "mu", "beta", "gamma"), "weighted": ("index", "a", "b"), "projection": ()}
-
-
 def _method_from_args(args):
-    from .coupling import make_method
-
-    given = {name: getattr(args, name) for name in ("index", "mu", "beta", "gamma", "a", "b")}
+    spec = methods.get_spec(args.method)
+    given = {name: getattr(args, name, None) for name in methods.argument_names()}
     given = {k: v for k, v in given.items() if v is not None}
-    extra = sorted(set(given) - set(_METHOD_ARGS[args.method]))
+    extra = sorted(set(given) - set(spec.arguments))
     if extra:
-        allowed = ", ".join(f"--{a}" for a in _METHOD_ARGS[args.method]) or "none"
+        allowed = ", ".join(f"--{a}" for a in spec.arguments) or "none"
         raise ParameterError(f"argument --{extra[0]}: not used by --method {args.method} (its parameters: {allowed})")
-    return make_method(args.method, **given)
+    return spec.make(**given)
 
 
 def _rho(args, parser):
-    from .coupling import get_decomposition
     from .model import TestModel
     from .stability import is_stable, spectral_radius, spectral_radius_mp
 
@@ -156,11 +150,9 @@ def _rho(args, parser):
 
 def _argument_message(text: str) -> str:
     """Messages from the library name parameters; make them read like argparse's."""
-    for name in ("lr1", "li1", "am21", "alr21", "ali21", "mu", "beta", "gamma", "index"):
-        if text.startswith(f"{name} "):
+    for name in ("lr1", "li1", "am21", "alr21", "ali21") + methods.argument_names():
+        if text.startswith(f"{name} "):  # also "a and b must be ..." -> --a
             return f"argument --{name}: {text}"
-    if text.startswith(("a ", "b ", "a and b")):
-        return f"argument --{text[0]}: {text}"
     if text.startswith("method "):
         return f"argument --method/--decomposition: {text}"
     return text

@@ -42,7 +42,7 @@ def provenance_attrs(config, *, title: str, command: str = "") -> dict:
     from . import __version__
 
     cfg = config_json(config)
-    now = _dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat()
+    now = _dt.datetime.now(_dt.UTC).replace(microsecond=0).isoformat()
     return {
         "title": title,
         "Conventions": CONVENTIONS,

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .coupling import get_decomposition
+from .decompositions import get_decomposition
 from .model import Coefficients
 
 __all__ = ["MonolithicSolution", "consistent_start"]

@@ -16,7 +16,7 @@ without loss to float64 or to any multiprecision type.
 from __future__ import annotations
 
 from fractions import Fraction
-from functools import lru_cache
+from functools import cache
 
 __all__ = ["predictor_nodes", "corrector_nodes", "monomial_coefficients", "weights_at"]
 
@@ -37,7 +37,7 @@ def corrector_nodes(k: int) -> tuple[int, ...]:
     return tuple(1 - j for j in range(_check_k(k) + 1))
 
 
-@lru_cache(maxsize=None)
+@cache
 def monomial_coefficients(nodes: tuple[int, ...]) -> tuple[tuple[Fraction, ...], ...]:
     """Matrix ``C`` with ``p(tau) = sum_m tau^m sum_j C[m][j] u_j``.
 

@@ -2,31 +2,12 @@
 variables, corrector, projection.  It serves every method, decomposition and
 approximation order, the linear test model and the nonlinear pendulum alike.
 
-A *problem* couples two subsystems and must provide:
-
-``backend``
-    the arithmetic (:mod:`icosim.backend`).
-``extrapolate(history) -> e_p``
-    the predicted coupling variables at ``T_N+1`` (Eq. 9/35/59).
-``predict(state, history) -> y_p``
-    subsystem outputs at ``T_N+1`` after integrating with the extrapolation
-    polynomials (step 1).
-``residuals(y) -> dict``
-    the coupling conditions at ``T_N+1``: ``pos``, ``vel``, ``acc`` (the joint
-    constraint on each level, shape ``(..., n_c)``) and ``force`` (balance of
-    the multipliers of kinematically driven subsystems, ``(..., n_f)``).
-``jacobians(state, history, e, y) -> dict``
-    ``d residuals / d e_N+1`` for the same levels, shape ``(..., n, n_e)``
-    (constant for the linear model, Eq. 13; numerical for the pendulum).
-``correct(state, history, e_new) -> (state_new, y_new)``
-    integration with the interpolation polynomials through ``e_new`` (step 3).
-``project(state) -> state``
-    the projection step (step 4), used by the projection method.
-``shift(history, e_new) -> history``
-    drop the oldest sample, prepend ``e_new``.
-
-The *method* (:class:`icosim.coupling.CouplingMethod`) only decides how the
-corrected coupling variables are formed from ``e_p``, residuals and Jacobians.
+A *problem* (:class:`icosim.problem.CosimulationProblem`, whose docstring
+states the contract) supplies the subsystems, the coupling conditions and their
+sensitivities; the *method* (:class:`icosim.methods.CouplingMethod`) only
+decides how the corrected coupling variables are formed from ``e_p``, residuals
+and Jacobians.  The step counts its coupling solves and projections in the
+problem's :attr:`~icosim.problem.CosimulationProblem.work`.
 """
 
 from __future__ import annotations
@@ -64,12 +45,14 @@ def macro_step(problem, method, state, history, *, iterations: int = 1, tol: flo
         r = problem.residuals(y)
         J = problem.jacobians(state, history, e, y)
         e_new = method.corrected_coupling(e, r, J, problem.backend)
+        problem.work.coupling_solves += method.n_solves
         if it > 0 and tol is not None and _max_abs(e_new - e) <= tol:
             break  # converged: the corrector already ran with (nearly) e_new
         e = e_new
         state_new, y = problem.correct(state, history, e)
     if method.projection:
         state_new = problem.project(state_new)
+        problem.work.projections += 1
     return state_new, problem.shift(history, e), y
 
 

@@ -65,7 +65,7 @@ class Coefficients:
     delta2: object
     am21: object
 
-    def map(self, fn) -> "Coefficients":
+    def map(self, fn) -> Coefficients:
         """Apply ``fn`` to every attribute (e.g. to add a broadcasting axis)."""
         return Coefficients(*(fn(getattr(self, f.name)) for f in fields(self)))
 
@@ -92,6 +92,17 @@ class TestModel:
 
     The physically meaningful test model is a passive (stable) mechanical
     system, hence the sign conventions above; they are checked on creation.
+
+    Subsystem 1 with eigenvalues ``-0.5 +- 2i`` has ``k1 = 0.25 + 4`` and
+    ``delta1 = 1``; a physical realisation gives the same point back:
+
+    >>> m = TestModel(lr1=-0.5, li1=2.0, am21=2.0)
+    >>> c = m.coefficients()
+    >>> float(c.k1), float(c.delta1)
+    (4.25, 1.0)
+    >>> back = m.to_physical(m1=3.0, H=0.1).test_model()
+    >>> round(back.lr1, 12), round(back.li1, 12), back.am21
+    (-0.5, 2.0, 2.0)
     """
 
     __test__ = False  # not a pytest test class, despite the name
@@ -127,7 +138,7 @@ class TestModel:
             am21=self.am21,
         )
 
-    def to_physical(self, m1: float = 1.0, H: float = 1.0) -> "PhysicalModel":
+    def to_physical(self, m1: float = 1.0, H: float = 1.0) -> PhysicalModel:
         """One physical realisation (mass ``m1`` and macro step ``H`` are free scales)."""
         c = self.coefficients()
         m2 = self.am21 * m1

@@ -15,14 +15,24 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
+from ..methods import parameters
+
 __all__ = ["convergence_figure", "work_precision_figure", "K_COLOURS"]
 
 K_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink")
-PARAM_LABELS = {"mu": r"$\mu$ = {v:g} s", "a": "$a$ = {v:g}", "b": "$b$ = {v:g}"}
+
+
+def param_label(name: str, value) -> str:
+    r"""A dimensional parameter as a column title, e.g. ``$\mu$ = 0.005 s`` (symbol and unit from the registry)."""
+    p = parameters().get(name)
+    if p is None:
+        return f"{name} = {value:g}"
+    unit = {"1": "", "s": " s", "s2": " s$^2$"}[p.unit]
+    return f"{p.tex_dimensional} = {value:g}{unit}"
 
 
 def _column_label(column: dict) -> str:
-    return ", ".join(PARAM_LABELS.get(k, f"{k} = {{v:g}}").format(v=v) for k, v in column.items())
+    return ", ".join(param_label(k, v) for k, v in column.items())
 
 
 def _limits(datasets):

@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..methods import METHODS
+
 __all__ = ["pendulum_figure", "error_figure", "PANELS", "label"]
 
 #: (variable, y label) of the six panels, in the paper's order.
@@ -29,14 +31,14 @@ PANELS = (
     ("lambda_cay", r"$\lambda_{cay}$ [N]"),
 )
 
-_METHOD_NAMES = {"baumgarte": "Baumgarte", "weighted": "weighted multiplier", "projection": "projection"}
 _STYLES = {"ff": "-", "fd": "--", "dd": ":"}
 _COLOURS = {"baumgarte": "tab:blue", "weighted": "tab:orange", "projection": "tab:green"}
 
 
 def label(ds) -> str:
     """Legend text of a run dataset, e.g. ``Baumgarte ff``."""
-    return f"{_METHOD_NAMES.get(ds.attrs['method'], ds.attrs['method'])} {ds.attrs['decomposition']}"
+    spec = METHODS.get(ds.attrs["method"])
+    return f"{spec.label if spec else ds.attrs['method']} {ds.attrs['decomposition']}"
 
 
 def _limits(values, pad=0.08):

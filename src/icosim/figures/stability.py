@@ -15,19 +15,23 @@ from matplotlib.colors import TwoSlopeNorm
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
+from ..methods import parameters
+from ..stability.panels import format_row_label
+
 __all__ = ["stability_figure", "panel_layout", "row_labels", "STYLES"]
 
 STYLES = ("field", "dots")
-SYMBOLS = {
+#: TeX symbols of the ratios; the method parameters' come from the registry (:mod:`icosim.methods`).
+RATIO_SYMBOLS = {
     "am21": r"$\alpha_{m21}$",
     "alr21": r"$\alpha_{\lambda r21}$",
     "ali21": r"$\alpha_{\lambda i21}$",
-    "mu": r"$\bar\mu$",
-    "beta": r"$\bar\beta$",
-    "gamma": r"$\bar\gamma$",
-    "a": "$a$",
-    "b": "$b$",
 }
+
+
+def symbols() -> dict:
+    """TeX symbols of everything a row may change: the ratios and every method parameter."""
+    return {**RATIO_SYMBOLS, **{name: p.tex for name, p in parameters().items()}}
 
 
 def panel_layout(panels):
@@ -52,21 +56,19 @@ def panel_layout(panels):
 def row_labels(panels) -> dict:
     """Row number -> label, from the panels' ``row_label_keys`` attribute.
 
-    The keys are decided once, by :func:`icosim.sweep.row_label_keys` (the rule
+    The keys are decided once, by :func:`icosim.stability.panels.row_label_keys` (the rule
     the report uses as well), and stored in every panel; here they are only
     typeset with the TeX symbols.
     """
-    from ..sweep import format_row_label
-
     labels = {}
     for ds in panels:
         keys = ds.attrs.get("row_label_keys")
         if not keys:
             raise ValueError(
                 f"panel of figure {ds.attrs.get('figure')} row {ds.attrs.get('row')} has no row_label_keys "
-                "attribute (written by icosim.sweep.stability_panel): recompute it"
+                "attribute (written by icosim.stability.panels.stability_panel): recompute it"
             )
-        labels[int(ds.attrs["row"])] = format_row_label(keys.split(), ds.attrs, SYMBOLS)
+        labels[int(ds.attrs["row"])] = format_row_label(keys.split(), ds.attrs, symbols())
     return labels
 
 
@@ -110,7 +112,7 @@ def stability_figure(
 
     Parameters
     ----------
-    panels : list of :class:`xarray.Dataset` written by :func:`icosim.sweep.stability_panel`.
+    panels : list of :class:`xarray.Dataset` written by :func:`icosim.stability.panels.stability_panel`.
     style : ``"field"`` (rho colour field and boundary) or ``"dots"`` (the
         paper's green dots at stable points, every ``dots_stride``-th grid point).
     rho_max : top of the colour scale; larger values use the top colour.

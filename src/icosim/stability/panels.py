@@ -22,9 +22,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import stability as _stability
-from .coupling import DECOMPOSITIONS, METHODS, make_method
-from .model import ParameterError, TestModel
+from .. import methods as _methods
+from ..backend import FLOAT64_DIGITS
+from ..decompositions import DECOMPOSITIONS
+from ..methods import make_method
+from ..model import ParameterError, TestModel
+from .policy import spectral_radius
 
 __all__ = [
     "PanelSpec",
@@ -35,38 +38,52 @@ __all__ = [
     "row_label",
     "row_label_keys",
     "format_row_label",
-    "ROW_SYMBOLS",
-    "METHOD_PARAMETERS_UNITS",
+    "row_symbols",
+    "row_keys",
+    "method_param_names",
+    "method_parameters_units",
     "RATIOS",
-    "METHOD_PARAMS",
-    "ROW_KEYS",
     "VIEWS",
 ]
 
 #: The three fixed ratios of Eq. (71) that a panel holds constant.
 RATIOS = ("am21", "alr21", "ali21")
-#: Method parameters under their command-line names.
-METHOD_PARAMS = ("mu", "beta", "gamma", "index", "a", "b")
-#: What a row of a figure may change.
-ROW_KEYS = RATIOS + ("mu", "beta", "gamma", "a", "b")
 #: A panel shows the whole parameter range or a zoom near the origin.
 VIEWS = ("full", "zoom")
-#: The method parameters of a panel are the engine's dimensionless ones.
-METHOD_PARAMETERS_UNITS = (
-    "dimensionless (beta_bar = beta/H, gamma_bar = gamma/H^2, mu_bar = mu/H; a, b dimensionless): "
-    "the attributes mu, beta, gamma are mu_bar, beta_bar, gamma_bar"
-)
-#: Symbols of the row parameters (plain text; the figures use their TeX form).
-ROW_SYMBOLS = {
-    "am21": "αm21",
-    "alr21": "αλr21",
-    "ali21": "αλi21",
-    "mu": "μ̄",
-    "beta": "β̄",
-    "gamma": "γ̄",
-    "a": "a",
-    "b": "b",
-}
+#: Symbols of the ratios (plain text; the figures use their TeX form).
+RATIO_SYMBOLS = {"am21": "αm21", "alr21": "αλr21", "ali21": "αλi21"}
+
+
+def method_param_names() -> tuple:
+    """Method parameters under their command-line names (every registered method's, and ``index``)."""
+    return _methods.argument_names()
+
+
+def row_keys() -> tuple:
+    """What a row of a figure may change: a ratio or a method parameter (not the index)."""
+    return RATIOS + tuple(_methods.parameters())
+
+
+def row_symbols() -> dict:
+    """Symbols of the row parameters (plain text; the figures use their TeX form)."""
+    return {**RATIO_SYMBOLS, **{name: p.symbol for name, p in _methods.parameters().items()}}
+
+
+def method_parameters_units() -> str:
+    """The ``method_parameters_units`` attribute: the panels hold the engine's dimensionless parameters."""
+    params = _methods.parameters()
+    scaled = [name for name, p in params.items() if p.scaling]
+    plain = sorted(name for name, p in params.items() if not p.scaling)
+
+    def per_H(name):
+        power = params[name].scaling
+        return f"{name}_bar = {name}/H" + (f"^{power}" if power != 1 else "")
+
+    return (
+        f"dimensionless ({', '.join(per_H(n) for n in sorted(scaled))}; {', '.join(plain)} dimensionless): "
+        f"the attributes {', '.join(scaled)} are {', '.join(n + '_bar' for n in scaled)}"
+    )
+
 
 LONG_NAMES = {
     "lr1": "real part of the eigenvalue of subsystem 1, lambda_bar_r1 = -d_bar_1/2",
@@ -122,7 +139,7 @@ class PanelSpec:
     row_keys: tuple = RATIOS
 
     @classmethod
-    def from_params(cls, params: dict) -> "PanelSpec":
+    def from_params(cls, params: dict) -> PanelSpec:
         """Build from the plain dict a workflow passes (keys as the field names)."""
         known = {f for f in cls.__dataclass_fields__}
         unknown = sorted(set(params) - known)
@@ -136,8 +153,7 @@ class PanelSpec:
         return cls(**p)
 
     def __post_init__(self):
-        if self.method not in METHODS:
-            raise ParameterError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
+        _methods.get_spec(self.method)  # refuses an unknown method, naming the known ones
         if self.decomposition not in DECOMPOSITIONS:
             raise ParameterError(
                 f"decomposition must be one of {', '.join(DECOMPOSITIONS)}, got {self.decomposition!r}"
@@ -148,10 +164,10 @@ class PanelSpec:
             raise ParameterError(f"k must be an integer >= 0, got {self.k!r}")
         if self.policy not in ("auto", "float64", "mp"):
             raise ParameterError(f"policy must be 'auto', 'float64' or 'mp', got {self.policy!r}")
-        bad = [key for key in self.row_keys if key not in ROW_KEYS]
+        bad = [key for key in self.row_keys if key not in row_keys()]
         if bad or not self.row_keys:
             raise ParameterError(
-                f"row_keys must be a non-empty list of {', '.join(ROW_KEYS)}, got {list(self.row_keys)}"
+                f"row_keys must be a non-empty list of {', '.join(row_keys())}, got {list(self.row_keys)}"
             )
 
     def coupling_method(self):
@@ -179,9 +195,7 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
     LR, LI = np.meshgrid(lr1, li1, indexing="ij")
     model = TestModel(LR, LI, spec.am21, spec.alr21, spec.ali21)
 
-    result = _stability.spectral_radius(
-        model, method, spec.decomposition, spec.k, digits=spec.digits, policy=spec.policy
-    )
+    result = spectral_radius(model, method, spec.decomposition, spec.k, digits=spec.digits, policy=spec.policy)
 
     dims = ("lr1", "li1")
     ds = xr.Dataset(
@@ -206,7 +220,7 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
                 {
                     "long_name": LONG_NAMES["digits"],
                     "units": "1",
-                    "comment": f"{_stability.FLOAT64_DIGITS} = float64; larger = mpmath recheck of a point "
+                    "comment": f"{FLOAT64_DIGITS} = float64; larger = mpmath recheck of a point "
                     "float64 could not decide",
                 },
             ),
@@ -240,7 +254,7 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
     )
     for name, value in method.params.items():  # beta, gamma, mu, index, a, b as resolved
         attrs[name] = int(value) if name == "index" else float(value)
-    attrs["method_parameters_units"] = METHOD_PARAMETERS_UNITS
+    attrs["method_parameters_units"] = method_parameters_units()
     # what tells the rows of the figure apart: the figure labels its rows from these
     attrs["row_label_keys"] = " ".join(spec.row_keys)
     attrs["row_label"] = format_row_label(spec.row_keys, attrs)
@@ -250,7 +264,7 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
         n_points=int(LR.size),
         n_high_precision=int(result.n_high_precision),
         # rechecked points on the undamped axis lr1 = 0, where rho = 1 to working precision
-        n_high_precision_undamped=int(np.sum((np.asarray(result.digits) > _stability.FLOAT64_DIGITS) & (LR == 0))),
+        n_high_precision_undamped=int(np.sum((np.asarray(result.digits) > FLOAT64_DIGITS) & (LR == 0))),
         n_stable=int(np.sum(result.stable)),
         seconds_total=float(sum(result.seconds.values())),
         seconds_mp=float(result.seconds["mp"]),
@@ -277,7 +291,7 @@ def row_label_keys(figure_cfg: dict) -> tuple:
     panel (attribute ``row_label_keys``), so the figure, the report and any
     other reader label rows alike.
     """
-    varied = sorted({key for r in figure_cfg["rows"] for key in r}, key=ROW_KEYS.index)
+    varied = sorted({key for r in figure_cfg["rows"] for key in r}, key=row_keys().index)
     if any(key in RATIOS for key in varied) or not varied:
         return RATIOS
     return tuple(varied)
@@ -285,7 +299,7 @@ def row_label_keys(figure_cfg: dict) -> tuple:
 
 def format_row_label(keys, values: dict, symbols: dict | None = None) -> str:
     """``"symbol = value, ..."`` for ``keys`` (plain-text symbols unless given)."""
-    symbols = symbols or ROW_SYMBOLS
+    symbols = symbols or row_symbols()
     return ", ".join(f"{symbols[key]} = {float(values[key]):g}" for key in keys)
 
 
@@ -342,7 +356,7 @@ def figure_panels(figure: str, figure_cfg: dict, *, grid: dict, zoom_grid: dict,
         missing = [r for r in RATIOS if r not in values]
         if missing:
             raise ParameterError(f"{where}: row {row} has no value for {', '.join(missing)} (give it in ratios)")
-        method_params = {key: values[key] for key in METHOD_PARAMS if key in values}
+        method_params = {key: values[key] for key in method_param_names() if key in values}
         try:
             make_method(figure_cfg["method"], **method_params).check_decomposition(
                 DECOMPOSITIONS[figure_cfg["decomposition"]]

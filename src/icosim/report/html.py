@@ -1,8 +1,7 @@
-"""Building blocks of the self-contained HTML report (no Snakemake here).
+"""Building blocks of the self-contained HTML report: escaping, tables, figures, sections, the page.
 
-Each part of the workflow renders one *section* (an HTML fragment with its
-figures embedded as base64 PNG) from its datasets and claim verdicts; the
-report rule assembles the sections into ``reports/icosim_report.html``.
+>>> table(["a", "b"], [[1, "<x>"]])
+'<table><thead><tr><th>a</th><th>b</th></tr></thead><tbody><tr><td>1</td><td>&lt;x&gt;</td></tr></tbody></table>'
 """
 
 from __future__ import annotations

@@ -1,0 +1,50 @@
+"""The check kinds of every part in one table, and the claims functions bound to it.
+
+Each part defines its kinds in its own ``checks`` module; this registry imports
+them all (as scipy's ``solve_ivp`` keeps its ``METHODS`` table), so the generic
+machinery in :mod:`icosim.claims` needs to import no part and no part needs to
+register itself.
+
+=============================  ==========================================
+module                         check kinds
+=============================  ==========================================
+:mod:`icosim.stability.checks`    ``stable_fraction``, ``compare``, ``trend``
+:mod:`icosim.convergence.checks`  ``convergence_order``
+:mod:`icosim.pendulum.checks`     ``pendulum_stability``
+=============================  ==========================================
+
+>>> sorted(CHECKS)
+['compare', 'convergence_order', 'pendulum_stability', 'stable_fraction', 'trend']
+"""
+
+from __future__ import annotations
+
+from . import claims as _claims
+from .claims import Claim, Verdict
+from .convergence import checks as _convergence
+from .pendulum import checks as _pendulum
+from .stability import checks as _stability
+
+__all__ = ["CHECKS", "parse_claims", "load_claims", "evaluate_claim", "evaluate"]
+
+#: check kind -> :class:`icosim.claims.CheckKind`, for every part.
+CHECKS = {**_stability.CHECKS, **_convergence.CHECKS, **_pendulum.CHECKS}
+
+
+def parse_claims(items, *, where: str = "claims") -> list[Claim]:
+    """:func:`icosim.claims.parse_claims` with every part's check kinds."""
+    return _claims.parse_claims(items, CHECKS, where=where)
+
+
+def load_claims(path, key: str = "claims") -> list[Claim]:
+    """:func:`icosim.claims.load_claims` with every part's check kinds."""
+    return _claims.load_claims(path, CHECKS, key=key)
+
+
+def evaluate_claim(claim: Claim, datasets) -> Verdict:
+    return _claims.evaluate_claim(claim, datasets, CHECKS)
+
+
+def evaluate(claims, datasets) -> list[Verdict]:
+    """One :class:`~icosim.claims.Verdict` per claim, with every part's check kinds."""
+    return _claims.evaluate(claims, datasets, CHECKS)

@@ -1,0 +1,64 @@
+"""Panel datasets read back as one record per curve (what the claims and the report select)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..methods import METHODS, parameters
+
+__all__ = ["curves", "curve_label", "stable_span"]
+
+
+# --------------------------------------------------------------------------- curves and claims
+def curves(datasets) -> list:
+    """Flatten panel datasets into one record per curve (dict)."""
+    out = []
+    for ds in datasets:
+        for i, index in enumerate(ds["index"].values):
+            for j, k in enumerate(ds["k"].values):
+                rec = {
+                    "figure": str(ds.attrs["figure"]),
+                    "decomposition": ds.attrs["decomposition"],
+                    "method": ds.attrs["method"],
+                    "panel": ds.attrs["panel"],
+                    "index": int(index),
+                    "k": int(k),
+                }
+                for name in parameters():
+                    if name in ds.coords:
+                        rec[name] = float(ds[name].values[i])
+                    elif name in ds.attrs:
+                        rec[name] = float(ds.attrs[name])
+                for name in ("order", "order_stderr", "fit_H_min", "fit_H_max", "order_second_half"):
+                    rec[name] = float(ds[name].values[i, j])
+                rec["fit_n_points"] = int(ds["fit_n_points"].values[i, j])
+                rec["H"] = ds["H"].values
+                rec["nrmse"] = ds["nrmse"].values[i, j]
+                rec["unstable"] = ds["unstable"].values[i, j].astype(bool)
+                out.append(rec)
+    return out
+
+
+def curve_label(rec) -> str:
+    """E.g. ``ff, baumgarte, index 1, mu = 0.005, k = 0`` (the parameters the registry labels curves by)."""
+    parts = [rec["decomposition"], rec["method"]]
+    spec = METHODS.get(rec["method"])
+    if spec is None or spec.takes_index:
+        parts.append(f"index {rec['index']}")
+    unused = spec.unused(rec["index"]) if spec else ()
+    for name in spec.label_parameters if spec else ():
+        if name in rec and np.isfinite(rec[name]) and name not in unused:
+            parts.append(f"{name} = {rec[name]:g}")
+    parts.append(f"k = {rec['k']}")
+    return ", ".join(parts)
+
+
+def stable_span(rec) -> str:
+    """Human-readable range of H where the curve is stable."""
+    H, u = rec["H"], rec["unstable"]
+    if u.all():
+        return "none"
+    if not u.any():
+        return "all"
+    Hs = H[~u]
+    return f"{Hs.min():.2g} to {Hs.max():.2g} s"

@@ -1,0 +1,28 @@
+"""The planar double pendulum of Sect. 4 as a co-simulation problem.
+
+Two rigid links, link 1 pinned to ground (subsystem 1) and link 2 free
+(subsystem 2), coupled at a joint; the same macro step as for the linear model
+(:func:`icosim.macrostep.macro_step`) drives them.  The model, its sign
+conventions, the displacement/displacement formulation, the sensitivities and
+the projection are described in ``docs/pendulum.md``.
+
+==========================  =====================================================
+module                      holds
+==========================  =====================================================
+:mod:`.model`               parameters, joint points and the joint constraint
+:mod:`.links`               the two links as subsystems (force or kinematically driven)
+:mod:`.problem`             :class:`~.problem.PendulumCosimulation`, the problem
+:mod:`.projection`          the mass-weighted projection (step 4)
+:mod:`.reference`           the monolithic model, reference solution, consistent history
+:mod:`.runs`                a whole run up to the end time, divergence or failure
+:mod:`.names`               names of runs, series and coupling variables
+:mod:`.datasets`            run and reference datasets (NetCDF contract)
+:mod:`.linearised`          the pendulum's point in the linear test model (Sect. 3)
+:mod:`.summary`             one row per run: errors, expected and observed behaviour
+:mod:`.checks`              the ``pendulum_stability`` claims
+:mod:`.config`              a ``pendulum:`` configuration, checked before any job
+==========================  =====================================================
+
+The package imports none of its modules: import the one you need, e.g.
+``from icosim.pendulum.runs import run_cosimulation``.
+"""

@@ -1,0 +1,56 @@
+"""The pendulum's point in the parameter plane of the linear test model (Sect. 3), and its spectral radius.
+
+The paper explains the instability of the weighted multiplier at ``k = 2`` by
+the stability plot of the linear test model near the origin; these functions
+put the pendulum on that plot.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..methods import CouplingMethod, engine_method
+from ..model import TestModel
+from ..stability import spectral_radius
+from .model import PendulumParameters
+from .reference import Monolithic
+
+__all__ = ["pendulum_test_model", "linear_test_model_rho"]
+
+
+def pendulum_test_model(params: PendulumParameters, H: float):
+    """The pendulum's point in the parameter plane of Sect. 3: a :class:`~icosim.TestModel` with two points.
+
+    As in the paper's explanation of Fig. 8, ``lr1 = -d H / (2 m1)`` (the
+    damping per unit mass of one link, in macro steps).  ``li1 = omega H`` for
+    the two modal frequencies ``omega`` of the pendulum linearised about its
+    hanging rest (imaginary parts of the eigenvalues of the monolithic model's
+    Jacobian, central differences): the two points bracket the frequencies the
+    swinging pendulum passes through.  Ratios: ``am21 = m2/m1``,
+    ``alr21 = m1/m2`` (the same damping ``d`` on each link), ``ali21 = 1``.
+    """
+    mono = Monolithic(params)
+    y0 = np.array([-math.pi / 2, -math.pi / 2, 0.0, 0.0])
+    h = 1e-6
+    jac = np.array([(mono.rhs(0, y0 + h * ej) - mono.rhs(0, y0 - h * ej)) / (2 * h) for ej in np.eye(4)]).T
+    omegas = np.sort(np.unique(np.round(np.abs(np.linalg.eigvals(jac).imag), 12)))
+    omegas = omegas[omegas > 0]
+    lr1 = -params.d * H / (2 * params.m1)
+    return TestModel(np.full(omegas.shape, lr1), omegas * H, params.m2 / params.m1, params.m1 / params.m2, 1.0)
+
+
+def linear_test_model_rho(params: PendulumParameters, H: float, method: CouplingMethod, decomposition: str, k: int):
+    """Largest spectral radius of the linear test model (Sect. 3) at the pendulum's points
+    (:func:`pendulum_test_model`), for the dimensionless form of ``method``.
+
+    The method's parameters are in SI units here and are scaled as the registry
+    says (:func:`icosim.methods.engine_method`: Baumgarte's ``beta_bar = beta/H``,
+    ``gamma_bar = gamma/H^2``; the weighted multiplier's ``a``, ``b`` are
+    dimensionless already).  Returns ``(rho, model)``.
+    """
+    dimensionless = engine_method(method, H)
+    model = pendulum_test_model(params, H)
+    result = spectral_radius(model, dimensionless, decomposition, int(k))
+    return float(np.max(result.rho)), model

@@ -1,0 +1,192 @@
+"""The double pendulum split into link 1 and link 2, as the macro step sees it (docs/pendulum.md).
+
+Each link is integrated over a macro step by Radau IIA (:mod:`icosim.radau`);
+the sensitivities of the coupling conditions are forward differences,
+integrated in one batch with the predictor.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..backend import Float64
+from ..decompositions import get_decomposition
+from ..lagrange import monomial_coefficients
+from ..model import ParameterError
+from ..problem import CosimulationProblem
+from ..radau import _fd_jacobian, radau_batch
+from .links import Link1, Link2
+from .model import PendulumParameters, joint_constraint
+from .names import COUPLING_VARIABLES
+from .projection import project_state
+
+__all__ = ["PendulumCosimulation"]
+
+
+#: Slices of ``e`` driving (link 1, link 2).
+_INPUTS = {
+    "ff": (slice(0, 2), slice(0, 2)),
+    "fd": (slice(0, 2), slice(2, 4)),
+    "dd": (slice(0, 2), slice(0, 2)),
+}
+
+
+# -- the co-simulation problem (protocol of icosim.macrostep) ----------------------
+class PendulumCosimulation(CosimulationProblem):
+    """The double pendulum split into link 1 and link 2 (decomposition ff, fd or dd).
+
+    State: ``s = (phi1, omega1, x_S2, y_S2, phi2, vx2, vy2, omega2)`` at ``T_N``.
+    History: ``h[j, :] = e_N-j``, ``j = 0..k`` (names :data:`COUPLING_VARIABLES`).
+    Outputs at ``T_N+1``: ``y[i, :, :] = (P_i, P_i', P_i'', f_i)`` per link
+    (joint point position, velocity, acceleration, joint force on link 2 as
+    seen by link ``i``: the input ``lambda_c`` for a force-driven link, the
+    multiplier for a kinematically driven one).
+    """
+
+    def __init__(
+        self,
+        params: PendulumParameters,
+        decomposition: str,
+        k: int,
+        H: float,
+        *,
+        rtol: float = 1e-6,
+        atol: float = 1e-6,
+        fd_step: float = 1e-3,
+        newton_tol: float = 1e-8,
+    ):
+        dec = get_decomposition(decomposition)
+        if not (isinstance(k, int) and not isinstance(k, bool) and k >= 0):
+            raise ParameterError(f"k must be an integer >= 0, got {k!r}")
+        for name, v in (("H", H), ("rtol", rtol), ("atol", atol), ("fd_step", fd_step), ("newton_tol", newton_tol)):
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ParameterError(f"{name} must be a finite number > 0, got {v!r}")
+        super().__init__(dec, k, Float64())
+        self.params, self.H = params, float(H)
+        self.rtol, self.atol, self.fd_step, self.newton_tol = rtol, atol, fd_step, newton_tol
+        self.links = (Link1(params, dec.kinds[0]), Link2(params, dec.kinds[1]))
+        self.inputs = _INPUTS[dec.name]
+        # monomial coefficients of the interpolation polynomial (Eq. 11) in tau = (t - T_N)/H
+        self.C_corr = np.array(monomial_coefficients(self.corr_nodes), dtype=float)
+        self._cache = None
+        self._jac0 = {}
+        # split: integrations that took more than one step or rejected one (docs/pendulum.md)
+        self.stats = {"integrations": 0, "steps": 0, "rejected": 0, "fev": 0, "split": 0}
+
+    @property
+    def n_coupling(self) -> int:
+        """Coupling variables per time point: two per joint quantity (:data:`COUPLING_VARIABLES`)."""
+        return len(COUPLING_VARIABLES[self.decomposition.name])
+
+    # -- helpers --------------------------------------------------------------
+    def _split(self, state):
+        return state[:2], state[2:]
+
+    def _integrate(self, i, state, samples):
+        """Integrate link ``i`` over one macro step for a batch of input samples.
+
+        ``samples`` (B, k+1, n_u) at the corrector nodes ``1, 0, ..., -k+1``.
+        Returns end states (B, n) and outputs (B, 4, 2).
+        """
+        link = self.links[i]
+        coef = np.einsum("mj,bju->bmu", self.C_corr, samples)
+        y0 = np.broadcast_to(self._split(state)[i], (samples.shape[0], link.n))
+        fun = link.rhs(coef, self.H)
+        # The Newton matrix of the first Radau step is shared by all integrations
+        # of this link from this state (predictor, sensitivities, corrector).
+        if self._jac0.get(i, (None,))[0] is not state:
+            self._jac0[i] = (state, _fd_jacobian(fun, 0.0, y0[:1], fun(0.0, y0[:1]))[0])
+        r = radau_batch(
+            fun, 0.0, self.H, y0, rtol=self.rtol, atol=self.atol, newton_tol=self.newton_tol, jac0=self._jac0[i][1]
+        )
+        self.work.subsystem_integrations += 1
+        st = self.stats
+        st["integrations"] += 1
+        st["steps"] += r.n_steps
+        st["rejected"] += r.n_rejected
+        st["fev"] += r.n_fev
+        st["split"] += r.n_steps > 1 or r.n_rejected > 0
+        u1 = coef.sum(axis=1)  # input at tau = 1
+        return r.y, link.outputs(r.y, r.f, u1)
+
+    def _linearise(self, state, history, e):
+        """Outputs at ``e`` and ``d residuals / d e`` by forward differences (one batch per link)."""
+        base = self.corrector_samples(history, e)
+        n_e = self.n_coupling
+        h = self.fd_step * np.maximum(1.0, np.abs(e))
+        ys, perturbed = [], []
+        for i in range(2):
+            sl = self.inputs[i]
+            idx = np.arange(n_e)[sl]
+            batch = np.broadcast_to(base, (1 + idx.size,) + base.shape).copy()
+            batch[1 + np.arange(idx.size), 0, idx] += h[idx]
+            _, y = self._integrate(i, state, batch[:, :, sl])
+            ys.append(y[0])
+            perturbed.append(dict(zip(idx.tolist(), y[1:])))
+        y0 = np.stack(ys)
+        r0 = self.residuals(y0)
+        jac = {key: np.zeros(val.shape + (n_e,)) for key, val in r0.items()}
+        for j in range(n_e):
+            # every link driven by e_j responds (in ff and dd both links are)
+            y = y0.copy()
+            for i in range(2):
+                if j in perturbed[i]:
+                    y[i] = perturbed[i][j]
+            for key, val in self.residuals(y).items():
+                jac[key][..., j] = (val - r0[key]) / h[j]
+        return y0, jac
+
+    # -- the problem interface ------------------------------------------------
+    def extrapolate(self, history):
+        # The base class's sum, formed as one BLAS dot product: equal up to rounding, and kept so
+        # that the pendulum's results stay bitwise those computed before the base class existed.
+        return np.tensordot(self.w_pred, history, axes=(0, 0))
+
+    def predict(self, state, history):
+        e_p = self.extrapolate(history)
+        y, jac = self._linearise(state, history, e_p)
+        self._cache = (state, history, e_p, jac)
+        return y
+
+    def jacobians(self, state, history, e, y):
+        c = self._cache
+        if c is not None and c[0] is state and c[1] is history and np.array_equal(c[2], e):
+            return c[3]
+        return self._linearise(state, history, e)[1]
+
+    def correct(self, state, history, e_new):
+        samples = self.corrector_samples(history, e_new)[None]
+        ends, ys = [], []
+        for i in range(2):
+            end, y = self._integrate(i, state, samples[:, :, self.inputs[i]])
+            ends.append(end[0])
+            ys.append(y[0])
+        return np.concatenate(ends), np.stack(ys)
+
+    def residuals(self, y):
+        """Joint constraint on each level (2 rows; dd: its normal component) and force balance."""
+        d = y[..., 0, :, :] - y[..., 1, :, :]  # link 1 minus link 2: g_c, g_c', g_c'', f1 - f2
+        if self.decomposition.name == "dd":
+            P1 = y[..., 0, 0, :]
+            e1 = P1 / np.linalg.norm(P1, axis=-1, keepdims=True)
+            n1 = np.stack([-e1[..., 1], e1[..., 0]], axis=-1)
+            proj = lambda v: np.sum(e1 * v, axis=-1, keepdims=True)  # noqa: E731
+            return {
+                "pos": proj(d[..., 0, :]),
+                "vel": proj(d[..., 1, :]),
+                "acc": proj(d[..., 2, :]),
+                # n1 . mu_2 - mu_1 (f_1 = mu_1 n1)
+                "force": -np.sum(n1 * d[..., 3, :], axis=-1, keepdims=True),
+            }
+        out = {"pos": d[..., 0, :], "vel": d[..., 1, :], "acc": d[..., 2, :]}
+        out["force"] = -d[..., 3, :] if self.decomposition.name == "fd" else d[..., 3, :0]
+        return out
+
+    def project(self, state):
+        return project_state(self.params, state)
+
+    # -- quantities of a state ----------------------------------------------------
+    def constraint(self, state):
+        return joint_constraint(self.params, state)

@@ -1,0 +1,180 @@
+"""A whole co-simulation run of the pendulum: to the end time, or to divergence or failure.
+
+The run goes through :func:`icosim.macrostep.simulate`; it *diverges* at the
+first macro step beyond a bound (or not finite) and *fails* at the first step
+that cannot be computed (a :class:`~icosim.macrostep.StepFailure`: it says
+nothing about stability).  The stored series end at the step before.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..decompositions import get_decomposition
+from ..macrostep import StepFailure, simulate
+from ..methods import CouplingMethod
+from ..model import ParameterError
+from .model import PendulumParameters, joint_constraint
+from .problem import PendulumCosimulation
+from .reference import consistent_history
+
+__all__ = ["RunResult", "run_cosimulation", "CouplingSolveError"]
+
+
+# -- a whole run ------------------------------------------------------------------
+@dataclass
+class RunResult:
+    """Time series of one co-simulation run up to the end time, divergence or failure.
+
+    ``status`` is ``stable`` (reached the end time), ``diverged`` (a step
+    exceeded a bound or was not finite, at ``t_diverged``) or ``failed`` (a
+    step could not be computed, at ``t_failed``); ``reason`` says why.
+    """
+
+    t: np.ndarray
+    series: dict  # name -> array over t (VARIABLES plus g_cax_corrector, g_cay_corrector)
+    status: str
+    t_diverged: float  # nan unless diverged
+    t_failed: float  # nan unless failed
+    reason: str
+    stats: dict
+    wall_time: float
+
+    @property
+    def diverged(self) -> bool:
+        return self.status == "diverged"
+
+    @property
+    def failed(self) -> bool:
+        return self.status == "failed"
+
+
+class CouplingSolveError(StepFailure):
+    """The linear system for the corrected coupling variables is singular."""
+
+
+class _SingularSolveAsFailure:
+    """A coupling method whose singular linear solve is a failed step (:class:`CouplingSolveError`)."""
+
+    def __init__(self, method: CouplingMethod):
+        self._method = method
+
+    def __getattr__(self, name):
+        return getattr(self._method, name)
+
+    def corrected_coupling(self, *args, **kwargs):
+        try:
+            return self._method.corrected_coupling(*args, **kwargs)
+        except np.linalg.LinAlgError as exc:
+            raise CouplingSolveError(f"singular coupling system ({exc})") from exc
+
+
+def _series_row(p: PendulumParameters, state, g_corrector, lam) -> dict:
+    """One time point of the stored series."""
+    g = joint_constraint(p, state)
+    return dict(
+        phi1=state[0],
+        phi2=state[4],
+        g_cax=g[0],
+        g_cay=g[1],
+        lambda_cax=lam[0],
+        lambda_cay=lam[1],
+        g_cax_corrector=g_corrector[0],
+        g_cay_corrector=g_corrector[1],
+    )
+
+
+def run_cosimulation(
+    params: PendulumParameters,
+    method: CouplingMethod,
+    decomposition: str,
+    k: int,
+    *,
+    H: float,
+    t_end: float,
+    rtol: float = 1e-6,
+    atol: float = 1e-6,
+    fd_step: float = 1e-3,
+    newton_tol: float = 1e-8,
+    iterations: int = 1,
+    tol: float | None = None,
+    max_constraint: float = 1e-2,
+    max_multiplier: float = 1e3,
+    max_rate: float = 1e2,
+) -> RunResult:
+    """Co-simulate from ``t = 0`` to ``t_end`` with macro step ``H`` (:func:`icosim.macrostep.simulate`).
+
+    The run *diverges* at the first macro step whose state, coupling variables
+    or outputs are not finite, whose joint constraint (after the step or after
+    the corrector) exceeds ``max_constraint`` (m), whose joint force exceeds
+    ``max_multiplier`` (N) or whose angular rates exceed ``max_rate`` (rad/s);
+    it *fails* at the first step that raises a
+    :class:`~icosim.macrostep.StepFailure`.  The series end at the step before.
+    """
+    dec = get_decomposition(decomposition)
+    method.check_decomposition(dec)
+    if not (isinstance(iterations, int) and iterations >= 1):
+        raise ParameterError(f"iterations must be an integer >= 1, got {iterations!r}")
+    for name, v in (
+        ("t_end", t_end),
+        ("max_constraint", max_constraint),
+        ("max_multiplier", max_multiplier),
+        ("max_rate", max_rate),
+    ):
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise ParameterError(f"{name} must be a finite number > 0, got {v!r}")
+    if tol is not None and not (math.isfinite(tol) and tol > 0):
+        raise ParameterError(f"tol must be a finite number > 0 or null, got {tol!r}")
+    n_steps = int(round(t_end / H))
+    if abs(n_steps * H - t_end) > 1e-9 * t_end:
+        raise ParameterError(f"t_end = {t_end!r} must be a whole number of macro steps H = {H!r}")
+    problem = PendulumCosimulation(params, dec.name, k, H, rtol=rtol, atol=atol, fd_step=fd_step, newton_tol=newton_tol)
+    state = params.initial_state()
+    history = consistent_history(params, dec.name, k, H)
+
+    def joint_force(e, y):
+        return y[1, 3] if dec.name == "dd" else e[:2]
+
+    def check(state, history, y):
+        """Reason for divergence of a step, or None."""
+        g = problem.constraint(state)
+        g_corr = y[0, 0] - y[1, 0]
+        lam = joint_force(history[0], y)
+        if not np.all(np.isfinite(np.concatenate([state, history[0], g, g_corr, lam]))):
+            return "not finite"
+        if np.max(np.abs(g)) > max_constraint or np.max(np.abs(g_corr)) > max_constraint:
+            return f"|g_c| > {max_constraint} m"
+        if np.max(np.abs(lam)) > max_multiplier:
+            return f"|lambda_c| > {max_multiplier} N"
+        if max(abs(state[1]), abs(state[7])) > max_rate:
+            return f"|omega| > {max_rate} rad/s"
+        return None
+
+    t0 = time.perf_counter()
+    with np.errstate(all="ignore"):
+        traj = simulate(
+            problem,
+            _SingularSolveAsFailure(method),
+            state,
+            history,
+            n_steps,
+            check=check,
+            iterations=iterations,
+            tol=tol,
+        )
+    wall = time.perf_counter() - t0
+    g0 = problem.constraint(state)
+    rows = [_series_row(params, state, g0, consistent_history(params, "ff", 0, H)[0])]
+    for s, e, y in zip(traj.states[1:], traj.coupling[1:], traj.outputs[1:]):
+        rows.append(_series_row(params, s, y[0, 0] - y[1, 0], joint_force(e, y)))
+    n_done = len(rows) - 1
+    series = {name: np.array([row[name] for row in rows], dtype=float) for name in rows[0]}
+    status = "failed" if traj.failed_at else "diverged" if traj.diverged_at else "stable"
+    t_div = traj.diverged_at * H if traj.diverged_at else math.nan
+    t_fail = traj.failed_at * H if traj.failed_at else math.nan
+    stats = dict(problem.stats, macro_steps=n_done)
+    return RunResult(H * np.arange(n_done + 1), series, status, t_div, t_fail, traj.reason or "", stats, wall)
