@@ -1,8 +1,13 @@
 # Shared helpers for all parts of the workflow.  The library lives in src/icosim and
 # knows nothing of Snakemake; rules are thin and call it from workflow/scripts/.
+import json
 import os
+import sys
+import tempfile
 from pathlib import Path
 
+import yaml
+from snakemake.exceptions import WorkflowError
 from snakemake.utils import validate
 
 validate(config, "../schemas/config.schema.yaml")
@@ -25,39 +30,68 @@ for _var in (
     os.environ.setdefault(_var, "Agg" if _var == "MPLBACKEND" else "1")
 
 
+# The library, read at parse time: configurations are checked before any job runs.
+sys.path.insert(0, str(Path(workflow.basedir) / "src"))
+from icosim.methods import METHODS  # noqa: E402
+from icosim.methods.schema import with_methods  # noqa: E402
+from icosim.sources import module_closure, script_closure  # noqa: E402
+
+
+def validate_part(part_config, schema):
+    """Validate against a schema whose method $defs are filled from the registry (icosim.methods)."""
+    path = Path(workflow.basedir) / "workflow" / "schemas" / schema
+    with open(path) as fh:
+        filled = with_methods(yaml.safe_load(fh))
+    with tempfile.TemporaryDirectory() as tmp:
+        materialised = Path(tmp) / path.name
+        materialised.write_text(json.dumps(filled))
+        validate(part_config, str(materialised))
+
+
+def _relative(paths):
+    return [str(p.relative_to(workflow.basedir)) for p in paths]
+
+
 def lib(*modules):
-    """Library source files a rule depends on.
+    """Library source files the named modules rest on (their transitive icosim imports).
 
-    Snakemake does not see modules that a script imports, so rules list the
-    modules they use as input: editing one reruns exactly what depends on it.
-    A name may be a module ('stability') or a subpackage ('figures').
+    Snakemake does not see modules that a script imports, so rules list them as input:
+    editing one reruns exactly what imports it.  Names are relative to the package
+    ('stability.panels').
     """
-    out = []
-    for name in modules:
-        path = Path(workflow.basedir) / "src" / "icosim" / name
-        if path.is_dir():
-            out += sorted(
-                str(p.relative_to(workflow.basedir)) for p in path.rglob("*.py")
-            )
-        else:
-            out.append(f"src/icosim/{name}.py")
-    return out
+    return _relative(
+        module_closure([f"icosim.{m}" for m in modules], Path(workflow.basedir) / "src")
+    )
 
 
-# The engine every numerical result rests on.
-ENGINE = lib(
-    "__init__",
-    "model",
-    "lagrange",
-    "backend",
-    "subsystems",
-    "coupling",
-    "macrostep",
-    "oscillator",
-    "stability",
-    "exact",
-    "datasets",
-)
+def script_lib(script):
+    """Library source files a workflow script rests on, read from its imports."""
+    return _relative(
+        script_closure(
+            Path(workflow.basedir) / "workflow" / "scripts" / f"{script}.py",
+            Path(workflow.basedir) / "src",
+        )
+    )
+
+
+# The engine every numerical result rests on: the macro step, its problems and methods,
+# and the stability analysis.
+ENGINE = lib("macrostep", "stability", "linear_problem", "methods")
+
+
+def engine_lib(script):
+    """script_lib of a job that computes numerical results: it must rest on the whole ENGINE."""
+    files = script_lib(script)
+    missing = sorted(set(ENGINE) - set(files))
+    if missing:
+        raise WorkflowError(
+            f"{script}.py does not import the engine ({', '.join(missing)})"
+        )
+    return files
+
+
+# Names of the registered coupling methods, for wildcard constraints.
+METHOD_NAMES = "|".join(METHODS)
 
 # Filled by each part's .smk file: every final target, and each part's report section
 # (an HTML fragment) keyed by part name.

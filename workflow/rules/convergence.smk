@@ -2,19 +2,15 @@
 # column) writing results/convergence/<dec>/fig<figure>_<panel>.nc, one plot job per figure and
 # decomposition, the work-precision timing and diagram, the paper's order claims checked
 # against the datasets, and the convergence section of the report.
-import sys
-
-sys.path.insert(0, str(Path(workflow.basedir) / "src"))
-from icosim.claims import load_claims  # noqa: E402
-from icosim.convergence import (
+from icosim.checks import load_claims  # noqa: E402
+from icosim.convergence.config import (
     check_claims_against_config,
-    figure_layout,
-    figure_panels,
-    resolve_scheme,
     study_from_config,
 )  # noqa: E402
+from icosim.convergence.panels import figure_layout, figure_panels  # noqa: E402
+from icosim.convergence.work_precision import resolve_scheme  # noqa: E402
 
-validate(config["convergence"], "../schemas/convergence.schema.yaml")
+validate_part(config["convergence"], "convergence.schema.yaml")
 
 CONVERGENCE = config["convergence"]
 # Model, initial conditions, end time and step sizes are checked here (H_min >= H_max, H_max
@@ -27,7 +23,7 @@ CONV_SETUP = {
     "growth_bound": CONVERGENCE["unstable"]["growth_bound"],
 }
 
-# (decomposition, figure, panel) -> icosim.convergence.PanelSpec.  Built here so that a
+# (decomposition, figure, panel) -> icosim.convergence.panels.PanelSpec.  Built here so that a
 # parameter a method does not take fails before any job runs, naming the figure.
 CONV_PANELS = {
     (spec.decomposition, spec.figure, spec.panel): spec
@@ -64,7 +60,7 @@ CONV_SECTION = "results/report/convergence.html"
 rule convergence_panel:
     """NRMSE of Eq. (72) over H for every row (index) and k of one figure column."""
     input:
-        lib=ENGINE + lib("convergence"),
+        lib=engine_lib("convergence_panel"),
     output:
         "results/convergence/{dec}/fig{figure}_{panel}.nc",
     log:
@@ -91,7 +87,7 @@ rule convergence_figure:
     """One convergence figure (rows = index, columns = parameter set) for one decomposition."""
     input:
         panels=lambda w: CONV_FIGURE_PANELS[(w.dec, w.figure)],
-        lib=lib("figures", "datasets"),
+        lib=script_lib("convergence_figure"),
     output:
         png=report(
             "results/convergence/figures/fig{figure}_{dec}.png",
@@ -129,7 +125,7 @@ rule convergence_work_precision:
                 for e in CONV_WP_ENTRIES
             }
         ),
-        lib=ENGINE + lib("convergence"),
+        lib=engine_lib("convergence_work_precision"),
     output:
         CONV_WP,
     log:
@@ -150,7 +146,7 @@ rule convergence_work_precision_figure:
     """Work-precision diagram: log-log CPU time per simulated second over NRMSE."""
     input:
         wp=CONV_WP,
-        lib=lib("figures", "datasets"),
+        lib=script_lib("convergence_work_precision_figure"),
     output:
         png=report(
             CONV_WP_FIGURE,
@@ -174,7 +170,7 @@ rule convergence_claims:
     input:
         datasets=CONV_ALL_PANELS,
         claims=CONV_CLAIMS_FILE,
-        lib=lib("claims", "convergence", "pendulum", "datasets", "model", "report"),
+        lib=script_lib("claims"),
     output:
         json=CONV_CLAIMS,
         tsv="results/convergence/claims.tsv",
@@ -196,7 +192,7 @@ rule convergence_report_section:
         wp=CONV_WP,
         claims=CONV_CLAIMS,
         panels=CONV_ALL_PANELS,
-        lib=lib("report", "convergence", "datasets", "claims"),
+        lib=script_lib("convergence_report_section"),
     output:
         CONV_SECTION,
     log:

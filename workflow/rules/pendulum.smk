@@ -2,13 +2,11 @@
 # job per (method, decomposition, k) writing results/pendulum/<method>_<dec>_k<k>.nc, the
 # errors and the claim of Sect. 4 in results/pendulum/summary.nc, one figure per k, and
 # the pendulum section of the report.
-import sys
+from icosim.checks import load_claims  # noqa: E402
+from icosim.pendulum.config import configured_runs  # noqa: E402
+from icosim.pendulum.names import run_name  # noqa: E402
 
-sys.path.insert(0, str(Path(workflow.basedir) / "src"))
-from icosim.claims import load_claims  # noqa: E402
-from icosim.pendulum import configured_runs, run_name  # noqa: E402
-
-validate(config["pendulum"], "../schemas/pendulum.schema.yaml")
+validate_part(config["pendulum"], "pendulum.schema.yaml")
 
 PENDULUM = config["pendulum"]
 # (method, decomposition, k) of every run; a method parameter it does not take, Baumgarte or
@@ -28,8 +26,6 @@ PENDULUM_FIGURES = [
 ]
 PENDULUM_ERROR_FIGURE = "results/pendulum/figures/pendulum_error.png"
 PENDULUM_SECTION = "results/report/pendulum.html"
-PENDULUM_LIB = lib("__init__", "pendulum", "radau", "coupling", "macrostep", "lagrange")
-PENDULUM_LIB += lib("model", "backend", "datasets")
 PENDULUM_DATASETS_OF_K = {
     int(k): [
         f"results/pendulum/{run_name(*r)}.nc" for r in PENDULUM_RUNS if r[2] == int(k)
@@ -41,7 +37,7 @@ PENDULUM_DATASETS_OF_K = {
 rule pendulum_reference:
     """Monolithic reference (minimal coordinates) on the macro-time grid."""
     input:
-        lib=PENDULUM_LIB,
+        lib=script_lib("pendulum_reference"),
     output:
         PENDULUM_REFERENCE,
     log:
@@ -60,13 +56,13 @@ rule pendulum_reference:
 rule pendulum_run:
     """One co-simulation run (method, decomposition, k) up to t_end or divergence."""
     input:
-        lib=PENDULUM_LIB,
+        lib=engine_lib("pendulum_run"),
     output:
         "results/pendulum/{method}_{decomposition}_k{k}.nc",
     log:
         "logs/pendulum/{method}_{decomposition}_k{k}.log",
     wildcard_constraints:
-        method="baumgarte|weighted|projection",
+        method=METHOD_NAMES,
         decomposition="ff|fd|dd",
         k=r"\d+",
     conda:
@@ -90,7 +86,7 @@ rule pendulum_summary:
         runs=PENDULUM_DATASETS,
         reference=PENDULUM_REFERENCE,
         claims=PENDULUM["claims"],
-        lib=PENDULUM_LIB + lib("stability", "oscillator", "claims"),
+        lib=script_lib("pendulum_summary"),
     output:
         PENDULUM_SUMMARY,
     log:
@@ -110,7 +106,7 @@ rule pendulum_figure:
     input:
         runs=lambda w: PENDULUM_DATASETS_OF_K[int(w.k)],
         reference=PENDULUM_REFERENCE,
-        lib=lib("figures/__init__", "figures/pendulum", "datasets"),
+        lib=script_lib("pendulum_figure"),
     output:
         png=report(
             "results/pendulum/figures/pendulum_k{k}.png",
@@ -140,7 +136,7 @@ rule pendulum_error_figure:
     input:
         runs=PENDULUM_DATASETS,
         reference=PENDULUM_REFERENCE,
-        lib=lib("figures/__init__", "figures/pendulum", "datasets"),
+        lib=script_lib("pendulum_error_figure"),
     output:
         PENDULUM_ERROR_FIGURE,
     log:
@@ -158,7 +154,7 @@ rule pendulum_claims:
     input:
         datasets=[PENDULUM_SUMMARY],
         claims=PENDULUM["claims"],
-        lib=lib("claims", "convergence", "pendulum", "datasets", "model", "report"),
+        lib=script_lib("claims"),
     output:
         json=PENDULUM_CLAIMS,
         tsv="results/pendulum/claims.tsv",
@@ -181,7 +177,7 @@ rule pendulum_report_section:
         summary=PENDULUM_SUMMARY,
         reference=PENDULUM_REFERENCE,
         claims=PENDULUM_CLAIMS,
-        lib=lib("report", "pendulum", "datasets", "claims"),
+        lib=script_lib("pendulum_report_section"),
     output:
         PENDULUM_SECTION,
     log:

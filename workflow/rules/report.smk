@@ -23,7 +23,7 @@ rule report:
         configfiles=[
             f for f in dict.fromkeys(workflow.configfiles) if os.path.exists(f)
         ],
-        lib=lib("report"),
+        lib=script_lib("report_page"),
     output:
         REPORT_HTML,
     log:

@@ -1,19 +1,16 @@
 # Stability plots, paper Figs. 9-20: one job per panel (figure x row x k x view) writing
 # results/stability/fig<figure>/r<row>_k<k>_<view>.nc, one plot job per figure, the paper's
 # claims checked against the datasets, and the stability section of the report.
-import sys
+from icosim.checks import load_claims  # noqa: E402
+from icosim.stability.panels import figure_panels, panel_id  # noqa: E402
 
-sys.path.insert(0, str(Path(workflow.basedir) / "src"))
-from icosim.claims import load_claims  # noqa: E402
-from icosim.sweep import figure_panels, panel_id  # noqa: E402
-
-validate(config["stability"], "../schemas/stability.schema.yaml")
+validate_part(config["stability"], "stability.schema.yaml")
 
 STABILITY = config["stability"]
 # figure numbers are names ("9"), also if written unquoted in the YAML
 STABILITY["figures"] = {str(fig): cfg for fig, cfg in STABILITY["figures"].items()}
 
-# (figure, panel id) -> icosim.sweep.PanelSpec, for every configured panel.  Built here so
+# (figure, panel id) -> icosim.stability.panels.PanelSpec, for every configured panel.  Built here so
 # that a parameter a method does not take fails before any job runs, naming the figure/row.
 STABILITY_PANELS = {
     (fig, panel_id(spec.row, spec.k, spec.view)): spec
@@ -54,7 +51,7 @@ STABILITY_SECTION = "results/report/stability.html"
 rule stability_sweep:
     """Spectral radius over the (lr1, li1) grid of one panel (float64 + mp rechecks)."""
     input:
-        lib=ENGINE + lib("sweep"),
+        lib=engine_lib("stability_sweep"),
     output:
         "results/stability/fig{figure}/{panel}.nc",
     log:
@@ -75,7 +72,7 @@ rule stability_figure:
     """One figure of the paper (rows x k, plus zooms) from its panels; PNG and PDF."""
     input:
         panels=lambda w: STABILITY_PANEL_FILES[w.figure],
-        lib=lib("figures/__init__", "figures/stability", "datasets"),
+        lib=script_lib("stability_figure"),
     output:
         png=report(
             "results/stability/figures/fig{figure}.png",
@@ -106,7 +103,7 @@ rule stability_claims:
     input:
         datasets=STABILITY_ALL_PANELS,
         claims=STABILITY_CLAIMS_FILE,
-        lib=lib("claims", "convergence", "pendulum", "datasets", "model", "report"),
+        lib=script_lib("claims"),
     output:
         json=STABILITY_CLAIMS,
         tsv=report(
@@ -132,7 +129,7 @@ rule stability_report_section:
         figures=[f for f in STABILITY_FIGURES if f.endswith(".png")],
         panels=STABILITY_ALL_PANELS,
         claims=STABILITY_CLAIMS,
-        lib=lib("report", "datasets", "sweep"),
+        lib=script_lib("stability_report_section"),
     output:
         STABILITY_SECTION,
     log:

@@ -6,8 +6,6 @@ from icosim.datasets import open_dataset
 from icosim.figures import save_figure
 from icosim.figures.convergence import convergence_figure
 
-snakemake = snakemake  # noqa: F821 (injected by Snakemake)
-
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params
 datasets = {ds.attrs["panel"]: ds for ds in (open_dataset(path) for path in snakemake.input.panels)}

@@ -1,12 +1,13 @@
-"""Snakemake job: one convergence panel (rows x k of one column) -> NetCDF (thin: icosim.convergence)."""
+"""Snakemake job: one convergence panel (rows x k of one column) -> NetCDF (thin: icosim.convergence.datasets)."""
 
 import json
 import logging
 
-from icosim.convergence import PanelSpec, Setup, Study, run_panel, step_counts
+from icosim.convergence.datasets import run_panel
+from icosim.convergence.experiment import Setup, step_counts
+from icosim.convergence.panels import PanelSpec
+from icosim.convergence.study import Study
 from icosim.datasets import provenance_attrs, write_netcdf
-
-snakemake = snakemake  # noqa: F821 (injected by Snakemake)
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params

@@ -1,220 +1,28 @@
-"""Snakemake job: the convergence section of the report (an HTML fragment).
-
-Everything shown comes from generated files: the figures, the claim verdicts
-(results/convergence/claims.json), the work-precision dataset and the panel
-datasets' attributes; the decisions are read from the configuration passed as params.
-"""
+"""Snakemake job: the convergence section of the report (thin: icosim.report.convergence)."""
 
 import logging
-from pathlib import Path
 
-import numpy as np
-
-from icosim import report as rp
-from icosim.claims import claims_table, read_verdicts, verdict_counts
-from icosim.convergence import Setup, fastest_schemes, oscillation_summary, step_counts
+from icosim.claims import read_verdicts
 from icosim.datasets import atomic_path, open_dataset
-
-snakemake = snakemake  # noqa: F821 (injected by Snakemake)
+from icosim.report.convergence import convergence_section
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params
-esc = rp.escape
-s = p.setup
-n_steps = step_counts(s["end_time"], p.step_sizes["H_min"], p.step_sizes["H_max"], p.step_sizes["num"])
-H = s["end_time"] / n_steps
-panels = [open_dataset(path) for path in snakemake.input.panels]
-seconds = sum(ds.attrs["seconds_total"] for ds in panels)
-n_curves = sum(ds.sizes["index"] * ds.sizes["k"] for ds in panels)
-n_unstable = sum(int(ds["unstable"].sum()) for ds in panels)
-n_runs = sum(int(ds["unstable"].size) for ds in panels)
-n_mp = sum(int((ds["spectral_radius_digits"] > 15).sum()) for ds in panels)
-osc = oscillation_summary(Setup(**s))
-if osc["overdamped"]:
-    horizon = (
-        f"the rigidly coupled system is overdamped (decay rate {osc['delta']:.3g} 1/s), "
-        f"the amplitude decays to {100 * osc['decay']:.2g} % of its start"
-    )
-else:
-    horizon = (
-        f"{osc['periods']:.2g} periods of the coupled oscillation (ω = {osc['omega']:.3g} rad/s), "
-        f"amplitude decaying to {100 * osc['decay']:.2g} % (decay rate {osc['delta']:.3g} 1/s)"
-    )
-
-decisions = [
-    f"Model (Sect. 3.7): m1 = {s['m1']:g} kg, m2 = {s['m2']:g} kg, c1 = {s['c1']:g} N/m, c2 = {s['c2']:g} N/m, "
-    f"d1 = {s['d1']:g} Ns/m, d2 = {s['d2']:g} Ns/m; macro-step size H in seconds.",
-    f"Initial conditions (not given in the paper; our choice): x1 = x2 = {s['x0']:g} m, v1 = v2 = {s['v0']:g} m/s at t = 0, "
-    f"consistent with the rigid link; end time T = {s['end_time']:g} s: {horizon} (every NRMSE denominator, the variance "
-    "of the reference, must stay well away from zero).",
-    "Coupling-variable history: the exact monolithic coupling variables (multiplier λ and/or acceleration) at "
-    "T_0, T_−1, …, T_−k (icosim.exact.consistent_start); both subsystems start at the exact state.",
-    f"Step sizes: {len(H)} sizes H = T/N_total from {H.min():.3g} s to {H.max():.3g} s "
-    f"({np.log10(H.max() / H.min()):.1f} decades; N_total from {n_steps.min()} to {n_steps.max()}).",
-    "Eq. (72), whose extraction is garbled (two brackets closed by ]^(1/2), one opened), is read as one square root of the "
-    "sum of the four normalised squared-error ratios of x1, x2, v1, v2, sums over N = 1 … N_total; the other reading "
-    "(two roots added) differs by at most √2 and cannot change an order. Both can be rebuilt from the datasets: "
-    "nrmse_x (x1, x2) and nrmse_v (v1, v2) are stored, nrmse = √(nrmse_x² + nrmse_v²), the other reading "
-    "nrmse_x + nrmse_v. nrmse_lambda is the same measure for the constraint force λ_c against the exact "
-    "multiplier (ff, fd), where the paper warns of index-3 chattering.",
-    f"Stepping: '{p.stepping}'"
-    + (
-        " — the macro step of the linear model is a fixed linear map, built once per (H, scheme) from the engine's "
-        "macro-step algorithm (icosim.stability.amplification_matrix) and iterated; identical to icosim.macrostep.simulate "
-        "up to round-off (tested)."
-        if p.stepping == "matrix"
-        else " — icosim.macrostep.simulate."
-    ),
-    f"Unstable: a run is stopped once |state| exceeds {p.unstable['growth_bound']:g} × the initial amplitude, and is "
-    "also unstable where the spectral radius of the recurrence at that H exceeds 1 (policy "
-    f"'{p.unstable['spectral_policy']}', mpmath at {p.unstable['digits']} digits where float64 cannot decide; "
-    f"{n_mp} of {n_runs} runs needed it). {n_unstable} of {n_runs} runs were unstable; they are drawn as × at the top "
-    "of a panel, never as an error.",
-    f"Order fit (icosim.convergence.fit_order): slope of log NRMSE over log H (scipy.stats.linregress) over the "
-    f"asymptotic range — the smallest-H window of at least {p.fit['min_points']} stable points whose local slopes agree "
-    f"with the fit within ±{p.fit['tolerance']:g} (slope ≥ {p.fit['min_order']:g}), grown toward larger H while it stays "
-    f"consistent; points below {p.fit['floor_factor']:g}·eps·N_total are round-off floor and left out. The fitted range "
-    "is stored in each dataset (fit_H_min, fit_H_max, fit_used).",
-]
-body = [
-    "<h3>What was computed</h3><ul>" + "".join(f"<li>{esc(d)}</li>" for d in decisions) + "</ul>",
-    f"<p>{n_curves} curves in {len(panels)} panel datasets (results/convergence/&lt;decomposition&gt;/fig*.nc), "
-    f"{seconds:.0f} s of compute in the panel jobs.</p>",
-]
-
-# -- claims -------------------------------------------------------------------------------------
 claims = read_verdicts(snakemake.input.claims)
-rows = []
-for c in claims:
-    first = True
-    for r in c["numbers"]["rows"]:
-        order = r["order"]
-        measured = (
-            "—"
-            if order is None or not np.isfinite(order)
-            else f"{order:.2f} on [{r['fit_H_min']:.2g}, {r['fit_H_max']:.2g}] s"
-        )
-        slopes = "—" if not r["local_slopes"] else f"{r['local_slopes'][0]:.2f} … {r['local_slopes'][1]:.2f}"
-        second = r["order_second_half"]
-        second = "—" if second is None or not np.isfinite(second) else f"{second:.2f}"
-        rows.append(
-            [
-                esc(c["id"]) if first else "",
-                esc(r["curve"]),
-                esc(r["claimed"]),
-                measured,
-                slopes,
-                second,
-                esc(r["stable_H"]),
-                rp.verdict_badge(r["verdict"]),
-            ]
-        )
-        first = False
-counts = verdict_counts(claims)
-tolerances = sorted({c["numbers"]["tolerance"] for c in claims})
-body.append(
-    f"<h3>The paper's claims</h3><p>{len(claims)} claims (config/claims/convergence.yaml), each checked on "
-    f"every curve it covers: {counts['pass']} pass, {counts['fail']} fail, {counts['undecided']} undecided. An order "
-    f"passes if the fitted asymptotic order is within ±{', '.join(f'{t:g}' for t in tolerances)} of the claim; it is "
-    "undecided where no order can be fitted (too few stable step sizes). 'unstable' passes if every step size is "
-    "unstable. Where the data disagree with the paper, the data stand and the last column explains.</p>"
-    + claims_table(claims, note_header="explanation")
-    + "<p>Per curve: the local slopes span neighbouring stable points from the fitted range up to the largest H "
-    "(pre-asymptotic range included, round-off floor left out); 'second half' is the order of Eq. (72) restricted "
-    "to T_N in (T/2, T], a diagnostic without the start-up transient.</p>"
-    + rp.table(
-        ["claim", "curve", "paper", "fitted order (range)", "local slopes", "second half", "stable H", "verdict"],
-        rows,
-        raw_columns=(7,),
-    )
+html = convergence_section(
+    setup=p.setup,
+    step_sizes=p.step_sizes,
+    stepping=p.stepping,
+    fit=p.fit,
+    unstable=p.unstable,
+    targets=p.targets,
+    figures=p.figures,
+    panels=[open_dataset(path) for path in snakemake.input.panels],
+    claims=claims,
+    figure_pngs=list(snakemake.input.figures),
+    wp=open_dataset(snakemake.input.wp),
+    wp_png=snakemake.input.wp_figure,
 )
-
-# -- figures --------------------------------------------------------------------------------------
-for png in snakemake.input.figures:
-    stem = Path(png).stem  # fig21_ff
-    fig, dec = stem[3:].split("_")
-    cfg = p.figures[fig]
-    paper = {"21": "Fig. 21", "22": "Fig. 22", "23": "Fig. 23"}.get(fig, f"Fig. {fig}")
-    shown = "as in the paper" if dec == "ff" else "not shown in the paper"
-    body.append(
-        rp.figure(
-            png,
-            f"<b>{paper}, {esc(dec)}</b> ({shown}): {esc(cfg['title'])}. NRMSE over H; filled points: "
-            "fitted asymptotic range, order p in the legend; ×: unstable at that H; dotted: O(H^p).",
-        )
-    )
-
-# -- work-precision -------------------------------------------------------------------------------
-wp = open_dataset(snakemake.input.wp)
-body.append(
-    "<h3>Work-precision</h3><p>"
-    + esc(
-        f"Timed: {wp.attrs['timed']}; CPU time ({wp.attrs['timer']}), minimum of {wp.attrs['repeats']} runs of "
-        f"{wp.attrs['steps']} macro steps after {wp.attrs['warmup_steps']} warm-up steps, per step, times T/H for one simulated "
-        "second. Every macro step of the linear model costs the same, so the time per simulated second is the time per step "
-        "divided by H. Unstable step sizes are left out. The NRMSE is taken from the panel datasets."
-    )
-    + "</p><p><b>Caveat.</b> "
-    + esc(
-        "The subsystems of the test model are integrated exactly, so what is timed is the coupling algorithm's Python "
-        "overhead, nearly equal for all schemes: the diagram is close to NRMSE over 1/H and says little about "
-        "numerically integrated subsystems. For those, weigh the counted work per macro step below (subsystem "
-        "integrations, coupling-condition solves, projections) with their cost there."
-    )
-    + "</p>"
-)
-body.append(
-    rp.figure(
-        snakemake.input.wp_figure, "CPU time per simulated second over NRMSE; one line per scheme, each point one H."
-    )
-)
-table_rows = []
-for entry in fastest_schemes(wp, p.targets):
-    rk = entry["ranking"]
-    if rk:
-        best = rk[0]
-        runner = "; ".join(f"{lab.split(' ', 1)[1]} ({sec:.3g} s)" for lab, sec, _ in rk[1:3])
-        table_rows.append(
-            [
-                entry["decomposition"],
-                f"{entry['target']:.0e}",
-                best[0].split(" ", 1)[1],
-                f"{best[1]:.3g}",
-                f"{best[2]:.3g}",
-                runner or "—",
-            ]
-        )
-    else:
-        table_rows.append([entry["decomposition"], f"{entry['target']:.0e}", "none reaches it", "—", "—", "—"])
-per_step = wp["cpu_seconds_per_step"].median(dim="H", skipna=True).values
-cost_rows = [
-    [
-        str(lab),
-        f"{1e3 * t:.3g}" if np.isfinite(t) else "— (unstable at every H)",
-        str(int(n_int)),
-        str(int(n_sol)),
-        str(int(n_proj)),
-    ]
-    for lab, t, n_int, n_sol, n_proj in zip(
-        wp["scheme"].values,
-        per_step,
-        wp["subsystem_integrations_per_step"].values,
-        wp["coupling_solves_per_step"].values,
-        wp["projections_per_step"].values,
-    )
-]
-body.append(
-    "<p>Which scheme reaches a given error fastest (least CPU time per simulated second among the measured step "
-    "sizes with NRMSE ≤ target):</p>"
-    + rp.table(
-        ["decomposition", "target NRMSE", "fastest scheme", "CPU s per simulated s", "at H (s)", "next two"], table_rows
-    )
-    + "<p>Cost of one macro step (median over H) and the work it consists of (counted on the engine's macro "
-    "step):</p>"
-    + rp.table(["scheme", "ms per macro step", "subsystem integrations", "coupling solves", "projections"], cost_rows)
-)
-
-html = rp.section("Convergence (Figs. 21–23)", "".join(body), anchor="convergence")
 with atomic_path(snakemake.output[0]) as tmp:
     tmp.write_text(html)
 logging.info("section written: %d claims, %d figures", len(claims), len(snakemake.input.figures))

@@ -3,10 +3,9 @@
 import json
 import logging
 
-from icosim.convergence import Setup, work_precision
+from icosim.convergence.experiment import Setup
+from icosim.convergence.work_precision import work_precision
 from icosim.datasets import open_dataset, provenance_attrs, write_netcdf
-
-snakemake = snakemake  # noqa: F821 (injected by Snakemake)
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params

@@ -6,8 +6,6 @@ from icosim.datasets import open_dataset
 from icosim.figures import save_figure
 from icosim.figures.convergence import work_precision_figure
 
-snakemake = snakemake  # noqa: F821 (injected by Snakemake)
-
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 wp = open_dataset(snakemake.input.wp)
 fig = work_precision_figure(wp, title="Work-precision: CPU time per simulated second over NRMSE (Eq. 72)")

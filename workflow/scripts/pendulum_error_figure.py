@@ -6,8 +6,6 @@ from icosim.datasets import open_dataset
 from icosim.figures import save_figure
 from icosim.figures.pendulum import error_figure
 
-snakemake = snakemake  # noqa: F821 (injected by Snakemake)
-
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 runs_by_k = {}
 for path in snakemake.input.runs:

@@ -4,9 +4,8 @@ import json
 import logging
 
 from icosim.datasets import provenance_attrs, write_netcdf
-from icosim.pendulum import PendulumParameters, reference_dataset
-
-snakemake = snakemake  # noqa: F821 (injected by Snakemake)
+from icosim.pendulum.datasets import reference_dataset
+from icosim.pendulum.model import PendulumParameters
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params

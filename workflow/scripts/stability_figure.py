@@ -5,8 +5,6 @@ import logging
 from icosim.datasets import open_dataset
 from icosim.figures import save_figure, stability_figure
 
-snakemake = snakemake  # noqa: F821 (injected by Snakemake)
-
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params
 panels = [open_dataset(path) for path in snakemake.input.panels]

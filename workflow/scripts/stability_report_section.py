@@ -1,175 +1,27 @@
-"""Snakemake job: the stability section of the report (an HTML fragment).
-
-Everything shown comes from generated files: the figures, the claim verdicts
-(results/stability/claims.json) and the panel datasets' attributes (precision
-and timing); the decisions are read from the configuration passed as params.
-"""
+"""Snakemake job: the stability section of the report (thin: icosim.report.stability)."""
 
 import logging
-from collections import defaultdict
-from pathlib import Path
 
-from icosim import report as rp
-from icosim.claims import claims_table, read_verdicts, verdict_counts
+from icosim.claims import read_verdicts, verdict_counts
 from icosim.datasets import atomic_path, open_dataset
-from icosim.sweep import RATIOS, row_label
-
-snakemake = snakemake  # noqa: F821 (injected by Snakemake)
+from icosim.report.stability import stability_section
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params
-esc = rp.escape
-
-
-def fmt_grid(g):
-    return f"{g['n']} × {g['n']} points over λ̄r1 ∈ [{g['lr1'][0]:g}, {g['lr1'][1]:g}], λ̄i1 ∈ [{g['li1'][0]:g}, {g['li1'][1]:g}]"
-
-
-# -- panel attributes: precision and cost, per figure ---------------------------------------
-attrs_by_fig = defaultdict(list)
-for path in snakemake.input.panels:
-    ds = open_dataset(path)
-    attrs_by_fig[ds.attrs["figure"]].append(ds.attrs)
-
-cost_rows, totals = [], defaultdict(float)
-KEYS = ("panels", "points", "hp", "hp_axis", "cpu64", "cpump")
-
-
-def cost_row(label, t):
-    cpu = t["cpu64"] + t["cpump"]
-    return [
-        label,
-        int(t["panels"]),
-        int(t["points"]),
-        int(t["hp"]),
-        int(t["hp_axis"]),
-        f"{t['hp'] / t['points']:.2%}",
-        f"{t['cpu64']:.1f}",
-        f"{t['cpump']:.1f}",
-        f"{t['cpump'] / max(cpu, 1e-12):.0%}",
-    ]
-
-
-for fig in p.figures:
-    al = attrs_by_fig[fig]
-    t = {
-        "panels": len(al),
-        "points": sum(a["n_points"] for a in al),
-        "hp": sum(a["n_high_precision"] for a in al),
-        "hp_axis": sum(a["n_high_precision_undamped"] for a in al),
-        "cpu64": sum(a["cpu_seconds_float64"] for a in al),
-        "cpump": sum(a["cpu_seconds_mp"] for a in al),
-    }
-    for key in KEYS:
-        totals[key] += t[key]
-    cost_rows.append(cost_row(f"Fig. {fig}", t))
-t = totals
-cost_rows.append(cost_row("all", t))
-
-# -- decisions, read from the configuration ---------------------------------------------------
-raised = sorted(
-    {
-        float(v)
-        for fig, cfg in p.figures.items()
-        for row in cfg["rows"]
-        for key, v in row.items()
-        if key in RATIOS and cfg["ratios"].get(key) != v
-    }
-)
-zooms = [
-    f"Fig. {fig}: rows {', '.join(map(str, cfg['zoom']['rows']))}, k = {', '.join(map(str, cfg['zoom']['k']))}"
-    for fig, cfg in p.figures.items()
-    if cfg.get("zoom")
-]
-pairs = {
-    fig: [row_label(cfg, r) for r in range(1, len(cfg["rows"]) + 1)]
-    for fig, cfg in p.figures.items()
-    if cfg["method"] == "weighted" and not cfg["params"]
-}
-decisions = [
-    "Rows of Figs. 9–15: row 1 is (αm21, αλr21, αλi21) = (1, 1, 1); rows 2, 3, 4 raise αm21, αλr21, αλi21 "
-    f"in turn to {', '.join(f'{v:g}' for v in raised) or '(none)'}.",
-    f"Full panels: {fmt_grid(p.grid)}.",
-    f"Zoom panels near the origin: {fmt_grid(p.zoom_grid)}, for " + ("; ".join(zooms) or "no figure") + ".",
-]
-for fig, labels in pairs.items():
-    decisions.append(f"Fig. {fig}: the three (a, b) pairs are " + "; ".join(labels) + ".")
-decisions.append(
-    f"Precision: policy '{p.precision['policy']}': float64 over the whole grid; every point whose float64 value cannot "
-    f"decide ρ ≤ 1 (|ρ − 1| within its error estimate, or not finite) is recomputed with mpmath at {p.precision['digits']} "
-    "digits (the paper's 128 decimal places). Each dataset records which precision decided each point (variable digits)."
-)
-hp_share = t["hp"] / t["points"]
-cpu = t["cpu64"] + t["cpump"]
-body = [
-    "<h3>What was computed</h3><ul>"
-    + "".join(f"<li>{esc(d)}</li>" for d in decisions)
-    + "</ul>"
-    + ("<h3>Why</h3><ul>" + "".join(f"<li>{esc(d)}</li>" for d in p.decisions) + "</ul>" if p.decisions else ""),
-    f"<p>{int(t['hp'])} of {int(t['points'])} grid points ({hp_share:.2%}) needed high precision, "
-    f"{int(t['hp_axis'])} of them on the undamped axis λ̄r1 = 0 (ρ = 1 to working precision there, which float64 "
-    f"cannot decide). The rechecks took {t['cpump'] / max(cpu, 1e-12):.0%} of the sweeps' compute time "
-    f"({t['cpump']:.0f} of {cpu:.0f} CPU-seconds in {int(t['panels'])} panel jobs; process start-up and file "
-    "writing not included).</p>",
-]
-
-# -- claims -------------------------------------------------------------------------------------
 claims = read_verdicts(snakemake.input.claims)
-counts = verdict_counts(claims)
-body.append(
-    f"<h3>The paper's claims</h3><p>{len(claims)} claims from Sects. 3.1–3.6 and 5 (config/claims/stability.yaml), "
-    f"evaluated on the datasets: {counts['pass']} pass, {counts['fail']} fail, {counts['undecided']} undecided. "
-    "Shares are of stable grid points; differences below the grid resolution 1/(n−1) are undecided. "
-    "Where the data disagree with the paper, the data stand.</p>"
-    + claims_table(claims, note_header="how the words were read")
+html = stability_section(
+    figures=p.figures,
+    grid=p.grid,
+    zoom_grid=p.zoom_grid,
+    precision=p.precision,
+    style=p.style,
+    decisions=p.decisions,
+    panel_attrs=[open_dataset(path).attrs for path in snakemake.input.panels],
+    claims=claims,
+    figure_pngs=list(snakemake.input.figures),
 )
-body.append(
-    "<h3>Precision and cost per figure</h3>"
-    + rp.table(
-        [
-            "figure",
-            "panels",
-            "points",
-            "high precision",
-            "of them at λ̄r1 = 0",
-            "share of points",
-            "float64 CPU s",
-            "mp CPU s",
-            "mp share of CPU",
-        ],
-        cost_rows,
-    )
-)
-
-# -- figures --------------------------------------------------------------------------------------
-style = (
-    "ρ as a colour field (green ρ < 1, yellow ρ = 1, red ρ > 1, grey not finite), black line ρ = 1"
-    if p.style == "field"
-    else "green circles at stable grid points (the paper's style), black line ρ = 1"
-)
-for png in snakemake.input.figures:
-    fig = Path(png).stem.removeprefix("fig")
-    cfg = p.figures[fig]
-    al = attrs_by_fig[fig]
-    hp = sum(a["n_high_precision"] for a in al)
-    n = sum(a["n_points"] for a in al)
-    params = ", ".join(f"{k} = {v:g}" for k, v in cfg["params"].items())
-    rows_txt = "; ".join(f"row {r}: {row_label(cfg, r)}" for r in range(1, len(cfg["rows"]) + 1))
-    zoom_txt = (
-        f" Zoom columns (right; outlined in blue on the full panels): {fmt_grid(p.zoom_grid)}, rows {', '.join(map(str, cfg['zoom']['rows']))}, k = {', '.join(map(str, cfg['zoom']['k']))}."
-        if cfg.get("zoom")
-        else ""
-    )
-    caption = (
-        f"<b>Fig. {fig}</b> (paper Fig. {fig}): {esc(cfg['title'])}. Method {esc(cfg['method'])}"
-        + (f" ({esc(params)})" if params else "")
-        + f", decomposition {esc(cfg['decomposition'])}, columns k = {', '.join(map(str, cfg['k']))}; {esc(rows_txt)}. "
-        + f"Grid {esc(fmt_grid(p.grid))}.{esc(zoom_txt)} Precision: {hp} of {n} points recomputed with mpmath at "
-        + f"{p.precision['digits']} digits, the rest float64. Shown: {esc(style)}."
-    )
-    body.append(rp.figure(png, caption, alt=f"Fig. {fig}"))
-
-html = rp.section("Stability (Figs. 9–20)", "".join(body), "stability")
 with atomic_path(snakemake.output[0]) as tmp:
     tmp.write_text(html)
-logging.info("section with %d figures and %d claims (%s)", len(snakemake.input.figures), len(claims), counts)
+logging.info(
+    "section with %d figures and %d claims (%s)", len(snakemake.input.figures), len(claims), verdict_counts(claims)
+)

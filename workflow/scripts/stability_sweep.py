@@ -1,12 +1,10 @@
-"""Snakemake job: one stability panel -> NetCDF (thin: the work is icosim.sweep)."""
+"""Snakemake job: one stability panel -> NetCDF (thin: the work is icosim.stability.panels)."""
 
 import json
 import logging
 
 from icosim.datasets import provenance_attrs, write_netcdf
-from icosim.sweep import PanelSpec, stability_panel
-
-snakemake = snakemake  # noqa: F821 (injected by Snakemake)
+from icosim.stability.panels import PanelSpec, stability_panel
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 params = snakemake.params.panel
