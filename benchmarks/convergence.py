@@ -15,7 +15,9 @@ import time
 
 import numpy as np
 
-from icosim.convergence import Setup, Study, dimensional_method, step_counts, time_macro_steps
+from icosim.convergence.experiment import Setup, dimensional_method, step_counts
+from icosim.convergence.study import Study
+from icosim.convergence.work_precision import time_macro_steps
 
 SCHEMES = [
     ("baumgarte", {"index": 1, "mu": 5e-3}, "ff", 2),

@@ -21,10 +21,16 @@ import statistics  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
-
-from icosim import TestModel, baumgarte, projection, spectral_radius_float64, spectral_radius_mp  # noqa: E402
-from icosim import weighted_multiplier  # noqa: E402
 from _timing import best_of  # noqa: E402  (benchmarks/ is on sys.path when run as a script)
+
+from icosim import (  # noqa: E402
+    TestModel,
+    baumgarte,
+    projection,
+    spectral_radius_float64,
+    spectral_radius_mp,
+    weighted_multiplier,  # noqa: E402
+)
 
 SCHEMES = [
     ("baumgarte mu=1 index 1", baumgarte(mu=1, index=1), "ff"),
@@ -56,8 +62,10 @@ def main():
         f"{'mp/point [s]':>12s} {'f64/point [us]':>14s} {'ratio mp:f64':>12s}"
     )
     for label, method, dec in SCHEMES:
-        t_plain = best_of(lambda: spectral_radius_float64(grid, method, dec, args.k, error_estimate=False), args.repeat)
-        t_est = best_of(lambda: spectral_radius_float64(grid, method, dec, args.k), args.repeat)
+        t_plain = best_of(
+            lambda m=method, d=dec: spectral_radius_float64(grid, m, d, args.k, error_estimate=False), args.repeat
+        )
+        t_est = best_of(lambda m=method, d=dec: spectral_radius_float64(grid, m, d, args.k), args.repeat)
         spectral_radius_mp(points[0], method, dec, args.k, args.digits)  # warm-up
         mp_times = []
         for p in points:

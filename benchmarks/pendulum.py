@@ -28,12 +28,15 @@ import argparse  # noqa: E402
 import json  # noqa: E402
 
 import numpy as np  # noqa: E402
+from _timing import best_of  # noqa: E402  (benchmarks/ is on sys.path when run as a script)
 from scipy.integrate import solve_ivp  # noqa: E402
 
 from icosim import make_method  # noqa: E402
-from icosim.pendulum import Monolithic, PendulumParameters, _Link2, run_cosimulation  # noqa: E402
+from icosim.pendulum.links import Link2  # noqa: E402
+from icosim.pendulum.model import PendulumParameters  # noqa: E402
+from icosim.pendulum.reference import Monolithic  # noqa: E402
+from icosim.pendulum.runs import run_cosimulation  # noqa: E402
 from icosim.radau import radau_batch  # noqa: E402
-from _timing import best_of  # noqa: E402  (benchmarks/ is on sys.path when run as a script)
 
 RUNS = [
     ("baumgarte", {"index": 1, "mu": 1e-3}, "ff", 1),
@@ -70,7 +73,7 @@ def main():
     def scipy_free():
         return solve_ivp(mono.rhs, (0.0, T), y0, method="Radau", rtol=tol, atol=tol)
 
-    link = _Link2(p, "force")
+    link = Link2(p, "force")
     fun = link.rhs(np.array([[[1.0, 9.0]]]), H)
     s2 = p.initial_state()[2:]
 
@@ -91,7 +94,7 @@ def main():
     for name, params, dec, k in RUNS:
         method = make_method(name, **params)
 
-        def cosim():
+        def cosim(method=method, dec=dec, k=k):
             return run_cosimulation(p, method, dec, k, H=H, t_end=T, rtol=tol, atol=tol)
 
         t = best_of(cosim, max(1, args.repeat - 1))

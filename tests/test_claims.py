@@ -12,23 +12,12 @@ import pytest
 import xarray as xr
 import yaml
 
-from icosim.claims import (
-    CHECKS,
-    claims_table,
-    enforce_references,
-    evaluate,
-    evaluate_claim,
-    grid_resolution,
-    load_claims,
-    parse_claims,
-    read_verdicts,
-    reference_mismatches,
-    select,
-    stable_share,
-    write_verdicts,
-)
+from icosim.checks import CHECKS, evaluate, evaluate_claim, load_claims, parse_claims
+from icosim.claims import enforce_references, read_verdicts, reference_mismatches, select, write_verdicts
 from icosim.model import ParameterError
-from icosim.sweep import PanelSpec, figure_panels, stability_panel
+from icosim.report.claims import claims_table
+from icosim.stability.checks import grid_resolution, stable_share
+from icosim.stability.panels import PanelSpec, figure_panels, stability_panel
 
 ROOT = Path(__file__).resolve().parents[1]
 CLAIMS_FILE = ROOT / "config" / "claims" / "stability.yaml"

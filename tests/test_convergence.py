@@ -1,34 +1,25 @@
 """Unit tests of icosim.convergence: Eq. (72), the order fit, stepping, unstable detection."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import xarray as xr
 import yaml
-from pathlib import Path
+from helpers import validate_config
 
 import icosim
-from icosim.claims import load_claims, parse_claims
-from icosim.convergence import (
-    PanelSpec,
-    Setup,
-    Study,
-    dimensional_method,
-    fastest_schemes,
-    figure_layout,
-    figure_panels,
-    fit_order,
-    iterate_linear_map,
-    method_attrs,
-    nrmse,
-    oscillation_summary,
-    resolve_scheme,
-    check_claims_against_config,
-    run_panel,
-    step_cost,
-    step_counts,
-    study_from_config,
-    time_macro_steps,
-)
+import icosim.convergence.experiment
+import icosim.convergence.work_precision
+from icosim.checks import load_claims, parse_claims
+from icosim.convergence.config import check_claims_against_config, study_from_config
+from icosim.convergence.datasets import run_panel
+from icosim.convergence.experiment import Setup, dimensional_method, method_attrs, oscillation_summary, step_counts
+from icosim.convergence.fit import fit_order
+from icosim.convergence.metric import nrmse
+from icosim.convergence.panels import PanelSpec, figure_layout, figure_panels
+from icosim.convergence.study import Study, iterate_linear_map
+from icosim.convergence.work_precision import fastest_schemes, resolve_scheme, step_cost, time_macro_steps
 from icosim.model import ParameterError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -169,7 +160,7 @@ def test_iterate_linear_map_powers_and_bound():
     W, d = iterate_linear_map(M, w0, 700, block=64)
     assert d is None and W.shape == (701, 5)
     w = w0.copy()
-    for n in range(700):
+    for _ in range(700):
         w = M @ w
     np.testing.assert_allclose(W[-1], w, atol=1e-12)
     # doubling: |w_n| = 2^n exceeds 100 first at n = 7
@@ -255,13 +246,12 @@ def test_bad_parameters_name_the_figure():
 
 
 def test_schema_rejects_unknown_key():
-    from snakemake.utils import validate
     from snakemake.exceptions import WorkflowError
 
     cfg = _config()
     cfg["step_sizes"]["H_mni"] = 1e-5
     with pytest.raises(WorkflowError, match="H_mni"):
-        validate(cfg, str(ROOT / "workflow" / "schemas" / "convergence.schema.yaml"))
+        validate_config(cfg, "convergence")
 
 
 def test_panel_dataset_and_work_precision():
@@ -276,7 +266,7 @@ def test_panel_dataset_and_work_precision():
         {"23": {"method": "projection", "columns": [{}], "rows": [{}], "decompositions": ["ff"]}},
         [0, 1],
     )
-    wp = icosim.convergence.work_precision(
+    wp = icosim.convergence.work_precision.work_precision(
         entries, {("ff", "23", "all"): ds}, study.setup, steps=2, repeats=1, warmup_steps=1
     )
     cost = wp["cpu_seconds_per_simulated_second"].values
@@ -292,7 +282,7 @@ def test_panel_dataset_and_work_precision():
 def test_time_macro_steps_times_the_documented_runs(monkeypatch):
     """The timing runs what it says: one warm-up of `warmup_steps`, then `repeats` runs of `steps`
     macro steps of the engine's simulate, each from the exact consistent start."""
-    import icosim.convergence as conv
+    import icosim.convergence.work_precision as conv
 
     calls = []
     real = conv.simulate
@@ -486,7 +476,7 @@ def test_baumgarte_index1_k0_has_the_drift_mode_of_time_scale_mu(ratio):
     """
     mu = 1.0e-3
     H = ratio * mu
-    c = icosim.PhysicalModel(**icosim.convergence.PAPER_MODEL, H=H).coefficients()
+    c = icosim.PhysicalModel(**icosim.convergence.experiment.PAPER_MODEL, H=H).coefficients()
     M = icosim.stability.amplification_matrix(
         c, icosim.make_method("baumgarte", beta=2 * mu / H, gamma=mu**2 / H**2), "ff", 0
     )

@@ -21,8 +21,11 @@ import pytest
 import yaml
 from snakemake.utils import update_config
 
-from icosim.claims import evaluate, load_claims
-from icosim.convergence import Setup, Study, figure_panels, run_panel, step_counts
+from icosim.checks import evaluate, load_claims
+from icosim.convergence.datasets import run_panel
+from icosim.convergence.experiment import Setup, step_counts
+from icosim.convergence.panels import figure_panels
+from icosim.convergence.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
 CLAIMS = load_claims(ROOT / "config" / "claims" / "convergence.yaml")

@@ -8,10 +8,13 @@ from types import SimpleNamespace
 
 import pytest
 import yaml
+from helpers import copy_workflow, snakemake
 
-from icosim.convergence import PanelSpec, Setup, Study, run_panel, step_counts
+from icosim.convergence.datasets import run_panel
+from icosim.convergence.experiment import Setup, step_counts
+from icosim.convergence.panels import PanelSpec
+from icosim.convergence.study import Study
 from icosim.datasets import write_netcdf
-from test_stability_workflow import copy_workflow, snakemake
 
 ROOT = Path(__file__).resolve().parents[1]
 

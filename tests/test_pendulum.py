@@ -16,21 +16,13 @@ from scipy.integrate import solve_ivp
 
 from icosim import ParameterError, make_method
 from icosim.macrostep import StepFailure, macro_step
-from icosim.pendulum import (
-    Monolithic,
-    PendulumCosimulation,
-    PendulumParameters,
-    ProjectionError,
-    _constraint_jacobian,
-    _Link1,
-    _Link2,
-    configured_runs,
-    consistent_history,
-    joint_constraint,
-    project_state,
-    reference_solution,
-    run_cosimulation,
-)
+from icosim.pendulum.config import configured_runs
+from icosim.pendulum.links import Link1, Link2
+from icosim.pendulum.model import PendulumParameters, joint_constraint
+from icosim.pendulum.problem import PendulumCosimulation
+from icosim.pendulum.projection import ProjectionError, _constraint_jacobian, project_state
+from icosim.pendulum.reference import Monolithic, consistent_history, reference_solution
+from icosim.pendulum.runs import run_cosimulation
 from icosim.radau import MU_REAL, IntegrationError, radau_batch
 
 P = PendulumParameters()
@@ -75,7 +67,7 @@ def test_radau_batch_members_match_single_integrations():
 def test_link_subsystem_over_a_macro_step_matches_solve_ivp():
     """A force-driven link 2 with a quadratic input polynomial: radau_batch vs solve_ivp Radau and DOP853."""
     coef = np.array([[[1.0, 5.0], [200.0, -300.0], [-4e4, 2e4]]])  # (B=1, K=3, 2) in tau = t/H
-    link = _Link2(P, "force")
+    link = Link2(P, "force")
     fun = link.rhs(coef, H)
     y0 = P.initial_state()[2:] + np.array([0, 0, 0, 0.3, -0.2, 1.5])
     ours = radau_batch(fun, 0.0, H, y0, rtol=1e-6, atol=1e-6).y[0]
@@ -106,10 +98,10 @@ def test_links_reproduce_the_monolithic_joint_force_and_acceleration(omegas):
     state = mono.cosim_state(Y)
     s1, s2 = state[:2], state[2:]
     out = {
-        ("1", "force"): _outputs_at_start(_Link1(P, "force"), s1, lam),
-        ("2", "force"): _outputs_at_start(_Link2(P, "force"), s2, lam),
-        ("1", "kinematic"): _outputs_at_start(_Link1(P, "kinematic"), s1, acc),
-        ("2", "kinematic"): _outputs_at_start(_Link2(P, "kinematic"), s2, acc),
+        ("1", "force"): _outputs_at_start(Link1(P, "force"), s1, lam),
+        ("2", "force"): _outputs_at_start(Link2(P, "force"), s2, lam),
+        ("1", "kinematic"): _outputs_at_start(Link1(P, "kinematic"), s1, acc),
+        ("2", "kinematic"): _outputs_at_start(Link2(P, "kinematic"), s2, acc),
     }
     for key, y in out.items():
         np.testing.assert_allclose(y[0], out[("1", "force")][0], atol=1e-14, err_msg=f"position {key}")
@@ -326,7 +318,8 @@ def test_bad_input_is_refused_with_the_name():
 def test_reference_dataset_keeps_the_naming_contract_after_a_netcdf_round_trip(tmp_path):
     """Other tools read phi1, phi2, g_cax, g_cay, lambda_cax, lambda_cay as data variables over t."""
     from icosim.datasets import open_dataset, write_netcdf
-    from icosim.pendulum import PendulumParameters, reference_dataset
+    from icosim.pendulum.datasets import reference_dataset
+    from icosim.pendulum.model import PendulumParameters
 
     ds = reference_dataset(PendulumParameters(), 1e-3, 0.01, {"title": "test"})
     write_netcdf(ds, tmp_path / "reference.nc")

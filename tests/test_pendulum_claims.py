@@ -13,22 +13,19 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from helpers import validate_config
 
-import icosim.pendulum
+import icosim.pendulum.problem
 from icosim import make_method
-from icosim.claims import evaluate_claim, load_claims, parse_claims
+from icosim.checks import evaluate_claim, load_claims, parse_claims
+from icosim.pendulum.checks import expected_outcome
+from icosim.pendulum.config import configured_runs
+from icosim.pendulum.datasets import reference_dataset, run_dataset
+from icosim.pendulum.linearised import linear_test_model_rho, pendulum_test_model
+from icosim.pendulum.model import PendulumParameters
+from icosim.pendulum.runs import run_cosimulation
+from icosim.pendulum.summary import summarize
 from icosim.radau import IntegrationError
-from icosim.pendulum import (
-    PendulumParameters,
-    configured_runs,
-    expected_outcome,
-    linear_test_model_rho,
-    pendulum_test_model,
-    reference_dataset,
-    run_cosimulation,
-    run_dataset,
-    summarize,
-)
 
 ROOT = Path(__file__).resolve().parents[1]
 CFG = yaml.safe_load((ROOT / "config" / "pendulum.yaml").read_text())["pendulum"]
@@ -137,7 +134,7 @@ def test_failed_integration_is_not_counted_as_unstable(monkeypatch):
     """A subsystem integration that fails is a failed run (not diverged): the claim gets no pass from it.
 
     weighted/ff/k = 2 is expected unstable, so counting a solver failure as a divergence would make it pass."""
-    real_radau, calls = icosim.pendulum.radau_batch, []
+    real_radau, calls = icosim.pendulum.problem.radau_batch, []
     fail_at_step = 11  # four integrations per macro step (predictor+sensitivities and corrector, two links)
 
     def failing_radau(*args, **kwargs):
@@ -146,7 +143,7 @@ def test_failed_integration_is_not_counted_as_unstable(monkeypatch):
             raise IntegrationError("injected failure")
         return real_radau(*args, **kwargs)
 
-    monkeypatch.setattr(icosim.pendulum, "radau_batch", failing_radau)
+    monkeypatch.setattr(icosim.pendulum.problem, "radau_batch", failing_radau)
     t_end = 0.05
     res = _run("weighted", "ff", 2, t_end=t_end)
     assert res.status == "failed" and res.failed and not res.diverged
@@ -172,9 +169,11 @@ def test_linear_test_model_at_the_pendulum_point_predicts_the_claim():
     model = pendulum_test_model(params, CFG["H"])
     np.testing.assert_allclose(model.lr1, -params.d * CFG["H"] / (2 * params.m1))
     # modal frequencies of two hinged uniform rods, undamped (M, K of the linearisation), bracket the damped ones
-    m, l, g, J = params.m1, params.l1, params.g, params.J1
-    M = np.array([[J + m * l**2 / 4 + m * l**2, m * l**2 / 2], [m * l**2 / 2, J + m * l**2 / 4]])
-    K = np.diag([1.5 * m * g * l, 0.5 * m * g * l])
+    m, length, g, J = params.m1, params.l1, params.g, params.J1
+    M = np.array(
+        [[J + m * length**2 / 4 + m * length**2, m * length**2 / 2], [m * length**2 / 2, J + m * length**2 / 4]]
+    )
+    K = np.diag([1.5 * m * g * length, 0.5 * m * g * length])
     omega0 = np.sort(np.sqrt(np.linalg.eigvals(np.linalg.solve(M, K)).real))
     assert np.all(model.li1 / CFG["H"] < omega0) and np.all(model.li1 / CFG["H"] > 0.9 * omega0)
     for method_name, dec, k in RUNS:
@@ -195,9 +194,7 @@ def test_linear_test_model_at_the_pendulum_point_predicts_the_claim():
     ],
 )
 def test_schema_rejects_bad_config_naming_it(patch, needle):
-    from snakemake.utils import validate
-
     bad = {**CFG, **patch}
-    validate(dict(CFG), str(ROOT / "workflow" / "schemas" / "pendulum.schema.yaml"))  # the real config passes
+    validate_config(dict(CFG), "pendulum")  # the real config passes
     with pytest.raises(Exception, match=needle):
-        validate(bad, str(ROOT / "workflow" / "schemas" / "pendulum.schema.yaml"))
+        validate_config(bad, "pendulum")

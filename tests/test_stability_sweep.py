@@ -1,4 +1,4 @@
-"""Stability panels (icosim.sweep) and their figures (icosim.figures.stability).
+"""Stability panels (icosim.stability.panels) and their figures (icosim.figures.stability).
 
 The dataset names are a contract other tools read (issue 3); the numbers are
 checked against an independent route: the multiprecision spectral radius of
@@ -21,7 +21,7 @@ from icosim.figures import save_figure, stability_figure  # noqa: E402
 from icosim.figures.stability import panel_layout, row_labels  # noqa: E402
 from icosim.model import ParameterError  # noqa: E402
 from icosim.stability import spectral_radius_mp  # noqa: E402
-from icosim.sweep import (
+from icosim.stability.panels import (  # noqa: E402
     PanelSpec,
     figure_panels,
     grid_axis,
@@ -29,7 +29,7 @@ from icosim.sweep import (
     row_label,
     row_label_keys,
     stability_panel,
-)  # noqa: E402
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 CFG = yaml.safe_load((ROOT / "config" / "stability.yaml").read_text())["stability"]
@@ -194,7 +194,7 @@ def test_bad_grids_are_refused_naming_the_key(name, grid, message):
 
 def test_figure_and_report_label_rows_by_one_rule():
     """The figure's row labels come from the keys stored in the panels, chosen by
-    icosim.sweep.row_label_keys -- the rule of the report's sweep.row_label."""
+    icosim.stability.panels.row_label_keys -- the rule of the report's row_label."""
     tiny = {**COARSE, "n": 2}
     for fig, fc in CFG["figures"].items():
         specs = [

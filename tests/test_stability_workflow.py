@@ -8,59 +8,16 @@ params rerun trigger.
 
 import copy
 import json
-import os
 import re
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 import yaml
+from helpers import copy_workflow, scheduled, snakemake
 
-from icosim.sweep import figure_panels, panel_id
+from icosim.stability.panels import figure_panels, panel_id
 
 ROOT = Path(__file__).resolve().parents[1]
-SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
-if not Path(SNAKEMAKE).exists():
-    SNAKEMAKE = shutil.which("snakemake") or "snakemake"
-
-
-def copy_workflow(dest: Path) -> Path:
-    for name in ("Snakefile", "pyproject.toml"):
-        if (ROOT / name).exists():
-            shutil.copy2(ROOT / name, dest / name)
-    for name in ("config", "workflow", "src"):
-        shutil.copytree(ROOT / name, dest / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
-    return dest
-
-
-def snakemake(workdir: Path, *args, check=True):
-    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
-    proc = subprocess.run(
-        [SNAKEMAKE, "--directory", str(workdir), "--snakefile", str(workdir / "Snakefile"), *args],
-        capture_output=True,
-        text=True,
-        cwd=workdir,
-        env=env,
-        timeout=600,
-    )
-    if check and proc.returncode != 0:
-        raise AssertionError(f"snakemake {' '.join(args)} failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}")
-    return proc
-
-
-def scheduled(proc, rule):
-    """Outputs of the jobs of `rule` in a dry-run listing."""
-    text = proc.stdout + proc.stderr
-    blocks = re.split(r"\n(?=\S*rule \w+:)", text)
-    outs = []
-    for block in blocks:
-        m = re.search(r"rule (\w+):", block)
-        if m and m.group(1) == rule:
-            out = re.search(r"output: ([^\n]+)", block)
-            outs += [o.strip() for o in out.group(1).split(",")] if out else []
-    return outs
 
 
 @pytest.fixture(scope="module")
@@ -206,7 +163,7 @@ def test_restyling_reruns_no_sweep_and_library_edits_rerun_their_users(tiny_run)
         fh.write("\n# edited by test_stability_workflow\n")
     proc = snakemake(tiny_run, "-n", "results/stability/figures/fig18.png")
     assert not scheduled(proc, "stability_sweep") and scheduled(proc, "stability_figure")
-    with open(tiny_run / "src/icosim/sweep.py", "a") as fh:
+    with open(tiny_run / "src/icosim/stability/panels.py", "a") as fh:
         fh.write("\n# edited by test_stability_workflow\n")
     proc = snakemake(tiny_run, "-n", "results/stability/figures/fig18.png")
     assert len(scheduled(proc, "stability_sweep")) == 6
@@ -262,3 +219,17 @@ def test_enforced_references_fail_the_claims_job_when_not_reproduced(tiny_run):
     verdicts = json.loads((tiny_run / "results/stability/claims.json").read_text())["claims"]
     assert [(v["id"], v["verdict"], v["matches_reference"]) for v in verdicts] == [("fig18_k0_good", "pass", True)]
     edit_config(tiny_run, lambda st: st["claims"].update(enforce_reference=False))
+
+
+def test_library_inputs_follow_the_real_imports(tiny_run):
+    """A rule reruns when a module its script imports (directly or not) changes, and only then:
+    editing the pendulum's problem reruns no stability job, editing a stability check reruns the claims."""
+    snakemake(tiny_run, "results/stability/claims.json", "-c1")  # up to date with the current config
+    with open(tiny_run / "src/icosim/pendulum/problem.py", "a") as fh:
+        fh.write("\n# edited by test_stability_workflow\n")
+    proc = snakemake(tiny_run, "-n", "results/stability/claims.json", "results/stability/figures/fig18.png")
+    assert not scheduled(proc, "stability_claims") and not scheduled(proc, "stability_sweep")
+    with open(tiny_run / "src/icosim/stability/checks.py", "a") as fh:
+        fh.write("\n# edited by test_stability_workflow\n")
+    proc = snakemake(tiny_run, "-n", "results/stability/claims.json")
+    assert scheduled(proc, "stability_claims") and not scheduled(proc, "stability_sweep")

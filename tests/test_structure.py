@@ -1,0 +1,130 @@
+"""The shape of the package: no import cycle, files of one idea, thin workflow scripts, and library
+inputs of the rules that follow the real imports."""
+
+import ast
+import json
+import subprocess
+import sys
+
+import pytest
+from helpers import ROOT
+
+from icosim.sources import module_closure, module_path, script_closure
+
+SRC = ROOT / "src"
+PACKAGE = SRC / "icosim"
+SCRIPTS = sorted((ROOT / "workflow" / "scripts").glob("*.py"))
+#: Files allowed beyond MAX_LINES, with the reason (one idea that needs the room).
+LONG_FILES = {}
+MAX_LINES = 450
+
+
+def _module_name(path):
+    rel = path.relative_to(SRC).with_suffix("")
+    parts = rel.parts[:-1] if rel.name == "__init__" else rel.parts
+    return ".".join(parts)
+
+
+def _imports(path):
+    """icosim modules a file imports anywhere (lazy imports included), resolved."""
+    name = _module_name(path)
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            out.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                parts = package.split(".")
+                base = ".".join(parts[: len(parts) - node.level + 1]) + (f".{node.module}" if node.module else "")
+            else:
+                base = node.module
+            for a in node.names:
+                sub = f"{base}.{a.name}"
+                out.add(sub if module_path(sub, SRC) else base)
+    return {m for m in out if m.split(".")[0] == "icosim" and m != name}
+
+
+def test_no_import_cycle():
+    """Every import counts, also one inside a function (the trick that used to hide a cycle)."""
+    graph = {_module_name(p): _imports(p) for p in PACKAGE.rglob("*.py")}
+    state = {}
+
+    def visit(node, stack):
+        state[node] = "open"
+        for nxt in graph.get(node, ()):
+            if state.get(nxt) == "open":
+                raise AssertionError("import cycle: " + " -> ".join(stack + [node, nxt]))
+            if nxt not in state:
+                visit(nxt, stack + [node])
+        state[node] = "done"
+
+    for node in sorted(graph):
+        if node not in state:
+            visit(node, [])
+
+
+def test_files_hold_one_idea():
+    long = {
+        str(p.relative_to(SRC)): n
+        for p in PACKAGE.rglob("*.py")
+        if (n := len(p.read_text().splitlines())) > MAX_LINES and str(p.relative_to(SRC)) not in LONG_FILES
+    }
+    assert not long, f"files over {MAX_LINES} lines: {long}"
+
+
+def test_claims_machinery_knows_no_part():
+    imported = _imports(PACKAGE / "claims.py")
+    assert imported <= {"icosim.model", "icosim.datasets"}, imported
+    assert "<" not in (PACKAGE / "claims.py").read_text().split('"""', 2)[2].replace("<=", "")  # no HTML
+
+
+@pytest.mark.parametrize("script", SCRIPTS, ids=lambda p: p.stem)
+def test_workflow_scripts_are_thin(script):
+    assert len(script.read_text().splitlines()) <= 45
+
+
+@pytest.mark.parametrize("script", SCRIPTS, ids=lambda p: p.stem)
+def test_library_inputs_cover_what_a_script_loads(script):
+    """The files script_closure lists (a rule's library inputs) are every icosim module its imports load."""
+    listed = {p.relative_to(SRC).as_posix() for p in script_closure(script, SRC)}
+    tree = ast.parse(script.read_text())
+    stmts = [
+        ast.unparse(n) for n in tree.body if isinstance(n, (ast.Import, ast.ImportFrom)) and "icosim" in ast.unparse(n)
+    ]
+    code = "\n".join(stmts) + (
+        "\nimport json, sys\n"
+        "print(json.dumps(sorted(m.__file__ for n, m in sys.modules.items() if n.split('.')[0] == 'icosim')))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        check=True,
+        cwd=ROOT,
+        env={"PYTHONPATH": str(SRC), "MPLBACKEND": "Agg", "PATH": ""},
+    )
+    loaded = {
+        str(__import__("pathlib").Path(f).resolve().relative_to(SRC.resolve()).as_posix())
+        for f in json.loads(out.stdout)
+    }
+    assert loaded <= listed, sorted(loaded - listed)
+
+
+def test_stability_claims_do_not_rest_on_the_pendulum_problem():
+    files = {p.relative_to(SRC).as_posix() for p in script_closure(ROOT / "workflow/scripts/claims.py", SRC)}
+    assert "icosim/stability/checks.py" in files and "icosim/pendulum/checks.py" in files
+    assert not {"icosim/pendulum/problem.py", "icosim/pendulum/runs.py", "icosim/convergence/study.py"} & files
+    assert "icosim/radau.py" not in {p.relative_to(SRC).as_posix() for p in module_closure(["icosim.checks"], SRC)}
+
+
+def test_importing_the_stability_package_stays_light():
+    code = "import sys, icosim.stability; print(any(m in sys.modules for m in ('xarray', 'matplotlib')))"
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        check=True,
+        env={"PYTHONPATH": str(SRC), "PATH": ""},
+    )
+    assert out.stdout.strip() == "False"
