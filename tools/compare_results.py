@@ -1,0 +1,313 @@
+"""Compare two runs of the workflow: are their results the same?
+
+    python tools/compare_results.py OLD NEW [--rerender [--configfile FILE ...]]
+
+OLD and NEW are checkouts (or copies) that each hold ``results/`` and ``reports/`` of a run.
+Every file under ``results/`` must exist in both and be equal:
+
+* NetCDF: every variable and coordinate with the same dims, dtype and bytes (NaN-aware by
+  construction: bitwise), the same variable attributes and global attributes -- except the
+  VOLATILE ones below, which record when and how fast a job ran;
+* JSON (claims): equal as parsed (verdicts, measured text, numbers); TSV and PDF: equal bytes;
+* PNG: equal pixel arrays (and equal bytes, reported separately);
+* HTML (report sections) and ``reports/icosim_report.html``: equal after the volatile parts
+  are masked (numbers in timing phrases and timing table cells, the figures drawn from
+  timings, the provenance section's time and commit); every masked difference is listed.
+
+``--rerender`` additionally rebuilds, with NEW's code, the report sections, the report and
+the work-precision figure from OLD's results (a copy of NEW's tree with OLD's results marked
+up to date by ``snakemake --touch``, those outputs deleted and built again, nothing else
+rerun) and requires them to be equal to
+OLD's byte for byte (the report modulo its provenance section): the figures and the report
+come from the same data by the same logic.  Exit status 0 if everything is equal.
+"""
+
+from __future__ import annotations
+
+import argparse
+import base64
+import hashlib
+import io
+import json
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+#: Global attributes that record time and cost of a job, never its result.
+VOLATILE_ATTRS = {
+    "history",  # creation time
+    "seconds_total",
+    "seconds_mp",
+    "seconds_float64",
+    "cpu_seconds_total",
+    "cpu_seconds_mp",
+    "cpu_seconds_float64",
+    "wall_time_s",
+}
+#: Variables that are timings (file name -> variables).
+VOLATILE_VARIABLES = {
+    "convergence/work_precision.nc": {"cpu_seconds_per_step", "cpu_seconds_per_simulated_second", "setup_seconds"},
+    "pendulum/summary.nc": {"wall_time_s"},
+}
+#: Figures drawn from timings (compared by --rerender instead).
+VOLATILE_FIGURES = {"convergence/figures/work_precision.png", "convergence/figures/work_precision.pdf"}
+#: Timing phrases in the report: the numbers in them are masked.
+TIMING_PHRASES = [
+    r"The rechecks took [^<]*?CPU-seconds",
+    r"[\d.]+ s of compute",
+]
+#: Table columns holding timings (header text), masked in every row; and tables ranked by time.
+TIMING_COLUMNS = {
+    "float64 CPU s",
+    "mp CPU s",
+    "mp share of CPU",
+    "wall [s]",
+    "ms per macro step",
+    "CPU s per simulated s",
+    "at H (s)",
+    "fastest scheme",
+    "next two",
+}
+IMAGE = re.compile(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"')
+
+
+def _nc(old: Path, new: Path, rel: str, problems: list):
+    import h5py
+
+    vol_vars = VOLATILE_VARIABLES.get(rel, set())
+    with h5py.File(old, "r") as a, h5py.File(new, "r") as b:
+
+        def attrs(obj):
+            return {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in obj.attrs.items()}
+
+        ga, gb = attrs(a), attrs(b)
+        for key in sorted(set(ga) | set(gb)):
+            if key in VOLATILE_ATTRS:
+                continue
+            if key not in ga or key not in gb or not _same(ga[key], gb[key]):
+                problems.append(f"{rel}: global attribute {key!r}: {ga.get(key)!r} != {gb.get(key)!r}")
+        na, nb = set(a.keys()), set(b.keys())
+        if na != nb:
+            problems.append(f"{rel}: variables differ: {sorted(na ^ nb)}")
+        for name in sorted(na & nb):
+            va, vb = a[name], b[name]
+            if va.shape != vb.shape or va.dtype != vb.dtype:
+                problems.append(f"{rel}:{name}: shape/dtype {va.shape} {va.dtype} != {vb.shape} {vb.dtype}")
+                continue
+            aa, ab = attrs(va), attrs(vb)
+            aa.pop("DIMENSION_LIST", None), ab.pop("DIMENSION_LIST", None)
+            aa.pop("REFERENCE_LIST", None), ab.pop("REFERENCE_LIST", None)
+            if not _same(aa, ab):
+                problems.append(f"{rel}:{name}: attributes differ: {aa} != {ab}")
+            if name in vol_vars:
+                continue
+            xa, xb = np.asarray(va[()]), np.asarray(vb[()])
+            if xa.dtype == object:  # variable-length strings: compare the strings, not the pointers
+                same = xa.tolist() == xb.tolist()
+            else:  # bitwise: NaNs, infinities and the sign of zero included
+                same = xa.tobytes() == xb.tobytes()
+            if not same:
+                problems.append(f"{rel}:{name}: values differ")
+
+
+def _same(a, b) -> bool:
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+    if isinstance(a, float) and isinstance(b, float) and np.isnan(a) and np.isnan(b):
+        return True
+    return type(a) is type(b) and a == b
+
+
+def _pixels(data: bytes):
+    import matplotlib.image
+
+    return matplotlib.image.imread(io.BytesIO(data), format="png")
+
+
+def _png(old: Path, new: Path, rel: str, problems: list, notes: list):
+    a, b = old.read_bytes(), new.read_bytes()
+    if a != b:
+        notes.append(f"{rel}: PNG bytes differ (pixels compared)")
+    pa, pb = _pixels(a), _pixels(b)
+    if pa.shape != pb.shape or not np.array_equal(pa, pb):
+        problems.append(f"{rel}: pixels differ")
+
+
+def _mask_html(text: str, volatile_images=()) -> str:
+    """Mask timings, figures drawn from timings and the provenance section."""
+
+    def image(m):
+        data = base64.b64decode(m.group(1))
+        digest = hashlib.sha256(_pixels(data).tobytes()).hexdigest()[:16]
+        return f'src="png:{digest}"'
+
+    text = IMAGE.sub(image, text)
+    for digest in volatile_images:
+        text = text.replace(f'src="png:{digest}"', 'src="png:<drawn from timings>"')
+    text = re.sub(r'<section id="provenance">.*?</section>', "<provenance/>", text, flags=re.S)
+    for phrase in TIMING_PHRASES:
+        text = re.sub(phrase, lambda m: re.sub(r"\d[\d.,]*%?", "#", m.group(0)), text)
+    out = []
+    for table in re.split(r"(<table>.*?</table>)", text, flags=re.S):
+        if not table.startswith("<table>"):
+            out.append(table)
+            continue
+        heads = re.findall(r"<th>(.*?)</th>", table)
+        cols = [i for i, h in enumerate(heads) if h in TIMING_COLUMNS]
+
+        def row(m, cols=cols):
+            cells = re.findall(r"<td>(.*?)</td>", m.group(0), flags=re.S)
+            for i in cols:
+                if i < len(cells):
+                    cells[i] = "#"
+            return "<tr>" + "".join(f"<td>{c}</td>" for c in cells) + "</tr>"
+
+        out.append(re.sub(r"<tr><td>.*?</tr>", row, table, flags=re.S) if cols else table)
+    return "".join(out)
+
+
+def _wp_digests(root: Path):
+    path = root / "results/convergence/figures/work_precision.png"
+    return [hashlib.sha256(_pixels(path.read_bytes()).tobytes()).hexdigest()[:16]] if path.exists() else []
+
+
+def _html(old: Path, new: Path, rel: str, problems: list, notes: list, old_root: Path, new_root: Path):
+    a, b = old.read_text(), new.read_text()
+    if a == b:
+        return
+    ma = _mask_html(a, _wp_digests(old_root))
+    mb = _mask_html(b, _wp_digests(new_root))
+    if ma != mb:
+        i = (
+            next(i for i, (x, y) in enumerate(zip(ma, mb)) if x != y)
+            if ma[: len(mb)] != mb[: len(ma)]
+            else min(len(ma), len(mb))
+        )
+        problems.append(
+            f"{rel}: differs beyond timings near ...{ma[max(0, i - 120) : i + 80]!r} / {mb[max(0, i - 120) : i + 80]!r}"
+        )
+    else:
+        notes.append(f"{rel}: equal once timings, figures drawn from timings and provenance are masked")
+
+
+def compare(old_root: Path, new_root: Path) -> tuple[list, list]:
+    problems, notes = [], []
+    old_res, new_res = old_root / "results", new_root / "results"
+    files_a = {p.relative_to(old_res).as_posix() for p in old_res.rglob("*") if p.is_file()}
+    files_b = {p.relative_to(new_res).as_posix() for p in new_res.rglob("*") if p.is_file()}
+    for rel in sorted(files_a ^ files_b):
+        problems.append(f"{rel}: only in {'OLD' if rel in files_a else 'NEW'}")
+    counts = {}
+    for rel in sorted(files_a & files_b):
+        a, b = old_res / rel, new_res / rel
+        suffix = a.suffix
+        counts[suffix] = counts.get(suffix, 0) + 1
+        if rel in VOLATILE_FIGURES:
+            notes.append(f"{rel}: drawn from timings (checked by --rerender)")
+        elif suffix == ".nc":
+            _nc(a, b, rel, problems)
+        elif suffix == ".json":
+            if json.loads(a.read_text()) != json.loads(b.read_text()):
+                problems.append(f"{rel}: JSON differs")
+        elif suffix == ".png":
+            _png(a, b, rel, problems, notes)
+        elif suffix == ".html":
+            _html(a, b, rel, problems, notes, old_root, new_root)
+        elif a.read_bytes() != b.read_bytes():
+            problems.append(f"{rel}: bytes differ")
+    report = Path("reports/icosim_report.html")
+    if (old_root / report).exists() and (new_root / report).exists():
+        _html(old_root / report, new_root / report, str(report), problems, notes, old_root, new_root)
+    notes.insert(0, "compared: " + ", ".join(f"{n} {s or 'other'}" for s, n in sorted(counts.items())))
+    return problems, notes
+
+
+RERENDERED = [
+    "stability_report_section",
+    "convergence_report_section",
+    "pendulum_report_section",
+    "convergence_work_precision_figure",
+    "report",
+    "all",
+]
+REBUILT = [
+    "results/report/stability.html",
+    "results/report/convergence.html",
+    "results/report/pendulum.html",
+    "results/convergence/figures/work_precision.png",
+    "results/convergence/figures/work_precision.pdf",
+    "reports/icosim_report.html",
+]
+
+
+def rerender(old_root: Path, new_root: Path, snakemake_args: list) -> list:
+    """NEW's code on OLD's results: report sections, report and work-precision figure as OLD's."""
+    problems = []
+    snakemake = str(Path(sys.executable).with_name("snakemake"))
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp) / "wf"
+        work.mkdir()
+        for name in ("Snakefile", "config", "workflow", "src"):
+            src = new_root / name
+            (shutil.copytree if src.is_dir() else shutil.copy2)(src, work / name)
+        shutil.copytree(old_root / "results", work / "results")
+        (work / "reports").mkdir()
+        shutil.copy2(old_root / "reports/icosim_report.html", work / "reports/icosim_report.html")
+        base = [snakemake, "-c1", "--directory", str(work), "--snakefile", str(work / "Snakefile"), *snakemake_args]
+        subprocess.run(base + ["--touch"], check=True, capture_output=True)  # OLD's results count as up to date
+        for rel in REBUILT:  # ... except what is rebuilt with NEW's code
+            (work / rel).unlink()
+        run = subprocess.run(base + ["--rerun-triggers", "mtime"], check=True, capture_output=True, text=True)
+        ran = set(re.findall(r"rule (\w+):", run.stdout + run.stderr))
+        if ran != set(RERENDERED):
+            problems.append(f"rerender ran {sorted(ran)}, expected exactly {sorted(RERENDERED)}")
+        for rel in ("results/report/stability.html", "results/report/convergence.html", "results/report/pendulum.html"):
+            if (work / rel).read_bytes() != (old_root / rel).read_bytes():
+                problems.append(f"rerendered {rel} differs from OLD's")
+        wp = "results/convergence/figures/work_precision.png"
+        if not np.array_equal(_pixels((work / wp).read_bytes()), _pixels((old_root / wp).read_bytes())):
+            problems.append(f"rerendered {wp} differs from OLD's")
+        strip = lambda t: re.sub(r'<section id="provenance">.*?</section>', "", t, flags=re.S)  # noqa: E731
+        if strip((work / "reports/icosim_report.html").read_text()) != strip(
+            (old_root / "reports/icosim_report.html").read_text()
+        ):
+            problems.append("rerendered reports/icosim_report.html differs from OLD's (provenance section aside)")
+    return problems
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("old", type=Path)
+    parser.add_argument("new", type=Path)
+    parser.add_argument("--rerender", action="store_true", help="rebuild the report from OLD's results with NEW's code")
+    parser.add_argument("--configfile", nargs="*", default=[], help="the --configfile files of the run (--rerender)")
+    args = parser.parse_args(argv)
+    problems, notes = compare(args.old, args.new)
+    if args.rerender:
+        problems += rerender(args.old, args.new, ["--configfile", *args.configfile] if args.configfile else [])
+    for line in notes:
+        print("note:", line)
+    for line in problems:
+        print("DIFFERS:", line)
+    print("equal" if not problems else f"{len(problems)} difference(s)")
+    print(
+        "exceptions made: attributes "
+        + ", ".join(sorted(VOLATILE_ATTRS))
+        + "; variables "
+        + "; ".join(f"{f}: {', '.join(sorted(v))}" for f, v in VOLATILE_VARIABLES.items())
+        + "; figures "
+        + ", ".join(sorted(VOLATILE_FIGURES))
+        + "; report: timing phrases and columns, provenance"
+    )
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
