@@ -4,16 +4,13 @@ import logging
 
 from icosim.datasets import open_dataset
 from icosim.figures import save_figure
-from icosim.figures.convergence import convergence_figure
+from icosim.figures.convergence import convergence_figure, row_title
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params
 datasets = {ds.attrs["panel"]: ds for ds in (open_dataset(path) for path in snakemake.input.panels)}
 layout = [[(panel, int(index)) for panel, index in col] for col in p.layout]
-rows = [
-    f"index {index}" if ds_method != "projection" else "projection"
-    for ds_method, index in ((datasets[panel].attrs["method"], index) for panel, index in layout[0])
-]
+rows = [row_title(datasets[panel].attrs["method"], index) for panel, index in layout[0]]
 fig = convergence_figure(datasets, layout, columns=p.columns, rows=rows, title=p.title, guide_orders=p.guide_orders)
 save_figure(fig, snakemake.output.png, snakemake.output.pdf, dpi=p.dpi)
 logging.info("drew %d panels into %s", len(datasets), ", ".join(snakemake.output))

@@ -15,9 +15,9 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from ..methods import parameters
+from ..methods import METHODS, parameters
 
-__all__ = ["convergence_figure", "work_precision_figure", "K_COLOURS"]
+__all__ = ["convergence_figure", "work_precision_figure", "row_title", "K_COLOURS"]
 
 K_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink")
 
@@ -29,6 +29,12 @@ def param_label(name: str, value) -> str:
         return f"{name} = {value:g}"
     unit = {"1": "", "s": " s", "s2": " s$^2$"}[p.unit]
     return f"{p.tex_dimensional} = {value:g}{unit}"
+
+
+def row_title(method: str, index: int) -> str:
+    """Title of a figure row: ``index i`` for a method formulated at several indices, else its label."""
+    spec = METHODS.get(method)
+    return f"index {index}" if spec is None or spec.takes_index else spec.label
 
 
 def _column_label(column: dict) -> str:
