@@ -8,12 +8,19 @@ integrated in one batch with the predictor.
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 
 import numpy as np
 
 from ..backend import Float64
 from ..decompositions import get_decomposition
-from ..lagrange import monomial_coefficients
+from ..lagrange import (
+    lagrange_coefficients,
+    lagrange_weights,
+    monomial_coefficients,
+    variable_corrector_nodes,
+    variable_predictor_nodes,
+)
 from ..model import ParameterError
 from ..problem import CosimulationProblem
 from ..radau import _fd_jacobian, radau_batch
@@ -74,6 +81,9 @@ class PendulumCosimulation(CosimulationProblem):
         self._jac0 = {}
         # split: integrations that took more than one step or rejected one (docs/pendulum.md)
         self.stats = {"integrations": 0, "steps": 0, "rejected": 0, "fev": 0, "split": 0}
+        # Jacobians of the links' right-hand sides (Radau's own and the shared first-step one) and the
+        # right-hand side evaluations spent on the shared ones (not in stats["fev"])
+        self.jacobian_stats = {"jev": 0, "fev": 0}
 
     @property
     def n_coupling(self) -> int:
@@ -98,6 +108,8 @@ class PendulumCosimulation(CosimulationProblem):
         # of this link from this state (predictor, sensitivities, corrector).
         if self._jac0.get(i, (None,))[0] is not state:
             self._jac0[i] = (state, _fd_jacobian(fun, 0.0, y0[:1], fun(0.0, y0[:1]))[0])
+            self.jacobian_stats["jev"] += 1
+            self.jacobian_stats["fev"] += 2
         r = radau_batch(
             fun, 0.0, self.H, y0, rtol=self.rtol, atol=self.atol, newton_tol=self.newton_tol, jac0=self._jac0[i][1]
         )
@@ -108,6 +120,7 @@ class PendulumCosimulation(CosimulationProblem):
         st["rejected"] += r.n_rejected
         st["fev"] += r.n_fev
         st["split"] += r.n_steps > 1 or r.n_rejected > 0
+        self.jacobian_stats["jev"] += r.n_jev
         u1 = coef.sum(axis=1)  # input at tau = 1
         return r.y, link.outputs(r.y, r.f, u1)
 
@@ -190,3 +203,25 @@ class PendulumCosimulation(CosimulationProblem):
     # -- quantities of a state ----------------------------------------------------
     def constraint(self, state):
         return joint_constraint(self.params, state)
+
+    # -- variable macro steps (icosim.pendulum.adaptive) ----------------------------------
+    def set_macro_step(self, H: float, past_steps=None):
+        """Size ``H`` of the next macro step and the sizes ``H_N-1, ..., H_N-k`` of the past ones.
+
+        The extrapolation (Eq. 9) and interpolation (Eq. 11) polynomials then
+        run through the non-equidistant nodes of :mod:`icosim.lagrange`
+        (:func:`~icosim.lagrange.variable_predictor_nodes`), their weights
+        computed exactly from the float step sizes and rounded once;
+        ``past_steps=None`` means equal steps (the nodes of a fixed ``H``).
+        """
+        if not (isinstance(H, (int, float)) and math.isfinite(H) and H > 0):
+            raise ParameterError(f"H must be a finite number > 0, got {H!r}")
+        self.H = float(H)
+        past = [self.H] * self.k if past_steps is None else [float(h) for h in past_steps][: self.k]
+        if len(past) != self.k or not all(math.isfinite(h) and h > 0 for h in past):
+            raise ParameterError(f"need {self.k} past step sizes > 0, got {past_steps!r}")
+        exact = [Fraction(h) for h in [self.H] + past]  # binary floats are exact rationals
+        pred = variable_predictor_nodes(exact[0], exact[1:])
+        corr = variable_corrector_nodes(exact[0], exact[1:])
+        self.w_pred = np.array([float(w) for w in lagrange_weights(pred, 1)], dtype=float)
+        self.C_corr = np.array(lagrange_coefficients(corr), dtype=float)
