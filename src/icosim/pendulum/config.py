@@ -35,3 +35,59 @@ def configured_runs(cfg: dict) -> list:
     if len(set(runs)) != len(runs):
         raise ParameterError("pendulum.configurations lists a (method, decomposition) pair twice")
     return runs
+
+
+def trade_plan(cfg: dict) -> dict:
+    """The speed-accuracy studies of a ``pendulum:`` config (``schemes``, ``trade``), checked up front.
+
+    Returns ``groups`` (``(scheme, method, decomposition)`` of every sweep and
+    limit job, each over all ``k``), ``configs`` (``(label, scheme, method,
+    decomposition, k)`` of every configuration) and the checked lists.  Errors
+    name the key: an unknown scheme, an ``error_over_H.t_end`` that is not a
+    whole number of every ``H``, a tolerance or adaptive configuration whose
+    method cannot take its decomposition or that has no parameters.
+    """
+    from .measures import SCHEMES, config_label
+
+    trade = cfg["trade"]
+    for s in cfg["schemes"]:
+        if s not in SCHEMES:
+            raise ParameterError(f"pendulum.schemes: {s!r} is not one of {', '.join(SCHEMES)}")
+    sweep = trade["error_over_H"]
+    T = sweep["t_end"]
+    for H in sweep["H"]:
+        n = round(T / H)
+        if n < 1 or abs(n * H - T) > 1e-9 * T:
+            raise ParameterError(
+                f"pendulum.trade.error_over_H.t_end = {T!r} must be a whole number of macro steps of every H; H = {H!r} is not"
+            )
+    runs = configured_runs(cfg)
+    groups, configs = [], []
+    for scheme in cfg["schemes"]:
+        for method, dec, _ in runs:
+            if (scheme, method, dec) not in groups:
+                groups.append((scheme, method, dec))
+        for method, dec, k in runs:
+            configs.append((config_label(scheme, method, dec, k), scheme, method, dec, k))
+    for key in ("tolerance", "adaptive"):
+        for i, c in enumerate(trade[key]["configurations"]):
+            where = f"pendulum.trade.{key}.configurations[{i}]"
+            scheme = c.get("scheme", "jacobi")
+            if scheme not in SCHEMES:
+                raise ParameterError(f"{where}: scheme {scheme!r} is not one of {', '.join(SCHEMES)}")
+            if c["method"] not in cfg["methods"]:
+                raise ParameterError(f"{where}: method {c['method']!r} has no parameters under pendulum.methods")
+            try:
+                make_method(c["method"], **cfg["methods"][c["method"]]).check_decomposition(
+                    get_decomposition(c["decomposition"])
+                )
+            except ParameterError as exc:
+                raise ParameterError(f"{where} ({c['method']}, {c['decomposition']}): {exc}") from None
+    ad = trade["adaptive"]
+    ctl = ad["controller"]
+    if not ctl["H_min"] <= ad["H0"] <= ctl["H_max"]:
+        raise ParameterError(
+            f"pendulum.trade.adaptive.H0 = {ad['H0']!r} must lie in [controller.H_min, controller.H_max] = "
+            f"[{ctl['H_min']!r}, {ctl['H_max']!r}]"
+        )
+    return {"groups": groups, "configs": configs}

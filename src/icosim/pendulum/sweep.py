@@ -1,0 +1,152 @@
+"""Error over the macro-step size H: every configuration at every H over the same end time.
+
+One job runs one group -- a scheme, a method and a decomposition, every ``k``
+and every ``H`` (:func:`sweep_group`) -- and writes its records
+(:data:`icosim.pendulum.measures.RECORD`) over ``(config, H)``.
+:func:`orders` fits the order of each configuration with the rule of
+:mod:`.orders` on the step sizes above the error floor, and the same rule on
+the linear test model's errors for the same scheme (:mod:`.linear_study`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..datasets import provenance_attrs
+from ..methods import make_method
+from .measures import RECORD, config_label, measured_run
+from .model import PendulumParameters
+from .orders import error_floor, pendulum_order
+from .reference import reference_solution
+
+__all__ = ["sweep_group", "records_dataset", "reference_accuracy", "orders"]
+
+
+def reference_accuracy(params: PendulumParameters, t_end: float, reference: dict, n: int = 201) -> float:
+    """Estimated error of the reference: ``max |phi(tol) - phi(10 tol)|`` over ``n`` times in ``[0, t_end]``.
+
+    The looser solution's error bounds the tighter one's (a conservative estimate).
+    """
+    t = np.linspace(0.0, t_end, n)
+    tight = reference_solution(params, t, **reference)
+    loose = reference_solution(params, t, **dict(reference, rtol=10 * reference["rtol"], atol=10 * reference["atol"]))
+    return float(max(np.max(np.abs(tight[v] - loose[v])) for v in ("phi1", "phi2")))
+
+
+def records_dataset(records: dict, labels: list, H_values, coords: dict, attrs: dict, dim: str = "H"):
+    """Records ``{(label, H): record}`` as a dataset over ``(config, dim)`` (NaN where none)."""
+    import xarray as xr
+
+    H_values = [float(h) for h in H_values]
+    data = {}
+    for name, (units, long_name) in RECORD.items():
+        arr = np.full((len(labels), len(H_values)), np.nan)
+        for i, lab in enumerate(labels):
+            for j, h in enumerate(H_values):
+                rec = records.get((lab, h))
+                if rec is not None:
+                    arr[i, j] = rec[name]
+        data[name] = (("config", dim), arr, {"units": units, "long_name": long_name})
+    status = [[records[(lab, h)]["status"] if (lab, h) in records else "" for h in H_values] for lab in labels]
+    reason = [[records[(lab, h)]["reason"] if (lab, h) in records else "" for h in H_values] for lab in labels]
+    data["status"] = (("config", dim), np.array(status, dtype=str), {"long_name": "stable, diverged or failed"})
+    data["reason"] = (("config", dim), np.array(reason, dtype=str), {"long_name": "why a run diverged or failed"})
+    all_coords = {"config": ("config", list(labels)), dim: (dim, H_values, {"units": "s"})}
+    all_coords.update({key: ("config", list(v)) for key, v in coords.items()})
+    return xr.Dataset(data, coords=all_coords, attrs=attrs)
+
+
+def sweep_group(
+    settings: dict,
+    scheme: str,
+    method: str,
+    decomposition: str,
+    ks,
+    H_values,
+    t_end: float,
+    *,
+    reference: dict,
+    integrator: dict | None = None,
+    repeats: int = 3,
+    repeat_below: float = 0.1,
+    command: str = "",
+    log=None,
+):
+    """Error over H of one group (scheme, method, decomposition; every ``k``) -> dataset over ``(config, H)``."""
+    make_method(method, **settings["methods"][method])  # fails early on bad parameters
+    labels, records = [], {}
+    for k in ks:
+        label = config_label(scheme, method, decomposition, k)
+        labels.append(label)
+        for H in H_values:
+            rec = measured_run(
+                settings,
+                scheme,
+                method,
+                decomposition,
+                k,
+                H,
+                t_end,
+                reference=reference,
+                repeats=repeats,
+                repeat_below=repeat_below,
+                integrator=integrator,
+            )
+            records[(label, float(H))] = rec
+            if log:
+                log(label, H, rec)
+    params = PendulumParameters(**settings["model"])
+    job = {
+        "scheme": scheme,
+        "method": method,
+        "decomposition": decomposition,
+        "k": [int(k) for k in ks],
+        "H": [float(h) for h in H_values],
+        "t_end": t_end,
+        "settings": settings,
+        "integrator": integrator or {},
+        "reference": reference,
+    }
+    attrs = provenance_attrs(
+        job, title=f"Double pendulum: error over H, {scheme} {method} {decomposition}", command=command
+    )
+    attrs.update(
+        t_end=float(t_end),
+        reference_method=reference["method"],
+        reference_rtol=float(reference["rtol"]),
+        reference_accuracy=reference_accuracy(params, t_end, reference),
+        rtol=float(dict(settings["integrator"], **(integrator or {}))["rtol"]),
+        atol=float(dict(settings["integrator"], **(integrator or {}))["atol"]),
+    )
+    coords = {
+        "scheme": [scheme] * len(labels),
+        "method": [method] * len(labels),
+        "decomposition": [decomposition] * len(labels),
+        "k": [int(k) for k in ks],
+    }
+    return records_dataset(records, labels, H_values, coords, attrs)
+
+
+def orders(ds, *, floor_factor: float = 10.0, decades: float = 1.0, tolerance: float = 0.1, min_points: int = 3):
+    """Order of every configuration of a sweep dataset: ``{label: AsymptoticOrder}``.
+
+    Unstable: a run that diverged or failed.  The floor is
+    :func:`.orders.error_floor` with the dataset's ``reference_accuracy``.
+    """
+    out = {}
+    H = ds["H"].values
+    acc = float(ds.attrs.get("reference_accuracy", 0.0))
+    for i, label in enumerate(ds["config"].values):
+        row = ds.isel(config=i)
+        unstable = row["status"].values != "stable"
+        floor = error_floor(row["n_macro_steps"].values, reference_accuracy=acc, factor=floor_factor)
+        out[str(label)] = pendulum_order(
+            H,
+            np.where(unstable, np.nan, row["error_max"].values),
+            unstable,
+            floor=floor,
+            decades=decades,
+            tolerance=tolerance,
+            min_points=min_points,
+        )
+    return out
