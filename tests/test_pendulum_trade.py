@@ -390,10 +390,11 @@ def small_studies(tmp_path_factory):
     """Every study on a tiny grid, written and read back as NetCDF (as the workflow does)."""
     from icosim.datasets import open_dataset, write_netcdf
     from icosim.pendulum.adaptive_study import adaptive_study
+    from icosim.pendulum.baselines import linear_orders_dataset, monolithic_baselines
     from icosim.pendulum.limits import limits_dataset, limits_group, merge_limits
     from icosim.pendulum.sweep import sweep_group
     from icosim.pendulum.tolerance import tolerance_study
-    from icosim.pendulum.work_precision import linear_orders_dataset, monolithic_baselines, work_precision_dataset
+    from icosim.pendulum.work_precision import work_precision_dataset
 
     trade = CFG["trade"]
     settings = {key: CFG[key] for key in ("model", "methods", "integrator", "sensitivities", "corrector", "divergence")}

@@ -3,7 +3,12 @@
 # errors and the claim of Sect. 4 in results/pendulum/summary.nc, one figure per k, and
 # the pendulum section of the report.
 from icosim.checks import load_claims  # noqa: E402
-from icosim.pendulum.config import configured_runs, trade_plan  # noqa: E402
+from icosim.pendulum.config import (  # noqa: E402
+    configured_runs,
+    run_settings,
+    study_methods,
+    trade_plan,
+)
 from icosim.pendulum.names import run_name  # noqa: E402
 
 validate_part(config["pendulum"], "pendulum.schema.yaml")
@@ -59,28 +64,6 @@ TRADE_FIGURES = {
     name: f"results/pendulum/figures/{name}.png" for name in TRADE_FIGURE_NAMES
 }
 
-
-def trade_settings(method=None):
-    """The run settings a trade job needs (only ``method``'s parameters when given)."""
-    out = {
-        key: PENDULUM[key]
-        for key in (
-            "model",
-            "integrator",
-            "sensitivities",
-            "corrector",
-            "divergence",
-        )
-    }
-    methods = PENDULUM["methods"]
-    out["methods"] = {method: methods[method]} if method else methods
-    return out
-
-
-def trade_group_methods(studies):
-    """Methods used by the configurations of some trade studies (their parameters only)."""
-    names = {c["method"] for key in studies for c in TRADE[key]["configurations"]}
-    return {name: PENDULUM["methods"][name] for name in sorted(names)}
 
 rule pendulum_reference:
     """Monolithic reference (minimal coordinates) on the macro-time grid."""
@@ -257,7 +240,7 @@ rule pendulum_sweep:
     conda:
         "../envs/icosim.yaml"
     params:
-        settings=lambda w: trade_settings(TRADE_GROUPS[w.group][1]),
+        settings=lambda w: run_settings(PENDULUM, [TRADE_GROUPS[w.group][1]]),
         scheme=lambda w: TRADE_GROUPS[w.group][0],
         method=lambda w: TRADE_GROUPS[w.group][1],
         decomposition=lambda w: TRADE_GROUPS[w.group][2],
@@ -283,7 +266,7 @@ rule pendulum_baselines:
     conda:
         "../envs/icosim.yaml"
     params:
-        settings=trade_settings(),
+        settings=run_settings(PENDULUM),
         configs=[list(c[:1]) + list(c[2:]) for c in TRADE_PLAN["configs"]],
         H=TRADE["error_over_H"]["H"],
         t_end=TRADE["error_over_H"]["t_end"],
@@ -327,7 +310,7 @@ rule pendulum_limits:
     conda:
         "../envs/icosim.yaml"
     params:
-        settings=lambda w: trade_settings(TRADE_GROUPS[w.group][1]),
+        settings=lambda w: run_settings(PENDULUM, [TRADE_GROUPS[w.group][1]]),
         scheme=lambda w: TRADE_GROUPS[w.group][0],
         method=lambda w: TRADE_GROUPS[w.group][1],
         decomposition=lambda w: TRADE_GROUPS[w.group][2],
@@ -363,10 +346,7 @@ rule pendulum_tolerance:
     conda:
         "../envs/icosim.yaml"
     params:
-        settings=lambda w: {
-            **trade_settings(),
-            "methods": trade_group_methods(["tolerance"]),
-        },
+        settings=run_settings(PENDULUM, study_methods(PENDULUM, "tolerance")),
         tolerance=TRADE["tolerance"],
         t_end=TRADE["error_over_H"]["t_end"],
         reference=TRADE["reference"],
@@ -385,10 +365,7 @@ rule pendulum_adaptive:
     conda:
         "../envs/icosim.yaml"
     params:
-        settings=lambda w: {
-            **trade_settings(),
-            "methods": trade_group_methods(["adaptive"]),
-        },
+        settings=run_settings(PENDULUM, study_methods(PENDULUM, "adaptive")),
         adaptive=TRADE["adaptive"],
         reference=TRADE["reference"],
     script:

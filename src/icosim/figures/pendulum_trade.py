@@ -186,13 +186,14 @@ def stability_limit_figure(limits, *, title=None):
             missing.append(f"{_label(m, d, k)}: measured {row['status'].values}, linear {row['status_linear'].values}")
             continue
         key = (m, d)
+        growth = str(row["limited_by"].values) == "growth"
         ax.plot(
             x,
             y,
             _MARKERS.get(d, "o"),
             color=_COLOURS.get(m),
             ms=8,
-            mfc="none" if k == 0 else (_COLOURS.get(m) if k == 2 else "white"),
+            mfc=_COLOURS.get(m) if growth else "none",
             label=_label(m, d) if key not in seen else None,
         )
         seen.add(key)
@@ -206,7 +207,11 @@ def stability_limit_figure(limits, *, title=None):
     ax.set_xlabel(r"predicted: largest H with $\rho \leq 1$ (linear test model at the pendulum's points) [s]")
     ax.set_ylabel(f"measured: largest H without divergence over {limits.attrs.get('t_end', float('nan')):g} s [s]")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize="small", title="marker fill: k = 0 open, 1 white, 2 filled; arrow: censored at the cap")
+    ax.legend(
+        fontsize="small",
+        title="filled: limit set by growth; open: by the |g_c| bound\n(or censored: arrow); label: k",
+        title_fontsize="small",
+    )
     if missing:
         ax.text(
             0.01, -0.14, "not drawn: " + "; ".join(missing), transform=ax.transAxes, fontsize=7, va="top", wrap=True

@@ -41,8 +41,9 @@ def trade_plan(cfg: dict) -> dict:
     """The speed-accuracy studies of a ``pendulum:`` config (``schemes``, ``trade``), checked up front.
 
     Returns ``groups`` (``(scheme, method, decomposition)`` of every sweep and
-    limit job, each over all ``k``), ``configs`` (``(label, scheme, method,
-    decomposition, k)`` of every configuration) and the checked lists.  Errors
+    limit job, each over all ``k``) and ``configs`` (``(label, scheme, method,
+    decomposition, k)`` of every configuration): every one of
+    ``pendulum.configurations`` unless ``trade.configurations`` names a subset.  Errors
     name the key: an unknown scheme, an ``error_over_H.t_end`` that is not a
     whole number of every ``H``, a tolerance or adaptive configuration whose
     method cannot take its decomposition or that has no parameters.
@@ -62,6 +63,17 @@ def trade_plan(cfg: dict) -> dict:
                 f"pendulum.trade.error_over_H.t_end = {T!r} must be a whole number of macro steps of every H; H = {H!r} is not"
             )
     runs = configured_runs(cfg)
+    subset = trade.get("configurations")
+    if subset is not None:  # a subset of pendulum.configurations (e.g. for CI); default: all of them
+        pairs = {(c["method"], c["decomposition"]) for c in cfg["configurations"]}
+        for i, c in enumerate(subset):
+            if (c["method"], c["decomposition"]) not in pairs:
+                raise ParameterError(
+                    f"pendulum.trade.configurations[{i}] ({c['method']}, {c['decomposition']}) is not one of "
+                    "pendulum.configurations"
+                )
+        wanted = {(c["method"], c["decomposition"]) for c in subset}
+        runs = [r for r in runs if (r[0], r[1]) in wanted]
     groups, configs = [], []
     for scheme in cfg["schemes"]:
         for method, dec, _ in runs:
@@ -91,3 +103,20 @@ def trade_plan(cfg: dict) -> dict:
             f"[{ctl['H_min']!r}, {ctl['H_max']!r}]"
         )
     return {"groups": groups, "configs": configs}
+
+
+#: The keys of a ``pendulum:`` configuration that a run of the speed-accuracy studies needs.
+RUN_KEYS = ("model", "integrator", "sensitivities", "corrector", "divergence")
+
+
+def run_settings(cfg: dict, methods=None) -> dict:
+    """What a speed-accuracy job needs of a ``pendulum:`` config: :data:`RUN_KEYS` and ``methods``
+    (only the parameters of the named ``methods`` when given, so that a job reruns only when they change)."""
+    out = {key: cfg[key] for key in RUN_KEYS}
+    out["methods"] = dict(cfg["methods"]) if methods is None else {m: cfg["methods"][m] for m in sorted(set(methods))}
+    return out
+
+
+def study_methods(cfg: dict, *studies) -> list:
+    """The methods of the configurations of the named studies of ``trade`` (``tolerance``, ``adaptive``)."""
+    return sorted({c["method"] for key in studies for c in cfg["trade"][key]["configurations"]})

@@ -51,6 +51,7 @@ __all__ = [
     "limits_group",
     "limits_dataset",
     "merge_limits",
+    "limited_by",
     "LIMIT_STATUSES",
 ]
 
@@ -68,6 +69,7 @@ class Limit:
     H_band_low: float
     status: str
     evaluations: list = field(default_factory=list)  # (H, stable, info) in the order evaluated
+    rho_linear: dict = field(default_factory=dict)  # the linear model's rho at this search's H_max, H_band_low
 
     @property
     def n_evaluations(self) -> int:
@@ -152,6 +154,13 @@ def limits_group(settings, scheme, method, decomposition, ks, *, scan, t_end, re
             measured_predicate(settings, scheme, method, decomposition, k, t_end), scan, resolution=resolution
         )
         predicted = stability_limit(linear_predicate(settings, method, decomposition, k), scan, resolution=resolution)
+        # the linear model's rho where the measurement put the band's edges: how fast would it have grown there?
+        params = PendulumParameters(**settings["model"])
+        m = make_method(method, **settings["methods"][method])
+        measured.rho_linear = {
+            key: (linear_rho(params, m, decomposition, k, H) if math.isfinite(H) else math.nan)
+            for key, H in (("H_max", measured.H_max), ("H_band_low", measured.H_band_low))
+        }
         out[label] = (int(k), measured, predicted)
         if log:
             log(label, measured, predicted)
@@ -219,6 +228,21 @@ def limits_dataset(groups: dict, *, scheme, method, decomposition, scan, t_end, 
             col(lambda k, m, p: _reason_at(m, m.H_unstable), str),
             {"long_name": "why the run at H_unstable diverged or failed"},
         ),
+        "limited_by": (
+            "config",
+            col(lambda k, m, p: limited_by(_reason_at(m, m.H_unstable)), str),
+            {"long_name": "what ended the run at H_unstable: growth, the constraint bound |g_c|, or a failure"},
+        ),
+        "rho_linear_at_measured_H_max": (
+            "config",
+            col(lambda k, m, p: m.rho_linear.get("H_max", math.nan)),
+            {"long_name": "linear test model's rho at the measured H_max"},
+        ),
+        "rho_linear_at_measured_band_low": (
+            "config",
+            col(lambda k, m, p: m.rho_linear.get("H_band_low", math.nan)),
+            {"long_name": "linear test model's rho at the measured lower edge of the stable band"},
+        ),
     }
     coords = {
         "config": ("config", labels),
@@ -230,6 +254,16 @@ def limits_dataset(groups: dict, *, scheme, method, decomposition, scan, t_end, 
     attrs = dict(attrs)
     attrs.update(t_end=float(t_end), resolution=float(resolution), scan=[float(h) for h in sorted(scan)])
     return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def limited_by(reason: str) -> str:
+    """``growth`` (|lambda_c| or |omega| beyond its bound, or not finite), ``constraint bound`` (|g_c| beyond its
+    bound: possibly an inaccurate rather than a growing run), ``failed`` or ``""`` (no unstable run)."""
+    if not reason:
+        return ""
+    if reason.startswith("failed"):
+        return "failed"
+    return "constraint bound" if "|g_c|" in reason else "growth"
 
 
 def _reason_at(lim: Limit, H) -> str:

@@ -3,9 +3,9 @@
 One job runs one group -- a scheme, a method and a decomposition, every ``k``
 and every ``H`` (:func:`sweep_group`) -- and writes its records
 (:data:`icosim.pendulum.measures.RECORD`) over ``(config, H)``.
-:func:`orders` fits the order of each configuration with the rule of
-:mod:`.orders` on the step sizes above the error floor, and the same rule on
-the linear test model's errors for the same scheme (:mod:`.linear_study`).
+The orders are fitted where the groups are assembled
+(:func:`icosim.pendulum.work_precision.orders`), so that a change of the fit
+reruns no sweep.
 """
 
 from __future__ import annotations
@@ -16,10 +16,9 @@ from ..datasets import provenance_attrs
 from ..methods import make_method
 from .measures import RECORD, config_label, measured_run
 from .model import PendulumParameters
-from .orders import error_floor, pendulum_order
 from .reference import reference_solution
 
-__all__ = ["sweep_group", "records_dataset", "reference_accuracy", "orders"]
+__all__ = ["sweep_group", "records_dataset", "reference_accuracy"]
 
 
 def reference_accuracy(params: PendulumParameters, t_end: float, reference: dict, n: int = 201) -> float:
@@ -125,28 +124,3 @@ def sweep_group(
         "k": [int(k) for k in ks],
     }
     return records_dataset(records, labels, H_values, coords, attrs)
-
-
-def orders(ds, *, floor_factor: float = 10.0, decades: float = 1.0, tolerance: float = 0.1, min_points: int = 3):
-    """Order of every configuration of a sweep dataset: ``{label: AsymptoticOrder}``.
-
-    Unstable: a run that diverged or failed.  The floor is
-    :func:`.orders.error_floor` with the dataset's ``reference_accuracy``.
-    """
-    out = {}
-    H = ds["H"].values
-    acc = float(ds.attrs.get("reference_accuracy", 0.0))
-    for i, label in enumerate(ds["config"].values):
-        row = ds.isel(config=i)
-        unstable = row["status"].values != "stable"
-        floor = error_floor(row["n_macro_steps"].values, reference_accuracy=acc, factor=floor_factor)
-        out[str(label)] = pendulum_order(
-            H,
-            np.where(unstable, np.nan, row["error_max"].values),
-            unstable,
-            floor=floor,
-            decades=decades,
-            tolerance=tolerance,
-            min_points=min_points,
-        )
-    return out

@@ -108,7 +108,14 @@ def tolerance_study(
     }
     job = {"configurations": configurations, "H": H_values, "rtol": rtols, "t_end": t_end, "settings": settings}
     attrs = provenance_attrs(job, title="Double pendulum: error over the subsystem tolerance", command=command)
-    attrs.update(t_end=float(t_end), reference_method=reference["method"], reference_rtol=float(reference["rtol"]))
+    from .sweep import reference_accuracy
+
+    attrs.update(
+        t_end=float(t_end),
+        reference_method=reference["method"],
+        reference_rtol=float(reference["rtol"]),
+        reference_accuracy=reference_accuracy(params, t_end, reference),
+    )
     return xr.Dataset(variables, coords=coords, attrs=attrs)
 
 

@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from ..pendulum.adaptive_study import equal_error_table
+from ..pendulum.orders import error_floor
 from ..pendulum.tolerance import sufficient_rtol
 from .html import escape, figure, table
 
@@ -93,6 +94,11 @@ def accuracy_rows(wp) -> list[dict]:
             "H": float(wp["cheapest_H"].values[j]),
             "cpu": float(wp["cheapest_cpu_seconds"].values[j]),
         }
+        labels = [str(c) for c in wp["config"].values]
+        row["unstable_small_H"] = bool(
+            row["config"] in labels
+            and str(wp["order_status"].values[labels.index(row["config"])]) == "unstable as H -> 0"
+        )
         for integ in wp["integrator"].values:
             row[f"cpu_{integ}"] = float(wp[f"monolithic_{integ}_cpu_at_level"].values[j])
             row[f"tol_{integ}"] = float(wp[f"monolithic_{integ}_tol_at_level"].values[j])
@@ -118,13 +124,25 @@ def limit_rows(limits) -> list[dict]:
                 "ratio": ratio,
                 "n_runs": int(r["n_runs"]),
                 "reason": str(r["reason_unstable"].values),
+                "limited_by": str(r["limited_by"].values),
+                "rho_at_H_max": float(r["rho_linear_at_measured_H_max"]),
+                "rho_at_band_low": float(r["rho_linear_at_measured_band_low"]),
             }
         )
     return rows
 
 
-def limit_summary(rows, scan0: float) -> dict:
-    """Counts behind the stability-limit conclusion (both bisected, agreeing within LIMIT_AGREEMENT, ...)."""
+def limit_summary(rows, scan0: float, t_end: float = math.nan) -> dict:
+    """Counts behind the stability-limit conclusion: where the measured limit is set by growth and the linear
+    model's by rho = 1, do they agree within LIMIT_AGREEMENT; which measured limits are the constraint bound;
+    the growth rho^n the linear model allows over the horizon at the lower edge of a measured band."""
+    growth = [r for r in rows if r["status"] == "bisected" and r["limited_by"] == "growth"]
+    growth_both = [r for r in growth if r["status_linear"] == "bisected"]
+    band_growth = {
+        r["config"]: r["rho_at_band_low"] ** math.ceil(t_end / r["H_band_low"] - 1e-9)
+        for r in rows
+        if r["H_band_low"] > scan0 * (1 + 1e-9) and math.isfinite(r["rho_at_band_low"]) and math.isfinite(t_end)
+    }
     both = [r for r in rows if r["status"] == "bisected" and r["status_linear"] == "bisected"]
     agree = [r for r in both if 1 / LIMIT_AGREEMENT <= r["ratio"] <= LIMIT_AGREEMENT]
     above = [r for r in both if r["ratio"] > LIMIT_AGREEMENT]
@@ -139,6 +157,13 @@ def limit_summary(rows, scan0: float) -> dict:
     ]
     return {
         "n": len(rows),
+        "growth_limited": [r["config"] for r in growth],
+        "growth_compared": [(r["config"], r["ratio"]) for r in growth_both],
+        "growth_agree": [r["config"] for r in growth_both if 1 / LIMIT_AGREEMENT <= r["ratio"] <= LIMIT_AGREEMENT],
+        "constraint_limited": [
+            r["config"] for r in rows if r["status"] == "bisected" and r["limited_by"] == "constraint bound"
+        ],
+        "band_growth": band_growth,
         "both_bisected": len(both),
         "agree": [r["config"] for r in agree],
         "measured_above": [r["config"] for r in above],
@@ -150,12 +175,19 @@ def limit_summary(rows, scan0: float) -> dict:
     }
 
 
-def tolerance_rows(tol) -> list[dict]:
+def tolerance_rows(tol, floor_factor: float = 10.0) -> list[dict]:
+    """Per configuration and H: errors, the largest integration effect, the loosest sufficient rtol, cost.
+
+    Where the error at the tightest rtol is below the error floor (:func:`~icosim.pendulum.orders.error_floor`)
+    the comparison says nothing (both are rounding): ``at_floor`` is then True.
+    """
     share = float(tol.attrs.get("share", 0.01))
+    acc = float(tol.attrs.get("reference_accuracy", 0.0))
     rows = []
     for lab in tol["config"].values:
         for H in tol["H"].values:
             r = tol.sel(config=lab, H=H)
+            floor = float(error_floor(r["n_macro_steps"].values[-1], reference_accuracy=acc, factor=floor_factor))
             rows.append(
                 {
                     "config": str(lab),
@@ -170,6 +202,7 @@ def tolerance_rows(tol) -> list[dict]:
                     "substeps_tight": float(r["n_subsystem_steps"].values[-1] / r["n_integrations"].values[-1]),
                     "cpu_loose": float(r["cpu_seconds"].values[0]),
                     "cpu_tight": float(r["cpu_seconds"].values[-1]),
+                    "at_floor": bool(float(r["error_max"].values[-1]) < floor),
                 }
             )
     return rows
@@ -231,7 +264,9 @@ def trade_section(*, work_precision, stability_limit, tolerance, adaptive, figur
         f"<p>Orders follow the linear study's rule: the slope of log error over log H on the smallest-H decade "
         f"of stable step sizes, asymptotic only if every local slope there lies within "
         f"{_f(wp.attrs.get('fit_tolerance'), 'g')} of it, otherwise pre-asymptotic (undecided). Errors below the floor "
-        f"{_f(wp.attrs.get('fit_floor_factor'), 'g')}·(ε·N + reference error) are not data and are left out first. "
+        f"{_f(wp.attrs.get('fit_floor_factor'), 'g')}·(ε·√N + reference error) (N macro steps; for the linear "
+        f"model, stepped with one rounded matrix, {_f(wp.attrs.get('fit_floor_factor'), 'g')}·ε·N) are not data and "
+        "are left out first. "
         "The linear model's orders are those of the paper's convergence test model (Sect. 3.7) with the same scheme, "
         "step sizes and rule (its own point at the pendulum's parameters has identical subsystems, for which the "
         "force/force coupling force vanishes and the co-simulation is exact).</p>"
@@ -276,9 +311,12 @@ def trade_section(*, work_precision, stability_limit, tolerance, adaptive, figur
             f"{_f(r['cpu'] / r['cpu_' + i], '.1f')}× monolithic {i}" if math.isfinite(r["cpu_" + i]) else f"{i}: none"
             for i in integs
         )
+        note = (
+            " — a configuration unstable as H → 0, stable only in a band of larger H" if r["unstable_small_H"] else ""
+        )
         sentences.append(
             f"at {_f(r['level'], '.0e')} rad the cheapest is <code>{escape(r['config'])}</code> at H = {_f(r['H'], 'g')} s "
-            f"({_f(r['cpu'], '.3f')} CPU s; {rel})"
+            f"({_f(r['cpu'], '.3f')} CPU s; {rel}){note}"
         )
     parts.append(
         "<h4>Work-precision</h4>"
@@ -313,7 +351,8 @@ def trade_section(*, work_precision, stability_limit, tolerance, adaptive, figur
     # stability limit
     lrows = limit_rows(lim)
     scan = [float(h) for h in np.atleast_1d(lim.attrs.get("scan", [math.nan]))]
-    lsum = limit_summary(lrows, scan[0])
+    T_lim = float(lim.attrs.get("t_end", math.nan))
+    lsum = limit_summary(lrows, scan[0], T_lim)
     parts.append(
         "<h4>Stability limit in H</h4>"
         f"<p>Largest stable H per configuration: scan H = {', '.join(_f(h, 'g') for h in scan)} s upward, then bisect "
@@ -323,15 +362,27 @@ def trade_section(*, work_precision, stability_limit, tolerance, adaptive, figur
         "(λ̄<sub>r1</sub> = −dH/(2m), λ̄<sub>i1</sub> = Hω for both modal frequencies, the mapping of the ρ ≈ 1.13 check; "
         "the method's SI parameters scaled by H). H_max is the upper edge of the first stable band at or above the first "
         "scan point.</p>"
-        f"<p><b>Result:</b> {lsum['both_bisected']} configurations have a bisected limit on both sides; measured and "
-        f"predicted agree within a factor {LIMIT_AGREEMENT} for {len(lsum['agree'])} of them ({_join(lsum['agree'])}); "
-        f"the measured limit is larger for {_join(lsum['measured_above'])} and smaller for "
-        f"{_join(lsum['measured_below'])}. Stable up to the last scan point: measured {_join(lsum['censored'])}; "
-        f"predicted {_join(lsum['censored_linear'])}. Unstable at the first scan point H = {_f(scan[0], 'g')} s "
-        f"(stable band, if any, above it): measured {_join(lsum['unstable_at_scan0'])}; predicted "
-        f"{_join(lsum['unstable_at_scan0_linear'])}. Divergence within a finite horizon is what is measured: where the "
-        "growth per step is barely above 1, a run stays within the bounds and the measured limit lies above the "
-        "predicted one; at large H the bounds on |g<sub>c</sub>| also stop inaccurate runs that do not grow.</p>"
+        "<p><b>Result.</b> "
+        f"<i>Limits set by growth</i> (the first unstable run exceeded |λ<sub>c</sub>| or |ω|): "
+        f"{_join(lsum['growth_limited'])}; where the linear model has a limit too, measured/predicted = "
+        + (", ".join(f"{_f(r, '.2f')} (<code>{escape(c)}</code>)" for c, r in lsum["growth_compared"]) or "–")
+        + f", i.e. agreement within a factor {LIMIT_AGREEMENT} for {len(lsum['growth_agree'])} of "
+        f"{len(lsum['growth_compared'])}. <i>Limits set by the constraint bound</i> |g<sub>c</sub>| &gt; "
+        "1 cm after the corrector, at large H, where a run may be inaccurate rather than growing: "
+        f"{_join(lsum['constraint_limited'])}. Stable up to the last scan point: measured "
+        f"{_join(lsum['censored'])}; predicted {_join(lsum['censored_linear'])}. Unstable at the first scan point "
+        f"H = {_f(scan[0], 'g')} s, with a stable band above it: measured {_join(lsum['unstable_at_scan0'])}; "
+        f"predicted {_join(lsum['unstable_at_scan0_linear'])}. "
+        + (
+            "Where the measured band starts below the predicted one, the linear model's growth over the "
+            f"{T_lim:g} s horizon at the measured lower edge is "
+            + ", ".join(f"{_f(g, '.1e')} (<code>{escape(c)}</code>)" for c, g in lsum["band_growth"].items())
+            + ": too little to reach the bounds from errors of 1e-9 rad, so divergence within the horizon cannot "
+            "see that instability. "
+            if lsum["band_growth"]
+            else ""
+        )
+        + "What is measured is divergence within a finite horizon.</p>"
     )
     parts.append(
         table(
@@ -343,8 +394,10 @@ def trade_section(*, work_precision, stability_limit, tolerance, adaptive, figur
                 "H_max linear [s]",
                 "search (linear)",
                 "measured / linear",
+                "ρ linear at measured H_max",
                 "runs",
                 "at the first unstable H",
+                "limited by",
             ],
             [
                 [
@@ -355,8 +408,10 @@ def trade_section(*, work_precision, stability_limit, tolerance, adaptive, figur
                     _f(r["H_max_linear"], ".4g"),
                     r["status_linear"],
                     _f(r["ratio"], ".2f"),
+                    _f(r["rho_at_H_max"], ".4f"),
                     r["n_runs"],
                     r["reason"],
+                    r["limited_by"],
                 ]
                 for r in lrows
             ],
@@ -373,7 +428,11 @@ def trade_section(*, work_precision, stability_limit, tolerance, adaptive, figur
 
     # tolerance
     trows = tolerance_rows(tol)
-    never = all(math.isfinite(r["sufficient"]) and r["sufficient"] >= r["rtol_loose"] * (1 - 1e-12) for r in trows)
+    decided = [r for r in trows if not r["at_floor"]]
+    never = bool(decided) and all(
+        math.isfinite(r["sufficient"]) and r["sufficient"] >= r["rtol_loose"] * (1 - 1e-12) for r in decided
+    )
+    floor_cases = [f"{r['config']} at H = {r['H']:g} s" for r in trows if r["at_floor"]]
     parts.append(
         "<h4>Subsystem tolerance</h4>"
         f"<p>At fixed H, the links' Radau IIA at rtol = atol from {_f(trows[0]['rtol_loose'], '.0e')} to "
@@ -385,6 +444,12 @@ def trade_section(*, work_precision, stability_limit, tolerance, adaptive, figur
             "<b>Result:</b> it never matters here: at every H and configuration the effect stays below that share from "
             "the loosest tolerance on, so the coupling error is what the error-over-H study measures; a tighter "
             "tolerance only costs Radau substeps (table)."
+            + (
+                f" Not decided where the error itself is at the error floor ({escape('; '.join(floor_cases))}): "
+                "there both numbers are rounding."
+                if floor_cases
+                else ""
+            )
             if never
             else "<b>Result:</b> the loosest sufficient tolerance per configuration and H is in the table."
         )
@@ -409,7 +474,7 @@ def trade_section(*, work_precision, stability_limit, tolerance, adaptive, figur
                     _f(r["error_tight"]),
                     _f(r["error_loose"]),
                     _f(r["effect_max"]),
-                    _f(r["sufficient"], ".0e"),
+                    "error at the floor" if r["at_floor"] else _f(r["sufficient"], ".0e"),
                     f"{r['substeps_loose']:.2f} → {r['substeps_tight']:.2f}",
                     f"{r['cpu_loose']:.3f} → {r['cpu_tight']:.3f}",
                 ]
