@@ -400,32 +400,37 @@ def small_studies(tmp_path_factory):
     settings = {key: CFG[key] for key in ("model", "methods", "integrator", "sensitivities", "corrector", "divergence")}
     ref = trade["reference"]
     H, T = [5e-3, 1e-2, 2e-2], 0.04
-    sweep = sweep_group(settings, "jacobi", "baumgarte", "ff", [0, 1], H, T, reference=ref, repeats=1)
+    sweeps = [
+        sweep_group(settings, "jacobi", "baumgarte", "ff", [0, 1], H, T, reference=ref, repeats=1),
+        sweep_group(settings, "jacobi", "projection", "ff", [1], H, T, reference=ref, repeats=1),
+    ]  # labels of different lengths: none may be cut to the first file's string width
+    root = tmp_path_factory.mktemp("trade")
+
+    def round_trip(ds, name):  # as the workflow passes datasets from job to job
+        write_netcdf(ds, root / f"{name}.nc")
+        return open_dataset(root / f"{name}.nc")
+
+    sweeps = [round_trip(ds, f"sweep{i}") for i, ds in enumerate(sweeps)]
     mono = monolithic_baselines(P, [1e-4, 1e-8], T, reference=ref, repeats=1)
     lin = linear_orders_dataset(
         settings,
-        [("baumgarte_ff_k0", "baumgarte", "ff", 0), ("baumgarte_ff_k1", "baumgarte", "ff", 1)],
+        [
+            ("baumgarte_ff_k0", "baumgarte", "ff", 0),
+            ("baumgarte_ff_k1", "baumgarte", "ff", 1),
+            ("projection_ff_k1", "projection", "ff", 1),
+        ],
         H,
         model=trade["linear_orders"]["model"],
         x0=0.1,
         t_end=0.1,
     )
-    wp = work_precision_dataset([sweep], mono, lin, fit=trade["fit"], accuracy_levels=[1e-4, 1e-12])
-    groups = limits_group(settings, "jacobi", "baumgarte", "ff", [1], scan=[5e-3, 2e-2], t_end=0.05, resolution=0.5)
-    lim = merge_limits(
-        [
-            limits_dataset(
-                groups,
-                scheme="jacobi",
-                method="baumgarte",
-                decomposition="ff",
-                scan=[5e-3, 2e-2],
-                t_end=0.05,
-                resolution=0.5,
-                attrs={},
-            )
-        ]
-    )
+    wp = work_precision_dataset(sweeps, mono, lin, fit=trade["fit"], accuracy_levels=[1e-4, 1e-12])
+    limit_groups = []
+    for method, k in (("baumgarte", 1), ("projection", 0)):
+        groups = limits_group(settings, "jacobi", method, "ff", [k], scan=[5e-3, 2e-2], t_end=0.05, resolution=0.5)
+        kw = dict(scheme="jacobi", method=method, decomposition="ff", scan=[5e-3, 2e-2], t_end=0.05, resolution=0.5)
+        limit_groups.append(round_trip(limits_dataset(groups, attrs={}, **kw), f"limits_{method}"))
+    lim = merge_limits(limit_groups)
     tol = tolerance_study(
         settings, [{"method": "projection", "decomposition": "ff", "k": 1}], [1e-2], [1e-3, 1e-8], T, reference=ref
     )
@@ -437,7 +442,6 @@ def small_studies(tmp_path_factory):
     )
     ad = adaptive_study(settings, study, reference=ref)
     out = {}
-    root = tmp_path_factory.mktemp("trade")
     for name, ds in (("work_precision", wp), ("stability_limit", lim), ("tolerance", tol), ("adaptive", ad)):
         write_netcdf(ds, root / f"{name}.nc")
         out[name] = open_dataset(root / f"{name}.nc")
@@ -448,9 +452,10 @@ def test_datasets_have_the_contract_names_and_dims(small_studies):
     wp, lim, ad = small_studies["work_precision"], small_studies["stability_limit"], small_studies["adaptive"]
     for name in ("error_max", "error_rms", "cpu_seconds", "n_macro_steps"):
         assert wp[name].dims == ("config", "H")
-    assert list(wp["config"].values) == ["baumgarte_ff_k0", "baumgarte_ff_k1"]
+    assert list(wp["config"].values) == ["baumgarte_ff_k0", "baumgarte_ff_k1", "projection_ff_k1"]
     for name in ("H_max", "H_max_linear"):
         assert lim[name].dims == ("config",)
+    assert list(lim["config"].values) == ["baumgarte_ff_k1", "projection_ff_k0"]
     for name in ("error_max", "n_macro_steps", "cpu_seconds"):
         assert ad[name].dims == ("config", "tol")
     assert list(ad["config"].values) == ["projection_ff_k1"]

@@ -279,7 +279,7 @@ def merge_limits(datasets: list):
 
     ds = xr.concat(
         datasets, dim="config", data_vars="all", coords="minimal", compat="override", combine_attrs="drop_conflicts"
-    )
+    ).drop_encoding()  # the first file's fixed string widths would truncate longer labels when written
     for key in ("config_json", "config_sha256", "title", "history"):
         ds.attrs.pop(key, None)
     return ds

@@ -53,7 +53,7 @@ def work_precision_dataset(sweeps: list, monolithic, linear, *, fit: dict, accur
 
     wp = xr.concat(
         sweeps, dim="config", data_vars="all", coords="minimal", compat="override", combine_attrs="drop_conflicts"
-    )
+    ).drop_encoding()  # the first file's fixed string widths would truncate longer labels when written
     for key in ("config_json", "config_sha256", "title", "history"):
         wp.attrs.pop(key, None)
     acc = max(float(s.attrs.get("reference_accuracy", 0.0)) for s in sweeps)

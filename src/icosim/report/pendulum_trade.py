@@ -247,7 +247,7 @@ def trade_section(*, work_precision, stability_limit, tolerance, adaptive, figur
     parts.append(
         f"<p><b>What was measured.</b> Every configuration above ({wp.sizes['config']} in all) at "
         f"{len(H)} macro steps H = {', '.join(_f(h, 'g') for h in H)} s over the same end time "
-        f"T = {T:g} s (the first swing from rest), subsystems by Radau IIA at rtol = {_f(wp.attrs.get('rtol'), 'g')}, "
+        f"T = {T:g} s, subsystems by Radau IIA at rtol = {_f(wp.attrs.get('rtol'), 'g')}, "
         f"atol = {_f(wp.attrs.get('atol'), 'g')}. Per run: the error against the monolithic reference "
         f"({escape(str(wp.attrs.get('reference_method')))}, rtol {_f(wp.attrs.get('reference_rtol'), 'g')}; its own "
         f"error estimated at {_f(wp.attrs.get('reference_accuracy'))} rad), max and time-weighted RMS over φ1 and φ2 at "
