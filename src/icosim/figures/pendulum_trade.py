@@ -61,6 +61,7 @@ def _mono_lines(ax, wp, x="cpu_seconds"):
 def work_precision_figure(wp, adaptive, *, title=None):
     """Error against CPU seconds per ``k`` and the monolithic baselines; adaptive against fixed H below."""
     from matplotlib.figure import Figure
+    from matplotlib.ticker import NullFormatter
 
     ks = sorted({int(k) for k in wp["k"].values})
     fig = Figure(figsize=(4.6 * max(3, len(ks)), 9.5), layout="constrained")
@@ -115,6 +116,7 @@ def work_precision_figure(wp, adaptive, *, title=None):
                 ls="--",
                 label=f"{_label(m, d, k)}: adaptive",
             )
+        ax.xaxis.set_minor_formatter(NullFormatter())  # decade labels only: the minor ones overlap
         ax.set_xlabel(xlabel + (" (accepted + rejected for adaptive)" if x == "n_macro_steps" else ""))
         ax.set_ylabel(r"max error [rad]")
         ax.set_title(f"adaptive against fixed H, T = {adaptive.attrs.get('t_end', float('nan')):g} s")
