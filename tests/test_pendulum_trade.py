@@ -469,7 +469,8 @@ def test_datasets_have_the_contract_names_and_dims(small_studies):
 
 def test_report_conclusions_are_the_datasets(small_studies):
     """The trade section's sentences are built from the same rows the tables show."""
-    from icosim.report.pendulum_trade import adaptive_summary, order_rows, order_summary, trade_section
+    from icosim.pendulum.conclusions import adaptive_summary, order_rows, order_summary
+    from icosim.report.pendulum_trade import trade_section
 
     s = small_studies
     html = trade_section(
