@@ -203,11 +203,19 @@ def tolerance_rows(tol, floor_factor: float = 10.0) -> list[dict]:
     return rows
 
 
-def adaptive_summary(adaptive) -> dict:
+def adaptive_summary(adaptive, limits=None) -> dict:
     """Per configuration: at how many bracketed tolerances the adaptive run needs fewer macro steps
-    (accepted + rejected) than a fixed H at equal error, the ratios, and the data an explanation needs."""
+    (accepted + rejected) than a fixed H at equal error, the ratios, and the data an explanation needs.
+
+    ``not_fewer`` lists the runs that are not cheaper or not bracketed, with their largest accepted
+    step and rejected steps; ``H_limit`` is the configuration's measured stability limit from
+    ``limits`` (``stability_limit.nc``), if given and listed there.
+    """
     rows = equal_error_table(adaptive)
     drift_tol = float(adaptive.attrs.get("drift_tol", math.nan))
+    limit_of = {}
+    if limits is not None:
+        limit_of = {str(c): float(h) for c, h in zip(limits["config"].values, limits["H_max"].values)}
     out = {}
     for lab in adaptive["config"].values:
         mine = [r for r in rows if r["config"] == str(lab)]
@@ -216,6 +224,17 @@ def adaptive_summary(adaptive) -> dict:
         row = adaptive.sel(config=lab)
         ok = row["status"].values == "stable"
         spread = row["H_max_used"].values[ok] / row["H_min_used"].values[ok]
+        tols = [float(t) for t in row["tol"].values]
+        not_fewer = [
+            {
+                "tol": r["tol"],
+                "how": r["how"],
+                "H_max_used": float(row["H_max_used"].values[tols.index(r["tol"])]),
+                "n_rejected": r["n_rejected"],
+            }
+            for r in mine
+            if r["status"] == "stable" and not r["fewer"]
+        ]
         out[str(lab)] = {
             "runs": len(mine),
             "compared": len(compared),
@@ -225,5 +244,7 @@ def adaptive_summary(adaptive) -> dict:
             "rejected": sum(r["n_rejected"] for r in mine),
             "drift_ok": all(r["drift_max"] <= drift_tol for r in mine if r["status"] == "stable"),
             "H_spread_max": float(np.max(spread)) if spread.size else math.nan,
+            "not_fewer": not_fewer,
+            "H_limit": limit_of.get(str(lab), math.nan),
         }
     return out

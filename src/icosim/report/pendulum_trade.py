@@ -294,7 +294,7 @@ def trade_section(*, work_precision, stability_limit, tolerance, adaptive, figur
         parts.append(figure(figure_pngs["tolerance"], "Error (solid) and integration effect (dashed) over rtol."))
 
     # adaptive
-    asum = adaptive_summary(ad)
+    asum = adaptive_summary(ad, lim)
     erows = equal_error_table(ad)
     verdicts = []
     for lab, s in asum.items():
@@ -307,6 +307,31 @@ def trade_section(*, work_precision, stability_limit, tolerance, adaptive, figur
             f"{int(s['rejected'])} rejected steps in all; largest H_max/H_min of a run {_f(s['H_spread_max'], '.1f')}; "
             f"drift within tolerance: {'yes' if s['drift_ok'] else 'no'})"
         )
+        if s["not_fewer"]:
+            worst = max(s["not_fewer"], key=lambda r: r["H_max_used"])
+            kinds = {
+                how: ", ".join(
+                    f"{r['tol']:g}" for r in s["not_fewer"] if (r["how"] == "not bracketed") == (how == "nb")
+                )
+                for how in ("nb", "no")
+            }
+            which = " or ".join(
+                f"{'not bracketed' if how == 'nb' else 'not cheaper'} (tol = {tols})"
+                for how, tols in kinds.items()
+                if tols
+            )
+            limit, H_top = s["H_limit"], _f(worst["H_max_used"], ".2g")
+            n_rej = int(max(r["n_rejected"] for r in s["not_fewer"]))
+            if math.isfinite(limit) and worst["H_max_used"] > limit:
+                verdicts[-1] += (
+                    f"; where it is {which}, its accepted steps reach {H_top} s, above the stability limit "
+                    f"{_f(limit, '.2g')} s measured for fixed H, and up to {n_rej} steps were rejected: in smooth "
+                    "stretches the controller lets H grow past the limit, the estimate then grows with the "
+                    "instability and forces rejections and a drop of H (the jagged step sizes in the figure), "
+                    "which costs the steps the adaptivity saved"
+                )
+            else:
+                verdicts[-1] += f"; {which}: largest step {H_top} s, up to {n_rej} rejected"
     ctl = escape(str(ad.attrs.get("controller_json", "")))
     parts.append(
         "<h4>Adaptive macro steps</h4>"
