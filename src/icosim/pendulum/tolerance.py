@@ -23,6 +23,7 @@ import numpy as np
 
 from ..datasets import provenance_attrs
 from ..methods import make_method
+from .baselines import reference_accuracy
 from .measures import RECORD, check_scheme, config_label, run_record
 from .model import PendulumParameters
 from .reference import reference_solution
@@ -108,8 +109,6 @@ def tolerance_study(
     }
     job = {"configurations": configurations, "H": H_values, "rtol": rtols, "t_end": t_end, "settings": settings}
     attrs = provenance_attrs(job, title="Double pendulum: error over the subsystem tolerance", command=command)
-    from .sweep import reference_accuracy
-
     attrs.update(
         t_end=float(t_end),
         reference_method=reference["method"],

@@ -56,8 +56,10 @@ def work_precision_dataset(sweeps: list, monolithic, linear, *, fit: dict, accur
     ).drop_encoding()  # the first file's fixed string widths would truncate longer labels when written
     for key in ("config_json", "config_sha256", "title", "history"):
         wp.attrs.pop(key, None)
-    acc = max(float(s.attrs.get("reference_accuracy", 0.0)) for s in sweeps)
+    acc = float(monolithic.attrs["reference_accuracy"])  # the reference's own error (baselines job)
     wp.attrs["reference_accuracy"] = acc
+    wp.attrs["reference_method"] = str(monolithic.attrs["reference_method"])
+    wp.attrs["reference_rtol"] = float(monolithic.attrs["reference_rtol"])
     fits = orders(wp, **fit)
     labels = [str(c) for c in wp["config"].values]
     lin = linear.reindex(config=labels)
