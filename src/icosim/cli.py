@@ -2,9 +2,13 @@
 
 ``icosim rho`` prints the spectral radius of one parameter point of the test
 model, decided by the precision policy (float64, rechecked at high precision
-where float64 cannot be trusted) or, with ``--digits``, computed at that
-precision directly.  Bad input is reported as ``icosim rho: error: ...``
-naming the argument, with exit status 2 and no traceback.
+where float64 cannot be trusted) or, with ``--digits N``, computed at N
+significant digits directly: then every number is taken as the decimal typed
+(``--lr1 -0.3`` is -3/10, not the nearest double) and the result is printed
+with N significant digits.  Negative values may follow their option with a
+space, also in exponent notation (``--lr1 -1e-3``).  Bad input is reported as
+``icosim rho: error: ...`` naming the argument, with exit status 2 and no
+traceback.
 """
 
 from __future__ import annotations
@@ -13,6 +17,9 @@ import argparse
 import json
 import math
 import sys
+from fractions import Fraction
+
+import mpmath
 
 from . import methods
 from .backend import FLOAT64_DIGITS
@@ -31,6 +38,12 @@ def _float(text):
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
     return value
+
+
+def _decimal(text):
+    """A finite number, kept exactly as the decimal typed (a :class:`~fractions.Fraction`)."""
+    _float(text)  # the same checks and messages as a float argument
+    return Fraction(text.strip())
 
 
 def _nonneg_int(text):
@@ -78,19 +91,20 @@ def build_parser() -> argparse.ArgumentParser:
     with_index = ", ".join(spec.label for spec in methods.METHODS.values() if spec.takes_index)
     g.add_argument("--index", type=int, choices=methods.indices(), help=f"index of the formulation ({with_index})")
     for name, p in methods.parameters().items():  # every registered method's parameters
-        g.add_argument(f"--{name}", type=_float, help=p.help)
+        g.add_argument(f"--{name}", type=_decimal, help=p.help)
     g = rho.add_argument_group("test-model parameters (Eq. 71)")
-    g.add_argument("--lr1", required=True, type=_float, help="real part of subsystem 1's eigenvalue (<= 0)")
-    g.add_argument("--li1", required=True, type=_float, help="imaginary part of subsystem 1's eigenvalue (>= 0)")
-    g.add_argument("--am21", required=True, type=_float, help="mass ratio m2/m1 (> 0)")
-    g.add_argument("--alr21", required=True, type=_float, help="damping ratio lr2/lr1 (>= 0)")
-    g.add_argument("--ali21", required=True, type=_float, help="frequency ratio li2/li1 (>= 0)")
+    g.add_argument("--lr1", required=True, type=_decimal, help="real part of subsystem 1's eigenvalue (<= 0)")
+    g.add_argument("--li1", required=True, type=_decimal, help="imaginary part of subsystem 1's eigenvalue (>= 0)")
+    g.add_argument("--am21", required=True, type=_decimal, help="mass ratio m2/m1 (> 0)")
+    g.add_argument("--alr21", required=True, type=_decimal, help="damping ratio lr2/lr1 (>= 0)")
+    g.add_argument("--ali21", required=True, type=_decimal, help="frequency ratio li2/li1 (>= 0)")
     g = rho.add_argument_group("precision and output")
     g.add_argument(
         "--digits",
         type=_digits,
-        help="compute with mpmath at this many significant digits (default: the precision policy, "
-        "float64 rechecked at 128 digits where float64 cannot be trusted)",
+        help="compute with mpmath at this many significant digits, the arguments taken as the decimals typed, "
+        "and print rho with as many digits (default: the precision policy, float64 rechecked at 128 digits "
+        "where float64 cannot be trusted)",
     )
     g.add_argument("--json", action="store_true", help="print one JSON object")
     parser.set_defaults(subparser=None)
@@ -121,16 +135,21 @@ def _rho(args, parser):
     except ParameterError as exc:
         parser.error(_argument_message(str(exc)))
     if args.digits is not None:
-        rho = float(spectral_radius_mp(model, method, decomposition, args.k, args.digits))
+        rho_mp = spectral_radius_mp(model, method, decomposition, args.k, args.digits)
+        rho = float(rho_mp)
+        rho_text = mpmath.nstr(rho_mp, args.digits, strip_zeros=False)
         digits, err, precision = args.digits, None, f"mpmath {args.digits} digits (requested)"
     else:
         res = spectral_radius(model, method, decomposition, args.k)
         rho, digits = float(res.rho), int(res.digits)
+        rho_text = repr(rho)
         err = float(res.err)
         precision = "float64" if digits == FLOAT64_DIGITS else f"mpmath {digits} digits (float64 not trusted)"
     stable = bool(is_stable(rho, digits))
     result = {
-        "rho": rho,
+        # a decimal string where a float would drop digits (more than 17 significant digits asked for)
+        "rho": rho_text if args.digits is not None and args.digits > 17 else rho,
+        "rho_float": rho,
         "digits": digits,
         "precision": precision,
         "stable": stable,
@@ -139,12 +158,12 @@ def _rho(args, parser):
         "decomposition": decomposition.name,
         "k": args.k,
         "method_parameters": method.params,
-        "model": {n: getattr(args, n) for n in ("lr1", "li1", "am21", "alr21", "ali21")},
+        "model": {n: float(getattr(args, n)) for n in ("lr1", "li1", "am21", "alr21", "ali21")},
     }
     if args.json:
         print(json.dumps(result))
     else:
-        print(f"rho = {rho!r}  ({'stable' if stable else 'unstable'}; decided by {precision})")
+        print(f"rho = {rho_text}  ({'stable' if stable else 'unstable'}; decided by {precision})")
     return 0
 
 
@@ -158,9 +177,49 @@ def _argument_message(text: str) -> str:
     return text
 
 
+def _negative_values_attached(argv, parser) -> list:
+    """``--lr1 -1e-3`` as ``--lr1=-1e-3``.
+
+    argparse reads a token that starts with ``-`` as an option unless it looks
+    like a plain negative number (``-1``, ``-.5``); exponent notation is not
+    covered.  A token after an option that takes a value is joined to it when
+    it parses as a number, so users can type numbers as they write them.
+    """
+    # options that take exactly one value (flags such as --json have nargs = 0)
+    takes_value = {opt for action in _all_actions(parser) if action.nargs is None for opt in action.option_strings}
+    out, i = [], 0
+    argv = list(argv)
+    while i < len(argv):
+        tok = argv[i]
+        if tok in takes_value and i + 1 < len(argv) and argv[i + 1].startswith("-") and _is_number(argv[i + 1]):
+            out.append(f"{tok}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(tok)
+        i += 1
+    return out
+
+
+def _all_actions(parser):
+    for action in parser._actions:
+        yield action
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                yield from _all_actions(sub)
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def main(argv=None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    argv = sys.argv[1:] if argv is None else argv
+    args = parser.parse_args(_negative_values_attached(argv, parser))
     if args.command == "rho":
         return _rho(args, args.subparser)
     return 2  # pragma: no cover - argparse enforces a command
