@@ -10,7 +10,7 @@ import base64
 import html
 from pathlib import Path
 
-__all__ = ["embed_png", "figure", "table", "section", "verdict_badge", "page", "escape"]
+__all__ = ["embed_png", "figure", "figure_pair", "table", "section", "verdict_badge", "page", "escape"]
 
 escape = html.escape
 
@@ -18,6 +18,7 @@ STYLE = """
 body{font-family:system-ui,sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222}
 h1,h2,h3{font-weight:600} figure{margin:1.5em 0} figure img{max-width:100%;border:1px solid #ddd}
 figcaption{font-size:.9em;color:#444;margin-top:.4em}
+.pair{display:flex;gap:.5em;align-items:flex-start} .pair img{width:50%;min-width:0}
 table{border-collapse:collapse;font-size:.9em;margin:1em 0} th,td{border:1px solid #ccc;padding:.3em .6em;vertical-align:top}
 th{background:#f4f4f4} .pass{color:#0a0;font-weight:600} .fail{color:#c00;font-weight:600}
 .undecided{color:#a60;font-weight:600} code{font-size:.9em} .note{font-size:.9em;color:#444}
@@ -35,6 +36,12 @@ def figure(png_path, caption_html: str, alt: str = "") -> str:
         f'<figure><img src="{embed_png(png_path)}" alt="{escape(alt or Path(png_path).stem)}">'
         f"<figcaption>{caption_html}</figcaption></figure>"
     )
+
+
+def figure_pair(left_png, right_png, caption_html: str) -> str:
+    """Two figures side by side under one caption (e.g. a convergence figure and its local slopes)."""
+    imgs = "".join(f'<img src="{embed_png(p)}" alt="{escape(Path(p).stem)}">' for p in (left_png, right_png))
+    return f'<figure><div class="pair">{imgs}</div><figcaption>{caption_html}</figcaption></figure>'
 
 
 def verdict_badge(verdict: str) -> str:
