@@ -112,7 +112,8 @@ def _convergence_inputs(tmp_path):
     setup = Setup(end_time=0.2)
     steps = {"H_min": 2e-4, "H_max": 2e-2, "num": 5}
     study = Study(setup, step_counts(0.2, steps["H_min"], steps["H_max"], steps["num"]))
-    ds = run_panel(PanelSpec("23", "ff", "all", "projection", {}, ({},), (0, 1)), study, {"min_points": 3})
+    fit = {"decades": 1.0, "tolerance": 0.1, "min_points": 2}
+    ds = run_panel(PanelSpec("23", "ff", "all", "projection", {}, ({},), (0, 1)), study, fit)
     fig = {"title": "projection", "method": "projection", "columns": [{}], "rows": [{}], "decompositions": ["ff"]}
     entries = resolve_scheme({"figure": "23"}, {"23": fig}, [0, 1])
     wp = work_precision(entries, {("ff", "23", "all"): ds}, setup, steps=1, repeats=1, warmup_steps=0)
@@ -125,21 +126,26 @@ def test_convergence_section_reports_curves_claims_and_work_precision(tmp_path, 
         "curve": "ff, projection, k = 0",
         "claimed": "O(H^2)",
         "order": float(ds["order"].values[0, 0]),
+        "order_status": str(ds["order_status"].values[0, 0]),
+        "reason": str(ds["fit_note"].values[0, 0]),
         "fit_H_min": 2e-4,
         "fit_H_max": 2e-2,
         "local_slopes": [1.9, 2.1],
         "order_second_half": float("nan"),
+        "order_startup": 3.5,
         "stable_H": "all",
         "verdict": "pass",
     }
     claim = record("proj", "pass", numbers={"rows": [row], "tolerance": 0.3})
     fig_png = tmp_path / "fig23_ff.png"
     fig_png.write_bytes(png.read_bytes())
+    (tmp_path / "fig23_ff_slopes.png").write_bytes(png.read_bytes())
     html = convergence_section(
         setup=setup.as_dict(),
         step_sizes=steps,
-        stepping="matrix",
-        fit={"min_points": 3, "tolerance": 0.25, "min_order": 0.5, "floor_factor": 10.0},
+        stepping="error",
+        fit={"decades": 1.0, "tolerance": 0.1, "min_points": 2},
+        startup_steps=7,
         unstable={"growth_bound": 1e3, "spectral_policy": "auto", "digits": 128},
         targets=[1e-2],
         figures={"23": fig},
@@ -154,7 +160,10 @@ def test_convergence_section_reports_curves_claims_and_work_precision(tmp_path, 
     assert f"{len(study_H(ds))} sizes H = T/N_total from 0.0002 s to 0.02 s" in html
     assert "1 claims (config/claims/convergence.yaml)" in html and "within ±0.3 of the claim" in html
     assert f"{row['order']:.2f} on [0.0002, 0.02] s" in html and "1.90 … 2.10" in html
-    assert "<b>Fig. 23, ff</b> (as in the paper)" in html
+    assert f"<td>{row['order_status']}" in html and "<td>3.50</td>" in html  # status and start-up order per curve
+    assert "within ±0.1 of it" in html and "first 7 macro steps" in html  # the decision rule and start-up window
+    assert "no round-off floor" in html and f"proven at {int(ds['defect_bits'].max())} bits" in html
+    assert "<b>Fig. 23, ff</b> (as in the paper)" in html and html.count('class="pair"') == 1
     for scheme in wp["scheme"].values:
         assert str(scheme) in html or str(scheme).split(" ", 1)[1] in html
 
