@@ -6,6 +6,7 @@ numbers and the figures embedded, not the wording around them.
 
 import base64
 import hashlib
+import json
 
 import numpy as np
 import pytest
@@ -17,7 +18,7 @@ from icosim.report.convergence import convergence_section
 from icosim.report.html import table
 from icosim.report.page import report_page
 from icosim.report.pendulum import pendulum_section
-from icosim.report.stability import stability_section
+from icosim.report.stability import overturned_html, stability_section
 
 
 @pytest.fixture(scope="module")
@@ -66,16 +67,23 @@ GRID = {"lr1": [-2.0, 0.0], "li1": [0.0, 2.0], "n": 21}
 ZOOM = {"lr1": [-0.2, 0.0], "li1": [0.0, 0.2], "n": 11}
 
 
-def panel_attrs(row, k, hp):
+def panel_attrs(row, k, hp, overturned=()):
     return {
         "figure": "9",
         "row": row,
         "k": k,
+        "view": "full",
         "n_points": 441,
         "n_high_precision": hp,
         "n_high_precision_undamped": hp // 2,
+        "n_certified": hp,
+        "n_marginal": hp // 5,
+        "n_audited": 4,
+        "n_overturned": len(overturned),
+        "overturned_points": json.dumps(list(overturned)),
         "cpu_seconds_float64": 1.5,
-        "cpu_seconds_mp": 0.5,
+        "cpu_seconds_certify": 0.5,
+        "cpu_seconds_mp": 0.0,
     }
 
 
@@ -93,13 +101,30 @@ def test_stability_section_counts_precision_claims_and_figures(png):
         figure_pngs=[str(png)],
     )
     assert html.startswith('<section id="stability">')
-    assert "100 of 1764 grid points (5.67%) needed high precision, 50 of them on the undamped axis" in html
+    assert "100 of 1764 grid points (5.67%) were certified, 20 of them marginal, 50 on the undamped axis" in html
     assert "(2 of 8 CPU-seconds in 4 panel jobs" in html and "took 25% of the sweeps' compute time" in html
+    # no float64 verdict overturned: said, with the count of points checked
+    assert "Overturned float64 verdicts: none.</b> 16 points that float64 decided were also certified" in html
     assert "3 claims" in html and "1 pass, 1 fail, 1 undecided" in html
     assert "raise αm21, αλr21, αλi21 in turn to 5." in html and "because &lt;reasons&gt;" in html
     assert "row 2: αm21 = 5, αλr21 = 1, αλi21 = 1" in html  # row labels from the configuration
-    assert "mpmath at 64 digits" in html and "21 × 21 points" in html
+    assert "128 bits doubled up to 1024" in html and "21 × 21 points" in html
     assert base64.b64encode(png.read_bytes()).decode() in html  # the figure itself, embedded
+
+
+def test_stability_section_lists_every_overturned_float64_verdict():
+    point = {
+        "lr1": -0.5,
+        "li1": 0.25,
+        "float64_verdict": "stable",
+        "verdict": "unstable",
+        "rho_lower": 1.000001,
+        "rho_upper": 1.000002,
+    }
+    html = overturned_html([panel_attrs(1, 0, 10), panel_attrs(2, 1, 10, overturned=[point])])
+    assert "Overturned float64 verdicts: 1</b> of 8 points checked" in html
+    assert "<td>Fig. 9 row 2 k = 1 (full)</td><td>-0.5</td><td>0.25</td><td>stable</td><td>unstable</td>" in html
+    assert "[1.000001, 1.000002]" in html
 
 
 def _convergence_inputs(tmp_path):

@@ -40,7 +40,7 @@ from ..exact import exact_coupling, monolithic_matrix
 from ..stability.certified import MAX_BITS, SpectralCertificate, certify_matrix
 from ..stability.matrix import amplification_matrix
 
-__all__ = ["ExactExtension", "exact_extension", "local_defect", "Defect", "propagate_errors"]
+__all__ = ["ExactExtension", "exact_extension", "local_defect", "Defect", "propagate_errors", "ErrorSeries"]
 
 #: Every row of D is known to this relative accuracy (or is negligible at this level).
 DEFECT_REL_ACCURACY = 2.0**-40
@@ -129,8 +129,53 @@ def local_defect(
         b = min(2 * b, max_bits)
 
 
-def propagate_errors(M, D, E, z_at, n_steps: int, *, block: int | None = None):
-    """``eps_0 ... eps_n_steps`` of ``eps_N+1 = M eps_N + D z_N``, ``eps_0 = 0``.
+class ErrorSeries:
+    """The errors ``eps_0 ... eps_N`` of one run, kept in the block layout they are computed in.
+
+    ``blocks[j, :, b]`` is ``eps`` at step ``b * B + j``.  The metrics of
+    Eq. (72) are sums of squares over step ranges: :meth:`sum_squares` forms
+    them without the (N, n) copy, and :meth:`max_abs` the largest entry;
+    :meth:`array` gives the plain ``(N + 1, n)`` array when one is needed.
+    """
+
+    def __init__(self, blocks: np.ndarray, n_steps: int):
+        self.blocks = blocks
+        self.n_steps = int(n_steps)
+        self.B = blocks.shape[0]
+
+    @classmethod
+    def from_array(cls, errors) -> ErrorSeries:
+        errors = np.asarray(errors, dtype=float)
+        return cls(errors[:, :, None], errors.shape[0] - 1)
+
+    def array(self) -> np.ndarray:
+        n = self.blocks.shape[1]
+        return self.blocks.transpose(2, 0, 1).reshape(-1, n)[: self.n_steps + 1]
+
+    def _valid(self) -> np.ndarray:
+        """Mask (B, blocks) of the steps that exist (the last block may run past N)."""
+        steps = np.arange(self.B)[:, None] + self.B * np.arange(self.blocks.shape[2])[None, :]
+        return steps <= self.n_steps
+
+    def max_abs(self, columns: slice = slice(None)) -> float:
+        with np.errstate(invalid="ignore"):
+            return float(np.max(np.where(self._valid()[:, None, :], np.abs(self.blocks[:, columns, :]), 0.0)))
+
+    def sum_squares(self, columns: slice, first: int, last: int | None = None) -> np.ndarray:
+        """``sum_{N = first}^{last} eps_N[columns]^2`` per column (``last`` defaults to the final step)."""
+        last = self.n_steps if last is None else min(last, self.n_steps)
+        if last < first:
+            return np.zeros(self.blocks[:, columns, 0].shape[1])
+        sq = np.square(self.blocks[:, columns, :])
+        b0, j0 = divmod(first, self.B)
+        b1, j1 = divmod(last, self.B)
+        if b0 == b1:
+            return sq[j0 : j1 + 1, :, b0].sum(axis=0)
+        return sq[j0:, :, b0].sum(axis=0) + sq[:, :, b0 + 1 : b1].sum(axis=(0, 2)) + sq[: j1 + 1, :, b1].sum(axis=0)
+
+
+def propagate_errors(M, D, E, z_at, n_steps: int, *, block: int | None = None) -> ErrorSeries:
+    """``eps_0 ... eps_n_steps`` of ``eps_N+1 = M eps_N + D z_N``, ``eps_0 = 0``, as an :class:`ErrorSeries`.
 
     ``z_at(N)`` gives the exact ``z`` at the macro-time points ``N`` (an array
     of step indices; called once, for the block starts).  Inside a block of
@@ -162,5 +207,5 @@ def propagate_errors(M, D, E, z_at, n_steps: int, *, block: int | None = None):
         for i in range(starts.size):
             eps_start[i] = e
             e = MB @ e + GB @ Z[i]
-        out = np.matmul(P, eps_start.T) + np.matmul(G, Z.T)  # (B, n, blocks)
-    return out.transpose(2, 0, 1).reshape(-1, n)[: n_steps + 1]
+        blocks = np.matmul(P, eps_start.T) + np.matmul(G, Z.T)  # (B, n, blocks)
+    return ErrorSeries(blocks, n_steps)

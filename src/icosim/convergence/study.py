@@ -43,8 +43,8 @@ from ..decompositions import get_decomposition
 from ..linear_problem import LinearCosimulation
 from ..macrostep import simulate
 from ..model import ParameterError
-from ..stability import amplification_matrix, is_stable, spectral_radius
-from .errors import local_defect, propagate_errors
+from ..stability import amplification_matrix, spectral_radius
+from .errors import ErrorSeries, local_defect, propagate_errors
 from .experiment import Setup, dimensional_method
 from .metric import ratio_root, variances
 
@@ -101,13 +101,9 @@ def _midpoint(cert) -> float:
     return float(cert.rho_lower if cert.rho_upper is None else (cert.rho_lower + cert.rho_upper) / 2)
 
 
-def _eq72_sums(sq, rows, H, lam):
-    """Sums over ``rows`` of squared errors in Eq. (72)'s order (x1, x2, v1, v2), physical units, and of lambda.
-
-    ``sq`` holds the squared errors in the engine's columns (x1, v1_bar, x2, v2_bar, e_N): ``v = v_bar / H``
-    is applied to the sums, not to 10^6 rows.
-    """
-    t = sq[rows].sum(axis=0)
+def _eq72_sums(t, H, lam):
+    """Sums of squared errors in the engine's columns (x1, v1_bar, x2, v2_bar, e_N) in Eq. (72)'s order
+    (x1, x2, v1, v2), physical units (``v = v_bar / H``, applied to the sums), and the multiplier's sum."""
     return np.array([t[0], t[2], t[1] / H**2, t[3] / H**2]), (t[4 + lam] if lam is not None else None)
 
 
@@ -208,8 +204,7 @@ class Study:
             rho, digits = np.full(nH, np.nan), np.zeros(nH, dtype=int)
             verdict = np.full(nH, "", dtype=object)
         else:
-            rho, digits = self._spectral_radii(methods, dec.name, k)
-            verdict = np.where(is_stable(rho, digits), "stable", "unstable").astype(object)
+            rho, digits, verdict = self._spectral_radii(methods, dec.name, k)
         names = ("nrmse_unfiltered", "nrmse_second_half", "nrmse_startup", "nrmse_x", "nrmse_v", "nrmse_lambda")
         out = {name: np.full(nH, np.nan) for name in names}
         out["diverged_at"] = np.full(nH, -1, dtype=np.int64)
@@ -225,13 +220,12 @@ class Study:
                 out["diverged_at"][i] = diverged
                 continue
             # Eq. (72) and its parts from sums of squared errors at T_1 ... T_N (metric.nrmse_of_errors without
-            # repeated passes over 10^6 steps): engine columns (x1, v1_bar, x2, v2_bar) -> (x1, x2, v1, v2) in
-            # physical units, v = v_bar / H, applied to the sums
+            # a pass per part over 10^6 steps)
+            columns = slice(0, 4 + (0 if lam is None else lam + 1))
             with np.errstate(over="ignore", invalid="ignore"):
-                sq = np.square(errors[1:, : 4 + (0 if lam is None else lam + 1)])
-                total, lam_total = _eq72_sums(sq, slice(None), H, lam)
-                startup, _ = _eq72_sums(sq, slice(0, self.startup_steps), H, lam)
-                half, _ = _eq72_sums(sq, slice(int(N) // 2, None), H, lam)  # T_N in (T/2, T]
+                total, lam_total = _eq72_sums(errors.sum_squares(columns, 1), H, lam)
+                startup, _ = _eq72_sums(errors.sum_squares(columns, 1, self.startup_steps), H, lam)
+                half, _ = _eq72_sums(errors.sum_squares(columns, int(N) // 2 + 1), H, lam)  # T_N in (T/2, T]
             var, var_half, var_lam = self._variances(i)
             out["nrmse_unfiltered"][i] = ratio_root(total, var)
             out["nrmse_x"][i] = ratio_root(total[:2], var[:2])
@@ -260,27 +254,30 @@ class Study:
         )
 
     def _spectral_radii(self, methods, decomposition, k):
-        """Spectral radius per H (one batched call when the method does not depend on H)."""
+        """Spectral radius, digits and verdict per H with the precision policy (the float64 steppings)."""
         models = self.setup.model(self.H)  # physical: overdamped subsystems are fine
-        if all(m.params == methods[0].params for m in methods):
+        if all(m.params == methods[0].params for m in methods):  # one batched call
             res = spectral_radius(models, methods[0], decomposition, k, digits=self.digits, policy=self.spectral_policy)
-            return np.asarray(res.rho, float), np.asarray(res.digits)
-        rho = np.empty(self.H.size)
-        digits = np.empty(self.H.size, dtype=int)
+            return np.asarray(res.rho, float), np.asarray(res.digits), np.asarray(res.verdict, dtype=object)
+        rho, digits = np.empty(self.H.size), np.empty(self.H.size, dtype=int)
+        verdict = np.empty(self.H.size, dtype=object)
         for i, m in enumerate(methods):
-            model_i = self.setup.model(self.H[i])
-            res = spectral_radius(model_i, m, decomposition, k, digits=self.digits, policy=self.spectral_policy)
-            rho[i], digits[i] = float(res.rho), int(res.digits)
-        return rho, digits
+            res = spectral_radius(
+                self.setup.model(self.H[i]), m, decomposition, k, digits=self.digits, policy=self.spectral_policy
+            )
+            rho[i], digits[i], verdict[i] = float(res.rho), int(res.digits), str(res.verdict)
+        return rho, digits, verdict
 
     def _errors(self, method, decomposition, k, i, stepping):
         """``(errors, diverged_at, defect_bits, certificate)`` for step size ``H[i]``.
 
-        ``errors[N] = w_N - w*_N`` at ``T_0 ... T_N_total`` in the engine's
-        variables ``(x1, v1_bar, x2, v2_bar, e_N)`` (``e_N`` the corrected
-        coupling variables at ``T_N``, dimensionless like the engine's), or
-        ``None`` and the first step whose state left the growth bound or was
-        not finite.
+        ``errors`` (an :class:`~icosim.convergence.errors.ErrorSeries`) holds
+        ``w_N - w*_N`` at ``T_0 ... T_N_total`` in the engine's variables
+        ``(x1, v1_bar, x2, v2_bar, e_N, ...)`` (``e_N`` the corrected coupling
+        variables at ``T_N``, dimensionless like the engine's; the floor-free
+        stepping keeps the history of ``e`` as further columns), or is None
+        with the first step whose state left the growth bound or was not
+        finite.
         """
         H, N = self.H[i], int(self.n_steps[i])
         c = self.setup.model(H).coefficients()
@@ -293,16 +290,15 @@ class Study:
             # step by step only if the largest error and the largest exact value together could cross it
             ref = self.reference(i)
             exact_max = max(np.max(np.abs(ref[:, 0])), H * np.max(np.abs(ref[:, 2])))
-            with np.errstate(invalid="ignore"):
-                err_max = np.max(np.abs(errors[:, :4]))
+            err_max = errors.max_abs(slice(0, 4))
             if not (np.isfinite(err_max) and err_max + exact_max <= bound):
                 exact_state = np.stack([ref[:, 0], H * ref[:, 2]], axis=-1)[:, [0, 1, 0, 1]]
                 with np.errstate(invalid="ignore"):
-                    mag = np.max(np.abs(exact_state + errors[1:, :4]), axis=-1)
+                    mag = np.max(np.abs(exact_state + errors.array()[1:, :4]), axis=-1)
                 bad = ~np.isfinite(mag) | (mag > bound)
                 if bad.any():
                     return None, int(np.argmax(bad)) + 1, d.bits, d.certificate
-            return errors[:, : 4 + get_decomposition(decomposition).n_coupling], None, d.bits, d.certificate
+            return errors, None, d.bits, d.certificate
         problem = LinearCosimulation(c, decomposition, k)
         solution = self.solution(H)
         state, history = exact.consistent_start(problem, solution)
@@ -323,4 +319,4 @@ class Study:
         exact_w = np.stack([st[:, 0], st[:, 1], st[:, 0], st[:, 1]], axis=-1)
         cols = [exact.exact_coupling(n, c, st[:, 0], st[:, 1], st[:, 2]) for n in problem.decomposition.variables]
         exact_w = np.concatenate([exact_w, np.stack(cols, axis=-1)], axis=-1)
-        return W - exact_w, None, 0, None
+        return ErrorSeries.from_array(W - exact_w), None, 0, None

@@ -20,8 +20,9 @@ cases: a root at 0 only makes ``|a_0| < |a_n|``.
 Verdicts, with no tolerance conventions:
 
 * ``stable``: all ``n`` roots in ``|z| < 1`` (proven: ``rho < 1``);
-* ``unstable``: fewer than ``n`` roots in ``|z| < 1`` and none on ``|z| = 1``
-  (proven: ``rho > 1``);
+* ``unstable``: fewer than ``n`` roots in ``|z| < 1`` and none on ``|z| = 1``,
+  or a root proven outside a radius above 1 (proven: ``rho > 1``; the second
+  form decides schemes with a root exactly on the circle besides a larger one);
 * ``marginal``: the count at ``r = 1`` stays undecided up to the precision cap
   (for example ``rho = 1`` exactly on the undamped axis with identical
   subsystems, or the Jordan block at 1 at the origin).
@@ -43,7 +44,7 @@ import numpy as np
 
 from ..backend import Ball
 from ..model import Coefficients, PhysicalModel, TestModel
-from .matrix import amplification_matrix
+from .matrix import amplification_matrix, as_coefficients
 
 __all__ = [
     "certify_spectral_radius",
@@ -53,12 +54,15 @@ __all__ = [
     "VERDICTS",
     "DEFAULT_BITS",
     "MAX_BITS",
+    "MAX_GUARD_BITS",
+    "guard_bits",
 ]
 
 #: The verdicts a certificate can give (``undecided``: the ball arithmetic lost every digit at the cap).
 VERDICTS = ("stable", "unstable", "marginal", "undecided")
-#: Working precision of the first attempt and the default cap (bits), doubled in between.
-DEFAULT_BITS, MAX_BITS = 128, 1024
+#: Working precision of the first attempt and the default cap (bits), doubled in between; both on top of
+#: the guard bits a heavily damped subsystem needs (:func:`guard_bits`), themselves capped.
+DEFAULT_BITS, MAX_BITS, MAX_GUARD_BITS = 128, 1024, 16384
 
 
 def roots_inside(coeffs, r=1):
@@ -130,6 +134,7 @@ class SpectralCertificate:
     rho_lower: Fraction
     rho_upper: Fraction | None
     bits: int
+    reason: str = ""
 
     def lower(self, digits: int = 20) -> str:
         """``rho_lower`` as a decimal string, rounded down."""
@@ -141,7 +146,12 @@ class SpectralCertificate:
 
     @property
     def certified(self) -> bool:
-        """A verdict proven by the enclosure: stable or unstable."""
+        """The verdict rests on the proven enclosure: stable, unstable, or marginal (1 proven inside it)."""
+        return self.verdict in ("stable", "unstable", "marginal")
+
+    @property
+    def proven(self) -> bool:
+        """A proven side of 1: stable or unstable."""
         return self.verdict in ("stable", "unstable")
 
 
@@ -173,43 +183,107 @@ def _enclosure(coeffs, n, rho_approx: float, bits: int):
     return lower, upper
 
 
-def certify_matrix(M, bits: int, *, final: bool = True) -> SpectralCertificate | None:
+def _refine(coeffs, n, lower: Fraction, upper: Fraction, digits: int, bits: int):
+    """Narrow ``[lower, upper]`` (a proven enclosure) to a relative width of ``10**-digits`` by bisection, or
+    until no count inside it is decided (a cluster of roots, or the working precision's limit).
+
+    Where the midpoint's count is undecided (a root modulus there: ``rho = 1``
+    exactly is the midpoint of a symmetric start) the thirds are tried.
+    """
+    target = Fraction(1, 10**digits)
+    while upper - lower > target * upper:
+        width, moved = upper - lower, False
+        for t in (Fraction(1, 2), Fraction(1, 3), Fraction(2, 3)):
+            r = _dyadic(lower + t * width, bits, up=True)
+            if not lower < r < upper:
+                continue
+            count = roots_inside(coeffs, _arb_exact(r))
+            if count is not None:
+                lower, upper = (r, upper) if count < n else (lower, r)
+                moved = True
+                break
+        if not moved:
+            break
+    return lower, upper
+
+
+def certify_matrix(M, bits: int, *, final: bool = True, digits: int | None = None) -> SpectralCertificate | None:
     """The certificate of a ball amplification matrix ``M`` computed at ``bits`` (inside that context).
 
     Returns None if the verdict is undecided at this precision and ``final``
     is False (the caller raises the precision); with ``final`` an undecided
-    count is ``marginal`` (or ``undecided`` if ``M`` is not finite).
+    count is ``marginal`` (or ``undecided`` if ``M`` is not finite).  With
+    ``digits`` the enclosure is narrowed by bisection to that many significant
+    digits where the arithmetic can decide (by default it is ~1e-14 wide: the
+    verdict needs no more).
     """
     import flint
 
     n = M.shape[-1]
     if not all(x.is_finite() for x in M.ravel()):
-        return SpectralCertificate("undecided", Fraction(0), None, bits) if final else None
+        why = f"the ball amplification matrix has no finite entries left at {bits} bits"
+        return SpectralCertificate("undecided", Fraction(0), None, bits, reason=why) if final else None
     coeffs = flint.arb_mat(M.tolist()).charpoly().coeffs()
     count = roots_inside(coeffs, 1)
-    if count is None and not final:
-        return None
-    verdict = "marginal" if count is None else "stable" if count == n else "unstable"
     mids = np.array([float(c.mid()) for c in coeffs])[::-1]
     rho_approx = float(np.max(np.abs(np.roots(mids)))) if n else 0.0
     lower, upper = _enclosure(coeffs, n, rho_approx, bits)
+    if count is None and lower > 1:
+        # a root on the unit circle leaves the count undecided, but a root proven outside it decides rho > 1
+        count = n - 1
+    if count is None and not final:
+        return None
+    verdict = "marginal" if count is None else "stable" if count == n else "unstable"
     if verdict == "stable":
         upper = Fraction(1) if upper is None else min(upper, Fraction(1))
     elif verdict == "unstable":
         lower = max(lower, Fraction(1))
+    if digits is not None and upper is not None:
+        lower, upper = _refine(coeffs, n, lower, upper, digits, bits)
     return SpectralCertificate(verdict, lower, upper, bits)
 
 
+def guard_bits(model) -> int:
+    """Extra bits for entries as small as ``exp(-decay)`` (a heavily damped subsystem over one macro step).
+
+    The propagators hold entries of size ``exp(-decay)`` next to O(1) ones;
+    their differences need ``decay / ln 2`` more bits for the same relative
+    accuracy (the ball radii would otherwise swallow them, honestly but
+    uselessly).  ``decay`` is the largest ``-Re`` of a subsystem eigenvalue,
+    in macro steps.
+    """
+    c = as_coefficients(model)
+    decay = 0.0
+    for k, d in ((c.k1, c.delta1), (c.k2, c.delta2)):
+        k, d = float(k), float(d)
+        decay = max(decay, d / 2 + math.sqrt(max(d * d / 4 - k, 0.0)))
+    return int(math.ceil(decay / math.log(2)))
+
+
 def certify_spectral_radius(
-    model, method, decomposition, k, *, bits: int = DEFAULT_BITS, max_bits: int = MAX_BITS, **matrix_kw
+    model,
+    method,
+    decomposition,
+    k,
+    *,
+    bits: int = DEFAULT_BITS,
+    max_bits: int = MAX_BITS,
+    max_guard_bits: int = MAX_GUARD_BITS,
+    digits: int | None = None,
+    **matrix_kw,
 ) -> SpectralCertificate:
     """Prove ``rho < 1`` or ``rho > 1``, or report ``marginal``, for one parameter point.
 
     ``model`` is a :class:`~icosim.model.TestModel` (or ``PhysicalModel`` /
     ``Coefficients``) of one point whose attributes are taken exactly (floats,
-    Fractions, decimal strings).  The working precision starts at ``bits`` and
-    doubles until the verdict is decided or ``max_bits`` is reached.
-    ``matrix_kw`` go to :func:`~icosim.stability.matrix.amplification_matrix`.
+    Fractions, decimal strings).  The working precision starts at ``bits``
+    (plus :func:`guard_bits`) and doubles until the verdict is decided or
+    ``max_bits`` (plus the same guard) is reached; a point needing more than
+    ``max_guard_bits`` guard bits is ``undecided`` at once, with the reason.
+    ``digits``: narrow the enclosure to that many significant digits (the
+    working precision then starts high enough for them; a cluster of roots,
+    e.g. a multiple root, stops the narrowing where the arithmetic cannot
+    separate it).  ``matrix_kw`` go to :func:`~icosim.stability.matrix.amplification_matrix`.
 
     >>> from icosim import TestModel, make_method
     >>> c = certify_spectral_radius(TestModel(-0.05, 0.5), make_method("weighted", a=1, b=1), "ff", 2)
@@ -218,13 +292,17 @@ def certify_spectral_radius(
     >>> certify_spectral_radius(TestModel(0.0, 0.3), make_method("projection"), "ff", 1).verdict  # undamped
     'marginal'
     """
-    b = int(bits)
+    guard = guard_bits(model)
+    if guard > max_guard_bits:
+        why = f"needs {guard} guard bits for exp(-decay) entries, more than the cap of {max_guard_bits}"
+        return SpectralCertificate("undecided", Fraction(0), None, 0, reason=why)
+    b = int(bits) if digits is None else max(int(bits), math.ceil(digits * math.log2(10)) + 32)
     max_bits = max(int(max_bits), b)
     while True:
-        be = Ball(b)
+        be = Ball(b + guard)
         with be.context():
             M = amplification_matrix(_exact_coefficients(model, be), method, decomposition, k, backend=be, **matrix_kw)
-            cert = certify_matrix(M, b, final=b >= max_bits)
+            cert = certify_matrix(M, b + guard, final=b >= max_bits, digits=digits)
         if cert is not None:
             return cert
         b = min(2 * b, max_bits)
