@@ -68,6 +68,16 @@ def _digits(text):
     return value
 
 
+def _bits(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 128, got {text!r}") from None
+    if value < 128:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 128 (the first attempt's precision), got {text!r}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
 
@@ -106,6 +116,18 @@ def build_parser() -> argparse.ArgumentParser:
         "and print rho with as many digits (default: the precision policy, float64 rechecked at 128 digits "
         "where float64 cannot be trusted)",
     )
+    g.add_argument(
+        "--certify",
+        action="store_true",
+        help="prove the verdict in ball arithmetic (python-flint Arb): stable (rho < 1), unstable (rho > 1) or "
+        "marginal (the proven enclosure still contains 1 at --max-bits); prints the enclosure",
+    )
+    g.add_argument(
+        "--max-bits",
+        type=_bits,
+        default=1024,
+        help="largest working precision of the ball arithmetic, in bits (default 1024)",
+    )
     g.add_argument("--json", action="store_true", help="print one JSON object")
     parser.set_defaults(subparser=None)
     rho.set_defaults(subparser=rho)
@@ -125,7 +147,7 @@ def _method_from_args(args):
 
 def _rho(args, parser):
     from .model import TestModel
-    from .stability import is_stable, spectral_radius, spectral_radius_mp
+    from .stability import Certification, certify_spectral_radius, spectral_radius, spectral_radius_mp
 
     try:
         method = _method_from_args(args)
@@ -134,26 +156,51 @@ def _rho(args, parser):
         model = TestModel(args.lr1, args.li1, args.am21, args.alr21, args.ali21)
     except ParameterError as exc:
         parser.error(_argument_message(str(exc)))
+    result = {}
+    cert = None
+    if args.certify or args.digits is not None:
+        # the verdict is proven from the exact (typed) parameters, whatever precision the value is printed in
+        # the enclosure narrowed to N digits (--digits N; else 17, a double's) where the arithmetic separates
+        # the roots: its midpoint is then the value printed
+        cert = certify_spectral_radius(
+            model, method, decomposition, args.k, max_bits=args.max_bits, digits=args.digits or 17
+        )
     if args.digits is not None:
         rho_mp = spectral_radius_mp(model, method, decomposition, args.k, args.digits)
-        rho = float(rho_mp)
-        rho_text = mpmath.nstr(rho_mp, args.digits, strip_zeros=False)
+        rho, rho_text = float(rho_mp), mpmath.nstr(rho_mp, args.digits, strip_zeros=False)
         digits, err, precision = args.digits, None, f"mpmath {args.digits} digits (requested)"
+    elif cert is not None:
+        rho = float((cert.rho_lower + cert.rho_upper) / 2) if cert.rho_upper is not None else float("nan")
+        rho_text, digits, err = repr(rho), int(cert.bits * math.log10(2)), None
+        precision = f"ball arithmetic {cert.bits} bits (requested)"
     else:
-        res = spectral_radius(model, method, decomposition, args.k)
-        rho, digits = float(res.rho), int(res.digits)
+        res = spectral_radius(model, method, decomposition, args.k, certification=Certification(audit=0.0))
+        rho, digits, err = float(res.rho), int(res.digits), float(res.err)
         rho_text = repr(rho)
-        err = float(res.err)
-        precision = "float64" if digits == FLOAT64_DIGITS else f"mpmath {digits} digits (float64 not trusted)"
-    stable = bool(is_stable(rho, digits))
+        if str(res.arithmetic) == "float64":
+            precision = "float64"
+        else:
+            precision = f"ball arithmetic {int(res.bits)} bits (float64 cannot decide)"
+            cert = _certificate_of(res)
+        verdict = str(res.verdict)
+    if cert is not None:
+        verdict = cert.verdict
+        result.update(
+            rho_lower=cert.lower(max(20, args.digits or 0)),
+            rho_upper=cert.upper(max(20, args.digits or 0)),
+            precision_bits=cert.bits,
+        )
     result = {
         # a decimal string where a float would drop digits (more than 17 significant digits asked for)
-        "rho": rho_text if args.digits is not None and args.digits > 17 else rho,
-        "rho_float": rho,
+        "rho": rho_text if args.digits is not None and args.digits > 17 else rho if math.isfinite(rho) else None,
+        "rho_float": rho if math.isfinite(rho) else None,
+        "verdict": verdict,
+        "stable": verdict == "stable",
+        "certified": cert is not None and cert.certified,
         "digits": digits,
         "precision": precision,
-        "stable": stable,
         "float64_error_estimate": err if err is None or math.isfinite(err) else None,
+        **result,
         "method": method.name,
         "decomposition": decomposition.name,
         "k": args.k,
@@ -161,10 +208,41 @@ def _rho(args, parser):
         "model": {n: float(getattr(args, n)) for n in ("lr1", "li1", "am21", "alr21", "ali21")},
     }
     if args.json:
-        print(json.dumps(result))
-    else:
-        print(f"rho = {rho_text}  ({'stable' if stable else 'unstable'}; decided by {precision})")
+        print(json.dumps(result, allow_nan=False))
+        return 0
+    print(f"rho = {rho_text}  ({_verdict_text(cert, verdict, precision, args.digits)})")
     return 0
+
+
+def _verdict_text(cert, verdict, precision, digits) -> str:
+    """The verdict, its proof (enclosure and bits) if there is one, and where the printed value comes from."""
+    if cert is None:
+        return f"{verdict}; decided by {precision}"
+    n = max(12, min(digits or 0, 60))
+    enclosure = f"rho in [{cert.lower(n)}, {cert.upper(n)}]"
+    proof = {
+        "stable": f"stable, proven: {enclosure}",
+        "unstable": f"unstable, proven: {enclosure}",
+        "marginal": f"marginal: the proven {enclosure} contains 1",
+    }.get(verdict, f"{verdict}: {cert.reason}")
+    proof += f" at {cert.bits} bits"
+    value = f"value by {precision}" if precision.startswith("mpmath") else f"decided by {precision}"
+    return f"{proof}; {value}"
+
+
+def _certificate_of(res):
+    """The certificate a policy result holds for its one point (bounds as exact rationals of the floats)."""
+    from fractions import Fraction
+
+    from .stability import SpectralCertificate
+
+    upper = float(res.rho_upper)
+    return SpectralCertificate(
+        str(res.verdict),
+        Fraction(float(res.rho_lower)) if math.isfinite(float(res.rho_lower)) else Fraction(0),
+        Fraction(upper) if math.isfinite(upper) else None,
+        int(res.bits),
+    )
 
 
 def _argument_message(text: str) -> str:
