@@ -50,8 +50,14 @@ def verdict_badge(verdict: str) -> str:
     return f'<span class="{cls}">{escape(verdict)}</span>'
 
 
-def table(header, rows, *, raw_columns=()) -> str:
-    """An HTML table; cells in ``raw_columns`` (indices) are inserted unescaped."""
+def table(header, rows=None, *, raw_columns=()) -> str:
+    """An HTML table; cells in ``raw_columns`` (indices) are inserted unescaped.
+
+    ``header`` may be a :class:`pandas.DataFrame` (then ``rows`` is not given): its columns are the
+    header and its rows the rows, rendered exactly as the same lists would be.
+    """
+    if rows is None:  # a DataFrame
+        header, rows = list(header.columns), header.itertuples(index=False, name=None)
     head = "".join(f"<th>{escape(str(h))}</th>" for h in header)
     body = []
     for row in rows:

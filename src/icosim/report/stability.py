@@ -40,6 +40,24 @@ def cost_row(label, t):
     ]
 
 
+def cost_table(panel_attrs, figures):
+    """Per figure (rows, in the order of ``figures``): panels, points, high-precision points (on the undamped
+    axis too) and CPU seconds of the float64 pass and of the rechecks, summed over the panels' attributes."""
+    import pandas as pd
+
+    columns = {
+        "n_points": "points",
+        "n_high_precision": "hp",
+        "n_high_precision_undamped": "hp_axis",
+        "cpu_seconds_float64": "cpu64",
+        "cpu_seconds_mp": "cpump",
+    }
+    df = pd.DataFrame(list(panel_attrs), columns=["figure", *columns]).rename(columns=columns)
+    df["figure"] = df["figure"].astype(str)
+    sums = df.groupby("figure").agg(panels=("points", "size"), **{c: (c, "sum") for c in columns.values()})
+    return sums.reindex([str(f) for f in figures], fill_value=0).astype(float)[list(KEYS)]
+
+
 def stability_section(
     *,
     figures: dict,
@@ -60,26 +78,13 @@ def stability_section(
     (:func:`icosim.claims.read_verdicts`), ``figure_pngs`` the figures
     (``.../fig<figure>.png``), in the order shown.
     """
-    cost_rows, totals = [], defaultdict(float)
-    # -- panel attributes: precision and cost, per figure ---------------------------------------
+    # -- panel attributes: precision and cost, per figure (and all) ---------------------------------
     attrs_by_fig = defaultdict(list)
     for attrs in panel_attrs:
         attrs_by_fig[attrs["figure"]].append(attrs)
-
-    for fig in figures:
-        al = attrs_by_fig[fig]
-        t = {
-            "panels": len(al),
-            "points": sum(a["n_points"] for a in al),
-            "hp": sum(a["n_high_precision"] for a in al),
-            "hp_axis": sum(a["n_high_precision_undamped"] for a in al),
-            "cpu64": sum(a["cpu_seconds_float64"] for a in al),
-            "cpump": sum(a["cpu_seconds_mp"] for a in al),
-        }
-        for key in KEYS:
-            totals[key] += t[key]
-        cost_rows.append(cost_row(f"Fig. {fig}", t))
-    t = totals
+    per_figure = cost_table(panel_attrs, list(figures))
+    cost_rows = [cost_row(f"Fig. {fig}", t) for fig, t in per_figure.iterrows()]
+    t = per_figure.sum()
     cost_rows.append(cost_row("all", t))
 
     # -- decisions, read from the configuration ---------------------------------------------------
