@@ -173,7 +173,7 @@ def convergence_section(
         "otherwise; a pre-asymptotic curve leaves it undecided; a curve unstable at every step size is n/a. 'unstable' "
         "passes if every step size is unstable. Where the data disagree with the paper, the data stand and the "
         "explanation column says why (each explanation is checked by a test against these data).</p>"
-        + claims_table(claims, note_header="explanation")
+        + claims_table(claims, note_header="explanation", part="convergence")
         + "<p>Per curve: the order over the smallest-H decade and its status; the local slopes over all stable step "
         "sizes; the orders of Eq. (72) over the second half of the run and of the start-up share (diagnostics of a "
         "start-up transient).</p>"
@@ -210,6 +210,9 @@ def convergence_section(
                 "smallest-H decade the order is read off, order p (or why it is not asymptotic) in the legend; ×: "
                 "unstable at that H; dotted: O(H^p). Right: local slopes between neighbouring step sizes; the band "
                 "marks the decade at the order ± the tolerance.",
+                anchor=rp.figure_anchor("convergence", png),
+                paper_figures=[fig],
+                claims_html=rp.used_by("convergence", [c["id"] for c in claims if fig in c["figures"]]),
             )
         )
 
@@ -231,7 +234,13 @@ def convergence_section(
         )
         + "</p>"
     )
-    body.append(rp.figure(wp_png, "CPU time per simulated second over NRMSE; one line per scheme, each point one H."))
+    body.append(
+        rp.figure(
+            wp_png,
+            "CPU time per simulated second over NRMSE; one line per scheme, each point one H.",
+            anchor=rp.figure_anchor("convergence", wp_png),
+        )
+    )
     table_rows = []
     for entry in fastest_schemes(wp, targets):
         rk = entry["ranking"]

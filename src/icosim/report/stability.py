@@ -141,7 +141,7 @@ def stability_section(
         f"evaluated on the datasets: {counts['pass']} pass, {counts['fail']} fail, {counts['undecided']} undecided. "
         "Shares are of stable grid points; differences below the grid resolution 1/(n−1) are undecided. "
         "Where the data disagree with the paper, the data stand.</p>"
-        + claims_table(claims, note_header="how the words were read")
+        + claims_table(claims, note_header="how the words were read", part="stability")
     )
     body.append(
         "<h3>Precision and cost per figure</h3>"
@@ -187,6 +187,15 @@ def stability_section(
             + f"Grid {esc(fmt_grid(grid))}.{esc(zoom_txt)} Precision: {hp} of {n} points recomputed with mpmath at "
             + f"{precision['digits']} digits, the rest float64. Shown: {esc(shown)}."
         )
-        body.append(rp.figure(png, caption, alt=f"Fig. {fig}"))
+        body.append(
+            rp.figure(
+                png,
+                caption,
+                alt=f"Fig. {fig}",
+                anchor=rp.figure_anchor("stability", png),
+                paper_figures=[fig],
+                claims_html=rp.used_by("stability", [c["id"] for c in claims if fig in c["figures"]]),
+            )
+        )
 
     return rp.section("Stability (Figs. 9–20)", "".join(body), "stability")
