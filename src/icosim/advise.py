@@ -545,7 +545,7 @@ def advise(
         rtol=float(rtol) if H.size == 2 else None,
         policy=policy,
         digits=int(digits),
-        defaults="method parameters not given are 1 in the paper's dimensionless form (mu_bar = mu/H = 1, a = b = 1)",
+        defaults="those not given are 1 in the paper's dimensionless form (mu_bar = mu/H = 1, a = b = 1)",
     )
     return df
 
@@ -697,5 +697,8 @@ def advice_text(df) -> str:
             "'stable on intervals': not stable at every H below it."
         )
     table["rank"] = table["rank"].map(lambda r: "-" if r is None or r is pd.NA else str(r))
-    lines.append(table.to_string(index=False, justify="left"))
+    table = table.astype(str)
+    widths = {c: max(len(c), *(len(v) for v in table[c])) for c in table.columns}
+    left = {c: (lambda w: lambda v: f"{v:<{w}}")(widths[c]) for c in table.columns}
+    lines += [line.rstrip() for line in table.to_string(index=False, justify="left", formatters=left).splitlines()]
     return "\n".join(lines)
