@@ -202,3 +202,14 @@ def test_progress_bar_only_on_a_terminal_after_the_delay():
     bar = Progress(4, stream=late, delay=60.0)
     bar(4)
     assert late.getvalue() == ""  # a scan shorter than the delay shows nothing
+
+
+def test_range_ranking_puts_schemes_stable_from_the_lower_end_first():
+    sl = schemes(methods=["weighted"], decompositions=["ff"], k=[2])[:1] + schemes(
+        methods=["projection"], decompositions=["ff"], k=[2]
+    )
+    df = advise(TwoMassSystem(**SYSTEM), (1e-4, 1e-1), scheme_list=sl)
+    # weighted ff k = 2 reaches the larger H (0.1) but is unstable at small H: ranked after projection
+    assert list(df["method"]) == ["projection", "weighted"] and list(df["rank"]) == [1, 2]
+    assert df["H_max"].iloc[1] > df["H_max"].iloc[0]
+    assert df["H_max_from_lo"].iloc[0] == df["H_max"].iloc[0] and np.isnan(df["H_max_from_lo"].iloc[1])

@@ -22,8 +22,9 @@ order ``k``:
 
 The answer is a :class:`pandas.DataFrame`, one row per scheme, stable schemes
 ranked first (at one ``H`` by ``rho``: the smaller, the faster a coupling error
-decays per macro step; over a range by the largest stable ``H``, then by
-``rho`` there).  ``df.attrs`` holds the system, its dimensionless parameters
+decays per macro step; over a range first the schemes stable from the range's
+lower end, by how far up they stay stable, then those stable only on higher
+intervals, by their largest stable ``H``).  ``df.attrs`` holds the system, its dimensionless parameters
 (Eq. 71, or the per-unit-mass coefficients when a subsystem is overdamped) and
 the settings.
 
@@ -480,7 +481,8 @@ def advise(
     Columns at one H: ``rank`` (1, 2, ... for stable schemes, else missing), ``scheme``, ``coupling``,
     ``method``, ``index``, ``parameters``, ``decomposition``, ``k``, ``H``, ``rho``, ``rho_float64_error``,
     ``digits``, ``verdict``.  Over a range: ``rank``, the scheme columns, ``H_max`` (largest stable H, missing
-    if none), ``unstable_above`` (the evaluated unstable H just above ``H_max``; missing where ``H_max`` is the
+    if none), ``H_max_from_lo`` (the largest H such that every H from ``H_lo`` up to it is stable: the
+    upper end of a stable interval starting at ``H_lo``; missing if ``H_lo`` is unstable), ``unstable_above`` (the evaluated unstable H just above ``H_max``; missing where ``H_max`` is the
     range's end), ``rho_at_H_max``, ``stable_intervals``, ``verdict`` (``stable`` on the whole range, ``stable
     up to H_max``, ``stable on intervals`` when not monotone, ``unstable`` everywhere, ``undecided``) and
     ``note``.  Where the system has an Eq. (71) form, ``lr1`` and ``li1`` at the row's H.
@@ -523,13 +525,19 @@ def advise(
     if H.size == 1:
         order = df.assign(_s=df["verdict"] != "stable").sort_values(["_s", "rho"], kind="stable").index
     else:
-        h = df["H_max"].astype(float).fillna(-np.inf)
-        gaps = df["verdict"] == "stable on intervals"
+        # stable from the range's lower end first, by how far up; then stable on higher intervals only
+        low = df["H_max_from_lo"].astype(float)
         order = (
-            df.assign(_h=-h, _g=gaps, _r=df["rho_at_H_max"].astype(float))
-            .sort_values(["_h", "_g", "_r"], kind="stable")
+            df.assign(
+                _a=low.isna(),
+                _l=-low.fillna(0.0),
+                _h=-df["H_max"].astype(float).fillna(-np.inf),
+                _r=df["rho_at_H_max"].astype(float),
+            )
+            .sort_values(["_a", "_l", "_h", "_r"], kind="stable")
             .index
         )
+        df["H_max_from_lo"] = low
         df["H_max"] = df["H_max"].astype(float)
     df = df.loc[order].reset_index(drop=True)
     stable = df["verdict"] == "stable" if H.size == 1 else df["H_max"].notna()
@@ -574,8 +582,10 @@ def _range_row(system, s, H, n_scan, rtol, policy, digits) -> dict:
             notes.append(f"stable at the range's upper end {H[1]:.4g} s (larger H not scanned)")
     if res["n_undecided"]:
         notes.append(f"{res['n_undecided']} scanned H undecided (counted as not stable)")
+    from_lo = iv[0][1] if iv and iv[0][0] == H[0] else None
     return {
         "H_max": H_max,
+        "H_max_from_lo": from_lo,
         "unstable_above": above_max,
         "rho_at_H_max": rho_max,
         "stable_intervals": iv,
@@ -605,6 +615,7 @@ def advice_records(df) -> dict:
         "rho": "no precision could compute it",
         "rho_float64_error": "float64 gave no finite value",
         "H_max": "no stable H in the range",
+        "H_max_from_lo": "unstable at the range's lower end",
         "unstable_above": "stable up to the range's upper end",
         "rho_at_H_max": "no stable H in the range",
         "lr1": "no Eq. (71) form",
@@ -681,8 +692,9 @@ def advice_text(df) -> str:
     else:
         lo, hi = a["H"]
         lines.append(
-            f"\n{len(df)} schemes over H in [{lo:g}, {hi:g}] s, {n_stable} stable somewhere in it, ranked by the "
-            f"largest stable H (then schemes stable at every H below it first, then by rho there). Scan: {a['n_scan']} log-spaced H, then every stable/unstable "
+            f"\n{len(df)} schemes over H in [{lo:g}, {hi:g}] s, {n_stable} stable somewhere in it, ranked: "
+            "first those stable from the range's lower end, by how far up they stay stable, then those stable only "
+            "on higher intervals, by their largest stable H. Scan: {a['n_scan']} log-spaced H, then every stable/unstable "
             f"transition bracketed to a relative width of {a['rtol']:g}; stable intervals narrower than the scan "
             f"spacing can be missed. Precision: {prec}."
         )
