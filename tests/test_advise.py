@@ -168,12 +168,12 @@ def test_text_output_ranks_the_stable_schemes(capsys):
     ],
 )
 def test_bad_input_exits_2_before_any_work(capsys, monkeypatch, extra, argument):
-    import icosim.advise
+    import icosim.advise.core
 
     def no_work(*a, **k):
         raise AssertionError("computed before the input was checked")
 
-    monkeypatch.setattr(icosim.advise, "evaluate", no_work)
+    monkeypatch.setattr(icosim.advise.core, "spectral_radius", no_work)
     argv = dict(zip(ARGS[::2], ARGS[1::2]))
     argv["--H"] = "1e-2"
     flat = [t for kv in argv.items() for t in kv]

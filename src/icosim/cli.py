@@ -111,7 +111,7 @@ def build_parser() -> argparse.ArgumentParser:
     rho.set_defaults(subparser=rho)
     from .commands import add_parsers  # icosim advise, icosim map
 
-    add_parsers(sub)
+    add_parsers(sub, number=_float, nonneg_int=_nonneg_int, digits=_digits)
     return parser
 
 

@@ -22,12 +22,6 @@ __all__ = ["add_parsers", "run"]
 _NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
 
 
-def _types():
-    from .cli import _digits, _float, _nonneg_int
-
-    return _float, _nonneg_int, _digits
-
-
 def _positive_int(text):
     try:
         value = int(text)
@@ -40,7 +34,7 @@ def _positive_int(text):
 
 def advise_parameters() -> dict:
     """Method parameters ``icosim advise`` takes: those some scheme of :func:`icosim.advise.schemes` uses."""
-    from .advise import _index_params
+    from .advise.core import _index_params
 
     used = {}
     for spec in methods.METHODS.values():
@@ -51,9 +45,13 @@ def advise_parameters() -> dict:
     return used
 
 
-def add_parsers(sub):
-    """Register ``advise`` and ``map`` on the ``icosim`` sub-command parsers."""
-    _float, _nonneg_int, _digits = _types()
+def add_parsers(sub, *, number, nonneg_int, digits):
+    """Register ``advise`` and ``map`` on the ``icosim`` sub-command parsers.
+
+    ``number``, ``nonneg_int`` and ``digits`` are the argument types of ``icosim rho``
+    (:mod:`icosim.cli`), so that every command takes and refuses numbers alike.
+    """
+    _float, _nonneg_int, _digits = number, nonneg_int, digits
 
     # -- advise ------------------------------------------------------------------------------------
     adv = sub.add_parser(
