@@ -3,7 +3,7 @@
     python benchmarks/report_size.py [--report reports/icosim_report.html] [--results results] [--svg]
 
 1. The page: bytes, embedded images by encoding, and the load time in headless Chromium
-   (navigation timing ``loadEventEnd``, best of ``--repeats`` runs; icosim.report.browser).
+   (navigation timing ``loadEventStart``, best of ``--repeats`` runs; icosim.report.browser).
 2. Per figure kind (stability, convergence, pendulum, work-precision): the bytes of the PNGs as
    matplotlib writes them, of their 256-colour palette version (what the report embeds where it
    is smaller: icosim.report.html.compact_png) and of lossless WebP; with ``--svg`` also of SVG,
