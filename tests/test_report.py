@@ -304,6 +304,7 @@ def test_summary_first_counts_verdicts_and_links_each_disagreement(tmp_path, png
     assert '<a href="#stability-claim-b">b</a>' in summary and '<a href="#stability-fig9">Fig. 9</a>' in summary
     assert '<a href="../results/stability/fig9/"><code>results/stability/fig9/</code></a>' in summary
     assert "Undecided" in summary and '<a href="#stability-claim-c">c</a>' in summary
+    assert "full-resolution reference" not in summary  # no claim here has a reference
     assert '<li><a href="#summary">summary</a></li>' in html
 
 

@@ -117,6 +117,11 @@ def summary_section(claims: dict, sections_html, *, datasets=None) -> str:
             items[c["verdict"]].append(
                 f'<li>{verdict_badge(c["verdict"])} <b>{esc(part)}</b>: <a href="#{esc(claim_anchor(part, c["id"]))}">'
                 f"{esc(c['id'])}</a> — {fold(c['statement'], 140)}"
+                + (
+                    f" <i>(full-resolution reference: {esc(c['reference'])}; this resolution does not reproduce it)</i>"
+                    if c.get("reference") not in (None, c["verdict"])
+                    else ""
+                )
                 + (f"<br><i>Why:</i> {esc(why(c))}" if c["verdict"] == "fail" and why(c) else "")
                 + f"<br>Figures and data: {'; '.join(figs)}</li>"
             )
