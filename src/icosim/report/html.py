@@ -134,8 +134,8 @@ def fold(text: str, limit: int = FOLD_AT) -> str:
 
     >>> fold("short")
     'short'
-    >>> fold("word " * 50, limit=20)[:40]
-    '<details><summary>word word word word …'
+    >>> fold("word " * 50, limit=20)[:39]
+    '<details><summary>word word …</summary>'
     """
     text = str(text)
     if len(text) <= limit:
