@@ -4,6 +4,7 @@
    clean results/) three times, one after the other:
    * this tree, default configuration (floor-free errors, ``stepping: error``, H = 1e-6 ... 1e-2 s);
    * this tree with ``stepping: matrix`` (the float64-only computation of the same curves, same H);
+   * this tree with the old range H = 1e-5 ... 1e-2 s (16 sizes): what the extension to 1e-6 costs;
    * an older commit (default ``06f2834``, before the floor-free errors: float64 state stepping,
      H = 1e-5 ... 1e-2 s), from a ``git worktree``.
    Prints wall and CPU seconds and the ratios new / float64-only and new / old (issue 8's target:
@@ -46,16 +47,25 @@ def workflow_runs(old: str):
                 overrides={"convergence": {"stepping": "matrix"}},
             )
         )
+        runs.append(
+            run_workflow(
+                new,
+                TARGET,
+                label="this tree, H 1e-5 ... 1e-2 (16 sizes)",
+                overrides={"convergence": {"step_sizes": {"H_min": 1e-5, "H_max": 1e-2, "num": 16}}},
+            )
+        )
     with tree(old) as old_tree:
         runs.append(run_workflow(old_tree, TARGET, label=f"commit {old} (float64, H 1e-5 ... 1e-2)"))
     print(f"{'convergence part':55s} {'wall s':>8s} {'CPU s':>8s}")
     for r in runs:
         print(f"{r.label:55s} {r.wall:8.1f} {r.cpu:8.1f}")
-    new, f64, before = runs
+    new, f64, short, before = runs
     print(
+        f"extension of the range to 1e-6 s: +{new.wall - short.wall:.1f} s wall, +{new.cpu - short.cpu:.1f} s CPU; "
         f"ratio floor-free / float64-only: wall {new.wall / f64.wall:.2f}, CPU {new.cpu / f64.cpu:.2f}; "
         f"ratio this tree / {old}: wall {new.wall / before.wall:.2f}, CPU {new.cpu / before.cpu:.2f} "
-        f"(load average at the end: {new.load[0]:.1f}, {f64.load[0]:.1f}, {before.load[0]:.1f})"
+        f"(load average at the end of each run: {', '.join(f'{r.load[0]:.1f}' for r in runs)})"
     )
 
 
@@ -72,7 +82,7 @@ def per_step_costs():
             best = np.inf
             for _ in range(3):
                 t0 = time.process_time()
-                study._errors(m, dec, k, 1, stepping)
+                study._errors(m, dec, k, 1, stepping)  # (errors, diverged, bits, certificate)
                 best = min(best, time.process_time() - t0)
             costs.append(best / N * 1e6)
         label = f"{method} {params} {dec} k={k}"

@@ -47,6 +47,7 @@ def run_panel(
     )
     arr = {n: np.full((nI, nK, nH), np.nan) for n in names_f}
     arr["spectral_radius_digits"] = np.zeros((nI, nK, nH), dtype=np.int32)
+    arr["spectral_verdict"] = np.full((nI, nK, nH), "", dtype=object)
     arr["diverged_at"] = np.full((nI, nK, nH), -1, dtype=np.int64)
     arr["unstable"] = np.zeros((nI, nK, nH), dtype=bool)
     arr["fit_used"] = np.zeros((nI, nK, nH), dtype=bool)
@@ -62,7 +63,7 @@ def run_panel(
     for i, row in enumerate(spec.rows):
         for j, k in enumerate(spec.k):
             r = study.run(spec.method, row, spec.decomposition, k, stepping=stepping)
-            for n in names_f + ("spectral_radius_digits", "diverged_at", "unstable", "defect_bits"):
+            for n in names_f + ("spectral_radius_digits", "spectral_verdict", "diverged_at", "unstable", "defect_bits"):
                 arr[n][i, j] = getattr(r, n)
             f = asymptotic_order(r.H, r.nrmse, r.unstable, **fit)
             arr["fit_used"][i, j] = f.used
@@ -143,7 +144,18 @@ def run_panel(
             "spectral_radius_digits": (
                 dims3,
                 arr["spectral_radius_digits"],
-                {"long_name": "significant digits that decided the spectral radius (15: float64)"},
+                {
+                    "long_name": "significant digits that decided the spectral radius (15: float64; for stepping "
+                    "error the Arb precision of the certificate)"
+                },
+            ),
+            "spectral_verdict": (
+                dims3,
+                arr["spectral_verdict"].astype(str),
+                {
+                    "long_name": "stable / unstable / marginal: for stepping error proven from the ball "
+                    "amplification matrix of the defect (icosim.stability.certified); else from the precision policy"
+                },
             ),
             "diverged_at": (
                 dims3,

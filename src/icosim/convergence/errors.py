@@ -37,6 +37,7 @@ import numpy as np
 from ..backend import Ball
 from ..decompositions import get_decomposition
 from ..exact import exact_coupling, monolithic_matrix
+from ..stability.certified import MAX_BITS, SpectralCertificate, certify_matrix
 from ..stability.matrix import amplification_matrix
 
 __all__ = ["ExactExtension", "exact_extension", "local_defect", "Defect", "propagate_errors"]
@@ -80,7 +81,8 @@ def exact_extension(coefficients, decomposition, k, backend) -> ExactExtension:
 
 @dataclass
 class Defect:
-    """float64 roundings of the proven ``M``, ``D``, ``E``, ``A`` and the precision that proved them."""
+    """float64 roundings of the proven ``M``, ``D``, ``E``, ``A``, the precision that proved them, and the
+    certified verdict on the spectral radius of the same ball ``M`` (:mod:`icosim.stability.certified`)."""
 
     M: np.ndarray
     D: np.ndarray
@@ -88,10 +90,18 @@ class Defect:
     A: np.ndarray
     bits: int
     rel_radius: float  # largest radius of a D row relative to the row (negligible rows excluded)
+    certificate: SpectralCertificate
 
 
-def local_defect(coefficients, method, decomposition, k, *, bits: int = 256, max_bits: int = 4096) -> Defect:
-    """``D = M W - W E`` of one parameter point, proven in ball arithmetic, then rounded."""
+def local_defect(
+    coefficients, method, decomposition, k, *, bits: int = 256, max_bits: int = 4096, certify_bits: int = MAX_BITS
+) -> Defect:
+    """``D = M W - W E`` of one parameter point, proven in ball arithmetic, then rounded.
+
+    The same ball ``M`` certifies the stability verdict of this step size; the
+    precision is also raised (up to ``certify_bits``) until that verdict is
+    decided, else it is ``marginal``.
+    """
 
     b = int(bits)
     while True:
@@ -108,41 +118,47 @@ def local_defect(coefficients, method, decomposition, k, *, bits: int = 256, max
             ok = np.all(np.max(rad, axis=1) <= DEFECT_REL_ACCURACY * np.maximum(size, floor)) and np.all(
                 np.isfinite(mid)
             )
-            if ok or b >= max_bits:
+            cert = certify_matrix(M, b, final=b >= min(certify_bits, max_bits))
+            if (ok and cert is not None) or b >= max_bits:
                 if not ok:
                     raise ArithmeticError(
                         f"defect not resolved at {max_bits} bits (max relative radius {np.max(rel):.1e})"
                     )
-                return Defect(be.mid(M), mid, be.mid(ext.E), be.mid(ext.A), b, float(np.max(rel)))
+                cert = cert or certify_matrix(M, b)
+                return Defect(be.mid(M), mid, be.mid(ext.E), be.mid(ext.A), b, float(np.max(rel)), cert)
         b = min(2 * b, max_bits)
 
 
-def propagate_errors(M, D, E, z_at, n_steps: int, *, block: int = 256):
+def propagate_errors(M, D, E, z_at, n_steps: int, *, block: int | None = None):
     """``eps_0 ... eps_n_steps`` of ``eps_N+1 = M eps_N + D z_N``, ``eps_0 = 0``.
 
     ``z_at(N)`` gives the exact ``z`` at the macro-time points ``N`` (an array
     of step indices; called once, for the block starts).  Inside a block of
     ``B`` steps from ``s``: ``eps_s+j = M^j eps_s + G_j z_s`` with
-    ``G_j+1 = M G_j + D E^j``; block starts advance sequentially.
+    ``G_j+1 = M G_j + D E^j``; block starts advance sequentially.  ``B``
+    defaults to about ``sqrt(n_steps)``: the Python loops building the block
+    (``B`` steps) and advancing it (``n_steps / B``) then cost the least.
     """
     M = np.asarray(M, dtype=float)
     n = M.shape[0]
+    if block is None:
+        block = int(np.clip(np.sqrt(n_steps + 1), 16, 2048))
     B = max(1, min(block, n_steps + 1))
-    P = np.empty((B, n, n))
-    G = np.zeros((B, n, 2))
-    P[0] = np.eye(n)
-    Ej = np.eye(2)
-    for j in range(1, B):
-        P[j] = M @ P[j - 1]
-        G[j] = M @ G[j - 1] + D @ Ej
-        Ej = E @ Ej
-    MB = M @ P[B - 1]
-    GB = M @ G[B - 1] + D @ Ej
-    starts = np.arange(0, n_steps + 1, B)
-    Z = z_at(starts)
-    eps_start = np.empty((starts.size, n))
-    e = np.zeros(n)
-    with np.errstate(over="ignore", invalid="ignore"):
+    with np.errstate(over="ignore", invalid="ignore"):  # an unstable run grows without bound
+        P = np.empty((B, n, n))
+        G = np.zeros((B, n, 2))
+        P[0] = np.eye(n)
+        Ej = np.eye(2)
+        for j in range(1, B):
+            P[j] = M @ P[j - 1]
+            G[j] = M @ G[j - 1] + D @ Ej
+            Ej = E @ Ej
+        MB = M @ P[B - 1]
+        GB = M @ G[B - 1] + D @ Ej
+        starts = np.arange(0, n_steps + 1, B)
+        Z = z_at(starts)
+        eps_start = np.empty((starts.size, n))
+        e = np.zeros(n)
         for i in range(starts.size):
             eps_start[i] = e
             e = MB @ e + GB @ Z[i]

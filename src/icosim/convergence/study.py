@@ -96,6 +96,21 @@ def iterate_linear_map(M, w0, n_steps: int, *, bound: float | None = None, block
     return np.concatenate(out), None
 
 
+def _midpoint(cert) -> float:
+    """A float within the proven enclosure of the spectral radius (its lower end if unbounded above)."""
+    return float(cert.rho_lower if cert.rho_upper is None else (cert.rho_lower + cert.rho_upper) / 2)
+
+
+def _eq72_sums(sq, rows, H, lam):
+    """Sums over ``rows`` of squared errors in Eq. (72)'s order (x1, x2, v1, v2), physical units, and of lambda.
+
+    ``sq`` holds the squared errors in the engine's columns (x1, v1_bar, x2, v2_bar, e_N): ``v = v_bar / H``
+    is applied to the sums, not to 10^6 rows.
+    """
+    t = sq[rows].sum(axis=0)
+    return np.array([t[0], t[2], t[1] / H**2, t[3] / H**2]), (t[4 + lam] if lam is not None else None)
+
+
 # --------------------------------------------------------------------------- one curve
 @dataclass
 class CurveResult:
@@ -112,6 +127,7 @@ class CurveResult:
     nrmse_lambda: np.ndarray  # the constraint force lambda_c (ff, fd; NaN for dd or unstable)
     spectral_radius: np.ndarray
     spectral_radius_digits: np.ndarray
+    spectral_verdict: np.ndarray  # stable / unstable / marginal (certified for stepping "error")
     diverged_at: np.ndarray  # first diverged step, -1 if none
     unstable: np.ndarray
     defect_bits: np.ndarray  # Arb precision that proved the defect (stepping "error"; 0 otherwise)
@@ -188,7 +204,12 @@ class Study:
         nH = self.H.size
         methods = [dimensional_method(method, H, **params) for H in self.H]
         methods[0].check_decomposition(dec)
-        rho, digits = self._spectral_radii(methods, dec.name, k)
+        if stepping == "error":  # certified from the ball matrices of the defects, in the loop below
+            rho, digits = np.full(nH, np.nan), np.zeros(nH, dtype=int)
+            verdict = np.full(nH, "", dtype=object)
+        else:
+            rho, digits = self._spectral_radii(methods, dec.name, k)
+            verdict = np.where(is_stable(rho, digits), "stable", "unstable").astype(object)
         names = ("nrmse_unfiltered", "nrmse_second_half", "nrmse_startup", "nrmse_x", "nrmse_v", "nrmse_lambda")
         out = {name: np.full(nH, np.nan) for name in names}
         out["diverged_at"] = np.full(nH, -1, dtype=np.int64)
@@ -196,27 +217,31 @@ class Study:
         # the constraint force is a coupling variable with ff and fd only
         lam = dec.variables.index("lambda_c") if "lambda_c" in dec.variables else None
         for i, (H, N) in enumerate(zip(self.H, self.n_steps)):
-            errors, diverged, bits = self._errors(methods[i], dec.name, k, i, stepping)
+            errors, diverged, bits, cert = self._errors(methods[i], dec.name, k, i, stepping)
             out["defect_bits"][i] = bits
+            if cert is not None:
+                rho[i], digits[i], verdict[i] = _midpoint(cert), int(cert.bits * np.log10(2)), cert.verdict
             if diverged is not None:
                 out["diverged_at"][i] = diverged
                 continue
-            # squared errors of (x1, x2, v1, v2) in physical units (v = v_bar / H) at T_1 ... T_N;
-            # Eq. (72) and its parts from their sums (metric.nrmse_of_errors, without repeated passes)
+            # Eq. (72) and its parts from sums of squared errors at T_1 ... T_N (metric.nrmse_of_errors without
+            # repeated passes over 10^6 steps): engine columns (x1, v1_bar, x2, v2_bar) -> (x1, x2, v1, v2) in
+            # physical units, v = v_bar / H, applied to the sums
             with np.errstate(over="ignore", invalid="ignore"):
-                sq = np.stack([errors[1:, 0], errors[1:, 2], errors[1:, 1] / H, errors[1:, 3] / H], axis=-1) ** 2
+                sq = np.square(errors[1:, : 4 + (0 if lam is None else lam + 1)])
+                total, lam_total = _eq72_sums(sq, slice(None), H, lam)
+                startup, _ = _eq72_sums(sq, slice(0, self.startup_steps), H, lam)
+                half, _ = _eq72_sums(sq, slice(int(N) // 2, None), H, lam)  # T_N in (T/2, T]
             var, var_half, var_lam = self._variances(i)
-            total = sq.sum(axis=0)
             out["nrmse_unfiltered"][i] = ratio_root(total, var)
             out["nrmse_x"][i] = ratio_root(total[:2], var[:2])
             out["nrmse_v"][i] = ratio_root(total[2:], var[2:])
-            out["nrmse_startup"][i] = ratio_root(sq[: self.startup_steps].sum(axis=0), var)
-            out["nrmse_second_half"][i] = ratio_root(sq[int(N) // 2 :].sum(axis=0), var_half)  # T_N in (T/2, T]
+            out["nrmse_startup"][i] = ratio_root(startup, var)
+            out["nrmse_second_half"][i] = ratio_root(half, var_half)
             if lam is not None:  # Eq. (72)'s measure is scale-free: lambda_bar needs no conversion
-                with np.errstate(over="ignore", invalid="ignore"):
-                    out["nrmse_lambda"][i] = ratio_root(np.sum(errors[1:, 4 + lam] ** 2), var_lam)
-        # diverged, or spectral radius above 1 (with the mp allowance of is_stable)
-        unstable = (out["diverged_at"] >= 0) | ~np.isfinite(out["nrmse_unfiltered"]) | ~is_stable(rho, digits)
+                out["nrmse_lambda"][i] = ratio_root(lam_total, var_lam)
+        # diverged, or the spectral radius proven (or, for the float64 steppings, computed) above 1
+        unstable = (out["diverged_at"] >= 0) | ~np.isfinite(out["nrmse_unfiltered"]) | (verdict == "unstable")
         filtered = {name: np.where(unstable, np.nan, out[name]) for name in names[1:]}
         return CurveResult(
             H=self.H.copy(),
@@ -226,6 +251,7 @@ class Study:
             **filtered,
             spectral_radius=rho,
             spectral_radius_digits=digits,
+            spectral_verdict=verdict.astype(str),
             diverged_at=out["diverged_at"],
             unstable=unstable,
             defect_bits=out["defect_bits"],
@@ -248,7 +274,7 @@ class Study:
         return rho, digits
 
     def _errors(self, method, decomposition, k, i, stepping):
-        """``(errors, diverged_at, defect_bits)`` for step size ``H[i]``.
+        """``(errors, diverged_at, defect_bits, certificate)`` for step size ``H[i]``.
 
         ``errors[N] = w_N - w*_N`` at ``T_0 ... T_N_total`` in the engine's
         variables ``(x1, v1_bar, x2, v2_bar, e_N)`` (``e_N`` the corrected
@@ -263,32 +289,38 @@ class Study:
             d = local_defect(c, method, decomposition, k)
             z0 = np.array([self.setup.x0, self.setup.v0 * H])
             errors = propagate_errors(d.M, d.D, d.E, lambda steps: exact.expm_2x2(d.A, steps) @ z0, N)
-            # the state itself (exact + error, engine units) against the growth bound, as the other steppings
+            # the state itself (exact + error, engine units) against the growth bound, as the other steppings;
+            # step by step only if the largest error and the largest exact value together could cross it
             ref = self.reference(i)
-            exact_state = np.stack([ref[:, 0], H * ref[:, 2]], axis=-1)[:, [0, 1, 0, 1]]
-            mag = np.max(np.abs(exact_state + errors[1:, :4]), axis=-1)
-            bad = ~np.isfinite(mag) | (mag > bound)
-            if bad.any():
-                return None, int(np.argmax(bad)) + 1, d.bits
-            return errors[:, : 4 + get_decomposition(decomposition).n_coupling], None, d.bits
+            exact_max = max(np.max(np.abs(ref[:, 0])), H * np.max(np.abs(ref[:, 2])))
+            with np.errstate(invalid="ignore"):
+                err_max = np.max(np.abs(errors[:, :4]))
+            if not (np.isfinite(err_max) and err_max + exact_max <= bound):
+                exact_state = np.stack([ref[:, 0], H * ref[:, 2]], axis=-1)[:, [0, 1, 0, 1]]
+                with np.errstate(invalid="ignore"):
+                    mag = np.max(np.abs(exact_state + errors[1:, :4]), axis=-1)
+                bad = ~np.isfinite(mag) | (mag > bound)
+                if bad.any():
+                    return None, int(np.argmax(bad)) + 1, d.bits, d.certificate
+            return errors[:, : 4 + get_decomposition(decomposition).n_coupling], None, d.bits, d.certificate
         problem = LinearCosimulation(c, decomposition, k)
         solution = self.solution(H)
         state, history = exact.consistent_start(problem, solution)
         if stepping == "simulate":
             traj = simulate(problem, method, state, history, N, bound=bound)
             if traj.diverged_at is not None:
-                return None, traj.diverged_at, 0
+                return None, traj.diverged_at, 0, None
             states = np.array(traj.states).reshape(N + 1, 4)
             W = np.concatenate([states, np.array(traj.coupling).reshape(N + 1, -1)], axis=-1)
         else:
             M = amplification_matrix(c, method, decomposition, k)
             W, diverged = iterate_linear_map(M, problem.pack(state, history), N, bound=bound)
             if diverged is not None:
-                return None, diverged, 0
+                return None, diverged, 0, None
         W = W[:, : 4 + problem.n_coupling]
         # the exact solution in the same variables, subtracted: the round-off floor of these steppings
         st = solution.state(np.arange(N + 1, dtype=float))
         exact_w = np.stack([st[:, 0], st[:, 1], st[:, 0], st[:, 1]], axis=-1)
         cols = [exact.exact_coupling(n, c, st[:, 0], st[:, 1], st[:, 2]) for n in problem.decomposition.variables]
         exact_w = np.concatenate([exact_w, np.stack(cols, axis=-1)], axis=-1)
-        return W - exact_w, None, 0
+        return W - exact_w, None, 0, None

@@ -82,7 +82,7 @@ def convergence_section(
     n_curves = sum(ds.sizes["index"] * ds.sizes["k"] for ds in panels)
     n_unstable = sum(int(ds["unstable"].sum()) for ds in panels)
     n_runs = sum(int(ds["unstable"].size) for ds in panels)
-    n_mp = sum(int((ds["spectral_radius_digits"] > 15).sum()) for ds in panels)
+    n_marginal = sum(int((ds["spectral_verdict"] == "marginal").sum()) for ds in panels if "spectral_verdict" in ds)
     osc = oscillation_summary(Setup(**s))
     if osc["overdamped"]:
         horizon = (
@@ -115,10 +115,14 @@ def convergence_section(
         + STEPPING_TEXT.get(stepping, "")
         + (f" The defects were proven at {_bits(panels)} bits." if stepping == "error" else ""),
         f"Unstable: a run is stopped once |state| exceeds {unstable['growth_bound']:g} × the initial amplitude, and is "
-        "also unstable where the spectral radius of the recurrence at that H exceeds 1 (policy "
-        f"'{unstable['spectral_policy']}', mpmath at {unstable['digits']} digits where float64 cannot decide; "
-        f"{n_mp} of {n_runs} runs needed it). {n_unstable} of {n_runs} runs were unstable; they are drawn as × at the top "
-        "of a panel, never as an error.",
+        "also unstable where the spectral radius of the recurrence at that H exceeds 1"
+        + (
+            ": proven from the same ball amplification matrix as the defect (icosim.stability.certified, "
+            f"{n_marginal} of {n_runs} runs marginal: the enclosure contains 1)."
+            if stepping == "error"
+            else f" (policy '{unstable['spectral_policy']}')."
+        )
+        + f" {n_unstable} of {n_runs} runs were unstable; they are drawn as × at the top of a panel, never as an error.",
         f"Orders decided in the asymptotic range (icosim.convergence.fit.asymptotic_order): the order of a curve is the "
         f"least-squares slope of log NRMSE over log H on its smallest-H decade (at least {fit['min_points']} stable step "
         f"sizes), and counts only if every local slope there is within ±{fit['tolerance']:g} of it; otherwise the curve is "
