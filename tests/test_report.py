@@ -6,7 +6,9 @@ numbers and the figures embedded, not the wording around them.
 
 import base64
 import hashlib
+import io
 import json
+import re
 
 import numpy as np
 import pytest
@@ -109,7 +111,21 @@ def test_stability_section_counts_precision_claims_and_figures(png):
     assert "raise αm21, αλr21, αλi21 in turn to 5." in html and "because &lt;reasons&gt;" in html
     assert "row 2: αm21 = 5, αλr21 = 1, αλi21 = 1" in html  # row labels from the configuration
     assert "128 bits doubled up to 1024" in html and "21 × 21 points" in html
-    assert base64.b64encode(png.read_bytes()).decode() in html  # the figure itself, embedded
+    assert same_pixels(embedded_images(html)[0], png.read_bytes())  # the figure itself, embedded
+    assert '<figure id="stability-fig9" data-paper-figures="9">' in html
+    assert '<tr id="stability-claim-b">' in html and 'Used by claims: <a href="#stability-claim-a">a</a>' in html
+
+
+def embedded_images(html) -> list:
+    """The bytes of every data-URI image of a page."""
+    return [base64.b64decode(m) for m in re.findall(r'src="data:image/[a-z+]+;base64,([^"]+)"', html)]
+
+
+def same_pixels(a: bytes, b: bytes) -> bool:
+    from PIL import Image
+
+    with Image.open(io.BytesIO(a)) as x, Image.open(io.BytesIO(b)) as y:
+        return x.size == y.size and np.array_equal(np.asarray(x.convert("RGB")), np.asarray(y.convert("RGB")))
 
 
 def test_stability_section_lists_every_overturned_float64_verdict():
@@ -273,3 +289,51 @@ def test_page_orders_sections_and_hashes_the_configuration(tmp_path):
     assert '<li><a href="#b">b</a></li><li><a href="#a">a</a></li>' in html
     assert hashlib.sha256(cfg.read_bytes()).hexdigest() in html and "<code>abc</code>" in html
     assert "parts without a section (not built): c" in html and "git commit: <code>0123</code>" in html
+
+
+def test_summary_first_counts_verdicts_and_links_each_disagreement(tmp_path, png):
+    note = "Read as shares.  Disagreement (the data stand): fd is less stable than ff, e.g. in Fig. 9.  More text."
+    stab = [record("a", "pass"), record("b", "fail", note=note), record("c", "undecided")]
+    pend = [record("sect4", "pass", figures=["6", "7", "8"])]
+    section = stability_section(
+        figures={"9": STABILITY_FIGURE},
+        grid=GRID,
+        zoom_grid=ZOOM,
+        precision={"policy": "auto", "digits": 64},
+        style="field",
+        decisions=[],
+        panel_attrs=[panel_attrs(1, 0, 1)],
+        claims=stab,
+        figure_pngs=[str(png)],
+    )
+    cfg = tmp_path / "config.yaml"
+    cfg.write_text("report: {}\n")
+    html = report_page(
+        title="T",
+        parts=["stability", "pendulum"],
+        skipped=[],
+        sections=[section, "<section id='pendulum'>P</section>"],
+        configfiles=[str(cfg)],
+        config_sha256={},
+        precision={"policy": "auto", "digits": 128},
+        commit_text="0",
+        generated="now",
+        claims={"stability": stab, "pendulum": pend},
+    )
+    assert html.index('<section id="summary">') < html.index('<section id="stability">')  # the answer first
+    summary = html[html.index('<section id="summary">') : html.index('<section id="stability">')]
+    assert "<td>3</td><td>1</td><td>1</td><td>1</td>" in summary  # stability: 3 claims, 1 / 1 / 1
+    assert "<td>all</td><td>4</td><td>2</td><td>1</td><td>1</td>" in summary
+    # the disagreement: the note's own sentence, and links to the claim row, the figure and the dataset
+    assert "<i>Why:</i> Disagreement (the data stand): fd is less stable than ff, e.g. in Fig. 9." in summary
+    assert '<a href="#stability-claim-b">b</a>' in summary and '<a href="#stability-fig9">Fig. 9</a>' in summary
+    assert '<a href="../results/stability/fig9/"><code>results/stability/fig9/</code></a>' in summary
+    assert "Undecided" in summary and '<a href="#stability-claim-c">c</a>' in summary
+    assert "full-resolution reference" not in summary  # no claim here has a reference
+    assert '<li><a href="#summary">summary</a></li>' in html
+
+
+def test_long_claim_texts_fold_away():
+    long = "word " * 60
+    html = claims_table([record("a", "pass", statement=long, note="short note")], part="p")
+    assert html.count("<details>") == 1 and "<summary>word word" in html and "short note" in html

@@ -131,6 +131,9 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--json", action="store_true", help="print one JSON object")
     parser.set_defaults(subparser=None)
     rho.set_defaults(subparser=rho)
+    from .commands import add_parsers  # icosim advise, icosim map
+
+    add_parsers(sub, number=_float, nonneg_int=_nonneg_int, digits=_digits)
     return parser
 
 
@@ -264,9 +267,12 @@ def _negative_values_attached(argv, parser) -> list:
     it parses as a number, so users can type numbers as they write them.
     """
     # options that take exactly one value (flags such as --json have nargs = 0)
-    takes_value = {opt for action in _all_actions(parser) if action.nargs is None for opt in action.option_strings}
-    out, i = [], 0
     argv = list(argv)
+    # the command's own options only: another command may take the same option with several values
+    takes_value = {
+        opt for action in _all_actions(parser, argv) if action.nargs is None for opt in action.option_strings
+    }
+    out, i = [], 0
     while i < len(argv):
         tok = argv[i]
         if tok in takes_value and i + 1 < len(argv) and argv[i + 1].startswith("-") and _is_number(argv[i + 1]):
@@ -278,12 +284,13 @@ def _negative_values_attached(argv, parser) -> list:
     return out
 
 
-def _all_actions(parser):
+def _all_actions(parser, argv=()):
     for action in parser._actions:
         yield action
         if isinstance(action, argparse._SubParsersAction):
-            for sub in action.choices.values():
-                yield from _all_actions(sub)
+            for name, sub in action.choices.items():
+                if name in argv[:1]:
+                    yield from _all_actions(sub)
 
 
 def _is_number(text: str) -> bool:
@@ -300,6 +307,10 @@ def main(argv=None) -> int:
     args = parser.parse_args(_negative_values_attached(argv, parser))
     if args.command == "rho":
         return _rho(args, args.subparser)
+    if args.command in ("advise", "map"):
+        from .commands import run
+
+        return run(args)
     return 2  # pragma: no cover - argparse enforces a command
 
 

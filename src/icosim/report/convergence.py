@@ -17,7 +17,7 @@ from ..convergence.work_precision import fastest_schemes
 from . import html as rp
 from .claims import claims_table
 
-__all__ = ["convergence_section"]
+__all__ = ["convergence_section", "work_cost_table"]
 
 esc = rp.escape
 
@@ -36,6 +36,17 @@ STEPPING_TEXT = {
 def _bits(panels) -> str:
     bits = sorted({int(b) for ds in panels if "defect_bits" in ds for b in np.unique(ds["defect_bits"].values) if b})
     return ", ".join(str(b) for b in bits) or "—"
+
+
+def work_cost_table(wp):
+    """Per scheme of the work-precision dataset: median ms per macro step and the counted work (a DataFrame)."""
+    work = wp[["subsystem_integrations_per_step", "coupling_solves_per_step", "projections_per_step"]]
+    cost = work.reset_coords(drop=True).to_dataframe().astype(int).astype(str)
+    cost.insert(0, "ms", wp["cpu_seconds_per_step"].median(dim="H", skipna=True).to_pandas())
+    cost["ms"] = cost["ms"].map(lambda t: f"{1e3 * t:.3g}" if np.isfinite(t) else "— (unstable at every H)")
+    cost = cost.reset_index().astype({"scheme": str})
+    cost.columns = ["scheme", "ms per macro step", "subsystem integrations", "coupling solves", "projections"]
+    return cost
 
 
 def convergence_section(
@@ -166,7 +177,7 @@ def convergence_section(
         "otherwise; a pre-asymptotic curve leaves it undecided; a curve unstable at every step size is n/a. 'unstable' "
         "passes if every step size is unstable. Where the data disagree with the paper, the data stand and the "
         "explanation column says why (each explanation is checked by a test against these data).</p>"
-        + claims_table(claims, note_header="explanation")
+        + claims_table(claims, note_header="explanation", part="convergence")
         + "<p>Per curve: the order over the smallest-H decade and its status; the local slopes over all stable step "
         "sizes; the orders of Eq. (72) over the second half of the run and of the start-up share (diagnostics of a "
         "start-up transient).</p>"
@@ -203,6 +214,9 @@ def convergence_section(
                 "smallest-H decade the order is read off, order p (or why it is not asymptotic) in the legend; ×: "
                 "unstable at that H; dotted: O(H^p). Right: local slopes between neighbouring step sizes; the band "
                 "marks the decade at the order ± the tolerance.",
+                anchor=rp.figure_anchor("convergence", png),
+                paper_figures=[fig],
+                claims_html=rp.used_by("convergence", [c["id"] for c in claims if fig in c["figures"]]),
             )
         )
 
@@ -224,7 +238,13 @@ def convergence_section(
         )
         + "</p>"
     )
-    body.append(rp.figure(wp_png, "CPU time per simulated second over NRMSE; one line per scheme, each point one H."))
+    body.append(
+        rp.figure(
+            wp_png,
+            "CPU time per simulated second over NRMSE; one line per scheme, each point one H.",
+            anchor=rp.figure_anchor("convergence", wp_png),
+        )
+    )
     table_rows = []
     for entry in fastest_schemes(wp, targets):
         rk = entry["ranking"]
@@ -243,23 +263,6 @@ def convergence_section(
             )
         else:
             table_rows.append([entry["decomposition"], f"{entry['target']:.0e}", "none reaches it", "—", "—", "—"])
-    per_step = wp["cpu_seconds_per_step"].median(dim="H", skipna=True).values
-    cost_rows = [
-        [
-            str(lab),
-            f"{1e3 * t:.3g}" if np.isfinite(t) else "— (unstable at every H)",
-            str(int(n_int)),
-            str(int(n_sol)),
-            str(int(n_proj)),
-        ]
-        for lab, t, n_int, n_sol, n_proj in zip(
-            wp["scheme"].values,
-            per_step,
-            wp["subsystem_integrations_per_step"].values,
-            wp["coupling_solves_per_step"].values,
-            wp["projections_per_step"].values,
-        )
-    ]
     body.append(
         "<p>Which scheme reaches a given error fastest (least CPU time per simulated second among the measured step "
         "sizes with NRMSE ≤ target):</p>"
@@ -268,10 +271,7 @@ def convergence_section(
             table_rows,
         )
         + "<p>Cost of one macro step (median over H) and the work it consists of (counted on the engine's macro "
-        "step):</p>"
-        + rp.table(
-            ["scheme", "ms per macro step", "subsystem integrations", "coupling solves", "projections"], cost_rows
-        )
+        "step):</p>" + rp.table(work_cost_table(wp))
     )
 
     return rp.section("Convergence (Figs. 21–23)", "".join(body), anchor="convergence")

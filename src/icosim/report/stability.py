@@ -7,7 +7,6 @@ configuration (the decisions).
 
 from __future__ import annotations
 
-from collections import defaultdict
 from pathlib import Path
 
 from ..claims import verdict_counts
@@ -42,20 +41,36 @@ def cost_row(label, t):
     ]
 
 
-def _totals(al) -> dict:
-    """Per-figure sums of the panel attributes the section reports (panels written before certification
-    count their multiprecision rechecks as certified: the only high-precision pass they had)."""
-    return {
-        "panels": len(al),
-        "points": sum(a["n_points"] for a in al),
-        "cert": sum(a.get("n_certified", a["n_high_precision"]) for a in al),
-        "marginal": sum(a.get("n_marginal", 0) for a in al),
-        "hp_axis": sum(a["n_high_precision_undamped"] for a in al),
-        "audited": sum(a.get("n_audited", 0) for a in al),
-        "overturned": sum(a.get("n_overturned", 0) for a in al),
-        "cpu64": sum(a["cpu_seconds_float64"] for a in al),
-        "cpucert": sum(a.get("cpu_seconds_certify", 0.0) + a.get("cpu_seconds_mp", 0.0) for a in al),
-    }
+def cost_table(panel_attrs, figures):
+    """Per figure (rows, in the order of ``figures``): panels, points, certified points (marginal ones, on the
+    undamped axis, audited, overturned) and CPU seconds of the float64 pass and of the certification, summed
+    over the panels' attributes.  Panels written before certification count their multiprecision rechecks as
+    certified (the only high-precision pass they had)."""
+    import pandas as pd
+
+    df = pd.DataFrame(list(panel_attrs))
+    if df.empty:
+        df = pd.DataFrame(columns=["figure", "n_points", "n_high_precision", "n_high_precision_undamped"])
+
+    def col(name, fallback=0.0):
+        return df[name].fillna(fallback) if name in df else pd.Series(fallback, index=df.index, dtype=float)
+
+    parts = pd.DataFrame(
+        {
+            "figure": df["figure"].astype(str),
+            "points": col("n_points"),
+            "cert": col("n_certified", float("nan")).fillna(col("n_high_precision")),
+            "marginal": col("n_marginal"),
+            "hp_axis": col("n_high_precision_undamped"),
+            "audited": col("n_audited"),
+            "overturned": col("n_overturned"),
+            "cpu64": col("cpu_seconds_float64"),
+            "cpucert": col("cpu_seconds_certify") + col("cpu_seconds_mp"),
+        }
+    )
+    value_columns = [c for c in KEYS if c != "panels"]
+    sums = parts.groupby("figure").agg(panels=("points", "size"), **{c: (c, "sum") for c in value_columns})
+    return sums.reindex([str(f) for f in figures], fill_value=0).astype(float)[list(KEYS)]
 
 
 def overturned_html(panel_attrs) -> str:
@@ -108,19 +123,10 @@ def stability_section(
     (:func:`icosim.claims.read_verdicts`), ``figure_pngs`` the figures
     (``.../fig<figure>.png``), in the order shown.
     """
-    cost_rows, totals = [], defaultdict(float)
-    # -- panel attributes: precision and cost, per figure ---------------------------------------
-    attrs_by_fig = defaultdict(list)
-    for attrs in panel_attrs:
-        attrs_by_fig[attrs["figure"]].append(attrs)
-
-    for fig in figures:
-        al = attrs_by_fig[fig]
-        t = _totals(al)
-        for key in KEYS:
-            totals[key] += t[key]
-        cost_rows.append(cost_row(f"Fig. {fig}", t))
-    t = totals
+    # -- panel attributes: precision and cost, per figure (and all) ---------------------------------
+    per_figure = cost_table(panel_attrs, list(figures))
+    cost_rows = [cost_row(f"Fig. {fig}", t) for fig, t in per_figure.iterrows()]
+    t = per_figure.sum()
     cost_rows.append(cost_row("all", t))
 
     # -- decisions, read from the configuration ---------------------------------------------------
@@ -184,7 +190,7 @@ def stability_section(
         "claim the marginal points could turn (they count neither as stable nor as unstable); each claim says how "
         "many of the points it uses are certified. "
         "Where the data disagree with the paper, the data stand.</p>"
-        + claims_table(claims, note_header="how the words were read")
+        + claims_table(claims, note_header="how the words were read", part="stability")
     )
     body.append(
         "<h3>Precision and cost per figure</h3>"
@@ -215,8 +221,7 @@ def stability_section(
     for png in figure_pngs:
         fig = Path(png).stem.removeprefix("fig")
         cfg = figures[fig]
-        al = attrs_by_fig[fig]
-        tf = _totals(al)
+        tf = per_figure.loc[fig]
         params = ", ".join(f"{k} = {v:g}" for k, v in cfg["params"].items())
         rows_txt = "; ".join(f"row {r}: {row_label(cfg, r)}" for r in range(1, len(cfg["rows"]) + 1))
         zoom_txt = (
@@ -231,6 +236,15 @@ def stability_section(
             + f"Grid {esc(fmt_grid(grid))}.{esc(zoom_txt)} Precision: {int(tf['cert'])} of {int(tf['points'])} points "
             + f"certified ({int(tf['marginal'])} marginal, blue), the rest float64. Shown: {esc(shown)}."
         )
-        body.append(rp.figure(png, caption, alt=f"Fig. {fig}"))
+        body.append(
+            rp.figure(
+                png,
+                caption,
+                alt=f"Fig. {fig}",
+                anchor=rp.figure_anchor("stability", png),
+                paper_figures=[fig],
+                claims_html=rp.used_by("stability", [c["id"] for c in claims if fig in c["figures"]]),
+            )
+        )
 
     return rp.section("Stability (Figs. 9–20)", "".join(body), "stability")
