@@ -23,6 +23,8 @@ import mpmath
 import numpy as np
 import scipy.linalg
 
+from .limits import check_digits, guard_digits
+
 __all__ = ["Float64", "Multiprecision", "Ball", "get_backend", "FLOAT64_DIGITS"]
 
 #: Decimal digits float64 carries reliably (``numpy.finfo(float).precision``).
@@ -67,9 +69,7 @@ class Multiprecision:
     dtype = object
 
     def __init__(self, digits: int = 128):
-        if isinstance(digits, bool) or int(digits) != digits or digits < 16:
-            raise ValueError(f"digits must be an integer >= 16, got {digits!r}")
-        self.digits = int(digits)
+        self.digits = check_digits(digits)  # 16 .. icosim.limits.MAX_DIGITS
         self.ctx = mpmath.MPContext()
         self.ctx.dps = self.digits
         self.eps = self.ctx.eps
@@ -115,7 +115,7 @@ class Multiprecision:
         digits, so that 128 digits mean 128 significant digits.
         """
         n = np.shape(M)[-1]
-        guard = 10 + int(math.ceil(max(float(decay), 0.0) / math.log(10)))
+        guard = guard_digits(decay)  # PrecisionCapError beyond icosim.limits.MAX_GUARD_DIGITS
 
         def one(m):
             with self.ctx.extradps(guard):

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import methods as _methods
+from ..limits import check_k
 from ..model import ParameterError, PhysicalModel
 from ..stability import spectral_radius
 
@@ -220,9 +221,7 @@ def schemes(
     unused = sorted(set(params) - taken)
     if unused:
         raise ParameterError(f"{unused[0]} is not used by the methods asked for ({', '.join(names)})")
-    ks = sorted({int(v) for v in k})
-    if any(v < 0 for v in ks):
-        raise ParameterError(f"k must be integers >= 0, got {list(k)}")
+    ks = sorted({check_k(v) for v in k})
     couplings = list(COUPLINGS) if couplings is None else list(couplings)
     for c in couplings:
         if c not in COUPLINGS:

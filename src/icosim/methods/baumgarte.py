@@ -15,11 +15,14 @@ of the convergence study and the pendulum ``mu`` and ``beta`` are in seconds,
 
 from __future__ import annotations
 
+import sys
 from fractions import Fraction
 
 from ..decompositions import DD_NEEDS_POSITION_LEVEL
 from ..model import ParameterError
 from .base import CouplingMethod, MethodSpec, Parameter, exact
+
+_FLOAT_MAX = Fraction(sys.float_info.max)
 
 __all__ = ["baumgarte", "SPEC"]
 
@@ -49,6 +52,9 @@ def baumgarte(beta: float = None, gamma: float = None, *, mu: float = None, inde
             if mu <= 0:
                 raise ParameterError(f"mu must be > 0, got {float(mu)!r}")
             beta, gamma = 2 * mu, (mu * mu if index == 1 else Fraction(0))
+            for name, value in (("beta = 2 mu", beta), ("gamma = mu^2", gamma)):
+                if value > _FLOAT_MAX:  # a derived quantity every arithmetic of the engine must hold
+                    raise ParameterError(f"mu = {float(mu):g} makes {name} too large for float64 (not finite)")
     else:
         if mu is not None:
             raise ParameterError("--mu needs --index (1 or 2) for the Baumgarte method")

@@ -18,6 +18,7 @@ import numpy as np
 
 from .. import methods as _methods
 from ..decompositions import DECOMPOSITIONS
+from ..limits import check_k
 from ..methods import make_method
 from ..model import ParameterError
 from .policy import POLICIES, Certification
@@ -145,8 +146,7 @@ class PanelSpec:
             )
         if self.view not in VIEWS:
             raise ParameterError(f"view must be one of {', '.join(VIEWS)}, got {self.view!r}")
-        if int(self.k) != self.k or self.k < 0:
-            raise ParameterError(f"k must be an integer >= 0, got {self.k!r}")
+        check_k(self.k)  # 0 .. icosim.limits.MAX_K
         if self.policy not in POLICIES:
             raise ParameterError(f"policy must be one of {', '.join(POLICIES)}, got {self.policy!r}")
         Certification.from_dict(self.certify)  # refuses a bad setting, naming it
