@@ -41,8 +41,7 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
-import numpy as np
-
+from .jsonio import dumps
 from .model import ParameterError
 
 __all__ = [
@@ -352,25 +351,14 @@ def enforce_references(verdicts, enforce: bool):
         )
 
 
-def _json_default(x):
-    if isinstance(x, (np.bool_, bool)):
-        return bool(x)
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    return float(x)
-
-
 def write_verdicts(verdicts, json_path, tsv_path=None):
     """Every verdict as JSON (``{"claims": [Verdict.as_dict(), ...]}``) and as a TSV table (atomic)."""
-    import json
 
     from .datasets import atomic_path
 
     records = [v.as_dict() for v in verdicts]
     with atomic_path(json_path) as tmp:
-        tmp.write_text(json.dumps({"claims": records}, indent=1, default=_json_default))
+        tmp.write_text(dumps({"claims": records}, indent=1))  # strict: a non-finite number is null, with why
     if tsv_path is None:
         return records
     with atomic_path(tsv_path) as tmp:

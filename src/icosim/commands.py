@@ -9,11 +9,11 @@ naming the argument and the allowed values.  ``--json`` prints strict JSON
 from __future__ import annotations
 
 import argparse
-import json
 import re
 
 from . import methods
 from .decompositions import DECOMPOSITIONS
+from .jsonio import dumps
 from .model import ParameterError
 from .stability.policy import POLICIES
 
@@ -159,7 +159,7 @@ def run(args) -> int:
 
 
 def _dumps(obj) -> str:
-    return json.dumps(obj, allow_nan=False)
+    return dumps(obj)  # strict JSON
 
 
 # -- advise ----------------------------------------------------------------------------------------
