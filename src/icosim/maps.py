@@ -13,8 +13,11 @@ variable names and attributes (``rho``, ``stable``, ``digits``,
 panel, the ``lr1`` intervals that are stable, as a :class:`pandas.DataFrame`.
 
 >>> panels = map_panels("projection", {}, "ff", [0], ratios=(1, 1, 1), lr1=(-1, 0), li1=(0, 1), n=5)
->>> stable_extent(panels[0])["stable_lr1"].tolist()  # per li1 = 0, 0.25, ..., 1: projection ff k=0 is stable there
-[[[-1.0, 0.0]], [[-1.0, 0.0]], [[-1.0, 0.0]], [[-1.0, 0.0]], [[-1.0, 0.0]]]
+>>> stable_extent(panels[0])["stable_lr1"].tolist()  # per li1 = 0, 0.25, ..., 1: projection ff k=0
+[[[-0.75, -0.25]], [[-1.0, -0.25]], [[-1.0, -0.25]], [[-1.0, -0.25]], [[-1.0, -0.25]]]
+
+Stable everywhere except the undamped axis lr1 = 0, which is marginal (rho = 1), and the point
+(-1, 0), where the coupling is undefined (its linear system is singular: undecided).
 """
 
 from __future__ import annotations

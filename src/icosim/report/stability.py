@@ -161,7 +161,7 @@ def stability_section(
     computed.append(
         f"Precision: policy '{precision['policy']}': float64 over the whole grid; certified in ball arithmetic "
         "(python-flint Arb: a proven enclosure of ρ from the characteristic polynomial of the ball amplification "
-        f"matrix, {cert['bits']} bits doubled up to {cert['max_bits']}) are every point float64 cannot decide "
+        f"matrix at {cert['bits']} bits, where undecided once more at {cert['max_bits']}) are every point float64 cannot decide "
         f"(|ρ − 1| within its error estimate, or not finite), every point with |ρ − 1| < {cert['band']:g}, and a "
         f"random {cert['audit']:.0%} audit sample of the rest. Verdicts: stable (ρ < 1 proven, or float64 trusted), "
         "unstable, marginal (the proven enclosure still contains 1 at the cap, e.g. ρ = 1 exactly: drawn as blue "

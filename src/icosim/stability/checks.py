@@ -44,6 +44,9 @@ __all__ = [
 
 _select = select  # the checks take a parameter called `select`
 
+#: Keys of a claim's ``region``: bounds on ``lr1``/``li1``, and the degenerate points left out.
+REGION_KEYS = ("lr1", "li1", "exclude_undamped", "exclude_origin")
+
 
 def grid_resolution(datasets) -> float:
     """``1/(n - 1)`` of the coarsest axis: the resolution of a stable share."""
@@ -56,9 +59,9 @@ def _region_mask(ds, region):
     li1 = ds["li1"].values[None, :]
     mask = np.ones((lr1.size, li1.size), dtype=bool)
     region = region or {}
-    unknown = sorted(set(region) - {"lr1", "li1", "exclude_undamped"})
+    unknown = sorted(set(region) - set(REGION_KEYS))
     if unknown:
-        raise ParameterError(f"region: unknown key(s) {unknown}; allowed: lr1, li1, exclude_undamped")
+        raise ParameterError(f"region: unknown key(s) {unknown}; allowed: {', '.join(REGION_KEYS)}")
     if "lr1" in region:
         lo, hi = region["lr1"]
         mask &= (lr1 >= lo) & (lr1 <= hi)
@@ -68,6 +71,10 @@ def _region_mask(ds, region):
     if region.get("exclude_undamped"):
         # lr1 = 0: both subsystems undamped, the model itself only marginally stable
         mask &= np.broadcast_to(lr1 < 0, mask.shape)
+    if region.get("exclude_origin"):
+        # lr1 = li1 = 0: both subsystems are free masses (lambda_2 = 0 too); every scheme reproduces the rigid motion
+        # x0 + v t, so 1 is an eigenvalue and rho >= 1 there: marginal or unstable, never provably stable
+        mask &= (lr1 != 0) | (li1 != 0)
     return mask
 
 
@@ -188,9 +195,23 @@ def check_stable_fraction(datasets, *, select: dict, op: str, value: float, regi
                     f" (undamped axis lr1 = 0, not counted: {n_axis_unstable} unstable, {n_axis_marginal} marginal "
                     f"of {int(axis_mask.sum())})"
                 )
+        if region and region.get("exclude_origin"):
+            text += _origin_text(ds, entry)
         numbers[_describe(ds)] = entry
         parts.append(text)
     return Outcome(combine_holds(ok), "; ".join(parts) + _certified_text(chosen, region), numbers)
+
+
+def _origin_text(ds, entry: dict) -> str:
+    """The verdict at the origin lr1 = li1 = 0 (left out of the share), if the grid holds it."""
+    i, j = np.flatnonzero(ds["lr1"].values == 0), np.flatnonzero(ds["li1"].values == 0)
+    if not (i.size and j.size):
+        return ""
+    stable, unstable = _verdict_masks(ds)
+    at = (i[0], j[0])
+    verdict = "stable" if stable[at] else "unstable" if unstable[at] else "marginal"
+    entry["origin_verdict"] = verdict
+    return f" (origin lr1 = li1 = 0, free masses where rho >= 1 for every scheme, not counted: {verdict})"
 
 
 def _certified_text(chosen, region) -> str:
@@ -327,7 +348,6 @@ def check_trend(
     return Outcome(holds, text + _certified_text(chosen, region), {"groups": dict(zip(names, lows)), "resolution": tol})
 
 
-REGION_KEYS = ("lr1", "li1", "exclude_undamped")
 
 
 def _validate_region(label: str, params: dict):
@@ -338,7 +358,7 @@ def _validate_region(label: str, params: dict):
         raise ParameterError(f"{label}: check.region must be a mapping of attribute -> value")
     unknown = sorted(set(region) - set(REGION_KEYS))
     if unknown:
-        raise ParameterError(f"{label}: check.region has unknown key(s) {unknown}; allowed: lr1, li1, exclude_undamped")
+        raise ParameterError(f"{label}: check.region has unknown key(s) {unknown}; allowed: {', '.join(REGION_KEYS)}")
 
 
 def _validate_compare(label: str, params: dict):

@@ -17,15 +17,14 @@ every run (:mod:`icosim.stability.policy`).
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 
 from ..backend import FLOAT64_DIGITS
 from ..decompositions import DECOMPOSITIONS
+from ..jsonio import dumps
 from ..model import TestModel
 from .panels import PanelSpec, format_row_label, grid_axis, method_parameters_units
-from .policy import ARITHMETICS, VERDICTS, Certification, spectral_radius
+from .policy import ARITHMETICS, REASONS, VERDICTS, Certification, spectral_radius
 
 __all__ = ["stability_panel", "LONG_NAMES", "verdict_names"]
 
@@ -41,9 +40,15 @@ LONG_NAMES = {
     "rho_upper": "proven upper bound of rho (certified points; NaN elsewhere)",
     "audited": "float64-trusted point also certified (within the band around 1, or in the audit sample)",
     "overturned": "audited point whose certified verdict is the opposite of float64's",
+    "undecided_reason": "why the point is undecided (none for decided points)",
     "digits": "decimal digits of the arithmetic that decided the point",
     "rho_float64_error": "error estimate of the float64 spectral radius",
 }
+
+
+def _finite_or_none(x):
+    """A float for JSON, ``None`` where it is not finite (strict JSON has no NaN or Infinity)."""
+    return float(x) if np.isfinite(x) else None
 
 
 def _codes(values, names) -> np.ndarray:
@@ -96,6 +101,7 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
             "rho_upper": var("rho_upper", np.asarray(result.rho_upper, dtype=float), units="1"),
             "audited": var("audited", np.asarray(result.audited, dtype=bool)),
             "overturned": var("overturned", np.asarray(result.overturned, dtype=bool)),
+            "undecided_reason": var("undecided_reason", _codes(result.reason_code, REASONS), **_flags(REASONS)),
             "digits": var(
                 "digits",
                 np.asarray(result.digits, dtype=np.int16),
@@ -142,11 +148,12 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
             "li1": float(li1[j]),
             "float64_verdict": str(result.float64_verdict[i, j]),
             "verdict": str(result.verdict[i, j]),
-            "rho_lower": float(result.rho_lower[i, j]),
-            "rho_upper": float(result.rho_upper[i, j]),
+            "rho_lower": _finite_or_none(result.rho_lower[i, j]),
+            "rho_upper": _finite_or_none(result.rho_upper[i, j]),
         }
         for i, j in over
     ]
+    codes = np.asarray(result.reason_code)
     attrs.update(
         precision_policy=spec.policy,
         mp_digits=int(spec.digits),
@@ -155,6 +162,7 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
         certify_seed=int(settings.seed),
         certify_bits=int(settings.bits),
         certify_max_bits=int(settings.max_bits),
+        certify_point_seconds=float(settings.point_seconds),
         n_points=int(LR.size),
         n_high_precision=int(result.n_high_precision),
         # rechecked points on the undamped axis lr1 = 0, where rho = 1 to working precision
@@ -163,10 +171,12 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
         n_certified=int(np.sum(result.certified)),
         n_marginal=int(np.sum(verdict == "marginal")),
         n_undecided=int(np.sum(verdict == "undecided")),
+        # undecided points per reason (JSON), e.g. {"timeout": 2}
+        undecided_reasons=dumps({r: int(np.sum(codes == r)) for r in REASONS[1:] if np.any(codes == r)}),
         n_audited=int(np.sum(result.audited)),
         n_overturned=int(np.sum(result.overturned)),
         # every float64 verdict certification overturned, with the proven enclosure (JSON; usually "[]")
-        overturned_points=json.dumps(overturned_points),
+        overturned_points=dumps(overturned_points),
         seconds_total=float(sum(result.seconds.values())),
         seconds_float64=float(result.seconds["float64"]),
         seconds_certify=float(result.seconds["certify"]),

@@ -33,16 +33,24 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field, fields
 
-import mpmath
 import numpy as np
 
 from ..backend import FLOAT64_DIGITS
+from ..limits import MAX_BITS_LIMIT, PointTimeout, PrecisionCapError, time_budget
 from ..model import Coefficients, ParameterError, TestModel
 from .certified import DEFAULT_BITS, MAX_BITS, certify_spectral_radius
 from .matrix import as_coefficients
 from .spectral import spectral_radius_float64, spectral_radius_mp
 
-__all__ = ["spectral_radius", "StabilityResult", "Certification", "POLICIES", "VERDICTS", "ARITHMETICS"]
+__all__ = [
+    "spectral_radius",
+    "StabilityResult",
+    "Certification",
+    "POLICIES",
+    "VERDICTS",
+    "ARITHMETICS",
+    "REASONS",
+]
 
 #: ``auto``: float64, certify what it cannot decide (and the band and the audit); ``float64``: no
 #: recheck; ``certify``: every point certified; ``mp``: every point with mpmath at ``digits``.
@@ -51,6 +59,9 @@ POLICIES = ("auto", "float64", "certify", "mp")
 VERDICTS = ("stable", "unstable", "marginal", "undecided")
 #: What decided a point.
 ARITHMETICS = ("float64", "ball", "mpmath", "none")
+#: Why a point is undecided (``none`` for decided points): a derived quantity not finite in float64, a precision
+#: beyond a cap (guard digits, or every digit lost at the largest precision), the time budget, any other error.
+REASONS = ("none", "overflow", "precision_cap", "timeout", "error")
 
 
 @dataclass(frozen=True)
@@ -59,7 +70,9 @@ class Certification:
 
     ``band``: certify every point with ``|rho - 1| < band``; ``audit``: the
     share of the remaining points certified at random (``seed``); ``bits`` and
-    ``max_bits``: the ball arithmetic's first and largest working precision.
+    ``max_bits``: the ball arithmetic's first and largest working precision;
+    ``point_seconds``: the wall-time budget of one point's recheck (past it the
+    point is undecided, reason ``timeout``; 0: none).
     """
 
     band: float = 1e-6
@@ -67,6 +80,7 @@ class Certification:
     seed: int = 0
     bits: int = DEFAULT_BITS
     max_bits: int = MAX_BITS
+    point_seconds: float = 60.0
 
     def __post_init__(self):
         if not (np.isfinite(self.band) and self.band >= 0):
@@ -75,8 +89,12 @@ class Certification:
             raise ParameterError(f"certify.audit must lie in [0, 1], got {self.audit!r}")
         if int(self.bits) != self.bits or self.bits < 53:
             raise ParameterError(f"certify.bits must be an integer >= 53, got {self.bits!r}")
-        if int(self.max_bits) != self.max_bits or self.max_bits < self.bits:
-            raise ParameterError(f"certify.max_bits must be an integer >= bits = {self.bits}, got {self.max_bits!r}")
+        if int(self.max_bits) != self.max_bits or not self.bits <= self.max_bits <= MAX_BITS_LIMIT:
+            raise ParameterError(
+                f"certify.max_bits must be an integer in bits = {self.bits}..{MAX_BITS_LIMIT}, got {self.max_bits!r}"
+            )
+        if not (np.isfinite(self.point_seconds) and self.point_seconds >= 0):
+            raise ParameterError(f"certify.point_seconds must be a finite number >= 0, got {self.point_seconds!r}")
 
     @classmethod
     def from_dict(cls, d: dict | None) -> Certification:
@@ -98,7 +116,8 @@ class StabilityResult:
     the points it trusted ('' elsewhere); ``digits`` the decimal digits of the
     arithmetic that decided (15 for float64; for balls ``bits * log10 2``).
     ``seconds`` and ``cpu_seconds`` split the cost (``float64``, ``certify``,
-    ``mp``).
+    ``mp``).  ``reason`` says in words why a point is undecided (or what
+    float64 could not do), ``reason_code`` classifies it (:data:`REASONS`).
     """
 
     rho: np.ndarray
@@ -112,6 +131,7 @@ class StabilityResult:
     audited: np.ndarray
     float64_verdict: np.ndarray
     reason: np.ndarray
+    reason_code: np.ndarray
     seconds: dict = field(default_factory=dict)
     cpu_seconds: dict = field(default_factory=dict)
 
@@ -180,11 +200,15 @@ def spectral_radius(
     shape = arrays[0].shape
     out = _empty(shape)
     t0, c0 = time.perf_counter(), time.process_time()
+    # derived quantities (k = lr^2 + li^2, ...) that overflow float64: undecided, nothing is computed there
+    overflow = _overflowing(point_type(*arrays) if point_type is TestModel else model, shape)
+    out["reason"][overflow] = "overflow: a derived coefficient (k1, delta1, k2, delta2) is not finite in float64"
+    out["reason_code"][overflow] = "overflow"
     if policy == "mp":
         todo_ball = np.zeros(shape, dtype=bool)
-        todo_mp = np.ones(shape, dtype=bool)
+        todo_mp = ~overflow
     else:
-        rho, err = spectral_radius_float64(point_type(*arrays), method, decomposition, k)
+        rho, err = _float64_isolated(point_type, arrays, overflow, method, decomposition, k, out)
         out["rho"], out["err"] = rho, err
         trusted = np.isfinite(rho) & (np.abs(rho - 1) > err)
         if policy == "float64":  # no recheck: float64's verdict on every finite point
@@ -194,31 +218,31 @@ def spectral_radius(
         out["float64_verdict"] = np.where(trusted, f64, "").astype(object)
         out["arithmetic"] = np.where(trusted, "float64", "none").astype(object)
         out["digits"] = np.where(trusted, FLOAT64_DIGITS, -1)
-        out["reason"] = np.where(
-            trusted, "", np.where(np.isfinite(rho), "float64 cannot decide", "float64 not finite")
-        ).astype(object)
+        why = np.where(np.isfinite(rho), "float64 cannot decide", "float64 not finite")
+        out["reason"] = np.where(trusted | overflow, out["reason"], why).astype(object)
         todo_mp = np.zeros(shape, dtype=bool)
         if policy == "float64":
             todo_ball = np.zeros(shape, dtype=bool)
         elif policy == "certify":
-            todo_ball = np.ones(shape, dtype=bool)
+            todo_ball = ~overflow
         else:
             rng = np.random.default_rng(cert_settings.seed)
             audit = trusted & (rng.random(shape) < cert_settings.audit)
             near = trusted & (np.abs(rho - 1) < cert_settings.band)
             out["audited"] = audit | near
-            todo_ball = ~trusted | near | audit
+            todo_ball = (~trusted | near | audit) & ~overflow
     t1, c1 = time.perf_counter(), time.process_time()
     for idx in np.ndindex(shape):
         if not todo_ball[idx]:
             continue
         point = point_type(*(float(a[idx]) for a in arrays))  # a double is exact: no rounding here
         try:
-            c = certify_spectral_radius(
-                point, method, decomposition, k, bits=cert_settings.bits, max_bits=cert_settings.max_bits
-            )
+            with time_budget(cert_settings.point_seconds):
+                c = certify_spectral_radius(
+                    point, method, decomposition, k, bits=cert_settings.bits, max_bits=cert_settings.max_bits
+                )
         except Exception as exc:  # one point's failure must not abort a grid
-            out["verdict"][idx], out["reason"][idx] = "undecided", f"{type(exc).__name__}: {exc}"
+            _undecided(out, idx, exc)
             continue
         _store(out, idx, c)
     t2, c2 = time.perf_counter(), time.process_time()
@@ -227,9 +251,10 @@ def spectral_radius(
             continue
         point = point_type(*(float(a[idx]) for a in arrays))
         try:
-            r = spectral_radius_mp(point, method, decomposition, k, digits)
-        except (ArithmeticError, mpmath.libmp.NoConvergence) as exc:
-            out["verdict"][idx], out["reason"][idx] = "undecided", f"{type(exc).__name__}: {exc}"
+            with time_budget(cert_settings.point_seconds):
+                r = spectral_radius_mp(point, method, decomposition, k, digits)
+        except Exception as exc:  # one point's failure must not abort a grid
+            _undecided(out, idx, exc)
             continue
         # an eigenvalue of a Jordan block is computed only to about half the digits: no verdict closer to 1
         half = 10.0 ** -(digits // 2)
@@ -240,6 +265,49 @@ def spectral_radius(
         **{k: (v.astype(str) if v.dtype == object else v) for k, v in out.items()},
         seconds={"float64": t1 - t0, "certify": t2 - t1, "mp": t3 - t2},
         cpu_seconds={"float64": c1 - c0, "certify": c2 - c1, "mp": c3 - c2},
+    )
+
+
+def _overflowing(model, shape) -> np.ndarray:
+    """Points whose subsystem coefficients are not finite in float64 (e.g. ``k2 = li2^2`` with ``ali21 = 1e300``)."""
+    with np.errstate(all="ignore"):
+        c = as_coefficients(model)
+        bad = np.zeros(shape, dtype=bool)
+        for name in ("k1", "delta1", "k2", "delta2"):
+            bad |= ~np.isfinite(np.broadcast_to(np.asarray(getattr(c, name), dtype=float), shape))
+    return bad
+
+
+def _float64_isolated(point_type, arrays, overflow, method, decomposition, k, out):
+    """The float64 pass over the grid in one call; if it raises, point by point, each failure undecided alone."""
+    shape = arrays[0].shape
+    safe = [np.where(overflow, 0.0, a) if a.dtype.kind == "f" else a for a in arrays]  # no overflow inside
+    try:
+        rho, err = spectral_radius_float64(point_type(*safe), method, decomposition, k)
+        return np.where(overflow, np.nan, rho), np.where(overflow, np.inf, err)
+    except Exception:  # noqa: BLE001 -- find the point(s) responsible; the others keep their values
+        rho, err = np.full(shape, np.nan), np.full(shape, np.inf)
+        for idx in np.ndindex(shape):
+            if overflow[idx]:
+                continue
+            try:
+                r, e = spectral_radius_float64(point_type(*(a[idx] for a in safe)), method, decomposition, k)
+                rho[idx], err[idx] = float(r), float(e)
+            except Exception as exc:  # noqa: BLE001
+                _undecided(out, idx, exc)
+        return rho, err
+
+
+def _undecided(out: dict, idx, exc: BaseException):
+    out["verdict"][idx], out["reason"][idx] = "undecided", f"{type(exc).__name__}: {exc}"
+    out["reason_code"][idx] = (
+        "timeout"
+        if isinstance(exc, PointTimeout)
+        else "precision_cap"
+        if isinstance(exc, PrecisionCapError)
+        else "overflow"
+        if isinstance(exc, (OverflowError, ParameterError))
+        else "error"
     )
 
 
@@ -256,18 +324,23 @@ def _empty(shape) -> dict:
         "audited": np.zeros(shape, dtype=bool),
         "float64_verdict": np.full(shape, "", dtype=object),
         "reason": np.full(shape, "", dtype=object),
+        "reason_code": np.full(shape, "none", dtype=object),
     }
 
 
 def _store(out: dict, idx, c):
     """One certificate into the result arrays (bounds rounded outward to float64)."""
+    if c.verdict == "undecided":  # the ball arithmetic lost every digit at the cap: nothing is known
+        out["verdict"][idx], out["rho"][idx], out["digits"][idx] = "undecided", np.nan, -1
+        out["reason"][idx], out["reason_code"][idx] = c.reason, "precision_cap"
+        return
     lower = float(c.rho_lower)
     lower = np.nextafter(lower, -np.inf) if lower > c.rho_lower else lower
     upper = np.inf if c.rho_upper is None else float(c.rho_upper)
     upper = np.nextafter(upper, np.inf) if upper < (c.rho_upper or 0) else upper
     out["rho_lower"][idx], out["rho_upper"][idx] = lower, upper
-    if out["float64_verdict"][idx] != c.verdict:
-        # float64 did not decide, or the proof does not confirm it: a value inside the enclosure stands
+    if out["float64_verdict"][idx] != c.verdict or not lower <= out["rho"][idx] <= upper:
+        # float64 did not decide, or the proof contradicts its verdict or its value: a value inside the enclosure
         out["rho"][idx] = lower if not np.isfinite(upper) else (lower + upper) / 2
     out["verdict"][idx], out["arithmetic"][idx], out["bits"][idx] = c.verdict, "ball", c.bits
     out["digits"][idx] = int(c.bits * np.log10(2))

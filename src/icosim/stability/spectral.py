@@ -93,6 +93,8 @@ def spectral_radius_float64(coefficients, method, decomposition, k, *, error_est
             Md = np.where(ok[..., None, None], Md, 0.0)
             norm = np.max(np.abs(Md), axis=(-1, -2), keepdims=True)
             Md = Md + rel * norm * rng.standard_normal(Md.shape)
+            ok &= np.all(np.isfinite(Md), axis=(-1, -2))  # entries near the float64 limit overflow with the noise
+            Md = np.where(ok[..., None, None], Md, 0.0)
             rho_d = np.where(ok, _spectral_radius_of(Md, be), np.nan)
             spread = np.fmax(spread, np.abs(rho_d - rho))
             spread = np.where(ok, spread, np.inf)
