@@ -17,7 +17,13 @@ from flint import arb
 
 from icosim import TestModel, make_method
 from icosim.cli import main
-from icosim.stability import Certification, certify_spectral_radius, spectral_radius, spectral_radius_float64
+from icosim.stability import (
+    Certification,
+    amplification_matrix,
+    certify_spectral_radius,
+    spectral_radius,
+    spectral_radius_float64,
+)
 from icosim.stability.certified import roots_inside
 from icosim.stability.spectral import spectral_radius_mp
 
@@ -172,7 +178,7 @@ def test_command_line_certify(capsys):
         assert mpmath.mpf(out["rho_lower"]) <= rho <= mpmath.mpf(out["rho_upper"])
     assert main(argv) == 0
     text = capsys.readouterr().out
-    assert "unstable, proven: rho in [" in text and "ball arithmetic 129 bits" in text  # 128 + 1 guard bit
+    assert "unstable, proven: rho in [" in text and "at 129 bits" in text  # 128 + 1 guard bit
     marginal = ["rho", "--method", "projection", "--decomposition", "ff", "--k", "1", "--lr1", "0", "--li1", "0.5"]
     assert (
         main(marginal + ["--am21", "1", "--alr21", "1", "--ali21", "1", "--certify", "--max-bits", "256", "--json"])
@@ -196,3 +202,45 @@ def test_enclosure_narrowed_to_the_digits_asked_for():
     origin = certify_spectral_radius(TestModel(0.0, 0.0, 1, 1, 1), make_method("projection"), "ff", 0, digits=100)
     assert origin.verdict == "marginal" and origin.rho_lower <= 1 <= origin.rho_upper
     assert origin.rho_upper - origin.rho_lower < Fraction(1, 10**100)
+
+
+def test_a_singular_coupling_is_undecided_not_guessed():
+    """At lr1 = -1, li1 = 0 (ratios 1) both subsystems are critically damped with k = 1, delta = 2: the acceleration
+    at the end of a step responds to a constant force by (1 - t) e^-t at t = 1, exactly 0, so projection's linear
+    system is singular there and the recurrence is undefined.  float64 still prints a number (its error estimate
+    says it cannot be trusted); the proof says undecided.  Next to it the matrix grows like 1/(2 eps) (theory:
+    a simple zero of the pivot) while rho stays near e^-1, proven on both sides."""
+    method = make_method("projection")
+    rho, err = spectral_radius_float64(TestModel(-1.0, 0.0), method, "ff", 0)
+    assert err > 1 and np.isfinite(rho)
+    c = certify_spectral_radius(TestModel(-1.0, 0.0), method, "ff", 0)
+    assert c.verdict == "undecided" and "singular" in c.reason
+    res = spectral_radius(TestModel(np.array([-1.0]), np.array([0.0])), method, "ff", 0)
+    assert res.verdict[0] == "undecided" and res.reason_code[0] == "precision_cap" and np.isnan(res.rho[0])
+    for eps in (Fraction(1, 10**4), Fraction(-1, 10**4), Fraction(1, 10**6)):
+        M = amplification_matrix(TestModel(float(-1 + eps), 0.0).coefficients(), method, "ff", 0)
+        assert np.max(np.abs(M)) == pytest.approx(1 / (2 * abs(float(eps))), rel=1e-3)
+        near = certify_spectral_radius(TestModel(-1 + eps, 0), method, "ff", 0)
+        assert near.verdict == "stable" and abs(float(near.rho_lower) - np.exp(-1)) < 10 * abs(float(eps))
+
+
+@pytest.mark.parametrize("method,dec,k", SCHEMES, ids=[f"{m.name}-{d}-k{k}" for m, d, k in SCHEMES])
+def test_no_scheme_is_stable_at_the_origin(method, dec, k):
+    """The reason the stability claims leave out lr1 = li1 = 0 (region.exclude_origin): both subsystems are free
+    masses there (every coefficient is 0, whatever the ratios) and every scheme reproduces the rigid motion
+    x0 + v t, so 1 is an eigenvalue of the recurrence (to 160 digits, up to the square root of the precision a
+    Jordan block allows): rho >= 1, and the proof can only say marginal (rho = 1) or unstable, never stable."""
+    from icosim.backend import Multiprecision
+    from icosim.stability.matrix import amplification_matrix
+
+    for ratios in ((1.0, 1.0, 1.0), (0.5, 2.0, 3.0)):
+        point = TestModel(0.0, 0.0, *ratios)
+        c = point.coefficients()
+        assert all(getattr(c, f) == 0 for f in ("k1", "delta1", "k2", "delta2"))
+        be = Multiprecision(160)
+        with be.context(), mpmath.workdps(160):
+            M = amplification_matrix(c.map(be.const), method, dec, k, backend=be)
+            eigenvalues = mpmath.eig(mpmath.matrix(M.tolist()), left=False, right=False)
+            assert min(abs(z - 1) for z in eigenvalues) < mpmath.mpf(10) ** -60
+        cert = certify_spectral_radius(point, method, dec, k)
+        assert cert.verdict in ("marginal", "unstable") and cert.rho_upper >= 1

@@ -26,11 +26,14 @@ def test_json_output_matches_library(capsys):
     data = json.loads(out)
     expected, _ = spectral_radius_float64(TestModel(-0.5, 0.7, 2, 2, 2), baumgarte(mu=1, index=1), "ff", 2)
     assert data["rho"] == pytest.approx(float(expected), rel=1e-13)
-    assert data["digits"] == 15 and data["stable"] is True
+    assert data["rho_float64"] == float(expected)  # float64's own value beside the proven one
+    # the value is the midpoint of the proven enclosure narrowed to a double's 17 digits
+    assert data["digits"] == 17 and data["stable"] is True and data["certified"] is True
+    assert float(data["rho_lower"]) <= data["rho"] <= float(data["rho_upper"])
     assert data["method_parameters"] == {"beta": 2.0, "gamma": 1.0, "mu": 1.0, "index": 1}
 
 
-def test_digits_option_uses_multiprecision(capsys):
+def test_digits_option_prints_that_many_proven_digits(capsys):
     code, out = run(
         capsys, BASE + ["--method", "projection", "--decomposition", "dd", "--k", "1", "--digits", "40", "--json"]
     )

@@ -110,7 +110,7 @@ def test_stability_section_counts_precision_claims_and_figures(png):
     assert "3 claims" in html and "1 pass, 1 fail, 1 undecided" in html
     assert "raise αm21, αλr21, αλi21 in turn to 5." in html and "because &lt;reasons&gt;" in html
     assert "row 2: αm21 = 5, αλr21 = 1, αλi21 = 1" in html  # row labels from the configuration
-    assert "128 bits doubled up to 1024" in html and "21 × 21 points" in html
+    assert "at 128 bits, where undecided once more at 1024" in html and "21 × 21 points" in html
     assert same_pixels(embedded_images(html)[0], png.read_bytes())  # the figure itself, embedded
     assert '<figure id="stability-fig9" data-paper-figures="9">' in html
     assert '<tr id="stability-claim-b">' in html and 'Used by claims: <a href="#stability-claim-a">a</a>' in html

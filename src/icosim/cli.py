@@ -1,29 +1,28 @@
 """The ``icosim`` command.
 
 ``icosim rho`` prints the spectral radius of one parameter point of the test
-model, decided by the precision policy (float64, rechecked at high precision
-where float64 cannot be trusted) or, with ``--digits N``, computed at N
-significant digits directly: then every number is taken as the decimal typed
-(``--lr1 -0.3`` is -3/10, not the nearest double) and the result is printed
-with N significant digits.  Negative values may follow their option with a
-space, also in exponent notation (``--lr1 -1e-3``).  Bad input is reported as
-``icosim rho: error: ...`` naming the argument, with exit status 2 and no
-traceback.
+model with its verdict proven in ball arithmetic (stable, unstable, or
+marginal), every number taken as the decimal typed (``--lr1 -0.3`` is -3/10,
+not the nearest double) and the value printed with the digits that are proven
+(17, or ``--digits N``): :mod:`icosim.rho_command`.  Negative values may follow
+their option with a space, also in exponent notation (``--lr1 -1e-3``).  Bad
+input -- including input beyond a limit of :mod:`icosim.limits` -- is reported
+as ``icosim rho: error: ...`` naming the argument, with exit status 2, before
+any work and without a traceback.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 from fractions import Fraction
 
-import mpmath
-
 from . import methods
 from .backend import FLOAT64_DIGITS
 from .decompositions import DECOMPOSITIONS, get_decomposition
+from .jsonio import dumps
+from .limits import MAX_BITS_LIMIT, MAX_DIGITS, MAX_GUARD_BITS, MAX_K, check_derived, check_k
 from .model import ParameterError
 
 __all__ = ["main", "build_parser"]
@@ -56,15 +55,25 @@ def _nonneg_int(text):
     return value
 
 
+def _order(text):
+    """An approximation order k in 0 .. icosim.limits.MAX_K."""
+    try:
+        return check_k(_nonneg_int(text), "k")
+    except ParameterError as exc:
+        raise argparse.ArgumentTypeError(f"expected an integer in 0..{MAX_K} (the largest k), got {text!r}") from exc
+
+
 def _digits(text):
     try:
         value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 16, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"expected an integer in 16..{MAX_DIGITS}, got {text!r}") from None
     if value < 16:
         raise argparse.ArgumentTypeError(
             f"expected an integer >= 16 (float64 carries {FLOAT64_DIGITS}; omit --digits for it), got {text!r}"
         )
+    if value > MAX_DIGITS:
+        raise argparse.ArgumentTypeError(f"expected an integer <= {MAX_DIGITS} (the largest --digits), got {text!r}")
     return value
 
 
@@ -72,9 +81,18 @@ def _bits(text):
     try:
         value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 128, got {text!r}") from None
-    if value < 128:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 128 (the first attempt's precision), got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected an integer in 128..{MAX_BITS_LIMIT}, got {text!r}") from None
+    if not 128 <= value <= MAX_BITS_LIMIT:
+        raise argparse.ArgumentTypeError(
+            f"expected an integer in 128..{MAX_BITS_LIMIT} (the first attempt's precision .. the limit), got {text!r}"
+        )
+    return value
+
+
+def _seconds(text):
+    value = _float(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds > 0, got {text!r}")
     return value
 
 
@@ -96,7 +114,7 @@ def build_parser() -> argparse.ArgumentParser:
     g = rho.add_argument_group("method and layout")
     g.add_argument("--method", required=True, choices=tuple(methods.METHODS))
     g.add_argument("--decomposition", required=True, choices=tuple(DECOMPOSITIONS))
-    g.add_argument("--k", required=True, type=_nonneg_int, help="approximation order (integer >= 0)")
+    g.add_argument("--k", required=True, type=_order, help=f"approximation order (integer 0..{MAX_K})")
     g = rho.add_argument_group("method parameters")
     with_index = ", ".join(spec.label for spec in methods.METHODS.values() if spec.takes_index)
     g.add_argument("--index", type=int, choices=methods.indices(), help=f"index of the formulation ({with_index})")
@@ -108,25 +126,29 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--am21", required=True, type=_decimal, help="mass ratio m2/m1 (> 0)")
     g.add_argument("--alr21", required=True, type=_decimal, help="damping ratio lr2/lr1 (>= 0)")
     g.add_argument("--ali21", required=True, type=_decimal, help="frequency ratio li2/li1 (>= 0)")
-    g = rho.add_argument_group("precision and output")
+    g = rho.add_argument_group(
+        "precision and output",
+        "The verdict is always proven in ball arithmetic (python-flint Arb) from the decimals as typed: stable "
+        "(rho < 1), unstable (rho > 1), or marginal (the proven enclosure still contains 1 at --max-bits). "
+        f"Limits: k <= {MAX_K}, --digits <= {MAX_DIGITS}, --max-bits <= {MAX_BITS_LIMIT}, guard bits for heavily "
+        f"damped subsystems <= {MAX_GUARD_BITS}; a point needing more is 'undecided' with the reason.",
+    )
     g.add_argument(
         "--digits",
         type=_digits,
-        help="compute with mpmath at this many significant digits, the arguments taken as the decimals typed, "
-        "and print rho with as many digits (default: the precision policy, float64 rechecked at 128 digits "
-        "where float64 cannot be trusted)",
+        help="print rho with this many significant digits, all proven (the enclosure narrowed to them; default 17)",
     )
-    g.add_argument(
-        "--certify",
-        action="store_true",
-        help="prove the verdict in ball arithmetic (python-flint Arb): stable (rho < 1), unstable (rho > 1) or "
-        "marginal (the proven enclosure still contains 1 at --max-bits); prints the enclosure",
-    )
+    g.add_argument("--certify", action="store_true", help="also print the proven enclosure of rho in the text output")
     g.add_argument(
         "--max-bits",
         type=_bits,
         default=1024,
-        help="largest working precision of the ball arithmetic, in bits (default 1024)",
+        help=f"largest working precision of the ball arithmetic, in bits (default 1024, at most {MAX_BITS_LIMIT})",
+    )
+    g.add_argument(
+        "--timeout",
+        type=_seconds,
+        help="give up after this many seconds of wall time: the verdict is then 'undecided' (reason timeout)",
     )
     g.add_argument("--json", action="store_true", help="print one JSON object")
     parser.set_defaults(subparser=None)
@@ -150,60 +172,21 @@ def _method_from_args(args):
 
 def _rho(args, parser):
     from .model import TestModel
-    from .stability import Certification, certify_spectral_radius, spectral_radius, spectral_radius_mp
+    from .rho_command import rho_answer, rho_text
 
     try:
         method = _method_from_args(args)
         decomposition = get_decomposition(args.decomposition)
         method.check_decomposition(decomposition)
         model = TestModel(args.lr1, args.li1, args.am21, args.alr21, args.ali21)
+        check_derived(model)  # k = lr^2 + li^2, ... finite in float64
     except ParameterError as exc:
         parser.error(_argument_message(str(exc)))
-    result = {}
-    cert = None
-    if args.certify or args.digits is not None:
-        # the verdict is proven from the exact (typed) parameters, whatever precision the value is printed in
-        # the enclosure narrowed to N digits (--digits N; else 17, a double's) where the arithmetic separates
-        # the roots: its midpoint is then the value printed
-        cert = certify_spectral_radius(
-            model, method, decomposition, args.k, max_bits=args.max_bits, digits=args.digits or 17
-        )
-    if args.digits is not None:
-        rho_mp = spectral_radius_mp(model, method, decomposition, args.k, args.digits)
-        rho, rho_text = float(rho_mp), mpmath.nstr(rho_mp, args.digits, strip_zeros=False)
-        digits, err, precision = args.digits, None, f"mpmath {args.digits} digits (requested)"
-    elif cert is not None:
-        rho = float((cert.rho_lower + cert.rho_upper) / 2) if cert.rho_upper is not None else float("nan")
-        rho_text, digits, err = repr(rho), int(cert.bits * math.log10(2)), None
-        precision = f"ball arithmetic {cert.bits} bits (requested)"
-    else:
-        res = spectral_radius(model, method, decomposition, args.k, certification=Certification(audit=0.0))
-        rho, digits, err = float(res.rho), int(res.digits), float(res.err)
-        rho_text = repr(rho)
-        if str(res.arithmetic) == "float64":
-            precision = "float64"
-        else:
-            precision = f"ball arithmetic {int(res.bits)} bits (float64 cannot decide)"
-            cert = _certificate_of(res)
-        verdict = str(res.verdict)
-    if cert is not None:
-        verdict = cert.verdict
-        result.update(
-            rho_lower=cert.lower(max(20, args.digits or 0)),
-            rho_upper=cert.upper(max(20, args.digits or 0)),
-            precision_bits=cert.bits,
-        )
+    answer = rho_answer(
+        model, method, decomposition, args.k, digits=args.digits, max_bits=args.max_bits, timeout=args.timeout
+    )
     result = {
-        # a decimal string where a float would drop digits (more than 17 significant digits asked for)
-        "rho": rho_text if args.digits is not None and args.digits > 17 else rho if math.isfinite(rho) else None,
-        "rho_float": rho if math.isfinite(rho) else None,
-        "verdict": verdict,
-        "stable": verdict == "stable",
-        "certified": cert is not None and cert.certified,
-        "digits": digits,
-        "precision": precision,
-        "float64_error_estimate": err if err is None or math.isfinite(err) else None,
-        **result,
+        **answer,
         "method": method.name,
         "decomposition": decomposition.name,
         "k": args.k,
@@ -211,41 +194,10 @@ def _rho(args, parser):
         "model": {n: float(getattr(args, n)) for n in ("lr1", "li1", "am21", "alr21", "ali21")},
     }
     if args.json:
-        print(json.dumps(result, allow_nan=False))
-        return 0
-    print(f"rho = {rho_text}  ({_verdict_text(cert, verdict, precision, args.digits)})")
+        print(dumps(result))
+    else:
+        print(rho_text(answer, show_enclosure=args.certify))
     return 0
-
-
-def _verdict_text(cert, verdict, precision, digits) -> str:
-    """The verdict, its proof (enclosure and bits) if there is one, and where the printed value comes from."""
-    if cert is None:
-        return f"{verdict}; decided by {precision}"
-    n = max(12, min(digits or 0, 60))
-    enclosure = f"rho in [{cert.lower(n)}, {cert.upper(n)}]"
-    proof = {
-        "stable": f"stable, proven: {enclosure}",
-        "unstable": f"unstable, proven: {enclosure}",
-        "marginal": f"marginal: the proven {enclosure} contains 1",
-    }.get(verdict, f"{verdict}: {cert.reason}")
-    proof += f" at {cert.bits} bits"
-    value = f"value by {precision}" if precision.startswith("mpmath") else f"decided by {precision}"
-    return f"{proof}; {value}"
-
-
-def _certificate_of(res):
-    """The certificate a policy result holds for its one point (bounds as exact rationals of the floats)."""
-    from fractions import Fraction
-
-    from .stability import SpectralCertificate
-
-    upper = float(res.rho_upper)
-    return SpectralCertificate(
-        str(res.verdict),
-        Fraction(float(res.rho_lower)) if math.isfinite(float(res.rho_lower)) else Fraction(0),
-        Fraction(upper) if math.isfinite(upper) else None,
-        int(res.bits),
-    )
 
 
 def _argument_message(text: str) -> str:
