@@ -21,6 +21,7 @@ from ..lagrange import (
     variable_corrector_nodes,
     variable_predictor_nodes,
 )
+from ..limits import check_k
 from ..model import ParameterError
 from ..problem import CosimulationProblem
 from ..radau import _fd_jacobian, radau_batch
@@ -65,8 +66,7 @@ class PendulumCosimulation(CosimulationProblem):
         newton_tol: float = 1e-8,
     ):
         dec = get_decomposition(decomposition)
-        if not (isinstance(k, int) and not isinstance(k, bool) and k >= 0):
-            raise ParameterError(f"k must be an integer >= 0, got {k!r}")
+        k = check_k(k)  # 0 .. icosim.limits.MAX_K
         for name, v in (("H", H), ("rtol", rtol), ("atol", atol), ("fd_step", fd_step), ("newton_tol", newton_tol)):
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ParameterError(f"{name} must be a finite number > 0, got {v!r}")
