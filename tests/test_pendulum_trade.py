@@ -343,6 +343,30 @@ def test_stability_limit_search():
     assert stability_limit(lambda H: False, [1e-3, 1e-2]).status == "no stable step size"
 
 
+def test_linear_prediction_is_the_policys_verdict(monkeypatch):
+    """The predicted limit counts only a ``stable`` verdict as stable: a marginal or undecided step size
+    (rho NaN, nothing known) is not, and the dataset records the verdict at the bracket's upper end."""
+    from icosim.pendulum import limits, linear_study
+    from icosim.pendulum.linearised import combined_verdict
+
+    settings = {key: CFG[key] for key in ("model", "methods")}
+    rho, verdict = linear_study.linear_stability(
+        P, make_method("baumgarte", **CFG["methods"]["baumgarte"]), "ff", 1, 1e-3
+    )
+    assert verdict == "stable" and 0 < rho < 1
+    assert combined_verdict(["stable", "undecided"]) == "undecided"
+    assert combined_verdict(["marginal", "unstable"]) == "unstable"
+
+    def fake(params, method, decomposition, k, H):
+        return (0.5, "stable") if H < 3e-3 else (math.nan, "undecided") if H < 6e-3 else (2.0, "unstable")
+
+    monkeypatch.setattr(limits, "linear_stability", fake)
+    pred = limits.linear_predicate(settings, "baumgarte", "ff", 1)
+    lim = limits.stability_limit(pred, [1e-3, 2e-3, 5e-3, 1e-2], resolution=0.02)
+    assert lim.H_max < 3e-3 <= lim.H_unstable
+    assert [info["verdict"] for H, ok, info in lim.evaluations if H == lim.H_unstable] == ["undecided"]
+
+
 def test_fixed_at_error_is_exact_for_a_power_law():
     """error = C H^p, N = T/H: log-log interpolation between grid points is exact."""
     T, C, p = 1.0, 3.0, 2.0
@@ -456,6 +480,8 @@ def test_datasets_have_the_contract_names_and_dims(small_studies):
     for name in ("H_max", "H_max_linear"):
         assert lim[name].dims == ("config",)
     assert list(lim["config"].values) == ["baumgarte_ff_k1", "projection_ff_k0"]
+    # the linear bracket's upper end: a verdict of the policy, "" where the search found no unstable H
+    assert set(map(str, lim["verdict_linear_unstable"].values)) <= {"", "unstable", "marginal", "undecided"}
     for name in ("error_max", "n_macro_steps", "cpu_seconds"):
         assert ad[name].dims == ("config", "tol")
     assert list(ad["config"].values) == ["projection_ff_k1"]

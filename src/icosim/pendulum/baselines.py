@@ -171,7 +171,13 @@ def linear_orders_dataset(
                 np.array(err),
                 {"units": "1", "long_name": "max |x_i - x| / x0 of the linear test model (Sect. 3.7), same scheme"},
             ),
-            "unstable_linear": (dims, np.array(unst).astype("int8"), {"long_name": "1 where rho > 1"}),
+            "unstable_linear": (
+                dims,
+                np.array(unst).astype("int8"),
+                {
+                    "long_name": "1 where the verdict is not stable (unstable, marginal or undecided) or the run not finite"
+                },
+            ),
             "rho_linear": (dims, np.array(rho), {"long_name": "spectral radius of the linear test model (Sect. 3.7)"}),
             "n_steps_linear": (dims, np.array(nsteps), {"long_name": "macro steps over t_end"}),
         },

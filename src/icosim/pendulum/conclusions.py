@@ -115,6 +115,8 @@ def limit_rows(limits) -> list[dict]:
                 "H_band_low": float(r["H_band_low"]),
                 "H_max_linear": hl,
                 "status_linear": str(r["status_linear"].values),
+                # the verdict at the linear bracket's upper end: "unstable", or marginal / undecided (no proven crossing)
+                "verdict_linear": str(r["verdict_linear_unstable"].values) if "verdict_linear_unstable" in r else "",
                 "H_band_low_linear": float(r["H_band_low_linear"]),
                 "ratio": ratio,
                 "n_runs": int(r["n_runs"]),

@@ -17,9 +17,11 @@ is unstable, ``H_max`` is censored at the largest scan point.
   whole macro steps) that neither diverges nor fails
   (:func:`icosim.pendulum.runs.run_cosimulation`'s bounds); a failed run (a
   step that cannot be computed) counts as not stable and says so;
-* predicted (:func:`linear_predicate`): the spectral radius of the linear
-  test model at the pendulum's points is at most 1
-  (:func:`.linear_study.linear_rho`).
+* predicted (:func:`linear_predicate`): the linear test model at the
+  pendulum's points is stable by the precision policy's verdict
+  (:func:`.linear_study.linear_stability`: float64 trusted or proven
+  ``rho < 1``); a ``marginal`` or ``undecided`` step size counts as not
+  stable, and the dataset records the verdict at the bracket's unstable end.
 
 The measured limit is divergence *within* ``t_end``: where the growth per
 step is only slightly above 1, a run may stay within the bounds over
@@ -39,7 +41,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..methods import make_method
-from .linear_study import linear_rho
+from .linear_study import linear_rho, linear_stability
 from .measures import config_label, measured_run
 from .model import PendulumParameters
 
@@ -134,13 +136,13 @@ _NO_REFERENCE = {"method": "DOP853", "rtol": 1e-6, "atol": 1e-6}
 
 
 def linear_predicate(settings: dict, method: str, decomposition: str, k: int):
-    """``stable(H)`` of the linear test model at the pendulum's points: ``rho <= 1``."""
+    """``stable(H)`` of the linear test model at the pendulum's points: the verdict is ``stable``."""
     params = PendulumParameters(**settings["model"])
     m = make_method(method, **settings["methods"][method])
 
     def stable(H):
-        rho = linear_rho(params, m, decomposition, k, H)
-        return bool(rho <= 1.0), {"rho": rho}
+        rho, verdict = linear_stability(params, m, decomposition, k, H)
+        return verdict == "stable", {"rho": rho, "verdict": verdict}
 
     return stable
 
@@ -180,12 +182,19 @@ def limits_dataset(groups: dict, *, scheme, method, decomposition, scan, t_end, 
         rhos = [info["rho"] for H, ok, info in lim.evaluations if H == lim.H_max and info]
         return rhos[0] if rhos else math.nan
 
+    def verdict_at(lim, H):
+        verdicts = [info["verdict"] for h, ok, info in lim.evaluations if h == H and info]
+        return verdicts[0] if verdicts else ""
+
     data = {
         "H_max": ("config", col(lambda k, m, p: m.H_max), {"units": "s", "long_name": "largest stable H, measured"}),
         "H_max_linear": (
             "config",
             col(lambda k, m, p: p.H_max),
-            {"units": "s", "long_name": "largest H with rho <= 1 of the linear test model at the pendulum's points"},
+            {
+                "units": "s",
+                "long_name": "largest H with the linear test model stable at the pendulum's points (verdict)",
+            },
         ),
         "H_unstable": (
             "config",
@@ -195,7 +204,7 @@ def limits_dataset(groups: dict, *, scheme, method, decomposition, scan, t_end, 
         "H_unstable_linear": (
             "config",
             col(lambda k, m, p: p.H_unstable),
-            {"units": "s", "long_name": "smallest H above H_max_linear with rho > 1 (bracket)"},
+            {"units": "s", "long_name": "smallest H above H_max_linear not stable by the verdict (bracket)"},
         ),
         "H_band_low": (
             "config",
@@ -205,7 +214,7 @@ def limits_dataset(groups: dict, *, scheme, method, decomposition, scan, t_end, 
         "H_band_low_linear": (
             "config",
             col(lambda k, m, p: p.H_band_low),
-            {"units": "s", "long_name": "first scan point with rho <= 1"},
+            {"units": "s", "long_name": "first scan point with the linear test model stable (verdict)"},
         ),
         "status": ("config", col(lambda k, m, p: m.status, str), {"long_name": "outcome of the measured search"}),
         "status_linear": (
@@ -222,6 +231,14 @@ def limits_dataset(groups: dict, *, scheme, method, decomposition, scan, t_end, 
             "config",
             col(lambda k, m, p: last_rho(p)),
             {"long_name": "linear test model's rho at H_max_linear"},
+        ),
+        "verdict_linear_unstable": (
+            "config",
+            col(lambda k, m, p: verdict_at(p, p.H_unstable), str),
+            {
+                "long_name": "precision policy's verdict of the linear test model at H_unstable_linear "
+                "(unstable, or marginal / undecided: no proven crossing)"
+            },
         ),
         "reason_unstable": (
             "config",

@@ -18,7 +18,10 @@ Two comparisons, two linear models:
   model at the pendulum's two points (:func:`~.linearised.pendulum_test_model`:
   ``lr1 = -d H/(2 m1)``, ``li1 = H omega`` for the two modal frequencies,
   the mapping of today's ``rho ~ 1.13`` check), with the precision policy of
-  :mod:`icosim.stability`.
+  :mod:`icosim.stability` and its verdict (:func:`linear_stability`): a step
+  size is stable when the verdict at both points is ``stable`` (float64
+  trusted or proven); ``marginal`` (the proven enclosure contains 1) and
+  ``undecided`` (nothing could be computed, ``rho`` NaN) are not.
 """
 
 from __future__ import annotations
@@ -32,10 +35,10 @@ from ..linear_problem import LinearCosimulation
 from ..methods import CouplingMethod, engine_method
 from ..model import PhysicalModel
 from ..stability import amplification_matrix, spectral_radius
-from .linearised import linear_test_model_rho
+from .linearised import linear_test_model_stability
 from .model import PendulumParameters
 
-__all__ = ["PAPER_LINEAR_MODEL", "linear_errors", "linear_rho"]
+__all__ = ["PAPER_LINEAR_MODEL", "linear_errors", "linear_rho", "linear_stability"]
 
 #: The test model of the paper's convergence study (Sect. 3.7), SI units.
 PAPER_LINEAR_MODEL = {"m1": 1.0, "m2": 2.0, "c1": 1000.0, "c2": 1000.0, "d1": 10.0, "d2": 10.0}
@@ -64,8 +67,10 @@ def linear_errors(
     """Errors of the linear test model ``model`` (m1, m2, c1, c2, d1, d2) co-simulated with ``method``.
 
     Returns ``(error, unstable, rho)`` over ``H_values`` (module docstring);
-    ``error`` is NaN where the step is unstable (``rho > 1`` by the precision
-    policy of :func:`icosim.stability.spectral_radius`, or a non-finite run).
+    ``error`` is NaN where the step is unstable: the verdict of the precision
+    policy (:func:`icosim.stability.spectral_radius`) is not ``stable`` --
+    ``unstable``, or ``marginal`` / ``undecided``, where no bound on the growth
+    is known -- or the run is not finite.  ``rho`` is NaN where undecided.
     """
     H_values = np.asarray(H_values, float)
     err = np.full(H_values.shape, np.nan)
@@ -76,14 +81,23 @@ def linear_errors(
         c = PhysicalModel(H=H, **model).coefficients()
         m = engine_method(method, H)
         res = spectral_radius(c, m, decomposition, int(k))
-        rho[i] = float(np.max(res.rho))
-        unstable[i] = not bool(np.all(res.stable))
+        rho[i] = float(np.max(res.rho))  # NaN where undecided
+        unstable[i] = not bool(np.all(res.verdict == "stable"))
         if not unstable[i]:
             err[i] = _error(c, m, decomposition, int(k), n, x0)
     unstable |= ~np.isfinite(err)
     return np.where(unstable, np.nan, err), unstable, rho
 
 
+def linear_stability(
+    params: PendulumParameters, method: CouplingMethod, decomposition: str, k: int, H: float
+) -> tuple[float, str]:
+    """``(rho, verdict)`` of the test model at the pendulum's two points (precision policy included;
+    :func:`~.linearised.linear_test_model_stability`)."""
+    rho, verdict, _ = linear_test_model_stability(params, H, method, decomposition, int(k))
+    return rho, verdict
+
+
 def linear_rho(params: PendulumParameters, method: CouplingMethod, decomposition: str, k: int, H: float) -> float:
-    """Larger spectral radius of the test model at the pendulum's two points (precision policy included)."""
-    return linear_test_model_rho(params, H, method, decomposition, int(k))[0]
+    """Larger spectral radius of the test model at the pendulum's two points (NaN where undecided)."""
+    return linear_stability(params, method, decomposition, k, H)[0]

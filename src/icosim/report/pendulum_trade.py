@@ -25,9 +25,15 @@ from ..pendulum.conclusions import (
     order_summary,
     tolerance_rows,
 )
-from .html import escape, figure, table
+from .html import escape, figure_anchor, table
+from .html import figure as _html_figure
 
 __all__ = ["trade_section"]
+
+
+def figure(png_path, caption_html: str) -> str:
+    """A figure of the trade studies, with its anchor in the page (``pendulum-<stem>``)."""
+    return _html_figure(png_path, caption_html, anchor=figure_anchor("pendulum", png_path))
 
 
 def _f(x, spec=".2e"):
@@ -214,7 +220,10 @@ def trade_section(*, work_precision, stability_limit, tolerance, adaptive, figur
                     r["status"],
                     _f(r["H_band_low"], "g"),
                     _f(r["H_max_linear"], ".4g"),
-                    r["status_linear"],
+                    r["status_linear"]
+                    + (
+                        f" (upper end {r['verdict_linear']})" if r.get("verdict_linear") not in ("", "unstable") else ""
+                    ),
                     _f(r["ratio"], ".2f"),
                     _f(r["rho_at_H_max"], ".4f"),
                     r["n_runs"],
