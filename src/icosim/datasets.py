@@ -12,12 +12,12 @@ from __future__ import annotations
 import datetime as _dt
 import hashlib
 import json
-import os
 import platform
-import tempfile
 from pathlib import Path
 
 import numpy as np
+
+from .atomic import atomic_path  # noqa: F401 -- re-exported: the writers' one import
 
 __all__ = ["provenance_attrs", "config_json", "write_netcdf", "atomic_path", "open_dataset"]
 
@@ -53,31 +53,6 @@ def provenance_attrs(config, *, title: str, command: str = "") -> dict:
         "config_json": cfg,
         "config_sha256": hashlib.sha256(cfg.encode()).hexdigest(),
     }
-
-
-class atomic_path:
-    """Context manager yielding a temporary path next to ``path``; renamed on success."""
-
-    def __init__(self, path):
-        self.path = Path(path)
-
-    def __enter__(self):
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".part", dir=self.path.parent)
-        os.close(fd)
-        self.tmp = Path(tmp)
-        return self.tmp
-
-    def __exit__(self, exc_type, exc, tb):
-        if exc_type is None:
-            # mkstemp creates 0600; give the result the permissions of an ordinary file
-            umask = os.umask(0)
-            os.umask(umask)
-            os.chmod(self.tmp, 0o666 & ~umask)
-            os.replace(self.tmp, self.path)
-        else:
-            self.tmp.unlink(missing_ok=True)
-        return False
 
 
 #: The NetCDF library: netCDF4 (Unidata's netCDF-C), as the design names it; 5-8x faster than h5netcdf

@@ -47,7 +47,7 @@ def sidecar(path) -> Path:
 
 def write_checksum(data_file, path) -> str:
     """Record the SHA-256 of ``data_file`` (the finished temporary) as the checksum of ``path`` (atomically)."""
-    from .datasets import atomic_path
+    from .atomic import atomic_path
 
     digest = sha256_file(data_file)
     with atomic_path(sidecar(path)) as tmp:
