@@ -64,7 +64,7 @@ class StepController:
     >>> c = StepController(order=2, H_max=1.0)
     >>> c.accepts(0.5), c.accepts(2.0), c.accepts(float("nan"))
     (True, False, False)
-    >>> c.after_reject(0.1, 4.0)        # 0.1 * 0.9 * 4^(-1/2)
+    >>> round(c.after_reject(0.1, 4.0), 15)  # 0.1 * 0.9 * 4^(-1/2)
     0.045
     >>> c.after_accept(0.1, 0.0, None)  # an error of zero: the largest growth
     0.2
