@@ -233,7 +233,9 @@ def _fujiwara_bound(coeffs) -> float:
     lead = abs(coeffs[-1].mid())
     if n < 1 or not lead > 0:
         return 1.0
-    exps = [float(((abs(coeffs[n - i].mid()) / lead).log() / i).mid()) for i in range(1, n + 1) if coeffs[n - i].mid() != 0]
+    exps = [
+        float(((abs(coeffs[n - i].mid()) / lead).log() / i).mid()) for i in range(1, n + 1) if coeffs[n - i].mid() != 0
+    ]
     if not exps:
         return 0.0
     return float(min(2 * math.exp(min(max(exps), 690.0)), 1e300))

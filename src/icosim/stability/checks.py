@@ -348,8 +348,6 @@ def check_trend(
     return Outcome(holds, text + _certified_text(chosen, region), {"groups": dict(zip(names, lows)), "resolution": tol})
 
 
-
-
 def _validate_region(label: str, params: dict):
     region = params.get("region")
     if region is None:
