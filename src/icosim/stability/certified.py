@@ -136,6 +136,7 @@ class SpectralCertificate:
     rho_upper: Fraction | None
     bits: int
     reason: str = ""
+    cause: str = ""  # for ``undecided``: a code of icosim.stability.policy.REASONS
 
     def lower(self, digits: int = 20) -> str:
         """``rho_lower`` as a decimal string, rounded down."""
@@ -259,7 +260,7 @@ def certify_matrix(M, bits: int, *, final: bool = True, digits: int | None = Non
             f"the ball amplification matrix is not finite at {bits} bits: the coupling's linear system is singular "
             "at this point (a pivot is exactly 0), or every digit was lost"
         )
-        return SpectralCertificate("undecided", Fraction(0), None, bits, reason=why) if final else None
+        return SpectralCertificate("undecided", Fraction(0), None, bits, reason=why, cause="not_finite") if final else None
     coeffs = flint.arb_mat(M.tolist()).charpoly().coeffs()
     count = roots_inside(coeffs, 1)
     rho_approx = _approximate_rho(coeffs) if n else 0.0
@@ -333,7 +334,7 @@ def certify_spectral_radius(
     guard = guard_bits(model)
     if guard > max_guard_bits:
         why = f"needs {guard} guard bits for exp(-decay) entries, more than the cap of {max_guard_bits}"
-        return SpectralCertificate("undecided", Fraction(0), None, 0, reason=why)
+        return SpectralCertificate("undecided", Fraction(0), None, 0, reason=why, cause="precision_cap")
     b = int(bits) if digits is None else max(int(bits), math.ceil(digits * math.log2(10)) + 32)
     max_bits = max(int(max_bits), b)
     while True:

@@ -60,8 +60,9 @@ VERDICTS = ("stable", "unstable", "marginal", "undecided")
 #: What decided a point.
 ARITHMETICS = ("float64", "ball", "mpmath", "none")
 #: Why a point is undecided (``none`` for decided points): a derived quantity not finite in float64, a precision
-#: beyond a cap (guard digits, or every digit lost at the largest precision), the time budget, any other error.
-REASONS = ("none", "overflow", "precision_cap", "timeout", "error")
+#: beyond a cap (guard digits), the time budget, any other error, or a ball amplification matrix that is not finite
+#: at the largest precision (the coupling's linear system singular at the point, or every digit lost).
+REASONS = ("none", "overflow", "precision_cap", "timeout", "error", "not_finite")
 
 
 @dataclass(frozen=True)
@@ -332,7 +333,7 @@ def _store(out: dict, idx, c):
     """One certificate into the result arrays (bounds rounded outward to float64)."""
     if c.verdict == "undecided":  # the ball arithmetic lost every digit at the cap: nothing is known
         out["verdict"][idx], out["rho"][idx], out["digits"][idx] = "undecided", np.nan, -1
-        out["reason"][idx], out["reason_code"][idx] = c.reason, "precision_cap"
+        out["reason"][idx], out["reason_code"][idx] = c.reason, c.cause or "precision_cap"
         return
     lower = float(c.rho_lower)
     lower = np.nextafter(lower, -np.inf) if lower > c.rho_lower else lower
