@@ -65,12 +65,16 @@ def snakemake_binary() -> str:
     return str(exe) if exe.exists() else (shutil.which("snakemake") or "snakemake")
 
 
-def run_workflow(workdir: Path, targets, *, label: str, cores: int = 2, configfiles=(), overrides=None) -> Run:
-    """``snakemake -c<cores> <targets>`` in ``workdir`` from a clean results/; wall and CPU seconds of the run.
+def run_workflow(
+    workdir: Path, targets, *, label: str, cores: int = 2, configfiles=(), overrides=None, keep_results=False
+) -> Run:
+    """``snakemake -c<cores> <targets>`` in ``workdir`` from a clean results/ (unless ``keep_results``: a later
+    part of the same run); wall and CPU seconds of the run.
 
     ``overrides`` (a nested mapping) is written to a config file given after ``configfiles``.
     """
-    shutil.rmtree(workdir / "results", ignore_errors=True)
+    if not keep_results:
+        shutil.rmtree(workdir / "results", ignore_errors=True)
     files = [str(f) for f in configfiles]
     if overrides:
         path = workdir / "benchmark_overrides.yaml"

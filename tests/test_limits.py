@@ -212,11 +212,62 @@ def test_any_accepted_point_answers_in_strict_json_and_its_verdict_does_not_depe
             return
         answers.append(strict_loads(buf.getvalue()))
     a, b = answers
-    decided = {"stable", "unstable"}
-    if a["verdict"] in decided and b["verdict"] in decided:
+    if "timeout" not in (a["reason_code"], b["reason_code"]):  # a timeout is the machine's, not the answer's
         assert a["verdict"] == b["verdict"]
     if a["rho"] is not None and b["rho"] is not None:
         assert abs(a["rho_float"] - b["rho_float"]) <= 1e-6 * max(1.0, abs(b["rho_float"]))
+
+
+def test_a_point_1e_400_from_the_undamped_axis_gets_one_verdict_at_every_digits():
+    """lr1 = -1e-400 (typed; no double holds it): rho is within ~1e-400 of 1, so the 1024-bit cap cannot separate
+    it from 1.  Asking for 400 or 2000 digits narrows enclosures, but must not turn the verdict into another one
+    (it did: the digits raised the cap, and 2000 digits proved 'stable' where the default said 'marginal')."""
+    argv = ["rho", "--method", "projection", "--decomposition", "ff", "--k", "1", "--lr1=-1e-400", "--li1", "0.3"]
+    argv += ["--am21", "1", "--alr21", "1", "--ali21", "1", "--json"]
+    verdicts = set()
+    for extra in ([], ["--digits", "400"], ["--digits", "2000"]):
+        verdicts.add(_json(argv + extra)["verdict"])
+    assert verdicts == {"marginal"}
+
+
+def test_a_damping_whose_square_overflows_is_undecided_with_its_reason_not_a_traceback():
+    """lr1 = -1e154: k1 = lr1^2 = 1e308 is still a double, d^2/4 is not; the decay rate is formed without the
+    square, and the guard bits it needs (~1e154 / ln 2) exceed the cap: undecided, reason precision_cap."""
+    argv = ["rho", "--method", "weighted", "--a", "1", "--b", "1", "--decomposition", "ff", "--k", "1"]
+    answer = _json(argv + ["--lr1=-1e154", "--li1", "0", "--am21", "1", "--alr21", "1", "--ali21", "1", "--json"])
+    assert answer["verdict"] == "undecided" and answer["reason_code"] == "precision_cap" and answer["rho"] is None
+
+
+def test_time_budget_outside_the_main_thread_runs_unbudgeted_and_a_huge_timeout_is_refused():
+    import threading
+
+    seen = []
+    thread = threading.Thread(target=lambda: seen.append(_budgeted_sleep(0.01, 0.2)))
+    thread.start()
+    thread.join()
+    assert seen == ["finished"]  # no SIGALRM from a worker thread: the block ran to its end
+    with pytest.raises(SystemExit) as exc:
+        main(
+            ["rho", "--method", "projection", "--decomposition", "ff", "--k", "0", "--lr1=-0.1", "--li1", "0.1"]
+            + ["--am21", "1", "--alr21", "1", "--ali21", "1", "--timeout", "1e12"]
+        )
+    assert exc.value.code == 2
+
+
+def _budgeted_sleep(budget, seconds):
+    with time_budget(budget):
+        time.sleep(seconds)
+    return "finished"
+
+
+def _json(argv):
+    import contextlib
+    import io
+
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        assert main(argv) == 0
+    return strict_loads(buf.getvalue())
 
 
 # -- configuration fuzz: a wrong value is a schema error before any job ---------------------------------

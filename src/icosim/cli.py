@@ -22,7 +22,7 @@ from . import methods
 from .backend import FLOAT64_DIGITS
 from .decompositions import DECOMPOSITIONS, get_decomposition
 from .jsonio import dumps
-from .limits import MAX_BITS_LIMIT, MAX_DIGITS, MAX_GUARD_BITS, MAX_K, check_derived, check_k
+from .limits import MAX_BITS_LIMIT, MAX_DIGITS, MAX_GUARD_BITS, MAX_K, MAX_SECONDS, check_derived, check_k
 from .model import ParameterError
 
 __all__ = ["main", "build_parser"]
@@ -70,10 +70,13 @@ def _digits(text):
         raise argparse.ArgumentTypeError(f"expected an integer in 16..{MAX_DIGITS}, got {text!r}") from None
     if value < 16:
         raise argparse.ArgumentTypeError(
-            f"expected an integer >= 16 (float64 carries {FLOAT64_DIGITS}; omit --digits for it), got {text!r}"
+            f"expected an integer in 16..{MAX_DIGITS} (float64 carries {FLOAT64_DIGITS}; omit --digits for it), "
+            f"got {text!r}"
         )
     if value > MAX_DIGITS:
-        raise argparse.ArgumentTypeError(f"expected an integer <= {MAX_DIGITS} (the largest --digits), got {text!r}")
+        raise argparse.ArgumentTypeError(
+            f"expected an integer in 16..{MAX_DIGITS} (the largest --digits), got {text!r}"
+        )
     return value
 
 
@@ -91,8 +94,8 @@ def _bits(text):
 
 def _seconds(text):
     value = _float(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds > 0, got {text!r}")
+    if not 0 < value <= MAX_SECONDS:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds in (0, {MAX_SECONDS:g}], got {text!r}")
     return value
 
 

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .atomic import atomic_path  # noqa: F401 -- re-exported: the writers' one import
+from .integrity import CorruptDatasetError, atomic_path, verify, write_checksum
 
 __all__ = ["provenance_attrs", "config_json", "write_netcdf", "atomic_path", "open_dataset"]
 
@@ -64,7 +64,6 @@ ENGINE = "netcdf4"
 def write_netcdf(ds, path):
     """Write an :class:`xarray.Dataset` to ``path`` atomically (NetCDF-4, :data:`ENGINE`), with its SHA-256
     recorded beside it (``path.sha256``, written before the rename: :mod:`icosim.integrity`)."""
-    from .integrity import write_checksum
 
     with atomic_path(path) as tmp:
         ds.to_netcdf(tmp, engine=ENGINE)
@@ -75,8 +74,6 @@ def open_dataset(path):
     """Open a result written by :func:`write_netcdf` (loaded into memory); a file whose SHA-256 no longer
     matches the recorded one is refused (:class:`~icosim.integrity.CorruptDatasetError`), never read."""
     import xarray as xr
-
-    from .integrity import CorruptDatasetError, verify
 
     if verify(path) is False:
         raise CorruptDatasetError(

@@ -40,7 +40,9 @@ __all__ = [
     "PointTimeout",
     "check_k",
     "check_digits",
+    "MAX_SECONDS",
     "check_finite",
+    "NotFiniteError",
     "check_derived",
     "guard_digits",
     "time_budget",
@@ -52,10 +54,16 @@ MAX_GUARD_DIGITS = 5000
 MAX_GUARD_BITS = 16384  # ~4932 digits: the ball arithmetic's cap, the same size as MAX_GUARD_DIGITS
 #: The largest working precision of the ball arithmetic one may ask for (``max_bits``; MAX_DIGITS in bits, rounded up).
 MAX_BITS_LIMIT = 8192
+#: The longest time budget one may give a point (``--timeout``, ``certify.point_seconds``): a day.
+MAX_SECONDS = 86400.0
 
 
 class PrecisionCapError(ArithmeticError):
     """The precision a point needs exceeds a cap: it is undecided (the message says why)."""
+
+
+class NotFiniteError(ParameterError, OverflowError):
+    """A derived quantity (a subsystem coefficient) that is not a finite float64."""
 
 
 class PointTimeout(ArithmeticError):
@@ -92,7 +100,7 @@ def check_finite(name: str, value, source: str = "") -> None:
             arr = np.array(np.inf)
     if not np.all(np.isfinite(arr)):
         where = f" (from {source})" if source else ""
-        raise ParameterError(f"{name}{where} is not a finite float64 number: the input is too large, got {value!r}")
+        raise NotFiniteError(f"{name}{where} is not a finite float64 number: the input is too large, got {value!r}")
 
 
 def guard_digits(decay: float) -> int:
@@ -124,8 +132,8 @@ def time_budget(seconds: float | None):
         yield
         return
     previous = signal.signal(signal.SIGALRM, expired)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
     try:
+        signal.setitimer(signal.ITIMER_REAL, min(float(seconds), MAX_SECONDS))
         yield
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)

@@ -23,7 +23,8 @@ from fractions import Fraction
 
 import numpy as np
 
-from .limits import PointTimeout, PrecisionCapError, time_budget
+from .limits import PointTimeout, time_budget
+from .stability.policy import reason_code
 
 __all__ = ["rho_answer", "rho_text"]
 
@@ -40,20 +41,22 @@ def rho_answer(model, method, decomposition, k, *, digits=None, max_bits=1024, t
 
     want = digits or DEFAULT_DIGITS
     out = {"rho": None, "rho_float": None, "verdict": "undecided", "stable": False, "certified": False}
-    out.update(digits=-1, precision="", reason="", rho_lower=None, rho_upper=None, precision_bits=None)
+    out.update(digits=-1, precision="", reason="", reason_code="none", rho_lower=None, rho_upper=None)
+    out.update(precision_bits=None)
     out.update(rho_decimal=None, rho_float64=None, float64_error_estimate=None)
     try:
         with time_budget(timeout):
             out["rho_float64"], out["float64_error_estimate"] = _float64(model, method, decomposition, k)
             cert = certify_spectral_radius(model, method, decomposition, k, max_bits=max_bits, digits=want)
-    except (PointTimeout, PrecisionCapError) as exc:
-        out["reason"] = str(exc)
+    except (ArithmeticError, ValueError) as exc:  # a timeout, a cap, an overflow: undecided, with the reason
+        out["reason"], out["reason_code"] = str(exc), reason_code(exc)
         out["precision"] = "none (undecided)"
         return out
     out["verdict"], out["stable"], out["certified"] = cert.verdict, cert.verdict == "stable", cert.certified
     out["precision_bits"] = cert.bits
     if cert.verdict == "undecided":
-        out["reason"], out["precision"] = cert.reason, f"ball arithmetic {cert.bits} bits (undecided)"
+        out["reason"], out["reason_code"] = cert.reason, cert.cause or "precision_cap"
+        out["precision"] = f"ball arithmetic {cert.bits} bits (undecided)"
         return out
     proven = _proven_digits(cert)
     shown = min(proven, want)
@@ -65,14 +68,17 @@ def rho_answer(model, method, decomposition, k, *, digits=None, max_bits=1024, t
         return out
     mid = (cert.rho_lower + cert.rho_upper) / 2
     out["rho_float"] = float(mid)
-    # a decimal string where a float would drop digits (more than 17 asked for), else the float
-    out["rho"] = _significant(mid, shown) if digits and digits > 17 else float(mid)
-    out["rho_decimal"] = _significant(mid, shown)  # exactly the digits that are proven
+    if shown > 0:
+        out["rho_decimal"] = _significant(mid, shown)  # exactly the digits that are proven
+        # a decimal string where a float would drop digits (more than 17 asked for), else the float of those digits
+        out["rho"] = out["rho_decimal"] if digits and digits > 17 else float(out["rho_decimal"])
     if shown < want:
-        out["reason"] = (
-            f"{shown} of the {want} digits asked for are proven: the enclosure cannot be narrowed further at "
-            f"{cert.bits} bits (a cluster of roots, e.g. a multiple root on the circle)"
+        why = (
+            "a marginal enclosure is kept as decided at the cap"
+            if cert.verdict == "marginal"
+            else "a cluster of roots, or digits lost to the guard bits of heavily damped subsystems"
         )
+        out["reason"] = f"{shown} of the {want} digits asked for are proven at {cert.bits} bits ({why})"
     return out
 
 
@@ -81,7 +87,7 @@ def rho_text(answer: dict, *, show_enclosure: bool = False) -> str:
     a = answer
     if a["rho"] is None and a["verdict"] == "undecided":
         return f"rho undecided  ({a['reason']})"
-    value = a["rho_decimal"] or "not bounded"
+    value = a["rho_decimal"] or ("not bounded" if a["rho_upper"] is None else "no digit proven")
     lo, hi = a["rho_lower"], a["rho_upper"]
     n = max(12, min(a["digits"] + 1, 60))
     low = _rounded(lo, n, up=False)
@@ -105,6 +111,8 @@ def _float64(model, method, decomposition, k):
         with np.errstate(all="ignore"):
             floats = type(model)(*(float(getattr(model, n)) for n in ("lr1", "li1", "am21", "alr21", "ali21")))
             r, e = spectral_radius_float64(floats, method, decomposition, k)
+    except PointTimeout:  # the command's time budget, not float64's failure
+        raise
     except (ArithmeticError, ValueError, np.linalg.LinAlgError):  # float64 cannot even form the point
         return None, None
     return _finite(r), _finite(e)

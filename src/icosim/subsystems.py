@@ -29,13 +29,26 @@ import numpy as np
 
 from .lagrange import monomial_coefficients, weights_at
 
-__all__ = ["OscillatorSubsystem", "FORCE", "KINEMATIC"]
+__all__ = ["OscillatorSubsystem", "FORCE", "KINEMATIC", "decay_rate"]
 
 FORCE = "force"
 KINEMATIC = "kinematic"
 
 #: Order of the components in a subsystem's output vector at ``T_N+1``.
 OUTPUTS = ("x", "v", "a", "f")  # position, velocity, acceleration, coupling force
+
+
+def decay_rate(stiffness, damping):
+    """Largest ``-Re`` of the eigenvalues of ``x'' + damping x' + stiffness x = 0``: ``d/2 + sqrt(d^2/4 - k)``.
+
+    Formed as ``h (1 + sqrt(1 - k/h^2))`` with ``h = d/2`` so that no square overflows (``d`` up to the
+    largest double); ``inf`` only where the decay itself is not a finite double.
+    """
+    k = np.asarray(stiffness, dtype=float)
+    h = np.asarray(damping, dtype=float) / 2
+    with np.errstate(all="ignore"):
+        ratio = np.where(h > 0, np.sqrt(k) / np.where(h > 0, h, 1.0), np.inf)
+        return np.where(ratio < 1, h + h * np.sqrt(np.maximum(1 - ratio * ratio, 0.0)), np.maximum(h, 0.0))
 
 
 @dataclass
@@ -92,9 +105,7 @@ class OscillatorSubsystem:
         if self.kind == KINEMATIC:
             return 0.0
         k = np.asarray(self.stiffness, dtype=float)
-        d = np.asarray(self.damping, dtype=float)
-        disc = np.sqrt(np.maximum(d * d / 4 - k, 0.0))
-        return float(np.max(d / 2 + disc)) if k.size else 0.0
+        return float(np.max(decay_rate(k, self.damping))) if k.size else 0.0
 
     def set_blocks(self, E):
         """Take ``Phi`` and ``R`` from the exponential of the augmented matrix.

@@ -45,6 +45,7 @@ import numpy as np
 from ..backend import Ball
 from ..limits import MAX_GUARD_BITS, check_finite
 from ..model import Coefficients, PhysicalModel, TestModel
+from ..subsystems import decay_rate
 from .matrix import amplification_matrix, as_coefficients
 
 __all__ = [
@@ -136,6 +137,7 @@ class SpectralCertificate:
     rho_upper: Fraction | None
     bits: int
     reason: str = ""
+    cause: str = ""  # for ``undecided``: a code of icosim.stability.policy.REASONS
 
     def lower(self, digits: int = 20) -> str:
         """``rho_lower`` as a decimal string, rounded down."""
@@ -259,7 +261,9 @@ def certify_matrix(M, bits: int, *, final: bool = True, digits: int | None = Non
             f"the ball amplification matrix is not finite at {bits} bits: the coupling's linear system is singular "
             "at this point (a pivot is exactly 0), or every digit was lost"
         )
-        return SpectralCertificate("undecided", Fraction(0), None, bits, reason=why) if final else None
+        return (
+            SpectralCertificate("undecided", Fraction(0), None, bits, reason=why, cause="not_finite") if final else None
+        )
     coeffs = flint.arb_mat(M.tolist()).charpoly().coeffs()
     count = roots_inside(coeffs, 1)
     rho_approx = _approximate_rho(coeffs) if n else 0.0
@@ -274,7 +278,7 @@ def certify_matrix(M, bits: int, *, final: bool = True, digits: int | None = Non
         upper = Fraction(1) if upper is None else min(upper, Fraction(1))
     elif verdict == "unstable":
         lower = max(lower, Fraction(1))
-    if digits is not None and upper is not None:
+    if digits is not None and upper is not None and verdict != "marginal":  # a marginal enclosure stays as decided
         lower, upper = _refine(coeffs, n, lower, upper, digits, bits)
     return SpectralCertificate(verdict, lower, upper, bits)
 
@@ -293,9 +297,9 @@ def guard_bits(model) -> int:
     for name, k, d in (("1", c.k1, c.delta1), ("2", c.k2, c.delta2)):
         check_finite(f"k{name}", k)
         check_finite(f"delta{name}", d)
-        k, d = float(k), float(d)
-        decay = max(decay, d / 2 + math.sqrt(max(d * d / 4 - k, 0.0)))
-    return int(math.ceil(decay / math.log(2)))
+        decay = max(decay, float(decay_rate(float(k), float(d))))
+    bits = decay / math.log(2)
+    return int(math.ceil(bits)) if bits < 2**62 else 2**62  # beyond any cap (inf for a decay past a double)
 
 
 def certify_spectral_radius(
@@ -318,10 +322,12 @@ def certify_spectral_radius(
     (plus :func:`guard_bits`); if that does not decide the verdict, it is
     computed once more at ``max_bits`` (plus the same guard); a point needing more than
     ``max_guard_bits`` guard bits is ``undecided`` at once, with the reason.
-    ``digits``: narrow the enclosure to that many significant digits (the
-    working precision then starts high enough for them; a cluster of roots,
-    e.g. a multiple root, stops the narrowing where the arithmetic cannot
-    separate it).  ``matrix_kw`` go to :func:`~icosim.stability.matrix.amplification_matrix`.
+    ``digits``: narrow a proven (stable or unstable) enclosure to that many
+    significant digits, at a working precision high enough for them (a cluster
+    of roots, e.g. a multiple root, stops the narrowing where the arithmetic
+    cannot separate it).  The verdict itself never depends on ``digits``: it
+    comes from the ``bits``-then-``max_bits`` schedule, and a marginal
+    enclosure is kept as decided there.  ``matrix_kw`` go to :func:`~icosim.stability.matrix.amplification_matrix`.
 
     >>> from icosim import TestModel, make_method
     >>> c = certify_spectral_radius(TestModel(-0.05, 0.5), make_method("weighted", a=1, b=1), "ff", 2)
@@ -333,20 +339,40 @@ def certify_spectral_radius(
     guard = guard_bits(model)
     if guard > max_guard_bits:
         why = f"needs {guard} guard bits for exp(-decay) entries, more than the cap of {max_guard_bits}"
-        return SpectralCertificate("undecided", Fraction(0), None, 0, reason=why)
-    b = int(bits) if digits is None else max(int(bits), math.ceil(digits * math.log2(10)) + 32)
-    max_bits = max(int(max_bits), b)
-    while True:
+        return SpectralCertificate("undecided", Fraction(0), None, 0, reason=why, cause="precision_cap")
+
+    def matrix(b):
         be = Ball(b + guard)
         with be.context():
-            M = amplification_matrix(_exact_coefficients(model, be), method, decomposition, k, backend=be, **matrix_kw)
-            cert = certify_matrix(M, b + guard, final=b >= max_bits, digits=digits)
+            return amplification_matrix(
+                _exact_coefficients(model, be), method, decomposition, k, backend=be, **matrix_kw
+            )
+
+    # the verdict comes from the same schedule whatever the digits asked for: ``bits``, then the cap
+    b, max_bits = int(bits), max(int(max_bits), int(bits))
+    while True:
+        M = matrix(b)
+        with Ball(b + guard).context():
+            cert = certify_matrix(M, b + guard, final=b >= max_bits)
         if cert is not None:
-            return cert
+            break
         # straight to the cap: a count undecided at ``bits`` means rho within ~2^-bits of 1 or a cluster of roots on
         # the circle, which in the paper's planes is rho = 1 exactly (marginal at any precision); the steps in
         # between would cost more than the cap itself (measured: 1.2-1.7 ms at 128 bits, 1.4-2.2 ms at 1024)
         b = max_bits
+    if digits is None or not cert.proven or cert.rho_upper is None:
+        # a marginal enclosure is kept as decided at the cap: narrowed further it could exclude 1, and the verdict
+        # would then depend on the digits asked for
+        return cert
+    # narrowing a proven enclosure: at the precision the digits need (a side of 1 is kept by intersection)
+    b_digits = max(b, math.ceil(digits * math.log2(10)) + 32)
+    M = matrix(b_digits) if b_digits > b else M
+    with Ball(b_digits + guard).context():
+        import flint
+
+        coeffs = flint.arb_mat(M.tolist()).charpoly().coeffs()
+        lower, upper = _refine(coeffs, M.shape[-1], cert.rho_lower, cert.rho_upper, digits, b_digits + guard)
+    return SpectralCertificate(cert.verdict, lower, upper, b_digits + guard if b_digits > b else cert.bits)
 
 
 def _exact_coefficients(model, be):

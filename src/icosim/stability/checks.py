@@ -31,6 +31,7 @@ import numpy as np
 
 from ..claims import CheckKind, Outcome, combine_holds, select
 from ..model import ParameterError
+from .policy import VERDICTS
 
 __all__ = [
     "CHECKS",
@@ -81,12 +82,14 @@ def _region_mask(ds, region):
 @dataclass(frozen=True)
 class Share:
     """Stable points inside a region: ``stable`` proven (or float64) stable, ``open`` marginal or
-    undecided, ``certified`` decided by a proof, out of ``n``.  The share lies in ``[low, high]``."""
+    undecided (``undecided`` of them), ``certified`` decided by a proof, out of ``n``.  The share lies in
+    ``[low, high]``."""
 
     stable: int
     open: int
     certified: int
     n: int
+    undecided: int = 0
 
     @property
     def low(self) -> float:
@@ -98,8 +101,10 @@ class Share:
 
     def text(self) -> str:
         core = f"{self.stable}/{self.n} stable ({self.low:.1%})"
+        marginal = self.open - self.undecided
         if self.open:
-            core += f" + {self.open} marginal (up to {self.high:.1%})"
+            parts = [f"{marginal} marginal"] * bool(marginal) + [f"{self.undecided} undecided"] * bool(self.undecided)
+            core += f" + {' + '.join(parts)} (up to {self.high:.1%})"
         return core
 
 
@@ -109,7 +114,7 @@ def _verdict_masks(ds):
         stable = ds["stable"].values.astype(bool)
         return stable, ~stable
     v = ds["verdict"].values
-    return v == 0, v == 1  # flag values of icosim.stability.policy.VERDICTS
+    return v == VERDICTS.index("stable"), v == VERDICTS.index("unstable")  # the datasets' flag values
 
 
 def stable_share(ds, region=None) -> Share:
@@ -120,8 +125,9 @@ def stable_share(ds, region=None) -> Share:
         raise ParameterError(f"region {region} holds no grid point of figure {ds.attrs.get('figure')}")
     stable, unstable = _verdict_masks(ds)
     certified = ds["certified"].values.astype(bool) if "certified" in ds else np.zeros(mask.shape, bool)
+    undecided = ds["verdict"].values == VERDICTS.index("undecided") if "verdict" in ds else np.zeros(mask.shape, bool)
     s, u = int(stable[mask].sum()), int(unstable[mask].sum())
-    return Share(s, n - s - u, int(certified[mask].sum()), n)
+    return Share(s, n - s - u, int(certified[mask].sum()), n, int(undecided[mask].sum()))
 
 
 def _holds(a: bool, b: bool):
@@ -172,7 +178,8 @@ def check_stable_fraction(datasets, *, select: dict, op: str, value: float, regi
             "stable_share": share.low,
             "stable_share_high": share.high,
             "n_stable": share.stable,
-            "n_marginal": share.open,
+            "n_marginal": share.open - share.undecided,
+            "n_undecided": share.undecided,
             "n_certified": share.certified,
             "n_points": share.n,
         }
@@ -217,8 +224,9 @@ def _origin_text(ds, entry: dict) -> str:
 def _certified_text(chosen, region) -> str:
     """How many of the points a claim uses are certified (proven) and how many are marginal."""
     shares = [stable_share(ds, region) for ds in chosen]
-    n, c, m = sum(x.n for x in shares), sum(x.certified for x in shares), sum(x.open for x in shares)
-    return f" [{n} points used: {c} certified, {m} marginal]"
+    n, c, m = sum(x.n for x in shares), sum(x.certified for x in shares), sum(x.open - x.undecided for x in shares)
+    u = sum(x.undecided for x in shares)
+    return f" [{n} points used: {c} certified, {m} marginal" + (f", {u} undecided]" if u else "]")
 
 
 def _group_share(datasets, selector, region):

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from ..backend import FLOAT64_DIGITS
-from ..limits import MAX_BITS_LIMIT, PointTimeout, PrecisionCapError, time_budget
+from ..limits import MAX_BITS_LIMIT, MAX_SECONDS, NotFiniteError, PointTimeout, PrecisionCapError, time_budget
 from ..model import Coefficients, ParameterError, TestModel
 from .certified import DEFAULT_BITS, MAX_BITS, certify_spectral_radius
 from .matrix import as_coefficients
@@ -50,6 +50,7 @@ __all__ = [
     "VERDICTS",
     "ARITHMETICS",
     "REASONS",
+    "reason_code",
 ]
 
 #: ``auto``: float64, certify what it cannot decide (and the band and the audit); ``float64``: no
@@ -60,8 +61,9 @@ VERDICTS = ("stable", "unstable", "marginal", "undecided")
 #: What decided a point.
 ARITHMETICS = ("float64", "ball", "mpmath", "none")
 #: Why a point is undecided (``none`` for decided points): a derived quantity not finite in float64, a precision
-#: beyond a cap (guard digits, or every digit lost at the largest precision), the time budget, any other error.
-REASONS = ("none", "overflow", "precision_cap", "timeout", "error")
+#: beyond a cap (guard digits), the time budget, any other error, or a ball amplification matrix that is not finite
+#: at the largest precision (the coupling's linear system singular at the point, or every digit lost).
+REASONS = ("none", "overflow", "precision_cap", "timeout", "error", "not_finite")
 
 
 @dataclass(frozen=True)
@@ -83,6 +85,12 @@ class Certification:
     point_seconds: float = 60.0
 
     def __post_init__(self):
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+                raise ParameterError(f"certify.{f.name} must be a number, got {value!r}")
+        if int(self.seed) != self.seed or self.seed < 0:
+            raise ParameterError(f"certify.seed must be an integer >= 0, got {self.seed!r}")
         if not (np.isfinite(self.band) and self.band >= 0):
             raise ParameterError(f"certify.band must be a finite number >= 0, got {self.band!r}")
         if not (0 <= self.audit <= 1):
@@ -93,8 +101,10 @@ class Certification:
             raise ParameterError(
                 f"certify.max_bits must be an integer in bits = {self.bits}..{MAX_BITS_LIMIT}, got {self.max_bits!r}"
             )
-        if not (np.isfinite(self.point_seconds) and self.point_seconds >= 0):
-            raise ParameterError(f"certify.point_seconds must be a finite number >= 0, got {self.point_seconds!r}")
+        if not (0 <= self.point_seconds <= MAX_SECONDS):
+            raise ParameterError(
+                f"certify.point_seconds must be a number in 0..{MAX_SECONDS:g}, got {self.point_seconds!r}"
+            )
 
     @classmethod
     def from_dict(cls, d: dict | None) -> Certification:
@@ -153,8 +163,8 @@ class StabilityResult:
 
     @property
     def n_high_precision(self) -> int:
-        """Points decided by an arithmetic other than float64."""
-        return int(np.sum(self.arithmetic != "float64"))
+        """Points decided by an arithmetic other than float64 (ball or mpmath)."""
+        return int(np.sum(np.isin(self.arithmetic, ("ball", "mpmath"))))
 
     @property
     def n_failed(self) -> int:
@@ -298,17 +308,20 @@ def _float64_isolated(point_type, arrays, overflow, method, decomposition, k, ou
         return rho, err
 
 
+def reason_code(exc: BaseException) -> str:
+    """The :data:`REASONS` code of the exception that left a point undecided."""
+    if isinstance(exc, PointTimeout):
+        return "timeout"
+    if isinstance(exc, PrecisionCapError):
+        return "precision_cap"
+    return "overflow" if isinstance(exc, (OverflowError, NotFiniteError)) else "error"
+
+
 def _undecided(out: dict, idx, exc: BaseException):
+    """One point undecided by ``exc``: nothing of an earlier pass stands (an audited float64 value included)."""
     out["verdict"][idx], out["reason"][idx] = "undecided", f"{type(exc).__name__}: {exc}"
-    out["reason_code"][idx] = (
-        "timeout"
-        if isinstance(exc, PointTimeout)
-        else "precision_cap"
-        if isinstance(exc, PrecisionCapError)
-        else "overflow"
-        if isinstance(exc, (OverflowError, ParameterError))
-        else "error"
-    )
+    out["reason_code"][idx] = reason_code(exc)
+    out["rho"][idx], out["digits"][idx], out["arithmetic"][idx] = np.nan, -1, "none"
 
 
 def _empty(shape) -> dict:
@@ -332,7 +345,8 @@ def _store(out: dict, idx, c):
     """One certificate into the result arrays (bounds rounded outward to float64)."""
     if c.verdict == "undecided":  # the ball arithmetic lost every digit at the cap: nothing is known
         out["verdict"][idx], out["rho"][idx], out["digits"][idx] = "undecided", np.nan, -1
-        out["reason"][idx], out["reason_code"][idx] = c.reason, "precision_cap"
+        out["reason"][idx], out["reason_code"][idx] = c.reason, c.cause or "precision_cap"
+        out["arithmetic"][idx] = "none"
         return
     lower = float(c.rho_lower)
     lower = np.nextafter(lower, -np.inf) if lower > c.rho_lower else lower
@@ -343,5 +357,6 @@ def _store(out: dict, idx, c):
         # float64 did not decide, or the proof contradicts its verdict or its value: a value inside the enclosure
         out["rho"][idx] = lower if not np.isfinite(upper) else (lower + upper) / 2
     out["verdict"][idx], out["arithmetic"][idx], out["bits"][idx] = c.verdict, "ball", c.bits
+    out["reason_code"][idx] = "none"  # decided (a float64 failure before it is only its reason to be certified)
     out["digits"][idx] = int(c.bits * np.log10(2))
     out["reason"][idx] = c.reason

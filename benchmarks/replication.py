@@ -1,0 +1,110 @@
+"""Benchmark of the full replication, this tree and an older commit side by side in one run (issue 14).
+
+For each tree, from a clean copy (``git worktree`` for the older commit) and a clean ``results/``,
+the workflow runs part by part, one ``snakemake -c2`` after the other:
+
+* stability: ``results/report/stability.html`` (the panels, figures, claims and section);
+* convergence: ``results/report/convergence.html``;
+* pendulum: ``results/report/pendulum.html``;
+* report: everything else (``all``: the page and what only it needs).
+
+Prints per part the wall and CPU seconds (Snakemake and all its jobs, ``getrusage``), the jobs' total,
+and the numerical-kernel CPU seconds the datasets record (``cpu_seconds_*`` of the stability panels,
+``seconds_total`` of the convergence curves, ``wall_time_s``/``cpu_seconds`` of the pendulum runs),
+so the kernel share of CPU and the overhead (interpreter starts, imports, Snakemake) can be read; then
+the ratio of the two trees' totals.  Wall time depends on other load (the load average is printed);
+CPU seconds much less.  Never a timed assertion: a measurement to quote.
+
+    python benchmarks/replication.py [--old COMMIT] [--ci] [--cores 2] [--json FILE]
+
+``--ci`` uses the reduced CI configuration (config/ci/*.yaml) for both trees: a quick check of the
+benchmark itself, not the number to quote.
+"""
+
+from __future__ import annotations
+
+import argparse
+import glob
+import json
+
+from _workflow import run_workflow, tree
+
+from icosim.datasets import open_dataset
+
+PARTS = (
+    ("stability", ["results/report/stability.html"]),
+    ("convergence", ["results/report/convergence.html"]),
+    ("pendulum", ["results/report/pendulum.html"]),
+    ("report", ["all"]),
+)
+#: Dataset attributes holding numerical-kernel seconds, per part's result folder.
+KERNEL_KEYS = {
+    "stability": ("cpu_seconds_float64", "cpu_seconds_certify", "cpu_seconds_mp"),
+    "convergence": ("seconds_total",),
+    "pendulum": ("cpu_seconds", "wall_time_s"),
+}
+CI_CONFIGS = ["config/ci/stability.yaml", "config/ci/convergence.yaml", "config/ci/pendulum.yaml"]
+
+
+def kernel_seconds(workdir, part: str) -> float:
+    """The kernel seconds the part's datasets record (first key present per dataset; 0 if none)."""
+    total = 0.0
+    for path in sorted(glob.glob(str(workdir / f"results/{part}/**/*.nc"), recursive=True)):
+        with open_dataset(path) as ds:
+            present = [k for k in KERNEL_KEYS[part] if k in ds.attrs]
+            if part == "stability":
+                total += sum(float(ds.attrs[k]) for k in present)
+            elif present:
+                total += float(ds.attrs[present[0]])
+    return total
+
+
+def run_tree(commit, label, configs, cores) -> dict:
+    parts = {}
+    with tree(commit) as workdir:
+        first = True
+        for part, targets in PARTS:
+            # run_workflow clears results/ before a run: only before the first part
+            run = run_workflow(
+                workdir, targets, label=f"{label}: {part}", cores=cores, configfiles=configs, keep_results=not first
+            )
+            first = False
+            kernel = kernel_seconds(workdir, part) if part in KERNEL_KEYS else 0.0
+            parts[part] = dict(wall=run.wall, cpu=run.cpu, kernel=kernel, load=run.load[0])
+    total = {key: sum(p[key] for p in parts.values()) for key in ("wall", "cpu", "kernel")}
+    return dict(label=label, parts=parts, total=total)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--old", default="06f2834", help="the older commit to compare with (default: %(default)s)")
+    ap.add_argument("--ci", action="store_true", help="the reduced CI configuration for both trees")
+    ap.add_argument("--cores", type=int, default=2)
+    ap.add_argument("--json", help="write the summary to this file")
+    args = ap.parse_args(argv)
+    configs = CI_CONFIGS if args.ci else []
+    rows = [
+        run_tree(None, "this tree", configs, args.cores),
+        run_tree(args.old, f"commit {args.old}", configs, args.cores),
+    ]
+    print(f"full replication, {'CI' if args.ci else 'default'} configuration, -c{args.cores}, part after part")
+    print(f"{'tree':<22}{'part':<13}{'wall s':>9}{'CPU s':>9}{'kernel s':>10}{'kernel %':>10}{'load':>7}")
+    for row in rows:
+        for part, p in list(row["parts"].items()) + [("total", {**row["total"], "load": float("nan")})]:
+            share = 100 * p["kernel"] / p["cpu"] if p["cpu"] else 0.0
+            print(
+                f"{row['label']:<22}{part:<13}{p['wall']:>9.1f}{p['cpu']:>9.1f}{p['kernel']:>10.1f}"
+                f"{share:>9.0f}%{p['load']:>7.2f}"
+            )
+    new, old = (r["total"] for r in rows)
+    print(
+        f"ratio this tree / {args.old}: wall {new['wall'] / old['wall']:.2f}, CPU {new['cpu'] / old['cpu']:.2f} "
+        "(issue 14's goal: wall <= 0.40 on the same machine)"
+    )
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(rows, fh, indent=1)
+
+
+if __name__ == "__main__":
+    main()
