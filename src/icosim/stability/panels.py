@@ -18,7 +18,7 @@ import numpy as np
 
 from .. import methods as _methods
 from ..decompositions import DECOMPOSITIONS
-from ..limits import check_k
+from ..limits import MAX_GRID_N, check_k
 from ..methods import make_method
 from ..model import ParameterError
 from .policy import POLICIES, Certification
@@ -87,8 +87,8 @@ def grid_axis(bounds, n: int) -> np.ndarray:
     lo, hi = (float(b) for b in bounds)
     if not lo < hi:
         raise ParameterError(f"grid bounds must be increasing, got {list(bounds)!r}")
-    if int(n) != n or n < 2:
-        raise ParameterError(f"grid size n must be an integer >= 2, got {n!r}")
+    if int(n) != n or not 2 <= n <= MAX_GRID_N:
+        raise ParameterError(f"grid size n must be an integer >= 2 and <= {MAX_GRID_N}, got {n!r}")
     axis = np.linspace(lo, hi, int(n))
     axis[0], axis[-1] = lo, hi
     return axis
@@ -213,8 +213,8 @@ def _check_grid(name: str, g: dict, *, where: str = "stability"):
         raise ParameterError(f"{where}.{name}.lr1 must lie in lr1 <= 0 (a damped subsystem), got {list(g['lr1'])!r}")
     if min(g["li1"]) < 0:
         raise ParameterError(f"{where}.{name}.li1 must lie in li1 >= 0, got {list(g['li1'])!r}")
-    if int(g["n"]) != g["n"] or g["n"] < 2:
-        raise ParameterError(f"{where}.{name}.n must be an integer >= 2, got {g['n']!r}")
+    if int(g["n"]) != g["n"] or not 2 <= g["n"] <= MAX_GRID_N:
+        raise ParameterError(f"{where}.{name}.n must be an integer >= 2 and <= {MAX_GRID_N}, got {g['n']!r}")
     for axis in ("lr1", "li1"):
         grid_axis(g[axis], g["n"])  # the grid the sweep job will build
 
