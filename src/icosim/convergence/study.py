@@ -34,6 +34,7 @@ from ..decompositions import get_decomposition
 from ..linear_problem import LinearCosimulation
 from ..macrostep import simulate
 from ..model import ParameterError
+from ..schemes import JACOBI, get_scheme
 from ..stability import amplification_matrix, is_stable, spectral_radius
 from .experiment import Setup, dimensional_method
 from .metric import nrmse
@@ -147,16 +148,19 @@ class Study:
         return s.growth_bound * max(abs(s.x0), abs(s.v0) * H)
 
     # -- one curve ----------------------------------------------------------------------
-    def run(self, method: str, params: dict, decomposition: str, k: int, *, stepping: str = "matrix") -> CurveResult:
-        """NRMSE over all step sizes for one scheme (dimensional ``params``)."""
+    def run(
+        self, method: str, params: dict, decomposition: str, k: int, *, stepping: str = "matrix", scheme=JACOBI
+    ) -> CurveResult:
+        """NRMSE over all step sizes for one scheme (dimensional ``params``; ``scheme``: Jacobi or Gauss-Seidel)."""
         if stepping not in ("matrix", "simulate"):
             raise ParameterError(f"stepping must be 'matrix' or 'simulate', got {stepping!r}")
+        scheme = get_scheme(scheme)
         dec = get_decomposition(decomposition)
         t0 = time.perf_counter()
         nH = self.H.size
         methods = [dimensional_method(method, H, **params) for H in self.H]
         methods[0].check_decomposition(dec)
-        rho, digits = self._spectral_radii(methods, dec.name, k)
+        rho, digits = self._spectral_radii(methods, dec.name, k, scheme)
         out = {
             name: np.full(nH, np.nan)
             for name in ("nrmse_unfiltered", "nrmse_second_half", "nrmse_x", "nrmse_v", "nrmse_lambda")
@@ -165,7 +169,7 @@ class Study:
         # the constraint force is a coupling variable (first entry of e_N) with ff and fd only
         lam = dec.variables.index("lambda_c") if "lambda_c" in dec.variables else None
         for i, (H, N) in enumerate(zip(self.H, self.n_steps)):
-            traj, diverged = self._states(methods[i], dec.name, k, H, int(N), stepping)
+            traj, diverged = self._states(methods[i], dec.name, k, H, int(N), stepping, scheme)
             if diverged is not None:
                 out["diverged_at"][i] = diverged
                 continue
@@ -196,24 +200,35 @@ class Study:
             diverged_at=out["diverged_at"],
             unstable=unstable,
             seconds=time.perf_counter() - t0,
-            meta={"method": method, "decomposition": dec.name, "k": int(k), "stepping": stepping, **params},
+            meta={
+                "method": method,
+                "decomposition": dec.name,
+                "k": int(k),
+                "stepping": stepping,
+                "scheme": scheme.name,
+                **params,
+            },
         )
 
-    def _spectral_radii(self, methods, decomposition, k):
+    def _spectral_radii(self, methods, decomposition, k, scheme=JACOBI):
         """Spectral radius per H (one batched call when the method does not depend on H)."""
         models = self.setup.model(self.H)  # physical: overdamped subsystems are fine
         if all(m.params == methods[0].params for m in methods):
-            res = spectral_radius(models, methods[0], decomposition, k, digits=self.digits, policy=self.spectral_policy)
+            res = spectral_radius(
+                models, methods[0], decomposition, k, digits=self.digits, policy=self.spectral_policy, scheme=scheme
+            )
             return np.asarray(res.rho, float), np.asarray(res.digits)
         rho = np.empty(self.H.size)
         digits = np.empty(self.H.size, dtype=int)
         for i, m in enumerate(methods):
             model_i = self.setup.model(self.H[i])
-            res = spectral_radius(model_i, m, decomposition, k, digits=self.digits, policy=self.spectral_policy)
+            res = spectral_radius(
+                model_i, m, decomposition, k, digits=self.digits, policy=self.spectral_policy, scheme=scheme
+            )
             rho[i], digits[i] = float(res.rho), int(res.digits)
         return rho, digits
 
-    def _states(self, method, decomposition, k, H, N, stepping):
+    def _states(self, method, decomposition, k, H, N, stepping, scheme=JACOBI):
         """``(x1, v1_bar, x2, v2_bar, e_N)`` at ``T_0 ... T_N`` (or diverged).
 
         ``e_N`` are the corrected coupling variables at ``T_N`` (the newest
@@ -224,11 +239,11 @@ class Study:
         state, history = exact.consistent_start(problem, self.solution(H))
         bound = self.bound(H)
         if stepping == "simulate":
-            traj = simulate(problem, method, state, history, N, bound=bound)
+            traj = simulate(problem, method, state, history, N, bound=bound, scheme=scheme)
             if traj.diverged_at is not None:
                 return None, traj.diverged_at
             states = np.array(traj.states).reshape(N + 1, 4)
             return np.concatenate([states, np.array(traj.coupling).reshape(N + 1, -1)], axis=-1), None
-        M = amplification_matrix(c, method, decomposition, k)
+        M = amplification_matrix(c, method, decomposition, k, scheme=scheme)
         W, diverged = iterate_linear_map(M, problem.pack(state, history), N, bound=bound)
         return (None, diverged) if diverged is not None else (W[:, : 4 + problem.n_coupling], None)

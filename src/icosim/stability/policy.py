@@ -28,6 +28,7 @@ import numpy as np
 
 from ..backend import FLOAT64_DIGITS
 from ..model import Coefficients, TestModel
+from ..schemes import JACOBI, get_scheme
 from .matrix import as_coefficients
 from .spectral import spectral_radius_float64, spectral_radius_mp
 
@@ -67,7 +68,7 @@ class StabilityResult:
         return int(np.sum(self.digits < 0))
 
 
-def spectral_radius(model, method, decomposition, k, *, digits: int = 128, policy: str = "auto"):
+def spectral_radius(model, method, decomposition, k, *, digits: int = 128, policy: str = "auto", scheme=JACOBI):
     """Spectral radius over arrays of parameter points with the precision policy.
 
     Parameters
@@ -75,6 +76,7 @@ def spectral_radius(model, method, decomposition, k, *, digits: int = 128, polic
     model : :class:`TestModel` (Eq. 71; its attributes broadcast to the grid),
         or :class:`~icosim.model.PhysicalModel` / :class:`~icosim.model.Coefficients`
         (any damping, overdamped included).
+    scheme : the coupling scheme (:mod:`icosim.schemes`; default Jacobi).
     policy : ``"auto"`` (float64, recheck untrusted points at ``digits``),
         ``"float64"`` (no recheck) or ``"mp"`` (every point at ``digits``).
 
@@ -84,6 +86,7 @@ def spectral_radius(model, method, decomposition, k, *, digits: int = 128, polic
     """
     if policy not in ("auto", "float64", "mp"):
         raise ValueError(f"policy must be 'auto', 'float64' or 'mp', got {policy!r}")
+    scheme = get_scheme(scheme)
     if isinstance(model, TestModel):
         names, point_type = ("lr1", "li1", "am21", "alr21", "ali21"), TestModel
     else:  # exact conversion happens per point in spectral_radius_mp
@@ -97,7 +100,7 @@ def spectral_radius(model, method, decomposition, k, *, digits: int = 128, polic
         err = np.full(shape, np.inf)
         recheck = np.ones(shape, dtype=bool)
     else:
-        rho, err = spectral_radius_float64(point_type(*arrays), method, decomposition, k)
+        rho, err = spectral_radius_float64(point_type(*arrays), method, decomposition, k, scheme=scheme)
         trusted = np.isfinite(rho) & (np.abs(rho - 1) > err)
         recheck = ~trusted if policy == "auto" else np.zeros(shape, dtype=bool)
     digits_used = np.full(shape, FLOAT64_DIGITS, dtype=int)
@@ -107,7 +110,7 @@ def spectral_radius(model, method, decomposition, k, *, digits: int = 128, polic
             continue
         point = point_type(*(float(a[idx]) for a in arrays))
         try:
-            rho[idx] = float(spectral_radius_mp(point, method, decomposition, k, digits))
+            rho[idx] = float(spectral_radius_mp(point, method, decomposition, k, digits, scheme=scheme))
             digits_used[idx] = digits
         except (ArithmeticError, mpmath.libmp.NoConvergence):
             rho[idx], digits_used[idx] = np.nan, -1
