@@ -18,6 +18,7 @@ from . import methods
 from .backend import FLOAT64_DIGITS
 from .decompositions import DECOMPOSITIONS, get_decomposition
 from .model import ParameterError
+from .schemes import get_scheme
 
 __all__ = ["main", "build_parser"]
 
@@ -74,6 +75,18 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--method", required=True, choices=tuple(methods.METHODS))
     g.add_argument("--decomposition", required=True, choices=tuple(DECOMPOSITIONS))
     g.add_argument("--k", required=True, type=_nonneg_int, help="approximation order (integer >= 0)")
+    g.add_argument(
+        "--scheme",
+        choices=("jacobi", "gauss-seidel"),
+        default="jacobi",
+        help="coupling scheme: jacobi (parallel, the paper's; default) or gauss-seidel (sequential)",
+    )
+    g.add_argument(
+        "--first",
+        type=int,
+        choices=(1, 2),
+        help="gauss-seidel: the subsystem that advances first (default 1)",
+    )
     g = rho.add_argument_group("method parameters")
     with_index = ", ".join(spec.label for spec in methods.METHODS.values() if spec.takes_index)
     g.add_argument("--index", type=int, choices=methods.indices(), help=f"index of the formulation ({with_index})")
@@ -113,6 +126,9 @@ def _rho(args, parser):
     from .model import TestModel
     from .stability import is_stable, spectral_radius, spectral_radius_mp
 
+    if args.first is not None and args.scheme != "gauss-seidel":
+        parser.error("argument --first: only used with --scheme gauss-seidel")
+    scheme = get_scheme(args.scheme, args.first)
     try:
         method = _method_from_args(args)
         decomposition = get_decomposition(args.decomposition)
@@ -121,10 +137,10 @@ def _rho(args, parser):
     except ParameterError as exc:
         parser.error(_argument_message(str(exc)))
     if args.digits is not None:
-        rho = float(spectral_radius_mp(model, method, decomposition, args.k, args.digits))
+        rho = float(spectral_radius_mp(model, method, decomposition, args.k, args.digits, scheme=scheme))
         digits, err, precision = args.digits, None, f"mpmath {args.digits} digits (requested)"
     else:
-        res = spectral_radius(model, method, decomposition, args.k)
+        res = spectral_radius(model, method, decomposition, args.k, scheme=scheme)
         rho, digits = float(res.rho), int(res.digits)
         err = float(res.err)
         precision = "float64" if digits == FLOAT64_DIGITS else f"mpmath {digits} digits (float64 not trusted)"
@@ -138,13 +154,15 @@ def _rho(args, parser):
         "method": method.name,
         "decomposition": decomposition.name,
         "k": args.k,
+        "scheme": scheme.name,
         "method_parameters": method.params,
         "model": {n: getattr(args, n) for n in ("lr1", "li1", "am21", "alr21", "ali21")},
     }
     if args.json:
         print(json.dumps(result))
     else:
-        print(f"rho = {rho!r}  ({'stable' if stable else 'unstable'}; decided by {precision})")
+        order = "" if scheme.name == "jacobi" else f"{scheme.label}; "
+        print(f"rho = {rho!r}  ({'stable' if stable else 'unstable'}; {order}decided by {precision})")
     return 0
 
 
