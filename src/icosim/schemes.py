@@ -41,6 +41,9 @@ __all__ = [
     "SCHEMES",
     "SCHEME_NAMES",
     "get_scheme",
+    "figure_id",
+    "split_figure_id",
+    "FIGURE_ID_PATTERN",
 ]
 
 #: Number of subsystems of every problem in this package.
@@ -91,7 +94,7 @@ class Scheme:
         return self.name
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Jacobi(Scheme):
     """Both subsystems predicted and corrected in parallel (the paper's scheme)."""
 
@@ -105,8 +108,11 @@ class Jacobi(Scheme):
     def label(self) -> str:
         return "Jacobi"
 
+    def __repr__(self) -> str:
+        return "Jacobi()"
 
-@dataclass(frozen=True, init=False)
+
+@dataclass(frozen=True, init=False, repr=False)
 class GaussSeidel(Scheme):
     """Subsystem ``first`` (1 or 2) advances once with extrapolation; the other is corrected."""
 
@@ -133,6 +139,9 @@ class GaussSeidel(Scheme):
     @property
     def label(self) -> str:
         return f"Gauss–Seidel {self.first}→{self.second}"
+
+    def __repr__(self) -> str:
+        return f"GaussSeidel(first={self.first})"
 
 
 JACOBI = Jacobi()
@@ -166,3 +175,32 @@ def get_scheme(scheme=None, first=None) -> Scheme:
         return found
     allowed = ", ".join(["gauss-seidel", *SCHEME_NAMES])
     raise ParameterError(f"scheme must be one of {allowed}, got {scheme!r}")
+
+
+# -- figure ids: one figure of the workflow per (paper figure, scheme) ------------------------
+def figure_id(figure, scheme=JACOBI) -> str:
+    """The workflow's id of a paper figure computed with ``scheme``: ``"9"`` (Jacobi), ``"9gs12"``, ``"9gs21"``.
+
+    Jacobi keeps the paper's number, so its files, claims and captions are the paper's.
+
+    >>> figure_id("9", "gauss-seidel-21"), figure_id(21)
+    ('9gs21', '21')
+    """
+    return f"{figure}{get_scheme(scheme).suffix}"
+
+
+def split_figure_id(fid) -> tuple:
+    """``(paper figure, scheme)`` of a figure id (inverse of :func:`figure_id`).
+
+    >>> split_figure_id("13gs12")
+    ('13', GaussSeidel(first=1))
+    """
+    fid = str(fid)
+    for scheme in (GS12, GS21):
+        if fid.endswith(scheme.suffix):
+            return fid[: -len(scheme.suffix)], scheme
+    return fid, JACOBI
+
+
+#: Regular expression of a figure id (Snakemake wildcard constraint); ``number`` the paper figure's.
+FIGURE_ID_PATTERN = r"\d+(gs12|gs21)?"

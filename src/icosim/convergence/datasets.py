@@ -54,7 +54,7 @@ def run_panel(
     fit_note = np.full((nI, nK), "", dtype=object)
     for i, row in enumerate(spec.rows):
         for j, k in enumerate(spec.k):
-            r = study.run(spec.method, row, spec.decomposition, k, stepping=stepping)
+            r = study.run(spec.method, row, spec.decomposition, k, stepping=stepping, scheme=spec.scheme)
             for n in names_f + ("spectral_radius_digits", "diverged_at", "unstable"):
                 arr[n][i, j] = getattr(r, n)
             f = fit_order(r.H, r.nrmse, r.n_steps, **fit)
@@ -175,6 +175,7 @@ def run_panel(
     attrs = dict(provenance or {})
     attrs.update(
         figure=spec.figure,
+        scheme=spec.scheme,
         method=spec.method,
         decomposition=spec.decomposition,
         decomposition_long_name=get_decomposition(spec.decomposition).long_name,

@@ -5,8 +5,9 @@ from __future__ import annotations
 from ..decompositions import get_decomposition
 from ..methods import make_method
 from ..model import ParameterError
+from ..schemes import get_scheme
 
-__all__ = ["configured_runs"]
+__all__ = ["configured_runs", "configured_schemes"]
 
 
 def configured_runs(cfg: dict) -> list:
@@ -35,3 +36,19 @@ def configured_runs(cfg: dict) -> list:
     if len(set(runs)) != len(runs):
         raise ParameterError("pendulum.configurations lists a (method, decomposition) pair twice")
     return runs
+
+
+def configured_schemes(cfg: dict) -> list:
+    """The coupling schemes of a ``pendulum:`` config (``schemes``, default ``[jacobi]``), by name, checked.
+
+    Every run of :func:`configured_runs` is made with each of them; Jacobi (the paper's)
+    must be among them: the figures and the claim of Sect. 4 are about it.
+    """
+    names = cfg.get("schemes", ["jacobi"])
+    try:
+        schemes = [get_scheme(name).name for name in names]
+    except ParameterError as exc:
+        raise ParameterError(f"pendulum.schemes: {exc}") from None
+    if "jacobi" not in schemes:
+        raise ParameterError(f"pendulum.schemes must include jacobi (the paper's scheme), got {names!r}")
+    return schemes

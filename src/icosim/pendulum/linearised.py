@@ -41,16 +41,19 @@ def pendulum_test_model(params: PendulumParameters, H: float):
     return TestModel(np.full(omegas.shape, lr1), omegas * H, params.m2 / params.m1, params.m1 / params.m2, 1.0)
 
 
-def linear_test_model_rho(params: PendulumParameters, H: float, method: CouplingMethod, decomposition: str, k: int):
+def linear_test_model_rho(
+    params: PendulumParameters, H: float, method: CouplingMethod, decomposition: str, k: int, *, scheme="jacobi"
+):
     """Largest spectral radius of the linear test model (Sect. 3) at the pendulum's points
     (:func:`pendulum_test_model`), for the dimensionless form of ``method``.
 
     The method's parameters are in SI units here and are scaled as the registry
     says (:func:`icosim.methods.engine_method`: Baumgarte's ``beta_bar = beta/H``,
     ``gamma_bar = gamma/H^2``; the weighted multiplier's ``a``, ``b`` are
-    dimensionless already).  Returns ``(rho, model)``.
+    dimensionless already).  ``scheme``: the coupling scheme (link 1 is subsystem 1).
+    Returns ``(rho, model)``.
     """
     dimensionless = engine_method(method, H)
     model = pendulum_test_model(params, H)
-    result = spectral_radius(model, dimensionless, decomposition, int(k))
+    result = spectral_radius(model, dimensionless, decomposition, int(k), scheme=scheme)
     return float(np.max(result.rho)), model

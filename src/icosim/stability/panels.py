@@ -27,6 +27,7 @@ from ..backend import FLOAT64_DIGITS
 from ..decompositions import DECOMPOSITIONS
 from ..methods import make_method
 from ..model import ParameterError, TestModel
+from ..schemes import figure_id, get_scheme
 from .policy import spectral_radius
 
 __all__ = [
@@ -137,6 +138,8 @@ class PanelSpec:
     policy: str = "auto"
     #: the parameters that tell this figure's rows apart (:func:`row_label_keys`)
     row_keys: tuple = RATIOS
+    #: the coupling scheme (:mod:`icosim.schemes`), by name
+    scheme: str = "jacobi"
 
     @classmethod
     def from_params(cls, params: dict) -> PanelSpec:
@@ -164,6 +167,7 @@ class PanelSpec:
             raise ParameterError(f"k must be an integer >= 0, got {self.k!r}")
         if self.policy not in ("auto", "float64", "mp"):
             raise ParameterError(f"policy must be 'auto', 'float64' or 'mp', got {self.policy!r}")
+        get_scheme(self.scheme)  # refuses an unknown scheme, naming the known ones
         bad = [key for key in self.row_keys if key not in row_keys()]
         if bad or not self.row_keys:
             raise ParameterError(
@@ -195,7 +199,9 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
     LR, LI = np.meshgrid(lr1, li1, indexing="ij")
     model = TestModel(LR, LI, spec.am21, spec.alr21, spec.ali21)
 
-    result = spectral_radius(model, method, spec.decomposition, spec.k, digits=spec.digits, policy=spec.policy)
+    result = spectral_radius(
+        model, method, spec.decomposition, spec.k, digits=spec.digits, policy=spec.policy, scheme=spec.scheme
+    )
 
     dims = ("lr1", "li1")
     ds = xr.Dataset(
@@ -248,6 +254,7 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
         method=spec.method,
         decomposition=spec.decomposition,
         k=int(spec.k),
+        scheme=get_scheme(spec.scheme).name,
         am21=float(spec.am21),
         alr21=float(spec.alr21),
         ali21=float(spec.ali21),
@@ -329,14 +336,17 @@ def _check_grid(name: str, g: dict, *, where: str = "stability"):
         grid_axis(g[axis], g["n"])  # the grid the sweep job will build
 
 
-def figure_panels(figure: str, figure_cfg: dict, *, grid: dict, zoom_grid: dict, precision: dict) -> list[PanelSpec]:
-    """The panels of one figure as configured (rows x k, plus the zooms).
+def figure_panels(
+    figure: str, figure_cfg: dict, *, grid: dict, zoom_grid: dict, precision: dict, scheme="jacobi"
+) -> list[PanelSpec]:
+    """The panels of one figure as configured (rows x k, plus the zooms), for one coupling scheme.
 
     ``figure_cfg`` has the layout of ``config/stability.yaml`` (``method``,
     ``decomposition``, ``params``, ``ratios``, ``rows``, ``k``, optional
-    ``zoom``).  Every panel's method is built once here, so a parameter the
+    ``zoom`` and ``schemes``).  Every panel's method is built once here, so a parameter the
     method does not accept is reported with the figure and row before any job
-    runs.
+    runs.  The panels' ``figure`` is the figure id of ``scheme``
+    (:func:`icosim.schemes.figure_id`: ``"9"`` for Jacobi, ``"9gs12"``, ``"9gs21"``).
     """
     where = f"stability.figures.{figure}"
     n_rows = len(figure_cfg["rows"])
@@ -368,7 +378,7 @@ def figure_panels(figure: str, figure_cfg: dict, *, grid: dict, zoom_grid: dict,
             for view, g in views + ([("zoom", zoom_grid)] if row in zoom["rows"] and k in zoom["k"] else []):
                 panels.append(
                     PanelSpec(
-                        figure=str(figure),
+                        figure=figure_id(figure, scheme),
                         row=row,
                         k=int(k),
                         view=view,
@@ -384,6 +394,7 @@ def figure_panels(figure: str, figure_cfg: dict, *, grid: dict, zoom_grid: dict,
                         digits=int(precision["digits"]),
                         policy=precision["policy"],
                         row_keys=row_keys,
+                        scheme=get_scheme(scheme).name,
                     )
                 )
     return panels
