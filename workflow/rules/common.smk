@@ -34,6 +34,7 @@ for _var in (
 sys.path.insert(0, str(Path(workflow.basedir) / "src"))
 from icosim.methods import METHODS  # noqa: E402
 from icosim.methods.schema import with_methods  # noqa: E402
+from icosim.schemes import SCHEMES  # noqa: E402
 from icosim.sources import module_closure, script_closure  # noqa: E402
 
 
@@ -92,6 +93,8 @@ def engine_lib(script):
 
 # Names of the registered coupling methods, for wildcard constraints.
 METHOD_NAMES = "|".join(METHODS)
+# Coupling scheme name -> label ("Gauss–Seidel 1→2"), for titles.
+SCHEME_LABELS = {name: scheme.label for name, scheme in SCHEMES.items()}
 
 # Filled by each part's .smk file: every final target, and each part's report section
 # (an HTML fragment) keyed by part name.

@@ -54,7 +54,7 @@ rule pendulum_reference:
 
 
 rule pendulum_run:
-    """One co-simulation run (method, decomposition, k) up to t_end or divergence."""
+    """One co-simulation run (method, decomposition, k; Jacobi) up to t_end or divergence."""
     input:
         lib=engine_lib("pendulum_run"),
     output:
@@ -76,6 +76,7 @@ rule pendulum_run:
         sensitivities=PENDULUM["sensitivities"],
         corrector=PENDULUM["corrector"],
         divergence=PENDULUM["divergence"],
+        scheme="jacobi",
     script:
         "../scripts/pendulum_run.py"
 

@@ -40,6 +40,7 @@ rule report:
                 json.dumps(config.get(part), sort_keys=True).encode()
             ).hexdigest()
             for part in ["report"] + list(config["report"]["sections"])
+            if part in config
         },
         precision=config["stability"]["precision"],
     script:
