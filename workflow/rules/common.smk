@@ -96,6 +96,15 @@ METHOD_NAMES = "|".join(METHODS)
 # Coupling scheme name -> label ("Gauss–Seidel 1→2"), for titles.
 SCHEME_LABELS = {name: scheme.label for name, scheme in SCHEMES.items()}
 
+
+def figure_title(fid, figure_ids, figures, detail=""):
+    """Title of a figure id: "Fig. 9<detail>: <title>" (Jacobi, the paper's) or
+    "Fig. 9<detail>, Gauss–Seidel 1→2: <title>" (figure_ids: id -> (figure, scheme))."""
+    fig, scheme = figure_ids[fid]
+    label = "" if scheme == "jacobi" else f", {SCHEME_LABELS[scheme]}"
+    return f"Fig. {fig}{detail}{label}: {figures[fig]['title']}"
+
+
 # Filled by each part's .smk file: every final target, and each part's report section
 # (an HTML fragment) keyed by part name.
 ALL_TARGETS = []

@@ -37,7 +37,9 @@ CONV_FIGURE_IDS = {
 CONV_PANELS = {
     (spec.decomposition, spec.figure, spec.panel): spec
     for fid, (fig, scheme) in CONV_FIGURE_IDS.items()
-    for spec in figure_panels(fig, CONVERGENCE["figures"][fig], CONVERGENCE["k"], scheme)
+    for spec in figure_panels(
+        fig, CONVERGENCE["figures"][fig], CONVERGENCE["k"], scheme
+    )
 }
 CONV_WP_ENTRIES = [
     entry
@@ -50,7 +52,9 @@ CONV_CLAIMS_FILE = CONVERGENCE["claims"]["file"]
 check_claims_against_config(load_claims(CONV_CLAIMS_FILE), CONVERGENCE)
 
 
-CONV_PANEL_FILE = "results/convergence/{}/fig{}_{}.nc"  # decomposition, figure id, panel
+CONV_PANEL_FILE = (
+    "results/convergence/{}/fig{}_{}.nc"  # decomposition, figure id, panel
+)
 # the paper's (Jacobi) figures: their claims, work-precision and report section
 CONV_ALL_PANELS = [
     CONV_PANEL_FILE.format(*key)
@@ -73,13 +77,6 @@ CONV_WP = "results/convergence/work_precision.nc"
 CONV_WP_FIGURE = "results/convergence/figures/work_precision.png"
 CONV_CLAIMS = "results/convergence/claims.json"
 CONV_SECTION = "results/report/convergence.html"
-
-
-def convergence_figure_title(fid, dec):
-    """ "Fig. 21 (ff): <title>" (Jacobi, the paper's) or "Fig. 21 (ff), Gauss-Seidel 1→2: <title>"."""
-    fig, scheme = CONV_FIGURE_IDS[fid]
-    label = "" if scheme == "jacobi" else f", {SCHEME_LABELS[scheme]}"
-    return f"Fig. {fig} ({dec}){label}: {CONVERGENCE['figures'][fig]['title']}"
 
 
 rule convergence_panel:
@@ -130,7 +127,9 @@ rule convergence_figure:
     conda:
         "../envs/icosim.yaml"
     params:
-        title=lambda w: convergence_figure_title(w.figure, w.dec),
+        title=lambda w: figure_title(
+            w.figure, CONV_FIGURE_IDS, CONVERGENCE["figures"], f" ({w.dec})"
+        ),
         layout=lambda w: figure_layout(
             CONV_FIGURE_IDS[w.figure][0],
             CONVERGENCE["figures"][CONV_FIGURE_IDS[w.figure][0]],

@@ -87,13 +87,15 @@ rule stability_gauss_seidel_claims:
         "../scripts/claims.py"
 
 
-
-
 # -- convergence ------------------------------------------------------------------------------
 GS_CONV_PANELS = [
     CONV_PANEL_FILE.format(*key)
     for key in CONV_PANELS
-    if any(s != "jacobi" for f, s in CONV_FIGURE_IDS.values() if f == CONV_FIGURE_IDS[key[1]][0])
+    if any(
+        s != "jacobi"
+        for f, s in CONV_FIGURE_IDS.values()
+        if f == CONV_FIGURE_IDS[key[1]][0]
+    )
 ]
 GS_CONV_FIGURES = sorted(
     {
@@ -125,8 +127,6 @@ rule convergence_gauss_seidel_claims:
         enforce_reference=CONVERGENCE["claims"]["enforce_reference"],
     script:
         "../scripts/claims.py"
-
-
 
 
 # -- pendulum ----------------------------------------------------------------------------------
@@ -250,29 +250,25 @@ rule pendulum_gs_figure:
         "../scripts/pendulum_figure.py"
 
 
-
-
 # -- the report section ------------------------------------------------------------------------
-def _if(condition, files):
-    return list(files) if condition else []
-
-
 GS_HAS = {
     "stability": bool(GS_STABILITY_FIGURES),
     "convergence": bool(GS_CONV_FIGURES),
     "pendulum": bool(GS_PENDULUM_SCHEMES),
 }
+S, C, P = GS_HAS["stability"], GS_HAS["convergence"], GS_HAS["pendulum"]
+# what the section is built from; a part without Gauss-Seidel results contributes nothing
 GS_SECTION_INPUTS = dict(
-    shares=_if(GS_HAS["stability"], [GS_STABILITY_SHARES]),
-    comparison=_if(GS_HAS["stability"], [GS_STABILITY_COMPARISON]),
-    stability_figures=_if(GS_HAS["stability"], GS_STABILITY_FIGURE_FILES),
-    stability_claims=_if(GS_HAS["stability"] and GS_STABILITY_CLAIMS_FILE, [GS_STABILITY_CLAIMS]),
-    convergence_panels=_if(GS_HAS["convergence"], GS_CONV_PANELS),
-    convergence_figures=_if(GS_HAS["convergence"], GS_CONV_FIGURES),
-    convergence_claims=_if(GS_HAS["convergence"] and GS_CONV_CLAIMS_FILE, [GS_CONV_CLAIMS]),
-    pendulum_summary=_if(GS_HAS["pendulum"], [GS_PENDULUM_SUMMARY]),
-    pendulum_figures=_if(GS_HAS["pendulum"], GS_PENDULUM_FIGURES),
-    pendulum_claims=_if(GS_HAS["pendulum"] and GS_PENDULUM_CLAIMS_FILE, [GS_PENDULUM_CLAIMS]),
+    shares=[GS_STABILITY_SHARES] if S else [],
+    comparison=[GS_STABILITY_COMPARISON] if S else [],
+    stability_figures=GS_STABILITY_FIGURE_FILES if S else [],
+    stability_claims=[GS_STABILITY_CLAIMS] if S and GS_STABILITY_CLAIMS_FILE else [],
+    convergence_panels=GS_CONV_PANELS if C else [],
+    convergence_figures=GS_CONV_FIGURES if C else [],
+    convergence_claims=[GS_CONV_CLAIMS] if C and GS_CONV_CLAIMS_FILE else [],
+    pendulum_summary=[GS_PENDULUM_SUMMARY] if P else [],
+    pendulum_figures=GS_PENDULUM_FIGURES if P else [],
+    pendulum_claims=[GS_PENDULUM_CLAIMS] if P and GS_PENDULUM_CLAIMS_FILE else [],
 )
 GS_SECTION = "results/report/gauss_seidel.html"
 
@@ -294,8 +290,10 @@ rule gauss_seidel_report_section:
         "../scripts/gauss_seidel_report_section.py"
 
 
-GS_TARGETS = [f for files in GS_SECTION_INPUTS.values() for f in files if not f.endswith(".nc")]
-GS_TARGETS += _if(GS_HAS["pendulum"], [GS_PENDULUM_SUMMARY])
+GS_TARGETS = [
+    f for files in GS_SECTION_INPUTS.values() for f in files if not f.endswith(".nc")
+]
+GS_TARGETS += [GS_PENDULUM_SUMMARY] if P else []
 ALL_TARGETS.extend(GS_TARGETS)
 if any(GS_HAS.values()):
     REPORT_SECTIONS["gauss_seidel"] = GS_SECTION

@@ -62,13 +62,6 @@ STABILITY_CLAIMS = "results/stability/claims.json"
 STABILITY_SECTION = "results/report/stability.html"
 
 
-def stability_figure_title(fid):
-    """ "Fig. 9: <title>" (Jacobi, the paper's) or "Fig. 9, Gauss-Seidel 1→2: <title>"."""
-    fig, scheme = STABILITY_FIGURE_IDS[fid]
-    label = "" if scheme == "jacobi" else f", {SCHEME_LABELS[scheme]}"
-    return f"Fig. {fig}{label}: {STABILITY['figures'][fig]['title']}"
-
-
 rule stability_sweep:
     """Spectral radius over the (lr1, li1) grid of one panel (float64 + mp rechecks)."""
     input:
@@ -110,7 +103,9 @@ rule stability_figure:
     conda:
         "../envs/icosim.yaml"
     params:
-        title=lambda w: stability_figure_title(w.figure),
+        title=lambda w: figure_title(
+            w.figure, STABILITY_FIGURE_IDS, STABILITY["figures"]
+        ),
         style=STABILITY["plot"]["style"],
         rho_max=STABILITY["plot"]["rho_max"],
         dots_stride=STABILITY["plot"]["dots_stride"],
