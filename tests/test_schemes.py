@@ -362,3 +362,29 @@ def test_make_method_and_scheme_by_name():
     M1 = amplification_matrix(TestModel(-0.5, 0.5), m, "ff", 1, scheme="gauss-seidel-21")
     M2 = amplification_matrix(TestModel(-0.5, 0.5), m, "ff", 1, scheme=get_scheme("gauss-seidel", first=2))
     np.testing.assert_array_equal(M1, M2)
+
+
+def test_an_eigenvalue_one_is_shared_by_every_scheme():
+    """docs/gauss_seidel.md: for a mode with eigenvalue 1 the coupling history is constant, so extrapolation and
+    interpolation give the same input and every scheme maps the mode alike.  At a point where Jacobi's projection
+    (ff, k = 1) has an eigenvalue 1 (found by bisection along lr1), both Gauss-Seidel orders have it too."""
+    method, li1 = projection(), 1.0
+
+    def gap(lr1, scheme):  # the largest real eigenvalue minus 1
+        ev = np.linalg.eigvals(amplification_matrix(TestModel(lr1, li1, 1.0, 1.0, 1.0), method, "ff", 1, scheme=scheme))
+        return float(np.max(ev.real[np.abs(ev.imag) < 1e-12])) - 1
+
+    lo, hi = -2.0, -0.05
+    assert gap(lo, JACOBI) * gap(hi, JACOBI) < 0  # a real eigenvalue crosses 1 in between
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if gap(lo, JACOBI) * gap(mid, JACOBI) > 0 else (lo, mid)
+    for scheme in (GS12, GS21):
+        ev = np.linalg.eigvals(amplification_matrix(TestModel(lo, li1, 1.0, 1.0, 1.0), method, "ff", 1, scheme=scheme))
+        assert np.min(np.abs(ev - 1)) < 1e-8
+    # away from that point the schemes' eigenvalues differ (the check is not vacuous)
+    ev_j = np.sort_complex(np.linalg.eigvals(amplification_matrix(TestModel(-1.0, li1, 1, 1, 1), method, "ff", 1)))
+    ev_g = np.sort_complex(
+        np.linalg.eigvals(amplification_matrix(TestModel(-1.0, li1, 1, 1, 1), method, "ff", 1, scheme=GS12))
+    )
+    assert np.max(np.abs(ev_j - ev_g)) > 1e-3
