@@ -5,7 +5,7 @@ Two copies of the workflow run from clean ``results/``: one with the default con
 paper's scheme only, as before issue 10).  For each part (stability, convergence, pendulum)
 the Jacobi-only copy builds the part's report section, then the other copy builds the same
 section plus the part's Gauss-Seidel outputs (figures, comparison, claims); then both build
-their report.  The runs alternate, so load on the machine hits both alike.  Printed per part:
+everything else (`all`: the report, claims tables, PDFs).  The runs alternate, so load on the machine hits both alike.  Printed per part:
 wall time, CPU-seconds of Snakemake and its jobs (``getrusage(RUSAGE_CHILDREN)``, which do not
 depend on other load; wall time does: the load average is printed), jobs run, and the
 Gauss-Seidel copy's extra CPU against the extra work it was asked for (stability panels,
@@ -82,7 +82,7 @@ def gauss_seidel_targets(part: str) -> list:
 
 
 def run(snakemake, workdir, targets, configfiles, cores):
-    cmd = [snakemake, *targets, f"-c{cores}", "--quiet", "all"]
+    cmd = [snakemake, *targets, f"-c{cores}", "--quiet", "all"]  # --quiet all: no per-job output
     if configfiles:
         cmd += ["--configfile", *configfiles]
     load = os.getloadavg()[0]
@@ -147,7 +147,8 @@ def main(argv=None):
 
     parts = {}
     for part in ("stability", "convergence", "pendulum", "report"):
-        section = "reports/icosim_report.html" if part == "report" else f"results/report/{part}.html"
+        # last: the report and every other target of `all` (claims tables, PDFs, ...)
+        section = "all" if part == "report" else f"results/report/{part}.html"
         extra = [] if part == "report" else gauss_seidel_targets(part)
         parts[part] = {
             "jacobi": run(snakemake, trees["jacobi"], [section], configs["jacobi"], args.cores),

@@ -62,6 +62,14 @@ def _effect(cells, scheme):
     return better, worse, same
 
 
+def _most_stable(c):
+    """The scheme with the largest share, or "tie" if another is within the grid resolution of it."""
+    ranked = sorted(c["shares"].items(), key=lambda kv: -kv[1])
+    if len(ranked) > 1 and ranked[0][1] - ranked[1][1] <= c["resolution"]:
+        return "tie (within the grid resolution)"
+    return LABEL[ranked[0][0]]
+
+
 def _cell_name(c):
     return f"Fig. {c['figure']} ({c['method']}, {c['decomposition']}) k = {c['k']}"
 
@@ -69,22 +77,20 @@ def _cell_name(c):
 def _stability_part(stab) -> str:
     cells = share_cells(stab["shares"])
     schemes = [str(s) for s in stab["shares"]["scheme"].values]
-    rows = [
-        [_cell_name(c)] + [f"{c['shares'][s]:.0%}" for s in schemes] + [LABEL[max(c["shares"], key=c["shares"].get)]]
-        for c in cells
-    ]
+    rows = [[_cell_name(c)] + [f"{c['shares'][s]:.0%}" for s in schemes] + [_most_stable(c)] for c in cells]
     effects = []
     for s in schemes:
         if s == "jacobi":
             continue
         better, worse, same = _effect(cells, s)
-        big = sorted(better + worse, key=lambda cd: -abs(cd[1]))[:4]
+        worst = sorted(worse, key=lambda cd: cd[1])[:4]
         effects.append(
             f"<li><b>{escape(LABEL[s])}</b> has a larger mean stable share than Jacobi in {len(better)} of "
-            f"{len(cells)} (figure, k) cells, a smaller one in {len(worse)}, the same (within the grid resolution) in "
-            f"{len(same)}. Largest changes: "
-            + "; ".join(f"{escape(_cell_name(c))} {d:+.0%}" for c, d in big)
-            + ".</li>"
+            f"{len(cells)} (figure, k) cells"
+            + (": " + "; ".join(f"{escape(_cell_name(c))} {d:+.0%}" for c, d in better) if better else "")
+            + f"; a smaller one in {len(worse)} (largest losses: "
+            + "; ".join(f"{escape(_cell_name(c))} {d:+.0%}" for c, d in worst)
+            + f"); the same, within the grid resolution, in {len(same)}.</li>"
         )
     counts = verdict_counts(stab["claims"])
     body = [
