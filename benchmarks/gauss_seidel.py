@@ -82,18 +82,20 @@ def gauss_seidel_targets(part: str) -> list:
 
 
 def run(snakemake, workdir, targets, configfiles, cores):
-    cmd = [snakemake, *targets, f"-c{cores}", "--quiet", "all"]  # --quiet all: no per-job output
+    cmd = [snakemake, *targets, f"-c{cores}"]
     if configfiles:
         cmd += ["--configfile", *configfiles]
     load = os.getloadavg()[0]
+    log = workdir / f"benchmark_{len(list(workdir.glob('benchmark_*.log')))}.log"
     ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    proc = subprocess.run(cmd, cwd=workdir, capture_output=True, text=True)
+    with open(log, "w") as fh:
+        proc = subprocess.run(cmd, cwd=workdir, stdout=fh, stderr=subprocess.STDOUT, text=True)
     wall = time.perf_counter() - t0
     ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     if proc.returncode != 0:
-        print(proc.stdout[-3000:], proc.stderr[-3000:], sep="\n")
-        sys.exit(f"snakemake failed (exit {proc.returncode}) in {workdir}")
+        print(log.read_text()[-3000:])
+        sys.exit(f"snakemake failed (exit {proc.returncode}) in {workdir}; log {log}")
     return {
         "wall_seconds": wall,
         "cpu_seconds": (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime),
