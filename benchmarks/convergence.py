@@ -1,21 +1,29 @@
-"""Benchmark of the convergence part: cost of one curve and of the co-simulation stepping.
+"""Benchmark of the convergence part (Figs. 21-23), measured side by side in one run.
 
-Prints (no assertions):
-* seconds per macro step of icosim.macrostep.simulate vs the amplification-matrix path, and
-  the speed-up, for a few schemes;
-* seconds for one full convergence curve (16 step sizes, 1e-5 ... 1e-2 s, T = 1 s) with the
-  matrix path, and the estimate for the same curve with simulate;
-* a check that CPU time per simulated second extrapolated from a few timed steps (what the
-  work-precision job does) matches a fully timed run.
+1. The convergence part of the workflow (``snakemake -c2 results/report/convergence.html`` from a
+   clean results/) three times, one after the other:
+   * this tree, default configuration (floor-free errors, ``stepping: error``, H = 1e-6 ... 1e-2 s);
+   * this tree with ``stepping: matrix`` (the float64-only computation of the same curves, same H);
+   * this tree with the old range H = 1e-5 ... 1e-2 s (16 sizes): what the extension to 1e-6 costs;
+   * an older commit (default ``06f2834``, before the floor-free errors: float64 state stepping,
+     H = 1e-5 ... 1e-2 s), from a ``git worktree``.
+   Prints wall and CPU seconds and the ratios new / float64-only and new / old (issue 8's target:
+   at most 1.5x the old convergence part).
+2. Per-step costs of the co-simulation stepping: icosim.macrostep.simulate against the linear-map
+   paths (float64 state stepping and the error recurrence), for a few schemes.
 
-    /work/venv/bin/python benchmarks/convergence.py
+    python benchmarks/convergence.py [--old COMMIT] [--skip-workflow]
 """
 
+from __future__ import annotations
+
+import argparse
 import time
 
 import numpy as np
+from _workflow import run_workflow, tree
 
-from icosim.convergence.experiment import Setup, dimensional_method, step_counts
+from icosim.convergence.experiment import Setup, dimensional_method
 from icosim.convergence.study import Study
 from icosim.convergence.work_precision import time_macro_steps
 
@@ -24,51 +32,71 @@ SCHEMES = [
     ("weighted", {"index": 1, "a": 1.0, "b": 1.0}, "fd", 1),
     ("projection", {}, "dd", 2),
 ]
+TARGET = ["results/report/convergence.html"]
 
 
-def main():
+def workflow_runs(old: str):
+    runs = []
+    with tree(None) as new:
+        runs.append(run_workflow(new, TARGET, label="this tree (floor-free, H 1e-6 ... 1e-2)"))
+        runs.append(
+            run_workflow(
+                new,
+                TARGET,
+                label="this tree, stepping: matrix (float64 only, same H)",
+                overrides={"convergence": {"stepping": "matrix"}},
+            )
+        )
+        runs.append(
+            run_workflow(
+                new,
+                TARGET,
+                label="this tree, H 1e-5 ... 1e-2 (16 sizes)",
+                overrides={"convergence": {"step_sizes": {"H_min": 1e-5, "H_max": 1e-2, "num": 16}}},
+            )
+        )
+    with tree(old) as old_tree:
+        runs.append(run_workflow(old_tree, TARGET, label=f"commit {old} (float64, H 1e-5 ... 1e-2)"))
+    print(f"{'convergence part':55s} {'wall s':>8s} {'CPU s':>8s}")
+    for r in runs:
+        print(f"{r.label:55s} {r.wall:8.1f} {r.cpu:8.1f}")
+    new, f64, short, before = runs
+    print(
+        f"extension of the range to 1e-6 s: +{new.wall - short.wall:.1f} s wall, +{new.cpu - short.cpu:.1f} s CPU; "
+        f"ratio floor-free / float64-only: wall {new.wall / f64.wall:.2f}, CPU {new.cpu / f64.cpu:.2f}; "
+        f"ratio this tree / {old}: wall {new.wall / before.wall:.2f}, CPU {new.cpu / before.cpu:.2f} "
+        f"(load average at the end of each run: {', '.join(f'{r.load[0]:.1f}' for r in runs)})"
+    )
+
+
+def per_step_costs():
     setup = Setup()
     H, N = 1e-4, 10000
     study = Study(setup, [N // 10, N])
-    print(f"{'scheme':45s} {'simulate us/step':>17s} {'matrix us/step':>15s} {'speed-up':>9s}")
+    print(f"{'scheme':45s} {'simulate':>10s} {'matrix':>10s} {'error':>10s}  (us per macro step)")
     for method, params, dec, k in SCHEMES:
         m = dimensional_method(method, H, **params)
-        t = time_macro_steps(setup, H, method, params, dec, k, steps=200, repeats=3, warmup_steps=10)
-        best = np.inf
-        for _ in range(3):
-            t0 = time.process_time()
-            study._states(m, dec, k, H, N, "matrix")
-            best = min(best, time.process_time() - t0)
-        sim, mat = t["seconds_per_step"] * 1e6, best / N * 1e6
-        print(f"{method + ' ' + str(params) + ' ' + dec + ' k=' + str(k):45s} {sim:17.1f} {mat:15.2f} {sim / mat:9.0f}")
+        sim = time_macro_steps(setup, H, method, params, dec, k, steps=200, repeats=3, warmup_steps=10)
+        costs = []
+        for stepping in ("matrix", "error"):
+            best = np.inf
+            for _ in range(3):
+                t0 = time.process_time()
+                study._errors(m, dec, k, 1, stepping)  # (errors, diverged, bits, certificate)
+                best = min(best, time.process_time() - t0)
+            costs.append(best / N * 1e6)
+        label = f"{method} {params} {dec} k={k}"
+        print(f"{label:45s} {sim['seconds_per_step'] * 1e6:10.1f} {costs[0]:10.2f} {costs[1]:10.2f}")
 
-    n = step_counts(1.0, 1e-5, 1e-2, 16)
-    full = Study(setup, n)
-    full.reference(0)  # warm-up of imports / caches
-    t0 = time.perf_counter()
-    full.run("baumgarte", {"index": 1, "mu": 5e-3}, "ff", 2)
-    curve = time.perf_counter() - t0
-    per_step = time_macro_steps(setup, 1e-3, "baumgarte", {"index": 1, "mu": 5e-3}, "ff", 2)["seconds_per_step"]
-    print(
-        f"one curve (16 sizes, {n.sum()} macro steps in total): {curve:.2f} s with the matrix path; "
-        f"simulate would need about {n.sum() * per_step:.0f} s"
-    )
 
-    # extrapolation check: CPU time per simulated second from 20 timed steps vs a fully timed run
-    H, T = 1e-3, 0.5
-    est = time_macro_steps(setup, H, "projection", {}, "ff", 1, steps=20, repeats=3)["seconds_per_simulated_second"]
-    s = Setup(end_time=T)
-    st = Study(s, [int(T / H) // 2, int(T / H)])
-    m = dimensional_method("projection", H)
-    best = np.inf
-    for _ in range(3):
-        t0 = time.process_time()
-        st._states(m, "ff", 1, H, int(T / H), "simulate")
-        best = min(best, time.process_time() - t0)
-    print(
-        f"CPU s per simulated second, projection ff k=1, H = 1e-3: extrapolated {est:.3f}, "
-        f"full run {best / T:.3f} (ratio {best / T / est:.2f}; the full run includes the set-up)"
-    )
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--old", default="06f2834", help="commit to compare with (default: before issue 8)")
+    ap.add_argument("--skip-workflow", action="store_true", help="only the per-step costs")
+    args = ap.parse_args(argv)
+    per_step_costs()
+    if not args.skip_workflow:
+        workflow_runs(args.old)
 
 
 if __name__ == "__main__":

@@ -17,7 +17,8 @@ from icosim.claims import enforce_references, read_verdicts, reference_mismatche
 from icosim.model import ParameterError
 from icosim.report.claims import claims_table
 from icosim.stability.checks import grid_resolution, stable_share
-from icosim.stability.panels import PanelSpec, figure_panels, stability_panel
+from icosim.stability.datasets import stability_panel
+from icosim.stability.panels import PanelSpec, figure_panels
 
 ROOT = Path(__file__).resolve().parents[1]
 CLAIMS_FILE = ROOT / "config" / "claims" / "stability.yaml"
@@ -59,12 +60,11 @@ def test_select_matches_numbers_numerically_and_lists():
 
 def test_stable_share_counts_points_and_region():
     ds = panel(4, n=11)  # columns lr1 = -2.0 ... -1.4 stable
-    share, s, n = stable_share(ds)
-    assert (s, n) == (44, 121) and share == pytest.approx(44 / 121)
-    share, s, n = stable_share(ds, {"lr1": [-2.0, -1.5]})  # 3 columns, all stable
-    assert (s, n) == (33, 33)
-    _, _, n = stable_share(ds, {"exclude_undamped": True})
-    assert n == 110  # the column lr1 = 0 is left out
+    share = stable_share(ds)
+    assert (share.stable, share.open, share.n) == (44, 0, 121) and share.low == share.high == pytest.approx(44 / 121)
+    share = stable_share(ds, {"lr1": [-2.0, -1.5]})  # 3 columns, all stable
+    assert (share.stable, share.n) == (33, 33)
+    assert stable_share(ds, {"exclude_undamped": True}).n == 110  # the column lr1 = 0 is left out
     with pytest.raises(ParameterError, match="region"):
         stable_share(ds, {"lr2": [0, 1]})
     with pytest.raises(ParameterError, match="no grid point"):
@@ -267,9 +267,10 @@ def test_the_claims_cover_the_issue_list():
 
 
 def test_index3_claim_on_a_coarse_engine_panel():
-    """Sect. 3.5 on real (coarse) data: index 3 is stable at k = 0 and never at k = 1."""
+    """Sect. 3.5 on real (coarse) data: index 3 is stable at k = 0 and never at k = 1.  (21 x 21: the marginal
+    undamped column, 1/21 of the points, cannot turn the 90 % of fig18_k0_good, as the 1/6 of a 6 x 6 grid would.)"""
     cfg = yaml.safe_load(CONFIG_FILE.read_text())["stability"]
-    coarse = {"lr1": [-2.0, 0.0], "li1": [0.0, 2.0], "n": 6}
+    coarse = {"lr1": [-2.0, 0.0], "li1": [0.0, 2.0], "n": 21}
     specs = figure_panels(
         "18", cfg["figures"]["18"], grid=coarse, zoom_grid=coarse, precision={"policy": "auto", "digits": 30}
     )
@@ -388,3 +389,50 @@ def test_writer_references_and_table(tmp_path):
     assert tsv[2].split("\t")[4:6] == ["pass", "fail"]
     html = claims_table(records, note_header="how read")
     assert "NOT reproduced" in html and "how read" in html and html.count('class="pass"') == 2
+
+
+def _with_verdicts(ds, marginal_cols):
+    """The synthetic panel with verdicts: its last ``marginal_cols`` lr1 columns marginal (neither stable nor
+    unstable), as certification reports points whose proven enclosure contains 1."""
+    verdict = np.where(ds["stable"].values, 0, 1).astype(np.int8)
+    verdict[-marginal_cols:, :] = 2
+    return ds.assign(
+        verdict=(("lr1", "li1"), verdict),
+        stable=(("lr1", "li1"), verdict == 0),
+        certified=(("lr1", "li1"), verdict == 2),
+    )
+
+
+def test_marginal_points_make_a_share_an_interval():
+    ds = _with_verdicts(panel(4, n=11), 1)  # the undamped column lr1 = 0 marginal
+    share = stable_share(ds)
+    assert (share.stable, share.open, share.certified) == (44, 11, 11)
+    assert share.low == pytest.approx(44 / 121) and share.high == pytest.approx(55 / 121)
+
+
+def test_a_claim_the_marginal_points_could_turn_is_undecided():
+    """'Only stable points' on a panel whose unstable-or-stable status rests on marginal points: undecided, and
+    it says how many points are certified and marginal; excluding them decides it."""
+    ds = _with_verdicts(panel(10, n=11), 1)  # every damped point stable, the undamped column marginal
+    c = claim({"kind": "stable_fraction", "select": {"figure": "9"}, "op": "==", "value": 1})
+    v = evaluate([c], [ds])[0]
+    assert v.verdict == "undecided" and "11 marginal" in v.measured and "121 points used: 11 certified" in v.measured
+    c2 = claim(
+        {
+            "kind": "stable_fraction",
+            "select": {"figure": "9"},
+            "op": "==",
+            "value": 1,
+            "region": {"exclude_undamped": True},
+        }
+    )
+    assert evaluate([c2], [ds])[0].verdict == "pass"
+
+
+def test_compare_with_marginal_points_decides_only_beyond_them():
+    a = _with_verdicts(panel(8, n=11, row=2), 1)  # share 88/121 ... 99/121
+    b = panel(2, n=11, row=1)  # share 22/121
+    c = claim({"kind": "compare", "a": {"row": 2}, "b": {"row": 1}, "relation": "greater"})
+    assert evaluate([c], [a, b])[0].verdict == "pass"  # greater for every way the marginal points go
+    b_close = panel(9, n=11, row=1)  # 99/121: a is less only if none of its marginal points is stable
+    assert evaluate([c], [a, b_close])[0].verdict == "undecided"

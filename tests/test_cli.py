@@ -27,18 +27,22 @@ def test_json_output_matches_library(capsys):
     data = json.loads(out)
     expected, _ = spectral_radius_float64(TestModel(-0.5, 0.7, 2, 2, 2), baumgarte(mu=1, index=1), "ff", 2)
     assert data["rho"] == pytest.approx(float(expected), rel=1e-13)
-    assert data["digits"] == 15 and data["stable"] is True
+    assert data["rho_float64"] == float(expected)  # float64's own value beside the proven one
+    # the value is the midpoint of the proven enclosure narrowed to a double's 17 digits
+    assert data["digits"] == 17 and data["stable"] is True and data["certified"] is True
+    assert float(data["rho_lower"]) <= data["rho"] <= float(data["rho_upper"])
     assert data["method_parameters"] == {"beta": 2.0, "gamma": 1.0, "mu": 1.0, "index": 1}
 
 
-def test_digits_option_uses_multiprecision(capsys):
+def test_digits_option_prints_that_many_proven_digits(capsys):
     code, out = run(
         capsys, BASE + ["--method", "projection", "--decomposition", "dd", "--k", "1", "--digits", "40", "--json"]
     )
     data = json.loads(out)
     assert code == 0 and data["digits"] == 40
     ref, _ = spectral_radius_float64(TestModel(-0.5, 0.7, 2, 2, 2), __import__("icosim").projection(), "dd", 1)
-    assert data["rho"] == pytest.approx(float(ref), rel=1e-12)
+    assert data["rho_float"] == pytest.approx(float(ref), rel=1e-12)
+    assert isinstance(data["rho"], str) and len(data["rho"].replace("0.", "", 1).lstrip("0")) == 40
 
 
 @pytest.mark.parametrize(
@@ -108,7 +112,8 @@ def test_gauss_seidel_scheme_matches_library(capsys, first, scheme):
     expected, _ = spectral_radius_float64(
         TestModel(-0.5, 0.7, 2, 2, 2), weighted_multiplier(1, 1), "fd", 1, scheme=scheme
     )
-    assert code == 0 and data["scheme"] == scheme.name
+    assert code == 0 and data["scheme"] == scheme.name and data["first"] == scheme.first
+    assert data["verdict"] in ("stable", "unstable") and data["certified"]
     assert data["rho"] == pytest.approx(float(expected), rel=1e-13)
     code, out = run(capsys, argv[:-1])
     assert scheme.label in out
@@ -116,7 +121,8 @@ def test_gauss_seidel_scheme_matches_library(capsys, first, scheme):
 
 def test_default_scheme_is_jacobi(capsys):
     code, out = run(capsys, BASE + ["--method", "projection", "--decomposition", "ff", "--k", "0", "--json"])
-    assert json.loads(out)["scheme"] == "jacobi"
+    data = json.loads(out)
+    assert data["scheme"] == "jacobi" and data["first"] is None
 
 
 @pytest.mark.parametrize(
@@ -134,3 +140,73 @@ def test_bad_scheme_arguments_exit_2_naming_them(capsys, extra, argument):
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert argument in err and "Traceback" not in err
+
+
+# -- N-digit results and numbers as users type them (issue: convergence decided) ------------------------
+def test_digits_take_the_decimals_as_typed_and_print_n_digits(capsys):
+    """``--lr1 -0.3 --digits 40`` computes at lr1 = -3/10 exactly (not the double -0.29999999999999998890) and prints
+    40 significant digits: it equals the library at the exact decimal and differs from the double input's value."""
+    from fractions import Fraction
+
+    import mpmath
+
+    from icosim import weighted_multiplier
+    from icosim.stability import spectral_radius_mp
+
+    argv = ["rho", "--lr1", "-0.3", "--li1", "0.05", "--am21", "1.1", "--alr21", "0.7", "--ali21", "1.3"]
+    argv += ["--method", "weighted", "--a", "0.1", "--b", "0.7", "--decomposition", "ff", "--k", "2"]
+    code, out = run(capsys, argv + ["--digits", "40", "--json"])
+    data = json.loads(out)
+    m = weighted_multiplier(Fraction("0.1"), Fraction("0.7"))
+    exact = spectral_radius_mp(TestModel(*(Fraction(v) for v in ("-0.3", "0.05", "1.1", "0.7", "1.3"))), m, "ff", 2, 60)
+    doubles = spectral_radius_mp(TestModel(-0.3, 0.05, 1.1, 0.7, 1.3), weighted_multiplier(0.1, 0.7), "ff", 2, 60)
+    with mpmath.workdps(60):
+        got = mpmath.mpf(data["rho"])
+        assert abs(got - exact) <= mpmath.mpf(10) ** -38 * exact  # 40 digits, the last one rounded
+        assert abs(doubles - exact) > mpmath.mpf(10) ** -20 * exact  # the typed decimals matter at 40 digits
+    code, text = run(capsys, argv + ["--digits", "40"])
+    assert text.startswith(f"rho = {data['rho']}  (")
+
+
+@pytest.mark.parametrize("value", ["-1e-3", "-2.5E-2", "-.5", "-3"])
+def test_negative_numbers_as_users_type_them(capsys, value):
+    """``--lr1 -1e-3`` (exponent notation after a space) is the number -1e-3, not an unknown option."""
+    argv = ["rho", "--lr1", value, "--li1", "0.7", "--am21", "2", "--alr21", "2", "--ali21", "2"]
+    code, out = run(capsys, argv + ["--method", "projection", "--decomposition", "ff", "--k", "1", "--json"])
+    assert code == 0 and json.loads(out)["model"]["lr1"] == float(value)
+
+
+def test_rho_at_128_and_160_digits_agree_to_120_digits():
+    """The multiprecision path is exact end to end: on points of every scheme kind the 128- and 160-digit results
+    agree to >= 120 digits (inputs exact, guard digits for the exponentials, exact method parameters)."""
+    from fractions import Fraction
+
+    import mpmath
+
+    from icosim import make_method
+    from icosim.stability import spectral_radius_mp
+
+    cases = [
+        ("baumgarte", {"index": 1, "mu": "1"}, "ff", 2),
+        ("baumgarte", {"index": 2, "mu": "0.25"}, "ff", 0),
+        ("baumgarte", {"index": 1, "mu": "1"}, "fd", 1),
+        ("weighted", {"a": "1", "b": "1"}, "ff", 2),
+        ("weighted", {"a": "0.5", "b": "0.25"}, "fd", 0),
+        ("weighted", {"index": 2, "a": "0.5"}, "ff", 1),
+        ("baumgarte", {"index": 3}, "ff", 0),
+        ("projection", {}, "ff", 1),
+        ("projection", {}, "fd", 2),
+        ("projection", {}, "dd", 0),
+    ]
+    points = ["-0.3 0.4 1 1 1", "-1.7 0.2 2 2 2", "-0.05 1.9 10 1 1", "-0.6 0.6 1 10 1", "-1 1.3 0.5 0.3 4"]
+    for i, (name, params, dec, k) in enumerate(cases):
+        method = make_method(name, **{key: Fraction(v) if isinstance(v, str) else v for key, v in params.items()})
+        point = TestModel(*(Fraction(v) for v in points[i % len(points)].split()))
+        r128 = spectral_radius_mp(point, method, dec, k, 128)
+        r160 = spectral_radius_mp(point, method, dec, k, 160)
+        with mpmath.workdps(170):
+            assert abs(mpmath.mpf(r128) - mpmath.mpf(r160)) <= mpmath.mpf(10) ** -120 * abs(mpmath.mpf(r160)), (
+                name,
+                dec,
+                k,
+            )

@@ -1,4 +1,4 @@
-"""Unit tests of icosim.convergence: Eq. (72), the order fit, stepping, unstable detection."""
+"""Unit tests of icosim.convergence: Eq. (72), the asymptotic order, stepping, unstable detection."""
 
 from pathlib import Path
 
@@ -15,7 +15,7 @@ from icosim.checks import load_claims, parse_claims
 from icosim.convergence.config import check_claims_against_config, study_from_config
 from icosim.convergence.datasets import run_panel
 from icosim.convergence.experiment import Setup, dimensional_method, method_attrs, oscillation_summary, step_counts
-from icosim.convergence.fit import fit_order
+from icosim.convergence.fit import asymptotic_order, local_slopes
 from icosim.convergence.metric import nrmse
 from icosim.convergence.panels import PanelSpec, figure_layout, figure_panels
 from icosim.convergence.study import Study, iterate_linear_map
@@ -136,20 +136,27 @@ def test_dimensional_baumgarte_parameters():
         ("projection", {}, "ff", 0),
     ],
 )
-def test_matrix_stepping_equals_simulate(method, params, dec, k):
-    """The amplification-matrix path is the same macro-step algorithm (by linearity)."""
+def test_steppings_agree(method, params, dec, k):
+    """The amplification-matrix path is the same macro-step algorithm as simulate (by linearity), and the
+    floor-free error recurrence gives the same errors where float64 state stepping has no floor yet."""
     study = Study(Setup(end_time=0.3), [300, 600])  # 600 > one block of powers
     for i, H in enumerate(study.H):
         m = dimensional_method(method, H, **params)
-        fast, d1 = study._states(m, dec, k, H, int(study.n_steps[i]), "matrix")
-        slow, d2 = study._states(m, dec, k, H, int(study.n_steps[i]), "simulate")
-        assert d1 is None and d2 is None
+        fast, d1, _, _ = study._errors(m, dec, k, i, "matrix")
+        slow, d2, _, _ = study._errors(m, dec, k, i, "simulate")
+        floor_free, d3, bits, cert = study._errors(m, dec, k, i, "error")
+        assert d1 is None and d2 is None and d3 is None and bits >= 128 and cert.verdict == "stable"
         # round-off only: ~eps per step amplified by the conditioning of the corrections
         # (an algorithmic difference would show at the size of the error, >= 1e-9 here)
+        fast, slow = fast.array(), slow.array()
+        floor_free = floor_free.array()[:, : fast.shape[1]]  # its further columns: the history of e
         np.testing.assert_allclose(fast, slow, rtol=0, atol=1e-10 * Setup().x0)
+        np.testing.assert_allclose(floor_free, fast, rtol=0, atol=1e-10 * Setup().x0)
     a = study.run(method, params, dec, k, stepping="matrix")
     b = study.run(method, params, dec, k, stepping="simulate")
+    c = study.run(method, params, dec, k)
     np.testing.assert_allclose(a.nrmse, b.nrmse, rtol=1e-6)
+    np.testing.assert_allclose(c.nrmse, a.nrmse, rtol=1e-6)
 
 
 def test_iterate_linear_map_powers_and_bound():
@@ -187,31 +194,47 @@ def test_slowly_growing_run_flagged_by_spectral_radius():
     assert (r.spectral_radius > 1).all() and r.unstable.all() and np.isnan(r.nrmse).all()
 
 
-# ------------------------------------------------------------------ order fit
-def test_fit_recovers_order_and_stops_before_floor():
-    H = np.logspace(-5, -2, 16)
-    n = np.round(1 / H)
-    rng = np.random.default_rng(0)
-    err = 3.0 * H**3 * (1 + 1e-3 * rng.standard_normal(H.size))
-    floor = 1e-11 * (1 + rng.random(H.size))  # round-off floor: noisy, not decreasing
-    f = fit_order(H, err + floor, n)
-    assert f.order == pytest.approx(3.0, abs=0.05)
-    assert f.H_min > 1e-4  # the floor points are not in the fitted range
-    assert f.H_max == pytest.approx(H.max())
+# ------------------------------------------------------------------ asymptotic order
+def test_local_slopes_of_a_power_law_and_of_an_unstable_gap():
+    H = np.geomspace(1e-5, 1e-2, 7)
+    err = 3.0 * H**2.5
+    err[2] = np.nan  # an unstable run: no slope on either side of it
+    H_mid, slope = local_slopes(H[::-1], err[::-1])  # any order in, increasing H out
+    np.testing.assert_allclose(H_mid, np.sqrt(H[:-1] * H[1:]), rtol=1e-12)
+    np.testing.assert_allclose(slope[[0, 3, 4, 5]], 2.5, rtol=1e-12)
+    assert np.isnan(slope[[1, 2]]).all()
 
 
-def test_fit_ignores_preasymptotic_range_and_nan():
-    H = np.logspace(-4, -1, 16)
-    err = H**2 + 1e3 * H**4  # order 2 for small H, 4 at large H
-    err[3] = np.nan  # an unstable point
-    f = fit_order(H, err)
-    assert f.order == pytest.approx(2.0, abs=0.1)
-    assert f.H_max < 2e-2 and not f.used[3] and not f.used[-4:].any()  # slope > 2.25 there
+def test_order_is_read_off_the_smallest_decade_only():
+    """A power law is asymptotic; the order is its exponent whatever happens at larger H."""
+    H = np.geomspace(1e-6, 1e-2, 21)
+    err = H**3 + np.where(H > 1e-4, 1e2 * H**4, 0.0)  # a different slope above 1e-4 does not matter
+    f = asymptotic_order(H, err)
+    assert f.status == "asymptotic" and f.order == pytest.approx(3.0, abs=1e-9)
+    assert f.H_min == pytest.approx(1e-6) and f.H_max == pytest.approx(1e-5) and f.n_points == 6
+    assert f.used.sum() == 6 and f.used[H <= 1e-5 * (1 + 1e-9)].all()
 
 
-def test_fit_too_few_points():
-    f = fit_order(np.array([1e-3, 2e-3, 4e-3]), np.array([1e-6, 4e-6, np.nan]))
-    assert np.isnan(f.order) and "fewer than" in f.reason
+def test_a_curve_still_turning_is_pre_asymptotic():
+    """H^2 + c H: the local slope moves from 1 toward 2 across the decade -- not yet an order."""
+    H = np.geomspace(1e-6, 1e-2, 21)
+    turning = asymptotic_order(H, H**2 + 3e-6 * H)
+    assert turning.status == "pre-asymptotic" and not turning.decided
+    assert "differ from their fit" in turning.reason and turning.spread > 0.1
+    settled = asymptotic_order(H, H**2 + 1e-9 * H)  # the H term is negligible above 1e-6 only by 1e-3
+    assert settled.status == "asymptotic" and settled.order == pytest.approx(2.0, abs=0.01)
+
+
+def test_instability_leaves_no_asymptotic_order():
+    H = np.geomspace(1e-6, 1e-2, 9)
+    err = H**2
+    small_unstable = H < 5e-6
+    f = asymptotic_order(H, np.where(small_unstable, np.nan, err), small_unstable)
+    assert f.status == "unstable as H -> 0" and np.isnan(f.order) and "stable only from H" in f.reason
+    g = asymptotic_order(H, np.full(H.shape, np.nan), np.ones(H.shape, bool))
+    assert g.status == "unstable at every H"
+    few = asymptotic_order(H[:3], err[:3], min_points=4)
+    assert few.status == "too few points"
 
 
 # ------------------------------------------------------------------ panels, datasets, work-precision
@@ -257,7 +280,7 @@ def test_schema_rejects_unknown_key():
 def test_panel_dataset_and_work_precision():
     spec = PanelSpec("23", "ff", "all", "projection", {}, ({},), (0, 1))
     study = Study(Setup(end_time=0.2), step_counts(0.2, 2e-4, 2e-2, 5))
-    ds = run_panel(spec, study, {"min_points": 3})
+    ds = run_panel(spec, study, {"min_points": 2, "decades": 1.0, "tolerance": 0.1})
     assert ds["nrmse"].dims == ("index", "k", "H") and ds["H"].attrs["units"] == "s"
     assert ds.attrs["figure"] == "23" and ds.attrs["method"] == "projection" and ds.attrs["decomposition"] == "ff"
     assert np.all(np.diff(ds["order"].values[0]) > 0.5)  # k = 1 converges faster than k = 0
@@ -330,6 +353,7 @@ def test_figure_never_draws_unstable_as_error():
             "unstable": (("index", "k", "H"), unstable),
             "fit_used": (("index", "k", "H"), np.zeros_like(unstable)),
             "order": (("index", "k"), [[np.nan]]),
+            "order_status": (("index", "k"), [["unstable as H -> 0"]]),
         },
         coords={"H": H, "index": [1], "k": [0]},
     )
@@ -369,7 +393,10 @@ def test_figure_never_draws_unstable_as_error():
             lambda c: c["step_sizes"].update(H_min=0.45, H_max=0.5, num=4),
             r"convergence\.step_sizes: .* only the step count",
         ),
-        (lambda c: c["fit"].update(min_points=20), r"convergence\.fit\.min_points = 20 exceeds the 16 step sizes"),
+        (
+            lambda c: c["fit"].update(min_points=20),
+            r"convergence\.fit\.min_points = 20 exceeds the 6 step sizes .* smallest-H window",
+        ),
     ],
 )
 def test_bad_configuration_is_refused_naming_the_key(change, message):

@@ -8,6 +8,7 @@ monolithic solution.
 
 from fractions import Fraction
 
+import mpmath
 import numpy as np
 import pytest
 from helpers import correct_all, growth_rate, predict_all
@@ -30,7 +31,7 @@ from icosim.backend import Float64, Multiprecision
 from icosim.exact import MonolithicSolution, consistent_start
 from icosim.lagrange import corrector_nodes, predictor_nodes, weights_at
 from icosim.macrostep import simulate
-from icosim.stability import amplification_matrix, is_stable
+from icosim.stability import amplification_matrix
 from icosim.subsystems import OscillatorSubsystem
 
 SCHEMES = [
@@ -332,9 +333,11 @@ def test_precision_policy_classifies_like_128_digits_at_the_extremes(method, dec
     model = TestModel(pts[:, 0], pts[:, 1], am21, 2.0, 0.5)
     res = spectral_radius(model, method, dec, k)
     assert np.all(np.isfinite(res.rho))
-    ref = np.array([float(spectral_radius_mp(TestModel(p[0], p[1], am21, 2.0, 0.5), method, dec, k)) for p in pts])
-    assert np.all(np.isfinite(ref))
-    np.testing.assert_array_equal(res.stable, is_stable(ref, np.full(ref.shape, 128)))
+    ref = [spectral_radius_mp(TestModel(p[0], p[1], am21, 2.0, 0.5), method, dec, k) for p in pts]
+    assert all(mpmath.isfinite(r) for r in ref)
+    # every verdict agrees with 128 digits; "marginal" only where rho = 1 to those digits (no float64 guess there)
+    for verdict, r in zip(res.verdict, ref):
+        assert verdict == ("stable" if r < 1 else "unstable") or (verdict == "marginal" and abs(r - 1) < 1e-60)
 
 
 def test_float64_fails_outright_at_the_extremes_and_the_policy_catches_it():
@@ -347,16 +350,18 @@ def test_float64_fails_outright_at_the_extremes_and_the_policy_catches_it():
     failed = ~np.isfinite(raw)
     assert failed.any()
     res = spectral_radius(model, method, "ff", 0)
-    assert np.all(res.digits[failed] == 128)
+    assert np.all(res.arithmetic[failed] == "ball") and np.all(res.certified[failed])
+    assert np.all(np.isin(res.verdict[failed], ("stable", "unstable")))
     assert np.all(np.isfinite(res.rho))
 
 
 def test_origin_is_marginal_and_decided_at_high_precision():
-    # a free mass: a Jordan block at eigenvalue 1, float64 only gets rho to ~1e-8
+    # a free mass: a Jordan block at eigenvalue 1, float64 only gets rho to ~1e-8; the proof cannot separate rho
+    # from 1 at any precision (it is 1), so the point is marginal, with an enclosure containing 1
     res = spectral_radius(TestModel(0.0, 0.0, 2.0, 2.0, 2.0), baumgarte(mu=1, index=1), "ff", 2)
-    assert res.digits == 128
-    assert abs(res.rho - 1) < 1e-30
-    assert res.stable
+    assert res.verdict == "marginal" and res.arithmetic == "ball" and res.bits == 1024
+    assert res.rho_lower <= 1 <= res.rho_upper and res.rho_upper - res.rho_lower < 1e-9
+    assert not res.stable
 
 
 def test_mp_backend_does_not_touch_global_mpmath_precision():
@@ -534,15 +539,17 @@ def test_policy_accepts_physical_models_including_overdamped():
 def test_policy_survives_a_point_no_precision_can_decide(monkeypatch):
     import icosim.stability.policy as st
 
-    original = st.spectral_radius_mp
+    original = st.certify_spectral_radius
 
     def fails_at_origin(point, *args, **kwargs):
         if float(point.lr1) == 0 and float(point.li1) == 0:
-            raise ZeroDivisionError
+            raise ZeroDivisionError("no result here")
         return original(point, *args, **kwargs)
 
-    monkeypatch.setattr(st, "spectral_radius_mp", fails_at_origin)
-    model = TestModel(np.array([0.0, 0.0, -0.5]), np.array([0.0, 0.3, 0.5]), 2.0, 2.0, 2.0)
+    monkeypatch.setattr(st, "certify_spectral_radius", fails_at_origin)
+    # identical undamped subsystems: rho = 1 exactly at (0, 0.3) (tests/test_certified.py checks it to 80 digits)
+    model = TestModel(np.array([0.0, 0.0, -0.5]), np.array([0.0, 0.3, 0.5]), 1.0, 1.0, 1.0)
     res = st.spectral_radius(model, baumgarte(mu=1, index=1), "ff", 2)
-    assert res.n_failed == 1 and res.digits[0] == -1 and np.isnan(res.rho[0]) and not res.stable[0]
-    assert np.all(np.isfinite(res.rho[1:]))
+    assert res.n_failed == 1 and res.verdict[0] == "undecided" and not res.stable[0]
+    assert res.reason[0] == "ZeroDivisionError: no result here" and res.digits[0] == -1
+    assert res.verdict[1] == "marginal" and res.verdict[2] in ("stable", "unstable")

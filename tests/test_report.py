@@ -6,6 +6,9 @@ numbers and the figures embedded, not the wording around them.
 
 import base64
 import hashlib
+import io
+import json
+import re
 
 import numpy as np
 import pytest
@@ -17,7 +20,7 @@ from icosim.report.convergence import convergence_section
 from icosim.report.html import table
 from icosim.report.page import report_page
 from icosim.report.pendulum import pendulum_section
-from icosim.report.stability import stability_section
+from icosim.report.stability import overturned_html, stability_section
 
 
 @pytest.fixture(scope="module")
@@ -66,16 +69,23 @@ GRID = {"lr1": [-2.0, 0.0], "li1": [0.0, 2.0], "n": 21}
 ZOOM = {"lr1": [-0.2, 0.0], "li1": [0.0, 0.2], "n": 11}
 
 
-def panel_attrs(row, k, hp):
+def panel_attrs(row, k, hp, overturned=()):
     return {
         "figure": "9",
         "row": row,
         "k": k,
+        "view": "full",
         "n_points": 441,
         "n_high_precision": hp,
         "n_high_precision_undamped": hp // 2,
+        "n_certified": hp,
+        "n_marginal": hp // 5,
+        "n_audited": 4,
+        "n_overturned": len(overturned),
+        "overturned_points": json.dumps(list(overturned)),
         "cpu_seconds_float64": 1.5,
-        "cpu_seconds_mp": 0.5,
+        "cpu_seconds_certify": 0.5,
+        "cpu_seconds_mp": 0.0,
     }
 
 
@@ -93,13 +103,44 @@ def test_stability_section_counts_precision_claims_and_figures(png):
         figure_pngs=[str(png)],
     )
     assert html.startswith('<section id="stability">')
-    assert "100 of 1764 grid points (5.67%) needed high precision, 50 of them on the undamped axis" in html
+    assert "100 of 1764 grid points (5.67%) were certified, 20 of them marginal, 50 on the undamped axis" in html
     assert "(2 of 8 CPU-seconds in 4 panel jobs" in html and "took 25% of the sweeps' compute time" in html
+    # no float64 verdict overturned: said, with the count of points checked
+    assert "Overturned float64 verdicts: none.</b> 16 points that float64 decided were also certified" in html
     assert "3 claims" in html and "1 pass, 1 fail, 1 undecided" in html
     assert "raise αm21, αλr21, αλi21 in turn to 5." in html and "because &lt;reasons&gt;" in html
     assert "row 2: αm21 = 5, αλr21 = 1, αλi21 = 1" in html  # row labels from the configuration
-    assert "mpmath at 64 digits" in html and "21 × 21 points" in html
-    assert base64.b64encode(png.read_bytes()).decode() in html  # the figure itself, embedded
+    assert "at 128 bits, where undecided once more at 1024" in html and "21 × 21 points" in html
+    assert same_pixels(embedded_images(html)[0], png.read_bytes())  # the figure itself, embedded
+    assert '<figure id="stability-fig9" data-paper-figures="9">' in html
+    assert '<tr id="stability-claim-b">' in html and 'Used by claims: <a href="#stability-claim-a">a</a>' in html
+
+
+def embedded_images(html) -> list:
+    """The bytes of every data-URI image of a page."""
+    return [base64.b64decode(m) for m in re.findall(r'src="data:image/[a-z+]+;base64,([^"]+)"', html)]
+
+
+def same_pixels(a: bytes, b: bytes) -> bool:
+    from PIL import Image
+
+    with Image.open(io.BytesIO(a)) as x, Image.open(io.BytesIO(b)) as y:
+        return x.size == y.size and np.array_equal(np.asarray(x.convert("RGB")), np.asarray(y.convert("RGB")))
+
+
+def test_stability_section_lists_every_overturned_float64_verdict():
+    point = {
+        "lr1": -0.5,
+        "li1": 0.25,
+        "float64_verdict": "stable",
+        "verdict": "unstable",
+        "rho_lower": 1.000001,
+        "rho_upper": 1.000002,
+    }
+    html = overturned_html([panel_attrs(1, 0, 10), panel_attrs(2, 1, 10, overturned=[point])])
+    assert "Overturned float64 verdicts: 1</b> of 8 points checked" in html
+    assert "<td>Fig. 9 row 2 k = 1 (full)</td><td>-0.5</td><td>0.25</td><td>stable</td><td>unstable</td>" in html
+    assert "[1.000001, 1.000002]" in html
 
 
 def _convergence_inputs(tmp_path):
@@ -112,7 +153,8 @@ def _convergence_inputs(tmp_path):
     setup = Setup(end_time=0.2)
     steps = {"H_min": 2e-4, "H_max": 2e-2, "num": 5}
     study = Study(setup, step_counts(0.2, steps["H_min"], steps["H_max"], steps["num"]))
-    ds = run_panel(PanelSpec("23", "ff", "all", "projection", {}, ({},), (0, 1)), study, {"min_points": 3})
+    fit = {"decades": 1.0, "tolerance": 0.1, "min_points": 2}
+    ds = run_panel(PanelSpec("23", "ff", "all", "projection", {}, ({},), (0, 1)), study, fit)
     fig = {"title": "projection", "method": "projection", "columns": [{}], "rows": [{}], "decompositions": ["ff"]}
     entries = resolve_scheme({"figure": "23"}, {"23": fig}, [0, 1])
     wp = work_precision(entries, {("ff", "23", "all"): ds}, setup, steps=1, repeats=1, warmup_steps=0)
@@ -125,21 +167,26 @@ def test_convergence_section_reports_curves_claims_and_work_precision(tmp_path, 
         "curve": "ff, projection, k = 0",
         "claimed": "O(H^2)",
         "order": float(ds["order"].values[0, 0]),
+        "order_status": str(ds["order_status"].values[0, 0]),
+        "reason": str(ds["fit_note"].values[0, 0]),
         "fit_H_min": 2e-4,
         "fit_H_max": 2e-2,
         "local_slopes": [1.9, 2.1],
         "order_second_half": float("nan"),
+        "order_startup": 3.5,
         "stable_H": "all",
         "verdict": "pass",
     }
     claim = record("proj", "pass", numbers={"rows": [row], "tolerance": 0.3})
     fig_png = tmp_path / "fig23_ff.png"
     fig_png.write_bytes(png.read_bytes())
+    (tmp_path / "fig23_ff_slopes.png").write_bytes(png.read_bytes())
     html = convergence_section(
         setup=setup.as_dict(),
         step_sizes=steps,
-        stepping="matrix",
-        fit={"min_points": 3, "tolerance": 0.25, "min_order": 0.5, "floor_factor": 10.0},
+        stepping="error",
+        fit={"decades": 1.0, "tolerance": 0.1, "min_points": 2},
+        startup_steps=7,
         unstable={"growth_bound": 1e3, "spectral_policy": "auto", "digits": 128},
         targets=[1e-2],
         figures={"23": fig},
@@ -154,7 +201,10 @@ def test_convergence_section_reports_curves_claims_and_work_precision(tmp_path, 
     assert f"{len(study_H(ds))} sizes H = T/N_total from 0.0002 s to 0.02 s" in html
     assert "1 claims (config/claims/convergence.yaml)" in html and "within ±0.3 of the claim" in html
     assert f"{row['order']:.2f} on [0.0002, 0.02] s" in html and "1.90 … 2.10" in html
-    assert "<b>Fig. 23, ff</b> (as in the paper)" in html
+    assert f"<td>{row['order_status']}" in html and "<td>3.50</td>" in html  # status and start-up order per curve
+    assert "within ±0.1 of it" in html and "first 7 macro steps" in html  # the decision rule and start-up window
+    assert "no round-off floor" in html and f"proven at {int(ds['defect_bits'].max())} bits" in html
+    assert "<b>Fig. 23, ff</b> (as in the paper)" in html and html.count('class="pair"') == 1
     for scheme in wp["scheme"].values:
         assert str(scheme) in html or str(scheme).split(" ", 1)[1] in html
 
@@ -239,3 +289,51 @@ def test_page_orders_sections_and_hashes_the_configuration(tmp_path):
     assert '<li><a href="#b">b</a></li><li><a href="#a">a</a></li>' in html
     assert hashlib.sha256(cfg.read_bytes()).hexdigest() in html and "<code>abc</code>" in html
     assert "parts without a section (not built): c" in html and "git commit: <code>0123</code>" in html
+
+
+def test_summary_first_counts_verdicts_and_links_each_disagreement(tmp_path, png):
+    note = "Read as shares.  Disagreement (the data stand): fd is less stable than ff, e.g. in Fig. 9.  More text."
+    stab = [record("a", "pass"), record("b", "fail", note=note), record("c", "undecided")]
+    pend = [record("sect4", "pass", figures=["6", "7", "8"])]
+    section = stability_section(
+        figures={"9": STABILITY_FIGURE},
+        grid=GRID,
+        zoom_grid=ZOOM,
+        precision={"policy": "auto", "digits": 64},
+        style="field",
+        decisions=[],
+        panel_attrs=[panel_attrs(1, 0, 1)],
+        claims=stab,
+        figure_pngs=[str(png)],
+    )
+    cfg = tmp_path / "config.yaml"
+    cfg.write_text("report: {}\n")
+    html = report_page(
+        title="T",
+        parts=["stability", "pendulum"],
+        skipped=[],
+        sections=[section, "<section id='pendulum'>P</section>"],
+        configfiles=[str(cfg)],
+        config_sha256={},
+        precision={"policy": "auto", "digits": 128},
+        commit_text="0",
+        generated="now",
+        claims={"stability": stab, "pendulum": pend},
+    )
+    assert html.index('<section id="summary">') < html.index('<section id="stability">')  # the answer first
+    summary = html[html.index('<section id="summary">') : html.index('<section id="stability">')]
+    assert "<td>3</td><td>1</td><td>1</td><td>1</td>" in summary  # stability: 3 claims, 1 / 1 / 1
+    assert "<td>all</td><td>4</td><td>2</td><td>1</td><td>1</td>" in summary
+    # the disagreement: the note's own sentence, and links to the claim row, the figure and the dataset
+    assert "<i>Why:</i> Disagreement (the data stand): fd is less stable than ff, e.g. in Fig. 9." in summary
+    assert '<a href="#stability-claim-b">b</a>' in summary and '<a href="#stability-fig9">Fig. 9</a>' in summary
+    assert '<a href="../results/stability/fig9/"><code>results/stability/fig9/</code></a>' in summary
+    assert "Undecided" in summary and '<a href="#stability-claim-c">c</a>' in summary
+    assert "full-resolution reference" not in summary  # no claim here has a reference
+    assert '<li><a href="#summary">summary</a></li>' in html
+
+
+def test_long_claim_texts_fold_away():
+    long = "word " * 60
+    html = claims_table([record("a", "pass", statement=long, note="short note")], part="p")
+    assert html.count("<details>") == 1 and "<summary>word word" in html and "short note" in html

@@ -21,6 +21,7 @@ from icosim.figures import save_figure, stability_figure  # noqa: E402
 from icosim.figures.stability import panel_layout, row_labels  # noqa: E402
 from icosim.model import ParameterError  # noqa: E402
 from icosim.stability import spectral_radius_mp  # noqa: E402
+from icosim.stability.datasets import stability_panel  # noqa: E402
 from icosim.stability.panels import (  # noqa: E402
     PanelSpec,
     figure_panels,
@@ -28,7 +29,6 @@ from icosim.stability.panels import (  # noqa: E402
     panel_id,
     row_label,
     row_label_keys,
-    stability_panel,
 )
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -81,7 +81,16 @@ def test_dataset_naming_contract(weighted_panel, tmp_path):
     # the precision that decided each point, and the counts that summarise it
     assert a["n_high_precision"] == int((ds["digits"] > 15).sum())
     assert a["n_points"] == 25 and a["n_stable"] == int(ds["stable"].sum())
-    assert a["seconds_float64"] >= 0 and a["seconds_mp"] >= 0
+    assert a["seconds_float64"] >= 0 and a["seconds_certify"] >= 0
+    # per point: the verdict, what decided it, whether it is proven, and the proof's enclosure
+    assert ds["verdict"].attrs["flag_meanings"] == "stable unstable marginal undecided"
+    assert ds["decided_by"].attrs["flag_meanings"] == "float64 ball mpmath none"
+    certified = ds["certified"].values
+    proof = (ds["decided_by"].values == 1) & (ds["verdict"].values != 3)  # ball arithmetic, not undecided
+    assert np.array_equal(certified, proof) and a["n_certified"] == int(certified.sum())
+    lo, hi, rho = ds["rho_lower"].values, ds["rho_upper"].values, ds["rho"].values
+    assert np.all(lo[certified] <= rho[certified]) and np.all(rho[certified] <= hi[certified])
+    assert np.isnan(lo[~certified]).all() and a["n_marginal"] == int((ds["verdict"] == 2).sum())
 
 
 def test_baumgarte_panel_records_beta_gamma():
@@ -106,16 +115,19 @@ def test_float64_points_agree_with_multiprecision(weighted_panel):
     assert checked >= 5
 
 
-def test_points_float64_cannot_decide_are_rechecked_and_counted():
+def test_points_float64_cannot_decide_are_certified_and_counted():
     ds = stability_panel(spec(method="baumgarte", method_params={"index": 1, "mu": 1.0}))
-    digits, rho, err = ds["digits"].values, ds["rho"].values, ds["rho_float64_error"].values
-    high = digits > 15
-    assert ds.attrs["n_high_precision"] == int(high.sum()) > 0
-    assert ds.attrs["n_high_precision_undamped"] == int(high[-1, :].sum())
-    assert np.all(digits[high] == 30)
-    # rechecked points are those whose float64 value lay within its error of rho = 1
-    assert np.all(np.abs(rho[high] - 1) <= err[high])
-    assert np.all(np.abs(rho[~high] - 1) > err[~high])
+    certified, audited = ds["certified"].values, ds["audited"].values
+    rho, err = ds["rho"].values, ds["rho_float64_error"].values
+    assert ds.attrs["n_high_precision"] == int(certified.sum()) > 0
+    assert ds.attrs["n_high_precision_undamped"] == int(certified[-1, :].sum())
+    assert np.all(ds["digits"].values[certified] >= 38)  # at least 128 bits
+    # certified without being audited: float64 could not decide (rho there is the proven one, within the estimate)
+    assert np.all(np.abs(rho[certified & ~audited] - 1) <= 2 * err[certified & ~audited])
+    # not certified: float64 decided
+    assert np.all(np.abs(rho[~certified] - 1) > err[~certified])
+    # the undamped axis with identical subsystems: rho = 1 exactly, marginal
+    assert np.all(ds["verdict"].values[-1, 1:] == 2)
 
 
 def test_grid_axis_hits_the_end_points_exactly():

@@ -204,7 +204,8 @@ def test_enforced_references_fail_the_claims_job_when_not_reproduced(tiny_run):
             "kind": "stable_fraction",
             "select": {"figure": "18", "k": 0, "view": "full"},
             "op": ">=",
-            "value": 0.9,
+            # the tiny grid's undamped axis (a quarter of its points) is marginal: >= 0.9 would be undecided
+            "value": 0.7,
         },
         "ci": True,
     }

@@ -30,8 +30,8 @@ from icosim.pendulum.linearised import linear_test_model_rho
 from icosim.pendulum.model import PendulumParameters
 from icosim.pendulum.runs import run_cosimulation
 from icosim.stability import spectral_radius
+from icosim.stability.datasets import stability_panel
 from icosim.stability.panels import PanelSpec as StabilityPanel
-from icosim.stability.panels import stability_panel
 
 NAME = "toy_velocity"
 

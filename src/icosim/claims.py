@@ -41,8 +41,7 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
-import numpy as np
-
+from .jsonio import dumps
 from .model import ParameterError
 
 __all__ = [
@@ -61,6 +60,7 @@ __all__ = [
     "reference_mismatches",
     "enforce_references",
     "write_verdicts",
+    "verdict_table",
     "read_verdicts",
     "verdict_counts",
 ]
@@ -351,44 +351,35 @@ def enforce_references(verdicts, enforce: bool):
         )
 
 
-def _json_default(x):
-    if isinstance(x, (np.bool_, bool)):
-        return bool(x)
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    return float(x)
-
-
 def write_verdicts(verdicts, json_path, tsv_path=None):
     """Every verdict as JSON (``{"claims": [Verdict.as_dict(), ...]}``) and as a TSV table (atomic)."""
-    import csv
-    import json
 
     from .datasets import atomic_path
 
     records = [v.as_dict() for v in verdicts]
     with atomic_path(json_path) as tmp:
-        tmp.write_text(json.dumps({"claims": records}, indent=1, default=_json_default))
+        tmp.write_text(dumps({"claims": records}, indent=1))  # strict: a non-finite number is null, with why
     if tsv_path is None:
         return records
-    with atomic_path(tsv_path) as tmp, open(tmp, "w", newline="") as fh:
-        w = csv.writer(fh, delimiter="\t")
-        w.writerow(["id", "source", "figures", "statement", "verdict", "reference", "measured"])
-        for r in records:
-            w.writerow(
-                [
-                    r["id"],
-                    r["source"],
-                    " ".join(r["figures"]),
-                    r["statement"],
-                    r["verdict"],
-                    r["reference"] or "",
-                    r["measured"],
-                ]
-            )
+    with atomic_path(tsv_path) as tmp:
+        # csv's dialect as before (CRLF line ends, minimal quoting): the files stay byte for byte the same
+        verdict_table(records).to_csv(tmp, sep="\t", index=False, lineterminator="\r\n")
     return records
+
+
+#: Columns of the claims TSV table (:func:`verdict_table`).
+TABLE_COLUMNS = ("id", "source", "figures", "statement", "verdict", "reference", "measured")
+
+
+def verdict_table(records):
+    """The verdict records as a :class:`pandas.DataFrame` (one row per claim, :data:`TABLE_COLUMNS`;
+    ``figures`` joined by spaces, a missing ``reference`` as an empty string)."""
+    import pandas as pd
+
+    df = pd.DataFrame.from_records(list(records), columns=[c for c in TABLE_COLUMNS])
+    df["figures"] = df["figures"].map(" ".join)
+    df["reference"] = df["reference"].fillna("").astype(str)
+    return df
 
 
 def read_verdicts(path) -> list[dict]:

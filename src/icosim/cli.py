@@ -1,22 +1,28 @@
 """The ``icosim`` command.
 
 ``icosim rho`` prints the spectral radius of one parameter point of the test
-model, decided by the precision policy (float64, rechecked at high precision
-where float64 cannot be trusted) or, with ``--digits``, computed at that
-precision directly.  Bad input is reported as ``icosim rho: error: ...``
-naming the argument, with exit status 2 and no traceback.
+model with its verdict proven in ball arithmetic (stable, unstable, or
+marginal), every number taken as the decimal typed (``--lr1 -0.3`` is -3/10,
+not the nearest double) and the value printed with the digits that are proven
+(17, or ``--digits N``): :mod:`icosim.rho_command`.  Negative values may follow
+their option with a space, also in exponent notation (``--lr1 -1e-3``).  Bad
+input -- including input beyond a limit of :mod:`icosim.limits` -- is reported
+as ``icosim rho: error: ...`` naming the argument, with exit status 2, before
+any work and without a traceback.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
+from fractions import Fraction
 
 from . import methods
 from .backend import FLOAT64_DIGITS
 from .decompositions import DECOMPOSITIONS, get_decomposition
+from .jsonio import dumps
+from .limits import MAX_BITS_LIMIT, MAX_DIGITS, MAX_GUARD_BITS, MAX_K, check_derived, check_k
 from .model import ParameterError
 from .schemes import get_scheme
 
@@ -34,6 +40,12 @@ def _float(text):
     return value
 
 
+def _decimal(text):
+    """A finite number, kept exactly as the decimal typed (a :class:`~fractions.Fraction`)."""
+    _float(text)  # the same checks and messages as a float argument
+    return Fraction(text.strip())
+
+
 def _nonneg_int(text):
     try:
         value = int(text)
@@ -44,15 +56,44 @@ def _nonneg_int(text):
     return value
 
 
+def _order(text):
+    """An approximation order k in 0 .. icosim.limits.MAX_K."""
+    try:
+        return check_k(_nonneg_int(text), "k")
+    except ParameterError as exc:
+        raise argparse.ArgumentTypeError(f"expected an integer in 0..{MAX_K} (the largest k), got {text!r}") from exc
+
+
 def _digits(text):
     try:
         value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 16, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"expected an integer in 16..{MAX_DIGITS}, got {text!r}") from None
     if value < 16:
         raise argparse.ArgumentTypeError(
             f"expected an integer >= 16 (float64 carries {FLOAT64_DIGITS}; omit --digits for it), got {text!r}"
         )
+    if value > MAX_DIGITS:
+        raise argparse.ArgumentTypeError(f"expected an integer <= {MAX_DIGITS} (the largest --digits), got {text!r}")
+    return value
+
+
+def _bits(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer in 128..{MAX_BITS_LIMIT}, got {text!r}") from None
+    if not 128 <= value <= MAX_BITS_LIMIT:
+        raise argparse.ArgumentTypeError(
+            f"expected an integer in 128..{MAX_BITS_LIMIT} (the first attempt's precision .. the limit), got {text!r}"
+        )
+    return value
+
+
+def _seconds(text):
+    value = _float(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds > 0, got {text!r}")
     return value
 
 
@@ -74,7 +115,7 @@ def build_parser() -> argparse.ArgumentParser:
     g = rho.add_argument_group("method and layout")
     g.add_argument("--method", required=True, choices=tuple(methods.METHODS))
     g.add_argument("--decomposition", required=True, choices=tuple(DECOMPOSITIONS))
-    g.add_argument("--k", required=True, type=_nonneg_int, help="approximation order (integer >= 0)")
+    g.add_argument("--k", required=True, type=_order, help=f"approximation order (integer 0..{MAX_K})")
     g.add_argument(
         "--scheme",
         choices=("jacobi", "gauss-seidel"),
@@ -91,23 +132,43 @@ def build_parser() -> argparse.ArgumentParser:
     with_index = ", ".join(spec.label for spec in methods.METHODS.values() if spec.takes_index)
     g.add_argument("--index", type=int, choices=methods.indices(), help=f"index of the formulation ({with_index})")
     for name, p in methods.parameters().items():  # every registered method's parameters
-        g.add_argument(f"--{name}", type=_float, help=p.help)
+        g.add_argument(f"--{name}", type=_decimal, help=p.help)
     g = rho.add_argument_group("test-model parameters (Eq. 71)")
-    g.add_argument("--lr1", required=True, type=_float, help="real part of subsystem 1's eigenvalue (<= 0)")
-    g.add_argument("--li1", required=True, type=_float, help="imaginary part of subsystem 1's eigenvalue (>= 0)")
-    g.add_argument("--am21", required=True, type=_float, help="mass ratio m2/m1 (> 0)")
-    g.add_argument("--alr21", required=True, type=_float, help="damping ratio lr2/lr1 (>= 0)")
-    g.add_argument("--ali21", required=True, type=_float, help="frequency ratio li2/li1 (>= 0)")
-    g = rho.add_argument_group("precision and output")
+    g.add_argument("--lr1", required=True, type=_decimal, help="real part of subsystem 1's eigenvalue (<= 0)")
+    g.add_argument("--li1", required=True, type=_decimal, help="imaginary part of subsystem 1's eigenvalue (>= 0)")
+    g.add_argument("--am21", required=True, type=_decimal, help="mass ratio m2/m1 (> 0)")
+    g.add_argument("--alr21", required=True, type=_decimal, help="damping ratio lr2/lr1 (>= 0)")
+    g.add_argument("--ali21", required=True, type=_decimal, help="frequency ratio li2/li1 (>= 0)")
+    g = rho.add_argument_group(
+        "precision and output",
+        "The verdict is always proven in ball arithmetic (python-flint Arb) from the decimals as typed: stable "
+        "(rho < 1), unstable (rho > 1), or marginal (the proven enclosure still contains 1 at --max-bits). "
+        f"Limits: k <= {MAX_K}, --digits <= {MAX_DIGITS}, --max-bits <= {MAX_BITS_LIMIT}, guard bits for heavily "
+        f"damped subsystems <= {MAX_GUARD_BITS}; a point needing more is 'undecided' with the reason.",
+    )
     g.add_argument(
         "--digits",
         type=_digits,
-        help="compute with mpmath at this many significant digits (default: the precision policy, "
-        "float64 rechecked at 128 digits where float64 cannot be trusted)",
+        help="print rho with this many significant digits, all proven (the enclosure narrowed to them; default 17)",
+    )
+    g.add_argument("--certify", action="store_true", help="also print the proven enclosure of rho in the text output")
+    g.add_argument(
+        "--max-bits",
+        type=_bits,
+        default=1024,
+        help=f"largest working precision of the ball arithmetic, in bits (default 1024, at most {MAX_BITS_LIMIT})",
+    )
+    g.add_argument(
+        "--timeout",
+        type=_seconds,
+        help="give up after this many seconds of wall time: the verdict is then 'undecided' (reason timeout)",
     )
     g.add_argument("--json", action="store_true", help="print one JSON object")
     parser.set_defaults(subparser=None)
     rho.set_defaults(subparser=rho)
+    from .commands import add_parsers  # icosim advise, icosim map
+
+    add_parsers(sub, number=_float, nonneg_int=_nonneg_int, digits=_digits)
     return parser
 
 
@@ -124,7 +185,7 @@ def _method_from_args(args):
 
 def _rho(args, parser):
     from .model import TestModel
-    from .stability import is_stable, spectral_radius, spectral_radius_mp
+    from .rho_command import rho_answer, rho_text
 
     if args.first is not None and args.scheme != "gauss-seidel":
         parser.error("argument --first: only used with --scheme gauss-seidel")
@@ -134,35 +195,33 @@ def _rho(args, parser):
         decomposition = get_decomposition(args.decomposition)
         method.check_decomposition(decomposition)
         model = TestModel(args.lr1, args.li1, args.am21, args.alr21, args.ali21)
+        check_derived(model)  # k = lr^2 + li^2, ... finite in float64
     except ParameterError as exc:
         parser.error(_argument_message(str(exc)))
-    if args.digits is not None:
-        rho = float(spectral_radius_mp(model, method, decomposition, args.k, args.digits, scheme=scheme))
-        digits, err, precision = args.digits, None, f"mpmath {args.digits} digits (requested)"
-    else:
-        res = spectral_radius(model, method, decomposition, args.k, scheme=scheme)
-        rho, digits = float(res.rho), int(res.digits)
-        err = float(res.err)
-        precision = "float64" if digits == FLOAT64_DIGITS else f"mpmath {digits} digits (float64 not trusted)"
-    stable = bool(is_stable(rho, digits))
+    answer = rho_answer(
+        model,
+        method,
+        decomposition,
+        args.k,
+        digits=args.digits,
+        max_bits=args.max_bits,
+        timeout=args.timeout,
+        scheme=scheme,
+    )
     result = {
-        "rho": rho,
-        "digits": digits,
-        "precision": precision,
-        "stable": stable,
-        "float64_error_estimate": err if err is None or math.isfinite(err) else None,
+        **answer,
         "method": method.name,
         "decomposition": decomposition.name,
         "k": args.k,
         "scheme": scheme.name,
+        "first": getattr(scheme, "first", None),  # the subsystem that advances first (Gauss-Seidel only)
         "method_parameters": method.params,
-        "model": {n: getattr(args, n) for n in ("lr1", "li1", "am21", "alr21", "ali21")},
+        "model": {n: float(getattr(args, n)) for n in ("lr1", "li1", "am21", "alr21", "ali21")},
     }
     if args.json:
-        print(json.dumps(result))
+        print(dumps(result))
     else:
-        order = "" if scheme.name == "jacobi" else f"{scheme.label}; "
-        print(f"rho = {rho!r}  ({'stable' if stable else 'unstable'}; {order}decided by {precision})")
+        print(rho_text(answer, show_enclosure=args.certify, scheme=scheme))
     return 0
 
 
@@ -176,11 +235,59 @@ def _argument_message(text: str) -> str:
     return text
 
 
+def _negative_values_attached(argv, parser) -> list:
+    """``--lr1 -1e-3`` as ``--lr1=-1e-3``.
+
+    argparse reads a token that starts with ``-`` as an option unless it looks
+    like a plain negative number (``-1``, ``-.5``); exponent notation is not
+    covered.  A token after an option that takes a value is joined to it when
+    it parses as a number, so users can type numbers as they write them.
+    """
+    # options that take exactly one value (flags such as --json have nargs = 0)
+    argv = list(argv)
+    # the command's own options only: another command may take the same option with several values
+    takes_value = {
+        opt for action in _all_actions(parser, argv) if action.nargs is None for opt in action.option_strings
+    }
+    out, i = [], 0
+    while i < len(argv):
+        tok = argv[i]
+        if tok in takes_value and i + 1 < len(argv) and argv[i + 1].startswith("-") and _is_number(argv[i + 1]):
+            out.append(f"{tok}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(tok)
+        i += 1
+    return out
+
+
+def _all_actions(parser, argv=()):
+    for action in parser._actions:
+        yield action
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                if name in argv[:1]:
+                    yield from _all_actions(sub)
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def main(argv=None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    argv = sys.argv[1:] if argv is None else argv
+    args = parser.parse_args(_negative_values_attached(argv, parser))
     if args.command == "rho":
         return _rho(args, args.subparser)
+    if args.command in ("advise", "map"):
+        from .commands import run
+
+        return run(args)
     return 2  # pragma: no cover - argparse enforces a command
 
 

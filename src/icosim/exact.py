@@ -15,7 +15,34 @@ import numpy as np
 from .decompositions import get_decomposition
 from .model import Coefficients
 
-__all__ = ["MonolithicSolution", "consistent_start"]
+__all__ = ["MonolithicSolution", "consistent_start", "monolithic_matrix", "exact_coupling"]
+
+
+def monolithic_matrix(c: Coefficients, backend=None):
+    """``A`` with ``(x, v)' = A (x, v)`` for the rigidly coupled system (time in macro steps).
+
+    In the backend's arithmetic (float64 by default), so the same matrix serves
+    the float64 reference and the ball-arithmetic defect of
+    :mod:`icosim.convergence.errors`.
+    """
+    if backend is None:
+        zero, one, dtype = 0.0, 1.0, float
+    else:
+        zero, one, dtype = backend.const(0), backend.const(1), backend.dtype
+    total = one + c.am21
+    return np.array(
+        [[zero, one], [-(c.k1 + c.am21 * c.k2) / total, -(c.delta1 + c.am21 * c.delta2) / total]], dtype=dtype
+    )
+
+
+def exact_coupling(name: str, c: Coefficients, x, v, a):
+    """The exact value of the coupling variable ``name`` for the exact ``x, v, a`` (any arithmetic):
+    the constraint force ``lambda_c = a + k1 x + delta1 v`` or the joint acceleration ``a``."""
+    if name == "lambda_c":
+        return a + c.k1 * x + c.delta1 * v
+    if name in ("a_tilde_1", "a_tilde"):
+        return a
+    raise ValueError(f"unknown coupling variable {name!r}")
 
 
 class MonolithicSolution:
@@ -26,10 +53,8 @@ class MonolithicSolution:
     """
 
     def __init__(self, coefficients: Coefficients, x0: float, v0: float):
-        c = coefficients
-        self.coefficients = c
-        M = 1 + c.am21
-        self.A = np.array([[0.0, 1.0], [-(c.k1 + c.am21 * c.k2) / M, -(c.delta1 + c.am21 * c.delta2) / M]], dtype=float)
+        self.coefficients = coefficients
+        self.A = monolithic_matrix(coefficients)
         self.s0 = np.array([x0, v0], dtype=float)
 
     def state(self, t):
@@ -37,7 +62,7 @@ class MonolithicSolution:
         s = expm_2x2(self.A, t) @ self.s0
         x, v = s[..., 0], s[..., 1]
         a = self.A[1, 0] * x + self.A[1, 1] * v
-        lam = a + self.coefficients.k1 * x + self.coefficients.delta1 * v
+        lam = exact_coupling("lambda_c", self.coefficients, x, v, a)
         return np.stack([x, v, a, lam], axis=-1)
 
 
@@ -75,8 +100,8 @@ def consistent_start(problem, solution: MonolithicSolution):
     k = problem.k
     exact = solution.state(-np.arange(k + 1, dtype=float))  # T_0, T_-1, ...
     dec = get_decomposition(problem.decomposition.name)
-    cols = {"lambda_c": exact[:, 3], "a_tilde_1": exact[:, 2], "a_tilde": exact[:, 2]}
-    history = np.stack([cols[name] for name in dec.variables], axis=-1)
+    c = solution.coefficients
+    history = np.stack([exact_coupling(name, c, *exact[:, :3].T) for name in dec.variables], axis=-1)
     state = np.array([solution.s0, solution.s0])
     be = problem.backend
     return be.asarray(state), be.asarray(history)

@@ -63,6 +63,10 @@ def monomial_coefficients(nodes: tuple[int, ...]) -> tuple[tuple[Fraction, ...],
 
 def weights_at(nodes: tuple[int, ...], tau) -> tuple[Fraction, ...]:
     """Lagrange weights ``l_j(tau)``; with exact ``tau`` the result is exact."""
-    C = monomial_coefficients(tuple(nodes))
-    tau = Fraction(tau)
+    return _weights_at(tuple(nodes), Fraction(tau))
+
+
+@cache
+def _weights_at(nodes: tuple[int, ...], tau: Fraction) -> tuple[Fraction, ...]:
+    C = monomial_coefficients(nodes)
     return tuple(sum(C[m][j] * tau**m for m in range(len(nodes))) for j in range(len(nodes)))

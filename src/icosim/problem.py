@@ -19,7 +19,7 @@ import numpy as np
 from .backend import Float64
 from .decompositions import get_decomposition
 from .lagrange import corrector_nodes, predictor_nodes, weights_at
-from .model import ParameterError
+from .limits import check_k
 
 __all__ = ["CosimulationProblem", "Work"]
 
@@ -101,8 +101,7 @@ class CosimulationProblem:
     """
 
     def __init__(self, decomposition, k: int, backend=None):
-        if isinstance(k, bool) or int(k) != k or k < 0:
-            raise ParameterError(f"k must be an integer >= 0, got {k!r}")
+        k = check_k(k)  # 0 .. icosim.limits.MAX_K
         self.backend = be = backend or Float64()
         self.decomposition = get_decomposition(decomposition)
         self.k = k

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import yaml
 from snakemake.exceptions import WorkflowError
+from snakemake.logging import logger
 from snakemake.utils import validate
 
 validate(config, "../schemas/config.schema.yaml")
@@ -36,6 +37,19 @@ from icosim.methods import METHODS  # noqa: E402
 from icosim.methods.schema import with_methods  # noqa: E402
 from icosim.schemes import SCHEMES  # noqa: E402
 from icosim.sources import module_closure, script_closure  # noqa: E402
+from icosim.integrity import quarantine_corrupt, remove_stale_parts  # noqa: E402
+
+# A dataset whose SHA-256 no longer matches the one recorded when it was written is set aside
+# (x.nc -> x.nc.corrupt) before the DAG is built, so this run computes it again instead of trusting it.
+if workflow.is_main_process:
+    for _moved in quarantine_corrupt("results"):
+        logger.warning(f"icosim: {_moved} did not match its SHA-256: set aside, it will be recomputed")
+
+
+onstart:
+    # temporaries of a killed run (under the lock this run now holds: no other run is writing them)
+    for _part in remove_stale_parts("results"):
+        logger.info(f"icosim: removed {_part}, left by an interrupted run")
 
 
 def validate_part(part_config, schema):

@@ -98,6 +98,7 @@ rule convergence_panel:
         setup=CONV_SETUP,
         step_sizes=CONVERGENCE["step_sizes"],
         stepping=CONVERGENCE["stepping"],
+        startup_steps=CONVERGENCE["startup_steps"],
         spectral_policy=CONVERGENCE["unstable"]["spectral_policy"],
         digits=CONVERGENCE["unstable"]["digits"],
         fit=CONVERGENCE["fit"],
@@ -119,6 +120,8 @@ rule convergence_figure:
             labels={"figure": "{figure}", "decomposition": "{dec}"},
         ),
         pdf="results/convergence/figures/fig{figure}_{dec}.pdf",
+        slopes_png="results/convergence/figures/fig{figure}_{dec}_slopes.png",
+        slopes_pdf="results/convergence/figures/fig{figure}_{dec}_slopes.pdf",
     log:
         "logs/convergence/figure/fig{figure}_{dec}.log",
     wildcard_constraints:
@@ -140,6 +143,7 @@ rule convergence_figure:
             "columns"
         ],
         guide_orders=CONVERGENCE["plot"]["guide_orders"],
+        tolerance=CONVERGENCE["fit"]["tolerance"],
         dpi=CONVERGENCE["plot"]["dpi"],
     script:
         "../scripts/convergence_figure.py"
@@ -217,6 +221,7 @@ rule convergence_report_section:
     """HTML fragment of the report: decisions, figures, claims table, work-precision."""
     input:
         figures=CONV_FIGURES,
+        slopes=[f.replace(".png", "_slopes.png") for f in CONV_FIGURES],
         wp_figure=CONV_WP_FIGURE,
         wp=CONV_WP,
         claims=CONV_CLAIMS,
@@ -232,6 +237,7 @@ rule convergence_report_section:
         setup=CONV_SETUP,
         step_sizes=CONVERGENCE["step_sizes"],
         stepping=CONVERGENCE["stepping"],
+        startup_steps=CONVERGENCE["startup_steps"],
         fit=CONVERGENCE["fit"],
         unstable=CONVERGENCE["unstable"],
         targets=CONVERGENCE["work_precision"]["targets"],

@@ -20,6 +20,8 @@ rule report:
     """Self-contained HTML page: every part's section (figures, claims) and provenance."""
     input:
         sections=list(REPORT_PARTS.values()),
+        # each part's claim verdicts (results/<part>/claims.json): the summary at the top of the page
+        claims=[f"results/{part}/claims.json" for part in REPORT_PARTS],
         configfiles=[
             f for f in dict.fromkeys(workflow.configfiles) if os.path.exists(f)
         ],

@@ -3,6 +3,7 @@
 import json
 import logging
 
+from icosim.convergence.curves import curve_label, curves
 from icosim.convergence.datasets import run_panel
 from icosim.convergence.experiment import Setup, step_counts
 from icosim.convergence.panels import PanelSpec
@@ -11,13 +12,15 @@ from icosim.datasets import provenance_attrs, write_netcdf
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params
-job = {k: p[k] for k in ("panel", "setup", "step_sizes", "stepping", "spectral_policy", "digits", "fit")}
+job = {
+    k: p[k] for k in ("panel", "setup", "step_sizes", "stepping", "startup_steps", "spectral_policy", "digits", "fit")
+}
 logging.info("panel parameters: %s", json.dumps(job, sort_keys=True))
 
 spec = PanelSpec.from_dict(p.panel)
 setup = Setup(**p.setup)
 n_steps = step_counts(setup.end_time, p.step_sizes["H_min"], p.step_sizes["H_max"], p.step_sizes["num"])
-study = Study(setup, n_steps, spectral_policy=p.spectral_policy, digits=p.digits)
+study = Study(setup, n_steps, spectral_policy=p.spectral_policy, digits=p.digits, startup_steps=p.startup_steps)
 title = f"Fig. {spec.figure} ({spec.decomposition}), panel {spec.panel}: NRMSE of Eq. (72) over the macro-step size"
 ds = run_panel(
     spec,
@@ -28,16 +31,8 @@ ds = run_panel(
 )
 write_netcdf(ds, snakemake.output[0])
 
-for i, index in enumerate(ds["index"].values):
-    for j, k in enumerate(ds["k"].values):
-        logging.info(
-            "index %d k %d: order %.3f on [%.3g, %.3g] s, %d unstable of %d step sizes",
-            index,
-            k,
-            ds["order"].values[i, j],
-            ds["fit_H_min"].values[i, j],
-            ds["fit_H_max"].values[i, j],
-            int(ds["unstable"].values[i, j].sum()),
-            ds.sizes["H"],
-        )
+for rec in curves([ds]):
+    logging.info(
+        "%s: order %.3f (%s), %d unstable", curve_label(rec), rec["order"], rec["order_status"], rec["unstable"].sum()
+    )
 logging.info("%.2f s", ds.attrs["seconds_total"])

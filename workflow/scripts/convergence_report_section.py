@@ -14,6 +14,7 @@ html = convergence_section(
     step_sizes=p.step_sizes,
     stepping=p.stepping,
     fit=p.fit,
+    startup_steps=p.startup_steps,
     unstable=p.unstable,
     targets=p.targets,
     figures=p.figures,

@@ -3,6 +3,7 @@
 import logging
 from pathlib import Path
 
+from icosim.claims import read_verdicts
 from icosim.datasets import atomic_path
 from icosim.report.page import git_commit_text, report_page, utc_now
 
@@ -19,6 +20,7 @@ html = report_page(
     precision=p.precision,
     commit_text=commit_text,
     generated=utc_now(),
+    claims={part: read_verdicts(path) for part, path in zip(p.parts, snakemake.input.claims)},
 )
 with atomic_path(snakemake.output[0]) as tmp:
     tmp.write_text(html)

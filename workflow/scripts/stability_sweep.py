@@ -1,10 +1,11 @@
-"""Snakemake job: one stability panel -> NetCDF (thin: the work is icosim.stability.panels)."""
+"""Snakemake job: one stability panel -> NetCDF (thin: the work is icosim.stability.datasets)."""
 
 import json
 import logging
 
 from icosim.datasets import provenance_attrs, write_netcdf
-from icosim.stability.panels import PanelSpec, stability_panel
+from icosim.stability.datasets import stability_panel
+from icosim.stability.panels import PanelSpec
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 params = snakemake.params.panel
@@ -17,12 +18,13 @@ write_netcdf(ds, snakemake.output[0])
 
 a = ds.attrs
 logging.info(
-    "%d points, %d stable, %d rechecked at %d digits; float64 %.2f s, mp %.2f s, CPU %.2f s",
+    "%d points, %d stable, %d marginal, %d certified (%d audited, %d overturned); float64 %.2f s, certify %.2f s",
     a["n_points"],
     a["n_stable"],
-    a["n_high_precision"],
-    a["mp_digits"],
+    a["n_marginal"],
+    a["n_certified"],
+    a["n_audited"],
+    a["n_overturned"],
     a["seconds_float64"],
-    a["seconds_mp"],
-    a["cpu_seconds_total"],
+    a["seconds_certify"],
 )

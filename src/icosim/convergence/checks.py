@@ -1,8 +1,14 @@
 """The ``convergence_order`` check kind (config/claims/convergence.yaml).
 
 A claim selects curves of the panel datasets (:func:`icosim.convergence.curves.curves`)
-and expects, per ``k``, an order ``p`` (the fitted order within a tolerance) or
-instability at every step size.
+and expects, per ``k``, an order ``p`` or instability at every step size.  An
+order decides only where it is asymptotic (:mod:`icosim.convergence.fit`):
+
+* asymptotic -- pass if within ``tolerance`` of ``p``, else fail;
+* pre-asymptotic, unstable as H -> 0, too few points -- undecided, with the reason;
+* unstable at every step size -- not applicable (``n/a``): the claim is about
+  the order of a convergent scheme, and this curve has none.  It is listed, and
+  a claim whose every curve is ``n/a`` is undecided.
 """
 
 from __future__ import annotations
@@ -13,7 +19,6 @@ from ..claims import CheckKind, Outcome, combine_holds, matches
 from ..methods import parameters
 from ..model import ParameterError
 from .curves import curve_label, curves, stable_span
-from .fit import local_slopes
 
 __all__ = ["CHECKS", "check_convergence_order", "SELECT_KEYS", "EXPECT_KEYS"]
 
@@ -22,7 +27,10 @@ __all__ = ["CHECKS", "check_convergence_order", "SELECT_KEYS", "EXPECT_KEYS"]
 SELECT_KEYS = {"figure", "scheme", "decomposition", "method", "panel", "index"} | set(parameters())
 
 
-EXPECT_KEYS = {"k", "order", "unstable", "observed", "observed_tolerance", "observed_second_half"}
+EXPECT_KEYS = {"k", "order", "unstable", "observed", "observed_tolerance", "observed_second_half", "observed_startup"}
+
+#: Per-curve verdicts; ``n/a`` (an order claim on a curve unstable at every H) does not count.
+NOT_APPLICABLE = "n/a"
 
 
 def _is_number(x) -> bool:
@@ -57,7 +65,7 @@ def _validate_order_check(label: str, params: dict):
             raise ParameterError(f"{elabel}: give exactly one of order: p or unstable: true")
         if "unstable" in exp and exp["unstable"] is not True:
             raise ParameterError(f"{elabel}.unstable must be true (or left out), got {exp['unstable']!r}")
-        for key in ("order", "observed", "observed_second_half", "observed_tolerance"):
+        for key in ("order", "observed", "observed_second_half", "observed_startup", "observed_tolerance"):
             if key in exp and not _is_number(exp[key]):
                 raise ParameterError(f"{elabel}.{key} must be a number, got {exp[key]!r}")
         if "observed_tolerance" in exp and exp["observed_tolerance"] <= 0:
@@ -67,15 +75,9 @@ def _validate_order_check(label: str, params: dict):
 def check_convergence_order(datasets, *, select: dict, expect: list, tolerance: float):
     """The paper's convergence claims (config/claims/convergence.yaml) on the panel datasets.
 
-    Each expectation is checked on every curve ``select`` picks with its ``k``:
-
-    * ``order: p`` -- pass if the fitted order is within ``tolerance`` of
-      ``p``, fail otherwise; undecided if no order could be fitted (too few
-      stable step sizes: the claim cannot be checked there).
-    * ``unstable: true`` -- pass if unstable at every step size, fail if
-      stable at every one, undecided if stable at some.
-
-    The claim fails if any curve fails, passes if all pass, else is undecided;
+    Each expectation is checked on every curve ``select`` picks with its ``k``
+    (module docstring for the per-curve rules).  The claim fails if any curve
+    fails, passes if every applicable curve passes, else is undecided;
     ``numbers["rows"]`` holds one record per curve.
     """
     recs = curves(datasets)
@@ -90,40 +92,49 @@ def check_convergence_order(datasets, *, select: dict, expect: list, tolerance: 
                 "curve": curve_label(rec),
                 "k": rec["k"],
                 "order": rec["order"],
+                "order_status": rec["order_status"],
+                "reason": rec["fit_note"],
+                "order_spread": rec["order_spread"],
                 "order_second_half": rec["order_second_half"],
+                "order_startup": rec["order_startup"],
                 "fit_H_min": rec["fit_H_min"],
                 "fit_H_max": rec["fit_H_max"],
                 "stable_H": stable_span(rec),
                 "observed": exp.get("observed"),
             }
-            # local slopes of the stable points from the fitted range upward (round-off floor left out)
-            keep = ~rec["unstable"] & (rec["H"] >= rec["fit_H_min"] if np.isfinite(rec["fit_H_min"]) else True)
-            slopes = local_slopes(rec["H"][keep], rec["nrmse"][keep])
-            slopes = slopes[np.isfinite(slopes)]
-            row["local_slopes"] = (float(slopes.min()), float(slopes.max())) if slopes.size else None
+            finite = rec["local_slope"][np.isfinite(rec["local_slope"])]
+            row["local_slopes"] = (float(finite.min()), float(finite.max())) if finite.size else None
             if exp.get("unstable"):
                 row["claimed"] = "unstable"
                 n_u = int(rec["unstable"].sum())
-                holds = True if n_u == rec["unstable"].size else False if n_u == 0 else None
+                verdict = "pass" if n_u == rec["unstable"].size else "fail" if n_u == 0 else "undecided"
             else:
                 p = float(exp["order"])
                 row["claimed"] = f"O(H^{p:g})"
-                holds = None if not np.isfinite(rec["order"]) else bool(abs(rec["order"] - p) <= tolerance)
-            row["verdict"] = {True: "pass", False: "fail"}.get(holds, "undecided")
-            row["holds"] = holds
+                if rec["order_status"] == "asymptotic":
+                    verdict = "pass" if abs(rec["order"] - p) <= tolerance else "fail"
+                elif rec["order_status"] == "unstable at every H":
+                    verdict = NOT_APPLICABLE
+                else:
+                    verdict = "undecided"
+            row["verdict"] = verdict
             rows.append(row)
-    measured = "; ".join(
-        f"{r['curve']}: {r['claimed']}, "
-        + (
-            f"stable H {r['stable_H']}"
-            if r["claimed"] == "unstable" or not np.isfinite(r["order"])
-            else f"fitted order {r['order']:.2f}"
-        )
-        + f" -> {r['verdict']}"
-        for r in rows
-    )
-    holds = combine_holds(r.pop("holds") for r in rows)
+    measured = "; ".join(_describe(r) for r in rows)
+    applicable = [r["verdict"] for r in rows if r["verdict"] != NOT_APPLICABLE]
+    holds = combine_holds({"pass": True, "fail": False}.get(v) for v in applicable) if applicable else None
     return Outcome(holds, measured, {"rows": rows, "tolerance": tolerance})
+
+
+def _describe(r) -> str:
+    """One curve of a claim in words: what was claimed, what the data decide, why."""
+    head = f"{r['curve']}: {r['claimed']}, "
+    if r["claimed"] == "unstable" or r["order_status"] in ("unstable at every H", "unstable as H -> 0"):
+        what = f"stable H {r['stable_H']}" + (f" ({r['reason']})" if r["reason"] else "")
+    elif r["order_status"] == "asymptotic":
+        what = f"asymptotic order {r['order']:.2f} on [{r['fit_H_min']:.2g}, {r['fit_H_max']:.2g}] s"
+    else:
+        what = f"{r['order_status']}: {r['reason']}"
+    return head + what + f" -> {r['verdict']}"
 
 
 #: The convergence check kinds (collected by :mod:`icosim.checks`).

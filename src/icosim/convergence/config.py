@@ -63,13 +63,23 @@ def study_from_config(cfg: dict, *, where: str = "convergence") -> Study:
             f"{where}.step_sizes: [H_min, H_max] = [{H_min!r}, {H_max!r}] gives only the step "
             f"count(s) {n_steps.tolist()} after rounding N_total = end_time / H; widen the range"
         )
-    min_points = cfg.get("fit", {}).get("min_points")
-    if min_points is not None and min_points > n_steps.size:
-        raise ParameterError(
-            f"{where}.fit.min_points = {min_points} exceeds the {n_steps.size} step sizes of "
-            f"{where}.step_sizes: no order could ever be fitted"
-        )
-    return Study(setup, n_steps, spectral_policy=cfg["unstable"]["spectral_policy"], digits=cfg["unstable"]["digits"])
+    fit = cfg.get("fit", {})
+    if "min_points" in fit:
+        H = end_time / n_steps
+        in_decade = int(np.sum(H <= H.min() * 10 ** fit.get("decades", 1.0) * (1 + 1e-9)))
+        if fit["min_points"] > in_decade:
+            raise ParameterError(
+                f"{where}.fit.min_points = {fit['min_points']} exceeds the {in_decade} step sizes of "
+                f"{where}.step_sizes in the smallest-H window of {where}.fit.decades = {fit.get('decades', 1.0)!r}: "
+                "no order could ever be decided; add step sizes (num) or widen the window"
+            )
+    return Study(
+        setup,
+        n_steps,
+        spectral_policy=cfg["unstable"]["spectral_policy"],
+        digits=cfg["unstable"]["digits"],
+        startup_steps=cfg.get("startup_steps", 50),
+    )
 
 
 def configured_curves(cfg: dict) -> list:

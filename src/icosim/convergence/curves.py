@@ -30,12 +30,16 @@ def curves(datasets) -> list:
                         rec[name] = float(ds[name].values[i])
                     elif name in ds.attrs:
                         rec[name] = float(ds.attrs[name])
-                for name in ("order", "order_stderr", "fit_H_min", "fit_H_max", "order_second_half"):
+                for name in ("order", "order_spread", "fit_H_min", "fit_H_max", "order_second_half", "order_startup"):
                     rec[name] = float(ds[name].values[i, j])
+                rec["order_status"] = str(ds["order_status"].values[i, j])
+                rec["fit_note"] = str(ds["fit_note"].values[i, j])
                 rec["fit_n_points"] = int(ds["fit_n_points"].values[i, j])
                 rec["H"] = ds["H"].values
                 rec["nrmse"] = ds["nrmse"].values[i, j]
                 rec["unstable"] = ds["unstable"].values[i, j].astype(bool)
+                rec["H_mid"] = ds["H_mid"].values
+                rec["local_slope"] = ds["local_slope"].values[i, j]
                 out.append(rec)
     return out
 

@@ -1,8 +1,11 @@
-"""A convergence panel as a NetCDF-ready dataset (dims ``index``, ``k``, ``H``).
+"""A convergence panel as a NetCDF-ready dataset (dims ``index``, ``k``, ``H``, ``H_mid``).
 
 Variables: ``nrmse`` (NaN where unstable) and its parts, ``unstable``,
-``spectral_radius`` with the digits that decided it, ``diverged_at``; per
-curve the fitted ``order`` with its range (``fit_H_min``, ``fit_H_max``,
+``spectral_radius`` with the digits that decided it, ``diverged_at``, the
+precision that proved each run's defect (``defect_bits``); the local slopes
+between neighbouring step sizes over ``H_mid``; per curve the asymptotic
+``order`` read off the smallest-H decade with its ``order_status``
+(:mod:`icosim.convergence.fit`) and range (``fit_H_min``, ``fit_H_max``,
 ``fit_used``); the row parameters (dimensional) as coordinates along
 ``index``; the set-up, the method and the procedures as attributes.
 """
@@ -16,7 +19,7 @@ import numpy as np
 from ..decompositions import get_decomposition
 from ..methods import get_spec, parameter_units
 from .experiment import PAPER_MODEL, dimensional_method, units_description
-from .fit import fit_order
+from .fit import asymptotic_order, local_slopes
 from .panels import PanelSpec
 from .study import Study
 
@@ -24,7 +27,7 @@ __all__ = ["run_panel"]
 
 
 def run_panel(
-    spec: PanelSpec, study: Study, fit: dict | None = None, *, stepping: str = "matrix", provenance: dict | None = None
+    spec: PanelSpec, study: Study, fit: dict | None = None, *, stepping: str = "error", provenance: dict | None = None
 ):
     """Every curve of a panel as an :class:`xarray.Dataset` (dims ``index``, ``k``, ``H``)."""
     import xarray as xr
@@ -36,6 +39,7 @@ def run_panel(
         "nrmse",
         "nrmse_unfiltered",
         "nrmse_second_half",
+        "nrmse_startup",
         "nrmse_x",
         "nrmse_v",
         "nrmse_lambda",
@@ -43,29 +47,38 @@ def run_panel(
     )
     arr = {n: np.full((nI, nK, nH), np.nan) for n in names_f}
     arr["spectral_radius_digits"] = np.zeros((nI, nK, nH), dtype=np.int32)
+    arr["spectral_verdict"] = np.full((nI, nK, nH), "", dtype=object)
     arr["diverged_at"] = np.full((nI, nK, nH), -1, dtype=np.int64)
     arr["unstable"] = np.zeros((nI, nK, nH), dtype=bool)
     arr["fit_used"] = np.zeros((nI, nK, nH), dtype=bool)
+    arr["defect_bits"] = np.zeros((nI, nK, nH), dtype=np.int32)
+    slopes = {n: np.full((nI, nK, nH - 1), np.nan) for n in ("local_slope", "local_slope_second_half")}
     fits = {
         n: np.full((nI, nK), np.nan)
-        for n in ("order", "order_stderr", "order_rvalue", "fit_H_min", "fit_H_max", "order_second_half")
+        for n in ("order", "order_spread", "fit_H_min", "fit_H_max", "order_second_half", "order_startup")
     }
+    status = {n: np.full((nI, nK), "", dtype=object) for n in ("order_status", "fit_note")}
     fit_n = np.zeros((nI, nK), dtype=np.int32)
-    fit_note = np.full((nI, nK), "", dtype=object)
+    H_mid = None
     for i, row in enumerate(spec.rows):
         for j, k in enumerate(spec.k):
             r = study.run(spec.method, row, spec.decomposition, k, stepping=stepping, scheme=spec.scheme)
-            for n in names_f + ("spectral_radius_digits", "diverged_at", "unstable"):
+            for n in names_f + ("spectral_radius_digits", "spectral_verdict", "diverged_at", "unstable", "defect_bits"):
                 arr[n][i, j] = getattr(r, n)
-            f = fit_order(r.H, r.nrmse, r.n_steps, **fit)
-            f2 = fit_order(r.H, r.nrmse_second_half, r.n_steps, **fit)
+            f = asymptotic_order(r.H, r.nrmse, r.unstable, **fit)
             arr["fit_used"][i, j] = f.used
-            fits["order"][i, j], fits["order_stderr"][i, j], fits["order_rvalue"][i, j] = f.order, f.stderr, f.rvalue
+            fits["order"][i, j], fits["order_spread"][i, j] = f.order, f.spread
             fits["fit_H_min"][i, j], fits["fit_H_max"][i, j] = f.H_min, f.H_max
-            fits["order_second_half"][i, j] = f2.order
+            fits["order_second_half"][i, j] = asymptotic_order(r.H, r.nrmse_second_half, r.unstable, **fit).order
+            fits["order_startup"][i, j] = asymptotic_order(r.H, r.nrmse_startup, r.unstable, **fit).order
+            status["order_status"][i, j], status["fit_note"][i, j] = f.status, f.reason
             fit_n[i, j] = f.n_points
-            fit_note[i, j] = f.reason
-    dims3, dims2 = ("index", "k", "H"), ("index", "k")
+            # local slopes in the dataset's H order (decreasing H), between neighbouring step sizes
+            H_mid, s_all = local_slopes(r.H, r.nrmse)
+            slopes["local_slope"][i, j] = s_all[::-1]
+            slopes["local_slope_second_half"][i, j] = local_slopes(r.H, r.nrmse_second_half)[1][::-1]
+    H_mid = H_mid[::-1]
+    dims3, dims2, dims_mid = ("index", "k", "H"), ("index", "k"), ("index", "k", "H_mid")
     H_attrs = {"long_name": "macro-step size", "units": "s"}
     ds = xr.Dataset(
         {
@@ -83,6 +96,15 @@ def run_panel(
                 dims3,
                 arr["nrmse_second_half"],
                 {"long_name": "Eq. (72) over T_N in (T/2, T] (diagnostic: no start-up transient)", "units": "1"},
+            ),
+            "nrmse_startup": (
+                dims3,
+                arr["nrmse_startup"],
+                {
+                    "long_name": "the terms of Eq. (72)'s sums from the first startup_steps macro steps, over the "
+                    "whole run's denominators (the start-up transient's share: nrmse^2 = startup^2 + rest^2)",
+                    "units": "1",
+                },
             ),
             "nrmse_x": (
                 dims3,
@@ -122,42 +144,103 @@ def run_panel(
             "spectral_radius_digits": (
                 dims3,
                 arr["spectral_radius_digits"],
-                {"long_name": "significant digits that decided the spectral radius (15: float64)"},
+                {
+                    "long_name": "significant digits that decided the spectral radius (15: float64; for stepping "
+                    "error the Arb precision of the certificate)"
+                },
+            ),
+            "spectral_verdict": (
+                dims3,
+                arr["spectral_verdict"].astype(str),
+                {
+                    "long_name": "stable / unstable / marginal: for stepping error proven from the ball "
+                    "amplification matrix of the defect (icosim.stability.certified); else from the precision policy"
+                },
             ),
             "diverged_at": (
                 dims3,
                 arr["diverged_at"],
                 {"long_name": "first macro step that left the growth bound or was not finite (-1: none)"},
             ),
-            "fit_used": (dims3, arr["fit_used"], {"long_name": "point used in the order fit (the asymptotic range)"}),
+            "fit_used": (
+                dims3,
+                arr["fit_used"],
+                {"long_name": "step size in the smallest-H decade the order is read off"},
+            ),
+            "defect_bits": (
+                dims3,
+                arr["defect_bits"],
+                {
+                    "long_name": "Arb working precision (bits) that proved the one-step defect of this run "
+                    "(stepping error; 0 for the float64 steppings)",
+                    "units": "1",
+                },
+            ),
+            "local_slope": (
+                dims_mid,
+                slopes["local_slope"],
+                {"long_name": "local slope d log(nrmse) / d log(H) between neighbouring step sizes", "units": "1"},
+            ),
+            "local_slope_second_half": (
+                dims_mid,
+                slopes["local_slope_second_half"],
+                {"long_name": "local slope of nrmse_second_half", "units": "1"},
+            ),
             "order": (
                 dims2,
                 fits["order"],
-                {"long_name": "fitted order of convergence of nrmse over the asymptotic range", "units": "1"},
+                {
+                    "long_name": "order of convergence of nrmse: least-squares slope over the smallest-H decade "
+                    "(evidence only where order_status is asymptotic)",
+                    "units": "1",
+                },
             ),
-            "order_stderr": (
+            "order_status": (
                 dims2,
-                fits["order_stderr"],
-                {"long_name": "standard error of the fitted order", "units": "1"},
+                status["order_status"].astype(str),
+                {
+                    "long_name": "asymptotic (every local slope in the smallest-H decade within the tolerance of "
+                    "the order), pre-asymptotic, unstable as H -> 0, unstable at every H, or too few points"
+                },
             ),
-            "order_rvalue": (
+            "order_spread": (
                 dims2,
-                fits["order_rvalue"],
-                {"long_name": "correlation coefficient of the order fit", "units": "1"},
+                fits["order_spread"],
+                {
+                    "long_name": "largest deviation of a local slope in the smallest-H decade from the order",
+                    "units": "1",
+                },
             ),
-            "fit_H_min": (dims2, fits["fit_H_min"], {"long_name": "smallest H of the fitted range", "units": "s"}),
-            "fit_H_max": (dims2, fits["fit_H_max"], {"long_name": "largest H of the fitted range", "units": "s"}),
-            "fit_n_points": (dims2, fit_n, {"long_name": "number of step sizes in the fitted range"}),
-            "fit_note": (dims2, fit_note.astype(str), {"long_name": "why no order was fitted (empty if fitted)"}),
+            "fit_H_min": (dims2, fits["fit_H_min"], {"long_name": "smallest H of the decade", "units": "s"}),
+            "fit_H_max": (dims2, fits["fit_H_max"], {"long_name": "largest H of the decade", "units": "s"}),
+            "fit_n_points": (dims2, fit_n, {"long_name": "number of step sizes in the decade"}),
+            "fit_note": (
+                dims2,
+                status["fit_note"].astype(str),
+                {"long_name": "why the order is not asymptotic (empty if it is)"},
+            ),
             "order_second_half": (
                 dims2,
                 fits["order_second_half"],
-                {"long_name": "fitted order of nrmse_second_half", "units": "1"},
+                {"long_name": "order of nrmse_second_half over the smallest-H decade", "units": "1"},
+            ),
+            "order_startup": (
+                dims2,
+                fits["order_startup"],
+                {"long_name": "order of nrmse_startup over the smallest-H decade", "units": "1"},
             ),
         },
         coords={
             "H": ("H", study.H, H_attrs),
             "n_steps": ("H", study.n_steps, {"long_name": "number of macro steps N_total = end_time / H"}),
+            "H_mid": (
+                "H_mid",
+                H_mid,
+                {
+                    "long_name": "geometric mean of neighbouring macro-step sizes (where a local slope applies)",
+                    "units": "s",
+                },
+            ),
             "index": (
                 "index",
                 np.array(spec.indices, dtype=np.int32),
@@ -196,7 +279,11 @@ def run_panel(
         method_parameters_units=units_description(),
         stepping=stepping,
         spectral_policy=study.spectral_policy,
-        fit_procedure="icosim.convergence.fit_order: " + ", ".join(f"{k}={v}" for k, v in sorted(fit.items())),
+        fit_procedure="icosim.convergence.fit.asymptotic_order: "
+        + ", ".join(f"{k}={v}" for k, v in sorted(fit.items())),
+        startup_steps=study.startup_steps,
+        defect_accuracy="stepping error: the one-step defect D = M W - W E is formed in Arb ball arithmetic until every "
+        "row is proven to 2^-40 relative (icosim.convergence.errors), then rounded to float64",
         seconds_total=time.perf_counter() - t0,
     )
     ds.attrs = attrs

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["nrmse", "VARIABLES"]
+__all__ = ["nrmse", "nrmse_of_errors", "variances", "ratio_root", "VARIABLES"]
 
 
 #: Names of the variables compared by Eq. (72), in the order of the last axis.
@@ -60,11 +60,41 @@ def nrmse(reference, numerical):
     num = np.asarray(numerical, dtype=float)
     if ref.shape != num.shape:
         raise ValueError(f"reference and numerical must have the same shape, got {ref.shape} and {num.shape}")
+    return nrmse_of_errors(ref, ref - num)
+
+
+def nrmse_of_errors(reference, errors, *, rows=None):
+    """Eq. (72) from the errors ``reference - numerical`` themselves.
+
+    This is how the floor-free study uses it (:mod:`icosim.convergence.errors`
+    computes the errors directly, never as a difference of two O(1) numbers).
+    ``rows`` (a slice or mask over axis -2) restricts the numerator's sum to
+    part of the run -- the denominators stay those of the whole run, so the
+    squares of the parts add up to the square of the whole.
+    """
+    ref = np.asarray(reference, dtype=float)
+    err = np.asarray(errors, dtype=float)
+    if ref.shape != err.shape:
+        raise ValueError(f"reference and errors must have the same shape, got {ref.shape} and {err.shape}")
+    if rows is not None:
+        err = err[..., rows, :]
+    with np.errstate(over="ignore", invalid="ignore"):
+        return ratio_root(np.sum(err**2, axis=-2), variances(ref))
+
+
+def variances(reference):
+    """Eq. (72)'s denominators: ``sum_N (y_j(T_N) - y_j,mean)^2`` per variable (axis -1)."""
+    ref = np.asarray(reference, dtype=float)
     if ref.ndim < 2 or ref.shape[-2] < 2:
         raise ValueError("need at least two time samples (axis -2) per variable")
     variance = np.sum((ref - ref.mean(axis=-2, keepdims=True)) ** 2, axis=-2)
     if np.any(variance <= 0):
         raise ValueError("a reference variable is constant: its NRMSE denominator is zero")
+    return variance
+
+
+def ratio_root(squared_error_sums, variance):
+    """``sqrt(sum_j S_j / V_j)`` over the last axis; NaN where not finite."""
     with np.errstate(over="ignore", invalid="ignore"):
-        err = np.sqrt(np.sum(np.sum((ref - num) ** 2, axis=-2) / variance, axis=-1))
-    return np.where(np.isfinite(err), err, np.nan)
+        out = np.sqrt(np.sum(np.asarray(squared_error_sums, float) / variance, axis=-1))
+    return np.where(np.isfinite(out), out, np.nan)

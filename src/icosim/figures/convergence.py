@@ -4,9 +4,14 @@ Layout as in the paper: one column per parameter set (Fig. 21: ``mu``;
 Fig. 22: ``(a, b)``), one row per index, one curve per ``k``.  The NRMSE of
 stable runs is drawn over ``H`` on log-log axes; a run that is unstable at
 some ``H`` is drawn as an ``x`` marker pinned to the top of the panel -- never
-as an error value.  The points of the fitted (asymptotic) range are filled,
-the fitted order is in the legend, and dotted auxiliary lines show
-``O(H^p)`` as in the paper.
+as an error value.  The points of the smallest-H decade the order is read off
+are filled, the order and its status (asymptotic or why not) are in the
+legend, and dotted auxiliary lines show ``O(H^p)`` as in the paper.
+
+The companion slope figure (:func:`slope_figure`) shows, in the same layout,
+the local slopes ``d log(nrmse) / d log(H)`` over ``H``: flat where the order
+is asymptotic, with the +/- tolerance band over the decade the order is read
+off.
 """
 
 from __future__ import annotations
@@ -17,7 +22,24 @@ from matplotlib.lines import Line2D
 
 from ..methods import METHODS, parameters
 
-__all__ = ["convergence_figure", "work_precision_figure", "row_title", "K_COLOURS"]
+__all__ = ["convergence_figure", "slope_figure", "work_precision_figure", "row_title", "K_COLOURS"]
+
+#: How an order that is not asymptotic is shown in a legend.
+STATUS_SHORT = {
+    "pre-asymptotic": "pre-asymptotic",
+    "unstable as H -> 0": "unstable as H→0",
+    "unstable at every H": "unstable",
+    "too few points": "too few points",
+}
+
+
+def _order_label(k, order, status) -> str:
+    if status == "asymptotic":
+        return f"k = {int(k)}: $p$ = {order:.2f}"
+    if np.isfinite(order):
+        return f"k = {int(k)}: {order:.2f}, {STATUS_SHORT.get(status, status)}"
+    return f"k = {int(k)}: {STATUS_SHORT.get(status, status)}"
+
 
 K_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink")
 
@@ -71,10 +93,7 @@ def _draw_cell(ax, ds, index, guide_orders, ylo, yhi):
         err = sub["nrmse"].values[j]
         unstable = sub["unstable"].values[j].astype(bool)
         used = sub["fit_used"].values[j].astype(bool)
-        order = float(sub["order"].values[j])
-        label = f"k = {int(k)}: " + (
-            f"$p$ = {order:.2f}" if np.isfinite(order) else ("unstable" if unstable.all() else "no fit")
-        )
+        label = _order_label(k, float(sub["order"].values[j]), str(sub["order_status"].values[j]))
         ax.plot(H, err, "-", color=colour, lw=1.2, label=label, zorder=3)
         ax.plot(H[~used], err[~used], "o", mfc="white", mec=colour, ms=3.5, zorder=4)
         ax.plot(H[used], err[used], "o", color=colour, ms=3.5, zorder=4)
@@ -113,21 +132,75 @@ def convergence_figure(datasets: dict, layout, *, columns, rows, title="", guide
             ax = axes[r, c]
             ds = datasets[panel]
             _draw_cell(ax, ds, index, guide_orders, ylo, yhi)
-            head = _column_label(columns[c])
-            if ds.attrs.get("shared_across_columns") and n_cols > 1:
-                head = f"{head} (index {index} does not use it)" if head else ""
-            ax.set_title(f"{rows[r]}" + (f"; {head}" if head else ""), fontsize=9)
+            ax.set_title(_cell_title(ds, index, rows[r], columns[c], n_cols), fontsize=9)
             if r == n_rows - 1:
                 ax.set_xlabel("macro-step size $H$ (s)")
             if c == 0:
                 ax.set_ylabel(r"NRMSE $\varepsilon_{glo}$, Eq. (72)")
     handles = [
-        Line2D([], [], ls="none", marker="o", color="0.3", label="in the fitted (asymptotic) range"),
-        Line2D([], [], ls="none", marker="o", mfc="white", mec="0.3", label="outside the fitted range"),
+        Line2D([], [], ls="none", marker="o", color="0.3", label="smallest-H decade (the order is read off it)"),
+        Line2D([], [], ls="none", marker="o", mfc="white", mec="0.3", label="larger H"),
         Line2D([], [], ls="none", marker="x", color="0.3", mew=1.4, label="unstable at this H (no error shown)"),
         Line2D([], [], ls=":", color="0.45", label="auxiliary lines $O(H^p)$"),
     ]
     fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=8, frameon=False)
+    if title:
+        fig.suptitle(title, fontsize=11)
+    return fig
+
+
+def _cell_title(ds, index, row: str, column: dict, n_cols: int) -> str:
+    head = _column_label(column)
+    if ds.attrs.get("shared_across_columns") and n_cols > 1:
+        head = f"{head} (index {index} does not use it)" if head else ""
+    return f"{row}" + (f"; {head}" if head else "")
+
+
+def _draw_slopes(ax, ds, index, tolerance):
+    sub = ds.sel(index=index)
+    H_mid = ds["H_mid"].values
+    for j, k in enumerate(ds["k"].values):
+        colour = K_COLOURS[j % len(K_COLOURS)]
+        slope = sub["local_slope"].values[j]
+        status = str(sub["order_status"].values[j])
+        order = float(sub["order"].values[j])
+        ax.plot(H_mid, slope, "o-", color=colour, ms=3, lw=1.1, label=_order_label(k, order, status), zorder=3)
+        if np.isfinite(order):  # the decade the order is read off, with the tolerance band
+            lo, hi = float(sub["fit_H_min"].values[j]), float(sub["fit_H_max"].values[j])
+            ax.fill_between([lo, hi], order - tolerance, order + tolerance, color=colour, alpha=0.18, lw=0)
+            ax.plot([lo, hi], [order, order], "--", color=colour, lw=1.0)
+    ax.set_xscale("log")
+    ax.grid(True, which="major", lw=0.4, alpha=0.5)
+    ax.legend(loc="best", fontsize=7, framealpha=0.85)
+
+
+def slope_figure(datasets: dict, layout, *, columns, rows, title="", tolerance=0.1):
+    """Local slopes over ``H`` in the layout of :func:`convergence_figure`.
+
+    Each point is the slope between two neighbouring step sizes, drawn at their
+    geometric mean; the shaded band spans the smallest-H decade at the order
+    +/- ``tolerance``: every point inside it means the order is asymptotic.
+    """
+    n_cols, n_rows = len(layout), len(rows)
+    values = np.concatenate([ds["local_slope"].values.ravel() for ds in datasets.values()])
+    values = values[np.isfinite(values)]
+    lo, hi = (np.floor(values.min()) - 0.5, np.ceil(values.max()) + 0.5) if values.size else (0.0, 5.0)
+    fig = Figure(figsize=(4.0 * n_cols + 0.6, 3.0 * n_rows + 0.9), layout="constrained")
+    axes = fig.subplots(n_rows, n_cols, squeeze=False, sharex=True, sharey=True)
+    for c, col in enumerate(layout):
+        for r, (panel, index) in enumerate(col):
+            ax = axes[r, c]
+            _draw_slopes(ax, datasets[panel], index, tolerance)
+            ax.set_ylim(max(lo, -1.0), min(hi, 8.0))
+            ax.set_title(_cell_title(datasets[panel], index, rows[r], columns[c], n_cols), fontsize=9)
+            if r == n_rows - 1:
+                ax.set_xlabel("macro-step size $H$ (s)")
+            if c == 0:
+                ax.set_ylabel(r"local slope $d\log\varepsilon_{glo} / d\log H$")
+    handles = [
+        Line2D([], [], ls="--", color="0.3", label=f"order over the smallest-H decade (band: ± {tolerance:g})"),
+    ]
+    fig.legend(handles=handles, loc="outside lower center", ncol=1, fontsize=8, frameon=False)
     if title:
         fig.suptitle(title, fontsize=11)
     return fig

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.colors import TwoSlopeNorm
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 from matplotlib.patches import Rectangle
 
 from ..methods import parameters
@@ -21,6 +22,12 @@ from ..stability.panels import format_row_label
 __all__ = ["stability_figure", "panel_layout", "row_labels", "STYLES"]
 
 STYLES = ("field", "dots")
+#: How points that are neither stable nor unstable are drawn: verdict code (icosim.stability.policy.VERDICTS)
+#: -> scatter style.  Marginal: the proven enclosure of rho contains 1; undecided: nothing could be computed.
+OPEN_VERDICTS = {
+    2: {"color": "#2c7bb6", "marker": "s", "label": "marginal: the proven enclosure of ρ contains 1"},
+    3: {"color": "#000000", "marker": "x", "label": "undecided: no result for the point"},
+}
 #: TeX symbols of the ratios; the method parameters' come from the registry (:mod:`icosim.methods`).
 RATIO_SYMBOLS = {
     "am21": r"$\alpha_{m21}$",
@@ -93,6 +100,13 @@ def _draw_panel(ax, ds, *, style, norm, cmap, dots_stride):
     finite = np.where(np.isfinite(rho), rho, np.inf)
     if np.nanmin(finite) < 1 < np.nanmax(finite):
         ax.contour(lr1, li1, np.minimum(finite, 1e6).T, levels=[1.0], colors="k", linewidths=0.7)
+    if "verdict" in ds:  # marginal (the proven enclosure contains 1) and undecided points in their own colours
+        LR, LI = np.meshgrid(lr1, li1, indexing="ij")
+        verdict = ds["verdict"].values
+        for code, style_kw in OPEN_VERDICTS.items():
+            sel = verdict == code
+            if sel.any():
+                ax.scatter(LR[sel], LI[sel], s=4, linewidths=0, clip_on=False, zorder=4, **style_kw)
     ax.set_xlim(lr1[0], lr1[-1])
     ax.set_ylim(li1[0], li1[-1])
     ax.tick_params(labelsize=6, length=2)
@@ -147,6 +161,14 @@ def stability_figure(
     _mark_zoom_regions(panels, place, columns, axes)
     if mappable is not None:
         fig.colorbar(mappable, ax=axes, shrink=0.6, extend="max", label=r"spectral radius $\rho$")
+    shown = {int(c) for ds in panels if "verdict" in ds for c in np.unique(ds["verdict"].values)}
+    handles = [
+        Line2D([], [], ls="none", ms=4, color=kw["color"], marker=kw["marker"], label=kw["label"])
+        for code, kw in OPEN_VERDICTS.items()
+        if code in shown
+    ]
+    if handles:
+        fig.legend(handles=handles, loc="outside lower center", ncol=len(handles), fontsize=7, frameon=False)
     if title:
         fig.suptitle(title, fontsize=9)
     return fig

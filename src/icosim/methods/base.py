@@ -21,13 +21,14 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 import numpy as np
 
 from ..decompositions import DECOMPOSITIONS, Decomposition
 from ..model import ParameterError
 
-__all__ = ["CouplingMethod", "MethodSpec", "Parameter", "solve_small", "finite"]
+__all__ = ["CouplingMethod", "MethodSpec", "Parameter", "solve_small", "finite", "exact"]
 
 
 @dataclass(frozen=True)
@@ -68,8 +69,8 @@ class CouplingMethod:
         for weight, levels in self.solves:
             if weight == 0:
                 continue  # an unused level may be singular (e.g. velocity at k = 0)
-            r = _conditions(levels, residuals, axis=-1)
-            J = _conditions(levels, jacobians, axis=-2)
+            r = _conditions(levels, residuals, axis=-1, const=backend.const)
+            J = _conditions(levels, jacobians, axis=-2, const=backend.const)
             de = solve_small(J, -r)
             term = de if weight == 1 else backend.const(weight) * de
             total = term if total is None else total + term
@@ -228,12 +229,25 @@ def finite(name, value) -> float:
     return v
 
 
-def _conditions(levels, parts, axis):
+def exact(name, value) -> Fraction:
+    """``value`` as an exact rational: a float as the binary number it is, a decimal string or
+    :class:`~fractions.Fraction` as the decimal number typed (so ``"0.1"`` is 1/10, not the double
+    nearest to it).  The error names the parameter."""
+    finite(name, value)  # checks it is a finite number
+    try:
+        return Fraction(value)
+    except (TypeError, ValueError):
+        return Fraction(float(value))
+
+
+def _conditions(levels, parts, axis, const=float):
     """Stack the constraint-level combination and the force-balance rows.
 
     ``parts`` maps ``pos``/``vel``/``acc``/``force`` to residuals (rows on the
     last axis) or Jacobians (rows on axis -2); ``levels`` are the weights of
-    the three constraint levels.
+    the three constraint levels, exact numbers turned into the parts'
+    arithmetic by ``const`` (a backend's; a Fraction times a float array
+    would make an object array).
     """
     rows = []
     if parts["pos"].shape[axis]:
@@ -241,7 +255,7 @@ def _conditions(levels, parts, axis):
         for w, key in zip(levels, ("pos", "vel", "acc")):
             if w == 0:
                 continue
-            term = parts[key] if w == 1 else w * parts[key]
+            term = parts[key] if w == 1 else const(w) * parts[key]
             combined = term if combined is None else combined + term
         rows.append(combined)
     if parts["force"].shape[axis]:
@@ -277,11 +291,15 @@ def solve_small(J, b):
 
 def _gauss(A, y):
     """Gaussian elimination with partial pivoting in the numbers' own arithmetic
-    (so mpmath values keep their context's precision)."""
+    (so mpmath values keep their context's precision and Arb balls their bounds).
+
+    The pivot is chosen by the float magnitude: comparing two Arb balls is
+    undecided when they overlap, and any nonzero pivot is correct (the size only
+    affects how wide the balls grow)."""
     n = len(y)
     A = [row[:] + [y[i]] for i, row in enumerate(A)]
     for col in range(n):
-        piv = max(range(col, n), key=lambda r: abs(A[r][col]))
+        piv = max(range(col, n), key=lambda r: float(abs(A[r][col])))
         A[col], A[piv] = A[piv], A[col]
         for r in range(col + 1, n):
             f = A[r][col] / A[col][col]

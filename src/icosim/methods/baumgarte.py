@@ -9,15 +9,20 @@ of the convergence study and the pendulum ``mu`` and ``beta`` are in seconds,
 >>> m = baumgarte(index=1, mu=0.5)
 >>> m.params
 {'beta': 1.0, 'gamma': 0.25, 'mu': 0.5, 'index': 1}
->>> m.solves
-((1, (1, 1.0, 0.25)),)
+>>> [str(level) for level in m.solves[0][1]]  # exact: "0.1" would be 1/10, not the nearest double
+['1', '1', '1/4']
 """
 
 from __future__ import annotations
 
+import sys
+from fractions import Fraction
+
 from ..decompositions import DD_NEEDS_POSITION_LEVEL
 from ..model import ParameterError
-from .base import CouplingMethod, MethodSpec, Parameter, finite
+from .base import CouplingMethod, MethodSpec, Parameter, exact
+
+_FLOAT_MAX = Fraction(sys.float_info.max)
 
 __all__ = ["baumgarte", "SPEC"]
 
@@ -39,25 +44,29 @@ def baumgarte(beta: float = None, gamma: float = None, *, mu: float = None, inde
         if index == 3:
             if mu is not None:
                 raise ParameterError("mu is not used at index 3 (beta = gamma = 0); drop --mu")
-            beta, gamma = 0.0, 0.0
+            beta, gamma = Fraction(0), Fraction(0)
         else:
             if mu is None:
                 raise ParameterError(f"Baumgarte index {index} needs --mu")
-            mu = finite("mu", mu)
+            mu = exact("mu", mu)
             if mu <= 0:
-                raise ParameterError(f"mu must be > 0, got {mu!r}")
-            beta, gamma = 2 * mu, (mu * mu if index == 1 else 0.0)
+                raise ParameterError(f"mu must be > 0, got {float(mu)!r}")
+            beta, gamma = 2 * mu, (mu * mu if index == 1 else Fraction(0))
+            for name, value in (("beta = 2 mu", beta), ("gamma = mu^2", gamma)):
+                if value > _FLOAT_MAX:  # a derived quantity every arithmetic of the engine must hold
+                    raise ParameterError(f"mu = {float(mu):g} makes {name} too large for float64 (not finite)")
     else:
         if mu is not None:
             raise ParameterError("--mu needs --index (1 or 2) for the Baumgarte method")
         if beta is None or gamma is None:
             raise ParameterError("Baumgarte needs --beta and --gamma, or --index (and --mu)")
-        beta, gamma = finite("beta", beta), finite("gamma", gamma)
+        beta, gamma = exact("beta", beta), exact("gamma", gamma)
         if beta < 0 or gamma < 0:
-            raise ParameterError(f"beta and gamma must be >= 0, got beta={beta!r}, gamma={gamma!r}")
-    params = {"beta": beta, "gamma": gamma}
+            raise ParameterError(f"beta and gamma must be >= 0, got beta={float(beta)!r}, gamma={float(gamma)!r}")
+    # the rule works with the exact values (decimal input stays exact at any precision); params show floats
+    params = {"beta": float(beta), "gamma": float(gamma)}
     if mu is not None:
-        params["mu"] = mu
+        params["mu"] = float(mu)
     # the index follows from the parameters: gamma = 0 drops the position level, beta = 0 too the velocity level
     params["index"] = index if index is not None else (3 if beta == gamma == 0 else 2 if gamma == 0 else 1)
     return CouplingMethod(

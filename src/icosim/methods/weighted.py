@@ -12,11 +12,9 @@ for term.  ``a`` and ``b`` are dimensionless in every setting.
 
 from __future__ import annotations
 
-from fractions import Fraction
-
 from ..decompositions import DD_NEEDS_POSITION_LEVEL
 from ..model import ParameterError
-from .base import CouplingMethod, MethodSpec, Parameter, finite
+from .base import CouplingMethod, MethodSpec, Parameter, exact
 
 __all__ = ["weighted_multiplier", "SPEC"]
 
@@ -45,15 +43,15 @@ def weighted_multiplier(a: float = None, b: float = None, *, index: int = None):
             raise ParameterError("weighted multiplier index 1 needs --a and --b")
     if a is None or b is None:
         raise ParameterError("weighted multiplier needs --a and --b (or --index)")
-    a, b = finite("a", a), finite("b", b)
+    # exact rationals (decimal input stays exact), so multiprecision runs are not limited by 1/3 in binary
+    fa, fb = exact("a", a), exact("b", b)
+    a, b = float(fa), float(fb)
     if a < 0 or b < 0:
         raise ParameterError(f"a and b must be >= 0, got a={a!r}, b={b!r}")
     if index is None:  # the index follows from the weights
         index = 3 if a == b == 0 else 2 if b == 0 else 1
     elif index == 1 and b == 0:
         raise ParameterError("index 1 needs b > 0 (b = 0 is the index-2 method)")
-    # exact rational weights, so that multiprecision runs are not limited by 1/3 in binary
-    fa, fb = Fraction(a), Fraction(b)
     s = 1 + fa + fb
     solves = ((1 / s, (1, 0, 0)), (fa / s, (0, 1, 0)), (fb / s, (0, 0, 1)))
     return CouplingMethod(

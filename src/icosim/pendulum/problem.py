@@ -14,6 +14,7 @@ import numpy as np
 from ..backend import Float64
 from ..decompositions import get_decomposition
 from ..lagrange import monomial_coefficients
+from ..limits import check_k
 from ..model import ParameterError
 from ..problem import CosimulationProblem
 from ..radau import _fd_jacobian, radau_batch
@@ -58,8 +59,7 @@ class PendulumCosimulation(CosimulationProblem):
         newton_tol: float = 1e-8,
     ):
         dec = get_decomposition(decomposition)
-        if not (isinstance(k, int) and not isinstance(k, bool) and k >= 0):
-            raise ParameterError(f"k must be an integer >= 0, got {k!r}")
+        k = check_k(k)  # 0 .. icosim.limits.MAX_K
         for name, v in (("H", H), ("rtol", rtol), ("atol", atol), ("fd_step", fd_step), ("newton_tol", newton_tol)):
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ParameterError(f"{name} must be a finite number > 0, got {v!r}")

@@ -7,8 +7,12 @@ from . import html as rp
 __all__ = ["claims_table"]
 
 
-def claims_table(records, *, note_header: str = "note") -> str:
-    """HTML table of verdict records (claim, source, figures, verdict and reference, measured, note)."""
+def claims_table(records, *, note_header: str = "note", part: str | None = None) -> str:
+    """HTML table of verdict records (claim, source, figures, verdict and reference, measured, note).
+
+    Long texts fold away (:func:`icosim.report.html.fold`); with ``part`` each row has the ``id``
+    :func:`icosim.report.html.claim_anchor` that the summary and the figures link to.
+    """
     rows = []
     for c in records:
         ref = c["reference"]
@@ -20,14 +24,18 @@ def claims_table(records, *, note_header: str = "note") -> str:
         )
         rows.append(
             [
-                f"<b>{rp.escape(c['id'])}</b><br>{rp.escape(c['statement'])}",
+                f"<b>{rp.escape(c['id'])}</b><br>{rp.fold(c['statement'])}",
                 rp.escape(c["source"]),
                 rp.escape(", ".join(c["figures"])),
                 rp.verdict_badge(c["verdict"]) + rp.escape(ref_note),
-                rp.escape(c["measured"]),
-                rp.escape(c["note"]),
+                rp.fold(c["measured"]),
+                rp.fold(c["note"]),
             ]
         )
+    ids = None if part is None else [rp.claim_anchor(part, c["id"]) for c in records]
     return rp.table(
-        ["claim", "source", "figures", "verdict", "measured", note_header], rows, raw_columns=(0, 1, 2, 3, 4, 5)
+        ["claim", "source", "figures", "verdict", "measured", note_header],
+        rows,
+        raw_columns=(0, 1, 2, 3, 4, 5),
+        row_ids=ids,
     )

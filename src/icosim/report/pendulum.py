@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 
 from .claims import claims_table
-from .html import escape, figure, section, table, verdict_badge
+from .html import escape, figure, figure_anchor, section, table, used_by, verdict_badge
 
 __all__ = ["pendulum_section"]
 
@@ -108,7 +108,7 @@ for q = (φ1, x<sub>S2</sub>, y<sub>S2</sub>, φ2)) projection of the positions 
 the KKT conditions) and of the velocities onto ġ<sub>c</sub> = 0, the generalisation of Eq. (30).</p>
 """
 
-    claim_html = ["<h3>The paper's claim</h3>" + claims_table(claims)]
+    claim_html = ["<h3>The paper's claim</h3>" + claims_table(claims, part="pendulum")]
     for claim in claims:
         claim_html.append(f"<p>Claim <b>{escape(claim['id'])}</b>, run by run:</p>")
         rows = [
@@ -187,12 +187,18 @@ the KKT conditions) and of the velocities onto ġ<sub>c</sub> = 0, the generalis
                 path,
                 f"Fig. {paper_figure.get(k, '–')} of the paper (k = {k}): φ1, φ2, g<sub>cax</sub>, g<sub>cay</sub>, λ<sub>cax</sub>, λ<sub>cay</sub> over t; grey: monolithic reference.",
                 alt=f"pendulum k={k}",
+                anchor=figure_anchor("pendulum", path),
+                paper_figures=[str(paper_figure[k])] if k in paper_figure else [],
+                claims_html=used_by(
+                    "pendulum", [c["id"] for c in claims if str(paper_figure.get(k)) in map(str, c["figures"])]
+                ),
             )
         )
     figs.append(
         figure(
             error_png,
             "Error of φ1 and φ2 against the monolithic reference (log scale), one column per k.",
+            anchor=figure_anchor("pendulum", error_png),
         )
     )
 

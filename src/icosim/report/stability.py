@@ -7,7 +7,6 @@ configuration (the decisions).
 
 from __future__ import annotations
 
-from collections import defaultdict
 from pathlib import Path
 
 from ..claims import verdict_counts
@@ -18,7 +17,7 @@ from .claims import claims_table
 __all__ = ["stability_section"]
 
 esc = rp.escape
-KEYS = ("panels", "points", "hp", "hp_axis", "cpu64", "cpump")
+KEYS = ("panels", "points", "cert", "marginal", "hp_axis", "audited", "overturned", "cpu64", "cpucert")
 
 
 def fmt_grid(g):
@@ -26,18 +25,82 @@ def fmt_grid(g):
 
 
 def cost_row(label, t):
-    cpu = t["cpu64"] + t["cpump"]
+    cpu = t["cpu64"] + t["cpucert"]
     return [
         label,
         int(t["panels"]),
         int(t["points"]),
-        int(t["hp"]),
+        int(t["cert"]),
+        int(t["marginal"]),
         int(t["hp_axis"]),
-        f"{t['hp'] / t['points']:.2%}",
+        int(t["audited"]),
+        int(t["overturned"]),
         f"{t['cpu64']:.1f}",
-        f"{t['cpump']:.1f}",
-        f"{t['cpump'] / max(cpu, 1e-12):.0%}",
+        f"{t['cpucert']:.1f}",
+        f"{t['cpucert'] / max(cpu, 1e-12):.0%}",
     ]
+
+
+def cost_table(panel_attrs, figures):
+    """Per figure (rows, in the order of ``figures``): panels, points, certified points (marginal ones, on the
+    undamped axis, audited, overturned) and CPU seconds of the float64 pass and of the certification, summed
+    over the panels' attributes.  Panels written before certification count their multiprecision rechecks as
+    certified (the only high-precision pass they had)."""
+    import pandas as pd
+
+    df = pd.DataFrame(list(panel_attrs))
+    if df.empty:
+        df = pd.DataFrame(columns=["figure", "n_points", "n_high_precision", "n_high_precision_undamped"])
+
+    def col(name, fallback=0.0):
+        return df[name].fillna(fallback) if name in df else pd.Series(fallback, index=df.index, dtype=float)
+
+    parts = pd.DataFrame(
+        {
+            "figure": df["figure"].astype(str),
+            "points": col("n_points"),
+            "cert": col("n_certified", float("nan")).fillna(col("n_high_precision")),
+            "marginal": col("n_marginal"),
+            "hp_axis": col("n_high_precision_undamped"),
+            "audited": col("n_audited"),
+            "overturned": col("n_overturned"),
+            "cpu64": col("cpu_seconds_float64"),
+            "cpucert": col("cpu_seconds_certify") + col("cpu_seconds_mp"),
+        }
+    )
+    value_columns = [c for c in KEYS if c != "panels"]
+    sums = parts.groupby("figure").agg(panels=("points", "size"), **{c: (c, "sum") for c in value_columns})
+    return sums.reindex([str(f) for f in figures], fill_value=0).astype(float)[list(KEYS)]
+
+
+def overturned_html(panel_attrs) -> str:
+    """Every float64 verdict that certification overturned, or that there was none and how many were checked."""
+    import json
+
+    checked = sum(a.get("n_audited", 0) for a in panel_attrs)
+    rows = [
+        [
+            f"Fig. {a['figure']} row {a['row']} k = {a['k']} ({a['view']})",
+            f"{p['lr1']:g}",
+            f"{p['li1']:g}",
+            p["float64_verdict"],
+            p["verdict"],
+            f"[{p['rho_lower']:.12g}, {p['rho_upper']:.12g}]",
+        ]
+        for a in panel_attrs
+        for p in json.loads(a.get("overturned_points", "[]"))
+    ]
+    if not rows:
+        return (
+            f"<p><b>Overturned float64 verdicts: none.</b> {checked} points that float64 decided were also certified "
+            "(every point within the band around ρ = 1 and the random audit sample), and every certified verdict "
+            "agreed with float64's.</p>"
+        )
+    return (
+        f"<p><b>Overturned float64 verdicts: {len(rows)}</b> of {checked} points checked; the certified verdict "
+        "stands in the datasets and figures.</p>"
+        + rp.table(["panel", "λ̄r1", "λ̄i1", "float64", "certified", "proven ρ"], rows)
+    )
 
 
 def stability_section(
@@ -60,26 +123,10 @@ def stability_section(
     (:func:`icosim.claims.read_verdicts`), ``figure_pngs`` the figures
     (``.../fig<figure>.png``), in the order shown.
     """
-    cost_rows, totals = [], defaultdict(float)
-    # -- panel attributes: precision and cost, per figure ---------------------------------------
-    attrs_by_fig = defaultdict(list)
-    for attrs in panel_attrs:
-        attrs_by_fig[attrs["figure"]].append(attrs)
-
-    for fig in figures:
-        al = attrs_by_fig[fig]
-        t = {
-            "panels": len(al),
-            "points": sum(a["n_points"] for a in al),
-            "hp": sum(a["n_high_precision"] for a in al),
-            "hp_axis": sum(a["n_high_precision_undamped"] for a in al),
-            "cpu64": sum(a["cpu_seconds_float64"] for a in al),
-            "cpump": sum(a["cpu_seconds_mp"] for a in al),
-        }
-        for key in KEYS:
-            totals[key] += t[key]
-        cost_rows.append(cost_row(f"Fig. {fig}", t))
-    t = totals
+    # -- panel attributes: precision and cost, per figure (and all) ---------------------------------
+    per_figure = cost_table(panel_attrs, list(figures))
+    cost_rows = [cost_row(f"Fig. {fig}", t) for fig, t in per_figure.iterrows()]
+    t = per_figure.sum()
     cost_rows.append(cost_row("all", t))
 
     # -- decisions, read from the configuration ---------------------------------------------------
@@ -110,23 +157,28 @@ def stability_section(
     ]
     for fig, labels in pairs.items():
         computed.append(f"Fig. {fig}: the three (a, b) pairs are " + "; ".join(labels) + ".")
+    cert = {"band": 1e-6, "audit": 0.01, "bits": 128, "max_bits": 1024, **(precision.get("certify") or {})}
     computed.append(
-        f"Precision: policy '{precision['policy']}': float64 over the whole grid; every point whose float64 value cannot "
-        f"decide ρ ≤ 1 (|ρ − 1| within its error estimate, or not finite) is recomputed with mpmath at {precision['digits']} "
-        "digits (the paper's 128 decimal places). Each dataset records which precision decided each point (variable digits)."
+        f"Precision: policy '{precision['policy']}': float64 over the whole grid; certified in ball arithmetic "
+        "(python-flint Arb: a proven enclosure of ρ from the characteristic polynomial of the ball amplification "
+        f"matrix at {cert['bits']} bits, where undecided once more at {cert['max_bits']}) are every point float64 cannot decide "
+        f"(|ρ − 1| within its error estimate, or not finite), every point with |ρ − 1| < {cert['band']:g}, and a "
+        f"random {cert['audit']:.0%} audit sample of the rest. Verdicts: stable (ρ < 1 proven, or float64 trusted), "
+        "unstable, marginal (the proven enclosure still contains 1 at the cap, e.g. ρ = 1 exactly: drawn as blue "
+        "squares), undecided. Each dataset records per point which arithmetic decided it and whether it is certified."
     )
-    hp_share = t["hp"] / t["points"]
-    cpu = t["cpu64"] + t["cpump"]
+    cpu = t["cpu64"] + t["cpucert"]
     body = [
         "<h3>What was computed</h3><ul>"
         + "".join(f"<li>{esc(d)}</li>" for d in computed)
         + "</ul>"
         + ("<h3>Why</h3><ul>" + "".join(f"<li>{esc(d)}</li>" for d in decisions) + "</ul>" if decisions else ""),
-        f"<p>{int(t['hp'])} of {int(t['points'])} grid points ({hp_share:.2%}) needed high precision, "
-        f"{int(t['hp_axis'])} of them on the undamped axis λ̄r1 = 0 (ρ = 1 to working precision there, which float64 "
-        f"cannot decide). The rechecks took {t['cpump'] / max(cpu, 1e-12):.0%} of the sweeps' compute time "
-        f"({t['cpump']:.0f} of {cpu:.0f} CPU-seconds in {int(t['panels'])} panel jobs; process start-up and file "
-        "writing not included).</p>",
+        f"<p>{int(t['cert'])} of {int(t['points'])} grid points ({t['cert'] / t['points']:.2%}) were certified, "
+        f"{int(t['marginal'])} of them marginal, {int(t['hp_axis'])} on the undamped axis λ̄r1 = 0 (ρ = 1 to any "
+        f"precision there for identical subsystems, which float64 cannot decide). The certification took "
+        f"{t['cpucert'] / max(cpu, 1e-12):.0%} of the sweeps' compute time ({t['cpucert']:.0f} of {cpu:.0f} "
+        f"CPU-seconds in {int(t['panels'])} panel jobs; process start-up and file writing not included).</p>"
+        + overturned_html(panel_attrs),
     ]
 
     # -- claims -------------------------------------------------------------------------------------
@@ -134,9 +186,11 @@ def stability_section(
     body.append(
         f"<h3>The paper's claims</h3><p>{len(claims)} claims from Sects. 3.1–3.6 and 5 (config/claims/stability.yaml), "
         f"evaluated on the datasets: {counts['pass']} pass, {counts['fail']} fail, {counts['undecided']} undecided. "
-        "Shares are of stable grid points; differences below the grid resolution 1/(n−1) are undecided. "
+        "Shares are of stable grid points; differences below the grid resolution 1/(n−1) are undecided, and so is a "
+        "claim the marginal points could turn (they count neither as stable nor as unstable); each claim says how "
+        "many of the points it uses are certified. "
         "Where the data disagree with the paper, the data stand.</p>"
-        + claims_table(claims, note_header="how the words were read")
+        + claims_table(claims, note_header="how the words were read", part="stability")
     )
     body.append(
         "<h3>Precision and cost per figure</h3>"
@@ -145,12 +199,14 @@ def stability_section(
                 "figure",
                 "panels",
                 "points",
-                "high precision",
-                "of them at λ̄r1 = 0",
-                "share of points",
+                "certified",
+                "marginal",
+                "rechecked at λ̄r1 = 0",
+                "float64 verdicts checked",
+                "overturned",
                 "float64 CPU s",
-                "mp CPU s",
-                "mp share of CPU",
+                "certification CPU s",
+                "its share of CPU",
             ],
             cost_rows,
         )
@@ -165,9 +221,7 @@ def stability_section(
     for png in figure_pngs:
         fig = Path(png).stem.removeprefix("fig")
         cfg = figures[fig]
-        al = attrs_by_fig[fig]
-        hp = sum(a["n_high_precision"] for a in al)
-        n = sum(a["n_points"] for a in al)
+        tf = per_figure.loc[fig]
         params = ", ".join(f"{k} = {v:g}" for k, v in cfg["params"].items())
         rows_txt = "; ".join(f"row {r}: {row_label(cfg, r)}" for r in range(1, len(cfg["rows"]) + 1))
         zoom_txt = (
@@ -179,9 +233,18 @@ def stability_section(
             f"<b>Fig. {fig}</b> (paper Fig. {fig}): {esc(cfg['title'])}. Method {esc(cfg['method'])}"
             + (f" ({esc(params)})" if params else "")
             + f", decomposition {esc(cfg['decomposition'])}, columns k = {', '.join(map(str, cfg['k']))}; {esc(rows_txt)}. "
-            + f"Grid {esc(fmt_grid(grid))}.{esc(zoom_txt)} Precision: {hp} of {n} points recomputed with mpmath at "
-            + f"{precision['digits']} digits, the rest float64. Shown: {esc(shown)}."
+            + f"Grid {esc(fmt_grid(grid))}.{esc(zoom_txt)} Precision: {int(tf['cert'])} of {int(tf['points'])} points "
+            + f"certified ({int(tf['marginal'])} marginal, blue), the rest float64. Shown: {esc(shown)}."
         )
-        body.append(rp.figure(png, caption, alt=f"Fig. {fig}"))
+        body.append(
+            rp.figure(
+                png,
+                caption,
+                alt=f"Fig. {fig}",
+                anchor=rp.figure_anchor("stability", png),
+                paper_figures=[fig],
+                claims_html=rp.used_by("stability", [c["id"] for c in claims if fig in c["figures"]]),
+            )
+        )
 
     return rp.section("Stability (Figs. 9–20)", "".join(body), "stability")

@@ -6,7 +6,9 @@ module                      holds
 :mod:`.matrix`              the amplification matrix, from the macro step itself
 :mod:`.spectral`            spectral radius in float64 (with an error estimate)
                             and at any precision (mpmath)
-:mod:`.policy`              the precision policy between the two; stability
+:mod:`.certified`           proven enclosures of the spectral radius (Arb balls)
+:mod:`.policy`              the precision policy: float64, proofs where it
+                            cannot decide; the verdict of every point
 :mod:`.panels`              one panel of Figs. 9-20 as a dataset (xarray)
 :mod:`.checks`              the stability claims' check kinds
 ==========================  ===================================================
@@ -14,8 +16,9 @@ module                      holds
 Importing this package loads the first three only (no xarray, no matplotlib).
 """
 
+from .certified import SpectralCertificate, certify_spectral_radius
 from .matrix import amplification_matrix
-from .policy import StabilityResult, is_stable, spectral_radius
+from .policy import Certification, StabilityResult, spectral_radius
 from .spectral import spectral_radius_float64, spectral_radius_mp
 
 __all__ = [
@@ -24,5 +27,7 @@ __all__ = [
     "spectral_radius_mp",
     "spectral_radius",
     "StabilityResult",
-    "is_stable",
+    "Certification",
+    "certify_spectral_radius",
+    "SpectralCertificate",
 ]

@@ -7,6 +7,12 @@ when the stability boundary moves by one grid spacing across the whole plot).
 Smaller differences are ``undecided``: the grid cannot tell them from
 discretisation.
 
+Marginal (and undecided) points -- the proven enclosure of ``rho`` contains 1
+-- are neither counted stable nor unstable: a share is an interval from "none
+of them stable" to "all of them stable", and a claim whose verdict depends on
+where in that interval the truth lies is ``undecided``.  Each claim reports how
+many of the points it uses are certified and how many are marginal.
+
 ============================  ==================================================
 kind                          reads
 ============================  ==================================================
@@ -19,15 +25,27 @@ kind                          reads
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..claims import CheckKind, Outcome, combine_holds, select
 from ..model import ParameterError
 
-__all__ = ["CHECKS", "check_stable_fraction", "check_compare", "check_trend", "stable_share", "grid_resolution"]
+__all__ = [
+    "CHECKS",
+    "check_stable_fraction",
+    "check_compare",
+    "check_trend",
+    "stable_share",
+    "Share",
+    "grid_resolution",
+]
 
 _select = select  # the checks take a parameter called `select`
+
+#: Keys of a claim's ``region``: bounds on ``lr1``/``li1``, and the degenerate points left out.
+REGION_KEYS = ("lr1", "li1", "exclude_undamped", "exclude_origin")
 
 
 def grid_resolution(datasets) -> float:
@@ -41,9 +59,9 @@ def _region_mask(ds, region):
     li1 = ds["li1"].values[None, :]
     mask = np.ones((lr1.size, li1.size), dtype=bool)
     region = region or {}
-    unknown = sorted(set(region) - {"lr1", "li1", "exclude_undamped"})
+    unknown = sorted(set(region) - set(REGION_KEYS))
     if unknown:
-        raise ParameterError(f"region: unknown key(s) {unknown}; allowed: lr1, li1, exclude_undamped")
+        raise ParameterError(f"region: unknown key(s) {unknown}; allowed: {', '.join(REGION_KEYS)}")
     if "lr1" in region:
         lo, hi = region["lr1"]
         mask &= (lr1 >= lo) & (lr1 <= hi)
@@ -53,17 +71,62 @@ def _region_mask(ds, region):
     if region.get("exclude_undamped"):
         # lr1 = 0: both subsystems undamped, the model itself only marginally stable
         mask &= np.broadcast_to(lr1 < 0, mask.shape)
+    if region.get("exclude_origin"):
+        # lr1 = li1 = 0: both subsystems are free masses (lambda_2 = 0 too); every scheme reproduces the rigid motion
+        # x0 + v t, so 1 is an eigenvalue and rho >= 1 there: marginal or unstable, never provably stable
+        mask &= (lr1 != 0) | (li1 != 0)
     return mask
 
 
-def stable_share(ds, region=None) -> tuple[float, int, int]:
-    """(share of stable points, stable count, point count) inside ``region``."""
+@dataclass(frozen=True)
+class Share:
+    """Stable points inside a region: ``stable`` proven (or float64) stable, ``open`` marginal or
+    undecided, ``certified`` decided by a proof, out of ``n``.  The share lies in ``[low, high]``."""
+
+    stable: int
+    open: int
+    certified: int
+    n: int
+
+    @property
+    def low(self) -> float:
+        return self.stable / self.n
+
+    @property
+    def high(self) -> float:
+        return (self.stable + self.open) / self.n
+
+    def text(self) -> str:
+        core = f"{self.stable}/{self.n} stable ({self.low:.1%})"
+        if self.open:
+            core += f" + {self.open} marginal (up to {self.high:.1%})"
+        return core
+
+
+def _verdict_masks(ds):
+    """``(stable, unstable)`` masks of a panel; the rest is marginal or undecided."""
+    if "verdict" not in ds:  # a panel without verdicts (written before certification): every point decided
+        stable = ds["stable"].values.astype(bool)
+        return stable, ~stable
+    v = ds["verdict"].values
+    return v == 0, v == 1  # flag values of icosim.stability.policy.VERDICTS
+
+
+def stable_share(ds, region=None) -> Share:
+    """The stable points inside ``region`` as a :class:`Share`."""
     mask = _region_mask(ds, region)
     n = int(mask.sum())
     if n == 0:
         raise ParameterError(f"region {region} holds no grid point of figure {ds.attrs.get('figure')}")
-    s = int(ds["stable"].values[mask].sum())
-    return s / n, s, n
+    stable, unstable = _verdict_masks(ds)
+    certified = ds["certified"].values.astype(bool) if "certified" in ds else np.zeros(mask.shape, bool)
+    s, u = int(stable[mask].sum()), int(unstable[mask].sum())
+    return Share(s, n - s - u, int(certified[mask].sum()), n)
+
+
+def _holds(a: bool, b: bool):
+    """One verdict from the two ends of an interval: True/False if both agree, else None (undecided)."""
+    return a if a == b else None
 
 
 def _describe(ds) -> str:
@@ -72,7 +135,7 @@ def _describe(ds) -> str:
 
 
 def _nearest_unstable(ds, region):
-    mask = _region_mask(ds, region) & ~ds["stable"].values.astype(bool)
+    mask = _region_mask(ds, region) & _verdict_masks(ds)[1]
     if not mask.any():
         return None
     LR, LI = np.meshgrid(ds["lr1"].values, ds["li1"].values, indexing="ij")
@@ -101,12 +164,19 @@ def check_stable_fraction(datasets, *, select: dict, op: str, value: float, regi
         return Outcome(None, f"no dataset matches {select}")
     parts, numbers, ok = [], {}, []
     for ds in chosen:
-        share, s, n = stable_share(ds, region)
-        good = _OPS[op](share, value)
+        share = stable_share(ds, region)
+        good = _holds(_OPS[op](share.low, value), _OPS[op](share.high, value))
         ok.append(good)
         nearest = _nearest_unstable(ds, region)
-        entry = {"stable_share": share, "n_stable": s, "n_points": n}
-        text = f"{_describe(ds)}: {s}/{n} stable ({share:.1%})"
+        entry = {
+            "stable_share": share.low,
+            "stable_share_high": share.high,
+            "n_stable": share.stable,
+            "n_marginal": share.open,
+            "n_certified": share.certified,
+            "n_points": share.n,
+        }
+        text = f"{_describe(ds)}: {share.text()}"
         if nearest is not None and op in ("<", "<=") and value >= 1:
             entry["nearest_unstable_to_origin"] = nearest
             text += f", nearest unstable point at distance {nearest:.3g} from the origin"
@@ -114,20 +184,52 @@ def check_stable_fraction(datasets, *, select: dict, op: str, value: float, regi
             axis_mask = _region_mask(ds, {**region, "exclude_undamped": False})
             axis_mask &= np.broadcast_to(ds["lr1"].values[:, None] == 0, axis_mask.shape)
             if axis_mask.any():
-                n_axis_unstable = int((~ds["stable"].values.astype(bool))[axis_mask].sum())
+                stable, unstable = _verdict_masks(ds)
+                n_axis_unstable, n_axis_marginal = (
+                    int(unstable[axis_mask].sum()),
+                    int((~stable & ~unstable)[axis_mask].sum()),
+                )
                 entry["undamped_axis_unstable"] = n_axis_unstable
-                text += f" (undamped axis lr1 = 0, not counted: {n_axis_unstable}/{int(axis_mask.sum())} unstable)"
+                entry["undamped_axis_marginal"] = n_axis_marginal
+                text += (
+                    f" (undamped axis lr1 = 0, not counted: {n_axis_unstable} unstable, {n_axis_marginal} marginal "
+                    f"of {int(axis_mask.sum())})"
+                )
+        if region and region.get("exclude_origin"):
+            text += _origin_text(ds, entry)
         numbers[_describe(ds)] = entry
         parts.append(text)
-    return Outcome(all(ok), "; ".join(parts), numbers)
+    return Outcome(combine_holds(ok), "; ".join(parts) + _certified_text(chosen, region), numbers)
+
+
+def _origin_text(ds, entry: dict) -> str:
+    """The verdict at the origin lr1 = li1 = 0 (left out of the share), if the grid holds it."""
+    i, j = np.flatnonzero(ds["lr1"].values == 0), np.flatnonzero(ds["li1"].values == 0)
+    if not (i.size and j.size):
+        return ""
+    stable, unstable = _verdict_masks(ds)
+    at = (i[0], j[0])
+    verdict = "stable" if stable[at] else "unstable" if unstable[at] else "marginal"
+    entry["origin_verdict"] = verdict
+    return f" (origin lr1 = li1 = 0, free masses where rho >= 1 for every scheme, not counted: {verdict})"
+
+
+def _certified_text(chosen, region) -> str:
+    """How many of the points a claim uses are certified (proven) and how many are marginal."""
+    shares = [stable_share(ds, region) for ds in chosen]
+    n, c, m = sum(x.n for x in shares), sum(x.certified for x in shares), sum(x.open for x in shares)
+    return f" [{n} points used: {c} certified, {m} marginal]"
 
 
 def _group_share(datasets, selector, region):
+    """Mean share interval ``(low, high)`` of the panels ``selector`` picks, the panels, and per-panel shares."""
     chosen = select(datasets, selector)
     if not chosen:
         return None, [], {}
-    shares = {_describe(ds): stable_share(ds, region)[0] for ds in chosen}
-    return float(np.mean(list(shares.values()))), chosen, shares
+    shares = {_describe(ds): stable_share(ds, region) for ds in chosen}
+    low = float(np.mean([x.low for x in shares.values()]))
+    high = float(np.mean([x.high for x in shares.values()]))
+    return (low, high), chosen, {key: x.low for key, x in shares.items()}
 
 
 def check_compare(datasets, *, a: dict, b, relation: str, within: float | None = None, region: dict | None = None):
@@ -136,7 +238,7 @@ def check_compare(datasets, *, a: dict, b, relation: str, within: float | None =
     ``relation``: ``greater`` (a more stable than b), ``less``, or ``similar``
     (``|a - b| <= within``).  ``b`` may be a list of selectors: the relation
     must then hold against each.  Differences within the grid resolution are
-    undecided.
+    undecided, and so are relations that the marginal points could turn.
     """
     if relation not in ("greater", "less", "similar"):
         raise ParameterError(f"compare: relation must be greater, less or similar, got {relation!r}")
@@ -145,29 +247,47 @@ def check_compare(datasets, *, a: dict, b, relation: str, within: float | None =
     sa, da, shares_a = _group_share(datasets, a, region)
     if sa is None:
         return Outcome(None, f"no dataset matches {a}")
-    holds, texts, numbers = [], [], {"a": sa, "shares_a": shares_a, "b": []}
+    holds, texts, numbers, used = [], [], {"a": sa[0], "a_high": sa[1], "shares_a": shares_a, "b": []}, list(da)
     for sel in b if isinstance(b, list) else [b]:
         sb, db, shares_b = _group_share(datasets, sel, region)
         if sb is None:
             holds.append(None)
             texts.append(f"no dataset matches {sel}")
             continue
+        used += db
         tol = grid_resolution(da + db)
-        diff = sa - sb
-        numbers["b"].append({"b": sb, "difference": diff, "resolution": tol, "shares_b": shares_b})
+        lo, hi = sa[0] - sb[1], sa[1] - sb[0]  # the difference, over every way the marginal points may go
+        diff = sa[0] - sb[0]
+        numbers["b"].append(
+            {
+                "b": sb[0],
+                "b_high": sb[1],
+                "difference": diff,
+                "difference_range": [lo, hi],
+                "resolution": tol,
+                "shares_b": shares_b,
+            }
+        )
         text = (
-            f"stable share {sa:.1%} ({_label(a)}) vs {sb:.1%} ({_label(sel)}), difference {diff:+.1%} "
+            f"stable share {_fmt(sa)} ({_label(a)}) vs {_fmt(sb)} ({_label(sel)}), difference {diff:+.1%} "
             f"(resolution {tol:.1%})"
         )
         if relation == "similar":
-            h = True if abs(diff) <= within else (False if abs(diff) > within + tol else None)
+            worst, best = max(abs(lo), abs(hi)), (0.0 if lo <= 0 <= hi else min(abs(lo), abs(hi)))
+            h = True if worst <= within else (False if best > within + tol else None)
             text += f", similar means within {within:.0%}"
         else:
             sign = 1 if relation == "greater" else -1
-            h = True if sign * diff > tol else (False if sign * diff < -tol else None)
+            lo_s, hi_s = sorted((sign * lo, sign * hi))
+            h = True if lo_s > tol else (False if hi_s < -tol else None)
         holds.append(h)
         texts.append(text)
-    return Outcome(combine_holds(holds), "; ".join(texts), numbers)
+    return Outcome(combine_holds(holds), "; ".join(texts) + _certified_text(used, region), numbers)
+
+
+def _fmt(share) -> str:
+    low, high = share
+    return f"{low:.1%}" if high == low else f"{low:.1%}–{high:.1%}"
 
 
 def _label(selector):
@@ -202,26 +322,30 @@ def check_trend(
     if len(groups) < 2:
         return Outcome(None, f"only one value of {along} among {select}")
     keys = sorted(groups)
-    shares = [float(np.mean([stable_share(ds, region)[0] for ds in groups[key]])) for key in keys]
+    lows = [float(np.mean([stable_share(ds, region).low for ds in groups[key]])) for key in keys]
+    highs = [float(np.mean([stable_share(ds, region).high for ds in groups[key]])) for key in keys]
     names = []
     for key in keys:
         attrs = groups[key][0].attrs
         names.append(f"{label}={float(attrs[label]):g}" if label else f"{along}={key:g}")
     tol = grid_resolution(chosen)
     sign = 1 if direction == "increasing" else -1
-    steps = [sign * (b - a) for a, b in zip(shares, shares[1:])]
-    total = sign * (shares[-1] - shares[0])
-    if any(s < -tol for s in steps):
+
+    def steps(first, second):  # the change from one group to the next, in the claimed direction
+        return [sign * (b - a) for a, b in zip(first, second[1:])]
+
+    # the worst and the best case over where the marginal points fall
+    worst = [min(x, y) for x, y in zip(steps(lows, highs), steps(highs, lows))]
+    best = [max(x, y) for x, y in zip(steps(lows, highs), steps(highs, lows))]
+    total_worst = min(sign * (highs[-1] - lows[0]), sign * (lows[-1] - highs[0]))
+    if any(s < -tol for s in best):
         holds = False
-    elif total > tol:
+    elif all(s >= -tol for s in worst) and total_worst > tol:
         holds = True
     else:
         holds = None
-    text = ", ".join(f"{n}: {s:.1%}" for n, s in zip(names, shares)) + f" (resolution {tol:.1%})"
-    return Outcome(holds, text, {"groups": dict(zip(names, shares)), "resolution": tol})
-
-
-REGION_KEYS = ("lr1", "li1", "exclude_undamped")
+    text = ", ".join(f"{n}: {_fmt((lo, hi))}" for n, lo, hi in zip(names, lows, highs)) + f" (resolution {tol:.1%})"
+    return Outcome(holds, text + _certified_text(chosen, region), {"groups": dict(zip(names, lows)), "resolution": tol})
 
 
 def _validate_region(label: str, params: dict):
@@ -232,7 +356,7 @@ def _validate_region(label: str, params: dict):
         raise ParameterError(f"{label}: check.region must be a mapping of attribute -> value")
     unknown = sorted(set(region) - set(REGION_KEYS))
     if unknown:
-        raise ParameterError(f"{label}: check.region has unknown key(s) {unknown}; allowed: lr1, li1, exclude_undamped")
+        raise ParameterError(f"{label}: check.region has unknown key(s) {unknown}; allowed: {', '.join(REGION_KEYS)}")
 
 
 def _validate_compare(label: str, params: dict):

@@ -61,7 +61,8 @@ def amplification_matrix(coefficients, method: CouplingMethod, decomposition, k:
     decomposition = get_decomposition(decomposition)
     method.check_decomposition(decomposition)
     coefficients = as_coefficients(coefficients)
-    return _matrix_from_problem(_problem(coefficients, decomposition, k, be), method, scheme)
+    with be.context():  # Arb's working precision (a no-op for float64 and mpmath)
+        return _matrix_from_problem(_problem(coefficients, decomposition, k, be), method, scheme)
 
 
 def as_coefficients(c) -> Coefficients:

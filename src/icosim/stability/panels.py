@@ -1,38 +1,31 @@
-"""Stability panels: the spectral radius over a (lr1, li1) grid as a NetCDF-ready dataset.
+"""Stability panels: what one plot of Figs. 9-20 is, as configured.
 
 One *panel* is one plot of the paper's Figs. 9-20: a coupling method with its
 parameters, a decomposition, the approximation order ``k`` and the three fixed
 ratios ``(am21, alr21, ali21)`` of Eq. (71), evaluated over a grid of
 ``lr1`` (real part) and ``li1`` (imaginary part of subsystem 1's eigenvalue).
-
-The names below are a contract other tools read: data variable ``rho`` over the
-coordinates ``lr1`` and ``li1``; attributes ``figure``, ``method``,
-``decomposition``, ``k``, ``am21``, ``alr21``, ``ali21`` and the method
-parameters under their command-line names (``beta``, ``gamma``, ``mu``,
-``index``, ``a``, ``b``).  A panel also records ``row`` (1-based, as in the
-paper), ``view`` (``full`` or ``zoom``), the precision that decided each point
-(``digits``) and how long the float64 pass and the multiprecision rechecks took
-(``seconds_float64``, ``seconds_mp``, ``n_high_precision``), so the cost of the
-precision policy is measured on every run.
+:class:`PanelSpec` holds exactly that; :func:`figure_panels` builds them from
+``config/stability.yaml``, checked before any job runs; the row labels are
+decided here once.  :mod:`icosim.stability.datasets` computes a panel and
+writes it as a dataset.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from .. import methods as _methods
-from ..backend import FLOAT64_DIGITS
 from ..decompositions import DECOMPOSITIONS
+from ..limits import check_k
 from ..methods import make_method
-from ..model import ParameterError, TestModel
+from ..model import ParameterError
 from ..schemes import figure_id, get_scheme
-from .policy import spectral_radius
+from .policy import POLICIES, Certification
 
 __all__ = [
     "PanelSpec",
-    "stability_panel",
     "grid_axis",
     "panel_id",
     "figure_panels",
@@ -86,16 +79,6 @@ def method_parameters_units() -> str:
     )
 
 
-LONG_NAMES = {
-    "lr1": "real part of the eigenvalue of subsystem 1, lambda_bar_r1 = -d_bar_1/2",
-    "li1": "imaginary part of the eigenvalue of subsystem 1, lambda_bar_i1 = sqrt(4 c_bar_1 - d_bar_1^2)/2",
-    "rho": "spectral radius of the co-simulation recurrence (one macro step)",
-    "stable": "numerically stable point, rho <= 1",
-    "digits": "decimal digits of the arithmetic that decided the point",
-    "rho_float64_error": "error estimate of the float64 spectral radius",
-}
-
-
 def grid_axis(bounds, n: int) -> np.ndarray:
     """``n`` equally spaced values from ``bounds[0]`` to ``bounds[1]`` (both included).
 
@@ -138,6 +121,8 @@ class PanelSpec:
     policy: str = "auto"
     #: the parameters that tell this figure's rows apart (:func:`row_label_keys`)
     row_keys: tuple = RATIOS
+    #: settings of the certified rechecks (:class:`icosim.stability.policy.Certification`), as a mapping
+    certify: dict = field(default_factory=dict)
     #: the coupling scheme (:mod:`icosim.schemes`), by name
     scheme: str = "jacobi"
 
@@ -153,6 +138,7 @@ class PanelSpec:
         p["li1"] = tuple(p["li1"])
         if "row_keys" in p:
             p["row_keys"] = tuple(p["row_keys"])
+        p["certify"] = dict(p.get("certify") or {})
         return cls(**p)
 
     def __post_init__(self):
@@ -163,10 +149,10 @@ class PanelSpec:
             )
         if self.view not in VIEWS:
             raise ParameterError(f"view must be one of {', '.join(VIEWS)}, got {self.view!r}")
-        if int(self.k) != self.k or self.k < 0:
-            raise ParameterError(f"k must be an integer >= 0, got {self.k!r}")
-        if self.policy not in ("auto", "float64", "mp"):
-            raise ParameterError(f"policy must be 'auto', 'float64' or 'mp', got {self.policy!r}")
+        check_k(self.k)  # 0 .. icosim.limits.MAX_K
+        if self.policy not in POLICIES:
+            raise ParameterError(f"policy must be one of {', '.join(POLICIES)}, got {self.policy!r}")
+        Certification.from_dict(self.certify)  # refuses a bad setting, naming it
         get_scheme(self.scheme)  # refuses an unknown scheme, naming the known ones
         bad = [key for key in self.row_keys if key not in row_keys()]
         if bad or not self.row_keys:
@@ -181,107 +167,8 @@ class PanelSpec:
         d = {f: getattr(self, f) for f in self.__dataclass_fields__}
         d["lr1"], d["li1"] = list(self.lr1), list(self.li1)
         d["row_keys"] = list(self.row_keys)
+        d["certify"] = dict(self.certify)
         return d
-
-
-def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
-    """Compute one panel and return it as an :class:`xarray.Dataset`.
-
-    ``provenance`` are extra global attributes (normally
-    :func:`icosim.datasets.provenance_attrs` of the job's configuration).
-    """
-    import xarray as xr
-
-    method = spec.coupling_method()
-    method.check_decomposition(DECOMPOSITIONS[spec.decomposition])
-    lr1 = grid_axis(spec.lr1, spec.n)
-    li1 = grid_axis(spec.li1, spec.n)
-    LR, LI = np.meshgrid(lr1, li1, indexing="ij")
-    model = TestModel(LR, LI, spec.am21, spec.alr21, spec.ali21)
-
-    result = spectral_radius(
-        model, method, spec.decomposition, spec.k, digits=spec.digits, policy=spec.policy, scheme=spec.scheme
-    )
-
-    dims = ("lr1", "li1")
-    ds = xr.Dataset(
-        {
-            "rho": (
-                dims,
-                np.asarray(result.rho, dtype=float),
-                {"long_name": LONG_NAMES["rho"], "units": "1"},
-            ),
-            "stable": (
-                dims,
-                np.asarray(result.stable, dtype=bool),
-                {
-                    "long_name": LONG_NAMES["stable"],
-                    "comment": "with multiprecision a point counts as stable if rho <= 1 + 10**(-digits/2) "
-                    "(an eigenvalue 1 of a Jordan block is computed to about half the working digits)",
-                },
-            ),
-            "digits": (
-                dims,
-                np.asarray(result.digits, dtype=np.int16),
-                {
-                    "long_name": LONG_NAMES["digits"],
-                    "units": "1",
-                    "comment": f"{FLOAT64_DIGITS} = float64; larger = mpmath recheck of a point "
-                    "float64 could not decide",
-                },
-            ),
-            "rho_float64_error": (
-                dims,
-                np.asarray(result.err, dtype=float),
-                {
-                    "long_name": LONG_NAMES["rho_float64_error"],
-                    "units": "1",
-                    "comment": "spread of float64 results under rounding-size disturbances times a safety "
-                    "factor (icosim.stability); a point is rechecked if |rho - 1| <= this or rho is not finite",
-                },
-            ),
-        },
-        coords={
-            "lr1": ("lr1", lr1, {"long_name": LONG_NAMES["lr1"], "units": "1"}),
-            "li1": ("li1", li1, {"long_name": LONG_NAMES["li1"], "units": "1"}),
-        },
-    )
-    attrs = dict(provenance or {})
-    attrs.update(
-        figure=str(spec.figure),
-        row=int(spec.row),
-        view=spec.view,
-        method=spec.method,
-        decomposition=spec.decomposition,
-        k=int(spec.k),
-        scheme=get_scheme(spec.scheme).name,
-        am21=float(spec.am21),
-        alr21=float(spec.alr21),
-        ali21=float(spec.ali21),
-    )
-    for name, value in method.params.items():  # beta, gamma, mu, index, a, b as resolved
-        attrs[name] = int(value) if name == "index" else float(value)
-    attrs["method_parameters_units"] = method_parameters_units()
-    # what tells the rows of the figure apart: the figure labels its rows from these
-    attrs["row_label_keys"] = " ".join(spec.row_keys)
-    attrs["row_label"] = format_row_label(spec.row_keys, attrs)
-    attrs.update(
-        precision_policy=spec.policy,
-        mp_digits=int(spec.digits),
-        n_points=int(LR.size),
-        n_high_precision=int(result.n_high_precision),
-        # rechecked points on the undamped axis lr1 = 0, where rho = 1 to working precision
-        n_high_precision_undamped=int(np.sum((np.asarray(result.digits) > FLOAT64_DIGITS) & (LR == 0))),
-        n_stable=int(np.sum(result.stable)),
-        seconds_total=float(sum(result.seconds.values())),
-        seconds_mp=float(result.seconds["mp"]),
-        seconds_float64=float(result.seconds["float64"]),
-        cpu_seconds_total=float(sum(result.cpu_seconds.values())),
-        cpu_seconds_mp=float(result.cpu_seconds["mp"]),
-        cpu_seconds_float64=float(result.cpu_seconds["float64"]),
-    )
-    ds.attrs = attrs
-    return ds
 
 
 def panel_id(row: int, k: int, view: str) -> str:
@@ -394,6 +281,7 @@ def figure_panels(
                         digits=int(precision["digits"]),
                         policy=precision["policy"],
                         row_keys=row_keys,
+                        certify=dict(precision.get("certify") or {}),
                         scheme=get_scheme(scheme).name,
                     )
                 )

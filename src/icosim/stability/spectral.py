@@ -95,6 +95,8 @@ def spectral_radius_float64(coefficients, method, decomposition, k, *, error_est
             Md = np.where(ok[..., None, None], Md, 0.0)
             norm = np.max(np.abs(Md), axis=(-1, -2), keepdims=True)
             Md = Md + rel * norm * rng.standard_normal(Md.shape)
+            ok &= np.all(np.isfinite(Md), axis=(-1, -2))  # entries near the float64 limit overflow with the noise
+            Md = np.where(ok[..., None, None], Md, 0.0)
             rho_d = np.where(ok, _spectral_radius_of(Md, be), np.nan)
             spread = np.fmax(spread, np.abs(rho_d - rho))
             spread = np.where(ok, spread, np.inf)
@@ -106,17 +108,20 @@ def spectral_radius_float64(coefficients, method, decomposition, k, *, error_est
 def spectral_radius_mp(coefficients, method, decomposition, k, digits: int = 128, *, scheme=JACOBI):
     """Spectral radius of one parameter point at ``digits`` significant digits.
 
-    ``coefficients`` are converted exactly from their float values, then every
-    derived quantity is formed in multiprecision.  Returns an ``mpf``.
+    The parameters are taken exactly as given -- a float as the binary number
+    it is, a :class:`~fractions.Fraction` or decimal string as the decimal
+    number (``"-0.3"`` is -3/10, not -0.29999999999999998890) -- and every
+    derived quantity is formed in multiprecision, as are the method's exact
+    parameters.  Returns an ``mpf`` with ``digits`` significant digits.
     """
     be = Multiprecision(digits)
     decomposition = get_decomposition(decomposition)
     method.check_decomposition(decomposition)
     if isinstance(coefficients, TestModel):
         coefficients = TestModel(
-            *(be.const(float(getattr(coefficients, f))) for f in ("lr1", "li1", "am21", "alr21", "ali21"))
+            *(be.const(getattr(coefficients, f)) for f in ("lr1", "li1", "am21", "alr21", "ali21"))
         ).coefficients()
     else:
-        coefficients = as_coefficients(coefficients).map(lambda a: be.const(float(a)))
+        coefficients = as_coefficients(coefficients).map(be.const)
     M = _matrix_from_problem(_problem(coefficients, decomposition, k, be), method, get_scheme(scheme))
     return _spectral_radius_of(M, be)
