@@ -24,7 +24,8 @@ from icosim.pendulum.runs import run_cosimulation
 from icosim.report.gauss_seidel import gauss_seidel_section, order_rows, pendulum_rows, share_cells
 from icosim.schemes import GS12, GS21, figure_id, split_figure_id
 from icosim.stability.comparison import scheme_shares
-from icosim.stability.panels import PanelSpec, figure_panels, stability_panel
+from icosim.stability.datasets import stability_panel
+from icosim.stability.panels import PanelSpec, figure_panels
 
 ROOT = Path(__file__).resolve().parents[1]
 
