@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..schemes import SCHEME_NAMES, split_figure_id
+from .checks import stable_share
 
 __all__ = ["scheme_shares"]
 
@@ -32,8 +33,8 @@ def scheme_shares(panels, *, provenance: dict | None = None):
         key = (fig, int(ds.attrs["row"]), int(ds.attrs["k"]), scheme.name)
         if key in by_key:
             raise ValueError(f"two panels for figure {fig}, row {key[1]}, k = {key[2]}, scheme {key[3]}")
-        stable = ds["stable"].values.astype(bool)
-        by_key[key] = (float(stable.mean()), int(stable.sum()), int(stable.size))
+        share = stable_share(ds)  # stable verdicts; marginal and undecided points apart (icosim.stability.checks)
+        by_key[key] = (share.low, share.stable, share.n, share.open)
         meta.setdefault(fig, (str(ds.attrs["method"]), str(ds.attrs["decomposition"])))
         row_labels[(fig, key[1])] = str(ds.attrs.get("row_label", ""))
     compared = {fig for fig, _, _, s in by_key if s != "jacobi"}
@@ -45,11 +46,12 @@ def scheme_shares(panels, *, provenance: dict | None = None):
     share = np.full(shape, np.nan)
     n_stable = np.full(shape, -1, dtype=np.int64)
     n_points = np.full(shape, -1, dtype=np.int64)
-    for (fig, r, k, s), (sh, ns, n) in by_key.items():
+    n_marginal = np.full(shape, -1, dtype=np.int64)
+    for (fig, r, k, s), (sh, ns, n, nm) in by_key.items():
         if fig not in compared:
             continue
         idx = (figures.index(fig), rows.index(r), ks.index(k), schemes.index(s))
-        share[idx], n_stable[idx], n_points[idx] = sh, ns, n
+        share[idx], n_stable[idx], n_points[idx], n_marginal[idx] = sh, ns, n, nm
     labels = np.array([[row_labels.get((fig, r), "") for r in rows] for fig in figures], dtype=object).astype(str)
     dims = ("figure", "row", "k", "scheme")
     ds = xr.Dataset(
@@ -57,9 +59,18 @@ def scheme_shares(panels, *, provenance: dict | None = None):
             "stable_share": (
                 dims,
                 share,
-                {"long_name": "share of stable grid points (rho <= 1) of the full panel", "units": "1"},
+                {
+                    "long_name": "share of stable grid points of the full panel (verdict stable: rho < 1 proven or "
+                    "float64 trusted; marginal points are not counted)",
+                    "units": "1",
+                },
             ),
             "n_stable": (dims, n_stable, {"long_name": "stable grid points (-1: not computed)"}),
+            "n_marginal": (
+                dims,
+                n_marginal,
+                {"long_name": "marginal or undecided grid points: neither stable nor unstable (-1: not computed)"},
+            ),
             "n_points": (dims, n_points, {"long_name": "grid points of the panel (-1: not computed)"}),
         },
         coords={
