@@ -43,7 +43,9 @@ from icosim.integrity import quarantine_corrupt, remove_stale_parts  # noqa: E40
 # (x.nc -> x.nc.corrupt) before the DAG is built, so this run computes it again instead of trusting it.
 if workflow.is_main_process:
     for _moved in quarantine_corrupt("results"):
-        logger.warning(f"icosim: {_moved} did not match its SHA-256: set aside, it will be recomputed")
+        logger.warning(
+            f"icosim: {_moved} did not match its SHA-256: set aside, it will be recomputed"
+        )
 
 
 onstart:

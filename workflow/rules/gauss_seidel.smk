@@ -107,7 +107,8 @@ GS_CONV_FIGURES = sorted(
 GS_CONV_CLAIMS_FILE = CONVERGENCE["claims"].get("gauss_seidel_file")
 GS_CONV_CLAIMS = "results/convergence/claims_gauss_seidel.json"
 if GS_CONV_CLAIMS_FILE:
-    GS_CONV_CLAIM_LIST = load_claims(GS_CONV_CLAIMS_FILE)  # a malformed claim fails here
+    # a malformed claim fails here
+    GS_CONV_CLAIM_LIST = load_claims(GS_CONV_CLAIMS_FILE)
     if GS_CONV_FIGURES:  # the claims select Gauss-Seidel curves: only if there are any
         check_claims_against_config(GS_CONV_CLAIM_LIST, CONVERGENCE)
 
