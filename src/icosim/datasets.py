@@ -12,12 +12,12 @@ from __future__ import annotations
 import datetime as _dt
 import hashlib
 import json
-import os
 import platform
-import tempfile
 from pathlib import Path
 
 import numpy as np
+
+from .integrity import CorruptDatasetError, atomic_path, verify, write_checksum
 
 __all__ = ["provenance_attrs", "config_json", "write_netcdf", "atomic_path", "open_dataset"]
 
@@ -55,31 +55,6 @@ def provenance_attrs(config, *, title: str, command: str = "") -> dict:
     }
 
 
-class atomic_path:
-    """Context manager yielding a temporary path next to ``path``; renamed on success."""
-
-    def __init__(self, path):
-        self.path = Path(path)
-
-    def __enter__(self):
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".part", dir=self.path.parent)
-        os.close(fd)
-        self.tmp = Path(tmp)
-        return self.tmp
-
-    def __exit__(self, exc_type, exc, tb):
-        if exc_type is None:
-            # mkstemp creates 0600; give the result the permissions of an ordinary file
-            umask = os.umask(0)
-            os.umask(umask)
-            os.chmod(self.tmp, 0o666 & ~umask)
-            os.replace(self.tmp, self.path)
-        else:
-            self.tmp.unlink(missing_ok=True)
-        return False
-
-
 #: The NetCDF library: netCDF4 (Unidata's netCDF-C), as the design names it; 5-8x faster than h5netcdf
 #: on the project's datasets with files of the same size (``benchmarks/netcdf_engines.py``), and
 #: either engine reads the other's files (NetCDF-4/HDF5 both).
@@ -89,7 +64,6 @@ ENGINE = "netcdf4"
 def write_netcdf(ds, path):
     """Write an :class:`xarray.Dataset` to ``path`` atomically (NetCDF-4, :data:`ENGINE`), with its SHA-256
     recorded beside it (``path.sha256``, written before the rename: :mod:`icosim.integrity`)."""
-    from .integrity import write_checksum
 
     with atomic_path(path) as tmp:
         ds.to_netcdf(tmp, engine=ENGINE)
@@ -100,8 +74,6 @@ def open_dataset(path):
     """Open a result written by :func:`write_netcdf` (loaded into memory); a file whose SHA-256 no longer
     matches the recorded one is refused (:class:`~icosim.integrity.CorruptDatasetError`), never read."""
     import xarray as xr
-
-    from .integrity import CorruptDatasetError, verify
 
     if verify(path) is False:
         raise CorruptDatasetError(

@@ -14,10 +14,13 @@ run left behind (:func:`remove_stale_parts`).  A dataset without a sidecar
 from __future__ import annotations
 
 import hashlib
+import os
+import tempfile
 from pathlib import Path
 
 __all__ = [
     "CorruptDatasetError",
+    "atomic_path",
     "sha256_file",
     "sidecar",
     "write_checksum",
@@ -39,6 +42,31 @@ def sha256_file(path) -> str:
     return h.hexdigest()
 
 
+class atomic_path:
+    """Context manager yielding a temporary path next to ``path``; renamed on success."""
+
+    def __init__(self, path):
+        self.path = Path(path)
+
+    def __enter__(self):
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".part", dir=self.path.parent)
+        os.close(fd)
+        self.tmp = Path(tmp)
+        return self.tmp
+
+    def __exit__(self, exc_type, exc, tb):
+        if exc_type is None:
+            # mkstemp creates 0600; give the result the permissions of an ordinary file
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(self.tmp, 0o666 & ~umask)
+            os.replace(self.tmp, self.path)
+        else:
+            self.tmp.unlink(missing_ok=True)
+        return False
+
+
 def sidecar(path) -> Path:
     """``x.nc`` -> ``x.nc.sha256``."""
     path = Path(path)
@@ -47,8 +75,6 @@ def sidecar(path) -> Path:
 
 def write_checksum(data_file, path) -> str:
     """Record the SHA-256 of ``data_file`` (the finished temporary) as the checksum of ``path`` (atomically)."""
-    from .datasets import atomic_path
-
     digest = sha256_file(data_file)
     with atomic_path(sidecar(path)) as tmp:
         tmp.write_text(f"{digest}  {Path(path).name}\n")
