@@ -99,7 +99,11 @@ def _nc(old: Path, new: Path, rel: str, problems: list, allow_added=(), notes=No
     with h5py.File(old, "r") as a, h5py.File(new, "r") as b:
 
         def attrs(obj):
-            return {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in obj.attrs.items()}
+            # netCDF4 writes text attributes as fixed-length strings, which h5py reads as bytes: compare them as text
+            return {
+                k: (v.tolist() if isinstance(v, np.ndarray) else v.decode() if isinstance(v, bytes) else v)
+                for k, v in obj.attrs.items()
+            }
 
         ga, gb = attrs(a), attrs(b)
         if allow_added and "config_json" in ga and "config_json" in gb and ga["config_json"] != gb["config_json"]:
