@@ -104,16 +104,18 @@ def test_float_nodes_agree_with_exact_ones():
         variable_predictor_nodes(1e-3, [0.0])
 
 
+@pytest.mark.parametrize("scheme", ["jacobi", "gauss-seidel-21"])
 @pytest.mark.parametrize("k", [0, 1, 2])
-def test_set_macro_step_with_equal_steps_is_bitwise_the_fixed_step(k):
-    """The problem's variable-step weights at equal steps are the fixed-H weights: one macro step is identical."""
+def test_set_macro_step_with_equal_steps_is_bitwise_the_fixed_step(k, scheme):
+    """The problem's variable-step weights at equal steps are the fixed-H weights: one macro step is identical
+    (with either scheme)."""
     fixed = PendulumCosimulation(P, "ff", k, 2e-3)
     variable = PendulumCosimulation(P, "ff", k, 7e-4)
     variable.set_macro_step(2e-3, [2e-3] * k)
     assert np.array_equal(fixed.w_pred, variable.w_pred) and np.array_equal(fixed.C_corr, variable.C_corr)
     hist = consistent_history(P, "ff", k, 2e-3)
-    a = macro_step(fixed, PROJECTION, P.initial_state(), hist)
-    b = macro_step(variable, PROJECTION, P.initial_state(), hist)
+    a = macro_step(fixed, PROJECTION, P.initial_state(), hist, scheme=scheme)
+    b = macro_step(variable, PROJECTION, P.initial_state(), hist, scheme=scheme)
     for x, y in zip(a, b):
         assert np.array_equal(x, y)
     with pytest.raises(ParameterError):
@@ -123,7 +125,7 @@ def test_set_macro_step_with_equal_steps_is_bitwise_the_fixed_step(k):
             variable.set_macro_step(1e-3, [])
 
 
-def _drive(dec, k, pattern, T, *, variable=True):
+def _drive(dec, k, pattern, T, *, variable=True, scheme="jacobi"):
     """Macro steps of sizes cycling through ``pattern`` up to ``T``; max angle error against the reference."""
     H0 = pattern[-1]
     prob = PendulumCosimulation(P, dec, k, H0, rtol=1e-10, atol=1e-10)
@@ -133,7 +135,7 @@ def _drive(dec, k, pattern, T, *, variable=True):
     while t < T - 1e-12:
         h = pattern[i % len(pattern)]
         prob.set_macro_step(h, past if variable else None)
-        state, hist, _ = macro_step(prob, PROJECTION, state, hist)
+        state, hist, _ = macro_step(prob, PROJECTION, state, hist, scheme=scheme)
         past, t, i = ([h] + past)[:k], t + h, i + 1
         ts.append(t)
         phis.append(state[[0, 4]])
@@ -149,6 +151,9 @@ def test_non_equidistant_macro_nodes_keep_the_order():
     assert abs(math.log2(errs[0] / errs[1]) - 3) < 0.2, errs
     wrong = [_drive("dd", 2, [H, H / 2], 0.06, variable=False) for H in (2e-3, 1e-3)]
     assert math.log2(wrong[0] / wrong[1]) < 1.2 and wrong[1] > 100 * errs[1], wrong
+    # Gauss-Seidel (link 2 first) on the same nodes: the same order
+    gs = [_drive("dd", 2, [H, H / 2], 0.06, scheme="gauss-seidel-21") for H in (2e-3, 1e-3)]
+    assert abs(math.log2(gs[0] / gs[1]) - 3) < 0.2, gs
 
 
 # -- the step-size controller -------------------------------------------------------------------
@@ -357,7 +362,7 @@ def test_linear_prediction_is_the_policys_verdict(monkeypatch):
     assert combined_verdict(["stable", "undecided"]) == "undecided"
     assert combined_verdict(["marginal", "unstable"]) == "unstable"
 
-    def fake(params, method, decomposition, k, H):
+    def fake(params, method, decomposition, k, H, *, scheme="jacobi"):
         return (0.5, "stable") if H < 3e-3 else (math.nan, "undecided") if H < 6e-3 else (2.0, "unstable")
 
     monkeypatch.setattr(limits, "linear_stability", fake)
@@ -382,9 +387,12 @@ def test_shipped_configuration_validates_and_schemes_match():
     schema = yaml.safe_load((ROOT / "workflow" / "schemas" / "pendulum.schema.yaml").read_text())
     assert tuple(schema["$defs"]["scheme"]["enum"]) == SCHEMES
     plan = trade_plan(CFG)
-    assert len(plan["configs"]) == 21 and len(CFG["trade"]["error_over_H"]["H"]) >= 8
+    # the 21 configurations with every scheme of pendulum.schemes (Jacobi, Gauss-Seidel 1->2 and 2->1)
+    assert len(plan["configs"]) == 21 * len(CFG["schemes"]) and len(CFG["trade"]["error_over_H"]["H"]) >= 8
+    assert {c[1] for c in plan["configs"]} == set(CFG["schemes"]) == set(SCHEMES)
     assert min(CFG["trade"]["error_over_H"]["H"]) == 1e-4 and max(CFG["trade"]["error_over_H"]["H"]) == 2e-2
     assert config_label("jacobi", "baumgarte", "ff", 1) == "baumgarte_ff_k1"
+    assert config_label("gauss-seidel-12", "baumgarte", "ff", 1) == "baumgarte_ff_k1_gs12"
 
 
 def test_bad_trade_configuration_names_the_key():
@@ -427,6 +435,7 @@ def small_studies(tmp_path_factory):
     sweeps = [
         sweep_group(settings, "jacobi", "baumgarte", "ff", [0, 1], H, T, reference=ref, repeats=1),
         sweep_group(settings, "jacobi", "projection", "ff", [1], H, T, reference=ref, repeats=1),
+        sweep_group(settings, "gauss-seidel-12", "projection", "ff", [1], H, T, reference=ref, repeats=1),
     ]  # labels of different lengths: none may be cut to the first file's string width
     root = tmp_path_factory.mktemp("trade")
 
@@ -439,9 +448,10 @@ def small_studies(tmp_path_factory):
     lin = linear_orders_dataset(
         settings,
         [
-            ("baumgarte_ff_k0", "baumgarte", "ff", 0),
-            ("baumgarte_ff_k1", "baumgarte", "ff", 1),
-            ("projection_ff_k1", "projection", "ff", 1),
+            ("baumgarte_ff_k0", "jacobi", "baumgarte", "ff", 0),
+            ("baumgarte_ff_k1", "jacobi", "baumgarte", "ff", 1),
+            ("projection_ff_k1", "jacobi", "projection", "ff", 1),
+            ("projection_ff_k1_gs12", "gauss-seidel-12", "projection", "ff", 1),
         ],
         H,
         model=trade["linear_orders"]["model"],
@@ -450,10 +460,14 @@ def small_studies(tmp_path_factory):
     )
     wp = work_precision_dataset(sweeps, mono, lin, fit=trade["fit"], accuracy_levels=[1e-4, 1e-12])
     limit_groups = []
-    for method, k in (("baumgarte", 1), ("projection", 0)):
-        groups = limits_group(settings, "jacobi", method, "ff", [k], scan=[5e-3, 2e-2], t_end=0.05, resolution=0.5)
-        kw = dict(scheme="jacobi", method=method, decomposition="ff", scan=[5e-3, 2e-2], t_end=0.05, resolution=0.5)
-        limit_groups.append(round_trip(limits_dataset(groups, attrs={}, **kw), f"limits_{method}"))
+    for scheme, method, k in (
+        ("jacobi", "baumgarte", 1),
+        ("jacobi", "projection", 0),
+        ("gauss-seidel-21", "projection", 0),
+    ):
+        groups = limits_group(settings, scheme, method, "ff", [k], scan=[5e-3, 2e-2], t_end=0.05, resolution=0.5)
+        kw = dict(scheme=scheme, method=method, decomposition="ff", scan=[5e-3, 2e-2], t_end=0.05, resolution=0.5)
+        limit_groups.append(round_trip(limits_dataset(groups, attrs={}, **kw), f"limits_{scheme}_{method}"))
     lim = merge_limits(limit_groups)
     tol = tolerance_study(
         settings, [{"method": "projection", "decomposition": "ff", "k": 1}], [1e-2], [1e-3, 1e-8], T, reference=ref
@@ -462,7 +476,10 @@ def small_studies(tmp_path_factory):
         trade["adaptive"],
         t_end=0.04,
         H_fixed=[2e-3, 1e-2],
-        configurations=[{"method": "projection", "decomposition": "ff", "k": 1, "tol": [1e-2, 1e-4]}],
+        configurations=[
+            {"method": "projection", "decomposition": "ff", "k": 1, "tol": [1e-2, 1e-4]},
+            {"scheme": "gauss-seidel-21", "method": "projection", "decomposition": "ff", "k": 1, "tol": [1e-2]},
+        ],
     )
     ad = adaptive_study(settings, study, reference=ref)
     out = {}
@@ -476,15 +493,22 @@ def test_datasets_have_the_contract_names_and_dims(small_studies):
     wp, lim, ad = small_studies["work_precision"], small_studies["stability_limit"], small_studies["adaptive"]
     for name in ("error_max", "error_rms", "cpu_seconds", "n_macro_steps"):
         assert wp[name].dims == ("config", "H")
-    assert list(wp["config"].values) == ["baumgarte_ff_k0", "baumgarte_ff_k1", "projection_ff_k1"]
+    assert list(wp["config"].values) == [
+        "baumgarte_ff_k0",
+        "baumgarte_ff_k1",
+        "projection_ff_k1",
+        "projection_ff_k1_gs12",
+    ]
+    assert list(wp["scheme"].values) == ["jacobi"] * 3 + ["gauss-seidel-12"]
     for name in ("H_max", "H_max_linear"):
         assert lim[name].dims == ("config",)
-    assert list(lim["config"].values) == ["baumgarte_ff_k1", "projection_ff_k0"]
+    assert list(lim["config"].values) == ["baumgarte_ff_k1", "projection_ff_k0", "projection_ff_k0_gs21"]
     # the linear bracket's upper end: a verdict of the policy, "" where the search found no unstable H
     assert set(map(str, lim["verdict_linear_unstable"].values)) <= {"", "unstable", "marginal", "undecided"}
     for name in ("error_max", "n_macro_steps", "cpu_seconds"):
         assert ad[name].dims == ("config", "tol")
-    assert list(ad["config"].values) == ["projection_ff_k1"]
+    assert list(ad["config"].values) == ["projection_ff_k1", "projection_ff_k1_gs21"]
+    assert list(ad["scheme"].values) == ["jacobi", "gauss-seidel-21"]
     # counts over (config, H) are the end time over H for the runs that reached it
     ok = wp["status"].values == "stable"
     np.testing.assert_array_equal(

@@ -85,7 +85,7 @@ rule pendulum_reference:
 
 
 rule pendulum_run:
-    """One co-simulation run (method, decomposition, k) up to t_end or divergence."""
+    """One co-simulation run (method, decomposition, k; Jacobi) up to t_end or divergence."""
     input:
         lib=engine_lib("pendulum_run"),
     output:
@@ -107,6 +107,7 @@ rule pendulum_run:
         sensitivities=PENDULUM["sensitivities"],
         corrector=PENDULUM["corrector"],
         divergence=PENDULUM["divergence"],
+        scheme="jacobi",
     script:
         "../scripts/pendulum_run.py"
 
@@ -267,7 +268,7 @@ rule pendulum_baselines:
         "../envs/icosim.yaml"
     params:
         settings=run_settings(PENDULUM),
-        configs=[list(c[:1]) + list(c[2:]) for c in TRADE_PLAN["configs"]],
+        configs=[list(c) for c in TRADE_PLAN["configs"]],
         H=TRADE["error_over_H"]["H"],
         t_end=TRADE["error_over_H"]["t_end"],
         monolithic=TRADE["monolithic"],

@@ -49,6 +49,7 @@ import numpy as np
 from ..macrostep import StepFailure, macro_step
 from ..methods import CouplingMethod
 from ..model import ParameterError
+from ..schemes import JACOBI, get_scheme
 from .model import PendulumParameters, joint_constraint
 from .problem import PendulumCosimulation
 from .reference import consistent_history
@@ -169,13 +170,16 @@ def run_adaptive(
     max_multiplier: float = 1e3,
     max_rate: float = 1e2,
     max_steps: int = 200000,
+    scheme=JACOBI,
 ) -> AdaptiveResult:
     """Co-simulate from 0 to ``t_end`` with adaptive macro steps (module docstring).
 
     ``controller`` are :class:`StepController` settings (``order`` is ``k + 1``).
     The bounds are those of :func:`icosim.pendulum.runs.run_cosimulation`; a
     step beyond them is rejected, and only at ``H_min`` ends the run.
+    ``scheme``: the coupling scheme (:mod:`icosim.schemes`; link 1 is subsystem 1).
     """
+    scheme = get_scheme(scheme)
     for name, v in (("t_end", t_end), ("tol", tol), ("drift_tol", drift_tol), ("H0", H0)):
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
             raise ParameterError(f"{name} must be a finite number > 0, got {v!r}")
@@ -211,7 +215,7 @@ def run_adaptive(
             failure = None
             try:
                 state_new, hist_new, y = macro_step(
-                    problem, solver, state, history, iterations=iterations, tol=corrector_tol
+                    problem, solver, state, history, scheme=scheme, iterations=iterations, tol=corrector_tol
                 )
                 diverged = divergence_reason(problem, state_new, hist_new[0], y, **bounds)
             except (StepFailure, np.linalg.LinAlgError) as exc:

@@ -116,6 +116,7 @@ def adaptive_study(settings: dict, study: dict, *, reference: dict, command: str
                 iterations=settings["corrector"]["iterations"],
                 corrector_tol=settings["corrector"]["tol"],
                 **settings["divergence"],
+                scheme=scheme,
             )
             rec = adaptive_record(res, reference_solution(params, res.t, **reference))
             adaptive[(label, float(tol))] = rec
@@ -185,6 +186,7 @@ def adaptive_study(settings: dict, study: dict, *, reference: dict, command: str
             "method": ("config", [c["method"] for c in confs]),
             "decomposition": ("config", [c["decomposition"] for c in confs]),
             "k": ("config", [int(c["k"]) for c in confs]),
+            "scheme": ("config", [check_scheme(c.get("scheme", "jacobi")) for c in confs]),
         },
     )
     ds = add_equal_error(ds)

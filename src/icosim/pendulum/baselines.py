@@ -143,7 +143,10 @@ def monolithic_baselines(
 def linear_orders_dataset(
     settings: dict, configurations, H_values, *, model: dict, x0: float, t_end: float, command=""
 ):
-    """Errors of the linear test model (:func:`.linear_study.linear_errors`) for every configuration -> dataset."""
+    """Errors of the linear test model (:func:`.linear_study.linear_errors`) for every configuration -> dataset.
+
+    ``configurations``: ``(label, scheme, method, decomposition, k)`` (as :func:`~.config.trade_plan` gives them);
+    the linear model is co-simulated with the same scheme."""
     import xarray as xr
 
     from ..methods import make_method
@@ -151,9 +154,16 @@ def linear_orders_dataset(
 
     labels, err, unst, rho, nsteps = [], [], [], [], []
     H_values = [float(h) for h in H_values]
-    for label, method, decomposition, k in configurations:
+    for label, scheme, method, decomposition, k in configurations:
         e, u, r = linear_errors(
-            model, make_method(method, **settings["methods"][method]), decomposition, k, H_values, t_end, x0
+            model,
+            make_method(method, **settings["methods"][method]),
+            decomposition,
+            k,
+            H_values,
+            t_end,
+            x0,
+            scheme=scheme,
         )
         labels.append(label)
         err.append(e)

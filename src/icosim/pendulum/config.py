@@ -5,8 +5,9 @@ from __future__ import annotations
 from ..decompositions import get_decomposition
 from ..methods import make_method
 from ..model import ParameterError
+from ..schemes import get_scheme
 
-__all__ = ["configured_runs"]
+__all__ = ["configured_runs", "configured_schemes", "trade_plan", "run_settings", "study_methods", "RUN_KEYS"]
 
 
 def configured_runs(cfg: dict) -> list:
@@ -37,8 +38,26 @@ def configured_runs(cfg: dict) -> list:
     return runs
 
 
+def configured_schemes(cfg: dict) -> list:
+    """The coupling schemes of a ``pendulum:`` config (``schemes``, default ``[jacobi]``), by name, checked.
+
+    Every run of :func:`configured_runs` is made with each of them; Jacobi (the paper's)
+    must be among them: the figures and the claim of Sect. 4 are about it.
+    """
+    names = cfg.get("schemes", ["jacobi"])
+    try:
+        schemes = [get_scheme(name).name for name in names]
+    except ParameterError as exc:
+        raise ParameterError(f"pendulum.schemes: {exc}") from None
+    if "jacobi" not in schemes:
+        raise ParameterError(f"pendulum.schemes must include jacobi (the paper's scheme), got {names!r}")
+    return schemes
+
+
 def trade_plan(cfg: dict) -> dict:
     """The speed-accuracy studies of a ``pendulum:`` config (``schemes``, ``trade``), checked up front.
+
+    The studies run with every scheme of :func:`configured_schemes` (the Figs. 6-8 runs' schemes).
 
     Returns ``groups`` (``(scheme, method, decomposition)`` of every sweep and
     limit job, each over all ``k``) and ``configs`` (``(label, scheme, method,
@@ -48,12 +67,10 @@ def trade_plan(cfg: dict) -> dict:
     whole number of every ``H``, a tolerance or adaptive configuration whose
     method cannot take its decomposition or that has no parameters.
     """
-    from .measures import SCHEMES, config_label
+    from .measures import config_label
 
     trade = cfg["trade"]
-    for s in cfg["schemes"]:
-        if s not in SCHEMES:
-            raise ParameterError(f"pendulum.schemes: {s!r} is not one of {', '.join(SCHEMES)}")
+    schemes = configured_schemes(cfg)
     sweep = trade["error_over_H"]
     T = sweep["t_end"]
     for H in sweep["H"]:
@@ -75,7 +92,7 @@ def trade_plan(cfg: dict) -> dict:
         wanted = {(c["method"], c["decomposition"]) for c in subset}
         runs = [r for r in runs if (r[0], r[1]) in wanted]
     groups, configs = [], []
-    for scheme in cfg["schemes"]:
+    for scheme in schemes:
         for method, dec, _ in runs:
             if (scheme, method, dec) not in groups:
                 groups.append((scheme, method, dec))
@@ -84,9 +101,10 @@ def trade_plan(cfg: dict) -> dict:
     for key in ("tolerance", "adaptive"):
         for i, c in enumerate(trade[key]["configurations"]):
             where = f"pendulum.trade.{key}.configurations[{i}]"
-            scheme = c.get("scheme", "jacobi")
-            if scheme not in SCHEMES:
-                raise ParameterError(f"{where}: scheme {scheme!r} is not one of {', '.join(SCHEMES)}")
+            try:
+                get_scheme(c.get("scheme", "jacobi"))
+            except ParameterError as exc:
+                raise ParameterError(f"{where}: {exc}") from None
             if c["method"] not in cfg["methods"]:
                 raise ParameterError(f"{where}: method {c['method']!r} has no parameters under pendulum.methods")
             try:

@@ -135,13 +135,13 @@ def measured_predicate(settings: dict, scheme: str, method: str, decomposition: 
 _NO_REFERENCE = {"method": "DOP853", "rtol": 1e-6, "atol": 1e-6}
 
 
-def linear_predicate(settings: dict, method: str, decomposition: str, k: int):
+def linear_predicate(settings: dict, method: str, decomposition: str, k: int, scheme="jacobi"):
     """``stable(H)`` of the linear test model at the pendulum's points: the verdict is ``stable``."""
     params = PendulumParameters(**settings["model"])
     m = make_method(method, **settings["methods"][method])
 
     def stable(H):
-        rho, verdict = linear_stability(params, m, decomposition, k, H)
+        rho, verdict = linear_stability(params, m, decomposition, k, H, scheme=scheme)
         return verdict == "stable", {"rho": rho, "verdict": verdict}
 
     return stable
@@ -155,12 +155,14 @@ def limits_group(settings, scheme, method, decomposition, ks, *, scan, t_end, re
         measured = stability_limit(
             measured_predicate(settings, scheme, method, decomposition, k, t_end), scan, resolution=resolution
         )
-        predicted = stability_limit(linear_predicate(settings, method, decomposition, k), scan, resolution=resolution)
+        predicted = stability_limit(
+            linear_predicate(settings, method, decomposition, k, scheme), scan, resolution=resolution
+        )
         # the linear model's rho where the measurement put the band's edges: how fast would it have grown there?
         params = PendulumParameters(**settings["model"])
         m = make_method(method, **settings["methods"][method])
         measured.rho_linear = {
-            key: (linear_rho(params, m, decomposition, k, H) if math.isfinite(H) else math.nan)
+            key: (linear_rho(params, m, decomposition, k, H, scheme=scheme) if math.isfinite(H) else math.nan)
             for key, H in (("H_max", measured.H_max), ("H_band_low", measured.H_band_low))
         }
         out[label] = (int(k), measured, predicted)

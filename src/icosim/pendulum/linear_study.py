@@ -44,12 +44,12 @@ __all__ = ["PAPER_LINEAR_MODEL", "linear_errors", "linear_rho", "linear_stabilit
 PAPER_LINEAR_MODEL = {"m1": 1.0, "m2": 2.0, "c1": 1000.0, "c2": 1000.0, "d1": 10.0, "d2": 10.0}
 
 
-def _error(c, method, decomposition: str, k: int, n_steps: int, x0: float) -> float:
+def _error(c, method, decomposition: str, k: int, n_steps: int, x0: float, scheme="jacobi") -> float:
     """``max |x_i - x_exact| / x0`` over ``n_steps`` macro steps from ``x = x0`` at rest."""
     problem = LinearCosimulation(c, decomposition, k)
     sol = exact.MonolithicSolution(c, x0, 0.0)
     state, history = exact.consistent_start(problem, sol)
-    M = amplification_matrix(c, method, decomposition, k)
+    M = amplification_matrix(c, method, decomposition, k, scheme=scheme)
     w = problem.pack(state, history)
     xs = np.empty((n_steps + 1, 2))
     xs[0] = w[[0, 2]]
@@ -62,7 +62,15 @@ def _error(c, method, decomposition: str, k: int, n_steps: int, x0: float) -> fl
 
 
 def linear_errors(
-    model: dict, method: CouplingMethod, decomposition: str, k: int, H_values, t_end: float, x0: float = 0.1
+    model: dict,
+    method: CouplingMethod,
+    decomposition: str,
+    k: int,
+    H_values,
+    t_end: float,
+    x0: float = 0.1,
+    *,
+    scheme="jacobi",
 ):
     """Errors of the linear test model ``model`` (m1, m2, c1, c2, d1, d2) co-simulated with ``method``.
 
@@ -80,24 +88,26 @@ def linear_errors(
         n = max(1, math.ceil(t_end / H - 1e-9))
         c = PhysicalModel(H=H, **model).coefficients()
         m = engine_method(method, H)
-        res = spectral_radius(c, m, decomposition, int(k))
+        res = spectral_radius(c, m, decomposition, int(k), scheme=scheme)
         rho[i] = float(np.max(res.rho))  # NaN where undecided
         unstable[i] = not bool(np.all(res.verdict == "stable"))
         if not unstable[i]:
-            err[i] = _error(c, m, decomposition, int(k), n, x0)
+            err[i] = _error(c, m, decomposition, int(k), n, x0, scheme)
     unstable |= ~np.isfinite(err)
     return np.where(unstable, np.nan, err), unstable, rho
 
 
 def linear_stability(
-    params: PendulumParameters, method: CouplingMethod, decomposition: str, k: int, H: float
+    params: PendulumParameters, method: CouplingMethod, decomposition: str, k: int, H: float, *, scheme="jacobi"
 ) -> tuple[float, str]:
-    """``(rho, verdict)`` of the test model at the pendulum's two points (precision policy included;
-    :func:`~.linearised.linear_test_model_stability`)."""
-    rho, verdict, _ = linear_test_model_stability(params, H, method, decomposition, int(k))
+    """``(rho, verdict)`` of the test model at the pendulum's two points with ``scheme`` (precision policy
+    included; :func:`~.linearised.linear_test_model_stability`)."""
+    rho, verdict, _ = linear_test_model_stability(params, H, method, decomposition, int(k), scheme=scheme)
     return rho, verdict
 
 
-def linear_rho(params: PendulumParameters, method: CouplingMethod, decomposition: str, k: int, H: float) -> float:
+def linear_rho(
+    params: PendulumParameters, method: CouplingMethod, decomposition: str, k: int, H: float, *, scheme="jacobi"
+) -> float:
     """Larger spectral radius of the test model at the pendulum's two points (NaN where undecided)."""
-    return linear_stability(params, method, decomposition, k, H)[0]
+    return linear_stability(params, method, decomposition, k, H, scheme=scheme)[0]

@@ -55,7 +55,7 @@ def combined_verdict(verdicts) -> str:
 
 
 def linear_test_model_stability(
-    params: PendulumParameters, H: float, method: CouplingMethod, decomposition: str, k: int
+    params: PendulumParameters, H: float, method: CouplingMethod, decomposition: str, k: int, *, scheme="jacobi"
 ):
     """Spectral radius and verdict of the linear test model (Sect. 3) at the pendulum's points
     (:func:`pendulum_test_model`), for the dimensionless form of ``method``.
@@ -63,7 +63,8 @@ def linear_test_model_stability(
     The method's parameters are in SI units here and are scaled as the registry
     says (:func:`icosim.methods.engine_method`: Baumgarte's ``beta_bar = beta/H``,
     ``gamma_bar = gamma/H^2``; the weighted multiplier's ``a``, ``b`` are
-    dimensionless already).  The verdict is the precision policy's
+    dimensionless already).  ``scheme``: the coupling scheme (link 1 is
+    subsystem 1).  The verdict is the precision policy's
     (:func:`icosim.stability.spectral_radius`) over both points
     (:func:`combined_verdict`); ``rho`` is the larger one, NaN if a point is
     undecided (nothing is known there) unless the other is unstable.  Returns
@@ -71,15 +72,17 @@ def linear_test_model_stability(
     """
     dimensionless = engine_method(method, H)
     model = pendulum_test_model(params, H)
-    result = spectral_radius(model, dimensionless, decomposition, int(k))
+    result = spectral_radius(model, dimensionless, decomposition, int(k), scheme=scheme)
     verdict = combined_verdict(result.verdict)
     rho = np.asarray(result.rho, float)
     rho = float(np.nanmax(rho)) if verdict == "unstable" or np.all(np.isfinite(rho)) else math.nan
     return rho, verdict, model
 
 
-def linear_test_model_rho(params: PendulumParameters, H: float, method: CouplingMethod, decomposition: str, k: int):
+def linear_test_model_rho(
+    params: PendulumParameters, H: float, method: CouplingMethod, decomposition: str, k: int, *, scheme="jacobi"
+):
     """Largest spectral radius of the linear test model at the pendulum's points
     (:func:`linear_test_model_stability` without the verdict).  Returns ``(rho, model)``."""
-    rho, _, model = linear_test_model_stability(params, H, method, decomposition, k)
+    rho, _, model = linear_test_model_stability(params, H, method, decomposition, k, scheme=scheme)
     return rho, model

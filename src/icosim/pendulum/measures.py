@@ -33,7 +33,9 @@ import numpy as np
 
 from ..methods import make_method
 from ..model import ParameterError
+from ..schemes import SCHEME_NAMES, get_scheme
 from .model import PendulumParameters
+from .names import run_name
 from .reference import reference_solution
 from .runs import RunResult, run_cosimulation
 
@@ -55,21 +57,22 @@ RECORD = {
     "t_last": ("s", "time of the last stored state (end time, or the step before divergence or failure)"),
 }
 
-#: Coupling schemes the runs can use.  Gauss-Seidel (issue 10) joins by adding its name here and
-#: passing ``scheme`` on in :func:`measured_run`; the configuration schema lists the same names.
-SCHEMES = ("jacobi",)
+#: Coupling schemes the runs can use (:mod:`icosim.schemes`); the configuration schema lists the same names.
+SCHEMES = SCHEME_NAMES
 
 
-def check_scheme(scheme: str) -> str:
-    if scheme not in SCHEMES:
-        raise ParameterError(f"scheme must be one of {', '.join(SCHEMES)}, got {scheme!r}")
-    return scheme
+def check_scheme(scheme) -> str:
+    """The scheme's name (``jacobi``, ``gauss-seidel-12``, ``gauss-seidel-21``), checked."""
+    try:
+        return get_scheme(scheme).name
+    except ParameterError as exc:
+        raise ParameterError(f"scheme must be one of {', '.join(SCHEMES)}, got {scheme!r}") from exc
 
 
-def config_label(scheme: str, method: str, decomposition: str, k: int) -> str:
-    """Label of a configuration, e.g. ``baumgarte_ff_k1`` (Jacobi) or ``baumgarte_ff_k1_gauss_seidel``."""
-    base = f"{method}_{decomposition}_k{int(k)}"
-    return base if scheme == "jacobi" else f"{base}_{scheme}"
+def config_label(scheme, method: str, decomposition: str, k: int) -> str:
+    """Label of a configuration: ``baumgarte_ff_k1`` (Jacobi), ``baumgarte_ff_k1_gs12`` (Gauss-Seidel), as the
+    runs of Figs. 6-8 are named (:func:`icosim.pendulum.names.run_name`)."""
+    return run_name(method, decomposition, int(k), scheme)
 
 
 def angle_errors(t, phi1, phi2, reference) -> tuple[float, float]:
@@ -133,14 +136,13 @@ def measured_run(
     the least CPU time is kept (the results are identical: the runs are
     deterministic).
     """
-    check_scheme(scheme)
+    scheme = check_scheme(scheme)
     params = PendulumParameters(**settings["model"])
     m = make_method(method, **settings["methods"][method])
     n = max(1, math.ceil(t_end / H - 1e-9))
     integ = dict(settings["integrator"], **(integrator or {}))
 
     def run():
-        # scheme: Jacobi is the engine's scheme today; Gauss-Seidel (issue 10) is passed on here.
         return run_cosimulation(
             params,
             m,
@@ -152,6 +154,7 @@ def measured_run(
             **settings["sensitivities"],
             **settings["corrector"],
             **settings["divergence"],
+            scheme=scheme,
         )
 
     result = run()

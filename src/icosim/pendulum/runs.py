@@ -18,6 +18,7 @@ from ..decompositions import get_decomposition
 from ..macrostep import StepFailure, simulate
 from ..methods import CouplingMethod
 from ..model import ParameterError
+from ..schemes import JACOBI, get_scheme
 from .model import PendulumParameters, joint_constraint
 from .problem import PendulumCosimulation
 from .reference import consistent_history
@@ -132,6 +133,7 @@ def run_cosimulation(
     newton_tol: float = 1e-8,
     iterations: int = 1,
     tol: float | None = None,
+    scheme=JACOBI,
     max_constraint: float = 1e-2,
     max_multiplier: float = 1e3,
     max_rate: float = 1e2,
@@ -144,7 +146,9 @@ def run_cosimulation(
     ``max_multiplier`` (N) or whose angular rates exceed ``max_rate`` (rad/s);
     it *fails* at the first step that raises a
     :class:`~icosim.macrostep.StepFailure`.  The series end at the step before.
+    ``scheme``: the coupling scheme (:mod:`icosim.schemes`; link 1 is subsystem 1).
     """
+    scheme = get_scheme(scheme)
     dec = get_decomposition(decomposition)
     method.check_decomposition(dec)
     if not (isinstance(iterations, int) and iterations >= 1):
@@ -184,6 +188,7 @@ def run_cosimulation(
             check=check,
             iterations=iterations,
             tol=tol,
+            scheme=scheme,
         )
     wall = time.perf_counter() - t0
     cpu = time.process_time() - c0

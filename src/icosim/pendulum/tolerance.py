@@ -32,7 +32,7 @@ from .runs import run_cosimulation
 __all__ = ["tolerance_study", "sufficient_rtol"]
 
 
-def _run(settings, method, decomposition, k, H, t_end, rtol):
+def _run(settings, method, decomposition, k, H, t_end, rtol, scheme="jacobi"):
     params = PendulumParameters(**settings["model"])
     n = max(1, math.ceil(t_end / H - 1e-9))
     integ = dict(settings["integrator"], rtol=rtol, atol=rtol)
@@ -47,6 +47,7 @@ def _run(settings, method, decomposition, k, H, t_end, rtol):
         **settings["sensitivities"],
         **settings["corrector"],
         **settings["divergence"],
+        scheme=scheme,
     )
 
 
@@ -71,7 +72,7 @@ def tolerance_study(
         scheme = check_scheme(c.get("scheme", "jacobi"))
         labels.append(config_label(scheme, c["method"], c["decomposition"], c["k"]))
         for j, H in enumerate(H_values):
-            runs = [_run(settings, c["method"], c["decomposition"], c["k"], H, t_end, r) for r in rtols]
+            runs = [_run(settings, c["method"], c["decomposition"], c["k"], H, t_end, r, scheme) for r in rtols]
             ref = reference_solution(params, runs[-1].t, **reference)
             tight = runs[-1]
             for m, (rtol, res) in enumerate(zip(rtols, runs)):
@@ -106,6 +107,7 @@ def tolerance_study(
         "method": ("config", [c["method"] for c in configurations]),
         "decomposition": ("config", [c["decomposition"] for c in configurations]),
         "k": ("config", [int(c["k"]) for c in configurations]),
+        "scheme": ("config", [check_scheme(c.get("scheme", "jacobi")) for c in configurations]),
     }
     job = {"configurations": configurations, "H": H_values, "rtol": rtols, "t_end": t_end, "settings": settings}
     attrs = provenance_attrs(job, title="Double pendulum: error over the subsystem tolerance", command=command)
