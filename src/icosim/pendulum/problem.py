@@ -271,3 +271,4 @@ class PendulumCosimulation(CosimulationProblem):
         corr = variable_corrector_nodes(exact[0], exact[1:])
         self.w_pred = np.array([float(w) for w in lagrange_weights(pred, 1)], dtype=float)
         self.C_corr = np.array(lagrange_coefficients(corr), dtype=float)
+        self._cache = None  # the predictor's responses (kept for the Jacobians) belong to the old nodes
