@@ -413,6 +413,11 @@ def test_shipped_configuration_validates_and_schemes_match():
     assert min(CFG["trade"]["error_over_H"]["H"]) == 1e-4 and max(CFG["trade"]["error_over_H"]["H"]) == 2e-2
     assert config_label("jacobi", "baumgarte", "ff", 1) == "baumgarte_ff_k1"
     assert config_label("gauss-seidel-12", "baumgarte", "ff", 1) == "baumgarte_ff_k1_gs12"
+    # the Gauss-Seidel adaptive configuration runs only while its scheme is configured (config/jacobi_only.yaml)
+    assert any(c.get("scheme") == "gauss-seidel-12" for c in plan["adaptive"]["configurations"])
+    only = trade_plan(dict(CFG, schemes=["jacobi"]))
+    assert {c.get("scheme", "jacobi") for c in only["adaptive"]["configurations"]} == {"jacobi"}
+    assert {g[0] for g in only["groups"]} == {"jacobi"} and len(only["configs"]) == 21
 
 
 def test_bad_trade_configuration_names_the_key():

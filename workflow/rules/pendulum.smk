@@ -348,7 +348,7 @@ rule pendulum_tolerance:
         "../envs/icosim.yaml"
     params:
         settings=run_settings(PENDULUM, study_methods(PENDULUM, "tolerance")),
-        tolerance=TRADE["tolerance"],
+        tolerance=TRADE_PLAN["tolerance"],
         t_end=TRADE["error_over_H"]["t_end"],
         reference=TRADE["reference"],
     script:
@@ -367,7 +367,7 @@ rule pendulum_adaptive:
         "../envs/icosim.yaml"
     params:
         settings=run_settings(PENDULUM, study_methods(PENDULUM, "adaptive")),
-        adaptive=TRADE["adaptive"],
+        adaptive=TRADE_PLAN["adaptive"],
         reference=TRADE["reference"],
     script:
         "../scripts/pendulum_adaptive.py"

@@ -59,7 +59,8 @@ def trade_plan(cfg: dict) -> dict:
 
     The studies run with every scheme of :func:`configured_schemes` (the Figs. 6-8 runs' schemes).
 
-    Returns ``groups`` (``(scheme, method, decomposition)`` of every sweep and
+    Returns ``tolerance`` and ``adaptive`` (the studies' settings with the
+    configurations whose scheme is configured), ``groups`` (``(scheme, method, decomposition)`` of every sweep and
     limit job, each over all ``k``) and ``configs`` (``(label, scheme, method,
     decomposition, k)`` of every configuration): every one of
     ``pendulum.configurations`` unless ``trade.configurations`` names a subset.  Errors
@@ -120,7 +121,17 @@ def trade_plan(cfg: dict) -> dict:
             f"pendulum.trade.adaptive.H0 = {ad['H0']!r} must lie in [controller.H_min, controller.H_max] = "
             f"[{ctl['H_min']!r}, {ctl['H_max']!r}]"
         )
-    return {"groups": groups, "configs": configs}
+    # the tolerance and adaptive configurations of the configured schemes only (config/jacobi_only.yaml
+    # thus leaves out their Gauss-Seidel ones too)
+    studies = {}
+    for key in ("tolerance", "adaptive"):
+        kept = [c for c in trade[key]["configurations"] if get_scheme(c.get("scheme", "jacobi")).name in schemes]
+        if not kept:
+            raise ParameterError(
+                f"pendulum.trade.{key}.configurations: none uses a scheme of pendulum.schemes {schemes}"
+            )
+        studies[key] = dict(trade[key], configurations=kept)
+    return {"groups": groups, "configs": configs, **studies}
 
 
 #: The keys of a ``pendulum:`` configuration that a run of the speed-accuracy studies needs.
