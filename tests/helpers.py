@@ -4,7 +4,11 @@
   directory, never on the checkout's results/;
 * :func:`scheduled`: the outputs a dry run schedules for a rule;
 * :func:`validate_config`: a part's configuration against its schema, with the method
-  definitions filled in from the registry as the workflow does.
+  definitions filled in from the registry as the workflow does;
+* :func:`predict_all` and :func:`correct_all`: every subsystem of a problem predicted or
+  corrected (the problems advance one subsystem at a time; the scheme lives in the macro step);
+* :func:`growth_rate`: the growth factor per macro step of plain time stepping (an
+  independent route to the spectral radius).
 """
 
 import json
@@ -74,3 +78,40 @@ def validate_config(part_config: dict, part: str):
         path = Path(tmp) / f"{part}.schema.json"
         path.write_text(json.dumps(with_methods(schema)))
         validate(part_config, str(path))
+
+
+def predict_all(prob, state, history):
+    """Outputs ``y`` of every subsystem after the predictor (extrapolation polynomials)."""
+    return prob.stack([prob.predict(i, state, history)[1] for i in range(2)])
+
+
+def correct_all(prob, state, history, e_new):
+    """``(state, y)`` of every subsystem after the corrector with the interpolation polynomials through ``e_new``."""
+    ends, ys = zip(*(prob.correct(i, state, history, e_new) for i in range(2)))
+    return prob.join(list(ends)), prob.stack(list(ys))
+
+
+def growth_rate(prob, method, n_chunks=30, chunk=20, seed=0, **step_kw):
+    """Average growth factor per macro step of plain time stepping.
+
+    Power iteration: run ``chunk`` steps, record the growth of the norm of
+    (state, coupling history), rescale, repeat; the second half is averaged,
+    which also averages out the oscillation of a complex dominant pair.
+    ``step_kw`` go to the macro step (e.g. ``scheme``).
+    """
+    import numpy as np
+
+    from icosim.macrostep import simulate
+
+    rng = np.random.default_rng(seed)
+    state = rng.standard_normal((2, 2))
+    hist = rng.standard_normal((prob.k + 1, prob.n_coupling))
+    logs = []
+    for _ in range(n_chunks):
+        norm0 = np.linalg.norm(prob.pack(state, hist))
+        traj = simulate(prob, method, state / norm0, hist / norm0, chunk, **step_kw)
+        assert traj.diverged_at is None
+        state = traj.states[-1]
+        hist = np.stack([traj.coupling[-1 - j] for j in range(prob.k + 1)])
+        logs.append(np.log(np.linalg.norm(prob.pack(state, hist))))
+    return float(np.exp(np.mean(logs[n_chunks // 2 :]) / chunk))

@@ -28,8 +28,8 @@ def by_hand(H, m1, m2, c1, c2, d1, d2):
     return TestModel(lr1, li1, m2 / m1, lr2 / lr1, li2 / li1)
 
 
-def rho_by_hand(H, scheme_method, dec, k, system=SYSTEM):
-    rho, _ = spectral_radius_float64(by_hand(H, **system), scheme_method, dec, k)
+def rho_by_hand(H, scheme_method, dec, k, system=SYSTEM, scheme="jacobi"):
+    rho, _ = spectral_radius_float64(by_hand(H, **system), scheme_method, dec, k, scheme=scheme)
     return float(rho)
 
 
@@ -48,9 +48,10 @@ def engine(row, H):
 def test_rho_at_one_H_equals_the_hand_computed_point():
     H = 1e-2
     df = advise(TwoMassSystem(**SYSTEM), H)
-    assert len(df) == 45  # 18 Baumgarte + 18 weighted multiplier + 9 projection schemes
+    assert len(df) == 3 * 45  # (18 Baumgarte + 18 weighted multiplier + 9 projection) x 3 coupling orders
+    assert df["coupling"].value_counts().to_dict() == {"jacobi": 45, "gauss-seidel-12": 45, "gauss-seidel-21": 45}
     for _, row in df.iterrows():
-        expected = rho_by_hand(H, engine(row, H), row["decomposition"], row["k"])
+        expected = rho_by_hand(H, engine(row, H), row["decomposition"], row["k"], scheme=row["coupling"])
         assert row["rho"] == pytest.approx(expected, rel=1e-12), row["scheme"]
         assert (row["verdict"] == "stable") == (expected <= 1)
     stable = df[df["verdict"] == "stable"]
@@ -64,7 +65,11 @@ def test_rho_at_one_H_equals_the_hand_computed_point():
 
 def test_baumgarte_mu_in_seconds_is_scaled_by_H():
     H, mu = 1e-2, 5e-3
-    df = advise(TwoMassSystem(**SYSTEM), H, scheme_list=schemes(methods=["baumgarte"], k=[1], params={"mu": mu}))
+    df = advise(
+        TwoMassSystem(**SYSTEM),
+        H,
+        scheme_list=schemes(methods=["baumgarte"], k=[1], params={"mu": mu}, couplings=["jacobi"]),
+    )
     row = df[(df["index"] == 1) & (df["decomposition"] == "ff")].iloc[0]
     assert row["parameters"] == "mu = 0.005 s"
     expected = rho_by_hand(H, make_method("baumgarte", index=1, mu=mu / H), "ff", 1)  # mu_bar = mu/H = 0.5
@@ -76,7 +81,7 @@ def test_largest_stable_H_is_bracketed():
     system = TwoMassSystem(**SYSTEM)
     rtol = 1e-6
     for method, dec, k in (("projection", "ff", 2), ("baumgarte", "fd", 0)):
-        sl = [s for s in schemes(methods=[method], decompositions=[dec], k=[k]) if s.index == 1]
+        sl = [s for s in schemes(methods=[method], decompositions=[dec], k=[k], couplings=["jacobi"]) if s.index == 1]
         row = advise(system, (1e-4, 1e-1), scheme_list=sl, rtol=rtol).iloc[0]
         assert row["verdict"] == "stable up to H_max" and row["stable_intervals"][0][0] == 1e-4
         H_max, above = row["H_max"], row["unstable_above"]
@@ -89,7 +94,7 @@ def test_largest_stable_H_is_bracketed():
 
 def test_non_monotone_stability_is_reported_as_intervals():
     """Weighted multiplier ff, k = 2: unstable for small H (near the origin), stable above."""
-    sl = schemes(methods=["weighted"], decompositions=["ff"], k=[2])[:1]
+    sl = schemes(methods=["weighted"], decompositions=["ff"], k=[2], couplings=["jacobi"])[:1]
     row = advise(TwoMassSystem(**SYSTEM), (1e-4, 1e-1), scheme_list=sl).iloc[0]
     [[lo, hi]] = row["stable_intervals"]
     assert row["verdict"] == "stable on intervals" and 1e-4 < lo < hi == 1e-1
@@ -103,7 +108,9 @@ def test_non_monotone_stability_is_reported_as_intervals():
 def test_overdamped_subsystem_has_no_eq71_form_but_a_verdict():
     system = TwoMassSystem(m1=1, m2=1, c1=1, c2=100, d1=10, d2=1)  # d1^2 = 100 > 4 m1 c1 = 4
     H = 0.05
-    df = advise(system, H, scheme_list=schemes(methods=["projection"], decompositions=["ff"], k=[0, 1]))
+    df = advise(
+        system, H, scheme_list=schemes(methods=["projection"], decompositions=["ff"], k=[0, 1], couplings=["jacobi"])
+    )
     p = df.attrs["dimensionless"][0]
     assert p["lr1"] is None and "subsystem 1 is overdamped" in p["eq71"]
     assert "lr1" not in df.columns
@@ -114,7 +121,22 @@ def test_overdamped_subsystem_has_no_eq71_form_but_a_verdict():
 
 
 def test_json_is_strict_and_explains_nulls(capsys):
-    code = main(["advise", *ARGS, "--H", "1e-3", "0.1", "--methods", "projection", "--k", "2", "--json"])
+    code = main(
+        [
+            "advise",
+            *ARGS,
+            "--H",
+            "1e-3",
+            "0.1",
+            "--methods",
+            "projection",
+            "--k",
+            "2",
+            "--couplings",
+            "jacobi",
+            "--json",
+        ]
+    )
     assert code == 0
     out = capsys.readouterr().out
 
@@ -124,11 +146,17 @@ def test_json_is_strict_and_explains_nulls(capsys):
     data = json.loads(out, parse_constant=refuse)
     assert data["mode"] == "range" and len(data["schemes"]) == 3
     assert all(s["rank"] is not None for s in data["schemes"])  # projection k = 2 is stable for small H
-    df = advise(TwoMassSystem(**SYSTEM), (1e-3, 0.1), scheme_list=schemes(methods=["projection"], k=[2]))
+    df = advise(
+        TwoMassSystem(**SYSTEM), (1e-3, 0.1), scheme_list=schemes(methods=["projection"], k=[2], couplings=["jacobi"])
+    )
     assert [s["H_max"] for s in data["schemes"]] == pytest.approx(df["H_max"].tolist())
     # a scheme unstable everywhere: nulls with reasons
     rec = advice_records(
-        advise(TwoMassSystem(**SYSTEM), (1e-3, 1e-2), scheme_list=schemes(methods=["weighted"], k=[2])[2:3])
+        advise(
+            TwoMassSystem(**SYSTEM),
+            (1e-3, 1e-2),
+            scheme_list=schemes(methods=["weighted"], k=[2], couplings=["jacobi"])[2:3],
+        )
     )
     [s] = rec["schemes"]
     assert s["H_max"] is None and s["null_reasons"]["H_max"] == "no stable H in the range"
@@ -137,7 +165,7 @@ def test_json_is_strict_and_explains_nulls(capsys):
 
 
 def test_text_output_ranks_the_stable_schemes(capsys):
-    assert main(["advise", *ARGS, "--H", "0.01", "--methods", "projection"]) == 0
+    assert main(["advise", *ARGS, "--H", "0.01", "--methods", "projection", "--couplings", "jacobi"]) == 0
     out = capsys.readouterr().out
     assert "Eq. (71) at H = 0.01 s: lr1 = -0.01, li1 = 0.3161, am21 = 2, alr21 = 1, ali21 = 1" in out
     assert "9 schemes at H = 0.01 s, 9 stable" in out
@@ -204,11 +232,39 @@ def test_progress_bar_only_on_a_terminal_after_the_delay():
 
 
 def test_range_ranking_puts_schemes_stable_from_the_lower_end_first():
-    sl = schemes(methods=["weighted"], decompositions=["ff"], k=[2])[:1] + schemes(
-        methods=["projection"], decompositions=["ff"], k=[2]
+    sl = schemes(methods=["weighted"], decompositions=["ff"], k=[2], couplings=["jacobi"])[:1] + schemes(
+        methods=["projection"], decompositions=["ff"], k=[2], couplings=["jacobi"]
     )
     df = advise(TwoMassSystem(**SYSTEM), (1e-4, 1e-1), scheme_list=sl)
     # weighted ff k = 2 reaches the larger H (0.1) but is unstable at small H: ranked after projection
     assert list(df["method"]) == ["projection", "weighted"] and list(df["rank"]) == [1, 2]
     assert df["H_max"].iloc[1] > df["H_max"].iloc[0]
     assert df["H_max_from_lo"].iloc[0] == df["H_max"].iloc[0] and np.isnan(df["H_max_from_lo"].iloc[1])
+
+
+def test_couplings_option_selects_the_coupling_orders(capsys):
+    """``--couplings gauss-seidel-21``: only that order, its rho the library's with that scheme."""
+    code = main(
+        ["advise", *ARGS, "--H", "1e-2", "--methods", "projection", "--k", "1", "--couplings", "gauss-seidel-21"]
+    )
+    assert code == 0
+    code = main(
+        [
+            "advise",
+            *ARGS,
+            "--H",
+            "1e-2",
+            "--methods",
+            "projection",
+            "--k",
+            "1",
+            "--couplings",
+            "gauss-seidel-21",
+            "--json",
+        ]
+    )
+    data = json.loads(capsys.readouterr().out.splitlines()[-1])
+    assert {s["coupling"] for s in data["schemes"]} == {"gauss-seidel-21"} and len(data["schemes"]) == 3
+    for s in data["schemes"]:
+        expected = rho_by_hand(1e-2, make_method("projection"), s["decomposition"], 1, scheme="gauss-seidel-21")
+        assert s["rho"] == pytest.approx(expected, rel=1e-12)

@@ -6,8 +6,9 @@ import sys
 
 import pytest
 
-from icosim import TestModel, baumgarte, spectral_radius_float64
+from icosim import TestModel, baumgarte, spectral_radius_float64, weighted_multiplier
 from icosim.cli import main
+from icosim.schemes import GS12, GS21
 
 BASE = ["rho", "--lr1", "-0.5", "--li1", "0.7", "--am21", "2", "--alr21", "2", "--ali21", "2"]
 
@@ -100,6 +101,45 @@ def test_missing_parameter_and_real_process_exit_status():
     proc = subprocess.run(argv, capture_output=True, text=True)
     assert proc.returncode == 2
     assert "--ali21" in proc.stderr and "Traceback" not in proc.stderr
+
+
+@pytest.mark.parametrize("first,scheme", [(None, GS12), ("1", GS12), ("2", GS21)])
+def test_gauss_seidel_scheme_matches_library(capsys, first, scheme):
+    argv = BASE + ["--method", "weighted", "--a", "1", "--b", "1", "--decomposition", "fd", "--k", "1"]
+    argv += ["--scheme", "gauss-seidel"] + (["--first", first] if first else []) + ["--json"]
+    code, out = run(capsys, argv)
+    data = json.loads(out)
+    expected, _ = spectral_radius_float64(
+        TestModel(-0.5, 0.7, 2, 2, 2), weighted_multiplier(1, 1), "fd", 1, scheme=scheme
+    )
+    assert code == 0 and data["scheme"] == scheme.name and data["first"] == scheme.first
+    assert data["verdict"] in ("stable", "unstable") and data["certified"]
+    assert data["rho"] == pytest.approx(float(expected), rel=1e-13)
+    code, out = run(capsys, argv[:-1])
+    assert scheme.label in out
+
+
+def test_default_scheme_is_jacobi(capsys):
+    code, out = run(capsys, BASE + ["--method", "projection", "--decomposition", "ff", "--k", "0", "--json"])
+    data = json.loads(out)
+    assert data["scheme"] == "jacobi" and data["first"] is None
+
+
+@pytest.mark.parametrize(
+    "extra,argument",
+    [
+        (["--first", "2"], "argument --first: only used with --scheme gauss-seidel"),
+        (["--scheme", "jacobi", "--first", "1"], "argument --first"),
+        (["--scheme", "gauss-seidel", "--first", "3"], "argument --first"),
+        (["--scheme", "seidel"], "argument --scheme"),
+    ],
+)
+def test_bad_scheme_arguments_exit_2_naming_them(capsys, extra, argument):
+    with pytest.raises(SystemExit) as exc:
+        main(BASE + ["--method", "projection", "--decomposition", "ff", "--k", "0"] + extra)
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert argument in err and "Traceback" not in err
 
 
 # -- N-digit results and numbers as users type them (issue: convergence decided) ------------------------

@@ -52,3 +52,31 @@ def test_report_masks_only_timings():
     assert compare_results._mask_html(cell.format("1.5")) == compare_results._mask_html(cell.format("7.0"))
     other = cell.replace("mp CPU s", "points")
     assert compare_results._mask_html(other.format("1.5")) != compare_results._mask_html(other.format("7.0"))
+
+
+def test_allow_added_forgives_only_what_new_adds(tmp_path):
+    from icosim.datasets import provenance_attrs
+
+    def tree(root, job, extra_attr=None, coord=False, rho=1.0):
+        ds = xr.Dataset({"rho": ("x", np.array([0.5, rho]))})
+        if coord:
+            ds = ds.assign_coords(scheme=("x", np.array(["jacobi", "jacobi"], dtype=object)))
+        ds.attrs.update(provenance_attrs(job, title="t"))
+        if extra_attr:
+            ds.attrs.update(extra_attr)
+        write_netcdf(ds, root / "results/p.nc")
+        return root
+
+    old = tree(tmp_path / "old", {"k": 1})
+    new = tree(tmp_path / "new", {"k": 1, "scheme": "jacobi"}, {"scheme": "jacobi"}, coord=True)
+    assert compare_results.compare(old, new)[0]  # without the option: differs
+    assert compare_results.compare(old, new, ["scheme"])[0] == []
+    # a changed value, or a changed key besides the added one, is still caught
+    changed = tree(tmp_path / "changed", {"k": 2, "scheme": "jacobi"}, {"scheme": "jacobi"}, coord=True)
+    assert any("config_json" in p for p in compare_results.compare(old, changed, ["scheme"])[0])
+    value = tree(tmp_path / "value", {"k": 1, "scheme": "jacobi"}, {"scheme": "jacobi"}, coord=True, rho=2.0)
+    assert any("rho: values differ" in p for p in compare_results.compare(old, value, ["scheme"])[0])
+    # an attribute OLD already had is compared as usual
+    old2 = tree(tmp_path / "old2", {"k": 1}, {"scheme": "jacobi"})
+    new2 = tree(tmp_path / "new2", {"k": 1}, {"scheme": "gauss-seidel-12"})
+    assert any("scheme" in p for p in compare_results.compare(old2, new2, ["scheme"])[0])

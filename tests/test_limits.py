@@ -333,6 +333,28 @@ def test_a_wrong_stability_value_fails_validation_or_is_harmless(data):
         spec.coupling_method()
 
 
+@pytest.mark.parametrize("n", [4294967296.0, 1.152921504606847e18, 10002])
+def test_a_huge_grid_is_refused_before_any_allocation(n):
+    """Hypothesis found these: an integral float passes the schema's ``integer`` and numpy then tried to
+    allocate 32 GiB (or raised 'array is too big'); now the schema and the panel construction refuse it."""
+    import copy
+
+    import yaml
+    from helpers import ROOT, validate_config
+    from snakemake.exceptions import WorkflowError
+
+    from icosim.limits import MAX_GRID_N
+    from icosim.model import ParameterError
+    from icosim.stability.panels import grid_axis
+
+    cfg = copy.deepcopy(yaml.safe_load((ROOT / "config/stability.yaml").read_text())["stability"])
+    cfg["grid"]["n"] = n
+    with pytest.raises(WorkflowError):
+        validate_config(cfg, "stability")
+    with pytest.raises(ParameterError, match=str(MAX_GRID_N)):
+        grid_axis([-1.0, 0.0], n)
+
+
 # -- datasets: checksums and stale temporaries ----------------------------------------------------------
 
 

@@ -128,3 +128,23 @@ def test_bad_input_exits_2_naming_the_argument(capsys, monkeypatch, tmp_path, ar
     err = capsys.readouterr().err
     assert argument in err and "Traceback" not in err
     assert not list(tmp_path.iterdir())  # nothing written
+
+
+@pytest.mark.parametrize("first,name", [("1", "gauss-seidel-12"), ("2", "gauss-seidel-21")])
+def test_map_with_a_gauss_seidel_scheme(tmp_path, capsys, first, name):
+    """``--scheme gauss-seidel --first N``: the panel is the scheme's (attribute ``scheme``, rho of the library)."""
+    prefix = tmp_path / "gs"
+    argv = [*WM, "--k", "0", *GRID, "--out", str(prefix), "--scheme", "gauss-seidel", "--first", first]
+    assert main(argv) == 0
+    assert "Gauss–Seidel" in capsys.readouterr().out
+    ds = open_dataset(tmp_path / "gs_k0.nc")
+    assert ds.attrs["scheme"] == name
+    lr1, li1 = ds["lr1"].values[3], ds["li1"].values[5]
+    rho, _ = spectral_radius_float64(TestModel(lr1, li1), make_method("weighted", a=1, b=1), "ff", 0, scheme=name)
+    assert ds["rho"].values[3, 5] == pytest.approx(float(rho), rel=1e-12)
+
+
+def test_map_first_without_gauss_seidel_exits_2(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main([*WM, "--k", "0", *GRID, "--first", "2"])
+    assert exc.value.code == 2 and "argument --first" in capsys.readouterr().err

@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import correct_all, predict_all
 from scipy.integrate import solve_ivp
 
 from icosim import ParameterError, make_method
@@ -143,7 +144,7 @@ def test_dd_conditions_vanish_at_the_exact_solution():
     ref = reference_solution(P, np.array([H, 0.0, -H]))
     e_exact = np.stack([ref["a_x"], ref["a_y"]], axis=-1)  # at T_1, T_0, T_-1
     state = P.initial_state()
-    _, y = prob.correct(state, e_exact[1:], e_exact[0])
+    _, y = correct_all(prob, state, e_exact[1:], e_exact[0])
     r = prob.residuals(y)
     scale = np.abs(e_exact).max()
     assert abs(r["acc"][0]) < 1e-8 * scale  # interpolation error of a quadratic over 1 ms
@@ -179,8 +180,8 @@ def test_forward_difference_sensitivities_match_central_differences(decompositio
         ep, em = e.copy(), e.copy()
         ep[j] += h
         em[j] -= h
-        rp = prob.residuals(prob.correct(state, hist, ep)[1])
-        rm = prob.residuals(prob.correct(state, hist, em)[1])
+        rp = prob.residuals(correct_all(prob, state, hist, ep)[1])
+        rm = prob.residuals(correct_all(prob, state, hist, em)[1])
         for key in ("pos", "vel", "acc", "force"):
             central = (rp[key] - rm[key]) / (2 * h)
             scale = np.max(np.abs(jac[key])) if jac[key].size else 1.0
@@ -196,7 +197,7 @@ def test_predictor_is_the_extrapolation_polynomial():
     k = 2
     prob = PendulumCosimulation(P, "ff", k, H)
     state, hist = P.initial_state(), consistent_history(P, "ff", k, H) * np.array([1.0, 1.3])
-    y = prob.predict(state, hist)
+    y = predict_all(prob, state, hist)
     C = np.array(monomial_coefficients(predictor_nodes(k)), dtype=float)
     coef = np.einsum("mj,ju->mu", C, hist)[None]  # extrapolation through e_N, e_N-1, e_N-2
     link = prob.links[0]
@@ -275,13 +276,15 @@ def test_fully_implicit_option_stops_early_with_the_conditions_met(method_name, 
     state = Monolithic(P).cosim_state(np.array([0.5, -1.2, 3.0, -4.0]))
     hist = consistent_history(P, decomposition, 1, H)
     prob = PendulumCosimulation(P, decomposition, 1, H)
-    residual_of_pass = []
+    residual_of_pass, outputs = [], [None, None]
     correct = prob.correct
 
-    def counting_correct(*args):
-        state_new, y = correct(*args)
-        residual_of_pass.append(np.max(np.abs(method.condition_residuals(prob.residuals(y)))))
-        return state_new, y
+    def counting_correct(i, *args):
+        end, y_i = correct(i, *args)
+        outputs[i] = y_i
+        if i == 1:  # a corrector pass (Jacobi) ends with link 2
+            residual_of_pass.append(np.max(np.abs(method.condition_residuals(prob.residuals(prob.stack(outputs))))))
+        return end, y_i
 
     prob.correct = counting_correct
     tol = 1e-8

@@ -1,6 +1,6 @@
 """Compare two runs of the workflow: are their results the same?
 
-    python tools/compare_results.py OLD NEW [--rerender [--configfile FILE ...]]
+    python tools/compare_results.py OLD NEW [--rerender [--configfile FILE ...]] [--allow-added NAME ...]
 
 OLD and NEW are checkouts (or copies) that each hold ``results/`` and ``reports/`` of a run.
 Every file under ``results/`` must exist in both and be equal:
@@ -20,6 +20,12 @@ up to date by ``snakemake --touch``, those outputs deleted and built again, noth
 rerun) and requires them to be equal to
 OLD's byte for byte (the report modulo its provenance section): the figures and the report
 come from the same data by the same logic.  Exit status 0 if everything is equal.
+
+``--allow-added NAME`` forgives what NEW *adds* under that name and nothing else: a global or
+variable attribute, or a variable (coordinate), present in NEW only; the name in a variable's
+``coordinates`` attribute; and a key of that name present only in NEW's ``config_json`` (at any
+depth; ``config_sha256`` is then checked against NEW's own ``config_json`` instead).  Used to show
+that adding the ``scheme`` attribute (Gauss-Seidel, issue 10) left every Jacobi result as it was.
 """
 
 from __future__ import annotations
@@ -76,22 +82,44 @@ TIMING_COLUMNS = {
 IMAGE = re.compile(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"')
 
 
-def _nc(old: Path, new: Path, rel: str, problems: list):
+def _drop_added(a, b, names):
+    """``b`` without the keys in ``names`` that ``a`` lacks (recursively through mappings and lists)."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        return {k: _drop_added(a.get(k), v, names) for k, v in b.items() if k in a or k not in names}
+    if isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
+        return [_drop_added(x, y, names) for x, y in zip(a, b)]
+    return b
+
+
+def _nc(old: Path, new: Path, rel: str, problems: list, allow_added=(), notes=None):
     import h5py
 
     vol_vars = VOLATILE_VARIABLES.get(rel, set())
+    allow_added = set(allow_added)
     with h5py.File(old, "r") as a, h5py.File(new, "r") as b:
 
         def attrs(obj):
-            return {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in obj.attrs.items()}
+            # netCDF4 writes text attributes as fixed-length strings, which h5py reads as bytes: compare them as text
+            return {
+                k: (v.tolist() if isinstance(v, np.ndarray) else v.decode() if isinstance(v, bytes) else v)
+                for k, v in obj.attrs.items()
+            }
 
         ga, gb = attrs(a), attrs(b)
+        if allow_added and "config_json" in ga and "config_json" in gb and ga["config_json"] != gb["config_json"]:
+            ja, jb = json.loads(ga["config_json"]), json.loads(gb["config_json"])
+            if ja == _drop_added(ja, jb, allow_added):
+                digest = hashlib.sha256(gb["config_json"].encode()).hexdigest()
+                if gb.get("config_sha256") == digest:
+                    ga["config_json"], ga["config_sha256"] = gb["config_json"], gb["config_sha256"]
+                    if notes is not None:
+                        notes.append(f"{rel}: config_json equal but for the added {sorted(allow_added)}")
         for key in sorted(set(ga) | set(gb)):
-            if key in VOLATILE_ATTRS:
+            if key in VOLATILE_ATTRS or (key in allow_added and key not in ga):
                 continue
             if key not in ga or key not in gb or not _same(ga[key], gb[key]):
                 problems.append(f"{rel}: global attribute {key!r}: {ga.get(key)!r} != {gb.get(key)!r}")
-        na, nb = set(a.keys()), set(b.keys())
+        na, nb = set(a.keys()), set(b.keys()) - (allow_added - set(a.keys()))
         if na != nb:
             problems.append(f"{rel}: variables differ: {sorted(na ^ nb)}")
         for name in sorted(na & nb):
@@ -102,6 +130,12 @@ def _nc(old: Path, new: Path, rel: str, problems: list):
             aa, ab = attrs(va), attrs(vb)
             aa.pop("DIMENSION_LIST", None), ab.pop("DIMENSION_LIST", None)
             aa.pop("REFERENCE_LIST", None), ab.pop("REFERENCE_LIST", None)
+            for key in [k for k in ab if k in allow_added and k not in aa]:
+                ab.pop(key)
+            if "coordinates" in ab and allow_added:  # xarray names the non-dimension coordinates here
+                kept = [c for c in str(ab["coordinates"]).split() if c not in allow_added or c in na]
+                ab["coordinates"] = " ".join(kept)
+                aa["coordinates"] = str(aa.get("coordinates", ""))
             if not _same(aa, ab):
                 problems.append(f"{rel}:{name}: attributes differ: {aa} != {ab}")
             if name in vol_vars:
@@ -197,7 +231,7 @@ def _html(old: Path, new: Path, rel: str, problems: list, notes: list, old_root:
         notes.append(f"{rel}: equal once timings, figures drawn from timings and provenance are masked")
 
 
-def compare(old_root: Path, new_root: Path) -> tuple[list, list]:
+def compare(old_root: Path, new_root: Path, allow_added=()) -> tuple[list, list]:
     problems, notes = [], []
     old_res, new_res = old_root / "results", new_root / "results"
     files_a = {p.relative_to(old_res).as_posix() for p in old_res.rglob("*") if p.is_file()}
@@ -215,7 +249,7 @@ def compare(old_root: Path, new_root: Path) -> tuple[list, list]:
         if rel in VOLATILE_FIGURES:
             notes.append(f"{rel}: drawn from timings (checked by --rerender)")
         elif suffix == ".nc":
-            _nc(a, b, rel, problems)
+            _nc(a, b, rel, problems, allow_added, notes)
         elif suffix == ".json":
             if json.loads(a.read_text()) != json.loads(b.read_text()):
                 problems.append(f"{rel}: JSON differs")
@@ -291,8 +325,15 @@ def main(argv=None) -> int:
     parser.add_argument("new", type=Path)
     parser.add_argument("--rerender", action="store_true", help="rebuild the report from OLD's results with NEW's code")
     parser.add_argument("--configfile", nargs="*", default=[], help="the --configfile files of the run (--rerender)")
+    parser.add_argument(
+        "--allow-added",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="forgive an attribute, coordinate or config_json key of this name that only NEW has (repeatable)",
+    )
     args = parser.parse_args(argv)
-    problems, notes = compare(args.old, args.new)
+    problems, notes = compare(args.old, args.new, args.allow_added)
     if args.rerender:
         problems += rerender(args.old, args.new, ["--configfile", *args.configfile] if args.configfile else [])
     for line in notes:
@@ -308,6 +349,7 @@ def main(argv=None) -> int:
         + "; figures "
         + ", ".join(sorted(VOLATILE_FIGURES))
         + "; report: timing phrases and columns, provenance"
+        + (f"; added in NEW only: {', '.join(args.allow_added)}" if args.allow_added else "")
     )
     return 1 if problems else 0
 

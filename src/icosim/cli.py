@@ -24,6 +24,7 @@ from .decompositions import DECOMPOSITIONS, get_decomposition
 from .jsonio import dumps
 from .limits import MAX_BITS_LIMIT, MAX_DIGITS, MAX_GUARD_BITS, MAX_K, MAX_SECONDS, check_derived, check_k
 from .model import ParameterError
+from .schemes import get_scheme
 
 __all__ = ["main", "build_parser"]
 
@@ -118,6 +119,18 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--method", required=True, choices=tuple(methods.METHODS))
     g.add_argument("--decomposition", required=True, choices=tuple(DECOMPOSITIONS))
     g.add_argument("--k", required=True, type=_order, help=f"approximation order (integer 0..{MAX_K})")
+    g.add_argument(
+        "--scheme",
+        choices=("jacobi", "gauss-seidel"),
+        default="jacobi",
+        help="coupling scheme: jacobi (parallel, the paper's; default) or gauss-seidel (sequential)",
+    )
+    g.add_argument(
+        "--first",
+        type=int,
+        choices=(1, 2),
+        help="gauss-seidel: the subsystem that advances first (default 1)",
+    )
     g = rho.add_argument_group("method parameters")
     with_index = ", ".join(spec.label for spec in methods.METHODS.values() if spec.takes_index)
     g.add_argument("--index", type=int, choices=methods.indices(), help=f"index of the formulation ({with_index})")
@@ -177,6 +190,9 @@ def _rho(args, parser):
     from .model import TestModel
     from .rho_command import rho_answer, rho_text
 
+    if args.first is not None and args.scheme != "gauss-seidel":
+        parser.error("argument --first: only used with --scheme gauss-seidel")
+    scheme = get_scheme(args.scheme, args.first)
     try:
         method = _method_from_args(args)
         decomposition = get_decomposition(args.decomposition)
@@ -186,20 +202,29 @@ def _rho(args, parser):
     except ParameterError as exc:
         parser.error(_argument_message(str(exc)))
     answer = rho_answer(
-        model, method, decomposition, args.k, digits=args.digits, max_bits=args.max_bits, timeout=args.timeout
+        model,
+        method,
+        decomposition,
+        args.k,
+        digits=args.digits,
+        max_bits=args.max_bits,
+        timeout=args.timeout,
+        scheme=scheme,
     )
     result = {
         **answer,
         "method": method.name,
         "decomposition": decomposition.name,
         "k": args.k,
+        "scheme": scheme.name,
+        "first": getattr(scheme, "first", None),  # the subsystem that advances first (Gauss-Seidel only)
         "method_parameters": method.params,
         "model": {n: float(getattr(args, n)) for n in ("lr1", "li1", "am21", "alr21", "ali21")},
     }
     if args.json:
         print(dumps(result))
     else:
-        print(rho_text(answer, show_enclosure=args.certify))
+        print(rho_text(answer, show_enclosure=args.certify, scheme=scheme))
     return 0
 
 

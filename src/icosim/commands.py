@@ -15,6 +15,7 @@ from . import methods
 from .decompositions import DECOMPOSITIONS
 from .jsonio import dumps
 from .model import ParameterError
+from .schemes import SCHEME_NAMES, get_scheme
 from .stability.policy import POLICIES
 
 __all__ = ["add_parsers", "run"]
@@ -84,6 +85,13 @@ def add_parsers(sub, *, number, nonneg_int, digits):
     g.add_argument("--methods", nargs="+", choices=tuple(methods.METHODS), help="default: every method")
     g.add_argument("--decompositions", nargs="+", choices=tuple(DECOMPOSITIONS), help="default: every one")
     g.add_argument("--k", nargs="+", type=_nonneg_int, help="approximation orders (default: 0 1 2)")
+    g.add_argument(
+        "--couplings",
+        nargs="+",
+        choices=SCHEME_NAMES,
+        help="coupling orders: jacobi (parallel, the paper's), gauss-seidel-12 (subsystem 1 first), "
+        "gauss-seidel-21 (subsystem 2 first); default: every one",
+    )
     units = {"s": "in s", "s2": "in s^2", "1": "dimensionless"}
     for name, p in advise_parameters().items():
         g.add_argument(
@@ -118,6 +126,15 @@ def add_parsers(sub, *, number, nonneg_int, digits):
     g.add_argument("--decomposition", required=True, choices=tuple(DECOMPOSITIONS))
     g.add_argument("--k", required=True, nargs="+", type=_nonneg_int, help="approximation orders, one panel each")
     g.add_argument("--index", type=int, choices=methods.indices(), help="index of the formulation")
+    g.add_argument(
+        "--scheme",
+        choices=("jacobi", "gauss-seidel"),
+        default="jacobi",
+        help="coupling scheme: jacobi (parallel, the paper's; default) or gauss-seidel (sequential)",
+    )
+    g.add_argument(
+        "--first", type=int, choices=(1, 2), help="gauss-seidel: the subsystem that advances first (default 1)"
+    )
     for name, p in methods.parameters().items():
         g.add_argument(f"--{name}", type=_float, help=f"{p.help} (dimensionless, as in the paper's figures)")
     g = mp.add_argument_group("test-model parameters (Eq. 71) and grid")
@@ -188,7 +205,11 @@ def _advise(args, parser) -> int:
         if len(args.H) == 1 and (args.scan is not None or args.rtol is not None):
             raise ParameterError("scan and --rtol apply to an H range (--H H_LO H_HI) only")
         scheme_list = schemes(
-            methods=args.methods, decompositions=args.decompositions, k=args.k or DEFAULT_K, params=params
+            methods=args.methods,
+            decompositions=args.decompositions,
+            k=args.k or DEFAULT_K,
+            params=params,
+            couplings=args.couplings,
         )
     except ParameterError as exc:
         _fail(parser, str(exc))
@@ -231,6 +252,9 @@ def _map(args, parser) -> int:
         digits=args.digits,
         policy=args.policy,
     )
+    if args.first is not None and args.scheme != "gauss-seidel":
+        parser.error("argument --first: only used with --scheme gauss-seidel")
+    grid["scheme"] = get_scheme(args.scheme, args.first).name
     try:
         spec = methods.get_spec(args.method)
         extra = sorted(set(given) - set(spec.arguments))
@@ -263,7 +287,8 @@ def _map(args, parser) -> int:
         args.title
         if args.title is not None
         else (
-            f"{spec.label}{f' ({params})' if params else ''}, {args.decomposition}; "
+            f"{spec.label}{f' ({params})' if params else ''}, {args.decomposition}"
+            f"{'' if grid['scheme'] == 'jacobi' else ', ' + get_scheme(grid['scheme']).label}; "
             f"am21 = {attrs['am21']:g}, alr21 = {attrs['alr21']:g}, ali21 = {attrs['ali21']:g}"
         )
     )

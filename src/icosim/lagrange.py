@@ -11,6 +11,26 @@ degree ``k`` through ``k + 1`` samples:
 
 Weights are exact rationals (:class:`fractions.Fraction`), so they convert
 without loss to float64 or to any multiprecision type.
+
+Variable macro steps (non-equidistant nodes)
+--------------------------------------------
+With macro steps of different sizes the nodes are no longer integers.  In the
+local time ``tau = (t - T_N)/H_N`` of the step ``[T_N, T_N+1]`` of size
+``H_N``, with the past step sizes ``H_N-1, H_N-2, ...``:
+
+* predictor: ``tau_0 = 0`` and ``tau_j = -(H_N-1 + ... + H_N-j)/H_N``,
+  ``j = 1..k`` (:func:`variable_predictor_nodes`);
+* corrector: ``1, tau_0, ..., tau_k-1`` (:func:`variable_corrector_nodes`).
+
+:func:`lagrange_weights` and :func:`lagrange_coefficients` take any nodes:
+exact for :class:`~fractions.Fraction` nodes and ``tau``, float64 for floats.
+Equal step sizes give back the equidistant nodes and weights above:
+
+>>> from fractions import Fraction as F
+>>> variable_predictor_nodes(F(1), [F(1), F(1)]) == tuple(F(n) for n in predictor_nodes(2))
+True
+>>> lagrange_weights(variable_corrector_nodes(F(1, 2), [F(1)]), 1)
+(Fraction(1, 1), Fraction(0, 1))
 """
 
 from __future__ import annotations
@@ -18,7 +38,16 @@ from __future__ import annotations
 from fractions import Fraction
 from functools import cache
 
-__all__ = ["predictor_nodes", "corrector_nodes", "monomial_coefficients", "weights_at"]
+__all__ = [
+    "predictor_nodes",
+    "corrector_nodes",
+    "monomial_coefficients",
+    "weights_at",
+    "variable_predictor_nodes",
+    "variable_corrector_nodes",
+    "lagrange_coefficients",
+    "lagrange_weights",
+]
 
 
 def _check_k(k: int) -> int:
@@ -70,3 +99,78 @@ def weights_at(nodes: tuple[int, ...], tau) -> tuple[Fraction, ...]:
 def _weights_at(nodes: tuple[int, ...], tau: Fraction) -> tuple[Fraction, ...]:
     C = monomial_coefficients(nodes)
     return tuple(sum(C[m][j] * tau**m for m in range(len(nodes))) for j in range(len(nodes)))
+
+
+# -- variable step sizes: arbitrary nodes -------------------------------------------------
+def variable_predictor_nodes(H, past_steps) -> tuple:
+    """Extrapolation nodes ``0, -H_N-1/H_N, -(H_N-1 + H_N-2)/H_N, ...`` in ``tau = (t - T_N)/H_N``.
+
+    ``H`` is the size ``H_N`` of the step to be taken, ``past_steps`` the sizes
+    ``H_N-1, ..., H_N-k`` of the previous ``k`` steps (most recent first); the
+    result has ``k + 1`` nodes.  Exact for :class:`~fractions.Fraction` input.
+    """
+    if not H > 0 or any(not h > 0 for h in past_steps):
+        raise ValueError(f"step sizes must be > 0, got H = {H!r}, past steps {tuple(past_steps)!r}")
+    nodes, acc = [H - H], H - H  # a zero of the input's type
+    for h in past_steps:
+        acc = acc + h
+        nodes.append(-acc / H)
+    return tuple(nodes)
+
+
+def variable_corrector_nodes(H, past_steps) -> tuple:
+    """Interpolation nodes ``1, 0, -H_N-1/H_N, ...``: ``tau = 1`` and the first ``k`` extrapolation nodes.
+
+    ``past_steps`` are the same ``k`` previous step sizes as for
+    :func:`variable_predictor_nodes` (the oldest one is not needed here).
+    """
+    k = len(past_steps)
+    return (H / H,) + variable_predictor_nodes(H, past_steps)[:k]
+
+
+def lagrange_coefficients(nodes) -> tuple:
+    """:func:`monomial_coefficients` for arbitrary nodes (not cached): ``C[m][j]`` is the
+    coefficient of ``tau^m`` of the Lagrange basis polynomial ``l_j``.
+
+    Exact for :class:`~fractions.Fraction` nodes, float64 for float nodes.
+    """
+    nodes = tuple(nodes)
+    n = len(nodes)
+    if len(set(nodes)) != n:
+        raise ValueError(f"Lagrange nodes must be distinct, got {nodes!r}")
+    one = nodes[0] - nodes[0] + 1
+    cols = []
+    for j, tj in enumerate(nodes):
+        poly = [one]  # lowest degree first
+        denom = one
+        for i, ti in enumerate(nodes):
+            if i == j:
+                continue
+            poly = [one - one] + poly  # multiply by (tau - ti)
+            for m in range(len(poly) - 1):
+                poly[m] = poly[m] - ti * poly[m + 1]
+            denom = denom * (tj - ti)
+        cols.append([c / denom for c in poly])
+    return tuple(tuple(cols[j][m] for j in range(n)) for m in range(n))
+
+
+def lagrange_weights(nodes, tau) -> tuple:
+    """Lagrange weights ``l_j(tau)`` for arbitrary distinct nodes (barycentric-free product form).
+
+    ``l_j(tau) = prod_{i != j} (tau - t_i)/(t_j - t_i)``; exact for
+    :class:`~fractions.Fraction` nodes and ``tau`` (an ``int`` ``tau`` is taken
+    as exact), float64 for floats.
+    """
+    nodes = tuple(nodes)
+    if len(set(nodes)) != len(nodes):
+        raise ValueError(f"Lagrange nodes must be distinct, got {nodes!r}")
+    if isinstance(tau, int) and nodes and isinstance(nodes[0], Fraction):
+        tau = Fraction(tau)
+    out = []
+    for j, tj in enumerate(nodes):
+        w = tau - tau + 1
+        for i, ti in enumerate(nodes):
+            if i != j:
+                w = w * (tau - ti) / (tj - ti)
+        out.append(w)
+    return tuple(out)

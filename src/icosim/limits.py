@@ -32,6 +32,7 @@ from .model import ParameterError
 
 __all__ = [
     "MAX_K",
+    "MAX_GRID_N",
     "MAX_DIGITS",
     "MAX_GUARD_DIGITS",
     "MAX_GUARD_BITS",
@@ -49,6 +50,9 @@ __all__ = [
 ]
 
 MAX_K = 12
+#: The most points per axis of a parameter grid (stability panels, ``icosim map``): 10001^2 points are
+#: already about 0.8 GB per float64 array; beyond it a grid is refused before any allocation.
+MAX_GRID_N = 10001
 MAX_DIGITS = 2000
 MAX_GUARD_DIGITS = 5000
 MAX_GUARD_BITS = 16384  # ~4932 digits: the ball arithmetic's cap, the same size as MAX_GUARD_DIGITS

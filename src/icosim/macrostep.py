@@ -1,6 +1,7 @@
 """The one macro-step algorithm (Sect. 2): predictor, corrected coupling
-variables, corrector, projection.  It serves every method, decomposition and
-approximation order, the linear test model and the nonlinear pendulum alike.
+variables, corrector, projection.  It serves every method, decomposition,
+approximation order and coupling scheme (Jacobi, Gauss-Seidel:
+:mod:`icosim.schemes`), the linear test model and the nonlinear pendulum alike.
 
 A *problem* (:class:`icosim.problem.CosimulationProblem`, whose docstring
 states the contract) supplies the subsystems, the coupling conditions and their
@@ -16,14 +17,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .schemes import JACOBI, N_SUBSYSTEMS, get_scheme
+
 __all__ = ["macro_step", "simulate", "Trajectory", "StepFailure"]
 
 
-def macro_step(problem, method, state, history, *, iterations: int = 1, tol: float | None = None):
+def macro_step(problem, method, state, history, *, scheme=JACOBI, iterations: int = 1, tol: float | None = None):
     """Advance one macro step ``T_N -> T_N+1``.
 
     Parameters
     ----------
+    scheme : :class:`icosim.schemes.Scheme` (or its name): the order of the
+        subsystems.  Jacobi (default, the paper's): every subsystem is predicted
+        and corrected.  Gauss-Seidel: the leading subsystem advances once with
+        the extrapolation polynomials, its end state is final, and it enters
+        the corrected coupling variables with its algebraic gradients and its
+        finished outputs; only the other subsystem is corrected.
     iterations : number of corrector steps.  The paper's scheme is one
         (semi-implicit; exact for the linear model because the sensitivities
         are constant).  More steps re-linearise about the latest coupling
@@ -39,18 +48,31 @@ def macro_step(problem, method, state, history, *, iterations: int = 1, tol: flo
     -------
     state_new, history_new, y_new
     """
+    scheme = get_scheme(scheme)
+    subsystems = range(N_SUBSYSTEMS)
     e = problem.extrapolate(history)
-    y = problem.predict(state, history)
+    # step 1: every subsystem with the extrapolation polynomials; a leading one is then final
+    ends, ys = map(list, zip(*(problem.predict(i, state, history, final=i in scheme.leading) for i in subsystems)))
+    fixed = scheme.fixed(ends)
+    y = problem.stack(ys)
     for it in range(max(1, iterations)):
+        # step 2: corrected coupling variables (leading subsystems: finished outputs, algebraic gradients)
         r = problem.residuals(y)
-        J = problem.jacobians(state, history, e, y)
+        J = problem.jacobians(state, history, e, y, fixed)
         e_new = method.corrected_coupling(e, r, J, problem.backend)
         problem.work.coupling_solves += method.n_solves
         if it > 0 and tol is not None and _max_abs(e_new - e) <= tol:
             break  # converged: the corrector already ran with (nearly) e_new
-        e = e_new
-        state_new, y = problem.correct(state, history, e)
-    if method.projection:
+        e_old, e = e, e_new
+        # step 3: corrector of the corrected subsystems; the leading ones' outputs follow e algebraically
+        for i in subsystems:
+            if i in scheme.leading:
+                ys[i] = problem.reevaluate(i, ends[i], ys[i], e_old, e)
+            else:
+                ends[i], ys[i] = problem.correct(i, state, history, e)
+        y = problem.stack(ys)
+    state_new = problem.join(ends)
+    if method.projection:  # step 4
         state_new = problem.project(state_new)
         problem.work.projections += 1
     return state_new, problem.shift(history, e), y
@@ -94,7 +116,7 @@ def simulate(problem, method, state, history, n_steps: int, *, bound: float | No
     a step fails when it raises :class:`StepFailure` or a singular linear
     system (:class:`numpy.linalg.LinAlgError`).  Either stops the run and
     is recorded: an unstable run is reported, never silently continued.
-    ``step_kw`` go to :func:`macro_step` (``iterations``, ``tol``).
+    ``step_kw`` go to :func:`macro_step` (``scheme``, ``iterations``, ``tol``).
     """
     states, coupling, outputs = [state], [history[..., 0, :]], [None]
     diverged = failed = reason = None

@@ -29,6 +29,7 @@ import pandas as pd
 
 from .datasets import provenance_attrs, write_netcdf
 from .decompositions import DECOMPOSITIONS
+from .schemes import get_scheme
 from .stability.datasets import stability_panel
 from .stability.panels import RATIOS, PanelSpec, grid_axis
 
@@ -38,9 +39,11 @@ __all__ = ["map_specs", "map_panels", "map_figure", "stable_extent", "boundary_e
 FIGURE_ID = "map"
 
 
-def map_specs(method, method_params, decomposition, ks, *, ratios, lr1, li1, n, digits=128, policy="auto"):
-    """One :class:`PanelSpec` per ``k`` (row 1, full view); invalid input raises
-    :class:`~icosim.model.ParameterError` naming the parameter."""
+def map_specs(
+    method, method_params, decomposition, ks, *, ratios, lr1, li1, n, digits=128, policy="auto", scheme="jacobi"
+):
+    """One :class:`PanelSpec` per ``k`` (row 1, full view) for the coupling ``scheme`` (:mod:`icosim.schemes`);
+    invalid input raises :class:`~icosim.model.ParameterError` naming the parameter."""
     am21, alr21, ali21 = (float(r) for r in ratios)
     return [
         PanelSpec(
@@ -60,6 +63,7 @@ def map_specs(method, method_params, decomposition, ks, *, ratios, lr1, li1, n, 
             digits=int(digits),
             policy=policy,
             row_keys=RATIOS,
+            scheme=get_scheme(scheme).name,
         )
         for k in ks
     ]

@@ -47,36 +47,57 @@ class Work:
 
 
 class CosimulationProblem:
-    """Base class of co-simulation problems (two subsystems, Jacobi scheme).
+    """Base class of co-simulation problems (two subsystems, any coupling scheme).
 
     Arrays: the state ``s`` is the subsystems' states at ``T_N`` (layout set by
     the subclass); the coupling history ``h[..., j, :] = e_N-j``, ``j = 0..k``;
     the outputs ``y`` at ``T_N+1`` are what the coupling conditions are formed
     from.  Leading batch axes are allowed wherever the subclass allows them.
 
-    A subclass calls ``super().__init__(decomposition, k, backend)`` and
-    implements
+    The problem knows nothing of the order in which its subsystems advance:
+    :func:`icosim.macrostep.macro_step` drives each subsystem ``i`` (0 or 1)
+    separately, as the scheme (:mod:`icosim.schemes`: Jacobi, Gauss-Seidel)
+    says.  A subclass calls ``super().__init__(decomposition, k, backend)`` and
+    implements, per subsystem ``i``:
 
-    ``predict(state, history) -> y_p``
-        outputs at ``T_N+1`` after integrating every subsystem with the
-        extrapolation polynomials through the history (step 1).
+    ``predict(i, state, history, *, final=False) -> (end_i, y_i)``
+        subsystem ``i`` integrated over the macro step with the extrapolation
+        polynomials through the history (Eq. 9/35/59): its state ``end_i`` at
+        ``T_N+1`` and its outputs ``y_i``.  ``final=True`` says the subsystem
+        leads a sequential scheme: ``end_i`` is final and no gradient through
+        its integration will be asked for (a problem that computes gradients
+        in the same pass may skip them).
+    ``correct(i, state, history, e_new) -> (end_i, y_i)``
+        subsystem ``i`` integrated with the interpolation polynomials through
+        :meth:`corrector_samples` (Eq. 11).
+    ``reevaluate(i, end_i, y_i, e_old, e_new) -> y_i``
+        the outputs of subsystem ``i`` at its fixed end state ``end_i``,
+        re-evaluated with the coupling variables ``e_new`` at ``T_N+1``
+        instead of ``e_old`` (only the outputs its equations of motion tie
+        algebraically to the input at ``T_N+1`` change: acceleration, coupling
+        force, multiplier).
+
+    and, for the coupled pair,
+
+    ``join(ends) -> state`` and ``stack(ys) -> y``
+        the subsystems' end states and outputs as one state and one output array.
     ``residuals(y) -> dict``
         the coupling conditions at ``T_N+1``: ``pos``, ``vel``, ``acc`` (the
         constraint on each level, shape ``(..., n_c)``) and ``force`` (balance
         of the multipliers of kinematically driven subsystems, ``(..., n_f)``).
-    ``jacobians(state, history, e, y) -> dict``
-        ``d residuals / d e_N+1`` for the same levels, shape ``(..., n, n_e)``.
-    ``correct(state, history, e_new) -> (state_new, y_new)``
-        integration with the interpolation polynomials through
-        :meth:`corrector_samples` (step 3).
+    ``jacobians(state, history, e, y, fixed=(None, None)) -> dict``
+        ``d residuals / d e_N+1`` at ``e`` for the same levels, shape
+        ``(..., n, n_e)``.  ``fixed[i] is None``: subsystem ``i`` responds
+        through its corrector integration (full gradients, Eq. 13/39/63);
+        otherwise ``fixed[i]`` is its final end state and it responds only
+        algebraically (as :meth:`reevaluate`).
     ``project(state) -> state``
-        the projection step (step 4; needed by methods that project).
+        the projection step (needed by methods that project).
 
     and counts each subsystem integration in :attr:`work`.  The base class
     provides :meth:`extrapolate`, :meth:`shift` and :meth:`corrector_samples`;
-    :func:`icosim.macrostep.macro_step` only calls these eight members plus
-    :attr:`backend`.  The subsystems are advanced in parallel (Jacobi): both
-    see only the coupling variables, never each other's new state.
+    :func:`icosim.macrostep.macro_step` only calls these members plus
+    :attr:`backend`.
     """
 
     def __init__(self, decomposition, k: int, backend=None):
@@ -108,16 +129,25 @@ class CosimulationProblem:
         return _prepend(e_new, history[..., :-1, :])
 
     # -- to be implemented by a subclass ------------------------------------------
-    def predict(self, state, history):  # pragma: no cover - contract
+    def predict(self, i, state, history, *, final=False):  # pragma: no cover - contract
+        raise NotImplementedError
+
+    def correct(self, i, state, history, e_new):  # pragma: no cover - contract
+        raise NotImplementedError
+
+    def reevaluate(self, i, end, y, e_old, e_new):  # pragma: no cover - contract
+        raise NotImplementedError
+
+    def join(self, ends):  # pragma: no cover - contract
+        raise NotImplementedError
+
+    def stack(self, ys):  # pragma: no cover - contract
         raise NotImplementedError
 
     def residuals(self, y):  # pragma: no cover - contract
         raise NotImplementedError
 
-    def jacobians(self, state, history, e, y):  # pragma: no cover - contract
-        raise NotImplementedError
-
-    def correct(self, state, history, e_new):  # pragma: no cover - contract
+    def jacobians(self, state, history, e, y, fixed=(None, None)):  # pragma: no cover - contract
         raise NotImplementedError
 
     def project(self, state):  # pragma: no cover - contract

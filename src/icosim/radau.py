@@ -92,7 +92,9 @@ class RadauResult:
 
     ``y`` and ``f = fun(t1, y)`` have shape ``(B, n)``; ``n_steps`` accepted
     and ``n_rejected`` rejected step attempts, ``n_fev`` batched right-hand
-    side evaluations, ``n_jev`` Jacobians.
+    side evaluations, ``n_jev`` Jacobians.  With ``record_steps``, ``t_steps``
+    ``(n_steps + 1,)`` and ``y_steps`` ``(n_steps + 1, B, n)`` hold the start
+    and every accepted step.
     """
 
     y: np.ndarray
@@ -102,6 +104,8 @@ class RadauResult:
     n_fev: int
     n_jev: int
     h_next: float
+    t_steps: np.ndarray | None = None
+    y_steps: np.ndarray | None = None
 
 
 def _rms_max(x):
@@ -142,6 +146,7 @@ def radau_batch(
     first_step: float | None = None,
     newton_tol: float = 1e-8,
     max_steps: int = 100000,
+    record_steps: bool = False,
 ) -> RadauResult:
     """Integrate ``y' = fun(t, y)`` from ``t0`` to ``t1`` for a batch of initial values.
 
@@ -160,6 +165,8 @@ def radau_batch(
     first_step : first trial step (default: the whole interval).
     newton_tol : convergence tolerance of the simplified Newton iterations,
         relative to the error scale ``atol + rtol |y|``.
+    record_steps : keep the solution at every accepted step
+        (:attr:`RadauResult.t_steps`, :attr:`RadauResult.y_steps`).
 
     Raises
     ------
@@ -184,8 +191,9 @@ def radau_batch(
     n_steps = n_rej = n_jev = 0
     n_fev = 1
     f = fun(t, y)
+    steps = [(t, y)] if record_steps else None
     if span == 0:
-        return RadauResult(y, f, 0, 0, n_fev, 0, h_abs)
+        return RadauResult(y, f, 0, 0, n_fev, 0, h_abs, *_recorded(steps))
     jacobian = (
         (lambda tt, yy, ff: jac(tt, yy)) if jac is not None else (lambda tt, yy, ff: _fd_jacobian(fun, tt, yy, ff))
     )
@@ -255,7 +263,15 @@ def radau_batch(
             raise IntegrationError(f"non-finite derivative at t = {t:.17g}")
         h_abs = h_abs * factor
         J = None  # a fresh Jacobian per step: cheap for these small systems
-    return RadauResult(y, f, n_steps, n_rej, n_fev, n_jev, h_abs)
+        if record_steps:
+            steps.append((t, y))
+    return RadauResult(y, f, n_steps, n_rej, n_fev, n_jev, h_abs, *_recorded(steps))
+
+
+def _recorded(steps):
+    if steps is None:
+        return None, None
+    return np.array([t for t, _ in steps]), np.array([y for _, y in steps])
 
 
 def _collocation(fun, t, y, h, scale, tol, inv_real, inv_complex):

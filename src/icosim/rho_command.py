@@ -24,6 +24,7 @@ from fractions import Fraction
 import numpy as np
 
 from .limits import PointTimeout, time_budget
+from .schemes import JACOBI, get_scheme
 from .stability.policy import reason_code
 
 __all__ = ["rho_answer", "rho_text"]
@@ -32,12 +33,15 @@ __all__ = ["rho_answer", "rho_text"]
 DEFAULT_DIGITS = 17
 
 
-def rho_answer(model, method, decomposition, k, *, digits=None, max_bits=1024, timeout=None) -> dict:
+def rho_answer(model, method, decomposition, k, *, digits=None, max_bits=1024, timeout=None, scheme=JACOBI) -> dict:
     """The command's answer as a JSON-ready dict (strict: no NaN or infinity; ``None`` with ``reason``).
 
-    ``model`` is a :class:`~icosim.model.TestModel` of one point (Fractions kept exact).
+    ``model`` is a :class:`~icosim.model.TestModel` of one point (Fractions kept exact); ``scheme`` the
+    coupling scheme (:mod:`icosim.schemes`), used by the proof and by float64 alike.
     """
     from .stability import certify_spectral_radius
+
+    scheme = get_scheme(scheme)
 
     want = digits or DEFAULT_DIGITS
     out = {"rho": None, "rho_float": None, "verdict": "undecided", "stable": False, "certified": False}
@@ -46,8 +50,10 @@ def rho_answer(model, method, decomposition, k, *, digits=None, max_bits=1024, t
     out.update(rho_decimal=None, rho_float64=None, float64_error_estimate=None)
     try:
         with time_budget(timeout):
-            out["rho_float64"], out["float64_error_estimate"] = _float64(model, method, decomposition, k)
-            cert = certify_spectral_radius(model, method, decomposition, k, max_bits=max_bits, digits=want)
+            out["rho_float64"], out["float64_error_estimate"] = _float64(model, method, decomposition, k, scheme)
+            cert = certify_spectral_radius(
+                model, method, decomposition, k, max_bits=max_bits, digits=want, scheme=scheme
+            )
     except (ArithmeticError, ValueError) as exc:  # a timeout, a cap, an overflow: undecided, with the reason
         out["reason"], out["reason_code"] = str(exc), reason_code(exc)
         out["precision"] = "none (undecided)"
@@ -82,11 +88,14 @@ def rho_answer(model, method, decomposition, k, *, digits=None, max_bits=1024, t
     return out
 
 
-def rho_text(answer: dict, *, show_enclosure: bool = False) -> str:
-    """One line: the value, the verdict and its proof (and the enclosure with ``show_enclosure``)."""
+def rho_text(answer: dict, *, show_enclosure: bool = False, scheme=JACOBI) -> str:
+    """One line: the value, the verdict and its proof (and the enclosure with ``show_enclosure``); a scheme
+    other than Jacobi is named."""
     a = answer
+    scheme = get_scheme(scheme)
+    order = "" if scheme.name == "jacobi" else f"{scheme.label}; "
     if a["rho"] is None and a["verdict"] == "undecided":
-        return f"rho undecided  ({a['reason']})"
+        return f"rho undecided  ({order}{a['reason']})"
     value = a["rho_decimal"] or ("not bounded" if a["rho_upper"] is None else "no digit proven")
     lo, hi = a["rho_lower"], a["rho_upper"]
     n = max(12, min(a["digits"] + 1, 60))
@@ -100,17 +109,17 @@ def rho_text(answer: dict, *, show_enclosure: bool = False) -> str:
     f64 = a["rho_float64"]
     f64_text = "" if f64 is None else f"; float64 gives {f64!r}"
     note = f"; {a['reason']}" if a["reason"] else ""
-    return f"rho = {value}  ({proof} at {a['precision_bits']} bits, {a['digits']} digits{f64_text}{note})"
+    return f"rho = {value}  ({order}{proof} at {a['precision_bits']} bits, {a['digits']} digits{f64_text}{note})"
 
 
-def _float64(model, method, decomposition, k):
+def _float64(model, method, decomposition, k, scheme=JACOBI):
     """float64's value and error estimate for comparison (None where float64 gives nothing finite)."""
     from .stability import spectral_radius_float64
 
     try:
         with np.errstate(all="ignore"):
             floats = type(model)(*(float(getattr(model, n)) for n in ("lr1", "li1", "am21", "alr21", "ali21")))
-            r, e = spectral_radius_float64(floats, method, decomposition, k)
+            r, e = spectral_radius_float64(floats, method, decomposition, k, scheme=scheme)
     except PointTimeout:  # the command's time budget, not float64's failure
         raise
     except (ArithmeticError, ValueError, np.linalg.LinAlgError):  # float64 cannot even form the point

@@ -175,6 +175,20 @@ class OscillatorSubsystem:
         drate = _matvec(self.Phi, b_u0) + dGamma[..., :, 0]
         return self._outputs(ds, drate[..., 1], w1[0] * one)
 
+    def algebraic_sensitivity(self):
+        """``d outputs / d u(1)`` at a fixed end state: the outputs that the
+        equation of motion at ``T_N+1`` ties to the input there.
+
+        Force-driven: ``a = -k x - delta v + g u`` and ``f = u`` give
+        ``(0, 0, g, 1)``; kinematically driven: ``a = u`` and
+        ``mu = (u + k x + delta v) / g`` give ``(0, 0, 1, 1/g)``.  This is
+        what a subsystem that has already finished its macro step contributes
+        to the corrected coupling variables of a Gauss-Seidel scheme.
+        """
+        one = self.backend.const(1)
+        zero = 0 * self.gain
+        return self._outputs(np.stack([zero, zero], axis=-1), self.gain * one, one + zero)
+
     def _outputs(self, s, a, u):
         x, v = s[..., 0], s[..., 1]
         if self.kind == FORCE:

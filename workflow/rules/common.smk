@@ -35,6 +35,7 @@ for _var in (
 sys.path.insert(0, str(Path(workflow.basedir) / "src"))
 from icosim.methods import METHODS  # noqa: E402
 from icosim.methods.schema import with_methods  # noqa: E402
+from icosim.schemes import SCHEMES  # noqa: E402
 from icosim.sources import module_closure, script_closure  # noqa: E402
 from icosim.integrity import quarantine_corrupt, remove_stale_parts  # noqa: E402
 
@@ -42,7 +43,9 @@ from icosim.integrity import quarantine_corrupt, remove_stale_parts  # noqa: E40
 # (x.nc -> x.nc.corrupt) before the DAG is built, so this run computes it again instead of trusting it.
 if workflow.is_main_process:
     for _moved in quarantine_corrupt("results"):
-        logger.warning(f"icosim: {_moved} did not match its SHA-256: set aside, it will be recomputed")
+        logger.warning(
+            f"icosim: {_moved} did not match its SHA-256: set aside, it will be recomputed"
+        )
 
 
 onstart:
@@ -106,6 +109,17 @@ def engine_lib(script):
 
 # Names of the registered coupling methods, for wildcard constraints.
 METHOD_NAMES = "|".join(METHODS)
+# Coupling scheme name -> label ("Gauss–Seidel 1→2"), for titles.
+SCHEME_LABELS = {name: scheme.label for name, scheme in SCHEMES.items()}
+
+
+def figure_title(fid, figure_ids, figures, detail=""):
+    """Title of a figure id: "Fig. 9<detail>: <title>" (Jacobi, the paper's) or
+    "Fig. 9<detail>, Gauss–Seidel 1→2: <title>" (figure_ids: id -> (figure, scheme))."""
+    fig, scheme = figure_ids[fid]
+    label = "" if scheme == "jacobi" else f", {SCHEME_LABELS[scheme]}"
+    return f"Fig. {fig}{detail}{label}: {figures[fig]['title']}"
+
 
 # Filled by each part's .smk file: every final target, and each part's report section
 # (an HTML fragment) keyed by part name.

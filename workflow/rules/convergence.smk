@@ -1,7 +1,9 @@
 # Convergence plots, paper Figs. 21-23 (Sect. 3.7): one job per panel (figure x decomposition x
 # column) writing results/convergence/<dec>/fig<figure>_<panel>.nc, one plot job per figure and
 # decomposition, the work-precision timing and diagram, the paper's order claims checked
-# against the datasets, and the convergence section of the report.
+# against the datasets, and the convergence section of the report.  A figure computed with a
+# Gauss-Seidel scheme (its `schemes:` list) has the figure id <figure>gs12 or <figure>gs21
+# (icosim.schemes.figure_id); its claims and report section are in gauss_seidel.smk.
 from icosim.checks import load_claims  # noqa: E402
 from icosim.convergence.config import (
     check_claims_against_config,
@@ -9,6 +11,7 @@ from icosim.convergence.config import (
 )  # noqa: E402
 from icosim.convergence.panels import figure_layout, figure_panels  # noqa: E402
 from icosim.convergence.work_precision import resolve_scheme  # noqa: E402
+from icosim.schemes import FIGURE_ID_PATTERN, figure_id  # noqa: E402
 
 validate_part(config["convergence"], "convergence.schema.yaml")
 
@@ -23,12 +26,20 @@ CONV_SETUP = {
     "growth_bound": CONVERGENCE["unstable"]["growth_bound"],
 }
 
-# (decomposition, figure, panel) -> icosim.convergence.panels.PanelSpec.  Built here so that a
+# figure id -> (paper figure, scheme name): one workflow figure per configured scheme
+CONV_FIGURE_IDS = {
+    figure_id(fig, scheme): (str(fig), scheme)
+    for fig, fig_cfg in CONVERGENCE["figures"].items()
+    for scheme in fig_cfg.get("schemes", ["jacobi"])
+}
+# (decomposition, figure id, panel) -> icosim.convergence.panels.PanelSpec.  Built here so that a
 # parameter a method does not take fails before any job runs, naming the figure.
 CONV_PANELS = {
     (spec.decomposition, spec.figure, spec.panel): spec
-    for fig, fig_cfg in CONVERGENCE["figures"].items()
-    for spec in figure_panels(fig, fig_cfg, CONVERGENCE["k"])
+    for fid, (fig, scheme) in CONV_FIGURE_IDS.items()
+    for spec in figure_panels(
+        fig, CONVERGENCE["figures"][fig], CONVERGENCE["k"], scheme
+    )
 }
 CONV_WP_ENTRIES = [
     entry
@@ -41,15 +52,26 @@ CONV_CLAIMS_FILE = CONVERGENCE["claims"]["file"]
 check_claims_against_config(load_claims(CONV_CLAIMS_FILE), CONVERGENCE)
 
 
-CONV_PANEL_FILE = "results/convergence/{}/fig{}_{}.nc"  # decomposition, figure, panel
-CONV_ALL_PANELS = [CONV_PANEL_FILE.format(*key) for key in CONV_PANELS]
-# (decomposition, figure) -> the panel files one figure is drawn from
+CONV_PANEL_FILE = (
+    "results/convergence/{}/fig{}_{}.nc"  # decomposition, figure id, panel
+)
+# the paper's (Jacobi) figures: their claims, work-precision and report section
+CONV_ALL_PANELS = [
+    CONV_PANEL_FILE.format(*key)
+    for key in CONV_PANELS
+    if CONV_FIGURE_IDS[key[1]][1] == "jacobi"
+]
+# (decomposition, figure id) -> the panel files one figure is drawn from
 CONV_FIGURE_PANELS = {
     key[:2]: [CONV_PANEL_FILE.format(*k) for k in CONV_PANELS if k[:2] == key[:2]]
     for key in CONV_PANELS
 }
 CONV_FIGURES = sorted(
-    {f"results/convergence/figures/fig{fig}_{dec}.png" for dec, fig, _ in CONV_PANELS}
+    {
+        f"results/convergence/figures/fig{fid}_{dec}.png"
+        for dec, fid, _ in CONV_PANELS
+        if CONV_FIGURE_IDS[fid][1] == "jacobi"
+    }
 )
 CONV_WP = "results/convergence/work_precision.nc"
 CONV_WP_FIGURE = "results/convergence/figures/work_precision.png"
@@ -67,7 +89,7 @@ rule convergence_panel:
         "logs/convergence/panel/{dec}_fig{figure}_{panel}.log",
     wildcard_constraints:
         dec="ff|fd|dd",
-        figure=r"\d+",
+        figure=FIGURE_ID_PATTERN,
     conda:
         "../envs/icosim.yaml"
     params:
@@ -104,15 +126,22 @@ rule convergence_figure:
         "logs/convergence/figure/fig{figure}_{dec}.log",
     wildcard_constraints:
         dec="ff|fd|dd",
-        figure=r"\d+",
+        figure=FIGURE_ID_PATTERN,
     conda:
         "../envs/icosim.yaml"
     params:
-        title=lambda w: f"Fig. {w.figure} ({w.dec}): {CONVERGENCE['figures'][w.figure]['title']}",
-        layout=lambda w: figure_layout(
-            w.figure, CONVERGENCE["figures"][w.figure], w.dec, CONVERGENCE["k"]
+        title=lambda w: figure_title(
+            w.figure, CONV_FIGURE_IDS, CONVERGENCE["figures"], f" ({w.dec})"
         ),
-        columns=lambda w: CONVERGENCE["figures"][w.figure]["columns"],
+        layout=lambda w: figure_layout(
+            CONV_FIGURE_IDS[w.figure][0],
+            CONVERGENCE["figures"][CONV_FIGURE_IDS[w.figure][0]],
+            w.dec,
+            CONVERGENCE["k"],
+        ),
+        columns=lambda w: CONVERGENCE["figures"][CONV_FIGURE_IDS[w.figure][0]][
+            "columns"
+        ],
         guide_orders=CONVERGENCE["plot"]["guide_orders"],
         tolerance=CONVERGENCE["fit"]["tolerance"],
         dpi=CONVERGENCE["plot"]["dpi"],

@@ -3,7 +3,12 @@
 # errors and the claim of Sect. 4 in results/pendulum/summary.nc, one figure per k, and
 # the pendulum section of the report.
 from icosim.checks import load_claims  # noqa: E402
-from icosim.pendulum.config import configured_runs  # noqa: E402
+from icosim.pendulum.config import (  # noqa: E402
+    configured_runs,
+    run_settings,
+    study_methods,
+    trade_plan,
+)
 from icosim.pendulum.names import run_name  # noqa: E402
 
 validate_part(config["pendulum"], "pendulum.schema.yaml")
@@ -34,6 +39,32 @@ PENDULUM_DATASETS_OF_K = {
 }
 
 
+# -- speed-accuracy trade (issue 12): error over H, work-precision, stability limit in H,
+# subsystem tolerance, adaptive macro steps.  One sweep job and one limit job per group
+# (scheme, method, decomposition; every k), then merges; figures and the report section
+# read only the datasets.
+TRADE = PENDULUM["trade"]
+# groups and configuration labels; bad schemes, end times off the H grid or invalid
+# tolerance/adaptive configurations fail here, naming the key
+TRADE_PLAN = trade_plan(PENDULUM)
+TRADE_GROUPS = {"_".join(g): g for g in TRADE_PLAN["groups"]}
+TRADE_DIR = "results/pendulum/trade"
+PENDULUM_WORK_PRECISION = "results/pendulum/work_precision.nc"
+PENDULUM_STABILITY_LIMIT = "results/pendulum/stability_limit.nc"
+PENDULUM_ADAPTIVE = "results/pendulum/adaptive.nc"
+PENDULUM_TOLERANCE = "results/pendulum/tolerance.nc"
+TRADE_FIGURE_NAMES = [
+    "work_precision",
+    "error_over_H",
+    "stability_limit",
+    "tolerance",
+    "adaptive",
+]
+TRADE_FIGURES = {
+    name: f"results/pendulum/figures/{name}.png" for name in TRADE_FIGURE_NAMES
+}
+
+
 rule pendulum_reference:
     """Monolithic reference (minimal coordinates) on the macro-time grid."""
     input:
@@ -54,7 +85,7 @@ rule pendulum_reference:
 
 
 rule pendulum_run:
-    """One co-simulation run (method, decomposition, k) up to t_end or divergence."""
+    """One co-simulation run (method, decomposition, k; Jacobi) up to t_end or divergence."""
     input:
         lib=engine_lib("pendulum_run"),
     output:
@@ -76,6 +107,7 @@ rule pendulum_run:
         sensitivities=PENDULUM["sensitivities"],
         corrector=PENDULUM["corrector"],
         divergence=PENDULUM["divergence"],
+        scheme="jacobi",
     script:
         "../scripts/pendulum_run.py"
 
@@ -177,6 +209,11 @@ rule pendulum_report_section:
         summary=PENDULUM_SUMMARY,
         reference=PENDULUM_REFERENCE,
         claims=PENDULUM_CLAIMS,
+        work_precision=PENDULUM_WORK_PRECISION,
+        stability_limit=PENDULUM_STABILITY_LIMIT,
+        tolerance=PENDULUM_TOLERANCE,
+        adaptive=PENDULUM_ADAPTIVE,
+        trade_figures=list(TRADE_FIGURES.values()),
         lib=script_lib("pendulum_report_section"),
     output:
         PENDULUM_SECTION,
@@ -191,7 +228,189 @@ rule pendulum_report_section:
         "../scripts/pendulum_report_section.py"
 
 
+rule pendulum_sweep:
+    """Error over H of one group (scheme, method, decomposition): every k and H over one end time."""
+    input:
+        lib=engine_lib("pendulum_sweep"),
+    output:
+        f"{TRADE_DIR}/sweep/{{group}}.nc",
+    log:
+        "logs/pendulum/sweep_{group}.log",
+    wildcard_constraints:
+        group="|".join(TRADE_GROUPS),
+    conda:
+        "../envs/icosim.yaml"
+    params:
+        settings=lambda w: run_settings(PENDULUM, [TRADE_GROUPS[w.group][1]]),
+        scheme=lambda w: TRADE_GROUPS[w.group][0],
+        method=lambda w: TRADE_GROUPS[w.group][1],
+        decomposition=lambda w: TRADE_GROUPS[w.group][2],
+        k=PENDULUM["k"],
+        H=TRADE["error_over_H"]["H"],
+        t_end=TRADE["error_over_H"]["t_end"],
+        integrator=TRADE["error_over_H"]["integrator"],
+        timing=TRADE["error_over_H"]["timing"],
+        reference=TRADE["reference"],
+    script:
+        "../scripts/pendulum_sweep.py"
+
+
+rule pendulum_baselines:
+    """Monolithic pendulum over tolerances (Radau IIA, DOP853) and the linear test model's errors."""
+    input:
+        lib=engine_lib("pendulum_baselines"),
+    output:
+        monolithic=f"{TRADE_DIR}/monolithic.nc",
+        linear=f"{TRADE_DIR}/linear_orders.nc",
+    log:
+        "logs/pendulum/baselines.log",
+    conda:
+        "../envs/icosim.yaml"
+    params:
+        settings=run_settings(PENDULUM),
+        configs=[list(c) for c in TRADE_PLAN["configs"]],
+        H=TRADE["error_over_H"]["H"],
+        t_end=TRADE["error_over_H"]["t_end"],
+        monolithic=TRADE["monolithic"],
+        linear_orders=TRADE["linear_orders"],
+        reference=TRADE["reference"],
+    script:
+        "../scripts/pendulum_baselines.py"
+
+
+rule pendulum_work_precision:
+    """work_precision.nc: the sweep groups, orders (pendulum and linear model), monolithic baselines."""
+    input:
+        sweeps=expand(f"{TRADE_DIR}/sweep/{{group}}.nc", group=TRADE_GROUPS),
+        monolithic=f"{TRADE_DIR}/monolithic.nc",
+        linear=f"{TRADE_DIR}/linear_orders.nc",
+        lib=script_lib("pendulum_work_precision"),
+    output:
+        PENDULUM_WORK_PRECISION,
+    log:
+        "logs/pendulum/work_precision.log",
+    conda:
+        "../envs/icosim.yaml"
+    params:
+        fit=TRADE["fit"],
+        accuracy_levels=TRADE["accuracy_levels"],
+    script:
+        "../scripts/pendulum_work_precision.py"
+
+
+rule pendulum_limits:
+    """Largest stable H of one group: bisection on divergence, and the linear test model's prediction."""
+    input:
+        lib=engine_lib("pendulum_limits"),
+    output:
+        f"{TRADE_DIR}/limits/{{group}}.nc",
+    log:
+        "logs/pendulum/limits_{group}.log",
+    wildcard_constraints:
+        group="|".join(TRADE_GROUPS),
+    conda:
+        "../envs/icosim.yaml"
+    params:
+        settings=lambda w: run_settings(PENDULUM, [TRADE_GROUPS[w.group][1]]),
+        scheme=lambda w: TRADE_GROUPS[w.group][0],
+        method=lambda w: TRADE_GROUPS[w.group][1],
+        decomposition=lambda w: TRADE_GROUPS[w.group][2],
+        k=PENDULUM["k"],
+        limits=TRADE["stability_limit"],
+    script:
+        "../scripts/pendulum_limits.py"
+
+
+rule pendulum_stability_limit:
+    """stability_limit.nc: the groups' measured and predicted limits over config."""
+    input:
+        groups=expand(f"{TRADE_DIR}/limits/{{group}}.nc", group=TRADE_GROUPS),
+        lib=script_lib("pendulum_stability_limit"),
+    output:
+        PENDULUM_STABILITY_LIMIT,
+    log:
+        "logs/pendulum/stability_limit.log",
+    conda:
+        "../envs/icosim.yaml"
+    script:
+        "../scripts/pendulum_stability_limit.py"
+
+
+rule pendulum_tolerance:
+    """Error over the links' Radau tolerance at fixed H for a few configurations."""
+    input:
+        lib=engine_lib("pendulum_tolerance"),
+    output:
+        PENDULUM_TOLERANCE,
+    log:
+        "logs/pendulum/tolerance.log",
+    conda:
+        "../envs/icosim.yaml"
+    params:
+        settings=run_settings(PENDULUM, study_methods(PENDULUM, "tolerance")),
+        tolerance=TRADE_PLAN["tolerance"],
+        t_end=TRADE["error_over_H"]["t_end"],
+        reference=TRADE["reference"],
+    script:
+        "../scripts/pendulum_tolerance.py"
+
+
+rule pendulum_adaptive:
+    """Adaptive macro steps (PI control of the predictor-corrector estimate) against fixed H."""
+    input:
+        lib=engine_lib("pendulum_adaptive"),
+    output:
+        PENDULUM_ADAPTIVE,
+    log:
+        "logs/pendulum/adaptive.log",
+    conda:
+        "../envs/icosim.yaml"
+    params:
+        settings=run_settings(PENDULUM, study_methods(PENDULUM, "adaptive")),
+        adaptive=TRADE_PLAN["adaptive"],
+        reference=TRADE["reference"],
+    script:
+        "../scripts/pendulum_adaptive.py"
+
+
+rule pendulum_trade_figures:
+    """Work-precision diagram, error over H, stability limit, tolerance and adaptive figures."""
+    input:
+        work_precision=PENDULUM_WORK_PRECISION,
+        stability_limit=PENDULUM_STABILITY_LIMIT,
+        tolerance=PENDULUM_TOLERANCE,
+        adaptive=PENDULUM_ADAPTIVE,
+        lib=script_lib("pendulum_trade_figures"),
+    output:
+        **{
+            name: report(
+                path,
+                caption="../report/pendulum_trade_figure.rst",
+                category="Double pendulum: speed-accuracy trade",
+                labels={"figure": name},
+            )
+            for name, path in TRADE_FIGURES.items()
+        },
+        **{f"{name}_pdf": path[:-4] + ".pdf" for name, path in TRADE_FIGURES.items()},
+    log:
+        "logs/pendulum/trade_figures.log",
+    conda:
+        "../envs/icosim.yaml"
+    params:
+        dpi=PENDULUM["plot"]["dpi"],
+    script:
+        "../scripts/pendulum_trade_figures.py"
+
+
 ALL_TARGETS.extend(
-    PENDULUM_FIGURES + [PENDULUM_ERROR_FIGURE, PENDULUM_SUMMARY, PENDULUM_CLAIMS]
+    PENDULUM_FIGURES
+    + [PENDULUM_ERROR_FIGURE, PENDULUM_SUMMARY, PENDULUM_CLAIMS]
+    + [
+        PENDULUM_WORK_PRECISION,
+        PENDULUM_STABILITY_LIMIT,
+        PENDULUM_ADAPTIVE,
+        PENDULUM_TOLERANCE,
+    ]
+    + list(TRADE_FIGURES.values())
 )
 REPORT_SECTIONS["pendulum"] = PENDULUM_SECTION

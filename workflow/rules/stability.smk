@@ -1,7 +1,10 @@
 # Stability plots, paper Figs. 9-20: one job per panel (figure x row x k x view) writing
 # results/stability/fig<figure>/r<row>_k<k>_<view>.nc, one plot job per figure, the paper's
-# claims checked against the datasets, and the stability section of the report.
+# claims checked against the datasets, and the stability section of the report.  A figure
+# computed with another coupling scheme (its `schemes:` list) has the figure id <figure>gs12
+# or <figure>gs21 (icosim.schemes.figure_id); the Gauss-Seidel parts are in gauss_seidel.smk.
 from icosim.checks import load_claims  # noqa: E402
+from icosim.schemes import FIGURE_ID_PATTERN, figure_id  # noqa: E402
 from icosim.stability.panels import figure_panels, panel_id  # noqa: E402
 
 validate_part(config["stability"], "stability.schema.yaml")
@@ -10,17 +13,24 @@ STABILITY = config["stability"]
 # figure numbers are names ("9"), also if written unquoted in the YAML
 STABILITY["figures"] = {str(fig): cfg for fig, cfg in STABILITY["figures"].items()}
 
-# (figure, panel id) -> icosim.stability.panels.PanelSpec, for every configured panel.  Built here so
-# that a parameter a method does not take fails before any job runs, naming the figure/row.
-STABILITY_PANELS = {
-    (fig, panel_id(spec.row, spec.k, spec.view)): spec
+# figure id -> (paper figure, scheme name): one workflow figure per configured scheme
+STABILITY_FIGURE_IDS = {
+    figure_id(fig, scheme): (fig, scheme)
     for fig, fig_cfg in STABILITY["figures"].items()
+    for scheme in fig_cfg.get("schemes", ["jacobi"])
+}
+# (figure id, panel id) -> icosim.stability.panels.PanelSpec, for every configured panel.  Built
+# here so that a parameter a method does not take fails before any job runs, naming the figure/row.
+STABILITY_PANELS = {
+    (spec.figure, panel_id(spec.row, spec.k, spec.view)): spec
+    for fid, (fig, scheme) in STABILITY_FIGURE_IDS.items()
     for spec in figure_panels(
         fig,
-        fig_cfg,
+        STABILITY["figures"][fig],
         grid=STABILITY["grid"],
         zoom_grid=STABILITY["zoom_grid"],
         precision=STABILITY["precision"],
+        scheme=scheme,
     )
 }
 
@@ -32,16 +42,20 @@ STABILITY_PANELS = {
 STABILITY_CLAIMS_FILE = STABILITY["claims"]["file"]
 load_claims(STABILITY_CLAIMS_FILE)
 
-STABILITY_PANEL_FILES = {fig: [] for fig in STABILITY["figures"]}
-for fig, pid in STABILITY_PANELS:
-    STABILITY_PANEL_FILES[fig].append(f"results/stability/fig{fig}/{pid}.nc")
+STABILITY_PANEL_FILES = {fid: [] for fid in STABILITY_FIGURE_IDS}
+for fid, pid in STABILITY_PANELS:
+    STABILITY_PANEL_FILES[fid].append(f"results/stability/fig{fid}/{pid}.nc")
 
+# the paper's (Jacobi) figures: their claims and report section
 STABILITY_ALL_PANELS = [
-    f"results/stability/fig{fig}/{pid}.nc" for (fig, pid) in STABILITY_PANELS
+    f"results/stability/fig{fid}/{pid}.nc"
+    for (fid, pid) in STABILITY_PANELS
+    if fid in STABILITY["figures"]
 ]
 STABILITY_FIGURES = [
     f"results/stability/figures/fig{fig}.{ext}"
     for fig in STABILITY["figures"]
+    if figure_id(fig) in STABILITY_FIGURE_IDS
     for ext in ("png", "pdf")
 ]
 STABILITY_CLAIMS = "results/stability/claims.json"
@@ -57,7 +71,7 @@ rule stability_sweep:
     log:
         "logs/stability/sweep/fig{figure}_{panel}.log",
     wildcard_constraints:
-        figure=r"\d+",
+        figure=FIGURE_ID_PATTERN,
         panel=r"r\d+_k\d+_(full|zoom)",
     conda:
         "../envs/icosim.yaml"
@@ -85,11 +99,13 @@ rule stability_figure:
     log:
         "logs/stability/figure/fig{figure}.log",
     wildcard_constraints:
-        figure=r"\d+",
+        figure=FIGURE_ID_PATTERN,
     conda:
         "../envs/icosim.yaml"
     params:
-        title=lambda w: f"Fig. {w.figure}: {STABILITY['figures'][w.figure]['title']}",
+        title=lambda w: figure_title(
+            w.figure, STABILITY_FIGURE_IDS, STABILITY["figures"]
+        ),
         style=STABILITY["plot"]["style"],
         rho_max=STABILITY["plot"]["rho_max"],
         dots_stride=STABILITY["plot"]["dots_stride"],

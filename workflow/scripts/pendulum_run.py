@@ -16,6 +16,7 @@ job = {
     "H": p.H,
     "t_end": p.t_end,
     **{key: dict(p[key]) for key in ("integrator", "sensitivities", "corrector", "divergence")},
+    "scheme": p.scheme,
 }
 logging.info("run: %s", json.dumps(job, sort_keys=True))
 result, ds = run_job(job, command="snakemake rule pendulum_run")

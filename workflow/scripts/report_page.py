@@ -20,7 +20,7 @@ html = report_page(
     precision=p.precision,
     commit_text=commit_text,
     generated=utc_now(),
-    claims={part: read_verdicts(path) for part, path in zip(p.parts, snakemake.input.claims)},
+    claims={part: read_verdicts(path) for part, path in zip(p.claim_parts, snakemake.input.claims)},
 )
 with atomic_path(snakemake.output[0]) as tmp:
     tmp.write_text(html)

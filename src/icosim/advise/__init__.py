@@ -4,8 +4,9 @@ A user brings two subsystems -- masses ``m1, m2`` [kg], stiffnesses ``c1, c2``
 [N/m], dampers ``d1, d2`` [N s/m] (overdamped ones included) -- and either a
 macro step ``H`` [s] or a range of them.  :func:`advise` answers, for every
 registered coupling method (:data:`icosim.methods.METHODS`), each index it can
-be formulated at, each decomposition it is defined for and each approximation
-order ``k``:
+be formulated at, each decomposition it is defined for, each approximation
+order ``k`` and each coupling order (:data:`COUPLINGS`: Jacobi, and Gauss-Seidel
+with subsystem 1 or subsystem 2 first, :mod:`icosim.schemes`):
 
 * at one ``H``: the spectral radius ``rho`` of the co-simulation recurrence
   (the precision policy of :func:`icosim.stability.spectral_radius`: float64,
@@ -41,7 +42,7 @@ Method parameters are taken in physical units (Baumgarte ``mu`` in s); one
 not given is 1 in the paper's dimensionless form (``mu_bar = mu/H = 1``,
 ``a = b = 1``), as in Figs. 9-15.
 
-Adding a coupling order (Gauss-Seidel) or certified verdicts touches
+Adding a coupling order (as Gauss-Seidel was added) or certified verdicts touches
 :data:`COUPLINGS` and :func:`evaluate` only: schemes are enumerated by
 :func:`schemes`, every spectral radius is computed by :func:`evaluate`, and the
 ``verdict`` column is the one place a verdict is stated.

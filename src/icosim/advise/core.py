@@ -15,6 +15,7 @@ import numpy as np
 from .. import methods as _methods
 from ..limits import check_k
 from ..model import ParameterError, PhysicalModel
+from ..schemes import SCHEME_NAMES
 from ..stability import spectral_radius
 
 __all__ = ["TwoMassSystem", "Scheme", "Evaluation", "COUPLINGS", "VERDICTS", "DEFAULT_K", "schemes", "evaluate"]
@@ -22,9 +23,10 @@ __all__ = ["TwoMassSystem", "Scheme", "Evaluation", "COUPLINGS", "VERDICTS", "DE
 #: Approximation orders scanned unless others are asked for.
 DEFAULT_K = (0, 1, 2)
 
-#: Coupling orders: name -> keyword arguments of :func:`icosim.stability.spectral_radius`.  The Jacobi
-#: (parallel) scheme is the engine's; Gauss-Seidel joins here once the engine takes ``scheme=``.
-COUPLINGS: dict[str, dict] = {"jacobi": {}}
+#: Coupling orders: name -> keyword arguments of :func:`icosim.stability.spectral_radius`: the Jacobi
+#: (parallel) scheme of the paper and Gauss-Seidel (sequential) with subsystem 1 or subsystem 2 first
+#: (:mod:`icosim.schemes`).
+COUPLINGS: dict[str, dict] = {name: ({} if name == "jacobi" else {"scheme": name}) for name in SCHEME_NAMES}
 
 #: Verdicts of one point: rho <= 1 decided, rho > 1 decided, not decided (failed, or float64 only).
 VERDICTS = ("stable", "unstable", "undecided")
@@ -204,10 +206,12 @@ def schemes(
     method takes those it has.  Every scheme is built once here, so a parameter value a method
     refuses is reported (:class:`~icosim.model.ParameterError`) before any computation.
 
-    >>> len(schemes())  # Baumgarte and weighted: 3 indices x (ff, fd); projection: ff, fd, dd; k = 0, 1, 2
+    >>> len(schemes(couplings=["jacobi"]))  # Baumgarte, weighted: 3 indices x (ff, fd); projection: ff, fd, dd; k = 0..2
     45
-    >>> schemes(methods=["weighted"], k=[2])[1].label
-    'weighted i1 (a = 1, b = 1) fd k=2'
+    >>> len(schemes())  # and each with the three coupling orders (Jacobi, Gauss-Seidel 1->2 and 2->1)
+    135
+    >>> schemes(methods=["weighted"], k=[2])[4].label
+    'weighted i1 (a = 1, b = 1) fd k=2 gauss-seidel-12'
     """
     params = dict(params or {})
     names = list(_methods.METHODS) if methods is None else list(methods)

@@ -24,7 +24,7 @@ __all__ = ["CHECKS", "check_convergence_order", "SELECT_KEYS", "EXPECT_KEYS"]
 
 
 #: Keys of a ``convergence_order`` check's ``select`` and of each ``expect`` entry.
-SELECT_KEYS = {"figure", "decomposition", "method", "panel", "index"} | set(parameters())
+SELECT_KEYS = {"figure", "scheme", "decomposition", "method", "panel", "index"} | set(parameters())
 
 
 EXPECT_KEYS = {"k", "order", "unstable", "observed", "observed_tolerance", "observed_second_half", "observed_startup"}

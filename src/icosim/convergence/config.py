@@ -90,11 +90,16 @@ def configured_curves(cfg: dict) -> list:
     """
     out = []
     for fig, fig_cfg in cfg["figures"].items():
-        for spec in figure_panels(str(fig), fig_cfg, cfg["k"]):
+        for spec in (
+            s
+            for scheme in fig_cfg.get("schemes", ["jacobi"])
+            for s in figure_panels(str(fig), fig_cfg, cfg["k"], scheme)
+        ):
             for row, index in zip(spec.rows, spec.indices):
                 attrs = method_attrs(spec.method, **row)
                 rec = {
                     "figure": spec.figure,
+                    "scheme": spec.scheme,
                     "decomposition": spec.decomposition,
                     "method": spec.method,
                     "panel": spec.panel,

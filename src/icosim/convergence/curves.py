@@ -18,6 +18,7 @@ def curves(datasets) -> list:
             for j, k in enumerate(ds["k"].values):
                 rec = {
                     "figure": str(ds.attrs["figure"]),
+                    "scheme": str(ds.attrs.get("scheme", "jacobi")),
                     "decomposition": ds.attrs["decomposition"],
                     "method": ds.attrs["method"],
                     "panel": ds.attrs["panel"],

@@ -62,7 +62,7 @@ def run_panel(
     H_mid = None
     for i, row in enumerate(spec.rows):
         for j, k in enumerate(spec.k):
-            r = study.run(spec.method, row, spec.decomposition, k, stepping=stepping)
+            r = study.run(spec.method, row, spec.decomposition, k, stepping=stepping, scheme=spec.scheme)
             for n in names_f + ("spectral_radius_digits", "spectral_verdict", "diverged_at", "unstable", "defect_bits"):
                 arr[n][i, j] = getattr(r, n)
             f = asymptotic_order(r.H, r.nrmse, r.unstable, **fit)
@@ -258,6 +258,7 @@ def run_panel(
     attrs = dict(provenance or {})
     attrs.update(
         figure=spec.figure,
+        scheme=spec.scheme,
         method=spec.method,
         decomposition=spec.decomposition,
         decomposition_long_name=get_decomposition(spec.decomposition).long_name,

@@ -37,6 +37,7 @@ import numpy as np
 from ..backend import Ball
 from ..decompositions import get_decomposition
 from ..exact import exact_coupling, monolithic_matrix
+from ..schemes import JACOBI
 from ..stability.certified import MAX_BITS, SpectralCertificate, certify_matrix
 from ..stability.matrix import amplification_matrix
 
@@ -94,9 +95,21 @@ class Defect:
 
 
 def local_defect(
-    coefficients, method, decomposition, k, *, bits: int = 256, max_bits: int = 4096, certify_bits: int = MAX_BITS
+    coefficients,
+    method,
+    decomposition,
+    k,
+    *,
+    bits: int = 256,
+    max_bits: int = 4096,
+    certify_bits: int = MAX_BITS,
+    scheme=JACOBI,
 ) -> Defect:
     """``D = M W - W E`` of one parameter point, proven in ball arithmetic, then rounded.
+
+    ``M`` is the amplification matrix of ``scheme`` (:mod:`icosim.schemes`); the
+    exact solution's packed form ``W`` is the same for every scheme (the
+    history holds the corrected coupling variables, exact on the exact solution).
 
     The same ball ``M`` certifies the stability verdict of this step size; the
     precision is also raised (up to ``certify_bits``) until that verdict is
@@ -108,7 +121,7 @@ def local_defect(
         be = Ball(b)
         with be.context():
             c = coefficients.map(be.const)
-            M = amplification_matrix(c, method, decomposition, k, backend=be)
+            M = amplification_matrix(c, method, decomposition, k, backend=be, scheme=scheme)
             ext = exact_extension(c, decomposition, k, be)
             D = M @ ext.W - ext.W @ ext.E
             mid, rad = be.mid(D), be.rad(D)

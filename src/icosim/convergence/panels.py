@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from ..decompositions import get_decomposition
 from ..methods import METHODS, get_spec
 from ..model import ParameterError
+from ..schemes import figure_id, get_scheme
 from .experiment import dimensional_method
 
 __all__ = ["PanelSpec", "effective_params", "panel_name", "figure_panels", "figure_layout"]
@@ -56,6 +57,8 @@ class PanelSpec:
     rows: tuple  # effective parameters of each row (dicts)
     k: tuple
     shared: bool = False
+    #: the coupling scheme (:mod:`icosim.schemes`), by name
+    scheme: str = "jacobi"
 
     def as_dict(self) -> dict:
         return {
@@ -67,6 +70,7 @@ class PanelSpec:
             "rows": [dict(r) for r in self.rows],
             "k": list(self.k),
             "shared": self.shared,
+            "scheme": self.scheme,
         }
 
     @classmethod
@@ -80,6 +84,7 @@ class PanelSpec:
             tuple(dict(r) for r in d["rows"]),
             tuple(d["k"]),
             bool(d.get("shared", False)),
+            get_scheme(d.get("scheme", "jacobi")).name,
         )
 
     @property
@@ -87,8 +92,11 @@ class PanelSpec:
         return [int(dimensional_method(self.method, 1.0, **r).params["index"]) for r in self.rows]
 
 
-def figure_panels(figure: str, fig_cfg: dict, k) -> list:
-    """All panel specs of one configured figure (every decomposition and column).
+def figure_panels(figure: str, fig_cfg: dict, k, scheme="jacobi") -> list:
+    """All panel specs of one configured figure (every decomposition and column), for one coupling scheme.
+
+    The specs' ``figure`` is the figure id of ``scheme`` (:func:`icosim.schemes.figure_id`:
+    ``"21"`` for Jacobi, ``"21gs12"``, ``"21gs21"``).
 
     ``fig_cfg`` has ``method``, ``columns`` (list of parameter dicts),
     ``rows`` (list of parameter dicts, usually ``{index: i}``) and
@@ -97,6 +105,8 @@ def figure_panels(figure: str, fig_cfg: dict, k) -> list:
     method = fig_cfg["method"]
     columns, rows = fig_cfg["columns"], fig_cfg["rows"]
     where = f"figure {figure}"
+    scheme = get_scheme(scheme).name
+    fid = figure_id(figure, scheme)
     try:
         cells = [[effective_params(method, c, r) for r in rows] for c in columns]
     except ParameterError as exc:
@@ -113,11 +123,11 @@ def figure_panels(figure: str, fig_cfg: dict, k) -> list:
         for i, c in enumerate(columns):
             own = tuple(cells[i][j] for j in range(len(rows)) if j not in shared_rows)
             if own:
-                specs.append(PanelSpec(figure, dec, panel_name(c), method, dict(c), own, tuple(k)))
+                specs.append(PanelSpec(fid, dec, panel_name(c), method, dict(c), own, tuple(k), scheme=scheme))
         if shared_rows:
             shared = tuple(cells[0][j] for j in shared_rows)
             name = "_".join(panel_name({"index": r.get("index")}) for r in shared)
-            specs.append(PanelSpec(figure, dec, name, method, {}, shared, tuple(k), shared=True))
+            specs.append(PanelSpec(fid, dec, name, method, {}, shared, tuple(k), shared=True, scheme=scheme))
     for spec in specs:
         idx = spec.indices
         if len(set(idx)) != len(idx):

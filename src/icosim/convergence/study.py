@@ -43,6 +43,7 @@ from ..decompositions import get_decomposition
 from ..linear_problem import LinearCosimulation
 from ..macrostep import simulate
 from ..model import ParameterError
+from ..schemes import JACOBI, get_scheme
 from ..stability import amplification_matrix, spectral_radius
 from .errors import ErrorSeries, local_defect, propagate_errors
 from .experiment import Setup, dimensional_method
@@ -191,10 +192,13 @@ class Study:
         return s.growth_bound * max(abs(s.x0), abs(s.v0) * H)
 
     # -- one curve ----------------------------------------------------------------------
-    def run(self, method: str, params: dict, decomposition: str, k: int, *, stepping: str = "error") -> CurveResult:
-        """NRMSE over all step sizes for one scheme (dimensional ``params``)."""
+    def run(
+        self, method: str, params: dict, decomposition: str, k: int, *, stepping: str = "error", scheme=JACOBI
+    ) -> CurveResult:
+        """NRMSE over all step sizes for one scheme (dimensional ``params``; ``scheme``: Jacobi or Gauss-Seidel)."""
         if stepping not in STEPPINGS:
             raise ParameterError(f"stepping must be one of {', '.join(STEPPINGS)}, got {stepping!r}")
+        scheme = get_scheme(scheme)
         dec = get_decomposition(decomposition)
         t0 = time.perf_counter()
         nH = self.H.size
@@ -204,7 +208,7 @@ class Study:
             rho, digits = np.full(nH, np.nan), np.zeros(nH, dtype=int)
             verdict = np.full(nH, "", dtype=object)
         else:
-            rho, digits, verdict = self._spectral_radii(methods, dec.name, k)
+            rho, digits, verdict = self._spectral_radii(methods, dec.name, k, scheme)
         names = ("nrmse_unfiltered", "nrmse_second_half", "nrmse_startup", "nrmse_x", "nrmse_v", "nrmse_lambda")
         out = {name: np.full(nH, np.nan) for name in names}
         out["diverged_at"] = np.full(nH, -1, dtype=np.int64)
@@ -212,7 +216,7 @@ class Study:
         # the constraint force is a coupling variable with ff and fd only
         lam = dec.variables.index("lambda_c") if "lambda_c" in dec.variables else None
         for i, (H, N) in enumerate(zip(self.H, self.n_steps)):
-            errors, diverged, bits, cert = self._errors(methods[i], dec.name, k, i, stepping)
+            errors, diverged, bits, cert = self._errors(methods[i], dec.name, k, i, stepping, scheme)
             out["defect_bits"][i] = bits
             if cert is not None:
                 rho[i], digits[i], verdict[i] = _midpoint(cert), int(cert.bits * np.log10(2)), cert.verdict
@@ -250,26 +254,32 @@ class Study:
             unstable=unstable,
             defect_bits=out["defect_bits"],
             seconds=time.perf_counter() - t0,
-            meta={"method": method, "decomposition": dec.name, "k": int(k), "stepping": stepping, **params},
+            meta={
+                "method": method,
+                "decomposition": dec.name,
+                "k": int(k),
+                "stepping": stepping,
+                "scheme": scheme.name,
+                **params,
+            },
         )
 
-    def _spectral_radii(self, methods, decomposition, k):
+    def _spectral_radii(self, methods, decomposition, k, scheme=JACOBI):
         """Spectral radius, digits and verdict per H with the precision policy (the float64 steppings)."""
         models = self.setup.model(self.H)  # physical: overdamped subsystems are fine
+        kw = {"digits": self.digits, "policy": self.spectral_policy, "scheme": scheme}
         if all(m.params == methods[0].params for m in methods):  # one batched call
-            res = spectral_radius(models, methods[0], decomposition, k, digits=self.digits, policy=self.spectral_policy)
+            res = spectral_radius(models, methods[0], decomposition, k, **kw)
             return np.asarray(res.rho, float), np.asarray(res.digits), np.asarray(res.verdict, dtype=object)
         rho, digits = np.empty(self.H.size), np.empty(self.H.size, dtype=int)
         verdict = np.empty(self.H.size, dtype=object)
         for i, m in enumerate(methods):
-            res = spectral_radius(
-                self.setup.model(self.H[i]), m, decomposition, k, digits=self.digits, policy=self.spectral_policy
-            )
+            res = spectral_radius(self.setup.model(self.H[i]), m, decomposition, k, **kw)
             rho[i], digits[i], verdict[i] = float(res.rho), int(res.digits), str(res.verdict)
         return rho, digits, verdict
 
-    def _errors(self, method, decomposition, k, i, stepping):
-        """``(errors, diverged_at, defect_bits, certificate)`` for step size ``H[i]``.
+    def _errors(self, method, decomposition, k, i, stepping, scheme=JACOBI):
+        """``(errors, diverged_at, defect_bits, certificate)`` for step size ``H[i]`` under ``scheme``.
 
         ``errors`` (an :class:`~icosim.convergence.errors.ErrorSeries`) holds
         ``w_N - w*_N`` at ``T_0 ... T_N_total`` in the engine's variables
@@ -283,7 +293,7 @@ class Study:
         c = self.setup.model(H).coefficients()
         bound = self.bound(H)
         if stepping == "error":
-            d = local_defect(c, method, decomposition, k)
+            d = local_defect(c, method, decomposition, k, scheme=scheme)
             z0 = np.array([self.setup.x0, self.setup.v0 * H])
             errors = propagate_errors(d.M, d.D, d.E, lambda steps: exact.expm_2x2(d.A, steps) @ z0, N)
             # the state itself (exact + error, engine units) against the growth bound, as the other steppings;
@@ -303,13 +313,13 @@ class Study:
         solution = self.solution(H)
         state, history = exact.consistent_start(problem, solution)
         if stepping == "simulate":
-            traj = simulate(problem, method, state, history, N, bound=bound)
+            traj = simulate(problem, method, state, history, N, bound=bound, scheme=scheme)
             if traj.diverged_at is not None:
                 return None, traj.diverged_at, 0, None
             states = np.array(traj.states).reshape(N + 1, 4)
             W = np.concatenate([states, np.array(traj.coupling).reshape(N + 1, -1)], axis=-1)
         else:
-            M = amplification_matrix(c, method, decomposition, k)
+            M = amplification_matrix(c, method, decomposition, k, scheme=scheme)
             W, diverged = iterate_linear_map(M, problem.pack(state, history), N, bound=bound)
             if diverged is not None:
                 return None, diverged, 0, None

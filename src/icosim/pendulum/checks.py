@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from ..claims import CheckKind, Outcome, combine_holds
 from ..model import ParameterError
+from ..schemes import get_scheme
 from .names import run_name
 
 __all__ = ["CHECKS", "check_pendulum_stability", "expected_outcome", "run_verdict", "OUTCOMES"]
@@ -21,6 +22,10 @@ OUTCOMES = ("stable", "unstable")
 
 def _validate_stability_check(label: str, params: dict):
     """Parameters of a ``pendulum_stability`` check (read with the claims file; errors name claim and key)."""
+    try:
+        get_scheme(params.get("scheme", "jacobi"))
+    except ParameterError as exc:
+        raise ParameterError(f"{label}: check.{exc}") from None
     if params["default"] not in OUTCOMES:
         raise ParameterError(f"{label}: check.default must be one of {list(OUTCOMES)}, got {params['default']!r}")
     exceptions = params.get("exceptions", [])
@@ -49,28 +54,33 @@ def run_verdict(expected: str, observed: str) -> str:
     return "undecided" if observed == "failed" else "pass" if expected == observed else "fail"
 
 
-def check_pendulum_stability(datasets, *, default: str, exceptions: list | None = None):
+def check_pendulum_stability(datasets, *, default: str, exceptions: list | None = None, scheme: str = "jacobi"):
     """Sect. 4: every run behaves as claimed (``default``, or its entry of ``exceptions``).
 
-    ``datasets`` are summaries (:func:`summarize`, one row per run).  Fails if a
+    ``datasets`` are summaries (:func:`summarize`, one row per run); only the runs
+    with the coupling scheme ``scheme`` (default the paper's, Jacobi) are checked.  Fails if a
     run does not behave as claimed; otherwise undecided if a run failed (no
     verdict of its own) or a configuration named in ``exceptions`` was not run;
     else passes.
     """
     check = {"default": default, "exceptions": exceptions or []}
+    scheme = get_scheme(scheme).name
     numbers, holds, have = {}, [], set()
     for ds in datasets:
-        for m, d, k, observed in zip(
-            ds["method"].values, ds["decomposition"].values, ds["k"].values, ds["observed"].values
+        schemes = ds["scheme"].values if "scheme" in ds.coords else ["jacobi"] * ds.sizes["run"]
+        for m, d, k, s, observed in zip(
+            ds["method"].values, ds["decomposition"].values, ds["k"].values, schemes, ds["observed"].values
         ):
             m, d, k, observed = str(m), str(d), int(k), str(observed)
+            if str(s) != scheme:
+                continue
             have.add((m, d, k))
             expected = expected_outcome(check, m, d, k)
             verdict = run_verdict(expected, observed)
-            numbers[run_name(m, d, k)] = {"expected": expected, "observed": observed, "verdict": verdict}
+            numbers[run_name(m, d, k, scheme)] = {"expected": expected, "observed": observed, "verdict": verdict}
             holds.append({"pass": True, "fail": False}.get(verdict))
     missing = [
-        run_name(ex["method"], ex["decomposition"], ex["k"])
+        run_name(ex["method"], ex["decomposition"], ex["k"], scheme)
         for ex in check["exceptions"]
         if (ex["method"], ex["decomposition"], int(ex["k"])) not in have
     ]

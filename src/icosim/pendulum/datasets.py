@@ -13,6 +13,7 @@ import numpy as np
 
 from ..datasets import provenance_attrs
 from ..methods import CouplingMethod, make_method, parameter_units
+from ..schemes import get_scheme
 from .model import PendulumParameters, joint_constraint
 from .names import VARIABLES
 from .reference import Monolithic, reference_solution
@@ -39,9 +40,17 @@ def _series_dataset(t, series, attrs):
 
 
 def run_dataset(
-    result: RunResult, method: CouplingMethod, decomposition: str, k: int, settings: dict, provenance: dict
+    result: RunResult,
+    method: CouplingMethod,
+    decomposition: str,
+    k: int,
+    settings: dict,
+    provenance: dict,
+    scheme: str = "jacobi",
 ):
     """The NetCDF contract of a co-simulation run (see the issue): series over ``t`` and attributes.
+
+    ``scheme`` is the coupling scheme's name (attribute ``scheme``).
 
     ``settings`` (H, t_end, tolerances, ...) are copied into the attributes; ``None`` values are
     written as the string ``"none"`` (NetCDF attributes cannot be empty).
@@ -51,6 +60,7 @@ def run_dataset(
         method=method.name,
         decomposition=decomposition,
         k=int(k),
+        scheme=get_scheme(scheme).name,
         status=result.status,
         reason=result.reason or "none",
         diverged=int(result.diverged),
@@ -140,6 +150,7 @@ def run_job(job: dict, *, command: str = ""):
         **sens,
         **corr,
         **div,
+        scheme=job.get("scheme", "jacobi"),
     )
     settings = {
         "H": job["H"],
@@ -153,6 +164,9 @@ def run_job(job: dict, *, command: str = ""):
         "corrector_tol": corr["tol"],
         **{f"bound_{key}": value for key, value in div.items()},
     }
+    scheme = get_scheme(job.get("scheme", "jacobi"))
     title = f"Double pendulum (Sect. 4): {job['method']} {job['decomposition']} k = {job['k']}"
+    if scheme.name != "jacobi":
+        title += f", {scheme.label}"
     provenance = provenance_attrs(job, title=title, command=command)
-    return result, run_dataset(result, method, job["decomposition"], job["k"], settings, provenance)
+    return result, run_dataset(result, method, job["decomposition"], job["k"], settings, provenance, scheme.name)

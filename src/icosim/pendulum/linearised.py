@@ -17,7 +17,10 @@ from ..stability import spectral_radius
 from .model import PendulumParameters
 from .reference import Monolithic
 
-__all__ = ["pendulum_test_model", "linear_test_model_rho"]
+__all__ = ["pendulum_test_model", "linear_test_model_rho", "linear_test_model_stability", "combined_verdict"]
+
+#: The verdicts of :mod:`icosim.stability.policy`, the one that decides first when points are combined.
+_VERDICT_ORDER = ("unstable", "undecided", "marginal", "stable")
 
 
 def pendulum_test_model(params: PendulumParameters, H: float):
@@ -41,16 +44,45 @@ def pendulum_test_model(params: PendulumParameters, H: float):
     return TestModel(np.full(omegas.shape, lr1), omegas * H, params.m2 / params.m1, params.m1 / params.m2, 1.0)
 
 
-def linear_test_model_rho(params: PendulumParameters, H: float, method: CouplingMethod, decomposition: str, k: int):
-    """Largest spectral radius of the linear test model (Sect. 3) at the pendulum's points
+def combined_verdict(verdicts) -> str:
+    """One verdict for several points: ``unstable`` if any is, else ``undecided``, else ``marginal``, else ``stable``.
+
+    >>> combined_verdict(["stable", "marginal"]), combined_verdict(["undecided", "unstable"])
+    ('marginal', 'unstable')
+    """
+    verdicts = {str(v) for v in np.ravel(verdicts)}
+    return next(v for v in _VERDICT_ORDER if v in verdicts)
+
+
+def linear_test_model_stability(
+    params: PendulumParameters, H: float, method: CouplingMethod, decomposition: str, k: int, *, scheme="jacobi"
+):
+    """Spectral radius and verdict of the linear test model (Sect. 3) at the pendulum's points
     (:func:`pendulum_test_model`), for the dimensionless form of ``method``.
 
     The method's parameters are in SI units here and are scaled as the registry
     says (:func:`icosim.methods.engine_method`: Baumgarte's ``beta_bar = beta/H``,
     ``gamma_bar = gamma/H^2``; the weighted multiplier's ``a``, ``b`` are
-    dimensionless already).  Returns ``(rho, model)``.
+    dimensionless already).  ``scheme``: the coupling scheme (link 1 is
+    subsystem 1).  The verdict is the precision policy's
+    (:func:`icosim.stability.spectral_radius`) over both points
+    (:func:`combined_verdict`); ``rho`` is the larger one, NaN if a point is
+    undecided (nothing is known there) unless the other is unstable.  Returns
+    ``(rho, verdict, model)``.
     """
     dimensionless = engine_method(method, H)
     model = pendulum_test_model(params, H)
-    result = spectral_radius(model, dimensionless, decomposition, int(k))
-    return float(np.max(result.rho)), model
+    result = spectral_radius(model, dimensionless, decomposition, int(k), scheme=scheme)
+    verdict = combined_verdict(result.verdict)
+    rho = np.asarray(result.rho, float)
+    rho = float(np.nanmax(rho)) if verdict == "unstable" or np.all(np.isfinite(rho)) else math.nan
+    return rho, verdict, model
+
+
+def linear_test_model_rho(
+    params: PendulumParameters, H: float, method: CouplingMethod, decomposition: str, k: int, *, scheme="jacobi"
+):
+    """Largest spectral radius of the linear test model at the pendulum's points
+    (:func:`linear_test_model_stability` without the verdict).  Returns ``(rho, model)``."""
+    rho, _, model = linear_test_model_stability(params, H, method, decomposition, k, scheme=scheme)
+    return rho, model

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from ..schemes import get_scheme
+
 __all__ = ["COUPLING_VARIABLES", "VARIABLES", "run_name"]
 
 
@@ -25,6 +27,11 @@ VARIABLES = {
 
 
 # -- datasets, summary and claims ------------------------------------------------------
-def run_name(method: str, decomposition: str, k: int) -> str:
-    """File stem of a run: ``{method}_{decomposition}_k{k}``."""
-    return f"{method}_{decomposition}_k{k}"
+def run_name(method: str, decomposition: str, k: int, scheme="jacobi") -> str:
+    """File stem of a run: ``{method}_{decomposition}_k{k}`` (Jacobi), with ``_gs12``/``_gs21`` for Gauss-Seidel.
+
+    >>> run_name("weighted", "fd", 2), run_name("projection", "dd", 0, "gauss-seidel-21")
+    ('weighted_fd_k2', 'projection_dd_k0_gs21')
+    """
+    suffix = get_scheme(scheme).suffix
+    return f"{method}_{decomposition}_k{k}" + (f"_{suffix}" if suffix else "")

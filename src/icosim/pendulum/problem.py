@@ -8,12 +8,19 @@ integrated in one batch with the predictor.
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 
 import numpy as np
 
 from ..backend import Float64
 from ..decompositions import get_decomposition
-from ..lagrange import monomial_coefficients
+from ..lagrange import (
+    lagrange_coefficients,
+    lagrange_weights,
+    monomial_coefficients,
+    variable_corrector_nodes,
+    variable_predictor_nodes,
+)
 from ..limits import check_k
 from ..model import ParameterError
 from ..problem import CosimulationProblem
@@ -74,6 +81,9 @@ class PendulumCosimulation(CosimulationProblem):
         self._jac0 = {}
         # split: integrations that took more than one step or rejected one (docs/pendulum.md)
         self.stats = {"integrations": 0, "steps": 0, "rejected": 0, "fev": 0, "split": 0}
+        # Jacobians of the links' right-hand sides (Radau's own and the shared first-step one) and the
+        # right-hand side evaluations spent on the shared ones (not in stats["fev"])
+        self.jacobian_stats = {"jev": 0, "fev": 0}
 
     @property
     def n_coupling(self) -> int:
@@ -98,6 +108,8 @@ class PendulumCosimulation(CosimulationProblem):
         # of this link from this state (predictor, sensitivities, corrector).
         if self._jac0.get(i, (None,))[0] is not state:
             self._jac0[i] = (state, _fd_jacobian(fun, 0.0, y0[:1], fun(0.0, y0[:1]))[0])
+            self.jacobian_stats["jev"] += 1
+            self.jacobian_stats["fev"] += 2
         r = radau_batch(
             fun, 0.0, self.H, y0, rtol=self.rtol, atol=self.atol, newton_tol=self.newton_tol, jac0=self._jac0[i][1]
         )
@@ -108,23 +120,47 @@ class PendulumCosimulation(CosimulationProblem):
         st["rejected"] += r.n_rejected
         st["fev"] += r.n_fev
         st["split"] += r.n_steps > 1 or r.n_rejected > 0
+        self.jacobian_stats["jev"] += r.n_jev
         u1 = coef.sum(axis=1)  # input at tau = 1
         return r.y, link.outputs(r.y, r.f, u1)
 
-    def _linearise(self, state, history, e):
-        """Outputs at ``e`` and ``d residuals / d e`` by forward differences (one batch per link)."""
+    def _respond(self, i, state, history, e, fixed=None):
+        """Outputs of link ``i`` at ``e`` and, per coupling variable ``j`` driving it, at ``e + h_j``.
+
+        ``fixed is None``: through link ``i``'s corrector integration, one batch
+        of the base and the perturbed inputs (full gradients); otherwise
+        ``fixed`` is the link's final end state and its outputs are re-evaluated
+        there (algebraic gradients of a leading link, no integration).
+        Returns ``(end_i, y_i, {j: y_i(e + h_j)})`` (``end_i`` the end state of the base member).
+        """
         base = self.corrector_samples(history, e)
+        n_e = self.n_coupling
+        h = self.fd_step * np.maximum(1.0, np.abs(e))
+        sl = self.inputs[i]
+        idx = np.arange(n_e)[sl]
+        batch = np.broadcast_to(base, (1 + idx.size,) + base.shape).copy()
+        batch[1 + np.arange(idx.size), 0, idx] += h[idx]
+        if fixed is None:
+            ends, y = self._integrate(i, state, batch[:, :, sl])
+            end = ends[0]
+        else:
+            end, y = fixed, self._outputs_at(i, fixed, batch[:, 0, sl])
+        return end, y[0], dict(zip(idx.tolist(), y[1:]))
+
+    def _linearise(self, state, history, e, fixed=(None, None), responses=None):
+        """Outputs at ``e`` and ``d residuals / d e`` by forward differences.
+
+        ``responses[i]`` (optional) is link ``i``'s :meth:`_respond` at ``e``
+        already computed (the predictor's batch).
+        """
         n_e = self.n_coupling
         h = self.fd_step * np.maximum(1.0, np.abs(e))
         ys, perturbed = [], []
         for i in range(2):
-            sl = self.inputs[i]
-            idx = np.arange(n_e)[sl]
-            batch = np.broadcast_to(base, (1 + idx.size,) + base.shape).copy()
-            batch[1 + np.arange(idx.size), 0, idx] += h[idx]
-            _, y = self._integrate(i, state, batch[:, :, sl])
-            ys.append(y[0])
-            perturbed.append(dict(zip(idx.tolist(), y[1:])))
+            got = responses[i] if responses is not None else None
+            _, y_i, pert_i = got if got is not None else self._respond(i, state, history, e, fixed[i])
+            ys.append(y_i)
+            perturbed.append(pert_i)
         y0 = np.stack(ys)
         r0 = self.residuals(y0)
         jac = {key: np.zeros(val.shape + (n_e,)) for key, val in r0.items()}
@@ -138,32 +174,55 @@ class PendulumCosimulation(CosimulationProblem):
                 jac[key][..., j] = (val - r0[key]) / h[j]
         return y0, jac
 
+    def _outputs_at(self, i, end, u1):
+        """Outputs of link ``i`` at its end state ``end`` for inputs ``u1`` (B, n_u) at ``T_N+1``."""
+        link = self.links[i]
+        Y = np.broadcast_to(end, (u1.shape[0], link.n))
+        f = link.rhs(u1[:, None, :], self.H)(self.H, Y)  # constant polynomial: u(tau) = u1
+        return link.outputs(Y, f, u1)
+
     # -- the problem interface ------------------------------------------------
     def extrapolate(self, history):
         # The base class's sum, formed as one BLAS dot product: equal up to rounding, and kept so
         # that the pendulum's results stay bitwise those computed before the base class existed.
         return np.tensordot(self.w_pred, history, axes=(0, 0))
 
-    def predict(self, state, history):
+    def predict(self, i, state, history, *, final=False):
+        """Link ``i`` with the extrapolation polynomial, i.e. the interpolation polynomial through ``e_p``.
+
+        A link to be corrected is integrated in one batch with its forward-difference
+        perturbations (kept for :meth:`jacobians`); a leading (``final``) link alone.
+        """
         e_p = self.extrapolate(history)
-        y, jac = self._linearise(state, history, e_p)
-        self._cache = (state, history, e_p, jac)
-        return y
+        if final:
+            end, y = self._integrate(i, state, self.corrector_samples(history, e_p)[None][:, :, self.inputs[i]])
+            return end[0], y[0]
+        if self._cache is None or self._cache[0] is not state or self._cache[1] is not history:
+            self._cache = (state, history, e_p, [None, None])
+        end, y_i, _ = self._cache[3][i] = self._respond(i, state, history, e_p)
+        return end, y_i
 
-    def jacobians(self, state, history, e, y):
+    def jacobians(self, state, history, e, y, fixed=(None, None)):
         c = self._cache
+        responses = None
         if c is not None and c[0] is state and c[1] is history and np.array_equal(c[2], e):
-            return c[3]
-        return self._linearise(state, history, e)[1]
+            responses = [c[3][i] if fixed[i] is None else None for i in range(2)]
+        return self._linearise(state, history, e, fixed, responses)[1]
 
-    def correct(self, state, history, e_new):
+    def correct(self, i, state, history, e_new):
         samples = self.corrector_samples(history, e_new)[None]
-        ends, ys = [], []
-        for i in range(2):
-            end, y = self._integrate(i, state, samples[:, :, self.inputs[i]])
-            ends.append(end[0])
-            ys.append(y[0])
-        return np.concatenate(ends), np.stack(ys)
+        end, y = self._integrate(i, state, samples[:, :, self.inputs[i]])
+        return end[0], y[0]
+
+    def reevaluate(self, i, end, y, e_old, e_new):
+        """Link ``i``'s outputs at its fixed end state with the input ``e_new`` at ``T_N+1`` (exact)."""
+        return self._outputs_at(i, end, np.asarray(e_new)[None, self.inputs[i]])[0]
+
+    def join(self, ends):
+        return np.concatenate(ends)
+
+    def stack(self, ys):
+        return np.stack(ys)
 
     def residuals(self, y):
         """Joint constraint on each level (2 rows; dd: its normal component) and force balance."""
@@ -190,3 +249,26 @@ class PendulumCosimulation(CosimulationProblem):
     # -- quantities of a state ----------------------------------------------------
     def constraint(self, state):
         return joint_constraint(self.params, state)
+
+    # -- variable macro steps (icosim.pendulum.adaptive) ----------------------------------
+    def set_macro_step(self, H: float, past_steps=None):
+        """Size ``H`` of the next macro step and the sizes ``H_N-1, ..., H_N-k`` of the past ones.
+
+        The extrapolation (Eq. 9) and interpolation (Eq. 11) polynomials then
+        run through the non-equidistant nodes of :mod:`icosim.lagrange`
+        (:func:`~icosim.lagrange.variable_predictor_nodes`), their weights
+        computed exactly from the float step sizes and rounded once;
+        ``past_steps=None`` means equal steps (the nodes of a fixed ``H``).
+        """
+        if not (isinstance(H, (int, float)) and math.isfinite(H) and H > 0):
+            raise ParameterError(f"H must be a finite number > 0, got {H!r}")
+        self.H = float(H)
+        past = [self.H] * self.k if past_steps is None else [float(h) for h in past_steps][: self.k]
+        if len(past) != self.k or not all(math.isfinite(h) and h > 0 for h in past):
+            raise ParameterError(f"need {self.k} past step sizes > 0, got {past_steps!r}")
+        exact = [Fraction(h) for h in [self.H] + past]  # binary floats are exact rationals
+        pred = variable_predictor_nodes(exact[0], exact[1:])
+        corr = variable_corrector_nodes(exact[0], exact[1:])
+        self.w_pred = np.array([float(w) for w in lagrange_weights(pred, 1)], dtype=float)
+        self.C_corr = np.array(lagrange_coefficients(corr), dtype=float)
+        self._cache = None  # the predictor's responses (kept for the Jacobians) belong to the old nodes

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -18,11 +18,12 @@ from ..decompositions import get_decomposition
 from ..macrostep import StepFailure, simulate
 from ..methods import CouplingMethod
 from ..model import ParameterError
+from ..schemes import JACOBI, get_scheme
 from .model import PendulumParameters, joint_constraint
 from .problem import PendulumCosimulation
 from .reference import consistent_history
 
-__all__ = ["RunResult", "run_cosimulation", "CouplingSolveError"]
+__all__ = ["RunResult", "run_cosimulation", "CouplingSolveError", "divergence_reason", "joint_force"]
 
 
 # -- a whole run ------------------------------------------------------------------
@@ -43,6 +44,11 @@ class RunResult:
     reason: str
     stats: dict
     wall_time: float
+    #: CPU seconds of the macro steps (time.process_time), like wall_time without the start-up
+    cpu_seconds: float = math.nan
+    #: Jacobian evaluations of the links (``jev``) and the right-hand side evaluations they took
+    #: beyond ``stats["fev"]`` (``fev``): PendulumCosimulation.jacobian_stats
+    jacobian_stats: dict = field(default_factory=dict)
 
     @property
     def diverged(self) -> bool:
@@ -71,6 +77,31 @@ class _SingularSolveAsFailure:
             return self._method.corrected_coupling(*args, **kwargs)
         except np.linalg.LinAlgError as exc:
             raise CouplingSolveError(f"singular coupling system ({exc})") from exc
+
+
+def joint_force(decomposition: str, e, y):
+    """The joint force of link 1 on link 2 after a step: ``lambda_c`` (ff, fd) or ``mu_2`` (dd)."""
+    return y[1, 3] if decomposition == "dd" else e[:2]
+
+
+def divergence_reason(
+    problem, state, e, y, *, max_constraint: float, max_multiplier: float, max_rate: float
+) -> str | None:
+    """Why a step counts as diverged (its state ``state``, newest coupling variables ``e``, outputs
+    ``y``), or None: not finite, ``|g_c|`` (after the step or after the corrector) beyond
+    ``max_constraint``, ``|lambda_c|`` beyond ``max_multiplier``, ``|omega|`` beyond ``max_rate``."""
+    g = problem.constraint(state)
+    g_corr = y[0, 0] - y[1, 0]
+    lam = joint_force(problem.decomposition.name, e, y)
+    if not np.all(np.isfinite(np.concatenate([state, e, g, g_corr, lam]))):
+        return "not finite"
+    if np.max(np.abs(g)) > max_constraint or np.max(np.abs(g_corr)) > max_constraint:
+        return f"|g_c| > {max_constraint} m"
+    if np.max(np.abs(lam)) > max_multiplier:
+        return f"|lambda_c| > {max_multiplier} N"
+    if max(abs(state[1]), abs(state[7])) > max_rate:
+        return f"|omega| > {max_rate} rad/s"
+    return None
 
 
 def _series_row(p: PendulumParameters, state, g_corrector, lam) -> dict:
@@ -102,6 +133,7 @@ def run_cosimulation(
     newton_tol: float = 1e-8,
     iterations: int = 1,
     tol: float | None = None,
+    scheme=JACOBI,
     max_constraint: float = 1e-2,
     max_multiplier: float = 1e3,
     max_rate: float = 1e2,
@@ -114,7 +146,9 @@ def run_cosimulation(
     ``max_multiplier`` (N) or whose angular rates exceed ``max_rate`` (rad/s);
     it *fails* at the first step that raises a
     :class:`~icosim.macrostep.StepFailure`.  The series end at the step before.
+    ``scheme``: the coupling scheme (:mod:`icosim.schemes`; link 1 is subsystem 1).
     """
+    scheme = get_scheme(scheme)
     dec = get_decomposition(decomposition)
     method.check_decomposition(dec)
     if not (isinstance(iterations, int) and iterations >= 1):
@@ -136,25 +170,14 @@ def run_cosimulation(
     state = params.initial_state()
     history = consistent_history(params, dec.name, k, H)
 
-    def joint_force(e, y):
-        return y[1, 3] if dec.name == "dd" else e[:2]
+    bounds = dict(max_constraint=max_constraint, max_multiplier=max_multiplier, max_rate=max_rate)
 
     def check(state, history, y):
         """Reason for divergence of a step, or None."""
-        g = problem.constraint(state)
-        g_corr = y[0, 0] - y[1, 0]
-        lam = joint_force(history[0], y)
-        if not np.all(np.isfinite(np.concatenate([state, history[0], g, g_corr, lam]))):
-            return "not finite"
-        if np.max(np.abs(g)) > max_constraint or np.max(np.abs(g_corr)) > max_constraint:
-            return f"|g_c| > {max_constraint} m"
-        if np.max(np.abs(lam)) > max_multiplier:
-            return f"|lambda_c| > {max_multiplier} N"
-        if max(abs(state[1]), abs(state[7])) > max_rate:
-            return f"|omega| > {max_rate} rad/s"
-        return None
+        return divergence_reason(problem, state, history[0], y, **bounds)
 
     t0 = time.perf_counter()
+    c0 = time.process_time()
     with np.errstate(all="ignore"):
         traj = simulate(
             problem,
@@ -165,16 +188,29 @@ def run_cosimulation(
             check=check,
             iterations=iterations,
             tol=tol,
+            scheme=scheme,
         )
     wall = time.perf_counter() - t0
+    cpu = time.process_time() - c0
     g0 = problem.constraint(state)
     rows = [_series_row(params, state, g0, consistent_history(params, "ff", 0, H)[0])]
     for s, e, y in zip(traj.states[1:], traj.coupling[1:], traj.outputs[1:]):
-        rows.append(_series_row(params, s, y[0, 0] - y[1, 0], joint_force(e, y)))
+        rows.append(_series_row(params, s, y[0, 0] - y[1, 0], joint_force(dec.name, e, y)))
     n_done = len(rows) - 1
     series = {name: np.array([row[name] for row in rows], dtype=float) for name in rows[0]}
     status = "failed" if traj.failed_at else "diverged" if traj.diverged_at else "stable"
     t_div = traj.diverged_at * H if traj.diverged_at else math.nan
     t_fail = traj.failed_at * H if traj.failed_at else math.nan
     stats = dict(problem.stats, macro_steps=n_done)
-    return RunResult(H * np.arange(n_done + 1), series, status, t_div, t_fail, traj.reason or "", stats, wall)
+    return RunResult(
+        H * np.arange(n_done + 1),
+        series,
+        status,
+        t_div,
+        t_fail,
+        traj.reason or "",
+        stats,
+        wall,
+        cpu_seconds=cpu,
+        jacobian_stats=dict(problem.jacobian_stats),
+    )

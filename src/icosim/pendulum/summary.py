@@ -8,6 +8,7 @@ import numpy as np
 
 from ..datasets import config_json, provenance_attrs
 from ..methods import make_method
+from ..schemes import get_scheme
 from .checks import expected_outcome, run_verdict
 from .linearised import linear_test_model_rho
 from .model import PendulumParameters
@@ -21,7 +22,8 @@ def summarize(runs: list, reference, claims: list, rho_test_model: dict | None =
 
     ``runs`` are run datasets, ``reference`` the monolithic one, ``claims`` the
     :class:`~icosim.claims.Claim` list of ``config/claims/pendulum.yaml`` (each
-    ``pendulum_stability`` claim adds ``expected_<id>`` and ``verdict_<id>``).  Errors are maxima over the
+    ``pendulum_stability`` claim adds ``expected_<id>`` and ``verdict_<id>``, ``n/a`` for the runs
+    of another coupling scheme than the claim's).  Errors are maxima over the
     computed part of the run (up to divergence or failure).  A run is observed
     ``unstable`` if it diverged, ``failed`` if a step could not be computed:
     its verdict is then ``undecided`` (a solver failure proves no instability).
@@ -49,6 +51,7 @@ def summarize(runs: list, reference, claims: list, rho_test_model: dict | None =
             method=ds.attrs["method"],
             decomposition=ds.attrs["decomposition"],
             k=int(ds.attrs["k"]),
+            scheme=str(ds.attrs.get("scheme", "jacobi")),
             status=status,
             reason=str(ds.attrs.get("reason", "none")),
             diverged=int(ds.attrs["diverged"]),
@@ -65,22 +68,23 @@ def summarize(runs: list, reference, claims: list, rho_test_model: dict | None =
             observed=observed,
         )
         if rho_test_model is not None:
-            row["rho_test_model"] = float(rho_test_model[run_name(row["method"], row["decomposition"], row["k"])])
+            row["rho_test_model"] = float(rho_test_model[_name(row)])
         for claim in claims:
             if claim.check["kind"] != "pendulum_stability":
+                continue
+            if (
+                get_scheme(claim.check.get("scheme", "jacobi")).name != row["scheme"]
+            ):  # the claim is about another scheme's runs
+                row[f"expected_{claim.id}"] = row[f"verdict_{claim.id}"] = "n/a"
                 continue
             exp = expected_outcome(claim.check, row["method"], row["decomposition"], row["k"])
             row[f"expected_{claim.id}"] = exp
             row[f"verdict_{claim.id}"] = run_verdict(exp, observed)
         rows.append(row)
-    names = [run_name(r["method"], r["decomposition"], r["k"]) for r in rows]
-    data = {key: ("run", [r[key] for r in rows]) for key in rows[0] if key not in ("method", "decomposition", "k")}
-    coords = {
-        "run": ("run", names),
-        "method": ("run", [r["method"] for r in rows]),
-        "decomposition": ("run", [r["decomposition"] for r in rows]),
-        "k": ("run", [r["k"] for r in rows]),
-    }
+    names = [_name(r) for r in rows]
+    coord_keys = ("method", "decomposition", "k", "scheme")
+    data = {key: ("run", [r[key] for r in rows]) for key in rows[0] if key not in coord_keys}
+    coords = {"run": ("run", names), **{key: ("run", [r[key] for r in rows]) for key in coord_keys}}
     units = {
         "t_diverged": "s",
         "t_failed": "s",
@@ -108,6 +112,10 @@ def summarize(runs: list, reference, claims: list, rho_test_model: dict | None =
     return ds
 
 
+def _name(row) -> str:
+    return run_name(row["method"], row["decomposition"], row["k"], row["scheme"])
+
+
 def summary_dataset(runs, reference, claims, *, model: dict, H: float, methods: dict, run_files, command: str = ""):
     """:func:`summarize` with the linear test model's spectral radius per run and provenance (the summary job).
 
@@ -118,8 +126,9 @@ def summary_dataset(runs, reference, claims, *, model: dict, H: float, methods: 
     rho, point = {}, None
     for ds in runs:
         name, dec, k = ds.attrs["method"], ds.attrs["decomposition"], int(ds.attrs["k"])
-        rho[run_name(name, dec, k)], point = linear_test_model_rho(
-            params, H, make_method(name, **methods[name]), dec, k
+        scheme = str(ds.attrs.get("scheme", "jacobi"))
+        rho[run_name(name, dec, k, scheme)], point = linear_test_model_rho(
+            params, H, make_method(name, **methods[name]), dec, k, scheme=scheme
         )
     ds = summarize(runs, reference, claims, rho_test_model=rho)
     job = {

@@ -10,22 +10,25 @@ import math
 
 from .claims import claims_table
 from .html import escape, figure, figure_anchor, section, table, used_by, verdict_badge
+from .pendulum_trade import trade_section
 
-__all__ = ["pendulum_section"]
+__all__ = ["pendulum_section", "trade_section"]
 
 
 def fmt(x, spec=".2e"):
     return "–" if x is None or (isinstance(x, float) and math.isnan(x)) else format(x, spec)
 
 
-def pendulum_section(*, config: dict, paper_figure: dict, summary, claims: list, figure_pngs: list, error_png) -> str:
+def pendulum_section(
+    *, config: dict, paper_figure: dict, summary, claims: list, figure_pngs: list, error_png, trade_html: str = ""
+) -> str:
     """The section as an HTML fragment.
 
     ``config`` is the configuration (``pendulum:``), ``paper_figure`` maps
     ``k`` to the paper's figure number, ``summary`` is the run summary
     (:func:`icosim.pendulum.summary.summarize`), ``claims`` the verdict
     records, ``figure_pngs`` the figures (``.../pendulum_k<k>.png``) and
-    ``error_png`` the error figure.
+    ``error_png`` the error figure; ``trade_html`` (:func:`trade_section`) is appended.
     """
     cfg = config
     paper_figure = {int(k): v for k, v in paper_figure.items()}
@@ -203,5 +206,7 @@ the KKT conditions) and of the velocities onto ġ<sub>c</sub> = 0, the generalis
     )
 
     return section(
-        "Double pendulum (Sect. 4, Figs. 6–8)", setup + "".join(claim_html) + errors + "".join(figs), "pendulum"
+        "Double pendulum (Sect. 4, Figs. 6–8)",
+        setup + "".join(claim_html) + errors + "".join(figs) + trade_html,
+        "pendulum",
     )

@@ -2,7 +2,7 @@
 
 The names are a contract other tools read: data variable ``rho`` over the
 coordinates ``lr1`` and ``li1``; attributes ``figure``, ``method``,
-``decomposition``, ``k``, ``am21``, ``alr21``, ``ali21`` and the method
+``decomposition``, ``k``, ``scheme``, ``am21``, ``alr21``, ``ali21`` and the method
 parameters under their command-line names (``beta``, ``gamma``, ``mu``,
 ``index``, ``a``, ``b``), ``row`` (1-based, as in the paper) and ``view``
 (``full`` or ``zoom``).  Per point the dataset records the verdict
@@ -23,6 +23,7 @@ from ..backend import FLOAT64_DIGITS
 from ..decompositions import DECOMPOSITIONS
 from ..jsonio import dumps
 from ..model import TestModel
+from ..schemes import get_scheme
 from .panels import PanelSpec, format_row_label, grid_axis, method_parameters_units
 from .policy import ARITHMETICS, REASONS, VERDICTS, Certification, spectral_radius
 
@@ -82,7 +83,14 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
     model = TestModel(LR, LI, spec.am21, spec.alr21, spec.ali21)
     settings = Certification.from_dict(spec.certify)
     result = spectral_radius(
-        model, method, spec.decomposition, spec.k, digits=spec.digits, policy=spec.policy, certification=settings
+        model,
+        method,
+        spec.decomposition,
+        spec.k,
+        digits=spec.digits,
+        policy=spec.policy,
+        certification=settings,
+        scheme=spec.scheme,
     )
 
     dims = ("lr1", "li1")
@@ -130,6 +138,7 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
         method=spec.method,
         decomposition=spec.decomposition,
         k=int(spec.k),
+        scheme=get_scheme(spec.scheme).name,
         am21=float(spec.am21),
         alr21=float(spec.alr21),
         ali21=float(spec.ali21),

@@ -26,6 +26,7 @@ from ..linear_problem import LinearCosimulation
 from ..macrostep import macro_step
 from ..methods import CouplingMethod
 from ..model import Coefficients
+from ..schemes import JACOBI, get_scheme
 
 __all__ = ["amplification_matrix", "as_coefficients"]
 
@@ -36,30 +37,32 @@ def _problem(coefficients: Coefficients, decomposition, k, backend, batch_axis=T
     return LinearCosimulation(coefficients, decomposition, k, backend)
 
 
-def _matrix_from_problem(problem: LinearCosimulation, method: CouplingMethod):
+def _matrix_from_problem(problem: LinearCosimulation, method: CouplingMethod, scheme=JACOBI):
     be = problem.backend
     n = problem.n_state
     eye = np.full((n, n), be.const(0), dtype=be.dtype)
     for i in range(n):
         eye[i, i] = be.const(1)
     state, history = problem.unpack(eye)
-    s1, h1, _ = macro_step(problem, method, state, history)
+    s1, h1, _ = macro_step(problem, method, state, history, scheme=scheme)
     rows = problem.pack(s1, h1)  # row j: image of unit vector j
     return np.swapaxes(rows, -1, -2)
 
 
-def amplification_matrix(coefficients, method: CouplingMethod, decomposition, k: int, backend=None):
+def amplification_matrix(coefficients, method: CouplingMethod, decomposition, k: int, backend=None, *, scheme=JACOBI):
     """The matrix ``M`` with ``w_N+1 = M w_N`` (leading axes follow the coefficients).
 
     ``coefficients`` is a :class:`~icosim.model.Coefficients` or a
-    :class:`~icosim.model.TestModel` / :class:`~icosim.model.PhysicalModel`.
+    :class:`~icosim.model.TestModel` / :class:`~icosim.model.PhysicalModel`;
+    ``scheme`` the coupling scheme (:mod:`icosim.schemes`, default Jacobi).
     """
+    scheme = get_scheme(scheme)
     be = backend or Float64()
     decomposition = get_decomposition(decomposition)
     method.check_decomposition(decomposition)
     coefficients = as_coefficients(coefficients)
     with be.context():  # Arb's working precision (a no-op for float64 and mpmath)
-        return _matrix_from_problem(_problem(coefficients, decomposition, k, be), method)
+        return _matrix_from_problem(_problem(coefficients, decomposition, k, be), method, scheme)
 
 
 def as_coefficients(c) -> Coefficients:

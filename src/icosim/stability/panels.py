@@ -18,9 +18,10 @@ import numpy as np
 
 from .. import methods as _methods
 from ..decompositions import DECOMPOSITIONS
-from ..limits import check_k
+from ..limits import MAX_GRID_N, check_k
 from ..methods import make_method
 from ..model import ParameterError
+from ..schemes import figure_id, get_scheme
 from .policy import POLICIES, Certification
 
 __all__ = [
@@ -87,8 +88,8 @@ def grid_axis(bounds, n: int) -> np.ndarray:
     lo, hi = (float(b) for b in bounds)
     if not lo < hi:
         raise ParameterError(f"grid bounds must be increasing, got {list(bounds)!r}")
-    if int(n) != n or n < 2:
-        raise ParameterError(f"grid size n must be an integer >= 2, got {n!r}")
+    if int(n) != n or not 2 <= n <= MAX_GRID_N:
+        raise ParameterError(f"grid size n must be an integer >= 2 and <= {MAX_GRID_N}, got {n!r}")
     axis = np.linspace(lo, hi, int(n))
     axis[0], axis[-1] = lo, hi
     return axis
@@ -122,6 +123,8 @@ class PanelSpec:
     row_keys: tuple = RATIOS
     #: settings of the certified rechecks (:class:`icosim.stability.policy.Certification`), as a mapping
     certify: dict = field(default_factory=dict)
+    #: the coupling scheme (:mod:`icosim.schemes`), by name
+    scheme: str = "jacobi"
 
     @classmethod
     def from_params(cls, params: dict) -> PanelSpec:
@@ -150,6 +153,7 @@ class PanelSpec:
         if self.policy not in POLICIES:
             raise ParameterError(f"policy must be one of {', '.join(POLICIES)}, got {self.policy!r}")
         Certification.from_dict(self.certify)  # refuses a bad setting, naming it
+        get_scheme(self.scheme)  # refuses an unknown scheme, naming the known ones
         bad = [key for key in self.row_keys if key not in row_keys()]
         if bad or not self.row_keys:
             raise ParameterError(
@@ -213,20 +217,23 @@ def _check_grid(name: str, g: dict, *, where: str = "stability"):
         raise ParameterError(f"{where}.{name}.lr1 must lie in lr1 <= 0 (a damped subsystem), got {list(g['lr1'])!r}")
     if min(g["li1"]) < 0:
         raise ParameterError(f"{where}.{name}.li1 must lie in li1 >= 0, got {list(g['li1'])!r}")
-    if int(g["n"]) != g["n"] or g["n"] < 2:
-        raise ParameterError(f"{where}.{name}.n must be an integer >= 2, got {g['n']!r}")
+    if int(g["n"]) != g["n"] or not 2 <= g["n"] <= MAX_GRID_N:
+        raise ParameterError(f"{where}.{name}.n must be an integer >= 2 and <= {MAX_GRID_N}, got {g['n']!r}")
     for axis in ("lr1", "li1"):
         grid_axis(g[axis], g["n"])  # the grid the sweep job will build
 
 
-def figure_panels(figure: str, figure_cfg: dict, *, grid: dict, zoom_grid: dict, precision: dict) -> list[PanelSpec]:
-    """The panels of one figure as configured (rows x k, plus the zooms).
+def figure_panels(
+    figure: str, figure_cfg: dict, *, grid: dict, zoom_grid: dict, precision: dict, scheme="jacobi"
+) -> list[PanelSpec]:
+    """The panels of one figure as configured (rows x k, plus the zooms), for one coupling scheme.
 
     ``figure_cfg`` has the layout of ``config/stability.yaml`` (``method``,
     ``decomposition``, ``params``, ``ratios``, ``rows``, ``k``, optional
-    ``zoom``).  Every panel's method is built once here, so a parameter the
+    ``zoom`` and ``schemes``).  Every panel's method is built once here, so a parameter the
     method does not accept is reported with the figure and row before any job
-    runs.
+    runs.  The panels' ``figure`` is the figure id of ``scheme``
+    (:func:`icosim.schemes.figure_id`: ``"9"`` for Jacobi, ``"9gs12"``, ``"9gs21"``).
     """
     where = f"stability.figures.{figure}"
     n_rows = len(figure_cfg["rows"])
@@ -258,7 +265,7 @@ def figure_panels(figure: str, figure_cfg: dict, *, grid: dict, zoom_grid: dict,
             for view, g in views + ([("zoom", zoom_grid)] if row in zoom["rows"] and k in zoom["k"] else []):
                 panels.append(
                     PanelSpec(
-                        figure=str(figure),
+                        figure=figure_id(figure, scheme),
                         row=row,
                         k=int(k),
                         view=view,
@@ -275,6 +282,7 @@ def figure_panels(figure: str, figure_cfg: dict, *, grid: dict, zoom_grid: dict,
                         policy=precision["policy"],
                         row_keys=row_keys,
                         certify=dict(precision.get("certify") or {}),
+                        scheme=get_scheme(scheme).name,
                     )
                 )
     return panels

@@ -38,6 +38,7 @@ import numpy as np
 from ..backend import FLOAT64_DIGITS
 from ..limits import MAX_BITS_LIMIT, MAX_SECONDS, NotFiniteError, PointTimeout, PrecisionCapError, time_budget
 from ..model import Coefficients, ParameterError, TestModel
+from ..schemes import JACOBI, get_scheme
 from .certified import DEFAULT_BITS, MAX_BITS, certify_spectral_radius
 from .matrix import as_coefficients
 from .spectral import spectral_radius_float64, spectral_radius_mp
@@ -181,6 +182,7 @@ def spectral_radius(
     digits: int = 128,
     policy: str = "auto",
     certification: Certification | dict | None = None,
+    scheme=JACOBI,
 ):
     """Spectral radius and stability verdict over arrays of parameter points with the precision policy.
 
@@ -189,6 +191,7 @@ def spectral_radius(
     model : :class:`TestModel` (Eq. 71; its attributes broadcast to the grid),
         or :class:`~icosim.model.PhysicalModel` / :class:`~icosim.model.Coefficients`
         (any damping, overdamped included).
+    scheme : the coupling scheme (:mod:`icosim.schemes`; default Jacobi), used by every arithmetic.
     policy : one of :data:`POLICIES` (module docstring).
     digits : mpmath digits of the ``mp`` policy.
     certification : :class:`Certification` settings (or a mapping of them).
@@ -198,6 +201,7 @@ def spectral_radius(
     """
     if policy not in POLICIES:
         raise ValueError(f"policy must be one of {', '.join(POLICIES)}, got {policy!r}")
+    scheme = get_scheme(scheme)
     cert_settings = (
         certification if isinstance(certification, Certification) else Certification.from_dict(certification)
     )
@@ -218,7 +222,7 @@ def spectral_radius(
         todo_ball = np.zeros(shape, dtype=bool)
         todo_mp = ~overflow
     else:
-        rho, err = _float64_isolated(point_type, arrays, overflow, method, decomposition, k, out)
+        rho, err = _float64_isolated(point_type, arrays, overflow, method, decomposition, k, out, scheme)
         out["rho"], out["err"] = rho, err
         trusted = np.isfinite(rho) & (np.abs(rho - 1) > err)
         if policy == "float64":  # no recheck: float64's verdict on every finite point
@@ -249,7 +253,13 @@ def spectral_radius(
         try:
             with time_budget(cert_settings.point_seconds):
                 c = certify_spectral_radius(
-                    point, method, decomposition, k, bits=cert_settings.bits, max_bits=cert_settings.max_bits
+                    point,
+                    method,
+                    decomposition,
+                    k,
+                    bits=cert_settings.bits,
+                    max_bits=cert_settings.max_bits,
+                    scheme=scheme,
                 )
         except Exception as exc:  # one point's failure must not abort a grid
             _undecided(out, idx, exc)
@@ -262,7 +272,7 @@ def spectral_radius(
         point = point_type(*(float(a[idx]) for a in arrays))
         try:
             with time_budget(cert_settings.point_seconds):
-                r = spectral_radius_mp(point, method, decomposition, k, digits)
+                r = spectral_radius_mp(point, method, decomposition, k, digits, scheme=scheme)
         except Exception as exc:  # one point's failure must not abort a grid
             _undecided(out, idx, exc)
             continue
@@ -288,12 +298,12 @@ def _overflowing(model, shape) -> np.ndarray:
     return bad
 
 
-def _float64_isolated(point_type, arrays, overflow, method, decomposition, k, out):
+def _float64_isolated(point_type, arrays, overflow, method, decomposition, k, out, scheme=JACOBI):
     """The float64 pass over the grid in one call; if it raises, point by point, each failure undecided alone."""
     shape = arrays[0].shape
     safe = [np.where(overflow, 0.0, a) if a.dtype.kind == "f" else a for a in arrays]  # no overflow inside
     try:
-        rho, err = spectral_radius_float64(point_type(*safe), method, decomposition, k)
+        rho, err = spectral_radius_float64(point_type(*safe), method, decomposition, k, scheme=scheme)
         return np.where(overflow, np.nan, rho), np.where(overflow, np.inf, err)
     except Exception:  # noqa: BLE001 -- find the point(s) responsible; the others keep their values
         rho, err = np.full(shape, np.nan), np.full(shape, np.inf)
@@ -301,7 +311,9 @@ def _float64_isolated(point_type, arrays, overflow, method, decomposition, k, ou
             if overflow[idx]:
                 continue
             try:
-                r, e = spectral_radius_float64(point_type(*(a[idx] for a in safe)), method, decomposition, k)
+                r, e = spectral_radius_float64(
+                    point_type(*(a[idx] for a in safe)), method, decomposition, k, scheme=scheme
+                )
                 rho[idx], err[idx] = float(r), float(e)
             except Exception as exc:  # noqa: BLE001
                 _undecided(out, idx, exc)

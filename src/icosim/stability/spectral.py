@@ -30,6 +30,7 @@ from ..backend import Float64, Multiprecision
 from ..decompositions import get_decomposition
 from ..linear_problem import LinearCosimulation
 from ..model import TestModel
+from ..schemes import JACOBI, get_scheme
 from .matrix import _matrix_from_problem, _problem, as_coefficients
 
 __all__ = ["spectral_radius_float64", "spectral_radius_mp", "SAFETY", "DISTURBANCE"]
@@ -65,7 +66,7 @@ def _disturbed(problem: LinearCosimulation, rng, rel):
     return p
 
 
-def spectral_radius_float64(coefficients, method, decomposition, k, *, error_estimate=True, seed=0):
+def spectral_radius_float64(coefficients, method, decomposition, k, *, error_estimate=True, seed=0, scheme=JACOBI):
     """Spectral radius in float64 over arrays of parameter points.
 
     Returns ``(rho, err)``; ``err`` is the error estimate described in the
@@ -73,12 +74,13 @@ def spectral_radius_float64(coefficients, method, decomposition, k, *, error_est
     returned as they are (never raised), so one bad point cannot spoil a grid.
     """
     be = Float64()
+    scheme = get_scheme(scheme)
     decomposition = get_decomposition(decomposition)
     method.check_decomposition(decomposition)
     coefficients = as_coefficients(coefficients)
     with np.errstate(all="ignore"):
         problem = _problem(coefficients, decomposition, k, be)
-        M = _matrix_from_problem(problem, method)
+        M = _matrix_from_problem(problem, method, scheme)
         finite = np.all(np.isfinite(M), axis=(-1, -2))
         M_safe = np.where(finite[..., None, None], M, 0.0)
         rho = np.where(finite, _spectral_radius_of(M_safe, be), np.nan)
@@ -88,7 +90,7 @@ def spectral_radius_float64(coefficients, method, decomposition, k, *, error_est
         rel = DISTURBANCE * be.eps
         spread = np.zeros_like(rho)
         for _ in range(2):
-            Md = _matrix_from_problem(_disturbed(problem, rng, rel), method)
+            Md = _matrix_from_problem(_disturbed(problem, rng, rel), method, scheme)
             ok = np.all(np.isfinite(Md), axis=(-1, -2))
             Md = np.where(ok[..., None, None], Md, 0.0)
             norm = np.max(np.abs(Md), axis=(-1, -2), keepdims=True)
@@ -103,7 +105,7 @@ def spectral_radius_float64(coefficients, method, decomposition, k, *, error_est
     return rho, err
 
 
-def spectral_radius_mp(coefficients, method, decomposition, k, digits: int = 128):
+def spectral_radius_mp(coefficients, method, decomposition, k, digits: int = 128, *, scheme=JACOBI):
     """Spectral radius of one parameter point at ``digits`` significant digits.
 
     The parameters are taken exactly as given -- a float as the binary number
@@ -121,5 +123,5 @@ def spectral_radius_mp(coefficients, method, decomposition, k, digits: int = 128
         ).coefficients()
     else:
         coefficients = as_coefficients(coefficients).map(be.const)
-    M = _matrix_from_problem(_problem(coefficients, decomposition, k, be), method)
+    M = _matrix_from_problem(_problem(coefficients, decomposition, k, be), method, get_scheme(scheme))
     return _spectral_radius_of(M, be)

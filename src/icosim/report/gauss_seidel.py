@@ -1,0 +1,283 @@
+"""The Gauss-Seidel section of the report: Jacobi against sequential coupling, from the data.
+
+Everything shown comes from generated files: the stable shares
+(:func:`icosim.stability.comparison.scheme_shares`), the convergence panels of
+every scheme, the pendulum summary of every run, the claims about the schemes
+and the figures.  A part without Gauss-Seidel results is left out.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..claims import verdict_counts
+from ..schemes import SCHEMES, split_figure_id
+from .claims import claims_table
+from .html import escape, figure, section, table
+
+__all__ = ["gauss_seidel_section", "share_cells", "order_rows", "pendulum_rows"]
+
+LABEL = {name: s.label for name, s in SCHEMES.items()}
+
+
+def _fmt(x, spec):
+    return "–" if x is None or (isinstance(x, float) and not math.isfinite(x)) else format(x, spec)
+
+
+# -- stability ------------------------------------------------------------------------------------
+def share_cells(shares) -> list:
+    """One record per (figure, k): mean stable share over the rows per scheme, and the grid resolution."""
+    out = []
+    schemes = [str(s) for s in shares["scheme"].values]
+    n = int(np.max(shares["n_points"].values))
+    resolution = 1.0 / (math.isqrt(n) - 1) if n > 1 else math.nan
+    for fig in shares["figure"].values:
+        for k in shares["k"].values:
+            cell = shares["stable_share"].sel(figure=fig, k=k)
+            means = {s: float(np.nanmean(cell.sel(scheme=s).values)) for s in schemes}
+            out.append(
+                {
+                    "figure": str(fig),
+                    "method": str(shares["method"].sel(figure=fig).values),
+                    "decomposition": str(shares["decomposition"].sel(figure=fig).values),
+                    "k": int(k),
+                    "shares": means,
+                    "resolution": resolution,
+                }
+            )
+    return out
+
+
+def _effect(cells, scheme):
+    """(cells where ``scheme`` is more stable than Jacobi, less stable, neither) beyond the grid resolution."""
+    better, worse, same = [], [], []
+    for c in cells:
+        if scheme not in c["shares"] or "jacobi" not in c["shares"]:
+            continue
+        d = c["shares"][scheme] - c["shares"]["jacobi"]
+        (better if d > c["resolution"] else worse if d < -c["resolution"] else same).append((c, d))
+    return better, worse, same
+
+
+def _most_stable(c):
+    """The scheme with the largest share, or "tie" if another is within the grid resolution of it."""
+    ranked = sorted(c["shares"].items(), key=lambda kv: -kv[1])
+    if len(ranked) > 1 and ranked[0][1] - ranked[1][1] <= c["resolution"]:
+        return "tie (within the grid resolution)"
+    return LABEL[ranked[0][0]]
+
+
+def _cell_name(c):
+    return f"Fig. {c['figure']} ({c['method']}, {c['decomposition']}) k = {c['k']}"
+
+
+def _stability_part(stab) -> str:
+    cells = share_cells(stab["shares"])
+    schemes = [str(s) for s in stab["shares"]["scheme"].values]
+    rows = [[_cell_name(c)] + [f"{c['shares'][s]:.0%}" for s in schemes] + [_most_stable(c)] for c in cells]
+    effects = []
+    for s in schemes:
+        if s == "jacobi":
+            continue
+        better, worse, same = _effect(cells, s)
+        worst = sorted(worse, key=lambda cd: cd[1])[:4]
+        effects.append(
+            f"<li><b>{escape(LABEL[s])}</b> has a larger mean stable share than Jacobi in {len(better)} of "
+            f"{len(cells)} (figure, k) cells"
+            + (": " + "; ".join(f"{escape(_cell_name(c))} {d:+.0%}" for c, d in better) if better else "")
+            + f"; a smaller one in {len(worse)} (largest losses: "
+            + "; ".join(f"{escape(_cell_name(c))} {d:+.0%}" for c, d in worst)
+            + f"); the same, within the grid resolution, in {len(same)}.</li>"
+        )
+    counts = verdict_counts(stab["claims"])
+    body = [
+        "<h3>Stability (Figs. 9–15 with both orders)</h3>",
+        "<p>The Gauss–Seidel versions of Figs. 9–15 have the Jacobi figures' panels, grids and precision policy "
+        "(figure ids <code>9gs12</code> … <code>15gs21</code>). Shares below are the mean over a figure's rows of "
+        "the share of stable grid points.</p><ul>" + "".join(effects) + "</ul>",
+        figure(
+            stab["comparison_png"],
+            "Stable shares per method, decomposition and k: Jacobi (grey), Gauss–Seidel 1→2 (blue), "
+            "2→1 (orange); bars are the mean over a figure's rows, markers each row.",
+            alt="scheme comparison",
+        ),
+        table(["figure, k"] + [LABEL[s] for s in schemes] + ["most stable"], rows),
+        f"<p>Claims about the schemes (config/claims/stability_gauss_seidel.yaml, stated from these data): "
+        f"{counts['pass']} pass, {counts['fail']} fail, {counts['undecided']} undecided.</p>"
+        + claims_table(stab["claims"], note_header="why"),
+    ]
+    for png in stab["figure_pngs"]:
+        fid = Path(png).stem.removeprefix("fig")
+        fig, scheme = split_figure_id(fid)
+        title = stab["figures_cfg"].get(fig, {}).get("title", "")
+        body.append(
+            figure(
+                png,
+                f"<b>Fig. {escape(fig)}, {escape(scheme.label)}</b> (<code>{escape(fid)}</code>): {escape(title)}. "
+                "Same rows, columns, grids and colours as the paper's (Jacobi) figure in the stability section.",
+                alt=f"Fig. {fid}",
+            )
+        )
+    return "".join(body)
+
+
+# -- convergence ----------------------------------------------------------------------------------
+def order_rows(curves) -> tuple:
+    """``(schemes, rows)``: per curve of the paper's figures the fitted order under each scheme.
+
+    ``curves`` are records of :func:`icosim.convergence.curves.curves` of every scheme's panels.
+    A row is ``(label, {scheme: order or "unstable" or None})``.
+    """
+    from ..convergence.curves import curve_label
+
+    table_, schemes = {}, []
+    for rec in curves:
+        fig, scheme = split_figure_id(rec["figure"])
+        if scheme.name not in schemes:
+            schemes.append(scheme.name)
+        label = f"Fig. {fig}: " + curve_label(rec)
+        value = "unstable" if bool(np.all(rec["unstable"])) else rec["order"]
+        table_.setdefault(label, {})[scheme.name] = value
+    order = [s for s in SCHEMES if s in schemes]
+    return order, list(table_.items())
+
+
+def _order_text(v):
+    if v is None:
+        return "–"
+    if v == "unstable":
+        return "unstable"
+    return _fmt(float(v), ".2f") if math.isfinite(float(v)) else "no fit"
+
+
+def _convergence_part(conv) -> str:
+    schemes, rows = order_rows(conv["curves"])
+    counts = verdict_counts(conv["claims"])
+    body = [
+        "<h3>Convergence (Figs. 21–23 with both orders)</h3>",
+        "<p>Every curve of Figs. 21–23 computed with both Gauss–Seidel orders, with the same step sizes, fit and "
+        "instability rules as the Jacobi curves (figure ids <code>21gs12</code> … <code>23gs21</code>). Fitted "
+        "order of Eq. (72) per curve; <i>unstable</i>: unstable at every step size; <i>no fit</i>: too few stable "
+        "step sizes. docs/gauss_seidel.md derives O(H<sup>k+1</sup>) for every stable Gauss–Seidel curve: the "
+        "leading subsystem's extrapolated coupling force and the corrected subsystem's interpolated one differ by "
+        "O(H<sup>k+1</sup>), an impulse defect O(H<sup>k+2</sup>) per step.</p>",
+        table(
+            ["curve"] + [LABEL[s] for s in schemes],
+            [[label] + [_order_text(v.get(s)) for s in schemes] for label, v in rows],
+        ),
+        f"<p>Claims (config/claims/convergence_gauss_seidel.yaml): {counts['pass']} pass, {counts['fail']} fail, "
+        f"{counts['undecided']} undecided.</p>" + claims_table(conv["claims"], note_header="why"),
+    ]
+    for png in conv["figure_pngs"]:
+        stem = Path(png).stem.removeprefix("fig")
+        fid, dec = stem.rsplit("_", 1)
+        fig, scheme = split_figure_id(fid)
+        body.append(
+            figure(
+                png,
+                f"<b>Fig. {escape(fig)} ({escape(dec)}), {escape(scheme.label)}</b>: NRMSE of Eq. (72) over H, one "
+                "curve per k; × marks unstable step sizes; filled points are the fitted range.",
+                alt=f"Fig. {stem}",
+            )
+        )
+    return "".join(body)
+
+
+# -- pendulum ----------------------------------------------------------------------------------
+def pendulum_rows(summary) -> tuple:
+    """``(schemes, rows)``: per configuration and k the outcome of each scheme's run.
+
+    A row is ``((method, decomposition, k), {scheme: record})`` with the record's
+    ``status``, ``t_end`` (diverged or failed at, else the last time), ``err_phi``,
+    ``rho_test_model`` and ``reason``.
+    """
+    out, schemes = {}, []
+    for i in range(summary.sizes["run"]):
+        r = summary.isel(run=i)
+        s = str(r["scheme"].values)
+        if s not in schemes:
+            schemes.append(s)
+        key = (str(r["method"].values), str(r["decomposition"].values), int(r["k"].values))
+        status = str(r["status"].values)
+        t_stop = float(r["t_" + status].values) if status in ("diverged", "failed") else float(r["t_last"].values)
+        out.setdefault(key, {})[s] = {
+            "status": status,
+            "t": t_stop,
+            "err_phi": max(float(r["err_phi1"].values), float(r["err_phi2"].values)),
+            "rho_test_model": float(r["rho_test_model"].values) if "rho_test_model" in r else math.nan,
+            "reason": str(r["reason"].values),
+        }
+    return [s for s in SCHEMES if s in schemes], list(out.items())
+
+
+def _pendulum_part(pend) -> str:
+    schemes, rows = pendulum_rows(pend["summary"])
+    cells = []
+    for (m, d, k), by in rows:
+        row = [f"{m} {d} k = {k}"]
+        for s in schemes:
+            rec = by.get(s)
+            if rec is None:
+                row.append("–")
+                continue
+            if rec["status"] == "stable":
+                text = f"stable, |Δφ| ≤ {_fmt(rec['err_phi'], '.1e')} rad"
+            else:
+                text = f"{rec['status']} at t = {rec['t']:.3f} s ({rec['reason']})"
+            row.append(text + f"; ρ(test model) = {_fmt(rec['rho_test_model'], '.4f')}")
+        cells.append(row)
+    n = {s: sum(1 for _, by in rows if by.get(s, {}).get("status") == "stable") for s in schemes}
+    counts = verdict_counts(pend["claims"])
+    body = [
+        "<h3>Double pendulum (all configurations with both orders)</h3>",
+        "<p>Every configuration of Figs. 6–8 run with both Gauss–Seidel orders (link 1 is subsystem 1), the same "
+        "integrator, sensitivities, end time and divergence bounds. Stable runs up to the end time: "
+        + ", ".join(f"{escape(LABEL[s])} {n[s]} of {len(rows)}" for s in schemes)
+        + ". ρ(test model): the spectral radius of the linear test model at the pendulum's points for the same "
+        "scheme (as in the pendulum section). With link 2 first the position- and velocity-level conditions are "
+        "singular for the pendulum (link 1 has one degree of freedom; docs/gauss_seidel.md, Sect. 5).</p>",
+        table(["run"] + [LABEL[s] for s in schemes], cells),
+        f"<p>Claims (config/claims/pendulum_gauss_seidel.yaml): {counts['pass']} pass, {counts['fail']} fail, "
+        f"{counts['undecided']} undecided.</p>" + claims_table(pend["claims"], note_header="why"),
+    ]
+    for png in pend["figure_pngs"]:
+        stem = Path(png).stem
+        body.append(
+            figure(
+                png,
+                f"<b>{escape(stem)}</b>: the pendulum with a Gauss–Seidel scheme, one line per configuration "
+                "(up to divergence), the monolithic reference dashed.",
+                alt=stem,
+            )
+        )
+    return "".join(body)
+
+
+def gauss_seidel_section(*, stability=None, convergence=None, pendulum=None) -> str:
+    """The section as an HTML fragment; each part a mapping (or None to leave it out).
+
+    ``stability``: ``shares`` (dataset), ``claims`` (verdict records), ``comparison_png``,
+    ``figure_pngs``, ``figures_cfg`` (``stability.figures``).  ``convergence``: ``curves``
+    (records of every scheme's panels), ``claims``, ``figure_pngs``.  ``pendulum``:
+    ``summary`` (every run), ``claims``, ``figure_pngs``.
+    """
+    intro = (
+        "<p>The paper analyses the Jacobi (parallel) scheme. In the Gauss–Seidel (sequential) scheme the first "
+        "subsystem advances once with the extrapolated coupling variables and its state is final; the corrected "
+        "coupling variables are formed from its finished outputs (algebraic gradients only) and the second "
+        "subsystem's full gradients; only the second subsystem is corrected, with the interpolation polynomial. "
+        f"Cost: {SCHEMES['gauss-seidel-12'].integrations_per_step} subsystem integrations per macro step instead of "
+        f"{SCHEMES['jacobi'].integrations_per_step}, but the subsystems no longer run in parallel. Both orders: "
+        "1→2 (subsystem 1 first) and 2→1. Derivation: docs/gauss_seidel.md.</p>"
+    )
+    parts = [intro]
+    if stability:
+        parts.append(_stability_part(stability))
+    if convergence:
+        parts.append(_convergence_part(convergence))
+    if pendulum:
+        parts.append(_pendulum_part(pendulum))
+    return section("Gauss–Seidel coupling (both orders) against Jacobi", "".join(parts), "gauss_seidel")

@@ -1,0 +1,312 @@
+"""The Gauss-Seidel parts of the workflow and the library around them: configuration, figure ids,
+scheduling, the comparison of stable shares, the report section, and the pendulum's Gauss-Seidel step.
+
+Dry runs work on a copy of the workflow; nothing here writes to the checkout's results/.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+import yaml
+from helpers import copy_workflow, scheduled, snakemake, validate_config
+
+from icosim import ParameterError, make_method
+from icosim.convergence.config import configured_curves
+from icosim.convergence.panels import figure_panels as conv_figure_panels
+from icosim.pendulum.config import configured_schemes
+from icosim.pendulum.model import PendulumParameters
+from icosim.pendulum.names import run_name
+from icosim.pendulum.problem import PendulumCosimulation
+from icosim.pendulum.reference import Monolithic, consistent_history
+from icosim.pendulum.runs import run_cosimulation
+from icosim.report.gauss_seidel import gauss_seidel_section, order_rows, pendulum_rows, share_cells
+from icosim.schemes import GS12, GS21, figure_id, split_figure_id
+from icosim.stability.comparison import scheme_shares
+from icosim.stability.datasets import stability_panel
+from icosim.stability.panels import PanelSpec, figure_panels
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def part(name):
+    return yaml.safe_load((ROOT / "config" / f"{name}.yaml").read_text())[name]
+
+
+@pytest.fixture(scope="module")
+def workflow_copy(tmp_path_factory):
+    return copy_workflow(tmp_path_factory.mktemp("wf"))
+
+
+# -- configuration ------------------------------------------------------------------------------
+def test_figure_ids_round_trip():
+    for fig in ("9", "15", "21"):
+        for scheme in ("jacobi", "gauss-seidel-12", "gauss-seidel-21"):
+            assert split_figure_id(figure_id(fig, scheme)) == (fig, __import__("icosim").get_scheme(scheme))
+    assert figure_id("9") == "9"  # the paper's figures keep their numbers
+
+
+def test_jacobi_only_config_switches_off_every_gauss_seidel_scheme():
+    only = yaml.safe_load((ROOT / "config" / "jacobi_only.yaml").read_text())
+    assert "gauss_seidel" not in only["report"]["sections"]
+    for name in ("stability", "convergence"):
+        for fig, cfg in part(name)["figures"].items():
+            if set(cfg.get("schemes", ["jacobi"])) != {"jacobi"}:
+                assert only[name]["figures"][str(fig)]["schemes"] == ["jacobi"], (name, fig)
+    assert only["pendulum"]["schemes"] == ["jacobi"]
+
+
+def test_default_config_computes_figs_9_to_15_and_21_to_23_with_both_orders():
+    both = {"jacobi", "gauss-seidel-12", "gauss-seidel-21"}
+    for name, figs in (("stability", range(9, 16)), ("convergence", range(21, 24))):
+        for fig in figs:
+            assert set(part(name)["figures"][str(fig)]["schemes"]) == both
+    assert set(configured_schemes(part("pendulum"))) == both
+
+
+@pytest.mark.parametrize(
+    "name, override, message",
+    [
+        ("stability", {"figures": {"9": {"schemes": ["seidel"]}}}, "seidel"),
+        ("convergence", {"figures": {"21": {"schemes": []}}}, "schemes"),
+        ("pendulum", {"schemes": ["gauss-seidel-12"]}, "jacobi"),
+    ],
+)
+def test_bad_schemes_are_refused_by_the_schemas(name, override, message):
+    cfg = part(name)
+    for key, value in override.items():
+        if key == "figures":
+            for fig, sub in value.items():
+                cfg["figures"][fig].update(sub)
+        else:
+            cfg[key] = value
+    with pytest.raises(Exception, match=message):
+        validate_config(cfg, name)
+
+
+def test_pendulum_schemes_must_include_jacobi():
+    with pytest.raises(ParameterError, match="pendulum.schemes must include jacobi"):
+        configured_schemes({"schemes": ["gauss-seidel-21"]})
+    with pytest.raises(ParameterError, match="pendulum.schemes: scheme must be one of"):
+        configured_schemes({"schemes": ["jacobi", "sequential"]})
+
+
+def test_gauss_seidel_panels_mirror_the_jacobi_layout():
+    cfg = part("stability")
+    kw = dict(grid=cfg["grid"], zoom_grid=cfg["zoom_grid"], precision=cfg["precision"])
+    for fig in ("9", "13"):
+        jac = figure_panels(fig, cfg["figures"][fig], **kw)
+        gs = figure_panels(fig, cfg["figures"][fig], scheme="gauss-seidel-21", **kw)
+        strip = lambda s: {**s.as_dict(), "figure": None, "scheme": None}  # noqa: E731
+        assert [strip(s) for s in gs] == [strip(s) for s in jac]
+        assert {s.figure for s in gs} == {f"{fig}gs21"} and {s.scheme for s in gs} == {"gauss-seidel-21"}
+    conv = part("convergence")
+    specs = conv_figure_panels("21", conv["figures"]["21"], conv["k"], "gauss-seidel-12")
+    assert {s.figure for s in specs} == {"21gs12"} and {s.scheme for s in specs} == {"gauss-seidel-12"}
+    curves = configured_curves(conv)
+    assert {c["scheme"] for c in curves if c["figure"] == "22gs21"} == {"gauss-seidel-21"}
+
+
+def test_run_names():
+    assert run_name("projection", "dd", 1) == "projection_dd_k1"
+    assert run_name("projection", "dd", 1, GS12) == "projection_dd_k1_gs12"
+
+
+# -- scheduling -------------------------------------------------------------------------------------
+def test_gauss_seidel_figure_schedules_its_own_panels(workflow_copy):
+    proc = snakemake(workflow_copy, "-n", "results/stability/figures/fig9gs21.png")
+    sweeps = scheduled(proc, "stability_sweep")
+    assert sweeps and all(s.startswith("results/stability/fig9gs21/") for s in sweeps)
+    assert len(sweeps) == 4 * 3 + 1
+
+
+def test_default_run_has_every_gauss_seidel_part_and_jacobi_only_has_none(workflow_copy):
+    proc = snakemake(workflow_copy, "-n")
+    text = proc.stdout + proc.stderr
+    for rule in (
+        "stability_scheme_figure",
+        "stability_gauss_seidel_claims",
+        "convergence_gauss_seidel_claims",
+        "pendulum_gs_run",
+        "pendulum_gauss_seidel_claims",
+        "gauss_seidel_report_section",
+    ):
+        assert f"rule {rule}:" in text, rule
+    assert len(scheduled(proc, "pendulum_gs_run")) == 2 * 21
+    only = snakemake(workflow_copy, "-n", "--configfile", "config/jacobi_only.yaml")
+    text = only.stdout + only.stderr
+    assert "gs12" not in text and "gs21" not in text and "gauss_seidel" not in text
+
+
+# -- the comparison and the report ------------------------------------------------------------------
+def _panel(figure, scheme, row, k, n=5):
+    spec = PanelSpec.from_params(
+        dict(
+            figure=figure,
+            row=row,
+            k=k,
+            view="full",
+            method="baumgarte",
+            method_params={"index": 1, "mu": 1.0},
+            decomposition="ff",
+            am21=10.0 if row == 2 else 1.0,
+            alr21=1.0,
+            ali21=1.0,
+            lr1=[-2.0, 0.0],
+            li1=[0.0, 2.0],
+            n=n,
+            policy="float64",
+            scheme=scheme,
+        )
+    )
+    return stability_panel(spec)
+
+
+def test_scheme_shares_tabulates_the_panels():
+    panels = [
+        _panel(figure_id("9", s), s, row, k)
+        for s in ("jacobi", "gauss-seidel-12", "gauss-seidel-21")
+        for row in (1, 2)
+        for k in (1, 2)
+    ]
+    ds = scheme_shares(panels)
+    assert list(ds["figure"].values) == ["9"] and list(ds["scheme"].values) == [
+        "jacobi",
+        "gauss-seidel-12",
+        "gauss-seidel-21",
+    ]
+    for p in panels:
+        fig, scheme = split_figure_id(p.attrs["figure"])
+        share = float(ds["stable_share"].sel(figure=fig, row=p.attrs["row"], k=p.attrs["k"], scheme=scheme.name))
+        assert share == pytest.approx(float(p["stable"].values.mean()))
+    cells = share_cells(ds)
+    assert len(cells) == 2 and cells[0]["resolution"] == pytest.approx(0.25)
+    html = gauss_seidel_section(
+        stability={"shares": ds, "claims": [], "comparison_png": _png(), "figure_pngs": [], "figures_cfg": {}}
+    )
+    assert "Gauss–Seidel 1→2" in html and "Fig. 9 (baumgarte, ff) k = 1" in html
+
+
+def _png(tmp=[]):  # noqa: B006 - one small PNG per session
+    if not tmp:
+        import tempfile
+
+        from matplotlib.figure import Figure
+
+        path = Path(tempfile.mkdtemp()) / "x.png"
+        Figure(figsize=(1, 1)).savefig(path, dpi=10)
+        tmp.append(path)
+    return tmp[0]
+
+
+def test_order_rows_and_pendulum_rows_read_the_data():
+    recs = [
+        {
+            "figure": fid,
+            "decomposition": "ff",
+            "method": "projection",
+            "panel": "all",
+            "index": 1,
+            "k": 0,
+            "order": order,
+            "unstable": np.array([unstable] * 3),
+        }
+        for fid, order, unstable in (("23", 2.0, False), ("23gs12", 1.0, False), ("23gs21", np.nan, True))
+    ]
+    schemes, rows = order_rows(recs)
+    assert schemes == ["jacobi", "gauss-seidel-12", "gauss-seidel-21"]
+    [(label, values)] = rows
+    assert label.startswith("Fig. 23: ff, projection") and values == {
+        "jacobi": 2.0,
+        "gauss-seidel-12": 1.0,
+        "gauss-seidel-21": "unstable",
+    }
+    summary = xr.Dataset(
+        {
+            "status": ("run", ["stable", "diverged"]),
+            "t_diverged": ("run", [np.nan, 0.02]),
+            "t_failed": ("run", [np.nan, np.nan]),
+            "t_last": ("run", [0.5, 0.019]),
+            "err_phi1": ("run", [1e-6, 1.0]),
+            "err_phi2": ("run", [2e-6, 1.0]),
+            "rho_test_model": ("run", [0.999, 1.85]),
+            "reason": ("run", ["none", "|lambda_c| > 1000 N"]),
+        },
+        coords={
+            "method": ("run", ["baumgarte"] * 2),
+            "decomposition": ("run", ["ff"] * 2),
+            "k": ("run", [1, 1]),
+            "scheme": ("run", ["jacobi", "gauss-seidel-12"]),
+        },
+    )
+    schemes, rows = pendulum_rows(summary)
+    assert schemes == ["jacobi", "gauss-seidel-12"]
+    [(key, by)] = rows
+    assert key == ("baumgarte", "ff", 1) and by["gauss-seidel-12"]["t"] == 0.02
+    assert by["jacobi"]["err_phi"] == 2e-6
+
+
+# -- the pendulum's Gauss-Seidel step -----------------------------------------------------------------
+P, H = PendulumParameters(), 1e-3
+
+
+@pytest.mark.parametrize("decomposition", ["ff", "fd", "dd"])
+@pytest.mark.parametrize("lead", [0, 1])
+def test_pendulum_gauss_seidel_jacobians_match_central_differences(decomposition, lead):
+    """The finished link responds algebraically, the other through its corrector: d residuals / d e
+    of that map by central differences (separate corrector runs and re-evaluations)."""
+    k = 1
+    prob = PendulumCosimulation(P, decomposition, k, H)
+    state = Monolithic(P).cosim_state(np.array([0.5, -1.2, 1.1, -0.4]))
+    hist = consistent_history(P, decomposition, k, H)
+    e = prob.extrapolate(hist)
+    end, y_lead = prob.predict(lead, state, hist, final=True)
+    fixed = [None, None]
+    fixed[lead] = end
+    jac = prob.jacobians(state, hist, e, None, tuple(fixed))
+
+    def residuals(ee):
+        ys = [None, None]
+        ys[lead] = prob.reevaluate(lead, end, y_lead, e, ee)
+        ys[1 - lead] = prob.correct(1 - lead, state, hist, ee)[1]
+        return prob.residuals(prob.stack(ys))
+
+    for j in range(prob.n_coupling):
+        h = 1e-2 * max(1.0, abs(e[j]))
+        ep, em = e.copy(), e.copy()
+        ep[j] += h
+        em[j] -= h
+        rp, rm = residuals(ep), residuals(em)
+        for key in ("acc", "force"):  # the levels every decomposition's projection solves
+            central = (rp[key] - rm[key]) / (2 * h)
+            scale = np.max(np.abs(jac[key])) if jac[key].size else 1.0
+            np.testing.assert_allclose(jac[key][..., j], central, rtol=0, atol=1e-5 * scale, err_msg=key)
+
+
+@pytest.mark.parametrize("decomposition", ["ff", "fd"])
+def test_pendulum_link2_first_leaves_position_level_singular(decomposition):
+    """docs/gauss_seidel.md, Sect. 5: with link 2 finished, only link 1 (one degree of freedom) can move
+    the joint: the position-level rows are of rank one; with link 1 finished link 2 meets them."""
+    prob = PendulumCosimulation(P, decomposition, 1, H)
+    state = Monolithic(P).cosim_state(np.array([0.5, -1.2, 1.1, -0.4]))
+    hist = consistent_history(P, decomposition, 1, H)
+    e = prob.extrapolate(hist)
+
+    def scaled_condition(lead, level):
+        fixed = [None, None]
+        fixed[lead] = prob.predict(lead, state, hist, final=True)[0]
+        jac = prob.jacobians(state, hist, e, None, tuple(fixed))
+        A = np.concatenate([jac[level], jac["force"]])
+        return np.linalg.cond(A / np.max(np.abs(A), axis=1, keepdims=True))
+
+    assert scaled_condition(1, "pos") > 1e5 and scaled_condition(1, "vel") > 1e5  # link 2 first
+    assert scaled_condition(0, "pos") < 1e2 and scaled_condition(1, "acc") < 1e2
+
+
+def test_pendulum_gauss_seidel_runs_count_three_integrations_and_detect_divergence():
+    stable = run_cosimulation(P, make_method("projection"), "ff", 1, H=H, t_end=0.02, scheme=GS12)
+    assert stable.status == "stable" and stable.stats["integrations"] == 3 * stable.stats["macro_steps"]
+    assert np.max(np.abs(np.hypot(stable.series["g_cax"], stable.series["g_cay"]))) < 1e-9  # projected
+    singular = run_cosimulation(P, make_method("weighted", a=1, b=1), "ff", 0, H=H, t_end=0.02, scheme=GS21)
+    assert singular.status == "diverged" and singular.t_diverged <= 2 * H and "lambda_c" in singular.reason

@@ -1,0 +1,23 @@
+"""Snakemake job: adaptive macro steps against fixed H at equal error -> NetCDF
+(thin: icosim.pendulum.adaptive_study)."""
+
+import logging
+
+from icosim.datasets import write_netcdf
+from icosim.pendulum.adaptive_study import adaptive_study
+
+logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+p = snakemake.params
+
+
+def log(kind, label, x, rec):
+    logging.info(
+        "%-8s %-22s %.1e %-8s err %.2e steps %d cpu %.2f s %s",
+        *(kind, label, x, rec["status"], rec["error_max"], rec["n_macro_steps"], rec["cpu_seconds"], rec["reason"]),
+    )
+
+
+ds = adaptive_study(
+    dict(p.settings), dict(p.adaptive), reference=dict(p.reference), command="snakemake rule pendulum_adaptive", log=log
+)
+write_netcdf(ds, snakemake.output[0])

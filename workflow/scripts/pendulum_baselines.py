@@ -1,0 +1,33 @@
+"""Snakemake job: the monolithic pendulum over tolerances (Radau IIA, DOP853) and the linear test model's
+errors for every configuration -> two NetCDF files (thin: icosim.pendulum.baselines)."""
+
+import logging
+
+from icosim.datasets import write_netcdf
+from icosim.pendulum.baselines import linear_orders_dataset, monolithic_baselines
+from icosim.pendulum.model import PendulumParameters
+
+logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+p = snakemake.params
+mono = monolithic_baselines(
+    PendulumParameters(**p.settings["model"]),
+    p.monolithic["tolerances"],
+    p.t_end,
+    reference=dict(p.reference),
+    repeats=p.monolithic["repeats"],
+    command="snakemake rule pendulum_baselines",
+)
+write_netcdf(mono, snakemake.output.monolithic)
+logging.info("monolithic: %s", mono["error_max"].values.tolist())
+lin = p.linear_orders
+ds = linear_orders_dataset(
+    dict(p.settings),
+    [tuple(c) for c in p.configs],
+    list(p.H),
+    model=dict(lin["model"]),
+    x0=lin["x0"],
+    t_end=lin["t_end"],
+    command="snakemake rule pendulum_baselines",
+)
+write_netcdf(ds, snakemake.output.linear)
+logging.info("linear errors for %d configurations", ds.sizes["config"])

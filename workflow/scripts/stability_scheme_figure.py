@@ -1,0 +1,13 @@
+"""Snakemake job: the Jacobi / Gauss-Seidel comparison of stable shares (never recomputes)."""
+
+import logging
+
+from icosim.datasets import open_dataset
+from icosim.figures import save_figure
+from icosim.figures.schemes import scheme_comparison_figure
+
+logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+ds = open_dataset(snakemake.input.shares)
+fig = scheme_comparison_figure(ds, title=snakemake.params.title)
+save_figure(fig, snakemake.output.png, snakemake.output.pdf, dpi=snakemake.params.dpi)
+logging.info("compared %d figures", ds.sizes["figure"])

@@ -1,0 +1,18 @@
+"""Snakemake job: stable shares per figure, row, k and scheme from the full panels (thin: icosim.stability.comparison)."""
+
+import logging
+
+from icosim.datasets import open_dataset, provenance_attrs, write_netcdf
+from icosim.stability.comparison import scheme_shares
+
+logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+panels = [open_dataset(path) for path in snakemake.input.panels]
+job = {"panels": list(snakemake.input.panels)}
+ds = scheme_shares(
+    panels,
+    provenance=provenance_attrs(
+        job, title="Stable shares: Jacobi and Gauss-Seidel", command="snakemake rule stability_scheme_shares"
+    ),
+)
+write_netcdf(ds, snakemake.output[0])
+logging.info("shares of %d figures x %d rows x %d k x %d schemes", *(ds.sizes[d] for d in ds["stable_share"].dims))
