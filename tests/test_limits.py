@@ -199,7 +199,7 @@ def test_any_accepted_point_answers_in_strict_json_and_its_verdict_does_not_depe
     import io
 
     answers = []
-    for extra in ([], ["--digits", "34"]):  # the default (17 digits) and twice as many
+    for extra in ([], ["--digits", "40"]):  # the default (17 digits) and the 40
         buf, errbuf = io.StringIO(), io.StringIO()
         with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(errbuf):
             try:
