@@ -13,9 +13,9 @@ reference in float64, so they have a floor): errors below ``floor`` (a number
 or one per step size, :func:`error_floor`) are not data.  Such step sizes are
 left out before the decade is chosen, so the decade is the smallest-H decade
 *above the floor* (status ``at the error floor`` when none is left, ``no
-stable decade above the floor`` when that decade reaches unstable step sizes).  :func:`pendulum_order` is written against the same signature and
-result type as ``icosim.convergence.fit.asymptotic_order`` on the lead's
-branch, so the two can be unified by swapping the body of :func:`decade_order`.
+stable decade above the floor`` when that decade reaches unstable step sizes).
+The decade rule itself is the linear study's function
+(:func:`icosim.convergence.fit.asymptotic_order`, here also named :func:`decade_order`).
 
 >>> import numpy as np
 >>> H = np.geomspace(1e-4, 2e-2, 12)
@@ -30,109 +30,17 @@ True
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
+
+from ..convergence.fit import STATUSES as LINEAR_STATUSES
+from ..convergence.fit import AsymptoticOrder, local_slopes
+from ..convergence.fit import asymptotic_order as decade_order
 
 __all__ = ["AsymptoticOrder", "decade_order", "pendulum_order", "error_floor", "local_slopes", "STATUSES"]
 
-#: Why an order is or is not evidence; only ``asymptotic`` orders decide.
-STATUSES = (
-    "asymptotic",
-    "pre-asymptotic",
-    "unstable as H -> 0",
-    "unstable at every H",
-    "too few points",
-    "at the error floor",
-    "no stable decade above the floor",
-)
-
-
-def local_slopes(H, error):
-    """Slopes ``d log(error) / d log(H)`` between neighbouring step sizes: ``(H_mid, slope)`` in increasing H.
-
-    ``H_mid`` is the geometric mean of each pair; a slope is NaN where either
-    error is not a finite positive number.
-    """
-    H = np.asarray(H, float)
-    e = np.asarray(error, float)
-    order = np.argsort(H)
-    H, e = H[order], e[order]
-    good = np.isfinite(e) & (e > 0)
-    log_e = np.where(good, np.log(np.where(good, e, 1.0)), np.nan)
-    return np.sqrt(H[:-1] * H[1:]), np.diff(log_e) / np.diff(np.log(H))
-
-
-@dataclass(frozen=True)
-class AsymptoticOrder:
-    """The order read off the smallest-H decade, and whether it is evidence.
-
-    ``order`` is the least-squares slope over ``[H_min, H_max]`` (reported also
-    when pre-asymptotic), ``spread`` the largest deviation of a local slope
-    there from it, ``used`` marks the step sizes of the decade (input order).
-    """
-
-    order: float
-    status: str
-    spread: float
-    H_min: float
-    H_max: float
-    n_points: int
-    used: np.ndarray
-    reason: str = ""
-
-    @property
-    def decided(self) -> bool:
-        """True if the order is asymptotic."""
-        return self.status == "asymptotic"
-
-
-def decade_order(H, error, unstable=None, *, decades=1.0, tolerance=0.1, min_points=3) -> AsymptoticOrder:
-    """The linear study's rule (issue 8) on step sizes ``H`` with errors ``error`` (NaN: no error).
-
-    ``unstable`` marks step sizes whose run was unstable; non-finite or
-    non-positive errors count as unstable too.
-    """
-    H = np.asarray(H, float)
-    e = np.asarray(error, float)
-    bad = np.zeros(H.shape, bool) if unstable is None else np.asarray(unstable, bool).copy()
-    bad |= ~(np.isfinite(e) & (e > 0))
-    used = np.zeros(H.shape, bool)
-    nan = float("nan")
-
-    def undecided(status, reason, n=0):
-        return AsymptoticOrder(nan, status, nan, nan, nan, n, used, reason)
-
-    if H.size == 0 or bad.all():
-        return undecided("unstable at every H", "no stable step size")
-    order = np.argsort(H)
-    if bad[order[0]]:
-        first_ok = H[order][np.argmax(~bad[order])]
-        return undecided(
-            "unstable as H -> 0", f"unstable at the smallest step sizes (stable only from H = {first_ok:.3g} s)"
-        )
-    window = order[H[order] <= H[order[0]] * 10**decades * (1 + 1e-9)]
-    if bad[window].any():
-        return undecided("unstable as H -> 0", "unstable step sizes inside the smallest-H decade")
-    if window.size < min_points:
-        return undecided(
-            "too few points", f"{window.size} step sizes in the smallest-H decade, need {min_points}", window.size
-        )
-    log_H, log_e = np.log(H[window]), np.log(e[window])
-    slope = float(np.polyfit(log_H, log_e, 1)[0])
-    slopes = np.diff(log_e) / np.diff(log_H)
-    spread = float(np.max(np.abs(slopes - slope)))
-    used[window] = True
-    status, reason = "asymptotic", ""
-    if spread > tolerance:
-        status = "pre-asymptotic"
-        reason = (
-            f"local slopes {slopes.min():.2f} to {slopes.max():.2f} in the smallest-H decade differ from "
-            f"their fit {slope:.2f} by up to {spread:.3f} > {tolerance:g}"
-        )
-    return AsymptoticOrder(
-        slope, status, spread, float(H[window[0]]), float(H[window[-1]]), int(window.size), used, reason
-    )
+#: Why an order is or is not evidence; only ``asymptotic`` orders decide.  The linear study's statuses and the
+#: two the pendulum's error floor adds.
+STATUSES = LINEAR_STATUSES + ("at the error floor", "no stable decade above the floor")
 
 
 def error_floor(n_steps, *, reference_accuracy: float = 0.0, factor: float = 10.0, rounding: str = "random walk"):
