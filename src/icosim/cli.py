@@ -20,6 +20,7 @@ from fractions import Fraction
 
 from . import methods
 from .backend import FLOAT64_DIGITS
+from .commands import add_parsers, add_scheme_arguments
 from .decompositions import DECOMPOSITIONS, get_decomposition
 from .jsonio import dumps
 from .limits import MAX_BITS_LIMIT, MAX_DIGITS, MAX_GUARD_BITS, MAX_K, MAX_SECONDS, check_derived, check_k
@@ -119,18 +120,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--method", required=True, choices=tuple(methods.METHODS))
     g.add_argument("--decomposition", required=True, choices=tuple(DECOMPOSITIONS))
     g.add_argument("--k", required=True, type=_order, help=f"approximation order (integer 0..{MAX_K})")
-    g.add_argument(
-        "--scheme",
-        choices=("jacobi", "gauss-seidel"),
-        default="jacobi",
-        help="coupling scheme: jacobi (parallel, the paper's; default) or gauss-seidel (sequential)",
-    )
-    g.add_argument(
-        "--first",
-        type=int,
-        choices=(1, 2),
-        help="gauss-seidel: the subsystem that advances first (default 1)",
-    )
+    add_scheme_arguments(g)
     g = rho.add_argument_group("method parameters")
     with_index = ", ".join(spec.label for spec in methods.METHODS.values() if spec.takes_index)
     g.add_argument("--index", type=int, choices=methods.indices(), help=f"index of the formulation ({with_index})")
@@ -169,9 +159,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--json", action="store_true", help="print one JSON object")
     parser.set_defaults(subparser=None)
     rho.set_defaults(subparser=rho)
-    from .commands import add_parsers  # icosim advise, icosim map
-
-    add_parsers(sub, number=_float, nonneg_int=_nonneg_int, digits=_digits)
+    add_parsers(sub, number=_float, order=_order, digits=_digits)  # icosim advise, icosim map
     return parser
 
 

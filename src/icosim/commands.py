@@ -18,7 +18,7 @@ from .model import ParameterError
 from .schemes import SCHEME_NAMES, get_scheme
 from .stability.policy import POLICIES
 
-__all__ = ["add_parsers", "run"]
+__all__ = ["add_parsers", "add_scheme_arguments", "run"]
 
 #: Negative numbers in exponent notation (``-1e-3``) are values, also for options taking two of them.
 _NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
@@ -47,13 +47,26 @@ def advise_parameters() -> dict:
     return used
 
 
-def add_parsers(sub, *, number, nonneg_int, digits):
+def add_scheme_arguments(group):
+    """``--scheme`` and ``--first``, alike for every command that takes one coupling scheme."""
+    group.add_argument(
+        "--scheme",
+        choices=("jacobi", "gauss-seidel"),
+        default="jacobi",
+        help="coupling scheme: jacobi (parallel, the paper's; default) or gauss-seidel (sequential)",
+    )
+    group.add_argument(
+        "--first", type=int, choices=(1, 2), help="gauss-seidel: the subsystem that advances first (default 1)"
+    )
+
+
+def add_parsers(sub, *, number, order, digits):
     """Register ``advise`` and ``map`` on the ``icosim`` sub-command parsers.
 
-    ``number``, ``nonneg_int`` and ``digits`` are the argument types of ``icosim rho``
-    (:mod:`icosim.cli`), so that every command takes and refuses numbers alike.
+    ``number``, ``order`` (k, within icosim's limit) and ``digits`` are the argument types of
+    ``icosim rho`` (:mod:`icosim.cli`), so that every command takes and refuses numbers alike.
     """
-    _float, _nonneg_int, _digits = number, nonneg_int, digits
+    _float, _order, _digits = number, order, digits
 
     # -- advise ------------------------------------------------------------------------------------
     adv = sub.add_parser(
@@ -84,7 +97,7 @@ def add_parsers(sub, *, number, nonneg_int, digits):
     g = adv.add_argument_group("schemes")
     g.add_argument("--methods", nargs="+", choices=tuple(methods.METHODS), help="default: every method")
     g.add_argument("--decompositions", nargs="+", choices=tuple(DECOMPOSITIONS), help="default: every one")
-    g.add_argument("--k", nargs="+", type=_nonneg_int, help="approximation orders (default: 0 1 2)")
+    g.add_argument("--k", nargs="+", type=_order, help="approximation orders (default: 0 1 2)")
     g.add_argument(
         "--couplings",
         nargs="+",
@@ -124,17 +137,9 @@ def add_parsers(sub, *, number, nonneg_int, digits):
     g = mp.add_argument_group("method and layout")
     g.add_argument("--method", required=True, choices=tuple(methods.METHODS))
     g.add_argument("--decomposition", required=True, choices=tuple(DECOMPOSITIONS))
-    g.add_argument("--k", required=True, nargs="+", type=_nonneg_int, help="approximation orders, one panel each")
+    g.add_argument("--k", required=True, nargs="+", type=_order, help="approximation orders, one panel each")
     g.add_argument("--index", type=int, choices=methods.indices(), help="index of the formulation")
-    g.add_argument(
-        "--scheme",
-        choices=("jacobi", "gauss-seidel"),
-        default="jacobi",
-        help="coupling scheme: jacobi (parallel, the paper's; default) or gauss-seidel (sequential)",
-    )
-    g.add_argument(
-        "--first", type=int, choices=(1, 2), help="gauss-seidel: the subsystem that advances first (default 1)"
-    )
+    add_scheme_arguments(g)
     for name, p in methods.parameters().items():
         g.add_argument(f"--{name}", type=_float, help=f"{p.help} (dimensionless, as in the paper's figures)")
     g = mp.add_argument_group("test-model parameters (Eq. 71) and grid")
