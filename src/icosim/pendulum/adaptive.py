@@ -53,7 +53,7 @@ from ..schemes import JACOBI, get_scheme
 from .model import PendulumParameters, joint_constraint
 from .problem import PendulumCosimulation
 from .reference import consistent_history
-from .runs import _SingularSolveAsFailure, divergence_reason, joint_force
+from .runs import _series_row, _SingularSolveAsFailure, divergence_reason, joint_force
 
 __all__ = ["StepController", "AdaptiveResult", "pc_estimate", "run_adaptive"]
 
@@ -198,7 +198,7 @@ def run_adaptive(
     past = [float(H0)] * k
     lam0 = consistent_history(params, "ff", 0, H0)[0]
     g0 = joint_constraint(params, state)
-    rows = [_row(state, g0, g0, lam0)]
+    rows = [_series_row(params, state, g0, lam0)]
     times, steps, estimates, drifts, rejected_H = [0.0], [], [], [], []
     t, H, err_prev, after_reject = 0.0, float(H0), None, False
     status, reason = "stable", ""
@@ -244,7 +244,7 @@ def run_adaptive(
             steps.append(H)
             estimates.append(est)
             drifts.append(drift * drift_tol)
-            rows.append(_row(state, g, y[0, 0] - y[1, 0], joint_force(dec, history[0], y)))
+            rows.append(_series_row(params, state, y[0, 0] - y[1, 0], joint_force(dec, history[0], y)))
             past = ([H] + past)[:k]
             H_next = ctl.after_accept(H, err, err_prev, after_reject=after_reject)
             err_prev, after_reject = err, False
@@ -265,17 +265,4 @@ def run_adaptive(
         dict(problem.jacobian_stats),
         cpu,
         rejected_H,
-    )
-
-
-def _row(state, g, g_corrector, lam) -> dict:
-    return dict(
-        phi1=state[0],
-        phi2=state[4],
-        g_cax=g[0],
-        g_cay=g[1],
-        g_cax_corrector=g_corrector[0],
-        g_cay_corrector=g_corrector[1],
-        lambda_cax=lam[0],
-        lambda_cay=lam[1],
     )
