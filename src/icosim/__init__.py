@@ -14,21 +14,51 @@ The map of the package is in the README (section "Layout"); the engine is
 with a coupling method of the registry :mod:`icosim.methods`.
 """
 
-from importlib.metadata import PackageNotFoundError, version
+# The public names are loaded on first use (PEP 562): a Snakemake job importing, say,
+# icosim.pendulum.sweep starts without the linear model, scipy.linalg and mpmath.
+_LAZY = {
+    "LinearCosimulation": ".linear_problem",
+    "make_method": ".methods",
+    "baumgarte": ".methods.baumgarte",
+    "projection": ".methods.projection",
+    "weighted_multiplier": ".methods.weighted",
+    "Coefficients": ".model",
+    "ParameterError": ".model",
+    "PhysicalModel": ".model",
+    "TestModel": ".model",
+    "JACOBI": ".schemes",
+    "GaussSeidel": ".schemes",
+    "Jacobi": ".schemes",
+    "get_scheme": ".schemes",
+    "amplification_matrix": ".stability",
+    "spectral_radius": ".stability",
+    "spectral_radius_float64": ".stability",
+    "spectral_radius_mp": ".stability",
+}
 
-from .linear_problem import LinearCosimulation
-from .methods import make_method
-from .methods.baumgarte import baumgarte
-from .methods.projection import projection
-from .methods.weighted import weighted_multiplier
-from .model import Coefficients, ParameterError, PhysicalModel, TestModel
-from .schemes import JACOBI, GaussSeidel, Jacobi, get_scheme
-from .stability import amplification_matrix, spectral_radius, spectral_radius_float64, spectral_radius_mp
 
-try:
-    __version__ = version("icosim")
-except PackageNotFoundError:  # running from a source tree
-    __version__ = "0+unknown"
+def __getattr__(name):
+    if name == "__version__":
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            value = version("icosim")
+        except PackageNotFoundError:  # running from a source tree
+            value = "0+unknown"
+        globals()["__version__"] = value
+        return value
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(_LAZY[name], __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'icosim' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY) | {"__version__"})
+
 
 __all__ = [
     "Coefficients",

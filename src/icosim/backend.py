@@ -19,9 +19,7 @@ import math
 from contextlib import contextmanager, nullcontext
 from fractions import Fraction
 
-import mpmath
 import numpy as np
-import scipy.linalg
 
 from .limits import check_digits, guard_digits
 
@@ -53,6 +51,8 @@ class Float64:
         # scipy's expm accepts stacks (..., n, n): one call for a whole grid.
         # ``decay`` is ignored: float64 cannot add guard digits (the precision
         # policy detects the points where that matters).
+        import scipy.linalg  # here, not at the top: jobs that never form expm start faster
+
         return scipy.linalg.expm(M)
 
     def eigvals(self, M):
@@ -70,6 +70,8 @@ class Multiprecision:
 
     def __init__(self, digits: int = 128):
         self.digits = check_digits(digits)  # 16 .. icosim.limits.MAX_DIGITS
+        import mpmath  # here, not at the top: float64-only jobs start faster
+
         self.ctx = mpmath.MPContext()
         self.ctx.dps = self.digits
         self.eps = self.ctx.eps
