@@ -128,3 +128,31 @@ def test_importing_the_stability_package_stays_light():
         env={"PYTHONPATH": str(SRC), "PATH": ""},
     )
     assert out.stdout.strip() == "False"
+
+
+def _type_checking_imports(path):
+    """``{name: module}`` imported under ``if TYPE_CHECKING:`` in ``path`` (relative module names)."""
+    tree = ast.parse(path.read_text())
+    out = {}
+    for node in tree.body:
+        if isinstance(node, ast.If) and ast.unparse(node.test) == "TYPE_CHECKING":
+            for stmt in node.body:
+                out.update({alias.name: "." * stmt.level + stmt.module for alias in stmt.names})
+    return out
+
+
+def test_the_package_loads_its_public_names_lazily_and_lists_them_for_the_workflow():
+    """icosim's public names: one table for the lazy loader, the same names under TYPE_CHECKING
+    (what icosim.sources reads, so every job importing icosim keeps the whole engine as input)."""
+    import icosim
+
+    assert _type_checking_imports(SRC / "icosim" / "__init__.py") == icosim._LAZY
+    assert set(icosim._LAZY) == set(icosim.__all__)
+    assert all(getattr(icosim, name) is not None for name in icosim.__all__)
+    engine = {"icosim/linear_problem.py", "icosim/stability/__init__.py", "icosim/methods/__init__.py"}
+    assert engine <= {p.relative_to(SRC).as_posix() for p in module_closure(["icosim.pendulum.names"], SRC)}
+    code = "import sys, icosim.pendulum.measures; print(sorted({'scipy.linalg', 'mpmath'} & set(sys.modules)))"
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, env={"PYTHONPATH": str(SRC), "PATH": ""}
+    )
+    assert out.stdout.strip() == "[]"

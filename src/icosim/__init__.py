@@ -14,8 +14,22 @@ The map of the package is in the README (section "Layout"); the engine is
 with a coupling method of the registry :mod:`icosim.methods`.
 """
 
+from typing import TYPE_CHECKING
+
 # The public names are loaded on first use (PEP 562): a Snakemake job importing, say,
 # icosim.pendulum.sweep starts without the linear model, scipy.linalg and mpmath.
+# The imports below are never executed; they are what type checkers and icosim.sources
+# read (every job that imports icosim still lists the whole engine as its input).
+if TYPE_CHECKING:
+    from .linear_problem import LinearCosimulation
+    from .methods import make_method
+    from .methods.baumgarte import baumgarte
+    from .methods.projection import projection
+    from .methods.weighted import weighted_multiplier
+    from .model import Coefficients, ParameterError, PhysicalModel, TestModel
+    from .schemes import JACOBI, GaussSeidel, Jacobi, get_scheme
+    from .stability import amplification_matrix, spectral_radius, spectral_radius_float64, spectral_radius_mp
+
 _LAZY = {
     "LinearCosimulation": ".linear_problem",
     "make_method": ".methods",
