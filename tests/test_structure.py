@@ -153,6 +153,10 @@ def test_the_package_loads_its_public_names_lazily_and_lists_them_for_the_workfl
     assert engine <= {p.relative_to(SRC).as_posix() for p in module_closure(["icosim.pendulum.names"], SRC)}
     code = "import sys, icosim.pendulum.measures; print(sorted({'scipy.linalg', 'mpmath'} & set(sys.modules)))"
     out = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, check=True, env={"PYTHONPATH": str(SRC), "PATH": ""}
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        check=True,
+        env={"PYTHONPATH": str(SRC), "PATH": ""},
     )
     assert out.stdout.strip() == "[]"
