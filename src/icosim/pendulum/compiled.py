@@ -24,9 +24,9 @@ inverses are LAPACK ``gesv`` with an identity (``np.linalg.solve``, as
 ``np.linalg.inv`` does), ``cos``/``sin`` may come from another library, and
 sums over a state's components run in index order here while numpy's einsum
 sums contiguous axes in a CPU-dependent order.  Sums over the three stages are
-in index order in both.  One difference by design: a Newton matrix that is
-not finite (unreachable from a finite state) is reported as singular, where
-numpy's LAPACK would return some inverse.
+in index order in both.  A Newton matrix that is not finite (``MU / h`` overflows for a
+step near underflow) gets an all-NaN inverse, where numpy's LAPACK returns one
+with some NaNs: either way the Newton iterations fail and the step is halved.
 
 One specialisation per entry point (C-contiguous float64 arrays of fixed ndim,
 int64 ids), so a cold disk cache costs one compilation per process.
@@ -303,14 +303,20 @@ def _radau(link, kind, par, H, coef, t0, t1, y0, jac0, rtol, atol, newton_tol, m
             scale[:] = atol + np.abs(y) * rtol
             mu_real = MU_REAL / h
             mu_complex = complex(_MU_COMPLEX_RE / h, _MU_COMPLEX_IM / h)
-            try:
-                for b in range(B):
-                    M_real[:] = mu_real * eye - J[b]
-                    M_complex[:] = mu_complex * eye_complex - J[b]
+            for b in range(B):
+                M_real[:] = mu_real * eye - J[b]
+                M_complex[:] = mu_complex * eye_complex - J[b]
+                if not (np.all(np.isfinite(M_real)) and np.all(np.isfinite(M_complex))):
+                    # e.g. MU / h = inf for h near underflow: numpy's LAPACK returns an inverse with NaNs (numba
+                    # would raise), the Newton iterations fail and the step is halved down to round-off level
+                    inv_real[b] = np.nan
+                    inv_complex[b] = np.nan
+                    continue
+                try:
                     inv_real[b] = np.linalg.solve(M_real, eye)  # gesv with an identity, as np.linalg.inv
                     inv_complex[b] = np.linalg.solve(M_complex, eye_complex)
-            except Exception:  # singular (or not finite: numba checks that first)
-                return y, f, counts, h_abs, _SINGULAR, t, h_abs
+                except Exception:  # an exactly singular matrix (np.linalg.LinAlgError)
+                    return y, f, counts, h_abs, _SINGULAR, t, h_abs
             converged, n_iter, fev = _collocation(
                 link, kind, par, H, coef, t, y, h, scale, newton_tol, inv_real, inv_complex, Z
             )
