@@ -134,7 +134,8 @@ def test_failed_integration_is_not_counted_as_unstable(monkeypatch):
     """A subsystem integration that fails is a failed run (not diverged): the claim gets no pass from it.
 
     weighted/ff/k = 2 is expected unstable, so counting a solver failure as a divergence would make it pass."""
-    real_radau, calls = icosim.pendulum.problem.radau_batch, []
+    compiled_link = icosim.pendulum.problem.CompiledLink  # the links' integrator (icosim.pendulum.compiled)
+    real_radau, calls = compiled_link.radau, []
     fail_at_step = 11  # four integrations per macro step (predictor+sensitivities and corrector, two links)
 
     def failing_radau(*args, **kwargs):
@@ -143,7 +144,7 @@ def test_failed_integration_is_not_counted_as_unstable(monkeypatch):
             raise IntegrationError("injected failure")
         return real_radau(*args, **kwargs)
 
-    monkeypatch.setattr(icosim.pendulum.problem, "radau_batch", failing_radau)
+    monkeypatch.setattr(compiled_link, "radau", failing_radau)
     t_end = 0.05
     res = _run("weighted", "ff", 2, t_end=t_end)
     assert res.status == "failed" and res.failed and not res.diverged

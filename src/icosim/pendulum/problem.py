@@ -1,8 +1,9 @@
 """The double pendulum split into link 1 and link 2, as the macro step sees it (docs/pendulum.md).
 
-Each link is integrated over a macro step by Radau IIA (:mod:`icosim.radau`);
-the sensitivities of the coupling conditions are forward differences,
-integrated in one batch with the predictor.
+Each link is integrated over a macro step by Radau IIA (:mod:`icosim.radau`,
+compiled for the links in :mod:`icosim.pendulum.compiled`); the sensitivities
+of the coupling conditions are forward differences, integrated in one batch
+with the predictor.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from ..limits import check_k
 from ..model import ParameterError
 from ..problem import CosimulationProblem
 from ..radau import _fd_jacobian, radau_batch
+from .compiled import CompiledLink
 from .links import Link1, Link2
 from .model import PendulumParameters, joint_constraint
 from .names import COUPLING_VARIABLES
@@ -53,6 +55,10 @@ class PendulumCosimulation(CosimulationProblem):
     multiplier for a kinematically driven one).
     """
 
+    #: Integrate the links with the compiled transcription of icosim.radau (:mod:`.compiled`);
+    #: False: with :func:`icosim.radau.radau_batch` on the links' closures (the reference, for comparisons).
+    compiled = True
+
     def __init__(
         self,
         params: PendulumParameters,
@@ -74,6 +80,7 @@ class PendulumCosimulation(CosimulationProblem):
         self.params, self.H = params, float(H)
         self.rtol, self.atol, self.fd_step, self.newton_tol = rtol, atol, fd_step, newton_tol
         self.links = (Link1(params, dec.kinds[0]), Link2(params, dec.kinds[1]))
+        self.compiled_links = tuple(CompiledLink(link) for link in self.links)
         self.inputs = _INPUTS[dec.name]
         # monomial coefficients of the interpolation polynomial (Eq. 11) in tau = (t - T_N)/H
         self.C_corr = np.array(monomial_coefficients(self.corr_nodes), dtype=float)
@@ -103,16 +110,22 @@ class PendulumCosimulation(CosimulationProblem):
         link = self.links[i]
         coef = np.einsum("mj,bju->bmu", self.C_corr, samples)
         y0 = np.broadcast_to(self._split(state)[i], (samples.shape[0], link.n))
-        fun = link.rhs(coef, self.H)
+        options = dict(rtol=self.rtol, atol=self.atol, newton_tol=self.newton_tol)
+        if self.compiled:
+            kernel = self.compiled_links[i]
+            jacobian = lambda: kernel.fd_jacobian(coef[:1], self.H, 0.0, y0[:1])[0]
+            integrate = lambda jac0: kernel.radau(coef, self.H, 0.0, self.H, y0, jac0=jac0, **options)
+        else:
+            fun = link.rhs(coef, self.H)
+            jacobian = lambda: _fd_jacobian(fun, 0.0, y0[:1], fun(0.0, y0[:1]))[0]
+            integrate = lambda jac0: radau_batch(fun, 0.0, self.H, y0, jac0=jac0, **options)
         # The Newton matrix of the first Radau step is shared by all integrations
         # of this link from this state (predictor, sensitivities, corrector).
         if self._jac0.get(i, (None,))[0] is not state:
-            self._jac0[i] = (state, _fd_jacobian(fun, 0.0, y0[:1], fun(0.0, y0[:1]))[0])
+            self._jac0[i] = (state, jacobian())
             self.jacobian_stats["jev"] += 1
             self.jacobian_stats["fev"] += 2
-        r = radau_batch(
-            fun, 0.0, self.H, y0, rtol=self.rtol, atol=self.atol, newton_tol=self.newton_tol, jac0=self._jac0[i][1]
-        )
+        r = integrate(self._jac0[i][1])
         self.work.subsystem_integrations += 1
         st = self.stats
         st["integrations"] += 1

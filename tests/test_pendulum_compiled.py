@@ -1,0 +1,147 @@
+"""The compiled links' integrator (icosim.pendulum.compiled) against the numpy reference (icosim.radau).
+
+The kernel is a transcription of ``radau_batch`` for the links' right-hand
+sides: the step sequence and the work counters must be the same, the numbers
+equal up to round-off (matrix inverses, sin/cos and the order of the sums
+over a state's components may differ in the last bits).
+"""
+
+import numpy as np
+import pytest
+
+from icosim import make_method
+from icosim.pendulum.compiled import CompiledLink
+from icosim.pendulum.links import Link1, Link2
+from icosim.pendulum.measures import check_scheme
+from icosim.pendulum.model import PendulumParameters
+from icosim.pendulum.problem import PendulumCosimulation
+from icosim.pendulum.runs import run_cosimulation
+from icosim.radau import IntegrationError, _fd_jacobian, radau_batch
+
+P = PendulumParameters()
+STATE = P.initial_state()
+
+
+def _counters(r):
+    return r.n_steps, r.n_rejected, r.n_fev, r.n_jev
+
+
+def _problem(L, kind, B, K, seed):
+    """A link, a batch of B states near the initial one and random input polynomials with K coefficients."""
+    rng = np.random.default_rng(seed)
+    link = L(P, kind)
+    y = STATE[:2] if L is Link1 else STATE[2:]
+    y0 = y + 0.01 * rng.standard_normal((B, link.n))
+    coef = 5 * rng.standard_normal((B, K, 2))
+    return link, y0, coef
+
+
+@pytest.mark.parametrize("L", [Link1, Link2])
+@pytest.mark.parametrize("kind", ["force", "kinematic"])
+@pytest.mark.parametrize("B", [1, 3])
+@pytest.mark.parametrize("K", [1, 2, 4])
+def test_one_macro_step_matches_radau_batch(L, kind, B, K):
+    """A macro step as the co-simulation takes it (H = 1e-3, shared first Jacobian): the same Jacobian,
+    end state and derivative up to a few ulp, and the same counters."""
+    link, y0, coef = _problem(L, kind, B, K, seed=K)
+    H = 1e-3
+    fun = link.rhs(coef, H)
+    jac0 = _fd_jacobian(fun, 0.0, y0[:1], fun(0.0, y0[:1]))[0]
+    kernel = CompiledLink(link)
+    jac0_compiled = kernel.fd_jacobian(coef[:1], H, 0.0, y0[:1])[0]
+    # forward differences divide a round-off difference of sin/cos by sqrt(eps): a few 1e-8 relative at worst
+    np.testing.assert_allclose(jac0_compiled, jac0, rtol=1e-7, atol=1e-7)
+    ref = radau_batch(fun, 0.0, H, y0, jac0=jac0)
+    got = kernel.radau(coef, H, 0.0, H, y0, jac0=jac0)
+    assert _counters(got) == _counters(ref)
+    np.testing.assert_allclose(got.y, ref.y, rtol=1e-14, atol=1e-15)
+    np.testing.assert_allclose(got.f, ref.f, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("L", [Link1, Link2])
+@pytest.mark.parametrize("kind", ["force", "kinematic"])
+@pytest.mark.parametrize("B", [1, 3])
+def test_many_steps_with_rejections_match_radau_batch(L, kind, B):
+    """One long interval with tight tolerances (over a hundred steps, rejected ones among them, fresh
+    Jacobians after failed Newton iterations): the same step sequence, the end states equal to 1e-12."""
+    link, y0, coef = _problem(L, kind, B, 3, seed=B)
+    H, tol = 0.3, 1e-10
+    ref = radau_batch(link.rhs(coef, H), 0.0, H, y0, rtol=tol, atol=tol)  # no jac0: the first Jacobian too
+    got = CompiledLink(link).radau(coef, H, 0.0, H, y0, rtol=tol, atol=tol)
+    assert ref.n_steps > 40 and ref.n_rejected > 0
+    assert _counters(got) == _counters(ref)
+    # over ~100-250 steps round-off accumulates (1e-13 relative at most seen); far below the tolerance
+    np.testing.assert_allclose(got.y, ref.y, rtol=1e-12, atol=1e-14)
+    assert got.h_next == pytest.approx(ref.h_next, rel=1e-6)
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # numpy's overflow in the input polynomial
+def test_errors_are_radau_batch_errors():
+    """The kernel's error codes come back as radau_batch's exceptions, with the same messages."""
+    link, y0, coef = _problem(Link2, "force", 1, 2, seed=0)
+    kernel = CompiledLink(link)
+    with pytest.raises(IntegrationError, match="more than 3 steps") as got:
+        kernel.radau(coef, 0.3, 0.0, 0.3, y0, rtol=1e-10, atol=1e-10, max_steps=3)
+    with pytest.raises(IntegrationError) as ref:
+        radau_batch(link.rhs(coef, 0.3), 0.0, 0.3, y0, rtol=1e-10, atol=1e-10, max_steps=3)
+    assert str(got.value) == str(ref.value)
+    huge = np.full_like(coef, 1e308)  # the input overflows: derivative not finite at the end of the first step
+    with pytest.raises(IntegrationError) as got:
+        kernel.radau(huge, 1e-3, 0.0, 1e-3, y0, jac0=np.eye(6))
+    with pytest.raises(IntegrationError) as ref:
+        radau_batch(link.rhs(huge, 1e-3), 0.0, 1e-3, y0, jac0=np.eye(6))
+    assert str(got.value) == str(ref.value)
+    with pytest.raises(ValueError, match="rtol"):
+        kernel.radau(coef, 1e-3, 0.0, 1e-3, y0, rtol=0.0)
+
+
+def _both_paths(monkeypatch, method, kw, dec, k, t_end, scheme="jacobi"):
+    runs = {}
+    for compiled in (False, True):
+        monkeypatch.setattr(PendulumCosimulation, "compiled", compiled)
+        runs[compiled] = run_cosimulation(
+            P, make_method(method, **kw), dec, k, H=1e-3, t_end=t_end, scheme=check_scheme(scheme)
+        )
+    return runs[False], runs[True]
+
+
+BAUMGARTE = dict(index=1, mu=1e-3)
+WEIGHTED = dict(index=1, a=1.0, b=1.0)
+
+
+@pytest.mark.parametrize(
+    "method, kw, dec, k, scheme, t_end, state_tol, force_tol",
+    [
+        # seen: states 6e-16, forces 4e-11; the forces come from forward differences (step 1e-3) through the
+        # coupling solve, and the numpy path itself moves them by 8e-11 for a 1-ulp change of phi1_0
+        ("baumgarte", BAUMGARTE, "ff", 1, "jacobi", 0.1, 1e-13, 1e-9),
+        ("projection", {}, "dd", 1, "jacobi", 0.1, 1e-13, 1e-12),  # seen: 6e-16, 4e-15
+        # the weighted multiplier at k = 2 grows by ~1.13 per step and round-off with it (seen: 2e-8, 2e-3
+        # relative in the oscillating force); a 1-ulp change of phi1_0 moves the numpy path ~50 times more
+        ("weighted", WEIGHTED, "ff", 2, "jacobi", 0.18, 1e-6, 2e-2),
+        ("baumgarte", BAUMGARTE, "fd", 1, "gauss-seidel-12", 0.03, 1e-10, 1e-5),  # seen: 1e-12, 2e-7
+    ],
+)
+def test_runs_match_the_numpy_path(monkeypatch, method, kw, dec, k, scheme, t_end, state_tol, force_tol):
+    """Whole co-simulation runs: the same outcome and work counters, the series equal up to amplified
+    round-off (angles and constraints absolutely, joint forces relative to max(1, their largest value))."""
+    ref, got = _both_paths(monkeypatch, method, kw, dec, k, t_end, scheme)
+    assert (got.status, got.reason) == (ref.status, ref.reason) == ("stable", "")
+    assert got.stats == ref.stats and got.jacobian_stats == ref.jacobian_stats
+    assert got.t.size == ref.t.size == round(t_end / 1e-3) + 1
+    for name, values in ref.series.items():
+        tol = force_tol * max(1.0, np.max(np.abs(values))) if name.startswith("lambda") else state_tol
+        np.testing.assert_allclose(got.series[name], values, rtol=0, atol=tol, err_msg=name)
+
+
+def test_a_diverging_run_diverges_at_the_same_step(monkeypatch):
+    """weighted ff k = 2 diverges at 0.205 s on both paths.  In the last steps of the blow-up round-off
+    has grown to ~1e-7 and may move one borderline step-size decision: the step counts stay equal, the
+    right-hand side evaluations within a few (a 1-ulp change of phi1_0 moves the numpy path by ~50)."""
+    ref, got = _both_paths(monkeypatch, "weighted", WEIGHTED, "ff", 2, 0.25)
+    assert ref.status == got.status == "diverged"
+    assert got.t_diverged == ref.t_diverged and got.reason == ref.reason
+    for key in ("integrations", "steps", "rejected", "split", "macro_steps"):
+        assert got.stats[key] == ref.stats[key], key
+    assert abs(got.stats["fev"] - ref.stats["fev"]) <= 3
+    np.testing.assert_allclose(got.series["phi1"], ref.series["phi1"], rtol=0, atol=1e-5)
