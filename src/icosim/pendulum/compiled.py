@@ -7,10 +7,7 @@ numpy's per-call overhead is nearly all of the cost (about 1.6 ms per macro
 step).  This module is the *same algorithm* written as loops over scalars and
 compiled (``numba.njit(cache=True)``):
 
-* the right-hand sides of :class:`~icosim.pendulum.links.Link1` and
-  :class:`~icosim.pendulum.links.Link2` (force-driven or kinematically driven),
-  with the input polynomial in ``tau = t / H`` evaluated by Horner's scheme as
-  ``links._poly``; dispatched on integer ids, parameters in a float array;
+* the right-hand sides of the links (:mod:`icosim.pendulum.compiled_links`);
 * ``radau_batch`` with ``_collocation``, ``_fd_jacobian`` and
   ``_predict_factor`` line by line: the same constants (imported from
   :mod:`icosim.radau`), simplified Newton in lockstep over the batch, error
@@ -51,76 +48,17 @@ from ..radau import (
     RadauResult,
     T,
 )
+from .compiled_links import FORCE, KINEMATIC, batch_rhs, link_parameters, member_rhs
 from .links import Link1
 
 __all__ = ["CompiledLink"]
 
-FORCE, KINEMATIC = 0, 1  # the link's kind (links.py: "force" or the kinematically driven one)
 # status codes of the kernel (0: integrated)
 _STEP_TOO_SMALL, _ERROR_NOT_FINITE, _SINGULAR, _TOO_MANY_STEPS, _DERIVATIVE_NOT_FINITE, _ZERO_ERROR = range(1, 7)
 
 # numba sees module globals as compile-time constants: plain floats and arrays
 _MU_COMPLEX_RE, _MU_COMPLEX_IM = MU_COMPLEX.real, MU_COMPLEX.imag
 _TI_REAL, _TI_COMPLEX_RE, _TI_COMPLEX_IM = TI[0].copy(), TI[1].copy(), TI[2].copy()
-
-
-# -- the links' right-hand sides (links.py) ----------------------------------------
-@numba.njit(cache=True)
-def _input(coef_b, tau):
-    """Input ``(u_x, u_y)`` at ``tau`` of one member's polynomial ``coef_b`` (K, 2), as ``links._poly``."""
-    K = coef_b.shape[0]
-    ux, uy = coef_b[K - 1, 0], coef_b[K - 1, 1]
-    for m in range(K - 2, -1, -1):
-        ux = ux * tau + coef_b[m, 0]
-        uy = uy * tau + coef_b[m, 1]
-    return ux, uy
-
-
-@numba.njit(cache=True)
-def _rhs(link, kind, par, H, t, y, coef_b, out):
-    """``out = y'`` of link 1 or 2 for one member (state ``y``, input polynomial ``coef_b``).
-
-    ``par``: link 1 ``(-m1 g l1/2, d l1^2/4, l1, J_O1)``, link 2 ``(l2/2, d, m2, g, J2, J2 + m2 l2^2/4)``
-    (:func:`_parameters`); the expressions in the order of links.py.
-    """
-    ux, uy = _input(coef_b, t / H)
-    if link == 1:
-        phi, w = y[0], y[1]
-        c, s = np.cos(phi), np.sin(phi)
-        tangential = c * uy - s * ux  # n1 . u
-        if kind == FORCE:
-            torque_ext = par[0] * c - par[1] * w
-            alpha = (torque_ext - par[2] * tangential) / par[3]
-        else:
-            alpha = tangential / par[2]
-        out[0] = w
-        out[1] = alpha
-        return
-    l2h, d, m2, g, J2, inertia = par[0], par[1], par[2], par[3], par[4], par[5]
-    c, s = np.cos(y[2]), np.sin(y[2])
-    out[0], out[1], out[2] = y[3], y[4], y[5]
-    if kind == FORCE:
-        out[3] = (ux - d * y[3]) / m2
-        out[4] = (uy - d * y[4]) / m2 - g
-        out[5] = -l2h * (c * uy - s * ux) / J2
-        return
-    Fx = -d * y[3]
-    Fy = -m2 * g - d * y[4]
-    # (J + m l^2/4) phi2'' = (l/2) e2 x F - (m l/2) e2 x a_tilde
-    alpha = l2h * ((c * Fy - s * Fx) - m2 * (c * uy - s * ux)) / inertia
-    ww = y[5] * y[5]
-    # a_S = a_tilde + (l/2)(phi2'' n2 - omega2^2 e2)
-    out[3] = ux + l2h * (-alpha * s - ww * c)
-    out[4] = uy + l2h * (alpha * c - ww * s)
-    out[5] = alpha
-
-
-@numba.njit(cache=True)
-def _fun(link, kind, par, H, t, Y, coef, out):
-    """The batch: ``out[b] = y'(t, Y[b])`` with member ``b``'s input; False if a value is not finite."""
-    for b in range(Y.shape[0]):
-        _rhs(link, kind, par, H, t, Y[b], coef[b], out[b])
-    return np.all(np.isfinite(out))
 
 
 # -- icosim.radau, transcribed ---------------------------------------------------------
@@ -136,7 +74,7 @@ def _fd_jacobian(link, kind, par, H, coef, t, y, f, J):
             h = sqrt_eps * max(1.0, abs(y[b, j]))
             Y[:] = y[b]
             Y[j] += h
-            _rhs(link, kind, par, H, t, Y, coef[b], F)
+            member_rhs(link, kind, par, H, t, Y, coef[b], F)
             for i in range(n):
                 J[b, i, j] = (F[i] - f[b, i]) / h
 
@@ -199,7 +137,7 @@ def _collocation(link, kind, par, H, coef, t, y, h, scale, tol, inv_real, inv_co
         finite = True
         for i in range(3):
             Y[:] = y + Z[i]
-            finite &= _fun(link, kind, par, H, t + h * C[i], Y, coef, F[i])
+            finite &= batch_rhs(link, kind, par, H, t + h * C[i], Y, coef, F[i])
         fev += 1
         if not finite:
             Z[:] = np.nan
@@ -262,7 +200,7 @@ def _radau(link, kind, par, H, coef, t0, t1, y0, jac0, rtol, atol, newton_tol, m
     n_fev = 1
     y = y0.copy()
     f = np.empty((B, n))
-    _fun(link, kind, par, H, t, y, coef, f)
+    batch_rhs(link, kind, par, H, t, y, coef, f)
     if span == 0:
         counts[2] = n_fev
         return y, f, counts, h_abs, 0, t, h_abs
@@ -340,7 +278,7 @@ def _radau(link, kind, par, H, coef, t0, t1, y0, jac0, rtol, atol, newton_tol, m
             error_norm = _rms_max(error, scale)
             safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + n_iter)
             if rejected and error_norm > 1:
-                _fun(link, kind, par, H, t, y + error, coef, error_f)
+                batch_rhs(link, kind, par, H, t, y + error, coef, error_f)
                 for b in range(B):
                     rhs[:] = error_f[b] + ZE[b]
                     _matvec(inv_real[b], rhs, error[b])
@@ -362,7 +300,7 @@ def _radau(link, kind, par, H, coef, t0, t1, y0, jac0, rtol, atol, newton_tol, m
         h_abs_old, error_norm_old, have_old = h_abs, error_norm, True
         t = t_new
         y[:] = y_new
-        finite = _fun(link, kind, par, H, t, y, coef, f)
+        finite = batch_rhs(link, kind, par, H, t, y, coef, f)
         n_fev += 1
         n_steps += 1
         if n_steps > max_steps:
@@ -379,22 +317,13 @@ def _radau(link, kind, par, H, coef, t0, t1, y0, jac0, rtol, atol, newton_tol, m
 def _jacobian(link, kind, par, H, coef, t, y):
     """``fun(t, y)`` once and its forward-difference Jacobian (B, n, n)."""
     f = np.empty(y.shape)
-    _fun(link, kind, par, H, t, y, coef, f)
+    batch_rhs(link, kind, par, H, t, y, coef, f)
     J = np.empty((y.shape[0], y.shape[1], y.shape[1]))
     _fd_jacobian(link, kind, par, H, coef, t, y, f, J)
     return J
 
 
 # -- the Python side --------------------------------------------------------------
-def _parameters(link) -> np.ndarray:
-    """The constants of a link's right-hand side, formed by the same expressions as in links.py."""
-    p = link.p
-    if isinstance(link, Link1):
-        return np.array([-p.m1 * p.g * p.l1 / 2, p.d * p.l1**2 / 4, p.l1, p.JO1])
-    l2h = p.l2 / 2
-    return np.array([l2h, p.d, p.m2, p.g, p.J2, p.J2 + p.m2 * l2h**2])
-
-
 def _float_array(x, ndim):
     """A writable C-contiguous float64 copy: one numba specialisation for every caller."""
     a = np.array(x, dtype=np.float64, order="C")
@@ -414,7 +343,7 @@ class CompiledLink:
         self.link_id = 1 if isinstance(link, Link1) else 2
         self.kind_id = FORCE if link.kind == "force" else KINEMATIC
         self.n = link.n
-        self.par = _parameters(link)
+        self.par = link_parameters(link)
 
     def fd_jacobian(self, coef, H: float, t: float, y) -> np.ndarray:
         """``radau._fd_jacobian(fun, t, y, fun(t, y))`` for ``fun = link.rhs(coef, H)``: (B, n, n)."""
