@@ -2,7 +2,10 @@
 
 The co-simulation integrates each link per macro step for the predictor plus
 the finite-difference perturbations (one batched Radau call per link) and for
-the corrector (one more call per link).  Its cost is set against the
+the corrector (one more call per link), compiled with numba
+(icosim.pendulum.compiled); each run is also timed on the numpy reference path
+(``PendulumCosimulation.compiled = False``: icosim.radau with the links'
+closures), side by side, for the compiled kernel's speed-up.  Its cost is set against the
 monolithic pendulum (minimal coordinates) solved with the *same integrator and
 tolerance* (``icosim.radau``, Radau IIA, rtol = atol = 1e-6):
 
@@ -34,6 +37,7 @@ from scipy.integrate import solve_ivp  # noqa: E402
 from icosim import make_method  # noqa: E402
 from icosim.pendulum.links import Link2  # noqa: E402
 from icosim.pendulum.model import PendulumParameters  # noqa: E402
+from icosim.pendulum.problem import PendulumCosimulation  # noqa: E402
 from icosim.pendulum.reference import Monolithic  # noqa: E402
 from icosim.pendulum.runs import run_cosimulation  # noqa: E402
 from icosim.radau import radau_batch  # noqa: E402
@@ -99,11 +103,19 @@ def main():
 
         t = best_of(cosim, max(1, args.repeat - 1))
         stats = cosim().stats
+        # the same run on the numpy reference path (icosim.radau.radau_batch with the links' closures)
+        PendulumCosimulation.compiled = False
+        try:
+            t_numpy = best_of(cosim, max(1, args.repeat - 1))
+        finally:
+            PendulumCosimulation.compiled = True
         rows.append(
             {
                 "run": f"{name} {dec} k={k}",
                 "seconds": t,
                 "ms_per_macro_step": 1e3 * t / n,
+                "numpy_path_ms_per_macro_step": 1e3 * t_numpy / n,
+                "compiled_speedup": t_numpy / t,
                 "integrations_per_macro_step": stats["integrations"] / n,
                 "radau_steps_per_integration": stats["steps"] / stats["integrations"],
                 "vs_monolithic_free": t / results["monolithic_free"],
@@ -122,11 +134,13 @@ def main():
         f"  one link over one macro step: scipy solve_ivp Radau {results['scipy_link_step'] * 1e6:.0f} us, icosim.radau {results['icosim_link_step'] * 1e6:.0f} us"
     )
     print(
-        f"{'co-simulation run':24s} {'time [s]':>9s} {'ms/step':>8s} {'int/step':>8s} {'x mono free':>12s} {'x mono grid':>12s}"
+        f"{'co-simulation run':24s} {'time [s]':>9s} {'ms/step':>8s} {'numpy ms':>8s} {'speedup':>8s} "
+        f"{'int/step':>8s} {'x mono free':>12s} {'x mono grid':>12s}"
     )
     for r in rows:
         print(
-            f"{r['run']:24s} {r['seconds']:9.3f} {r['ms_per_macro_step']:8.3f} {r['integrations_per_macro_step']:8.1f} "
+            f"{r['run']:24s} {r['seconds']:9.3f} {r['ms_per_macro_step']:8.3f} "
+            f"{r['numpy_path_ms_per_macro_step']:8.3f} {r['compiled_speedup']:8.2f} {r['integrations_per_macro_step']:8.1f} "
             f"{r['vs_monolithic_free']:12.0f} {r['vs_monolithic_grid']:12.1f}"
         )
     if args.json:
