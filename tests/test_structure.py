@@ -118,6 +118,19 @@ def test_stability_claims_do_not_rest_on_the_pendulum_problem():
     assert "icosim/radau.py" not in {p.relative_to(SRC).as_posix() for p in module_closure(["icosim.checks"], SRC)}
 
 
+def test_an_edited_module_is_read_again(tmp_path):
+    """module_closure parses each file once per version (a cache for Snakemake's start): an edit shows."""
+    pkg = tmp_path / "icosim"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "b.py").write_text("")
+    (pkg / "c.py").write_text("")
+    (pkg / "a.py").write_text("from . import b\n")
+    assert [p.name for p in module_closure(["icosim.a"], tmp_path)] == ["__init__.py", "a.py", "b.py"]
+    (pkg / "a.py").write_text("from . import b, c\n")
+    assert [p.name for p in module_closure(["icosim.a"], tmp_path)] == ["__init__.py", "a.py", "b.py", "c.py"]
+
+
 def _loaded_after(statement: str, modules) -> list:
     """Which of ``modules`` a fresh interpreter has loaded after ``statement``."""
     code = f"import sys; {statement}; print(sorted(set({sorted(modules)!r}) & set(sys.modules)))"
