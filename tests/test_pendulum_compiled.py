@@ -11,6 +11,7 @@ import pytest
 
 from icosim import make_method
 from icosim.pendulum.compiled import CompiledLink
+from icosim.pendulum.compiled_algebra import all_finite, inverse, nan_maximum
 from icosim.pendulum.links import Link1, Link2
 from icosim.pendulum.measures import check_scheme
 from icosim.pendulum.model import PendulumParameters
@@ -145,3 +146,44 @@ def test_a_diverging_run_diverges_at_the_same_step(monkeypatch):
         assert got.stats[key] == ref.stats[key], key
     assert abs(got.stats["fev"] - ref.stats["fev"]) <= 3
     np.testing.assert_allclose(got.series["phi1"], ref.series["phi1"], rtol=0, atol=1e-5)
+
+
+# -- the dense algebra the kernel uses instead of numba's LAPACK bindings ----------------------------
+@pytest.mark.parametrize("dtype", [np.float64, np.complex128])
+@pytest.mark.parametrize("n", [1, 2, 3, 6])
+def test_inverse_is_numpys_inverse(n, dtype):
+    """LU with partial pivoting against np.linalg.inv (LAPACK gesv): Newton-like matrices mu I - J and
+    matrices whose pivots need row interchanges (a zero on the diagonal)."""
+    rng = np.random.default_rng(n)
+    for trial in range(20):
+        J = rng.standard_normal((n, n)) * 10.0 ** rng.uniform(-3, 3)
+        mu = (3.6 + 1.2j if dtype is np.complex128 else 3.6) * 10.0 ** rng.uniform(-2, 4)
+        M = (mu * np.eye(n) - J).astype(dtype)
+        if trial % 2 and n > 1:
+            M[0, 0] = 0.0  # the first pivot must come from another row
+        out = np.empty((n, n), dtype)
+        assert inverse(M, out)
+        want = np.linalg.inv(M)
+        scale = np.abs(want).max()
+        np.testing.assert_allclose(out, want, rtol=0, atol=1e-12 * scale * np.linalg.cond(M))
+        np.testing.assert_allclose(M @ out, np.eye(n), rtol=0, atol=1e-12 * np.linalg.cond(M))
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.complex128])
+def test_inverse_reports_an_exactly_singular_matrix(dtype):
+    """A zero pivot is what makes gesv raise LinAlgError (radau_batch: 'singular Newton matrix')."""
+    M = np.array([[1.0, 2.0], [2.0, 4.0]], dtype)
+    with pytest.raises(np.linalg.LinAlgError):
+        np.linalg.inv(M)
+    assert not inverse(M, np.empty((2, 2), dtype))
+    assert not inverse(np.zeros((3, 3), dtype), np.empty((3, 3), dtype))
+
+
+def test_nan_maximum_and_all_finite_are_numpys():
+    values = [0.0, -1.0, 2.5, np.inf, -np.inf, np.nan]
+    for a in values:
+        for b in values:
+            np.testing.assert_equal(nan_maximum(a, b), np.maximum(a, b))
+    for x in ([1.0, 2.0], [1.0, np.nan], [np.inf], [1 + 1j, complex(0, np.nan)], [1 + 1j]):
+        x = np.array(x)
+        assert all_finite(x) == np.all(np.isfinite(x))

@@ -50,6 +50,7 @@ from ..macrostep import StepFailure, macro_step
 from ..methods import CouplingMethod
 from ..model import ParameterError
 from ..schemes import JACOBI, get_scheme
+from .compiled import warm_up
 from .model import PendulumParameters, joint_constraint
 from .problem import PendulumCosimulation
 from .reference import consistent_history
@@ -202,6 +203,8 @@ def run_adaptive(
     times, steps, estimates, drifts, rejected_H = [0.0], [], [], [], []
     t, H, err_prev, after_reject = 0.0, float(H0), None, False
     status, reason = "stable", ""
+    if problem.compiled:
+        warm_up()  # not timed: numba's compilation or cache load
     c0 = time.process_time()
     with np.errstate(all="ignore"):
         while t_end - t > 1e-12 * t_end:

@@ -73,9 +73,12 @@ def member_rhs(link, kind, par, H, t, y, coef_b, out):
 @numba.njit(cache=True)
 def batch_rhs(link, kind, par, H, t, Y, coef, out):
     """The batch: ``out[b] = y'(t, Y[b])`` with member ``b``'s input; False if a value is not finite."""
+    finite = True
     for b in range(Y.shape[0]):
         member_rhs(link, kind, par, H, t, Y[b], coef[b], out[b])
-    return np.all(np.isfinite(out))
+        for v in out[b]:
+            finite = finite and np.isfinite(v)
+    return finite
 
 
 def link_parameters(link) -> np.ndarray:

@@ -19,6 +19,7 @@ from ..macrostep import StepFailure, simulate
 from ..methods import CouplingMethod
 from ..model import ParameterError
 from ..schemes import JACOBI, get_scheme
+from .compiled import warm_up
 from .model import PendulumParameters, joint_constraint
 from .problem import PendulumCosimulation
 from .reference import consistent_history
@@ -176,6 +177,8 @@ def run_cosimulation(
         """Reason for divergence of a step, or None."""
         return divergence_reason(problem, state, history[0], y, **bounds)
 
+    if problem.compiled:
+        warm_up()  # the first run of a process would otherwise time numba's compilation or cache load
     t0 = time.perf_counter()
     c0 = time.process_time()
     with np.errstate(all="ignore"):
