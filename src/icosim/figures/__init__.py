@@ -15,11 +15,19 @@ __all__ = ["save_figure", "stability_figure"]
 
 
 def save_figure(fig, *paths, dpi: int = 110):
-    """Write ``fig`` to each path; the format follows the suffix (``.png``, ``.pdf``)."""
-    for path in paths:
+    """Write ``fig`` to each path; the format follows the suffix (``.png``, ``.pdf``).
+
+    The layout (constrained layout, if the figure uses it) is computed for the first file and then
+    kept for the others: it is in figure coordinates, so a second pass would only repeat the
+    slowest part of saving (for a figure with twenty panels, about half of its time).  ``fig``'s
+    layout engine is ``"none"`` afterwards.
+    """
+    for i, path in enumerate(paths):
         fmt = Path(path).suffix.lstrip(".").lower()
         with atomic_path(path) as tmp:
             fig.savefig(tmp, format=fmt, dpi=dpi, metadata=_metadata(fmt))
+        if i == 0:
+            fig.set_layout_engine("none")
 
 
 def _metadata(fmt):
