@@ -155,21 +155,21 @@ if GS_PENDULUM_CLAIMS_FILE:
 
 
 rule pendulum_gs_run:
-    """One Gauss-Seidel co-simulation run (method, decomposition, k, order) up to t_end or divergence."""
+    """The Gauss-Seidel runs of one (method, decomposition, order), every k (as pendulum_run)."""
     input:
         lib=engine_lib("pendulum_run"),
     output:
-        "results/pendulum/{method}_{decomposition}_k{k}_{gs}.nc",
+        expand("results/pendulum/{{method}}_{{decomposition}}_k{k}_{{gs}}.nc", k=PENDULUM["k"]),
     log:
-        "logs/pendulum/{method}_{decomposition}_k{k}_{gs}.log",
+        "logs/pendulum/{method}_{decomposition}_{gs}.log",
     wildcard_constraints:
         method=METHOD_NAMES,
         decomposition="ff|fd|dd",
-        k=r"\d+",
         gs="gs12|gs21",
     conda:
         "../envs/icosim.yaml"
     params:
+        k=PENDULUM["k"],
         model=PENDULUM["model"],
         H=PENDULUM["H"],
         t_end=PENDULUM["t_end"],

@@ -1,5 +1,5 @@
 # Double pendulum, paper Sect. 4 and Figs. 6-8: the monolithic reference, one co-simulation
-# job per (method, decomposition, k) writing results/pendulum/<method>_<dec>_k<k>.nc, the
+# job per (method, decomposition) writing results/pendulum/<method>_<dec>_k<k>.nc per k, the
 # errors and the claim of Sect. 4 in results/pendulum/summary.nc, one figure per k, and
 # the pendulum section of the report.
 from icosim.checks import load_claims  # noqa: E402
@@ -9,7 +9,7 @@ from icosim.pendulum.config import (  # noqa: E402
     study_methods,
     trade_plan,
 )
-from icosim.pendulum.names import run_name  # noqa: E402
+from icosim.pendulum.names import TRADE_FIGURE_DATASETS, run_name  # noqa: E402
 
 validate_part(config["pendulum"], "pendulum.schema.yaml")
 
@@ -53,13 +53,7 @@ PENDULUM_WORK_PRECISION = "results/pendulum/work_precision.nc"
 PENDULUM_STABILITY_LIMIT = "results/pendulum/stability_limit.nc"
 PENDULUM_ADAPTIVE = "results/pendulum/adaptive.nc"
 PENDULUM_TOLERANCE = "results/pendulum/tolerance.nc"
-TRADE_FIGURE_NAMES = [
-    "work_precision",
-    "error_over_H",
-    "stability_limit",
-    "tolerance",
-    "adaptive",
-]
+TRADE_FIGURE_NAMES = list(TRADE_FIGURE_DATASETS)
 TRADE_FIGURES = {
     name: f"results/pendulum/figures/{name}.png" for name in TRADE_FIGURE_NAMES
 }
@@ -85,20 +79,22 @@ rule pendulum_reference:
 
 
 rule pendulum_run:
-    """One co-simulation run (method, decomposition, k; Jacobi) up to t_end or divergence."""
+    """The co-simulation runs of one (method, decomposition), every k (Jacobi), each up to t_end or
+    divergence: one job, since the runs are short and a job's start-up (interpreter, imports, the
+    compiled integrator) cost about as much as a CI-length run."""
     input:
         lib=engine_lib("pendulum_run"),
     output:
-        "results/pendulum/{method}_{decomposition}_k{k}.nc",
+        expand("results/pendulum/{{method}}_{{decomposition}}_k{k}.nc", k=PENDULUM["k"]),
     log:
-        "logs/pendulum/{method}_{decomposition}_k{k}.log",
+        "logs/pendulum/{method}_{decomposition}.log",
     wildcard_constraints:
         method=METHOD_NAMES,
         decomposition="ff|fd|dd",
-        k=r"\d+",
     conda:
         "../envs/icosim.yaml"
     params:
+        k=PENDULUM["k"],
         model=PENDULUM["model"],
         H=PENDULUM["H"],
         t_end=PENDULUM["t_end"],
@@ -373,33 +369,35 @@ rule pendulum_adaptive:
         "../scripts/pendulum_adaptive.py"
 
 
-rule pendulum_trade_figures:
-    """Work-precision diagram, error over H, stability limit, tolerance and adaptive figures."""
+rule pendulum_trade_figure:
+    """One figure of the trade (TRADE_FIGURES): work-precision, error over H, stability limit,
+    tolerance or adaptive; each job starts as soon as the datasets it draws exist."""
     input:
-        work_precision=PENDULUM_WORK_PRECISION,
-        stability_limit=PENDULUM_STABILITY_LIMIT,
-        tolerance=PENDULUM_TOLERANCE,
-        adaptive=PENDULUM_ADAPTIVE,
-        lib=script_lib("pendulum_trade_figures"),
+        unpack(
+            lambda w: {
+                stem: f"results/pendulum/{stem}.nc"
+                for stem in TRADE_FIGURE_DATASETS[w.name]
+            }
+        ),
+        lib=script_lib("pendulum_trade_figure"),
     output:
-        **{
-            name: report(
-                path,
-                caption="../report/pendulum_trade_figure.rst",
-                category="Double pendulum: speed-accuracy trade",
-                labels={"figure": name},
-            )
-            for name, path in TRADE_FIGURES.items()
-        },
-        **{f"{name}_pdf": path[:-4] + ".pdf" for name, path in TRADE_FIGURES.items()},
+        png=report(
+            "results/pendulum/figures/{name}.png",
+            caption="../report/pendulum_trade_figure.rst",
+            category="Double pendulum: speed-accuracy trade",
+            labels={"figure": "{name}"},
+        ),
+        pdf="results/pendulum/figures/{name}.pdf",
     log:
-        "logs/pendulum/trade_figures.log",
+        "logs/pendulum/trade_figure_{name}.log",
+    wildcard_constraints:
+        name="|".join(TRADE_FIGURE_NAMES),
     conda:
         "../envs/icosim.yaml"
     params:
         dpi=PENDULUM["plot"]["dpi"],
     script:
-        "../scripts/pendulum_trade_figures.py"
+        "../scripts/pendulum_trade_figure.py"
 
 
 ALL_TARGETS.extend(

@@ -1,4 +1,5 @@
-"""Snakemake job: one co-simulation run of the double pendulum -> NetCDF (thin: icosim.pendulum.datasets)."""
+"""Snakemake job: the co-simulation runs of one (method, decomposition), one per k -> NetCDF each
+(thin: icosim.pendulum.datasets)."""
 
 import json
 import logging
@@ -8,25 +9,26 @@ from icosim.pendulum.datasets import run_job
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 w, p = snakemake.wildcards, snakemake.params
-job = {
-    "method": w.method,
-    "decomposition": w.decomposition,
-    "k": int(w.k),
-    **{key: dict(p[key]) for key in ("method_params", "model")},
-    "H": p.H,
-    "t_end": p.t_end,
-    **{key: dict(p[key]) for key in ("integrator", "sensitivities", "corrector", "divergence")},
-    "scheme": p.scheme,
-}
-logging.info("run: %s", json.dumps(job, sort_keys=True))
-result, ds = run_job(job, command="snakemake rule pendulum_run")
-write_netcdf(ds, snakemake.output[0])
-logging.info(
-    "%d macro steps in %.2f s; diverged=%d at t=%s (%s); %s",
-    result.stats["macro_steps"],
-    result.wall_time,
-    result.diverged,
-    result.t_diverged,
-    result.reason or "-",
-    result.stats,
-)
+for k, path in zip(p.k, snakemake.output, strict=True):
+    job = {
+        "method": w.method,
+        "decomposition": w.decomposition,
+        "k": int(k),
+        **{key: dict(p[key]) for key in ("method_params", "model")},
+        "H": p.H,
+        "t_end": p.t_end,
+        **{key: dict(p[key]) for key in ("integrator", "sensitivities", "corrector", "divergence")},
+        "scheme": p.scheme,
+    }
+    logging.info("run: %s", json.dumps(job, sort_keys=True))
+    result, ds = run_job(job, command="snakemake rule pendulum_run")
+    write_netcdf(ds, path)
+    logging.info(
+        "%d macro steps in %.2f s; diverged=%d at t=%s (%s); %s",
+        result.stats["macro_steps"],
+        result.wall_time,
+        result.diverged,
+        result.t_diverged,
+        result.reason or "-",
+        result.stats,
+    )

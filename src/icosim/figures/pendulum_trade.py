@@ -19,6 +19,7 @@ from ..methods import METHODS
 from ..schemes import get_scheme
 
 __all__ = [
+    "TRADE_FIGURES",
     "work_precision_figure",
     "error_over_H_figure",
     "stability_limit_figure",
@@ -324,3 +325,14 @@ def adaptive_figure(adaptive, *, title=None):
     axes[0].set_ylabel("accepted macro step H [s]")
     fig.suptitle(title or "Adaptive macro steps (PI control of the predictor-corrector difference)")
     return fig
+
+
+#: figure name -> function; it takes the datasets icosim.pendulum.names.TRADE_FIGURE_DATASETS lists
+#: for the name.  One workflow job per figure.
+TRADE_FIGURES = {
+    "work_precision": work_precision_figure,
+    "error_over_H": error_over_H_figure,
+    "stability_limit": stability_limit_figure,
+    "tolerance": tolerance_figure,
+    "adaptive": adaptive_figure,
+}

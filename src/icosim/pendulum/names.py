@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from ..schemes import get_scheme
 
-__all__ = ["COUPLING_VARIABLES", "VARIABLES", "run_name"]
+__all__ = ["COUPLING_VARIABLES", "TRADE_FIGURE_DATASETS", "VARIABLES", "run_name"]
 
 
 #: Names of the coupling variables per decomposition.
@@ -23,6 +23,17 @@ VARIABLES = {
     "g_cay": ("m", "joint constraint g_cay = (y_S1 + l1/2 sin phi1) - (y_S2 - l2/2 sin phi2)"),
     "lambda_cax": ("N", "joint force of link 1 on link 2, x"),
     "lambda_cay": ("N", "joint force of link 1 on link 2, y"),
+}
+
+
+#: The speed-accuracy figures (icosim.figures.pendulum_trade.TRADE_FIGURES): name -> the datasets
+#: it draws, as stems under results/pendulum/, in the figure function's argument order.
+TRADE_FIGURE_DATASETS = {
+    "work_precision": ("work_precision", "adaptive"),
+    "error_over_H": ("work_precision",),
+    "stability_limit": ("stability_limit",),
+    "tolerance": ("tolerance",),
+    "adaptive": ("adaptive",),
 }
 
 
