@@ -247,8 +247,8 @@ def _radau(link, kind, par, H, coef, t0, t1, y0, jac0, rtol, atol, newton_tol, m
                         M_real[i, j] = (mu_real if i == j else 0.0) - J[b, i, j]
                         M_complex[i, j] = (mu_complex if i == j else 0j) - J[b, i, j]
                 if not (all_finite(M_real.ravel()) and all_finite(M_complex.ravel())):
-                    # e.g. MU / h = inf for h near underflow: numpy's LAPACK returns an inverse with NaNs (numba
-                    # would raise), the Newton iterations fail and the step is halved down to round-off level
+                    # e.g. MU / h = inf for h near underflow: numpy's LAPACK returns an inverse with NaNs, here
+                    # all NaN; either way the Newton iterations fail and the step is halved to round-off level
                     inv_real[b].fill(np.nan)
                     inv_complex[b].fill(np.nan)
                     continue
