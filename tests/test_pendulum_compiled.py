@@ -187,3 +187,17 @@ def test_nan_maximum_and_all_finite_are_numpys():
     for x in ([1.0, 2.0], [1.0, np.nan], [np.inf], [1 + 1j, complex(0, np.nan)], [1 + 1j]):
         x = np.array(x)
         assert all_finite(x) == np.all(np.isfinite(x))
+
+
+def test_warm_up_compiles_the_signature_the_runs_use():
+    """warm_up's arguments have the types the wrapper passes: a run after it compiles nothing more,
+    so nothing of numba's compilation falls inside a run's timed region."""
+    from icosim.pendulum import compiled
+
+    compiled.warm_up()
+    for L in (Link1, Link2):
+        link, y0, coef = _problem(L, "force", 2, 3, seed=0)
+        kernel = CompiledLink(link)
+        kernel.radau(coef, 1e-3, 0.0, 1e-3, y0, jac0=kernel.fd_jacobian(coef[:1], 1e-3, 0.0, y0[:1])[0])
+    assert len(compiled._radau.signatures) == 1
+    assert len(compiled._jacobian.signatures) == 1
