@@ -165,14 +165,37 @@ class ErrorSeries:
         n = self.blocks.shape[1]
         return self.blocks.transpose(2, 0, 1).reshape(-1, n)[: self.n_steps + 1]
 
-    def _valid(self) -> np.ndarray:
-        """Mask (B, blocks) of the steps that exist (the last block may run past N)."""
-        steps = np.arange(self.B)[:, None] + self.B * np.arange(self.blocks.shape[2])[None, :]
-        return steps <= self.n_steps
-
     def max_abs(self, columns: slice = slice(None)) -> float:
+        return float(np.max(self.block_max_abs(columns)))
+
+    def block_max_abs(self, columns: slice = slice(None)) -> np.ndarray:
+        """The largest ``|eps_N[columns]|`` of each block over the steps that exist (NaN if one is NaN)."""
+        B, nb = self.B, self.blocks.shape[2]
+        last = self.n_steps - (nb - 1) * B  # the last block's last step
         with np.errstate(invalid="ignore"):
-            return float(np.max(np.where(self._valid()[:, None, :], np.abs(self.blocks[:, columns, :]), 0.0)))
+            out = np.abs(self.blocks[:, columns, : nb - 1]).max(axis=(0, 1)) if nb > 1 else np.empty(0)
+            return np.append(out, np.abs(self.blocks[: last + 1, columns, nb - 1]).max())
+
+    def first_step_beyond(self, exact: np.ndarray, bound: float, columns: slice = slice(None)) -> int | None:
+        """The first step ``N >= 1`` whose ``max |exact[N - 1] + eps_N[columns]|`` exceeds ``bound`` or is not
+        finite, else None (``exact``: the exact values at ``T_1 ... T_N``, the same columns).
+
+        Block by block, in order; a block is skipped when ``max |eps| + max |exact| <= bound`` (rounding is
+        monotone, so no sum in it can exceed the bound): the same answer as checking every step, without
+        the pass over all of them that a diverging run would otherwise cost.
+        """
+        B = self.B
+        exact_max = float(np.max(np.abs(exact))) if exact.size else 0.0
+        for b, err_max in enumerate(self.block_max_abs(columns)):
+            if err_max + exact_max <= bound:  # False for NaN: checked step by step
+                continue
+            steps = np.arange(max(b * B, 1), min((b + 1) * B, self.n_steps + 1))
+            with np.errstate(invalid="ignore"):
+                mag = np.max(np.abs(exact[steps - 1] + self.blocks[steps - b * B, columns, b]), axis=-1)
+            bad = ~np.isfinite(mag) | (mag > bound)
+            if bad.any():
+                return int(steps[np.argmax(bad)])
+        return None
 
     def sum_squares(self, columns: slice, first: int, last: int | None = None) -> np.ndarray:
         """``sum_{N = first}^{last} eps_N[columns]^2`` per column (``last`` defaults to the final step)."""

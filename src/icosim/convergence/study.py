@@ -303,11 +303,9 @@ class Study:
             err_max = errors.max_abs(slice(0, 4))
             if not (np.isfinite(err_max) and err_max + exact_max <= bound):
                 exact_state = np.stack([ref[:, 0], H * ref[:, 2]], axis=-1)[:, [0, 1, 0, 1]]
-                with np.errstate(invalid="ignore"):
-                    mag = np.max(np.abs(exact_state + errors.array()[1:, :4]), axis=-1)
-                bad = ~np.isfinite(mag) | (mag > bound)
-                if bad.any():
-                    return None, int(np.argmax(bad)) + 1, d.bits, d.certificate
+                diverged = errors.first_step_beyond(exact_state, bound, slice(0, 4))
+                if diverged is not None:
+                    return None, diverged, d.bits, d.certificate
             return errors, None, d.bits, d.certificate
         problem = LinearCosimulation(c, decomposition, k)
         solution = self.solution(H)
