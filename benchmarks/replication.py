@@ -19,6 +19,12 @@ CPU seconds much less.  Never a timed assertion: a measurement to quote.
 
 ``--ci`` uses the reduced CI configuration (config/ci/*.yaml) for both trees: a quick check of the
 benchmark itself, not the number to quote.
+
+``--same-work`` compares the same work, which is what issue 14's goal is about: both trees build exactly
+the files the older tree's full replication produces (``snakemake --summary`` of its ``all``: datasets,
+figures, claims tables; not its report pages, whose content differs between the trees), part by part,
+each tree from a clean ``results/``.  The newer tree's extra studies (Gauss-Seidel, trade studies, ...) are then not in
+the comparison.
 """
 
 from __future__ import annotations
@@ -26,8 +32,9 @@ from __future__ import annotations
 import argparse
 import glob
 import json
+import subprocess
 
-from _workflow import run_workflow, tree
+from _workflow import run_workflow, snakemake_binary, tree
 
 from icosim.datasets import open_dataset
 
@@ -59,11 +66,33 @@ def kernel_seconds(workdir, part: str) -> float:
     return total
 
 
-def run_tree(commit, label, configs, cores) -> dict:
+#: Files of a replication that the same-work comparison builds (not logs, not the report pages).
+SAME_WORK_SUFFIXES = (".nc", ".png", ".pdf", ".json", ".tsv")
+
+
+def replication_files(commit, configs) -> list[tuple[str, list[str]]]:
+    """The files the tree's full replication produces (``snakemake --summary``, nothing run), as
+    (part, targets) in PARTS order, for the parts that have any."""
+    with tree(commit) as workdir:
+        cmd = [snakemake_binary(), "--summary", "all"] + (["--configfile", *configs] if configs else [])
+        out = subprocess.run(cmd, cwd=workdir, capture_output=True, text=True, check=True).stdout
+    paths = [line.split("\t")[0] for line in out.splitlines()[1:] if line.startswith("results/")]
+    parts = []
+    for part, _ in PARTS:
+        files = sorted(
+            p for p in paths if p.startswith(f"results/{part}/") and p.endswith(SAME_WORK_SUFFIXES) and "/logs/" not in p
+        )
+        if files:
+            parts.append((part, files))
+    return parts
+
+
+def run_tree(commit, label, configs, cores, parts_targets=PARTS) -> dict:
+    """Run the parts, (name, targets), one after the other, the first from a clean results/."""
     parts = {}
     with tree(commit) as workdir:
         first = True
-        for part, targets in PARTS:
+        for part, targets in parts_targets:
             # run_workflow clears results/ before a run: only before the first part
             run = run_workflow(
                 workdir, targets, label=f"{label}: {part}", cores=cores, configfiles=configs, keep_results=not first
@@ -80,14 +109,25 @@ def main(argv=None):
     ap.add_argument("--old", default="06f2834", help="the older commit to compare with (default: %(default)s)")
     ap.add_argument("--ci", action="store_true", help="the reduced CI configuration for both trees")
     ap.add_argument("--cores", type=int, default=2)
+    ap.add_argument("--same-work", action="store_true", help="both trees build exactly the older tree's files")
     ap.add_argument("--json", help="write the summary to this file")
     args = ap.parse_args(argv)
     configs = CI_CONFIGS if args.ci else []
-    rows = [
-        run_tree(None, "this tree", configs, args.cores),
-        run_tree(args.old, f"commit {args.old}", configs, args.cores),
-    ]
-    print(f"full replication, {'CI' if args.ci else 'default'} configuration, -c{args.cores}, part after part")
+    if args.same_work:
+        files = replication_files(args.old, configs)
+        rows = [
+            run_tree(None, "this tree", configs, args.cores, files),
+            run_tree(args.old, f"commit {args.old}", configs, args.cores, files),
+        ]
+        n = sum(len(part_files) for _, part_files in files)
+        scope = f"the same work ({n} files {args.old} produces)"
+    else:
+        rows = [
+            run_tree(None, "this tree", configs, args.cores),
+            run_tree(args.old, f"commit {args.old}", configs, args.cores),
+        ]
+        scope = "full replication"
+    print(f"{scope}, {'CI' if args.ci else 'default'} configuration, -c{args.cores}, part after part")
     print(f"{'tree':<22}{'part':<13}{'wall s':>9}{'CPU s':>9}{'kernel s':>10}{'kernel %':>10}{'load':>7}")
     for row in rows:
         for part, p in list(row["parts"].items()) + [("total", {**row["total"], "load": float("nan")})]:
