@@ -6,6 +6,8 @@ equal up to round-off (matrix inverses, sin/cos and the order of the sums
 over a state's components may differ in the last bits).
 """
 
+import json
+
 import numpy as np
 import pytest
 
@@ -201,3 +203,50 @@ def test_warm_up_compiles_the_signature_the_runs_use():
         kernel.radau(coef, 1e-3, 0.0, 1e-3, y0, jac0=kernel.fd_jacobian(coef[:1], 1e-3, 0.0, y0[:1])[0])
     assert len(compiled._radau.signatures) == 1
     assert len(compiled._jacobian.signatures) == 1
+
+
+def test_compile_record_lists_what_the_runs_use_in_strict_json():
+    """The workflow's compile job records numba's version and the one signature per kernel that a run
+    then uses (nothing compiled later), with cache hits + misses = 1 per kernel in a fresh process."""
+    import subprocess
+    import sys
+
+    code = (
+        "import json\n"
+        "from icosim.jsonio import dumps\n"
+        "from icosim.pendulum.compiled import compile_kernels\n"
+        "print(dumps(compile_kernels()))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    record = json.loads(out.stdout)
+    from icosim.pendulum import compiled
+
+    compiled.warm_up()
+    assert record["numba"] == compiled.numba.__version__
+    for name in ("_jacobian", "_radau"):
+        kernel = record["kernels"][name]
+        assert kernel["signatures"] == [str(s) for s in getattr(compiled, name).signatures]
+        assert kernel["cache_hits"] + kernel["cache_misses"] == 1
+    assert record["cpu_seconds"] > 0 and record["wall_seconds"] > 0
+
+
+def test_every_job_that_runs_the_integrator_waits_for_the_one_compile_job(tmp_path):
+    """In the DAG of the full workflow: one pendulum_kernels job, and an edge from it to every job of
+    the rules whose scripts run co-simulations, listed here (two runs starting together on a cold cache
+    would each compile), and to no other (the figures, merges and report never integrate)."""
+    import re
+
+    from helpers import copy_workflow, snakemake
+
+    runners = {"pendulum_run", "pendulum_gs_run", "pendulum_sweep", "pendulum_limits", "pendulum_tolerance"}
+    runners |= {"pendulum_adaptive"}
+    dag = snakemake(copy_workflow(tmp_path), "--dag").stdout
+    labels = dict(re.findall(r'^\s*(\d+)\[label = "(\w+)', dag, flags=re.M))
+    edges = re.findall(r"^\s*(\d+) -> (\d+)", dag, flags=re.M)
+    kernels = [i for i, rule in labels.items() if rule == "pendulum_kernels"]
+    assert len(kernels) == 1
+    waiting = {labels[b] for a, b in edges if a == kernels[0]}
+    assert waiting == runners
+    jobs = [i for i, rule in labels.items() if rule in runners]
+    fed = {b for a, b in edges if a == kernels[0]}
+    assert jobs and set(jobs) <= fed

@@ -31,6 +31,8 @@ int64 ids), so a cold disk cache costs one compilation per process.
 
 from __future__ import annotations
 
+import time
+
 import numba
 import numpy as np
 
@@ -52,7 +54,7 @@ from .compiled_algebra import all_finite, inverse, matvec, nan_maximum
 from .compiled_links import FORCE, KINEMATIC, batch_rhs, link_parameters, member_rhs
 from .links import Link1
 
-__all__ = ["CompiledLink", "warm_up"]
+__all__ = ["CompiledLink", "warm_up", "compile_kernels"]
 
 # status codes of the kernel (0: integrated)
 _STEP_TOO_SMALL, _ERROR_NOT_FINITE, _SINGULAR, _TOO_MANY_STEPS, _DERIVATIVE_NOT_FINITE, _ZERO_ERROR = range(1, 7)
@@ -338,6 +340,27 @@ def warm_up() -> None:
     y, coef, par = np.zeros((1, 2)), np.zeros((1, 1, 2)), np.ones(4)
     _jacobian(1, FORCE, par, 1.0, coef, 0.0, y)
     _radau(1, FORCE, par, 1.0, coef, 0.0, 0.0, y, np.empty((0, 0)), 1e-6, 1e-6, 1e-8, 1)
+
+
+def compile_kernels() -> dict:
+    """:func:`warm_up`, and a record of it: numba's version, each kernel's signatures and cache hits and
+    misses in this process, and the seconds it took.
+
+    The workflow runs this once, in one job before the runs (``results/pendulum/kernels.json``): runs
+    that start together on a cold cache (a fresh clone) would otherwise each compile, about 10 CPU-s.
+    """
+    t0, c0 = time.perf_counter(), time.process_time()
+    warm_up()
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    kernels = {}
+    for name, kernel in (("_jacobian", _jacobian), ("_radau", _radau)):
+        stats = kernel.stats
+        kernels[name] = {
+            "signatures": [str(sig) for sig in kernel.signatures],
+            "cache_hits": sum(stats.cache_hits.values()),
+            "cache_misses": sum(stats.cache_misses.values()),
+        }
+    return {"numba": numba.__version__, "kernels": kernels, "wall_seconds": wall, "cpu_seconds": cpu}
 
 
 def _float_array(x, ndim):
