@@ -80,7 +80,9 @@ def replication_files(commit, configs) -> list[tuple[str, list[str]]]:
     parts = []
     for part, _ in PARTS:
         files = sorted(
-            p for p in paths if p.startswith(f"results/{part}/") and p.endswith(SAME_WORK_SUFFIXES) and "/logs/" not in p
+            p
+            for p in paths
+            if p.startswith(f"results/{part}/") and p.endswith(SAME_WORK_SUFFIXES) and "/logs/" not in p
         )
         if files:
             parts.append((part, files))

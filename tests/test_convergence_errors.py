@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from icosim.backend import Ball, Multiprecision
-from icosim.convergence.errors import DEFECT_REL_ACCURACY, ErrorSeries, exact_extension, local_defect, propagate_errors
+from icosim.convergence.errors import DEFECT_REL_ACCURACY, exact_extension, local_defect, propagate_errors
 from icosim.convergence.experiment import Setup, dimensional_method
 from icosim.convergence.study import Study
 from icosim.decompositions import get_decomposition

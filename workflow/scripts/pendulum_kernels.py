@@ -11,4 +11,6 @@ logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asc
 record = compile_kernels()
 with atomic_path(snakemake.output[0]) as tmp:
     tmp.write_text(dumps(record, indent=1) + "\n")
-logging.info("numba %s: kernels ready in %.2f s (%.2f CPU-s)", record["numba"], record["wall_seconds"], record["cpu_seconds"])
+logging.info(
+    "numba %s: kernels ready in %.2f s (%.2f CPU-s)", record["numba"], record["wall_seconds"], record["cpu_seconds"]
+)
