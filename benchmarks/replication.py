@@ -15,7 +15,7 @@ so the kernel share of CPU and the overhead (interpreter starts, imports, Snakem
 the ratio of the two trees' totals.  Wall time depends on other load (the load average is printed);
 CPU seconds much less.  Never a timed assertion: a measurement to quote.
 
-    python benchmarks/replication.py [--old COMMIT] [--ci] [--cores 2] [--json FILE]
+    python benchmarks/replication.py [--old COMMIT] [--same-work] [--ci] [--cores 2] [--json FILE]
 
 ``--ci`` uses the reduced CI configuration (config/ci/*.yaml) for both trees: a quick check of the
 benchmark itself, not the number to quote.

@@ -163,32 +163,37 @@ def _plain_first_step_beyond(errors, exact, bound):
     return int(np.argmax(bad)) + 1 if bad.any() else None
 
 
-@pytest.mark.parametrize("n_steps, block", [(1, None), (7, 3), (100, None), (1000, 16), (1000, 2048), (4099, 64)])
-@pytest.mark.parametrize("case", ["growing", "nan", "inf", "bounded", "tail_only"])
+@pytest.mark.parametrize(
+    "n_steps, block", [(1, None), (7, 3), (9, 1), (100, None), (1000, 16), (1000, 2048), (4099, 64)]
+)
+@pytest.mark.parametrize("case", ["growing", "nan", "inf", "exact_nan", "exact_inf", "bounded", "tail"])
 def test_block_screen_finds_the_same_first_step_as_every_step(n_steps, block, case):
     """``first_step_beyond``/``max_abs`` against the plain per-step computation, on runs of an unstable
-    (rho 1.01), a stable and a poisoned error recurrence; the last block's steps past N never count."""
+    (rho 1.01), a stable and a poisoned error recurrence (NaN or inf in the errors or the exact values);
+    the last block's steps past N (planted huge and NaN in "tail") never count."""
     rng = np.random.default_rng(n_steps)
     n = 6
-    rho = 1.01 if case in ("growing", "tail_only") else 0.9
+    rho = 1.01 if case in ("growing", "tail") else 0.9
     Q = np.linalg.qr(rng.normal(size=(n, n)))[0]
     M = Q @ np.diag(rho * np.linspace(0.5, 1, n)) @ Q.T
     D, E = rng.normal(size=(n, 2)) * 1e-3, np.array([[np.cos(0.1), np.sin(0.1)], [-np.sin(0.1), np.cos(0.1)]])
     z_at = lambda steps: np.stack([np.cos(0.1 * steps), -np.sin(0.1 * steps)], axis=-1)  # noqa: E731
     errors = propagate_errors(M, D, E, z_at, n_steps, block=block)
-    if case in ("nan", "inf"):
-        step = n_steps // 2 + 1
-        b, j = divmod(step, errors.B)
-        errors.blocks[j, 2, b] = np.nan if case == "nan" else -np.inf
     exact = z_at(np.arange(1, n_steps + 1))[:, [0, 1, 0, 1]]
+    step = n_steps // 2 + 1
+    b, j = divmod(step, errors.B)
+    if case in ("nan", "inf"):
+        errors.blocks[j, 2, b] = np.nan if case == "nan" else -np.inf
+    if case in ("exact_nan", "exact_inf"):
+        exact[step - 1, 1] = np.nan if case == "exact_nan" else np.inf
+    last = n_steps - (errors.blocks.shape[2] - 1) * errors.B  # the last block's last step
+    if case == "tail":
+        errors.blocks[last + 1 :, :, -1] = np.where(np.arange(n) % 2, np.nan, 1e300)
     plain = errors.array()[:, :4]
-    assert errors.max_abs(slice(0, 4)) == pytest.approx(np.max(np.abs(plain)), rel=0, nan_ok=True)
+    np.testing.assert_equal(errors.max_abs(slice(0, 4)), np.max(np.abs(plain)))
     # bounds below, at and above the run's largest sums: each crossing found at the same step
     with np.errstate(invalid="ignore"):
         sums = np.max(np.abs(exact + plain[1:]), axis=-1)
     finite = sums[np.isfinite(sums)] if np.isfinite(sums).any() else np.ones(1)
-    bounds = np.quantile(finite, [0.0, 0.5, 0.99, 1.0]) if case != "tail_only" else [finite.max()]
-    for bound in [*bounds, 2 * finite.max()]:
+    for bound in [*np.quantile(finite, [0.0, 0.5, 0.99, 1.0]), 2 * finite.max(), np.inf]:
         assert errors.first_step_beyond(exact, bound, slice(0, 4)) == _plain_first_step_beyond(errors, exact, bound)
-    if case == "tail_only":  # values past N (the last block's unused steps) are not steps of the run
-        assert errors.first_step_beyond(exact, finite.max(), slice(0, 4)) is None

@@ -250,3 +250,7 @@ def test_every_job_that_runs_the_integrator_waits_for_the_one_compile_job(tmp_pa
     jobs = [i for i, rule in labels.items() if rule in runners]
     fed = {b for a, b in edges if a == kernels[0]}
     assert jobs and set(jobs) <= fed
+    # as ancient(): a rerun of the compile job (an edited script, -R, a deleted record) reruns no run
+    rules = "".join((tmp_path / "workflow" / "rules" / f).read_text() for f in ("pendulum.smk", "gauss_seidel.smk"))
+    uses = re.findall(r"kernels=(.*),", rules)
+    assert len(uses) == len(runners) and set(uses) == {"ancient(PENDULUM_KERNELS)"}

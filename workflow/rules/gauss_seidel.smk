@@ -158,7 +158,7 @@ rule pendulum_gs_run:
     """The Gauss-Seidel runs of one (method, decomposition, order), every k (as pendulum_run)."""
     input:
         lib=engine_lib("pendulum_run"),
-        kernels=PENDULUM_KERNELS,
+        kernels=ancient(PENDULUM_KERNELS),
     output:
         expand("results/pendulum/{{method}}_{{decomposition}}_k{k}_{{gs}}.nc", k=PENDULUM["k"]),
     log:

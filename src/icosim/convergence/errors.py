@@ -180,14 +180,16 @@ class ErrorSeries:
         """The first step ``N >= 1`` whose ``max |exact[N - 1] + eps_N[columns]|`` exceeds ``bound`` or is not
         finite, else None (``exact``: the exact values at ``T_1 ... T_N``, the same columns).
 
-        Block by block, in order; a block is skipped when ``max |eps| + max |exact| <= bound`` (rounding is
-        monotone, so no sum in it can exceed the bound): the same answer as checking every step, without
-        the pass over all of them that a diverging run would otherwise cost.
+        Block by block, in order; a block is skipped when ``max |eps| + max |exact|`` is finite and
+        ``<= bound`` (rounding is monotone, so no sum in it can exceed the bound or overflow): the same
+        answer as checking every step, with the per-step sums formed only from the first block that could
+        cross (a diverging run's early blocks are far below the bound).
         """
         B = self.B
         exact_max = float(np.max(np.abs(exact))) if exact.size else 0.0
         for b, err_max in enumerate(self.block_max_abs(columns)):
-            if err_max + exact_max <= bound:  # False for NaN: checked step by step
+            screen = err_max + exact_max
+            if np.isfinite(screen) and screen <= bound:  # NaN or an overflow: checked step by step
                 continue
             steps = np.arange(max(b * B, 1), min((b + 1) * B, self.n_steps + 1))
             with np.errstate(invalid="ignore"):
