@@ -98,6 +98,23 @@ def test_errors_are_radau_batch_errors():
         kernel.radau(coef, 1e-3, 0.0, 1e-3, y0, rtol=0.0)
 
 
+def test_a_link_at_rest_integrates_with_zero_error_estimates():
+    """Link 1 driven kinematically by a zero input, at rest: its derivative and every error estimate are
+    exactly 0.  Both paths integrate it (before, 0.0 ** -0.25 raised ZeroDivisionError): the state stays
+    0, the first step spans the interval (a zero derivative sets no scale), and the next step is
+    MAX_FACTOR times longer, as scipy's Radau grows a step whose error is 0; counters and next step agree."""
+    from icosim.radau import MAX_FACTOR
+
+    link = Link1(P, "kinematic")
+    coef, y0, H = np.zeros((1, 2, 2)), np.zeros((1, 2)), 1e-3
+    ref = radau_batch(link.rhs(coef, H), 0.0, H, y0)
+    got = CompiledLink(link).radau(coef, H, 0.0, H, y0)
+    assert np.all(ref.y == 0) and np.all(got.y == 0)
+    assert (got.n_steps, got.n_rejected, got.n_fev, got.n_jev) == (ref.n_steps, ref.n_rejected, ref.n_fev, ref.n_jev)
+    assert ref.n_steps == 1 and ref.n_rejected == 0
+    assert got.h_next == ref.h_next == MAX_FACTOR * H
+
+
 def _both_paths(monkeypatch, method, kw, dec, k, t_end, scheme="jacobi"):
     runs = {}
     for compiled in (False, True):

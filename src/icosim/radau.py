@@ -37,6 +37,7 @@ given.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -125,12 +126,16 @@ def _fd_jacobian(fun, t, y, f):
 
 
 def _predict_factor(h_abs, h_abs_old, error_norm, error_norm_old):
-    if error_norm_old is None or h_abs_old is None or error_norm == 0:
+    """scipy's Radau step-size factor.  An error estimate of exactly 0 (a system at rest, e.g. in
+    equilibrium) gives +inf, which the caller caps at MAX_FACTOR, as scipy's numpy float would; and
+    leaves no history for the next step (a ratio to an old error of 0 would make the next factor 0)."""
+    if error_norm == 0:
+        return math.inf
+    if error_norm_old is None or h_abs_old is None or error_norm_old == 0:
         multiplier = 1.0
     else:
         multiplier = h_abs / h_abs_old * (error_norm_old / error_norm) ** 0.25
-    with np.errstate(divide="ignore"):
-        return min(1.0, multiplier) * error_norm**-0.25
+    return min(1.0, multiplier) * error_norm**-0.25
 
 
 def radau_batch(

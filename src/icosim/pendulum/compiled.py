@@ -57,7 +57,7 @@ from .links import Link1
 __all__ = ["CompiledLink", "warm_up", "compile_kernels"]
 
 # status codes of the kernel (0: integrated)
-_STEP_TOO_SMALL, _ERROR_NOT_FINITE, _SINGULAR, _TOO_MANY_STEPS, _DERIVATIVE_NOT_FINITE, _ZERO_ERROR = range(1, 7)
+_STEP_TOO_SMALL, _ERROR_NOT_FINITE, _SINGULAR, _TOO_MANY_STEPS, _DERIVATIVE_NOT_FINITE = range(1, 6)
 
 # numba sees module globals as compile-time constants: plain floats and arrays
 _MU_COMPLEX_RE, _MU_COMPLEX_IM = MU_COMPLEX.real, MU_COMPLEX.imag
@@ -85,7 +85,9 @@ def _fd_jacobian(link, kind, par, H, coef, t, y, f, J):
 
 @numba.njit(cache=True)
 def _predict_factor(h_abs, h_abs_old, error_norm, error_norm_old, have_old):
-    if not have_old or error_norm == 0:
+    if error_norm == 0:  # at rest: radau._predict_factor's +inf, capped at MAX_FACTOR by the caller
+        return np.inf
+    if not have_old or error_norm_old == 0:
         multiplier = 1.0
     else:
         multiplier = h_abs / h_abs_old * (error_norm_old / error_norm) ** 0.25
@@ -299,8 +301,6 @@ def _radau(link, kind, par, H, coef, t0, t1, y0, jac0, rtol, atol, newton_tol, m
                 rejected = True
                 continue
             break
-        if error_norm == 0:  # Python's 0.0 ** -0.25 in radau._predict_factor
-            return y, f, counts, h_abs, _ZERO_ERROR, t, h_abs
         factor = _predict_factor(h_abs, h_abs_old, error_norm, error_norm_old, have_old)
         factor = min(MAX_FACTOR, safety * factor)
         h_abs_old, error_norm_old, have_old = h_abs, error_norm, True
@@ -439,6 +439,5 @@ def _failure(status, t, h_abs, max_steps):
         return IntegrationError(f"singular Newton matrix at t = {t:.17g}: Singular matrix")
     if status == _TOO_MANY_STEPS:
         return IntegrationError(f"more than {max_steps} steps")
-    if status == _DERIVATIVE_NOT_FINITE:
-        return IntegrationError(f"non-finite derivative at t = {t:.17g}")
-    return ZeroDivisionError("0.0 cannot be raised to a negative power")  # _ZERO_ERROR
+    assert status == _DERIVATIVE_NOT_FINITE, f"unknown status {status}"
+    return IntegrationError(f"non-finite derivative at t = {t:.17g}")
