@@ -271,3 +271,31 @@ def test_every_job_that_runs_the_integrator_waits_for_the_one_compile_job(tmp_pa
     rules = "".join((tmp_path / "workflow" / "rules" / f).read_text() for f in ("pendulum.smk", "gauss_seidel.smk"))
     uses = re.findall(r"kernels=(.*),", rules)
     assert len(uses) == len(runners) and set(uses) == {"ancient(PENDULUM_KERNELS)"}
+
+
+def test_an_edited_source_the_kernels_inline_recompiles_them(tmp_path):
+    """numba alone would load kernels compiled from an old compiled_links.py (its cache is keyed on
+    compiled.py's time stamp only): on a copy of the package, the second process loads the cache, and
+    after an edit of compiled_links.py the third compiles again."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    src = Path(__file__).resolve().parents[1] / "src"
+    shutil.copytree(src, tmp_path / "src", ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+    code = "import json\nfrom icosim.pendulum.compiled import compile_kernels\nprint(json.dumps(compile_kernels()))\n"
+    env = {**os.environ, "PYTHONPATH": str(tmp_path / "src"), "OPENBLAS_NUM_THREADS": "1"}
+
+    def radau_cache():
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env)
+        kernel = json.loads(out.stdout)["kernels"]["_radau"]
+        return kernel["cache_hits"], kernel["cache_misses"]
+
+    assert radau_cache() == (0, 1)
+    assert radau_cache() == (1, 0)
+    links = tmp_path / "src" / "icosim" / "pendulum" / "compiled_links.py"
+    links.write_text(links.read_text() + "\n# an edit\n")
+    assert radau_cache() == (0, 1)
+    assert radau_cache() == (1, 0)
