@@ -31,10 +31,6 @@ int64 ids), so a cold disk cache costs one compilation per process.
 
 from __future__ import annotations
 
-import hashlib
-import time
-from pathlib import Path
-
 import numba
 import numpy as np
 
@@ -54,45 +50,12 @@ from ..radau import (
 )
 from .compiled_algebra import all_finite, inverse, matvec, nan_maximum
 from .compiled_links import FORCE, KINEMATIC, batch_rhs, link_parameters, member_rhs
+from .kernel_cache import compile_record, drop_stale_cache
 from .links import Link1
 
 __all__ = ["CompiledLink", "warm_up", "compile_kernels"]
 
-#: Sources compiled into this module's kernels besides itself: the inlined functions and the constants.
-KERNEL_SOURCES = ("pendulum/compiled_links.py", "pendulum/compiled_algebra.py", "radau.py")
-
-
-def _drop_stale_cache(cache_dir: Path | None = None) -> bool:
-    """Remove this module's numba cache if a file in KERNEL_SOURCES changed since it was written.
-
-    Why: numba keys a cached kernel on the time stamp of the file defining it only, so after an edit
-    of ``compiled_links.py`` (or a constant of ``radau.py``) it would load the kernels compiled from
-    the old code.  A digest of those files is kept beside the cache (``compiled.sources``); when it
-    differs, the cache files of ``compiled.*`` are removed before the kernels are defined, so they
-    compile again.  Only numba's default cache place (``__pycache__`` beside this file) is looked
-    after.  Returns whether the cache was dropped.
-    """
-    here = Path(__file__)
-    root = here.parents[1]
-    cache = cache_dir or here.parent / "__pycache__"
-    digest = hashlib.sha256(b"".join((root / name).read_bytes() for name in KERNEL_SOURCES)).hexdigest()
-    record = cache / "compiled.sources"
-    try:
-        if record.read_text() == digest:
-            return False
-    except OSError:
-        pass
-    try:
-        for path in cache.glob("compiled.*.nb[ic]"):
-            path.unlink(missing_ok=True)
-        cache.mkdir(exist_ok=True)
-        record.write_text(digest)
-    except OSError:  # a read-only install: numba caches elsewhere or not at all
-        pass
-    return True
-
-
-_drop_stale_cache()
+drop_stale_cache()  # before the kernels are defined: numba loads their cache as it defines them
 
 # status codes of the kernel (0: integrated)
 _STEP_TOO_SMALL, _ERROR_NOT_FINITE, _SINGULAR, _TOO_MANY_STEPS, _DERIVATIVE_NOT_FINITE = range(1, 6)
@@ -381,24 +344,8 @@ def warm_up() -> None:
 
 
 def compile_kernels() -> dict:
-    """:func:`warm_up`, and a record of it: numba's version, each kernel's signatures and cache hits and
-    misses in this process, and the seconds it took.
-
-    The workflow runs this once, in one job before the runs (``results/pendulum/kernels.json``): runs
-    that start together on a cold cache (a fresh clone) would otherwise each compile, about 10 CPU-s.
-    """
-    t0, c0 = time.perf_counter(), time.process_time()
-    warm_up()
-    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-    kernels = {}
-    for name, kernel in (("_jacobian", _jacobian), ("_radau", _radau)):
-        stats = kernel.stats
-        kernels[name] = {
-            "signatures": [str(sig) for sig in kernel.signatures],
-            "cache_hits": sum(stats.cache_hits.values()),
-            "cache_misses": sum(stats.cache_misses.values()),
-        }
-    return {"numba": numba.__version__, "kernels": kernels, "wall_seconds": wall, "cpu_seconds": cpu}
+    """:func:`warm_up` and its record (:func:`~icosim.pendulum.kernel_cache.compile_record`)."""
+    return compile_record(warm_up, {"_jacobian": _jacobian, "_radau": _radau})
 
 
 def _float_array(x, ndim):
