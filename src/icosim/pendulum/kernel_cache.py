@@ -25,12 +25,12 @@ __all__ = ["KERNEL_SOURCES", "drop_stale_cache", "compile_record"]
 KERNEL_SOURCES = ("pendulum/compiled_links.py", "pendulum/compiled_algebra.py", "radau.py")
 
 
-def drop_stale_cache(cache_dir: Path | None = None) -> bool:
+def drop_stale_cache() -> bool:
     """Remove the cache of ``compiled.*`` if a file in KERNEL_SOURCES changed since it was written;
     returns whether it did (also when there was no record yet)."""
     here = Path(__file__)
     root = here.parents[1]
-    cache = cache_dir or here.parent / "__pycache__"
+    cache = here.parent / "__pycache__"
     digest = hashlib.sha256(b"".join((root / name).read_bytes() for name in KERNEL_SOURCES)).hexdigest()
     record = cache / "compiled.sources"
     try:
