@@ -19,6 +19,8 @@ kind                          reads
 ``stable_fraction``           every selected panel's stable share against a value
 ``compare``                   two groups of panels' mean stable shares
 ``trend``                     the stable share along an attribute (e.g. ``row``)
+``pointwise``                 two groups of panels' verdicts, point by point
+                              (:mod:`icosim.stability.pointwise`)
 ============================  ==================================================
 """
 
@@ -31,7 +33,9 @@ import numpy as np
 
 from ..claims import CheckKind, Outcome, combine_holds, select
 from ..model import ParameterError
+from .pointwise import RELATIONS, check_pointwise, validate_pointwise
 from .policy import VERDICTS
+from .regions import region_mask, validate_region, verdict_masks
 
 __all__ = [
     "CHECKS",
@@ -45,38 +49,11 @@ __all__ = [
 
 _select = select  # the checks take a parameter called `select`
 
-#: Keys of a claim's ``region``: bounds on ``lr1``/``li1``, and the degenerate points left out.
-REGION_KEYS = ("lr1", "li1", "exclude_undamped", "exclude_origin")
-
 
 def grid_resolution(datasets) -> float:
     """``1/(n - 1)`` of the coarsest axis: the resolution of a stable share."""
     n = min(min(ds.sizes["lr1"], ds.sizes["li1"]) for ds in datasets)
     return 1.0 / (n - 1)
-
-
-def _region_mask(ds, region):
-    lr1 = ds["lr1"].values[:, None]
-    li1 = ds["li1"].values[None, :]
-    mask = np.ones((lr1.size, li1.size), dtype=bool)
-    region = region or {}
-    unknown = sorted(set(region) - set(REGION_KEYS))
-    if unknown:
-        raise ParameterError(f"region: unknown key(s) {unknown}; allowed: {', '.join(REGION_KEYS)}")
-    if "lr1" in region:
-        lo, hi = region["lr1"]
-        mask &= (lr1 >= lo) & (lr1 <= hi)
-    if "li1" in region:
-        lo, hi = region["li1"]
-        mask &= (li1 >= lo) & (li1 <= hi)
-    if region.get("exclude_undamped"):
-        # lr1 = 0: both subsystems undamped, the model itself only marginally stable
-        mask &= np.broadcast_to(lr1 < 0, mask.shape)
-    if region.get("exclude_origin"):
-        # lr1 = li1 = 0: both subsystems are free masses (lambda_2 = 0 too); every scheme reproduces the rigid motion
-        # x0 + v t, so 1 is an eigenvalue and rho >= 1 there: marginal or unstable, never provably stable
-        mask &= (lr1 != 0) | (li1 != 0)
-    return mask
 
 
 @dataclass(frozen=True)
@@ -108,22 +85,13 @@ class Share:
         return core
 
 
-def _verdict_masks(ds):
-    """``(stable, unstable)`` masks of a panel; the rest is marginal or undecided."""
-    if "verdict" not in ds:  # a panel without verdicts (written before certification): every point decided
-        stable = ds["stable"].values.astype(bool)
-        return stable, ~stable
-    v = ds["verdict"].values
-    return v == VERDICTS.index("stable"), v == VERDICTS.index("unstable")  # the datasets' flag values
-
-
 def stable_share(ds, region=None) -> Share:
     """The stable points inside ``region`` as a :class:`Share`."""
-    mask = _region_mask(ds, region)
+    mask = region_mask(ds, region)
     n = int(mask.sum())
     if n == 0:
         raise ParameterError(f"region {region} holds no grid point of figure {ds.attrs.get('figure')}")
-    stable, unstable = _verdict_masks(ds)
+    stable, unstable = verdict_masks(ds)
     certified = ds["certified"].values.astype(bool) if "certified" in ds else np.zeros(mask.shape, bool)
     undecided = ds["verdict"].values == VERDICTS.index("undecided") if "verdict" in ds else np.zeros(mask.shape, bool)
     s, u = int(stable[mask].sum()), int(unstable[mask].sum())
@@ -141,7 +109,7 @@ def _describe(ds) -> str:
 
 
 def _nearest_unstable(ds, region):
-    mask = _region_mask(ds, region) & _verdict_masks(ds)[1]
+    mask = region_mask(ds, region) & verdict_masks(ds)[1]
     if not mask.any():
         return None
     LR, LI = np.meshgrid(ds["lr1"].values, ds["li1"].values, indexing="ij")
@@ -188,10 +156,10 @@ def check_stable_fraction(datasets, *, select: dict, op: str, value: float, regi
             entry["nearest_unstable_to_origin"] = nearest
             text += f", nearest unstable point at distance {nearest:.3g} from the origin"
         if region and region.get("exclude_undamped"):
-            axis_mask = _region_mask(ds, {**region, "exclude_undamped": False})
+            axis_mask = region_mask(ds, {**region, "exclude_undamped": False})
             axis_mask &= np.broadcast_to(ds["lr1"].values[:, None] == 0, axis_mask.shape)
             if axis_mask.any():
-                stable, unstable = _verdict_masks(ds)
+                stable, unstable = verdict_masks(ds)
                 n_axis_unstable, n_axis_marginal = (
                     int(unstable[axis_mask].sum()),
                     int((~stable & ~unstable)[axis_mask].sum()),
@@ -214,7 +182,7 @@ def _origin_text(ds, entry: dict) -> str:
     i, j = np.flatnonzero(ds["lr1"].values == 0), np.flatnonzero(ds["li1"].values == 0)
     if not (i.size and j.size):
         return ""
-    stable, unstable = _verdict_masks(ds)
+    stable, unstable = verdict_masks(ds)
     at = (i[0], j[0])
     verdict = "stable" if stable[at] else "unstable" if unstable[at] else "marginal"
     entry["origin_verdict"] = verdict
@@ -356,19 +324,8 @@ def check_trend(
     return Outcome(holds, text + _certified_text(chosen, region), {"groups": dict(zip(names, lows)), "resolution": tol})
 
 
-def _validate_region(label: str, params: dict):
-    region = params.get("region")
-    if region is None:
-        return
-    if not isinstance(region, dict):
-        raise ParameterError(f"{label}: check.region must be a mapping of attribute -> value")
-    unknown = sorted(set(region) - set(REGION_KEYS))
-    if unknown:
-        raise ParameterError(f"{label}: check.region has unknown key(s) {unknown}; allowed: {', '.join(REGION_KEYS)}")
-
-
 def _validate_compare(label: str, params: dict):
-    _validate_region(label, params)
+    validate_region(label, params)
     if params.get("relation") == "similar" and params.get("within") is None:
         raise ParameterError(f"{label}: check (compare) with relation 'similar' needs `within`")
 
@@ -376,7 +333,7 @@ def _validate_compare(label: str, params: dict):
 #: The stability check kinds (collected by :mod:`icosim.checks`).
 CHECKS = {
     "stable_fraction": CheckKind(
-        check_stable_fraction, _validate_region, choices={"op": ("==", ">=", "<=", ">", "<")}, selectors=("select",)
+        check_stable_fraction, validate_region, choices={"op": ("==", ">=", "<=", ">", "<")}, selectors=("select",)
     ),
     "compare": CheckKind(
         check_compare,
@@ -385,7 +342,13 @@ CHECKS = {
         selectors=("a", "b"),
         selector_lists=("b",),
     ),
+    "pointwise": CheckKind(
+        check_pointwise,
+        validate_pointwise,
+        choices={"relation": RELATIONS},
+        selectors=("a", "b"),
+    ),
     "trend": CheckKind(
-        check_trend, _validate_region, choices={"direction": ("increasing", "decreasing")}, selectors=("select",)
+        check_trend, validate_region, choices={"direction": ("increasing", "decreasing")}, selectors=("select",)
     ),
 }
