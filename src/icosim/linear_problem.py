@@ -125,32 +125,33 @@ class LinearCosimulation(CosimulationProblem):
         out["force"] = d[..., 3:4] if self.decomposition.has_force_balance else empty
         return out
 
-    def output_sensitivities(self, algebraic=(False, False)):
+    def output_sensitivities(self, response=("full", "full")):
         """``dy/de_N+1``, shape ``(..., n_e, 2, 4)``: exact, the model is linear.
 
-        ``algebraic[i]``: subsystem ``i`` has finished its macro step (it leads
-        a Gauss-Seidel scheme) and responds only algebraically
-        (:meth:`~icosim.subsystems.OscillatorSubsystem.algebraic_sensitivity`);
-        otherwise through the interpolation polynomial of its corrector (Eq. 13).
+        ``response[i]``: ``"full"`` -- through the interpolation polynomial of
+        subsystem ``i``'s corrector (Eq. 13); ``"algebraic"`` -- it has finished
+        its macro step (it leads a Gauss-Seidel scheme) and responds only
+        algebraically (:meth:`~icosim.subsystems.OscillatorSubsystem.algebraic_sensitivity`);
+        ``"none"`` -- its outputs stay as integrated.
         """
         cols = []
         for j in range(self.n_coupling):
             per_sub = []
-            for sub, alg in zip(self.subsystems, algebraic):
-                dy = sub.algebraic_sensitivity() if alg else sub.step_sensitivity(self.corr_nodes)
-                per_sub.append(dy if sub.input == j else 0 * dy)
+            for sub, how in zip(self.subsystems, response):
+                dy = sub.algebraic_sensitivity() if how != "full" else sub.step_sensitivity(self.corr_nodes)
+                per_sub.append(dy if sub.input == j and how != "none" else 0 * dy)
             cols.append(np.stack(np.broadcast_arrays(*per_sub), axis=-2))
         return np.stack(cols, axis=-3)
 
-    def jacobians(self, state, history, e, y, fixed=(None, None)):
+    def jacobians(self, state, history, e, y, fixed=(None, None), algebraic=True):
         """Constant (Eq. 13): built once per scheme from the exact output sensitivities, not counted as work."""
-        algebraic = tuple(f is not None for f in fixed)
+        response = tuple("full" if f is None else "algebraic" if algebraic else "none" for f in fixed)
         cache = self.__dict__.setdefault("_jac", {})
-        if algebraic not in cache:
-            S = self.output_sensitivities(algebraic)
+        if response not in cache:
+            S = self.output_sensitivities(response)
             res = self.residuals(S)  # linear and homogeneous: maps sensitivities
-            cache[algebraic] = {key: np.swapaxes(val, -1, -2) for key, val in res.items()}
-        return cache[algebraic]
+            cache[response] = {key: np.swapaxes(val, -1, -2) for key, val in res.items()}
+        return cache[response]
 
     def project(self, state):
         """Mass-weighted projection of positions and velocities (Eq. 30)."""

@@ -32,7 +32,9 @@ def macro_step(problem, method, state, history, *, scheme=JACOBI, iterations: in
         and corrected.  Gauss-Seidel: the leading subsystem advances once with
         the extrapolation polynomials, its end state is final, and it enters
         the corrected coupling variables with its algebraic gradients and its
-        finished outputs; only the other subsystem is corrected.
+        finished outputs; only the other subsystem is corrected.  A scheme whose
+        leading outputs stay as integrated (``reevaluates_leading`` False) skips
+        the re-evaluation, and the leading subsystem does not respond at all.
     iterations : number of corrector steps.  The paper's scheme is one
         (semi-implicit; exact for the linear model because the sensitivities
         are constant).  More steps re-linearise about the latest coupling
@@ -58,7 +60,7 @@ def macro_step(problem, method, state, history, *, scheme=JACOBI, iterations: in
     for it in range(max(1, iterations)):
         # step 2: corrected coupling variables (leading subsystems: finished outputs, algebraic gradients)
         r = problem.residuals(y)
-        J = problem.jacobians(state, history, e, y, fixed)
+        J = problem.jacobians(state, history, e, y, fixed, algebraic=scheme.reevaluates_leading)
         e_new = method.corrected_coupling(e, r, J, problem.backend)
         problem.work.coupling_solves += method.n_solves
         if it > 0 and tol is not None and _max_abs(e_new - e) <= tol:
@@ -67,7 +69,8 @@ def macro_step(problem, method, state, history, *, scheme=JACOBI, iterations: in
         # step 3: corrector of the corrected subsystems; the leading ones' outputs follow e algebraically
         for i in subsystems:
             if i in scheme.leading:
-                ys[i] = problem.reevaluate(i, ends[i], ys[i], e_old, e)
+                if scheme.reevaluates_leading:
+                    ys[i] = problem.reevaluate(i, ends[i], ys[i], e_old, e)
             else:
                 ends[i], ys[i] = problem.correct(i, state, history, e)
         y = problem.stack(ys)

@@ -85,12 +85,13 @@ class CosimulationProblem:
         the coupling conditions at ``T_N+1``: ``pos``, ``vel``, ``acc`` (the
         constraint on each level, shape ``(..., n_c)``) and ``force`` (balance
         of the multipliers of kinematically driven subsystems, ``(..., n_f)``).
-    ``jacobians(state, history, e, y, fixed=(None, None)) -> dict``
+    ``jacobians(state, history, e, y, fixed=(None, None), algebraic=True) -> dict``
         ``d residuals / d e_N+1`` at ``e`` for the same levels, shape
         ``(..., n, n_e)``.  ``fixed[i] is None``: subsystem ``i`` responds
         through its corrector integration (full gradients, Eq. 13/39/63);
         otherwise ``fixed[i]`` is its final end state and it responds only
-        algebraically (as :meth:`reevaluate`).
+        algebraically (as :meth:`reevaluate`), or, with ``algebraic=False``,
+        not at all (its outputs stay as integrated).
     ``project(state) -> state``
         the projection step (needed by methods that project).
 
@@ -147,7 +148,7 @@ class CosimulationProblem:
     def residuals(self, y):  # pragma: no cover - contract
         raise NotImplementedError
 
-    def jacobians(self, state, history, e, y, fixed=(None, None)):  # pragma: no cover - contract
+    def jacobians(self, state, history, e, y, fixed=(None, None), algebraic=True):  # pragma: no cover - contract
         raise NotImplementedError
 
     def project(self, state):  # pragma: no cover - contract

@@ -215,11 +215,13 @@ class PendulumCosimulation(CosimulationProblem):
         end, y_i, _ = self._cache[3][i] = self._respond(i, state, history, e_p)
         return end, y_i
 
-    def jacobians(self, state, history, e, y, fixed=(None, None)):
+    def jacobians(self, state, history, e, y, fixed=(None, None), algebraic=True):
         c = self._cache
-        responses = None
+        responses = [None, None]
         if c is not None and c[0] is state and c[1] is history and np.array_equal(c[2], e):
             responses = [c[3][i] if fixed[i] is None else None for i in range(2)]
+        if not algebraic:  # a finished link's outputs stay as integrated: it does not respond
+            responses = [(f, y[i], {}) if f is not None else r for i, (f, r) in enumerate(zip(fixed, responses))]
         return self._linearise(state, history, e, fixed, responses)[1]
 
     def correct(self, i, state, history, e_new):
