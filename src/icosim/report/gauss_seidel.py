@@ -161,9 +161,10 @@ def _convergence_part(conv) -> str:
         "<p>Every curve of Figs. 21–23 computed with both Gauss–Seidel orders, with the same step sizes, fit and "
         "instability rules as the Jacobi curves (figure ids <code>21gs12</code> … <code>23gs21</code>). Fitted "
         "order of Eq. (72) per curve; <i>unstable</i>: unstable at every step size; <i>no fit</i>: too few stable "
-        "step sizes. docs/gauss_seidel.md derives O(H<sup>k+1</sup>) for every stable Gauss–Seidel curve: the "
-        "leading subsystem's extrapolated coupling force and the corrected subsystem's interpolated one differ by "
-        "O(H<sup>k+1</sup>), an impulse defect O(H<sup>k+2</sup>) per step.</p>",
+        "step sizes. docs/gauss_seidel.md derives O(H<sup>k+1</sup>) for every stable Gauss–Seidel curve in ff: "
+        "the leading subsystem's extrapolated coupling force and the corrected subsystem's interpolated one differ "
+        "by O(H<sup>k+1</sup>), an impulse defect O(H<sup>k+2</sup>) per step. In fd and dd (a kinematically "
+        "driven subsystem) the order is measured, not derived.</p>",
         table(
             ["curve"] + [LABEL[s] for s in schemes],
             [[label] + [_order_text(v.get(s)) for s in schemes] for label, v in rows],

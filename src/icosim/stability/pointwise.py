@@ -138,8 +138,10 @@ def check_pointwise(datasets, *, a: dict, b: dict, relation: str, pair_by: list 
         return Outcome(None, f"no dataset matches {a}")
     base = "same" if relation in ("same", "differ") else "subset"
     holds, texts, numbers = [], [], {}
+    # name a pair by the attributes the selector leaves open (the fixed ones are the claim's own words)
+    shown = [i for i, name in enumerate(pair_by) if isinstance(a.get(name), list) or name not in a]
     for key, da in sorted(group_a.items()):
-        label = _describe(key, pair_by)
+        label = _describe([key[i] for i in shown], [pair_by[i] for i in shown]) or "panel"
         db = group_b.get(key)
         if db is None:
             holds.append(None)
@@ -175,8 +177,11 @@ def check_pointwise(datasets, *, a: dict, b: dict, relation: str, pair_by: list 
         }
         numbers[label] = entry
         text = f"{label}: {entry['n_points']} points, {entry['n_failing']} contradict, {entry['n_open']} open"
-        if relation not in ("same", "differ"):
-            text += f", {entry['n_b_stable_a_unstable']} stable only in b"
+        text += f" ({entry['n_b_stable_a_unstable']} stable only in b"
+        if base == "same":
+            entry["n_a_stable_b_unstable"] = int((mask & (va == "S") & (vb == "U")).sum())
+            text += f", {entry['n_a_stable_b_unstable']} only in a"
+        text += ")"
         if bad:
             listed = ", ".join(
                 f"({p['lr1']:g}, {p['li1']:g}) {p['a']}/{p['b']} rho {p['rho_a']:.4g}/{p['rho_b']:.4g}"
@@ -184,11 +189,7 @@ def check_pointwise(datasets, *, a: dict, b: dict, relation: str, pair_by: list 
             )
             text += f" [{listed}{', ...' if len(bad) > MAX_LISTED else ''}]"
         texts.append(text)
-    return Outcome(combine_holds(holds), f"{relation} ({_label(a)} vs {_label(b)}): " + "; ".join(texts), numbers)
-
-
-def _label(selector) -> str:
-    return ", ".join(f"{k}={v}" for k, v in selector.items() if k != "view")
+    return Outcome(combine_holds(holds), "; ".join(texts), numbers)
 
 
 def validate_pointwise(label: str, params: dict):
