@@ -117,11 +117,18 @@ def test_unstable_near_origin_ignores_the_undamped_axis_but_reports_it():
         (5, 8, "less", "pass"),
         (6, 6, "similar", "pass"),
         (9, 3, "similar", "fail"),
+        # `by`: at least 30 points (3 of the 11 columns = 27.3 %, 4 = 36.4 %; one column is the resolution)
+        (9, 5, "greater by 0.3", "pass"),
+        (7, 5, "greater by 0.3", "fail"),  # 18.2 points: short of 30 by more than one column
+        (8, 5, "greater by 0.3", "undecided"),  # 27.3 points: within one column of 30
     ],
 )
 def test_compare_relations(cols_a, cols_b, relation, expected):
     ds = [panel(cols_a, figure="12"), panel(cols_b, figure="9")]
+    relation, _, by = relation.partition(" by ")
     check = {"kind": "compare", "a": {"figure": "12"}, "b": {"figure": "9"}, "relation": relation}
+    if by:
+        check["by"] = float(by)
     if relation == "similar":
         check["within"] = 0.05
     assert evaluate_claim(claim(check), ds).verdict == expected

@@ -25,7 +25,7 @@ from .convergence import checks as _convergence
 from .pendulum import checks as _pendulum
 from .stability import checks as _stability
 
-__all__ = ["CHECKS", "parse_claims", "load_claims", "evaluate_claim", "evaluate"]
+__all__ = ["CHECKS", "parse_claims", "load_claims", "evaluate_claim", "evaluate", "describe_claim"]
 
 #: check kind -> :class:`icosim.claims.CheckKind`, for every part.
 CHECKS = {**_stability.CHECKS, **_convergence.CHECKS, **_pendulum.CHECKS}
@@ -48,3 +48,8 @@ def evaluate_claim(claim: Claim, datasets) -> Verdict:
 def evaluate(claims, datasets) -> list[Verdict]:
     """One :class:`~icosim.claims.Verdict` per claim, with every part's check kinds."""
     return _claims.evaluate(claims, datasets, CHECKS)
+
+
+def describe_claim(claim: Claim) -> dict:
+    """:func:`icosim.claims.describe_claim` with every part's check kinds."""
+    return _claims.describe_claim(claim, CHECKS)

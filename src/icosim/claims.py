@@ -56,6 +56,8 @@ __all__ = [
     "matches",
     "evaluate",
     "evaluate_claim",
+    "describe_claim",
+    "selector_text",
     "combine_holds",
     "reference_mismatches",
     "enforce_references",
@@ -139,7 +141,9 @@ class CheckKind:
     ``selector_lists`` may also be a list of them), filled in by a claim's
     ``each``; ``validate(label, params)``, if given, checks the parameters
     further when the claims are read (the signature check -- unknown,
-    missing -- is always made).
+    missing -- is always made).  ``describe(params) -> (what, fails_if)``
+    says in words what the check reads and which data outcome would make the
+    claim fail (the claims table of the documentation).
     """
 
     fn: Callable
@@ -147,6 +151,7 @@ class CheckKind:
     choices: Mapping[str, tuple] = field(default_factory=dict)
     selectors: tuple[str, ...] = ()
     selector_lists: tuple[str, ...] = ()
+    describe: Callable | None = None
 
 
 # -- reading claims ------------------------------------------------------------
@@ -314,6 +319,28 @@ def evaluate_claim(claim: Claim, datasets, checks: Mapping[str, CheckKind]) -> V
         numbers[tag] = outcome.numbers
         holds.append(outcome.holds)
     return Verdict(claim, _verdict(combine_holds(holds)), "; ".join(parts), numbers)
+
+
+def selector_text(selector) -> str:
+    """A selector in words: ``{figure: "9", row: [1, 2]}`` -> ``figure 9, row 1 or 2``."""
+    if isinstance(selector, list):
+        return "; ".join(selector_text(s) for s in selector)
+    parts = []
+    for key, value in selector.items():
+        values = value if isinstance(value, list) else [value]
+        parts.append(f"{key} {' or '.join(str(v) for v in values)}")
+    return ", ".join(parts) or "every dataset"
+
+
+def describe_claim(claim: Claim, checks: Mapping[str, CheckKind]) -> dict:
+    """What a claim's check reads and what would make it fail, in words (``check``, ``fails_if``)."""
+    params = {k: v for k, v in claim.check.items() if k != "kind"}
+    describe = checks[claim.check["kind"]].describe
+    what, fails_if = describe(params) if describe else (claim.check["kind"], "the check does not hold")
+    if claim.each:
+        what += "; once for each " + ", ".join(f"{k} in {v}" for k, v in claim.each.items())
+        fails_if += " (in any of them)"
+    return {"check": what, "fails_if": fails_if}
 
 
 def evaluate(claims, datasets, checks: Mapping[str, CheckKind]) -> list[Verdict]:

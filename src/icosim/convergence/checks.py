@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..claims import CheckKind, Outcome, combine_holds, matches
+from ..claims import CheckKind, Outcome, combine_holds, matches, selector_text
 from ..methods import parameters
 from ..model import ParameterError
 from .curves import curve_label, curves, stable_span
@@ -89,7 +89,7 @@ def check_convergence_order(datasets, *, select: dict, expect: list, tolerance: 
             raise ParameterError(f"convergence_order: no curve matches {sel}")
         for rec in matched:
             row = {
-                "curve": curve_label(rec),
+                "curve": curve_label(rec) + ("" if rec["scheme"] == "jacobi" else f", {rec['scheme']}"),
                 "k": rec["k"],
                 "order": rec["order"],
                 "order_status": rec["order_status"],
@@ -137,5 +137,20 @@ def _describe(r) -> str:
     return head + what + f" -> {r['verdict']}"
 
 
+def _describe_order(p):
+    claimed = "; ".join(
+        f"k = {e['k']}: "
+        + ("unstable at every H" if e.get("unstable") else f"order {e['order']:g} ± {p['tolerance']:g}")
+        for e in p["expect"]
+    )
+    what = f"asymptotic order of every curve with {selector_text(p['select'])} ({claimed})"
+    fails = "a curve's asymptotic order lies outside the tolerance, or a curve claimed unstable is stable at every H"
+    return what, fails
+
+
 #: The convergence check kinds (collected by :mod:`icosim.checks`).
-CHECKS = {"convergence_order": CheckKind(check_convergence_order, _validate_order_check, selectors=("select",))}
+CHECKS = {
+    "convergence_order": CheckKind(
+        check_convergence_order, _validate_order_check, selectors=("select",), describe=_describe_order
+    )
+}

@@ -98,5 +98,16 @@ def check_pendulum_stability(datasets, *, default: str, exceptions: list | None 
     return Outcome(combine_holds(holds), text, {"runs": numbers, "not_run": missing})
 
 
+def _describe_stability(p):
+    scheme = p.get("scheme", "jacobi")
+    exceptions = ", ".join(
+        f"{e['method']} {e['decomposition']} k = {e['k']} {e['expected']}" for e in p.get("exceptions") or []
+    )
+    what = f"every {scheme} run {p['default']} up to the end time" + (f", except {exceptions}" if exceptions else "")
+    return what, "a run diverges that should stay bounded, or stays bounded where it should diverge"
+
+
 #: The pendulum's check kinds (collected by :mod:`icosim.checks`).
-CHECKS = {"pendulum_stability": CheckKind(check_pendulum_stability, _validate_stability_check)}
+CHECKS = {
+    "pendulum_stability": CheckKind(check_pendulum_stability, _validate_stability_check, describe=_describe_stability)
+}

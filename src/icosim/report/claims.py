@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from . import html as rp
 
-__all__ = ["claims_table"]
+__all__ = ["claims_table", "claims_markdown"]
 
 
 def claims_table(records, *, note_header: str = "note", part: str | None = None) -> str:
@@ -39,3 +39,24 @@ def claims_table(records, *, note_header: str = "note", part: str | None = None)
         raw_columns=(0, 1, 2, 3, 4, 5),
         row_ids=ids,
     )
+
+
+def claims_markdown(claims, describe) -> str:
+    """A Markdown table of claims for the documentation: what each says, what its check reads, what
+    data outcome would make it fail, and its recorded full-resolution verdict.
+
+    ``describe(claim) -> {"check": ..., "fails_if": ...}`` (:func:`icosim.checks.describe_claim`).
+    """
+
+    def cell(text) -> str:
+        return " ".join(str(text).split()).replace("|", "\\|")
+
+    lines = ["| claim | statement | check | fails if | verdict |", "|---|---|---|---|---|"]
+    for c in claims:
+        d = describe(c)
+        verdict = c.reference or "–"
+        lines.append(
+            f"| `{c.id}` ({cell(c.source)}) | {cell(c.statement)} | {cell(d['check'])} | {cell(d['fails_if'])} "
+            f"| {verdict} |"
+        )
+    return "\n".join(lines) + "\n"

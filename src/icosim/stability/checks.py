@@ -31,9 +31,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..claims import CheckKind, Outcome, combine_holds, select
+from ..claims import CheckKind, Outcome, combine_holds, select, selector_text
 from ..model import ParameterError
-from .pointwise import RELATIONS, check_pointwise, validate_pointwise
+from .pointwise import RELATIONS, check_pointwise, describe_pointwise, validate_pointwise
 from .policy import VERDICTS
 from .regions import region_mask, validate_region, verdict_masks
 
@@ -208,13 +208,24 @@ def _group_share(datasets, selector, region):
     return (low, high), chosen, {key: x.low for key, x in shares.items()}
 
 
-def check_compare(datasets, *, a: dict, b, relation: str, within: float | None = None, region: dict | None = None):
+def check_compare(
+    datasets,
+    *,
+    a: dict,
+    b,
+    relation: str,
+    within: float | None = None,
+    by: float = 0.0,
+    region: dict | None = None,
+):
     """Compare the mean stable share of the panels selected by ``a`` with that of ``b``.
 
     ``relation``: ``greater`` (a more stable than b), ``less``, or ``similar``
-    (``|a - b| <= within``).  ``b`` may be a list of selectors: the relation
-    must then hold against each.  Differences within the grid resolution are
-    undecided, and so are relations that the marginal points could turn.
+    (``|a - b| <= within``).  ``by`` (greater, less): the difference must be at
+    least this (e.g. 0.1 for "notably": ten points of stable share).  ``b`` may
+    be a list of selectors: the relation must then hold against each.
+    Differences within the grid resolution are undecided, and so are relations
+    that the marginal points could turn.
     """
     if relation not in ("greater", "less", "similar"):
         raise ParameterError(f"compare: relation must be greater, less or similar, got {relation!r}")
@@ -255,7 +266,9 @@ def check_compare(datasets, *, a: dict, b, relation: str, within: float | None =
         else:
             sign = 1 if relation == "greater" else -1
             lo_s, hi_s = sorted((sign * lo, sign * hi))
-            h = True if lo_s > tol else (False if hi_s < -tol else None)
+            h = True if lo_s > max(tol, by) else (False if hi_s < by - tol else None)
+            if by:
+                text += f", {relation} by at least {by:.0%} claimed"
         holds.append(h)
         texts.append(text)
     return Outcome(combine_holds(holds), "; ".join(texts) + _certified_text(used, region), numbers)
@@ -328,12 +341,59 @@ def _validate_compare(label: str, params: dict):
     validate_region(label, params)
     if params.get("relation") == "similar" and params.get("within") is None:
         raise ParameterError(f"{label}: check (compare) with relation 'similar' needs `within`")
+    by = params.get("by", 0)
+    if not isinstance(by, (int, float)) or isinstance(by, bool) or not 0 <= by <= 1:
+        raise ParameterError(f"{label}: check.by must be a share difference in [0, 1], got {by!r}")
+    if by and params.get("relation") == "similar":
+        raise ParameterError(f"{label}: check.by goes with relation greater or less, not similar (use within)")
+
+
+def _region_text(region) -> str:
+    if not region:
+        return ""
+    parts = [f"{axis} in [{region[axis][0]:g}, {region[axis][1]:g}]" for axis in ("lr1", "li1") if axis in region]
+    parts += ["damped points only (lr1 < 0)"] * bool(region.get("exclude_undamped"))
+    parts += ["the origin left out"] * bool(region.get("exclude_origin"))
+    return " inside " + ", ".join(parts)
+
+
+def _describe_stable_fraction(p):
+    what = f"stable share of every panel with {selector_text(p['select'])}{_region_text(p.get('region'))} {p['op']} {p['value']:g}"
+    return what, f"a selected panel's share fails {p['op']} {p['value']:g} whichever way its marginal points go"
+
+
+def _describe_compare(p):
+    b = selector_text(p["b"])
+    region = _region_text(p.get("region"))
+    what = f"mean stable share of ({selector_text(p['a'])}) against ({b}){region}: {p['relation']}"
+    if p["relation"] == "similar":
+        what += f" within {p['within']:.0%}"
+        fails = f"the shares differ by more than {p['within']:.0%} plus one grid spacing"
+    else:
+        word = "more" if p["relation"] == "greater" else "less"
+        by = p.get("by", 0)
+        what += f" by at least {by:.0%}" if by else ""
+        fails = (
+            f"a is not {word} stable than b by {by:.0%} or more (short by more than one grid spacing)"
+            if by
+            else f"a is {'less' if word == 'more' else 'more'} stable than b by more than one grid spacing"
+        )
+    return what, fails
+
+
+def _describe_trend(p):
+    what = f"stable share of {selector_text(p['select'])}{_region_text(p.get('region'))} along {p['along']}: {p['direction']}"
+    return what, "a step goes the other way by more than one grid spacing (or the whole change is within it)"
 
 
 #: The stability check kinds (collected by :mod:`icosim.checks`).
 CHECKS = {
     "stable_fraction": CheckKind(
-        check_stable_fraction, validate_region, choices={"op": ("==", ">=", "<=", ">", "<")}, selectors=("select",)
+        check_stable_fraction,
+        validate_region,
+        choices={"op": ("==", ">=", "<=", ">", "<")},
+        selectors=("select",),
+        describe=_describe_stable_fraction,
     ),
     "compare": CheckKind(
         check_compare,
@@ -341,14 +401,20 @@ CHECKS = {
         choices={"relation": ("greater", "less", "similar")},
         selectors=("a", "b"),
         selector_lists=("b",),
+        describe=_describe_compare,
     ),
     "pointwise": CheckKind(
         check_pointwise,
         validate_pointwise,
         choices={"relation": RELATIONS},
         selectors=("a", "b"),
+        describe=describe_pointwise,
     ),
     "trend": CheckKind(
-        check_trend, validate_region, choices={"direction": ("increasing", "decreasing")}, selectors=("select",)
+        check_trend,
+        validate_region,
+        choices={"direction": ("increasing", "decreasing")},
+        selectors=("select",),
+        describe=_describe_trend,
     ),
 }

@@ -44,12 +44,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..claims import Outcome, combine_holds, select
+from ..claims import Outcome, combine_holds, select, selector_text
 from ..model import ParameterError
 from .policy import VERDICTS
 from .regions import region_mask, validate_region, verdict_masks
 
-__all__ = ["check_pointwise", "point_verdicts", "RELATIONS", "PAIR_BY", "MAX_LISTED"]
+__all__ = ["check_pointwise", "describe_pointwise", "point_verdicts", "RELATIONS", "PAIR_BY", "MAX_LISTED"]
 
 #: Relations between the verdicts of two paired panels.
 RELATIONS = ("same", "differ", "subset", "proper_subset")
@@ -197,3 +197,21 @@ def validate_pointwise(label: str, params: dict):
     pair_by = params.get("pair_by")
     if pair_by is not None and (not isinstance(pair_by, list) or not all(isinstance(p, str) for p in pair_by)):
         raise ParameterError(f"{label}: check.pair_by must be a list of attribute names, got {pair_by!r}")
+
+
+#: What makes a pointwise claim fail, per relation.
+FAILS_IF = {
+    "same": "a grid point is stable in one panel and unstable in its partner",
+    "differ": "every grid point has the same verdict in both panels",
+    "subset": "a grid point is stable in a and unstable in b",
+    "proper_subset": "a grid point is stable in a and unstable in b, or no point is stable only in b",
+}
+
+
+def describe_pointwise(p):
+    pair_by = ", ".join(p.get("pair_by") or PAIR_BY)
+    what = (
+        f"verdicts of ({selector_text(p['a'])}) and ({selector_text(p['b'])}) point by point, panels paired by "
+        f"{pair_by}{' inside ' + str(p['region']) if p.get('region') else ''}: {p['relation'].replace('_', ' ')}"
+    )
+    return what, FAILS_IF[p["relation"]]
