@@ -72,3 +72,39 @@ def test_disagreements_with_the_paper_are_confirmed_by_time_stepping(method, dec
                 assert growth_rate(prob_a, method) == pytest.approx(rho_a, rel=2e-2)
                 assert growth_rate(prob_b, method) <= 1.0
     assert found >= 3
+
+
+def test_pendulum_link2_is_the_heavier_at_the_joint_along_link1s_direction_of_motion():
+    """gs12_pendulum_stability note: link 1 can move its joint point only along its normal n1, with the
+    effective mass J_O1/l1^2 = 1/3 kg; link 2, a free body, resists a force at its end along n1 with
+    1/(1/m2 + (r x n1)^2/J2), which at the initial angles (link 2 perpendicular to link 1, so r || n1) is
+    m2 = 1 kg.  The linear test model at the pendulum's point with that mass ratio (3) is unstable for
+    Baumgarte at k = 1 with link 1 first (the heavier link corrected) and stable with link 2 first, where
+    the equal-mass model (am21 = 1) gives 0.999 either way and cannot tell."""
+    import math
+
+    import numpy as np
+
+    from icosim.methods import engine_method
+    from icosim.pendulum.linearised import pendulum_test_model
+    from icosim.pendulum.model import PendulumParameters
+    from icosim.stability import spectral_radius_float64
+
+    p = PendulumParameters()
+    n1 = np.array([-math.sin(p.phi1_0), math.cos(p.phi1_0)])
+    r = -p.l2 / 2 * np.array([math.cos(p.phi2_0), math.sin(p.phi2_0)])  # link 2's centre of mass -> joint
+    m_link1 = p.JO1 / p.l1**2
+    r_cross_n1 = r[0] * n1[1] - r[1] * n1[0]
+    m_link2 = 1 / (1 / p.m2 + r_cross_n1**2 / p.J2)
+    assert m_link1 == pytest.approx(1 / 3) and m_link2 == pytest.approx(1.0)
+    H = 1e-3
+    point = pendulum_test_model(p, H)
+    method = engine_method(make_method("baumgarte", index=1, mu=H), H)
+
+    def rho(am21, scheme):
+        model = TestModel(point.lr1, point.li1, am21, point.alr21, point.ali21)
+        return float(np.max(spectral_radius_float64(model, method, "ff", 1, scheme=scheme)[0]))
+
+    assert rho(1.0, "gauss-seidel-12") == pytest.approx(0.999, abs=1e-3)
+    assert rho(m_link2 / m_link1, "gauss-seidel-12") > 1.5
+    assert rho(m_link2 / m_link1, "gauss-seidel-21") < 1
