@@ -108,3 +108,24 @@ def test_pendulum_link2_is_the_heavier_at_the_joint_along_link1s_direction_of_mo
     assert rho(1.0, "gauss-seidel-12") == pytest.approx(0.999, abs=1e-3)
     assert rho(m_link2 / m_link1, "gauss-seidel-12") > 1.5
     assert rho(m_link2 / m_link1, "gauss-seidel-21") < 1
+
+
+@pytest.mark.parametrize("k", [0, 1, 2])
+def test_gauss_seidel_coupling_systems_are_regular_over_the_plane(k):
+    """docs/gauss_seidel.md, Sect. 2: the fd Baumgarte system (mu_bar = 1) has a positive determinant and
+    the dd condition a negative derivative in both orders, at every point of the plotted plane in every row
+    of Figs. 9-15 and with a ten times lighter subsystem 2: no solve of the Gauss-Seidel schemes is singular."""
+    import numpy as np
+
+    from icosim.linear_problem import LinearCosimulation
+
+    lr1, li1 = np.meshgrid(np.linspace(-2, 0, 41), np.linspace(0, 2, 41), indexing="ij")
+    beta, gamma = 2.0, 1.0  # Baumgarte index 1, mu_bar = 1
+    for ratios in ((1, 1, 1), (10, 1, 1), (1, 10, 1), (1, 1, 10), (0.1, 1, 1)):
+        c = TestModel(lr1, li1, *ratios).coefficients()
+        fd, dd = LinearCosimulation(c, "fd", k), LinearCosimulation(c, "dd", k)
+        for fixed in ((True, None), (None, True)):  # the first subsystem leads, or the second
+            J = fd.jacobians(None, None, None, None, fixed)
+            A = np.concatenate([J["pos"] + beta * J["vel"] + gamma * J["acc"], J["force"]], axis=-2)
+            assert np.linalg.det(A).min() > 0.5
+            assert dd.jacobians(None, None, None, None, fixed)["force"].max() < -1
