@@ -90,7 +90,8 @@ def _stability_part(stab) -> str:
             + (": " + "; ".join(f"{escape(_cell_name(c))} {d:+.0%}" for c, d in better) if better else "")
             + f"; a smaller one in {len(worse)} (largest losses: "
             + "; ".join(f"{escape(_cell_name(c))} {d:+.0%}" for c, d in worst)
-            + f"); the same, within the grid resolution, in {len(same)}.</li>"
+            + f"); a mean share equal to Jacobi's within the grid resolution (an area, not the same points) in "
+            f"{len(same)}.</li>"
         )
     counts = verdict_counts(stab["claims"])
     body = [
@@ -270,6 +271,9 @@ def gauss_seidel_section(*, stability=None, convergence=None, pendulum=None) -> 
         "subsystem advances once with the extrapolated coupling variables and its state is final; the corrected "
         "coupling variables are formed from its finished outputs (algebraic gradients only) and the second "
         "subsystem's full gradients; only the second subsystem is corrected, with the interpolation polynomial. "
+        "The first subsystem's outputs at the end of the step (acceleration, coupling force) are re-evaluated with "
+        'the corrected coupling variables; leaving them as integrated is the other reading of "sequential", '
+        "and much less stable (docs/gauss_seidel.md). "
         f"Cost: {SCHEMES['gauss-seidel-12'].integrations_per_step} subsystem integrations per macro step instead of "
         f"{SCHEMES['jacobi'].integrations_per_step}, but the subsystems no longer run in parallel. Both orders: "
         "1→2 (subsystem 1 first) and 2→1. Derivation: docs/gauss_seidel.md.</p>"
