@@ -14,7 +14,7 @@ import yaml
 
 from icosim.checks import CHECKS, evaluate, evaluate_claim, load_claims, parse_claims
 from icosim.claims import enforce_references, read_verdicts, reference_mismatches, select, write_verdicts
-from icosim.model import ParameterError
+from icosim.errors import ParameterError
 from icosim.report.claims import claims_table
 from icosim.stability.checks import grid_resolution, stable_share
 from icosim.stability.datasets import stability_panel

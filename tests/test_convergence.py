@@ -20,7 +20,7 @@ from icosim.convergence.metric import nrmse
 from icosim.convergence.panels import PanelSpec, figure_layout, figure_panels
 from icosim.convergence.study import Study, iterate_linear_map
 from icosim.convergence.work_precision import fastest_schemes, resolve_scheme, step_cost, time_macro_steps
-from icosim.model import ParameterError
+from icosim.errors import ParameterError
 
 ROOT = Path(__file__).resolve().parents[1]
 

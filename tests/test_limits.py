@@ -26,8 +26,9 @@ from hypothesis import strategies as st
 
 from icosim import TestModel, make_method
 from icosim.cli import main
+from icosim.errors import PointTimeout
 from icosim.integrity import quarantine_corrupt, remove_stale_parts, sidecar, verify
-from icosim.limits import MAX_DIGITS, MAX_K, PointTimeout, time_budget
+from icosim.limits import MAX_DIGITS, MAX_K, time_budget
 from icosim.stability import spectral_radius, spectral_radius_mp
 
 WEIGHTED = ["--method", "weighted", "--a", "1", "--b", "1", "--decomposition", "ff", "--k", "2"]
@@ -305,7 +306,7 @@ def test_a_wrong_stability_value_fails_validation_or_is_harmless(data):
     from helpers import ROOT, validate_config
     from snakemake.exceptions import WorkflowError
 
-    from icosim.model import ParameterError
+    from icosim.errors import ParameterError
     from icosim.stability.panels import figure_panels
 
     base = yaml.safe_load((ROOT / "config/stability.yaml").read_text())["stability"]
@@ -343,8 +344,8 @@ def test_a_huge_grid_is_refused_before_any_allocation(n):
     from helpers import ROOT, validate_config
     from snakemake.exceptions import WorkflowError
 
+    from icosim.errors import ParameterError
     from icosim.limits import MAX_GRID_N
-    from icosim.model import ParameterError
     from icosim.stability.panels import grid_axis
 
     cfg = copy.deepcopy(yaml.safe_load((ROOT / "config/stability.yaml").read_text())["stability"])
@@ -362,7 +363,7 @@ def test_a_corrupt_dataset_is_refused_and_set_aside_and_stale_temporaries_remove
     import xarray as xr
 
     from icosim.datasets import open_dataset, write_netcdf
-    from icosim.integrity import CorruptDatasetError
+    from icosim.errors import CorruptDatasetError
 
     path = tmp_path / "results" / "fig9" / "r1_k0_full.nc"
     write_netcdf(xr.Dataset({"rho": ("x", np.arange(4.0))}), path)

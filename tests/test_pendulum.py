@@ -16,7 +16,8 @@ from helpers import correct_all, predict_all
 from scipy.integrate import solve_ivp
 
 from icosim import ParameterError, make_method
-from icosim.macrostep import StepFailure, macro_step
+from icosim.errors import StepFailure
+from icosim.macrostep import macro_step
 from icosim.pendulum.config import configured_runs
 from icosim.pendulum.links import Link1, Link2
 from icosim.pendulum.model import PendulumParameters, joint_constraint

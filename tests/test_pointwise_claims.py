@@ -7,7 +7,7 @@ import xarray as xr
 
 from icosim import TestModel, make_method
 from icosim.checks import evaluate_claim, parse_claims
-from icosim.model import ParameterError
+from icosim.errors import ParameterError
 from icosim.stability.matrix import amplification_matrix
 from icosim.stability.policy import VERDICTS
 

@@ -8,9 +8,9 @@ from helpers import ROOT, validate_config
 from icosim import methods
 from icosim.cli import build_parser
 from icosim.convergence.experiment import dimensional_method, units_description, units_summary
+from icosim.errors import ParameterError
 from icosim.methods import METHODS, engine_method, get_spec, make_method, parameter_units
 from icosim.methods.schema import PLACEHOLDERS, schema_defs, with_methods
-from icosim.model import ParameterError
 from icosim.stability.panels import method_parameters_units, row_keys
 
 SCHEMAS = ("stability", "convergence", "pendulum")

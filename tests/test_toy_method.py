@@ -22,9 +22,9 @@ from icosim.convergence.datasets import run_panel
 from icosim.convergence.experiment import Setup, dimensional_method, step_counts
 from icosim.convergence.panels import figure_panels
 from icosim.convergence.study import Study
+from icosim.errors import ParameterError
 from icosim.methods import CouplingMethod, MethodSpec, Parameter, make_method
 from icosim.methods.base import finite
-from icosim.model import ParameterError
 from icosim.pendulum.config import configured_runs
 from icosim.pendulum.linearised import linear_test_model_rho
 from icosim.pendulum.model import PendulumParameters

@@ -21,12 +21,13 @@ from typing import TYPE_CHECKING
 # The imports below are never executed; they are what type checkers and icosim.sources
 # read (every job that imports icosim still lists the whole engine as its input).
 if TYPE_CHECKING:
+    from .errors import ParameterError
     from .linear_problem import LinearCosimulation
     from .methods import make_method
     from .methods.baumgarte import baumgarte
     from .methods.projection import projection
     from .methods.weighted import weighted_multiplier
-    from .model import Coefficients, ParameterError, PhysicalModel, TestModel
+    from .model import Coefficients, PhysicalModel, TestModel
     from .schemes import JACOBI, GaussSeidel, Jacobi, get_scheme
     from .stability import amplification_matrix, spectral_radius, spectral_radius_float64, spectral_radius_mp
 
@@ -37,7 +38,7 @@ _LAZY = {
     "projection": ".methods.projection",
     "weighted_multiplier": ".methods.weighted",
     "Coefficients": ".model",
-    "ParameterError": ".model",
+    "ParameterError": ".errors",
     "PhysicalModel": ".model",
     "TestModel": ".model",
     "JACOBI": ".schemes",

@@ -41,8 +41,8 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
+from .errors import ParameterError
 from .jsonio import dumps
-from .model import ParameterError
 
 __all__ = [
     "Claim",

@@ -22,9 +22,9 @@ from . import methods
 from .backend import FLOAT64_DIGITS
 from .commands import add_parsers, add_scheme_arguments
 from .decompositions import DECOMPOSITIONS, get_decomposition
+from .errors import ParameterError
 from .jsonio import dumps
 from .limits import MAX_BITS_LIMIT, MAX_DIGITS, MAX_GUARD_BITS, MAX_K, MAX_SECONDS, check_derived, check_k
-from .model import ParameterError
 from .schemes import get_scheme
 
 __all__ = ["main", "build_parser"]

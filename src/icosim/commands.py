@@ -13,8 +13,8 @@ import re
 
 from . import methods
 from .decompositions import DECOMPOSITIONS
+from .errors import ParameterError
 from .jsonio import dumps
-from .model import ParameterError
 from .schemes import SCHEME_NAMES, get_scheme
 from .stability.policy import POLICIES
 

@@ -17,7 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .integrity import CorruptDatasetError, atomic_path, verify, write_checksum
+from .errors import CorruptDatasetError
+from .integrity import atomic_path, verify, write_checksum
 
 __all__ = ["provenance_attrs", "config_json", "write_netcdf", "atomic_path", "open_dataset"]
 
@@ -72,7 +73,7 @@ def write_netcdf(ds, path):
 
 def open_dataset(path):
     """Open a result written by :func:`write_netcdf` (loaded into memory); a file whose SHA-256 no longer
-    matches the recorded one is refused (:class:`~icosim.integrity.CorruptDatasetError`), never read."""
+    matches the recorded one is refused (:class:`~icosim.errors.CorruptDatasetError`), never read."""
     import xarray as xr
 
     if verify(path) is False:

@@ -19,7 +19,6 @@ import tempfile
 from pathlib import Path
 
 __all__ = [
-    "CorruptDatasetError",
     "atomic_path",
     "sha256_file",
     "sidecar",
@@ -28,10 +27,6 @@ __all__ = [
     "quarantine_corrupt",
     "remove_stale_parts",
 ]
-
-
-class CorruptDatasetError(OSError):
-    """A dataset whose SHA-256 no longer matches the one recorded when it was written."""
 
 
 def sha256_file(path) -> str:

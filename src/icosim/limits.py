@@ -28,7 +28,7 @@ import threading
 
 import numpy as np
 
-from .model import ParameterError
+from .errors import NotFiniteError, ParameterError, PointTimeout, PrecisionCapError
 
 __all__ = [
     "MAX_K",
@@ -37,13 +37,10 @@ __all__ = [
     "MAX_GUARD_DIGITS",
     "MAX_GUARD_BITS",
     "MAX_BITS_LIMIT",
-    "PrecisionCapError",
-    "PointTimeout",
     "check_k",
     "check_digits",
     "MAX_SECONDS",
     "check_finite",
-    "NotFiniteError",
     "check_derived",
     "guard_digits",
     "time_budget",
@@ -60,18 +57,6 @@ MAX_GUARD_BITS = 16384  # ~4932 digits: the ball arithmetic's cap, the same size
 MAX_BITS_LIMIT = 8192
 #: The longest time budget one may give a point (``--timeout``, ``certify.point_seconds``): a day.
 MAX_SECONDS = 86400.0
-
-
-class PrecisionCapError(ArithmeticError):
-    """The precision a point needs exceeds a cap: it is undecided (the message says why)."""
-
-
-class NotFiniteError(ParameterError, OverflowError):
-    """A derived quantity (a subsystem coefficient) that is not a finite float64."""
-
-
-class PointTimeout(ArithmeticError):
-    """One point took longer than its time budget: it is undecided (reason ``timeout``)."""
 
 
 def check_k(k, name: str = "k") -> int:

@@ -17,9 +17,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import StepFailure
 from .schemes import JACOBI, N_SUBSYSTEMS, get_scheme
 
-__all__ = ["macro_step", "simulate", "Trajectory", "StepFailure"]
+__all__ = ["macro_step", "simulate", "Trajectory"]
 
 
 def macro_step(problem, method, state, history, *, scheme=JACOBI, iterations: int = 1, tol: float | None = None):
@@ -83,14 +84,6 @@ def macro_step(problem, method, state, history, *, scheme=JACOBI, iterations: in
 
 def _max_abs(values):
     return float(np.max(np.abs(np.asarray(values, dtype=float)))) if np.size(values) else 0.0
-
-
-class StepFailure(RuntimeError):
-    """A macro step could not be computed (e.g. a subsystem integration failed).
-
-    :func:`simulate` records it as a *failed* run, distinct from a diverged one:
-    a failure says nothing about the stability of the coupling.
-    """
 
 
 @dataclass

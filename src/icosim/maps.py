@@ -43,7 +43,7 @@ def map_specs(
     method, method_params, decomposition, ks, *, ratios, lr1, li1, n, digits=128, policy="auto", scheme="jacobi"
 ):
     """One :class:`PanelSpec` per ``k`` (row 1, full view) for the coupling ``scheme`` (:mod:`icosim.schemes`);
-    invalid input raises :class:`~icosim.model.ParameterError` naming the parameter."""
+    invalid input raises :class:`~icosim.errors.ParameterError` naming the parameter."""
     am21, alr21, ali21 = (float(r) for r in ratios)
     return [
         PanelSpec(

@@ -25,11 +25,9 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-__all__ = ["Coefficients", "TestModel", "PhysicalModel", "ParameterError"]
+from .errors import ParameterError
 
-
-class ParameterError(ValueError):
-    """Invalid model or method parameter; the message names the parameter."""
+__all__ = ["Coefficients", "TestModel", "PhysicalModel"]
 
 
 def _check(name: str, value, *, positive=False, nonnegative=False, nonpositive=False):

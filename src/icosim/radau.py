@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .macrostep import StepFailure
+from .errors import StepFailure
 
 __all__ = ["radau_batch", "RadauResult", "IntegrationError"]
 
@@ -82,7 +82,7 @@ class IntegrationError(StepFailure):
     """The step size fell below round-off level, the solution stopped being finite or a
     Newton matrix was singular.
 
-    A :class:`~icosim.macrostep.StepFailure`: a co-simulation run records it as
+    A :class:`~icosim.errors.StepFailure`: a co-simulation run records it as
     *failed*, not as diverged (a solver failure says nothing about stability).
     """
 

@@ -23,7 +23,8 @@ from fractions import Fraction
 
 import numpy as np
 
-from .limits import PointTimeout, time_budget
+from .errors import PointTimeout
+from .limits import time_budget
 from .schemes import JACOBI, get_scheme
 from .stability.policy import reason_code
 

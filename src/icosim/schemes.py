@@ -38,7 +38,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .model import ParameterError
+from .errors import ParameterError
 
 __all__ = [
     "Scheme",
@@ -151,7 +151,9 @@ class GaussSeidel(Scheme):
         if isinstance(first, bool) or first not in (1, 2):
             raise ParameterError(f"first must be 1 or 2 (the subsystem that advances first), got {first!r}")
         if leading_outputs not in LEADING_OUTPUTS:
-            raise ParameterError(f"leading_outputs must be one of {', '.join(LEADING_OUTPUTS)}, got {leading_outputs!r}")
+            raise ParameterError(
+                f"leading_outputs must be one of {', '.join(LEADING_OUTPUTS)}, got {leading_outputs!r}"
+            )
         object.__setattr__(self, "first", int(first))
         object.__setattr__(self, "leading", (int(first) - 1,))
         object.__setattr__(self, "leading_outputs", leading_outputs)
@@ -178,7 +180,9 @@ class GaussSeidel(Scheme):
 
     @property
     def label(self) -> str:
-        return f"Gauss–Seidel {self.first}→{self.second}" + ("" if self.reevaluates_leading else " (outputs as integrated)")
+        return f"Gauss–Seidel {self.first}→{self.second}" + (
+            "" if self.reevaluates_leading else " (outputs as integrated)"
+        )
 
     def __repr__(self) -> str:
         extra = "" if self.reevaluates_leading else f", leading_outputs={self.leading_outputs!r}"

@@ -13,8 +13,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import methods as _methods
+from ..errors import ParameterError
 from ..limits import check_k
-from ..model import ParameterError, PhysicalModel
+from ..model import PhysicalModel
 from ..schemes import SCHEME_NAMES
 from ..stability import spectral_radius
 
@@ -204,7 +205,7 @@ def schemes(
 
     ``params`` are method parameters by name in physical units (``{"mu": 5e-3, "a": 0.5}``); each
     method takes those it has.  Every scheme is built once here, so a parameter value a method
-    refuses is reported (:class:`~icosim.model.ParameterError`) before any computation.
+    refuses is reported (:class:`~icosim.errors.ParameterError`) before any computation.
 
     >>> len(schemes(couplings=["jacobi"]))  # Baumgarte, weighted: 3 indices x (ff, fd); projection: ff, fd, dd; k = 0..2
     45

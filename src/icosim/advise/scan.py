@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..model import ParameterError
+from ..errors import ParameterError
 from .core import TwoMassSystem, evaluate, schemes
 
 __all__ = ["stable_intervals", "check_settings", "advise", "DEFAULT_SCAN", "DEFAULT_RTOL"]

@@ -10,8 +10,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..claims import matches
+from ..errors import ParameterError
 from ..methods import get_spec
-from ..model import ParameterError, PhysicalModel
+from ..model import PhysicalModel
 from .experiment import Setup, method_attrs, step_counts
 from .panels import figure_panels
 from .study import Study

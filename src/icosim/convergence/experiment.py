@@ -11,8 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import ParameterError
 from ..methods import METHODS, UNIT_TEXT, get_spec, parameters
-from ..model import ParameterError, PhysicalModel
+from ..model import PhysicalModel
 
 __all__ = [
     "PAPER_MODEL",

@@ -11,8 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..decompositions import get_decomposition
+from ..errors import ParameterError
 from ..methods import METHODS, get_spec
-from ..model import ParameterError
 from ..schemes import figure_id, get_scheme
 from .experiment import dimensional_method
 

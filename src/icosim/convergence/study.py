@@ -40,9 +40,9 @@ import numpy as np
 
 from .. import exact
 from ..decompositions import get_decomposition
+from ..errors import ParameterError
 from ..linear_problem import LinearCosimulation
 from ..macrostep import simulate
-from ..model import ParameterError
 from ..schemes import JACOBI, get_scheme
 from ..stability import amplification_matrix, spectral_radius
 from .errors import ErrorSeries, local_defect, propagate_errors

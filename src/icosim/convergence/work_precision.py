@@ -15,10 +15,10 @@ import time
 import numpy as np
 
 from .. import exact
+from ..errors import ParameterError
 from ..linear_problem import LinearCosimulation
 from ..macrostep import macro_step, simulate
 from ..methods import get_spec, parameter_units, parameters
-from ..model import ParameterError
 from .experiment import Setup, dimensional_method, method_attrs, units_summary
 from .panels import effective_params, figure_panels
 

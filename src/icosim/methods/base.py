@@ -26,7 +26,7 @@ from fractions import Fraction
 import numpy as np
 
 from ..decompositions import DECOMPOSITIONS, Decomposition
-from ..model import ParameterError
+from ..errors import ParameterError
 
 __all__ = ["CouplingMethod", "MethodSpec", "Parameter", "solve_small", "finite", "exact"]
 

@@ -19,7 +19,7 @@ import sys
 from fractions import Fraction
 
 from ..decompositions import DD_NEEDS_POSITION_LEVEL
-from ..model import ParameterError
+from ..errors import ParameterError
 from .base import CouplingMethod, MethodSpec, Parameter, exact
 
 _FLOAT_MAX = Fraction(sys.float_info.max)

@@ -46,9 +46,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..macrostep import StepFailure, macro_step
+from ..errors import ParameterError, StepFailure
+from ..macrostep import macro_step
 from ..methods import CouplingMethod
-from ..model import ParameterError
 from ..schemes import JACOBI, get_scheme
 from .compiled import warm_up
 from .model import PendulumParameters, joint_constraint

@@ -10,7 +10,7 @@
 from __future__ import annotations
 
 from ..claims import CheckKind, Outcome, combine_holds
-from ..model import ParameterError
+from ..errors import ParameterError
 from ..schemes import get_scheme
 from .names import run_name
 

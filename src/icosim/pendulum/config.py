@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from ..decompositions import get_decomposition
+from ..errors import ParameterError
 from ..methods import make_method
-from ..model import ParameterError
 from ..schemes import get_scheme
 
 __all__ = ["configured_runs", "configured_schemes", "trade_plan", "run_settings", "study_methods", "RUN_KEYS"]

@@ -31,8 +31,8 @@ import math
 
 import numpy as np
 
+from ..errors import ParameterError
 from ..methods import make_method
-from ..model import ParameterError
 from ..schemes import SCHEME_NAMES, get_scheme
 from .model import PendulumParameters
 from .names import run_name

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..backend import Float64
 from ..decompositions import get_decomposition
+from ..errors import ParameterError
 from ..lagrange import (
     lagrange_coefficients,
     lagrange_weights,
@@ -23,7 +24,6 @@ from ..lagrange import (
     variable_predictor_nodes,
 )
 from ..limits import check_k
-from ..model import ParameterError
 from ..problem import CosimulationProblem
 from ..radau import _fd_jacobian, radau_batch
 from .compiled import CompiledLink

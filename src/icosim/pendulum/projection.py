@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from ..macrostep import StepFailure
+from ..errors import StepFailure
 from .model import PendulumParameters, joint_constraint
 
 __all__ = ["project_state", "ProjectionError"]

@@ -2,7 +2,7 @@
 
 The run goes through :func:`icosim.macrostep.simulate`; it *diverges* at the
 first macro step beyond a bound (or not finite) and *fails* at the first step
-that cannot be computed (a :class:`~icosim.macrostep.StepFailure`: it says
+that cannot be computed (a :class:`~icosim.errors.StepFailure`: it says
 nothing about stability).  The stored series end at the step before.
 """
 
@@ -15,9 +15,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..decompositions import get_decomposition
-from ..macrostep import StepFailure, simulate
+from ..errors import ParameterError, StepFailure
+from ..macrostep import simulate
 from ..methods import CouplingMethod
-from ..model import ParameterError
 from ..schemes import JACOBI, get_scheme
 from .compiled import warm_up
 from .model import PendulumParameters, joint_constraint
@@ -146,7 +146,7 @@ def run_cosimulation(
     the corrector) exceeds ``max_constraint`` (m), whose joint force exceeds
     ``max_multiplier`` (N) or whose angular rates exceed ``max_rate`` (rad/s);
     it *fails* at the first step that raises a
-    :class:`~icosim.macrostep.StepFailure`.  The series end at the step before.
+    :class:`~icosim.errors.StepFailure`.  The series end at the step before.
     ``scheme``: the coupling scheme (:mod:`icosim.schemes`; link 1 is subsystem 1).
     """
     scheme = get_scheme(scheme)

@@ -18,9 +18,9 @@ import numpy as np
 
 from .. import methods as _methods
 from ..decompositions import DECOMPOSITIONS
+from ..errors import ParameterError
 from ..limits import MAX_GRID_N, check_k
 from ..methods import make_method
-from ..model import ParameterError
 from ..schemes import figure_id, get_scheme
 from .policy import POLICIES, Certification
 

@@ -45,7 +45,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..claims import Outcome, combine_holds, select
-from ..model import ParameterError
+from ..errors import ParameterError
 from .policy import VERDICTS
 from .regions import region_mask, validate_region, verdict_masks
 

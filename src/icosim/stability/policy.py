@@ -36,8 +36,9 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from ..backend import FLOAT64_DIGITS
-from ..limits import MAX_BITS_LIMIT, MAX_SECONDS, NotFiniteError, PointTimeout, PrecisionCapError, time_budget
-from ..model import Coefficients, ParameterError, TestModel
+from ..errors import NotFiniteError, ParameterError, PointTimeout, PrecisionCapError
+from ..limits import MAX_BITS_LIMIT, MAX_SECONDS, time_budget
+from ..model import Coefficients, TestModel
 from ..schemes import JACOBI, get_scheme
 from .certified import DEFAULT_BITS, MAX_BITS, certify_spectral_radius
 from .matrix import as_coefficients

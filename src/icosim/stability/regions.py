@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model import ParameterError
+from ..errors import ParameterError
 from .policy import VERDICTS
 
 __all__ = ["REGION_KEYS", "region_mask", "verdict_masks", "validate_region"]
