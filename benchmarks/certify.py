@@ -30,7 +30,7 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from icosim import TestModel, make_method  # noqa: E402
-from icosim.decompositions import DECOMPOSITIONS  # noqa: E402
+from icosim.engine.decompositions import DECOMPOSITIONS  # noqa: E402
 from icosim.stability import certify_spectral_radius, spectral_radius_float64, spectral_radius_mp  # noqa: E402
 
 GOAL = 5.0

@@ -47,7 +47,7 @@ def copy_workflow(dest: Path):
 def gauss_seidel_targets(part: str) -> list:
     """The part's Gauss-Seidel outputs, read from the default configuration."""
     sys.path.insert(0, str(ROOT / "src"))
-    from icosim.schemes import SCHEMES, figure_id
+    from icosim.engine.schemes import SCHEMES, figure_id
 
     cfg = {}
     for name in ("stability", "convergence", "pendulum"):

@@ -231,7 +231,7 @@ def test_no_scheme_is_stable_at_the_origin(method, dec, k):
     masses there (every coefficient is 0, whatever the ratios) and every scheme reproduces the rigid motion
     x0 + v t, so 1 is an eigenvalue of the recurrence (to 160 digits, up to the square root of the precision a
     Jordan block allows): rho >= 1, and the proof can only say marginal (rho = 1) or unstable, never stable."""
-    from icosim.backend import Multiprecision
+    from icosim.engine.backends import Multiprecision
     from icosim.stability.matrix import amplification_matrix
 
     for ratios in ((1.0, 1.0, 1.0), (0.5, 2.0, 3.0)):

@@ -8,7 +8,7 @@ import pytest
 
 from icosim import TestModel, baumgarte, spectral_radius_float64, weighted_multiplier
 from icosim.cli import main
-from icosim.schemes import GS12, GS21
+from icosim.engine.schemes import GS12, GS21
 
 BASE = ["rho", "--lr1", "-0.5", "--li1", "0.7", "--am21", "2", "--alr21", "2", "--ali21", "2"]
 

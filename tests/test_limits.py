@@ -1,4 +1,4 @@
-"""Reliability at the extremes (icosim.limits, icosim rho, the grid API, the datasets' integrity).
+"""Reliability at the extremes (icosim.engine.bounds, icosim rho, the grid API, the datasets' integrity).
 
 Every input the issue found hanging, crashing or printing different answers at different
 precisions now finishes quickly with exit 0 (an answer, possibly ``undecided`` with the
@@ -26,9 +26,9 @@ from hypothesis import strategies as st
 
 from icosim import TestModel, make_method
 from icosim.cli import main
+from icosim.engine.bounds import MAX_DIGITS, MAX_K, time_budget
 from icosim.errors import PointTimeout
 from icosim.integrity import quarantine_corrupt, remove_stale_parts, sidecar, verify
-from icosim.limits import MAX_DIGITS, MAX_K, time_budget
 from icosim.stability import spectral_radius, spectral_radius_mp
 
 WEIGHTED = ["--method", "weighted", "--a", "1", "--b", "1", "--decomposition", "ff", "--k", "2"]
@@ -344,8 +344,8 @@ def test_a_huge_grid_is_refused_before_any_allocation(n):
     from helpers import ROOT, validate_config
     from snakemake.exceptions import WorkflowError
 
+    from icosim.engine.bounds import MAX_GRID_N
     from icosim.errors import ParameterError
-    from icosim.limits import MAX_GRID_N
     from icosim.stability.panels import grid_axis
 
     cfg = copy.deepcopy(yaml.safe_load((ROOT / "config/stability.yaml").read_text())["stability"])

@@ -16,8 +16,8 @@ from helpers import correct_all, predict_all
 from scipy.integrate import solve_ivp
 
 from icosim import ParameterError, make_method
+from icosim.engine.macrostep import macro_step
 from icosim.errors import StepFailure
-from icosim.macrostep import macro_step
 from icosim.pendulum.config import configured_runs
 from icosim.pendulum.links import Link1, Link2
 from icosim.pendulum.model import PendulumParameters, joint_constraint
@@ -193,7 +193,7 @@ def test_forward_difference_sensitivities_match_central_differences(decompositio
 
 def test_predictor_is_the_extrapolation_polynomial():
     """The unperturbed member of the first batch (interpolation through e_p) equals the extrapolation."""
-    from icosim.lagrange import monomial_coefficients, predictor_nodes
+    from icosim.engine.lagrange import monomial_coefficients, predictor_nodes
 
     k = 2
     prob = PendulumCosimulation(P, "ff", k, H)

@@ -15,7 +15,7 @@ import yaml
 from helpers import ROOT, validate_config
 
 from icosim import ParameterError, make_method
-from icosim.lagrange import (
+from icosim.engine.lagrange import (
     corrector_nodes,
     lagrange_coefficients,
     lagrange_weights,
@@ -25,7 +25,7 @@ from icosim.lagrange import (
     variable_predictor_nodes,
     weights_at,
 )
-from icosim.macrostep import macro_step
+from icosim.engine.macrostep import macro_step
 from icosim.pendulum import runs as runs_module
 from icosim.pendulum.adaptive import StepController, pc_estimate, run_adaptive
 from icosim.pendulum.adaptive_study import fixed_at_error

@@ -283,8 +283,8 @@ def test_force_displacement_instability_is_confirmed_by_time_stepping(method, lr
     """Independent route for the reported disagreements (Figs. 13 and 14, k = 0): from an
     exact start, plain time stepping grows by the panel's rho per macro step."""
     from icosim import LinearCosimulation
-    from icosim.exact import MonolithicSolution, consistent_start
-    from icosim.macrostep import simulate
+    from icosim.engine.exact import MonolithicSolution, consistent_start
+    from icosim.engine.macrostep import simulate
 
     s = spec(
         figure="13",

@@ -6,7 +6,7 @@ marginal), every number taken as the decimal typed (``--lr1 -0.3`` is -3/10,
 not the nearest double) and the value printed with the digits that are proven
 (17, or ``--digits N``): :mod:`icosim.rho_command`.  Negative values may follow
 their option with a space, also in exponent notation (``--lr1 -1e-3``).  Bad
-input -- including input beyond a limit of :mod:`icosim.limits` -- is reported
+input -- including input beyond a limit of :mod:`icosim.engine.bounds` -- is reported
 as ``icosim rho: error: ...`` naming the argument, with exit status 2, before
 any work and without a traceback.
 """
@@ -18,14 +18,14 @@ import math
 import sys
 from fractions import Fraction
 
-from . import methods
-from .backend import FLOAT64_DIGITS
 from .commands import add_parsers, add_scheme_arguments
-from .decompositions import DECOMPOSITIONS, get_decomposition
+from .engine import methods
+from .engine.backends import FLOAT64_DIGITS
+from .engine.bounds import MAX_BITS_LIMIT, MAX_DIGITS, MAX_GUARD_BITS, MAX_K, MAX_SECONDS, check_derived, check_k
+from .engine.decompositions import DECOMPOSITIONS, get_decomposition
+from .engine.schemes import get_scheme
 from .errors import ParameterError
 from .jsonio import dumps
-from .limits import MAX_BITS_LIMIT, MAX_DIGITS, MAX_GUARD_BITS, MAX_K, MAX_SECONDS, check_derived, check_k
-from .schemes import get_scheme
 
 __all__ = ["main", "build_parser"]
 
@@ -58,7 +58,7 @@ def _nonneg_int(text):
 
 
 def _order(text):
-    """An approximation order k in 0 .. icosim.limits.MAX_K."""
+    """An approximation order k in 0 .. icosim.engine.bounds.MAX_K."""
     try:
         return check_k(_nonneg_int(text), "k")
     except ParameterError as exc:
@@ -175,7 +175,7 @@ def _method_from_args(args):
 
 
 def _rho(args, parser):
-    from .model import TestModel
+    from .engine.model import TestModel
     from .rho_command import rho_answer, rho_text
 
     if args.first is not None and args.scheme != "gauss-seidel":

@@ -11,11 +11,11 @@ from __future__ import annotations
 import argparse
 import re
 
-from . import methods
-from .decompositions import DECOMPOSITIONS
+from .engine import methods
+from .engine.decompositions import DECOMPOSITIONS
+from .engine.schemes import SCHEME_NAMES, get_scheme
 from .errors import ParameterError
 from .jsonio import dumps
-from .schemes import SCHEME_NAMES, get_scheme
 from .stability.policy import POLICIES
 
 __all__ = ["add_parsers", "add_scheme_arguments", "run"]
@@ -244,8 +244,8 @@ def _map(args, parser) -> int:
     import numpy as np
 
     from .advise import Progress
+    from .engine.model import TestModel
     from .maps import boundary_extent, map_figure, map_panels, map_specs, marginal_extent, stable_extent, write_map
-    from .model import TestModel
     from .stability.panels import grid_axis
 
     given = {name: getattr(args, name) for name in methods.argument_names() if getattr(args, name) is not None}

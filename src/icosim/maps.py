@@ -28,8 +28,8 @@ import numpy as np
 import pandas as pd
 
 from .datasets import provenance_attrs, write_netcdf
-from .decompositions import DECOMPOSITIONS
-from .schemes import get_scheme
+from .engine.decompositions import DECOMPOSITIONS
+from .engine.schemes import get_scheme
 from .stability.datasets import stability_panel
 from .stability.panels import RATIOS, PanelSpec, grid_axis
 
@@ -42,7 +42,7 @@ FIGURE_ID = "map"
 def map_specs(
     method, method_params, decomposition, ks, *, ratios, lr1, li1, n, digits=128, policy="auto", scheme="jacobi"
 ):
-    """One :class:`PanelSpec` per ``k`` (row 1, full view) for the coupling ``scheme`` (:mod:`icosim.schemes`);
+    """One :class:`PanelSpec` per ``k`` (row 1, full view) for the coupling ``scheme`` (:mod:`icosim.engine.schemes`);
     invalid input raises :class:`~icosim.errors.ParameterError` naming the parameter."""
     am21, alr21, ali21 = (float(r) for r in ratios)
     return [

@@ -23,9 +23,9 @@ from fractions import Fraction
 
 import numpy as np
 
+from .engine.bounds import time_budget
+from .engine.schemes import JACOBI, get_scheme
 from .errors import PointTimeout
-from .limits import time_budget
-from .schemes import JACOBI, get_scheme
 from .stability.policy import reason_code
 
 __all__ = ["rho_answer", "rho_text"]
@@ -37,8 +37,8 @@ DEFAULT_DIGITS = 17
 def rho_answer(model, method, decomposition, k, *, digits=None, max_bits=1024, timeout=None, scheme=JACOBI) -> dict:
     """The command's answer as a JSON-ready dict (strict: no NaN or infinity; ``None`` with ``reason``).
 
-    ``model`` is a :class:`~icosim.model.TestModel` of one point (Fractions kept exact); ``scheme`` the
-    coupling scheme (:mod:`icosim.schemes`), used by the proof and by float64 alike.
+    ``model`` is a :class:`~icosim.engine.model.TestModel` of one point (Fractions kept exact); ``scheme`` the
+    coupling scheme (:mod:`icosim.engine.schemes`), used by the proof and by float64 alike.
     """
     from .stability import certify_spectral_radius
 

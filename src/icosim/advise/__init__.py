@@ -3,10 +3,10 @@
 A user brings two subsystems -- masses ``m1, m2`` [kg], stiffnesses ``c1, c2``
 [N/m], dampers ``d1, d2`` [N s/m] (overdamped ones included) -- and either a
 macro step ``H`` [s] or a range of them.  :func:`advise` answers, for every
-registered coupling method (:data:`icosim.methods.METHODS`), each index it can
+registered coupling method (:data:`icosim.engine.methods.METHODS`), each index it can
 be formulated at, each decomposition it is defined for, each approximation
 order ``k`` and each coupling order (:data:`COUPLINGS`: Jacobi, and Gauss-Seidel
-with subsystem 1 or subsystem 2 first, :mod:`icosim.schemes`):
+with subsystem 1 or subsystem 2 first, :mod:`icosim.engine.schemes`):
 
 * at one ``H``: the spectral radius ``rho`` of the co-simulation recurrence
   (the precision policy of :func:`icosim.stability.spectral_radius`: float64,

@@ -12,11 +12,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import methods as _methods
+from ..engine import methods as _methods
+from ..engine.bounds import check_k
+from ..engine.model import PhysicalModel
+from ..engine.schemes import SCHEME_NAMES
 from ..errors import ParameterError
-from ..limits import check_k
-from ..model import PhysicalModel
-from ..schemes import SCHEME_NAMES
 from ..stability import spectral_radius
 
 __all__ = ["TwoMassSystem", "Scheme", "Evaluation", "COUPLINGS", "VERDICTS", "DEFAULT_K", "schemes", "evaluate"]
@@ -26,7 +26,7 @@ DEFAULT_K = (0, 1, 2)
 
 #: Coupling orders: name -> keyword arguments of :func:`icosim.stability.spectral_radius`: the Jacobi
 #: (parallel) scheme of the paper and Gauss-Seidel (sequential) with subsystem 1 or subsystem 2 first
-#: (:mod:`icosim.schemes`).
+#: (:mod:`icosim.engine.schemes`).
 COUPLINGS: dict[str, dict] = {name: ({} if name == "jacobi" else {"scheme": name}) for name in SCHEME_NAMES}
 
 #: Verdicts of one point: rho <= 1 decided, rho > 1 decided, not decided (failed, or float64 only).

@@ -3,7 +3,7 @@
 The test model is used in physical units (``m1 = 1, m2 = 2, c1 = c2 = 1000,
 d1 = d2 = 10`` in the paper) with a dimensional macro step ``H`` in seconds, and
 every co-simulation is compared with the exact monolithic solution
-(:class:`icosim.exact.MonolithicSolution`) at the macro-time points.
+(:class:`icosim.engine.exact.MonolithicSolution`) at the macro-time points.
 
 ==============================  ===================================================
 module                          holds

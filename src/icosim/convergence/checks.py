@@ -16,8 +16,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..claims import CheckKind, Outcome, combine_holds, matches
+from ..engine.methods import parameters
 from ..errors import ParameterError
-from ..methods import parameters
 from .curves import curve_label, curves, stable_span
 
 __all__ = ["CHECKS", "check_convergence_order", "SELECT_KEYS", "EXPECT_KEYS"]

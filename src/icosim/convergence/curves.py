@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..methods import METHODS, parameters
+from ..engine.methods import METHODS, parameters
 
 __all__ = ["curves", "curve_label", "stable_span"]
 

@@ -16,8 +16,8 @@ import time
 
 import numpy as np
 
-from ..decompositions import get_decomposition
-from ..methods import get_spec, parameter_units
+from ..engine.decompositions import get_decomposition
+from ..engine.methods import get_spec, parameter_units
 from .experiment import PAPER_MODEL, dimensional_method, units_description
 from .fit import asymptotic_order, local_slopes
 from .panels import PanelSpec
@@ -272,7 +272,7 @@ def run_panel(
         growth_bound=s.growth_bound,
         initial_conditions=f"x1 = x2 = {s.x0:g} m, v1 = v2 = {s.v0:g} m/s at t = 0 (consistent with the rigid link)",
         history_initialisation="coupling variables at T_0, T_-1, ..., T_-k from the exact monolithic solution "
-        "(icosim.exact.consistent_start)",
+        "(icosim.engine.exact.consistent_start)",
         nrmse_definition="Eq. (72) read as sqrt of the sum of the four normalised squared-error ratios "
         "(x1, x2, v1, v2), sums over N = 1..N_total; nrmse_x, nrmse_v hold the position and velocity parts "
         "(nrmse^2 = nrmse_x^2 + nrmse_v^2)",

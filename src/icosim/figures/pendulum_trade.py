@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..methods import METHODS
-from ..schemes import get_scheme
+from ..engine.methods import METHODS
+from ..engine.schemes import get_scheme
 
 __all__ = [
     "TRADE_FIGURES",

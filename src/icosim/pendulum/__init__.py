@@ -2,7 +2,7 @@
 
 Two rigid links, link 1 pinned to ground (subsystem 1) and link 2 free
 (subsystem 2), coupled at a joint; the same macro step as for the linear model
-(:func:`icosim.macrostep.macro_step`) drives them.  The model, its sign
+(:func:`icosim.engine.macrostep.macro_step`) drives them.  The model, its sign
 conventions, the displacement/displacement formulation, the sensitivities and
 the projection are described in ``docs/pendulum.md``.
 

@@ -3,7 +3,7 @@
 Co-simulation masters offer step-size control for explicit coupling (PyFMI's
 master, libcosim); for the implicit, constraint-coupled schemes of the paper
 none does.  This module adds it to the same macro step
-(:func:`icosim.macrostep.macro_step`, unchanged):
+(:func:`icosim.engine.macrostep.macro_step`, unchanged):
 
 **Error estimate.**  The predictor extrapolates the coupling variables with a
 polynomial of degree ``k`` (Eq. 9); the corrector computes them from the
@@ -23,7 +23,7 @@ criterion is met by construction.
 **Non-equidistant nodes.**  After step-size changes the Lagrange polynomials
 run through the actual past macro nodes
 (:meth:`icosim.pendulum.problem.PendulumCosimulation.set_macro_step`,
-:func:`icosim.lagrange.variable_predictor_nodes`); the starting history is
+:func:`icosim.engine.lagrange.variable_predictor_nodes`); the starting history is
 the monolithic solution at ``T_0, T_0 - H0, ...`` (taken again at the new spacing
 when the very first step is rejected: far-away start-up nodes would only
 inflate the extrapolation error and with it the estimate).
@@ -46,10 +46,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..engine.macrostep import macro_step
+from ..engine.methods import CouplingMethod
+from ..engine.schemes import JACOBI, get_scheme
 from ..errors import ParameterError, StepFailure
-from ..macrostep import macro_step
-from ..methods import CouplingMethod
-from ..schemes import JACOBI, get_scheme
 from .compiled import warm_up
 from .model import PendulumParameters, joint_constraint
 from .problem import PendulumCosimulation
@@ -178,7 +178,7 @@ def run_adaptive(
     ``controller`` are :class:`StepController` settings (``order`` is ``k + 1``).
     The bounds are those of :func:`icosim.pendulum.runs.run_cosimulation`; a
     step beyond them is rejected, and only at ``H_min`` ends the run.
-    ``scheme``: the coupling scheme (:mod:`icosim.schemes`; link 1 is subsystem 1).
+    ``scheme``: the coupling scheme (:mod:`icosim.engine.schemes`; link 1 is subsystem 1).
     """
     scheme = get_scheme(scheme)
     for name, v in (("t_end", t_end), ("tol", tol), ("drift_tol", drift_tol), ("H0", H0)):

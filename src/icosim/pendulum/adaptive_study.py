@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from ..datasets import provenance_attrs
-from ..methods import make_method
+from ..engine.methods import make_method
 from .adaptive import run_adaptive
 from .measures import RECORD, angle_errors, check_scheme, config_label, measured_run
 from .model import PendulumParameters

@@ -149,7 +149,7 @@ def linear_orders_dataset(
     the linear model is co-simulated with the same scheme."""
     import xarray as xr
 
-    from ..methods import make_method
+    from ..engine.methods import make_method
     from .linear_study import linear_errors
 
     labels, err, unst, rho, nsteps = [], [], [], [], []

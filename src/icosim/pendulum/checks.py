@@ -10,8 +10,8 @@
 from __future__ import annotations
 
 from ..claims import CheckKind, Outcome, combine_holds
+from ..engine.schemes import get_scheme
 from ..errors import ParameterError
-from ..schemes import get_scheme
 from .names import run_name
 
 __all__ = ["CHECKS", "check_pendulum_stability", "expected_outcome", "run_verdict", "OUTCOMES"]

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from ..decompositions import get_decomposition
+from ..engine.decompositions import get_decomposition
+from ..engine.methods import make_method
+from ..engine.schemes import get_scheme
 from ..errors import ParameterError
-from ..methods import make_method
-from ..schemes import get_scheme
 
 __all__ = ["configured_runs", "configured_schemes", "trade_plan", "run_settings", "study_methods", "RUN_KEYS"]
 

@@ -12,8 +12,8 @@ import time
 import numpy as np
 
 from ..datasets import provenance_attrs
-from ..methods import CouplingMethod, make_method, parameter_units
-from ..schemes import get_scheme
+from ..engine.methods import CouplingMethod, make_method, parameter_units
+from ..engine.schemes import get_scheme
 from .model import PendulumParameters, joint_constraint
 from .names import VARIABLES
 from .reference import Monolithic, reference_solution

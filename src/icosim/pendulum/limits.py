@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..methods import make_method
+from ..engine.methods import make_method
 from .linear_study import linear_rho, linear_stability
 from .measures import config_label, measured_run
 from .model import PendulumParameters

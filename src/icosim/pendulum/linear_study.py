@@ -7,7 +7,7 @@ Two comparisons, two linear models:
   in SI units, both masses at ``x0`` at rest), co-simulated with the *same
   scheme* (method with its SI parameters, decomposition, k) at the pendulum's
   step sizes, its error ``max |x_i - x| / x0`` over the macro nodes against
-  the exact solution (:class:`icosim.exact.MonolithicSolution`), stepped with
+  the exact solution (:class:`icosim.engine.exact.MonolithicSolution`), stepped with
   the engine's own amplification matrix
   (:func:`icosim.stability.amplification_matrix`).  A step size whose spectral
   radius exceeds 1 is unstable, as in the linear study.  The pendulum's own
@@ -30,10 +30,10 @@ import math
 
 import numpy as np
 
-from .. import exact
-from ..linear_problem import LinearCosimulation
-from ..methods import CouplingMethod, engine_method
-from ..model import PhysicalModel
+from ..engine import exact
+from ..engine.linear_problem import LinearCosimulation
+from ..engine.methods import CouplingMethod, engine_method
+from ..engine.model import PhysicalModel
 from ..stability import amplification_matrix, spectral_radius
 from .linearised import linear_test_model_stability
 from .model import PendulumParameters

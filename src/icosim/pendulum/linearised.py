@@ -11,8 +11,8 @@ import math
 
 import numpy as np
 
-from ..methods import CouplingMethod, engine_method
-from ..model import TestModel
+from ..engine.methods import CouplingMethod, engine_method
+from ..engine.model import TestModel
 from ..stability import spectral_radius
 from .model import PendulumParameters
 from .reference import Monolithic
@@ -61,7 +61,7 @@ def linear_test_model_stability(
     (:func:`pendulum_test_model`), for the dimensionless form of ``method``.
 
     The method's parameters are in SI units here and are scaled as the registry
-    says (:func:`icosim.methods.engine_method`: Baumgarte's ``beta_bar = beta/H``,
+    says (:func:`icosim.engine.methods.engine_method`: Baumgarte's ``beta_bar = beta/H``,
     ``gamma_bar = gamma/H^2``; the weighted multiplier's ``a``, ``b`` are
     dimensionless already).  ``scheme``: the coupling scheme (link 1 is
     subsystem 1).  The verdict is the precision policy's

@@ -31,9 +31,9 @@ import math
 
 import numpy as np
 
+from ..engine.methods import make_method
+from ..engine.schemes import SCHEME_NAMES, get_scheme
 from ..errors import ParameterError
-from ..methods import make_method
-from ..schemes import SCHEME_NAMES, get_scheme
 from .model import PendulumParameters
 from .names import run_name
 from .reference import reference_solution
@@ -57,7 +57,7 @@ RECORD = {
     "t_last": ("s", "time of the last stored state (end time, or the step before divergence or failure)"),
 }
 
-#: Coupling schemes the runs can use (:mod:`icosim.schemes`); the configuration schema lists the same names.
+#: Coupling schemes the runs can use (:mod:`icosim.engine.schemes`); the configuration schema lists the same names.
 SCHEMES = SCHEME_NAMES
 
 

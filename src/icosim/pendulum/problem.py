@@ -13,18 +13,18 @@ from fractions import Fraction
 
 import numpy as np
 
-from ..backend import Float64
-from ..decompositions import get_decomposition
-from ..errors import ParameterError
-from ..lagrange import (
+from ..engine.backends import Float64
+from ..engine.bounds import check_k
+from ..engine.decompositions import get_decomposition
+from ..engine.lagrange import (
     lagrange_coefficients,
     lagrange_weights,
     monomial_coefficients,
     variable_corrector_nodes,
     variable_predictor_nodes,
 )
-from ..limits import check_k
-from ..problem import CosimulationProblem
+from ..engine.problem import CosimulationProblem
+from ..errors import ParameterError
 from ..radau import _fd_jacobian, radau_batch
 from .compiled import CompiledLink
 from .links import Link1, Link2
@@ -43,7 +43,7 @@ _INPUTS = {
 }
 
 
-# -- the co-simulation problem (protocol of icosim.macrostep) ----------------------
+# -- the co-simulation problem (protocol of icosim.engine.macrostep) ----------------------
 class PendulumCosimulation(CosimulationProblem):
     """The double pendulum split into link 1 and link 2 (decomposition ff, fd or dd).
 
@@ -72,7 +72,7 @@ class PendulumCosimulation(CosimulationProblem):
         newton_tol: float = 1e-8,
     ):
         dec = get_decomposition(decomposition)
-        k = check_k(k)  # 0 .. icosim.limits.MAX_K
+        k = check_k(k)  # 0 .. icosim.engine.bounds.MAX_K
         for name, v in (("H", H), ("rtol", rtol), ("atol", atol), ("fd_step", fd_step), ("newton_tol", newton_tol)):
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ParameterError(f"{name} must be a finite number > 0, got {v!r}")
@@ -270,8 +270,8 @@ class PendulumCosimulation(CosimulationProblem):
         """Size ``H`` of the next macro step and the sizes ``H_N-1, ..., H_N-k`` of the past ones.
 
         The extrapolation (Eq. 9) and interpolation (Eq. 11) polynomials then
-        run through the non-equidistant nodes of :mod:`icosim.lagrange`
-        (:func:`~icosim.lagrange.variable_predictor_nodes`), their weights
+        run through the non-equidistant nodes of :mod:`icosim.engine.lagrange`
+        (:func:`~icosim.engine.lagrange.variable_predictor_nodes`), their weights
         computed exactly from the float step sizes and rounded once;
         ``past_steps=None`` means equal steps (the nodes of a fixed ``H``).
         """

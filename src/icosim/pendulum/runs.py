@@ -1,6 +1,6 @@
 """A whole co-simulation run of the pendulum: to the end time, or to divergence or failure.
 
-The run goes through :func:`icosim.macrostep.simulate`; it *diverges* at the
+The run goes through :func:`icosim.engine.macrostep.simulate`; it *diverges* at the
 first macro step beyond a bound (or not finite) and *fails* at the first step
 that cannot be computed (a :class:`~icosim.errors.StepFailure`: it says
 nothing about stability).  The stored series end at the step before.
@@ -14,11 +14,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..decompositions import get_decomposition
+from ..engine.decompositions import get_decomposition
+from ..engine.macrostep import simulate
+from ..engine.methods import CouplingMethod
+from ..engine.schemes import JACOBI, get_scheme
 from ..errors import ParameterError, StepFailure
-from ..macrostep import simulate
-from ..methods import CouplingMethod
-from ..schemes import JACOBI, get_scheme
 from .compiled import warm_up
 from .model import PendulumParameters, joint_constraint
 from .problem import PendulumCosimulation
@@ -139,7 +139,7 @@ def run_cosimulation(
     max_multiplier: float = 1e3,
     max_rate: float = 1e2,
 ) -> RunResult:
-    """Co-simulate from ``t = 0`` to ``t_end`` with macro step ``H`` (:func:`icosim.macrostep.simulate`).
+    """Co-simulate from ``t = 0`` to ``t_end`` with macro step ``H`` (:func:`icosim.engine.macrostep.simulate`).
 
     The run *diverges* at the first macro step whose state, coupling variables
     or outputs are not finite, whose joint constraint (after the step or after
@@ -147,7 +147,7 @@ def run_cosimulation(
     ``max_multiplier`` (N) or whose angular rates exceed ``max_rate`` (rad/s);
     it *fails* at the first step that raises a
     :class:`~icosim.errors.StepFailure`.  The series end at the step before.
-    ``scheme``: the coupling scheme (:mod:`icosim.schemes`; link 1 is subsystem 1).
+    ``scheme``: the coupling scheme (:mod:`icosim.engine.schemes`; link 1 is subsystem 1).
     """
     scheme = get_scheme(scheme)
     dec = get_decomposition(decomposition)

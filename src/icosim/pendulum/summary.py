@@ -7,8 +7,8 @@ import math
 import numpy as np
 
 from ..datasets import config_json, provenance_attrs
-from ..methods import make_method
-from ..schemes import get_scheme
+from ..engine.methods import make_method
+from ..engine.schemes import get_scheme
 from .checks import expected_outcome, run_verdict
 from .linearised import linear_test_model_rho
 from .model import PendulumParameters

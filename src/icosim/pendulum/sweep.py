@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..datasets import provenance_attrs
-from ..methods import make_method
+from ..engine.methods import make_method
 from .measures import RECORD, config_label, measured_run
 
 __all__ = ["sweep_group", "records_dataset"]

@@ -22,7 +22,7 @@ import math
 import numpy as np
 
 from ..datasets import provenance_attrs
-from ..methods import make_method
+from ..engine.methods import make_method
 from .baselines import reference_accuracy
 from .measures import RECORD, check_scheme, config_label, run_record
 from .model import PendulumParameters

@@ -29,7 +29,7 @@ STEPPING_TEXT = {
     "so there is no round-off floor. Checked against 40-digit mpmath time stepping (tests).",
     "matrix": " — the float64 state is iterated with the amplification matrix and the exact solution subtracted "
     "(a round-off floor near NRMSE ~ 1e-11).",
-    "simulate": " — icosim.macrostep.simulate in float64 (a round-off floor near NRMSE ~ 1e-11).",
+    "simulate": " — icosim.engine.macrostep.simulate in float64 (a round-off floor near NRMSE ~ 1e-11).",
 }
 
 
@@ -102,7 +102,7 @@ def convergence_section(
         f"consistent with the rigid link; end time T = {s['end_time']:g} s: {horizon} (every NRMSE denominator, the variance "
         "of the reference, must stay well away from zero).",
         "Coupling-variable history: the exact monolithic coupling variables (multiplier λ and/or acceleration) at "
-        "T_0, T_−1, …, T_−k (icosim.exact.consistent_start); both subsystems start at the exact state.",
+        "T_0, T_−1, …, T_−k (icosim.engine.exact.consistent_start); both subsystems start at the exact state.",
         f"Step sizes: {len(H)} sizes H = T/N_total from {H.min():.3g} s to {H.max():.3g} s "
         f"({np.log10(H.max() / H.min()):.1f} decades; N_total from {n_steps.min()} to {n_steps.max()}).",
         "Eq. (72), whose extraction is garbled (two brackets closed by ]^(1/2), one opened), is read as one square root of the "

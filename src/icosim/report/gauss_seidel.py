@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ..claims import verdict_counts
-from ..schemes import SCHEMES, split_figure_id
+from ..engine.schemes import SCHEMES, split_figure_id
 from .claims import claims_table
 from .html import escape, figure, section, table
 

@@ -1,7 +1,7 @@
 """Certified stability verdicts: a proven enclosure of the spectral radius (ball arithmetic).
 
 The amplification matrix is computed by the engine's own macro step in Arb ball
-arithmetic (:class:`icosim.backend.Ball`), so each entry is a ball that contains
+arithmetic (:class:`icosim.engine.backends.Ball`), so each entry is a ball that contains
 the exact entry for the exact parameters.  Its characteristic polynomial
 ``p(z) = det(z I - M)`` (Arb, ball coefficients) is then examined with the
 Schur-Cohn-Marden test (Marden, *Geometry of polynomials*, Thm. 42.1): with
@@ -42,10 +42,10 @@ from fractions import Fraction
 
 import numpy as np
 
-from ..backend import Ball
-from ..limits import MAX_GUARD_BITS, check_finite
-from ..model import Coefficients, PhysicalModel, TestModel
-from ..subsystems import decay_rate
+from ..engine.backends import Ball
+from ..engine.bounds import MAX_GUARD_BITS, check_finite
+from ..engine.model import Coefficients, PhysicalModel, TestModel
+from ..engine.subsystems import decay_rate
 from .matrix import amplification_matrix, as_coefficients
 
 __all__ = [
@@ -316,7 +316,7 @@ def certify_spectral_radius(
 ) -> SpectralCertificate:
     """Prove ``rho < 1`` or ``rho > 1``, or report ``marginal``, for one parameter point.
 
-    ``model`` is a :class:`~icosim.model.TestModel` (or ``PhysicalModel`` /
+    ``model`` is a :class:`~icosim.engine.model.TestModel` (or ``PhysicalModel`` /
     ``Coefficients``) of one point whose attributes are taken exactly (floats,
     Fractions, decimal strings).  The working precision starts at ``bits``
     (plus :func:`guard_bits`); if that does not decide the verdict, it is

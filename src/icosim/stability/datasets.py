@@ -19,11 +19,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..backend import FLOAT64_DIGITS
-from ..decompositions import DECOMPOSITIONS
+from ..engine.backends import FLOAT64_DIGITS
+from ..engine.decompositions import DECOMPOSITIONS
+from ..engine.model import TestModel
+from ..engine.schemes import get_scheme
 from ..jsonio import dumps
-from ..model import TestModel
-from ..schemes import get_scheme
 from .panels import PanelSpec, format_row_label, grid_axis, method_parameters_units
 from .policy import ARITHMETICS, REASONS, VERDICTS, Certification, spectral_radius
 

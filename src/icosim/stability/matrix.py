@@ -1,7 +1,7 @@
 """The one-step amplification matrix of the linear test model (Sect. 2, Eqs. 21-23).
 
 The matrix is obtained from the very macro-step algorithm that the time
-stepper runs (:func:`icosim.macrostep.macro_step`), by linearity: the step is
+stepper runs (:func:`icosim.engine.macrostep.macro_step`), by linearity: the step is
 applied to every unit vector of the packed state
 ``(x1, v1, x2, v2, e_N, ..., e_N-k)``.  The paper's ``5(k+1)``-dimensional
 companion form additionally carries old subsystem states that no equation
@@ -20,13 +20,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..backend import Float64
-from ..decompositions import get_decomposition
-from ..linear_problem import LinearCosimulation
-from ..macrostep import macro_step
-from ..methods import CouplingMethod
-from ..model import Coefficients
-from ..schemes import JACOBI, get_scheme
+from ..engine.backends import Float64
+from ..engine.decompositions import get_decomposition
+from ..engine.linear_problem import LinearCosimulation
+from ..engine.macrostep import macro_step
+from ..engine.methods import CouplingMethod
+from ..engine.model import Coefficients
+from ..engine.schemes import JACOBI, get_scheme
 
 __all__ = ["amplification_matrix", "as_coefficients"]
 
@@ -52,9 +52,9 @@ def _matrix_from_problem(problem: LinearCosimulation, method: CouplingMethod, sc
 def amplification_matrix(coefficients, method: CouplingMethod, decomposition, k: int, backend=None, *, scheme=JACOBI):
     """The matrix ``M`` with ``w_N+1 = M w_N`` (leading axes follow the coefficients).
 
-    ``coefficients`` is a :class:`~icosim.model.Coefficients` or a
-    :class:`~icosim.model.TestModel` / :class:`~icosim.model.PhysicalModel`;
-    ``scheme`` the coupling scheme (:mod:`icosim.schemes`, default Jacobi).
+    ``coefficients`` is a :class:`~icosim.engine.model.Coefficients` or a
+    :class:`~icosim.engine.model.TestModel` / :class:`~icosim.engine.model.PhysicalModel`;
+    ``scheme`` the coupling scheme (:mod:`icosim.engine.schemes`, default Jacobi).
     """
     scheme = get_scheme(scheme)
     be = backend or Float64()
@@ -66,5 +66,5 @@ def amplification_matrix(coefficients, method: CouplingMethod, decomposition, k:
 
 
 def as_coefficients(c) -> Coefficients:
-    """:class:`~icosim.model.Coefficients` of a test model, physical model or coefficients."""
+    """:class:`~icosim.engine.model.Coefficients` of a test model, physical model or coefficients."""
     return c if isinstance(c, Coefficients) else c.coefficients()

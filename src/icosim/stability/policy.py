@@ -35,11 +35,11 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from ..backend import FLOAT64_DIGITS
+from ..engine.backends import FLOAT64_DIGITS
+from ..engine.bounds import MAX_BITS_LIMIT, MAX_SECONDS, time_budget
+from ..engine.model import Coefficients, TestModel
+from ..engine.schemes import JACOBI, get_scheme
 from ..errors import NotFiniteError, ParameterError, PointTimeout, PrecisionCapError
-from ..limits import MAX_BITS_LIMIT, MAX_SECONDS, time_budget
-from ..model import Coefficients, TestModel
-from ..schemes import JACOBI, get_scheme
 from .certified import DEFAULT_BITS, MAX_BITS, certify_spectral_radius
 from .matrix import as_coefficients
 from .spectral import spectral_radius_float64, spectral_radius_mp
@@ -190,9 +190,9 @@ def spectral_radius(
     Parameters
     ----------
     model : :class:`TestModel` (Eq. 71; its attributes broadcast to the grid),
-        or :class:`~icosim.model.PhysicalModel` / :class:`~icosim.model.Coefficients`
+        or :class:`~icosim.engine.model.PhysicalModel` / :class:`~icosim.engine.model.Coefficients`
         (any damping, overdamped included).
-    scheme : the coupling scheme (:mod:`icosim.schemes`; default Jacobi), used by every arithmetic.
+    scheme : the coupling scheme (:mod:`icosim.engine.schemes`; default Jacobi), used by every arithmetic.
     policy : one of :data:`POLICIES` (module docstring).
     digits : mpmath digits of the ``mp`` policy.
     certification : :class:`Certification` settings (or a mapping of them).

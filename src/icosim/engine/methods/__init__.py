@@ -25,7 +25,7 @@ module                    rule                                           paramet
 
 from __future__ import annotations
 
-from ..errors import ParameterError
+from ...errors import ParameterError
 from . import baumgarte, projection, weighted
 from .base import UNIT_TEXT, CouplingMethod, MethodSpec, Parameter, solve_small
 

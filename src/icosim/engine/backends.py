@@ -21,7 +21,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from .limits import check_digits, guard_digits
+from .bounds import check_digits, guard_digits
 
 __all__ = ["Float64", "Multiprecision", "Ball", "get_backend", "FLOAT64_DIGITS"]
 
@@ -69,7 +69,7 @@ class Multiprecision:
     dtype = object
 
     def __init__(self, digits: int = 128):
-        self.digits = check_digits(digits)  # 16 .. icosim.limits.MAX_DIGITS
+        self.digits = check_digits(digits)  # 16 .. icosim.engine.bounds.MAX_DIGITS
         import mpmath  # here, not at the top: float64-only jobs start faster
 
         self.ctx = mpmath.MPContext()
@@ -117,7 +117,7 @@ class Multiprecision:
         digits, so that 128 digits mean 128 significant digits.
         """
         n = np.shape(M)[-1]
-        guard = guard_digits(decay)  # PrecisionCapError beyond icosim.limits.MAX_GUARD_DIGITS
+        guard = guard_digits(decay)  # PrecisionCapError beyond icosim.engine.bounds.MAX_GUARD_DIGITS
 
         def one(m):
             with self.ctx.extradps(guard):

@@ -12,8 +12,8 @@ for term.  ``a`` and ``b`` are dimensionless in every setting.
 
 from __future__ import annotations
 
+from ...errors import ParameterError
 from ..decompositions import DD_NEEDS_POSITION_LEVEL
-from ..errors import ParameterError
 from .base import CouplingMethod, MethodSpec, Parameter, exact
 
 __all__ = ["weighted_multiplier", "SPEC"]

@@ -3,7 +3,7 @@
 With the rigid link, ``x1 = x2 = x`` and
 ``(m1 + m2) x'' = -(c1 + c2) x - (d1 + d2) x'``; the constraint force follows
 from subsystem 1, ``lambda = m1 x'' + c1 x + d1 x'``.  In the engine's
-dimensionless variables (time in macro steps, see :mod:`icosim.model`)
+dimensionless variables (time in macro steps, see :mod:`icosim.engine.model`)
 that is ``(1 + am21) x'' = -(k1 + am21 k2) x - (delta1 + am21 delta2) x'`` and
 ``lambda_bar = x'' + k1 x + delta1 x'``.
 """

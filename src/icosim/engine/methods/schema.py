@@ -3,7 +3,7 @@
 The schemas under ``workflow/schemas/`` refer to these ``$defs`` instead of
 listing methods and parameters themselves; :func:`with_methods` fills them in
 before a configuration is validated (``workflow/rules/common.smk``), so a
-method added to :data:`icosim.methods.METHODS` is accepted by every schema.
+method added to :data:`icosim.engine.methods.METHODS` is accepted by every schema.
 
 ==============================  =====================================================
 ``$defs`` entry                 what it allows

@@ -1,14 +1,14 @@
 """The one macro-step algorithm (Sect. 2): predictor, corrected coupling
 variables, corrector, projection.  It serves every method, decomposition,
 approximation order and coupling scheme (Jacobi, Gauss-Seidel:
-:mod:`icosim.schemes`), the linear test model and the nonlinear pendulum alike.
+:mod:`icosim.engine.schemes`), the linear test model and the nonlinear pendulum alike.
 
-A *problem* (:class:`icosim.problem.CosimulationProblem`, whose docstring
+A *problem* (:class:`icosim.engine.problem.CosimulationProblem`, whose docstring
 states the contract) supplies the subsystems, the coupling conditions and their
-sensitivities; the *method* (:class:`icosim.methods.CouplingMethod`) only
+sensitivities; the *method* (:class:`icosim.engine.methods.CouplingMethod`) only
 decides how the corrected coupling variables are formed from ``e_p``, residuals
 and Jacobians.  The step counts its coupling solves and projections in the
-problem's :attr:`~icosim.problem.CosimulationProblem.work`.
+problem's :attr:`~icosim.engine.problem.CosimulationProblem.work`.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import StepFailure
+from ..errors import StepFailure
 from .schemes import JACOBI, N_SUBSYSTEMS, get_scheme
 
 __all__ = ["macro_step", "simulate", "Trajectory"]
@@ -28,7 +28,7 @@ def macro_step(problem, method, state, history, *, scheme=JACOBI, iterations: in
 
     Parameters
     ----------
-    scheme : :class:`icosim.schemes.Scheme` (or its name): the order of the
+    scheme : :class:`icosim.engine.schemes.Scheme` (or its name): the order of the
         subsystems.  Jacobi (default, the paper's): every subsystem is predicted
         and corrected.  Gauss-Seidel: the leading subsystem advances once with
         the extrapolation polynomials, its end state is final, and it enters

@@ -18,8 +18,8 @@ from __future__ import annotations
 import sys
 from fractions import Fraction
 
+from ...errors import ParameterError
 from ..decompositions import DD_NEEDS_POSITION_LEVEL
-from ..errors import ParameterError
 from .base import CouplingMethod, MethodSpec, Parameter, exact
 
 _FLOAT_MAX = Fraction(sys.float_info.max)

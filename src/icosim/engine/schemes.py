@@ -14,7 +14,7 @@ with the interpolation polynomials through the corrected values.  Derivation,
 equation by equation: ``docs/gauss_seidel.md``.
 
 A scheme is data: which subsystems lead (advance once, algebraic gradients
-only) and which are corrected.  :func:`icosim.macrostep.macro_step` reads it;
+only) and which are corrected.  :func:`icosim.engine.macrostep.macro_step` reads it;
 the coupling methods never see it.
 
 >>> get_scheme("gauss-seidel", first=2).name
@@ -38,7 +38,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .errors import ParameterError
+from ..errors import ParameterError
 
 __all__ = [
     "Scheme",

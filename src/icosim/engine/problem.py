@@ -1,4 +1,4 @@
-"""The co-simulation problem: what :func:`icosim.macrostep.macro_step` needs of it.
+"""The co-simulation problem: what :func:`icosim.engine.macrostep.macro_step` needs of it.
 
 A problem couples two subsystems through the coupling variables ``e`` of its
 decomposition.  :class:`CosimulationProblem` holds what every problem shares --
@@ -6,7 +6,7 @@ the decomposition, the approximation order ``k``, the arithmetic, the
 extrapolation (Eq. 9/35/59) and shift of the coupling history, the samples the
 corrector's interpolation polynomial runs through (Eq. 11), and a count of the
 work done -- and states the contract a subclass meets.  The linear test model
-(:class:`icosim.linear_problem.LinearCosimulation`) and the double pendulum
+(:class:`icosim.engine.linear_problem.LinearCosimulation`) and the double pendulum
 (:class:`icosim.pendulum.problem.PendulumCosimulation`) are the two subclasses.
 """
 
@@ -16,10 +16,10 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .backend import Float64
+from .backends import Float64
+from .bounds import check_k
 from .decompositions import get_decomposition
 from .lagrange import corrector_nodes, predictor_nodes, weights_at
-from .limits import check_k
 
 __all__ = ["CosimulationProblem", "Work"]
 
@@ -31,7 +31,7 @@ class Work:
     ``subsystem_integrations`` counts calls of a subsystem integrator (a
     batched call counts once), ``coupling_solves`` linear solves of coupling
     conditions, ``projections`` projection steps.  The problems count their
-    integrations, :func:`icosim.macrostep.macro_step` the solves and
+    integrations, :func:`icosim.engine.macrostep.macro_step` the solves and
     projections.
     """
 
@@ -55,8 +55,8 @@ class CosimulationProblem:
     from.  Leading batch axes are allowed wherever the subclass allows them.
 
     The problem knows nothing of the order in which its subsystems advance:
-    :func:`icosim.macrostep.macro_step` drives each subsystem ``i`` (0 or 1)
-    separately, as the scheme (:mod:`icosim.schemes`: Jacobi, Gauss-Seidel)
+    :func:`icosim.engine.macrostep.macro_step` drives each subsystem ``i`` (0 or 1)
+    separately, as the scheme (:mod:`icosim.engine.schemes`: Jacobi, Gauss-Seidel)
     says.  A subclass calls ``super().__init__(decomposition, k, backend)`` and
     implements, per subsystem ``i``:
 
@@ -97,12 +97,12 @@ class CosimulationProblem:
 
     and counts each subsystem integration in :attr:`work`.  The base class
     provides :meth:`extrapolate`, :meth:`shift` and :meth:`corrector_samples`;
-    :func:`icosim.macrostep.macro_step` only calls these members plus
+    :func:`icosim.engine.macrostep.macro_step` only calls these members plus
     :attr:`backend`.
     """
 
     def __init__(self, decomposition, k: int, backend=None):
-        k = check_k(k)  # 0 .. icosim.limits.MAX_K
+        k = check_k(k)  # 0 .. icosim.engine.bounds.MAX_K
         self.backend = be = backend or Float64()
         self.decomposition = get_decomposition(decomposition)
         self.k = k

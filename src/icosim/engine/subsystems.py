@@ -61,7 +61,7 @@ class OscillatorSubsystem:
     stiffness, damping, gain : per-unit-mass coefficients (arrays broadcast).
     input : index of the coupling variable that drives this subsystem.
     k : degree of the approximation polynomials.
-    backend : :mod:`icosim.backend` arithmetic.
+    backend : :mod:`icosim.engine.backends` arithmetic.
     """
 
     kind: str

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .errors import ParameterError
+from ..errors import ParameterError
 
 __all__ = ["DECOMPOSITIONS", "Decomposition", "get_decomposition", "DD_NEEDS_POSITION_LEVEL"]
 

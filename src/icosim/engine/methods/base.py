@@ -13,8 +13,8 @@ dimensional setting of the convergence study and the pendulum, how it scales
 with the macro step ``H``, symbols), labels, the indices it can be formulated
 at and the parameters each index leaves unused, and the decompositions it is
 defined for.  The entries live next to their rules (``baumgarte.py``,
-``weighted.py``, ``projection.py``); :mod:`icosim.methods` collects them in
-:data:`~icosim.methods.METHODS`.
+``weighted.py``, ``projection.py``); :mod:`icosim.engine.methods` collects them in
+:data:`~icosim.engine.methods.METHODS`.
 """
 
 from __future__ import annotations
@@ -25,8 +25,8 @@ from fractions import Fraction
 
 import numpy as np
 
+from ...errors import ParameterError
 from ..decompositions import DECOMPOSITIONS, Decomposition
-from ..errors import ParameterError
 
 __all__ = ["CouplingMethod", "MethodSpec", "Parameter", "solve_small", "finite", "exact"]
 

@@ -28,7 +28,7 @@ class LinearCosimulation(CosimulationProblem):
 
     Parameters
     ----------
-    coefficients : :class:`icosim.model.Coefficients` (arrays broadcast).
+    coefficients : :class:`icosim.engine.model.Coefficients` (arrays broadcast).
     decomposition : ``"ff"``, ``"fd"`` or ``"dd"`` (or a Decomposition).
     k : degree of the Lagrange polynomials (any integer >= 0).
     backend : arithmetic; float64 by default.
@@ -41,7 +41,7 @@ class LinearCosimulation(CosimulationProblem):
     projection; with Gauss-Seidel (subsystem 1 first) after three:
 
     >>> from icosim import TestModel, make_method
-    >>> from icosim.macrostep import macro_step
+    >>> from icosim.engine.macrostep import macro_step
     >>> p = LinearCosimulation(TestModel(-0.1, 0.5).coefficients(), "ff", k=0)
     >>> state, history = np.array([[1.0, 0.0], [1.0, 0.0]]), np.zeros((1, 1))
     >>> s1, h1, y = macro_step(p, make_method("projection"), state, history)
@@ -86,7 +86,7 @@ class LinearCosimulation(CosimulationProblem):
         lead = w.shape[:-1]
         return w[..., :4].reshape(lead + (2, 2)), w[..., 4:].reshape(lead + (self.k + 1, self.n_coupling))
 
-    # -- the problem interface used by icosim.macrostep ----------------------
+    # -- the problem interface used by icosim.engine.macrostep ----------------------
     def _integrate(self, i, state, samples, nodes):
         self.work.subsystem_integrations += 1
         sub = self.subsystems[i]
@@ -131,7 +131,7 @@ class LinearCosimulation(CosimulationProblem):
         ``response[i]``: ``"full"`` -- through the interpolation polynomial of
         subsystem ``i``'s corrector (Eq. 13); ``"algebraic"`` -- it has finished
         its macro step (it leads a Gauss-Seidel scheme) and responds only
-        algebraically (:meth:`~icosim.subsystems.OscillatorSubsystem.algebraic_sensitivity`);
+        algebraically (:meth:`~icosim.engine.subsystems.OscillatorSubsystem.algebraic_sensitivity`);
         ``"none"`` -- its outputs stay as integrated.
         """
         cols = []
