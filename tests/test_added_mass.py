@@ -19,8 +19,8 @@ import pytest
 
 from icosim import TestModel, make_method
 from icosim.engine.backends import Ball
-from icosim.stability import spectral_radius_mp
-from icosim.stability.matrix import amplification_matrix
+from icosim.engine.spectral import spectral_radius_mp
+from icosim.engine.spectral.matrix import amplification_matrix
 
 GS12, GS21 = "gauss-seidel-12", "gauss-seidel-21"
 RATIOS = [Fraction(1, 10), Fraction(1, 2), Fraction(2), Fraction(10)]

@@ -2,7 +2,7 @@
 
 Expected values come from an independent route: the Eq. (71) point worked out by hand from
 m, c, d and H (not through :class:`icosim.engine.model.PhysicalModel`), evaluated with
-:func:`icosim.stability.spectral_radius_float64` on a :class:`~icosim.engine.model.TestModel`.
+:func:`icosim.engine.spectral.spectral_radius_float64` on a :class:`~icosim.engine.model.TestModel`.
 """
 
 import io

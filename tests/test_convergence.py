@@ -504,7 +504,7 @@ def test_baumgarte_index1_k0_has_the_drift_mode_of_time_scale_mu(ratio):
     mu = 1.0e-3
     H = ratio * mu
     c = icosim.PhysicalModel(**icosim.convergence.experiment.PAPER_MODEL, H=H).coefficients()
-    M = icosim.stability.amplification_matrix(
+    M = icosim.engine.spectral.amplification_matrix(
         c, icosim.make_method("baumgarte", beta=2 * mu / H, gamma=mu**2 / H**2), "ff", 0
     )
     ev = np.linalg.eigvals(M)

@@ -19,7 +19,7 @@ from icosim.engine.backends import Ball, Multiprecision
 from icosim.engine.decompositions import get_decomposition
 from icosim.engine.linear_problem import LinearCosimulation
 from icosim.engine.macrostep import macro_step
-from icosim.stability import amplification_matrix
+from icosim.engine.spectral import amplification_matrix
 
 #: Every method at every index of Figs. 21-23 (dimensional parameters), with the decompositions used.
 SCHEMES = [

@@ -11,7 +11,7 @@ from helpers import ROOT
 from icosim.convergence.config import study_from_config
 from icosim.convergence.experiment import dimensional_method
 from icosim.convergence.fit import asymptotic_order, local_slopes
-from icosim.stability import amplification_matrix
+from icosim.engine.spectral import amplification_matrix
 
 CFG = yaml.safe_load((ROOT / "config" / "convergence.yaml").read_text())["convergence"]
 FIT = CFG["fit"]

@@ -31,8 +31,8 @@ from icosim.engine.backends import Float64, Multiprecision
 from icosim.engine.exact import MonolithicSolution, consistent_start
 from icosim.engine.lagrange import corrector_nodes, predictor_nodes, weights_at
 from icosim.engine.macrostep import simulate
+from icosim.engine.spectral import amplification_matrix
 from icosim.engine.subsystems import OscillatorSubsystem
-from icosim.stability import amplification_matrix
 
 SCHEMES = [
     (baumgarte(mu=1, index=1), "ff"),
@@ -537,7 +537,7 @@ def test_policy_accepts_physical_models_including_overdamped():
 
 
 def test_policy_survives_a_point_no_precision_can_decide(monkeypatch):
-    import icosim.stability.policy as st
+    import icosim.engine.spectral.policy as st
 
     original = st.certify_spectral_radius
 

@@ -30,7 +30,7 @@ from icosim.convergence.study import Study
 from icosim.engine.macrostep import macro_step
 from icosim.engine.model import Coefficients
 from icosim.engine.schemes import GS12, GS21, JACOBI, GaussSeidel, Jacobi, get_scheme
-from icosim.stability import amplification_matrix
+from icosim.engine.spectral import amplification_matrix
 
 CASES = [
     (baumgarte(mu=1, index=1), "ff"),

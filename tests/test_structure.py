@@ -144,8 +144,8 @@ def _loaded_after(statement: str, modules) -> list:
     return json.loads(out.stdout.replace("'", '"'))
 
 
-def test_importing_the_stability_package_stays_light():
-    assert _loaded_after("import icosim.stability", {"xarray", "matplotlib"}) == []
+def test_importing_the_spectral_radius_stays_light():
+    assert _loaded_after("import icosim.engine.spectral", {"xarray", "matplotlib"}) == []
 
 
 def _type_checking_imports(path):
@@ -167,6 +167,10 @@ def test_the_package_loads_its_public_names_lazily_and_lists_them_for_the_workfl
     assert _type_checking_imports(SRC / "icosim" / "__init__.py") == icosim._LAZY
     assert set(icosim._LAZY) == set(icosim.__all__)
     assert all(getattr(icosim, name) is not None for name in icosim.__all__)
-    engine = {"icosim/engine/linear_problem.py", "icosim/stability/__init__.py", "icosim/engine/methods/__init__.py"}
+    engine = {
+        "icosim/engine/linear_problem.py",
+        "icosim/engine/spectral/__init__.py",
+        "icosim/engine/methods/__init__.py",
+    }
     assert engine <= {p.relative_to(SRC).as_posix() for p in module_closure(["icosim.pendulum.names"], SRC)}
     assert _loaded_after("import icosim.pendulum.measures", {"scipy.linalg", "mpmath"}) == []

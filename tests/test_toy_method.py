@@ -25,12 +25,12 @@ from icosim.convergence.study import Study
 from icosim.engine import methods
 from icosim.engine.methods import CouplingMethod, MethodSpec, Parameter, make_method
 from icosim.engine.methods.base import finite
+from icosim.engine.spectral import spectral_radius
 from icosim.errors import ParameterError
 from icosim.pendulum.config import configured_runs
 from icosim.pendulum.linearised import linear_test_model_rho
 from icosim.pendulum.model import PendulumParameters
 from icosim.pendulum.runs import run_cosimulation
-from icosim.stability import spectral_radius
 from icosim.stability.datasets import stability_panel
 from icosim.stability.panels import PanelSpec as StabilityPanel
 

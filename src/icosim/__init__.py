@@ -28,8 +28,8 @@ if TYPE_CHECKING:
     from .engine.methods.weighted import weighted_multiplier
     from .engine.model import Coefficients, PhysicalModel, TestModel
     from .engine.schemes import JACOBI, GaussSeidel, Jacobi, get_scheme
+    from .engine.spectral import amplification_matrix, spectral_radius, spectral_radius_float64, spectral_radius_mp
     from .errors import ParameterError
-    from .stability import amplification_matrix, spectral_radius, spectral_radius_float64, spectral_radius_mp
 
 _LAZY = {
     "LinearCosimulation": ".engine.linear_problem",
@@ -45,10 +45,10 @@ _LAZY = {
     "GaussSeidel": ".engine.schemes",
     "Jacobi": ".engine.schemes",
     "get_scheme": ".engine.schemes",
-    "amplification_matrix": ".stability",
-    "spectral_radius": ".stability",
-    "spectral_radius_float64": ".stability",
-    "spectral_radius_mp": ".stability",
+    "amplification_matrix": ".engine.spectral",
+    "spectral_radius": ".engine.spectral",
+    "spectral_radius_float64": ".engine.spectral",
+    "spectral_radius_mp": ".engine.spectral",
 }
 
 

@@ -14,9 +14,9 @@ import re
 from .engine import methods
 from .engine.decompositions import DECOMPOSITIONS
 from .engine.schemes import SCHEME_NAMES, get_scheme
+from .engine.spectral.policy import POLICIES
 from .errors import ParameterError
 from .jsonio import dumps
-from .stability.policy import POLICIES
 
 __all__ = ["add_parsers", "add_scheme_arguments", "run"]
 

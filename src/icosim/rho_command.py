@@ -1,7 +1,7 @@
 """``icosim rho``: the spectral radius of one parameter point, its verdict proven.
 
 Every answer of the command rests on ball arithmetic
-(:func:`icosim.stability.certify_spectral_radius`): the parameters are taken
+(:func:`icosim.engine.spectral.certify_spectral_radius`): the parameters are taken
 exactly as typed (``--lr1 -0.3`` is -3/10), the verdict is proven (stable,
 unstable, or marginal: the enclosure still contains 1 at ``--max-bits``), and
 the value printed is the midpoint of the proven enclosure narrowed to the
@@ -25,8 +25,8 @@ import numpy as np
 
 from .engine.bounds import time_budget
 from .engine.schemes import JACOBI, get_scheme
+from .engine.spectral.policy import reason_code
 from .errors import PointTimeout
-from .stability.policy import reason_code
 
 __all__ = ["rho_answer", "rho_text"]
 
@@ -40,7 +40,7 @@ def rho_answer(model, method, decomposition, k, *, digits=None, max_bits=1024, t
     ``model`` is a :class:`~icosim.engine.model.TestModel` of one point (Fractions kept exact); ``scheme`` the
     coupling scheme (:mod:`icosim.engine.schemes`), used by the proof and by float64 alike.
     """
-    from .stability import certify_spectral_radius
+    from .engine.spectral import certify_spectral_radius
 
     scheme = get_scheme(scheme)
 
@@ -115,7 +115,7 @@ def rho_text(answer: dict, *, show_enclosure: bool = False, scheme=JACOBI) -> st
 
 def _float64(model, method, decomposition, k, scheme=JACOBI):
     """float64's value and error estimate for comparison (None where float64 gives nothing finite)."""
-    from .stability import spectral_radius_float64
+    from .engine.spectral import spectral_radius_float64
 
     try:
         with np.errstate(all="ignore"):

@@ -93,7 +93,7 @@ def script_lib(script):
 
 # The engine every numerical result rests on: the macro step, its problems and methods,
 # and the stability analysis.
-ENGINE = lib("engine.macrostep", "stability", "engine.linear_problem", "engine.methods")
+ENGINE = lib("engine.macrostep", "engine.spectral", "engine.linear_problem", "engine.methods")
 
 
 def engine_lib(script):

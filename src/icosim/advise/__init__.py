@@ -9,7 +9,7 @@ order ``k`` and each coupling order (:data:`COUPLINGS`: Jacobi, and Gauss-Seidel
 with subsystem 1 or subsystem 2 first, :mod:`icosim.engine.schemes`):
 
 * at one ``H``: the spectral radius ``rho`` of the co-simulation recurrence
-  (the precision policy of :func:`icosim.stability.spectral_radius`: float64,
+  (the precision policy of :func:`icosim.engine.spectral.spectral_radius`: float64,
   certified in ball arithmetic where float64 cannot decide) and the verdict;
 * over a range ``[H_lo, H_hi]``: where the scheme is stable.  Stability need
   not be monotone in ``H`` (the weighted multiplier at ``k = 2`` is unstable

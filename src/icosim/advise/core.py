@@ -16,15 +16,15 @@ from ..engine import methods as _methods
 from ..engine.bounds import check_k
 from ..engine.model import PhysicalModel
 from ..engine.schemes import SCHEME_NAMES
+from ..engine.spectral import spectral_radius
 from ..errors import ParameterError
-from ..stability import spectral_radius
 
 __all__ = ["TwoMassSystem", "Scheme", "Evaluation", "COUPLINGS", "VERDICTS", "DEFAULT_K", "schemes", "evaluate"]
 
 #: Approximation orders scanned unless others are asked for.
 DEFAULT_K = (0, 1, 2)
 
-#: Coupling orders: name -> keyword arguments of :func:`icosim.stability.spectral_radius`: the Jacobi
+#: Coupling orders: name -> keyword arguments of :func:`icosim.engine.spectral.spectral_radius`: the Jacobi
 #: (parallel) scheme of the paper and Gauss-Seidel (sequential) with subsystem 1 or subsystem 2 first
 #: (:mod:`icosim.engine.schemes`).
 COUPLINGS: dict[str, dict] = {name: ({} if name == "jacobi" else {"scheme": name}) for name in SCHEME_NAMES}
@@ -266,7 +266,7 @@ def evaluate(system: TwoMassSystem, scheme: Scheme, H, *, policy="auto", digits=
     """``rho`` of ``scheme`` at every macro step in ``H``: one batched call, or one per H where the engine's
     parameters change with it (a Baumgarte ``mu`` in s).
 
-    The verdict is the precision policy's (:func:`icosim.stability.spectral_radius`): ``stable``,
+    The verdict is the precision policy's (:func:`icosim.engine.spectral.spectral_radius`): ``stable``,
     ``unstable`` (float64 trusted, or proven in ball arithmetic), ``marginal`` (the proven enclosure
     contains 1), or ``undecided``: nothing could compute the point, or (policy ``float64``) float64
     could not decide it.

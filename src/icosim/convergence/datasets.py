@@ -154,7 +154,7 @@ def run_panel(
                 arr["spectral_verdict"].astype(str),
                 {
                     "long_name": "stable / unstable / marginal: for stepping error proven from the ball "
-                    "amplification matrix of the defect (icosim.stability.certified); else from the precision policy"
+                    "amplification matrix of the defect (icosim.engine.spectral.certified); else from the precision policy"
                 },
             ),
             "diverged_at": (

@@ -38,8 +38,8 @@ from ..engine.backends import Ball
 from ..engine.decompositions import get_decomposition
 from ..engine.exact import exact_coupling, monolithic_matrix
 from ..engine.schemes import JACOBI
-from ..stability.certified import MAX_BITS, SpectralCertificate, certify_matrix
-from ..stability.matrix import amplification_matrix
+from ..engine.spectral.certified import MAX_BITS, SpectralCertificate, certify_matrix
+from ..engine.spectral.matrix import amplification_matrix
 
 __all__ = ["ExactExtension", "exact_extension", "local_defect", "Defect", "propagate_errors", "ErrorSeries"]
 
@@ -83,7 +83,7 @@ def exact_extension(coefficients, decomposition, k, backend) -> ExactExtension:
 @dataclass
 class Defect:
     """float64 roundings of the proven ``M``, ``D``, ``E``, ``A``, the precision that proved them, and the
-    certified verdict on the spectral radius of the same ball ``M`` (:mod:`icosim.stability.certified`)."""
+    certified verdict on the spectral radius of the same ball ``M`` (:mod:`icosim.engine.spectral.certified`)."""
 
     M: np.ndarray
     D: np.ndarray

@@ -24,7 +24,7 @@ Unstable runs
 A run counts as unstable when (a) its state stops being finite or grows beyond
 ``growth_bound`` times the initial amplitude (the run is stopped there), or (b)
 the spectral radius of the recurrence at that ``H`` exceeds 1, decided with the
-engine's precision policy (:func:`icosim.stability.spectral_radius`, float64
+engine's precision policy (:func:`icosim.engine.spectral.spectral_radius`, float64
 with mpmath rechecks).  (b) catches runs that grow too slowly to blow up within
 the end time: their error would otherwise look small.  The NRMSE of an
 unstable run is never reported as an error (``nrmse`` is NaN there; the value
@@ -43,8 +43,8 @@ from ..engine.decompositions import get_decomposition
 from ..engine.linear_problem import LinearCosimulation
 from ..engine.macrostep import simulate
 from ..engine.schemes import JACOBI, get_scheme
+from ..engine.spectral import amplification_matrix, spectral_radius
 from ..errors import ParameterError
-from ..stability import amplification_matrix, spectral_radius
 from .errors import ErrorSeries, local_defect, propagate_errors
 from .experiment import Setup, dimensional_method
 from .metric import ratio_root, variances

@@ -147,7 +147,7 @@ class Ball:
     code (no estimate, no convention).  Arb's precision is a global setting, so
     arithmetic must run inside :meth:`context`.  There is no ``eigvals``:
     eigenvalues of a ball matrix with clusters (the Jordan block of the reduced
-    state at 0) cannot be isolated; :mod:`icosim.stability.certified` encloses
+    state at 0) cannot be isolated; :mod:`icosim.engine.spectral.certified` encloses
     the spectral radius from the characteristic polynomial instead.
     """
 

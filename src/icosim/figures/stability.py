@@ -22,7 +22,7 @@ from ..stability.panels import format_row_label
 __all__ = ["stability_figure", "panel_layout", "row_labels", "STYLES"]
 
 STYLES = ("field", "dots")
-#: How points that are neither stable nor unstable are drawn: verdict code (icosim.stability.policy.VERDICTS)
+#: How points that are neither stable nor unstable are drawn: verdict code (icosim.engine.spectral.policy.VERDICTS)
 #: -> scatter style.  Marginal: the proven enclosure of rho contains 1; undecided: nothing could be computed.
 OPEN_VERDICTS = {
     2: {"color": "#2c7bb6", "marker": "s", "label": "marginal: the proven enclosure of ρ contains 1"},

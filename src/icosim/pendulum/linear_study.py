@@ -9,7 +9,7 @@ Two comparisons, two linear models:
   step sizes, its error ``max |x_i - x| / x0`` over the macro nodes against
   the exact solution (:class:`icosim.engine.exact.MonolithicSolution`), stepped with
   the engine's own amplification matrix
-  (:func:`icosim.stability.amplification_matrix`).  A step size whose spectral
+  (:func:`icosim.engine.spectral.amplification_matrix`).  A step size whose spectral
   radius exceeds 1 is unstable, as in the linear study.  The pendulum's own
   point in the test model cannot serve here: its ratios ``am21 = alr21 =
   ali21 = 1`` make the two subsystems identical, so with force/force coupling
@@ -34,7 +34,7 @@ from ..engine import exact
 from ..engine.linear_problem import LinearCosimulation
 from ..engine.methods import CouplingMethod, engine_method
 from ..engine.model import PhysicalModel
-from ..stability import amplification_matrix, spectral_radius
+from ..engine.spectral import amplification_matrix, spectral_radius
 from .linearised import linear_test_model_stability
 from .model import PendulumParameters
 
@@ -76,7 +76,7 @@ def linear_errors(
 
     Returns ``(error, unstable, rho)`` over ``H_values`` (module docstring);
     ``error`` is NaN where the step is unstable: the verdict of the precision
-    policy (:func:`icosim.stability.spectral_radius`) is not ``stable`` --
+    policy (:func:`icosim.engine.spectral.spectral_radius`) is not ``stable`` --
     ``unstable``, or ``marginal`` / ``undecided``, where no bound on the growth
     is known -- or the run is not finite.  ``rho`` is NaN where undecided.
     """

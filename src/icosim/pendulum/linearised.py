@@ -13,13 +13,13 @@ import numpy as np
 
 from ..engine.methods import CouplingMethod, engine_method
 from ..engine.model import TestModel
-from ..stability import spectral_radius
+from ..engine.spectral import spectral_radius
 from .model import PendulumParameters
 from .reference import Monolithic
 
 __all__ = ["pendulum_test_model", "linear_test_model_rho", "linear_test_model_stability", "combined_verdict"]
 
-#: The verdicts of :mod:`icosim.stability.policy`, the one that decides first when points are combined.
+#: The verdicts of :mod:`icosim.engine.spectral.policy`, the one that decides first when points are combined.
 _VERDICT_ORDER = ("unstable", "undecided", "marginal", "stable")
 
 
@@ -65,7 +65,7 @@ def linear_test_model_stability(
     ``gamma_bar = gamma/H^2``; the weighted multiplier's ``a``, ``b`` are
     dimensionless already).  ``scheme``: the coupling scheme (link 1 is
     subsystem 1).  The verdict is the precision policy's
-    (:func:`icosim.stability.spectral_radius`) over both points
+    (:func:`icosim.engine.spectral.spectral_radius`) over both points
     (:func:`combined_verdict`); ``rho`` is the larger one, NaN if a point is
     undecided (nothing is known there) unless the other is unstable.  Returns
     ``(rho, verdict, model)``.

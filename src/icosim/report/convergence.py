@@ -117,7 +117,7 @@ def convergence_section(
         f"Unstable: a run is stopped once |state| exceeds {unstable['growth_bound']:g} × the initial amplitude, and is "
         "also unstable where the spectral radius of the recurrence at that H exceeds 1"
         + (
-            ": proven from the same ball amplification matrix as the defect (icosim.stability.certified, "
+            ": proven from the same ball amplification matrix as the defect (icosim.engine.spectral.certified, "
             f"{n_marginal} of {n_runs} runs marginal: the enclosure contains 1)."
             if stepping == "error"
             else f" (policy '{unstable['spectral_policy']}')."

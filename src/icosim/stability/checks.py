@@ -32,9 +32,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..claims import CheckKind, Outcome, combine_holds, select
+from ..engine.spectral.policy import VERDICTS
 from ..errors import ParameterError
 from .pointwise import RELATIONS, check_pointwise, validate_pointwise
-from .policy import VERDICTS
 from .regions import region_mask, validate_region, verdict_masks
 
 __all__ = [

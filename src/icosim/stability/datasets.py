@@ -12,7 +12,7 @@ proof), whether it is ``certified`` with the proven enclosure
 ``[rho_lower, rho_upper]``, and whether a float64 verdict was checked by
 certification (``audited``) and ``overturned``; the attributes count them
 and say how long each pass took, so the cost of the policy is measured on
-every run (:mod:`icosim.stability.policy`).
+every run (:mod:`icosim.engine.spectral.policy`).
 """
 
 from __future__ import annotations
@@ -23,9 +23,9 @@ from ..engine.backends import FLOAT64_DIGITS
 from ..engine.decompositions import DECOMPOSITIONS
 from ..engine.model import TestModel
 from ..engine.schemes import get_scheme
+from ..engine.spectral.policy import ARITHMETICS, REASONS, VERDICTS, Certification, spectral_radius
 from ..jsonio import dumps
 from .panels import PanelSpec, format_row_label, grid_axis, method_parameters_units
-from .policy import ARITHMETICS, REASONS, VERDICTS, Certification, spectral_radius
 
 __all__ = ["stability_panel", "LONG_NAMES", "verdict_names"]
 
@@ -122,7 +122,7 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
                 np.asarray(result.err, dtype=float),
                 units="1",
                 comment="spread of float64 results under rounding-size disturbances times a safety factor "
-                "(icosim.stability.spectral); a point is certified if |rho - 1| <= this or rho is not finite",
+                "(icosim.engine.spectral.radius); a point is certified if |rho - 1| <= this or rho is not finite",
             ),
         },
         coords={

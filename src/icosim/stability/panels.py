@@ -21,8 +21,8 @@ from ..engine.bounds import MAX_GRID_N, check_k
 from ..engine.decompositions import DECOMPOSITIONS
 from ..engine.methods import make_method
 from ..engine.schemes import figure_id, get_scheme
+from ..engine.spectral.policy import POLICIES, Certification
 from ..errors import ParameterError
-from .policy import POLICIES, Certification
 
 __all__ = [
     "PanelSpec",
@@ -121,7 +121,7 @@ class PanelSpec:
     policy: str = "auto"
     #: the parameters that tell this figure's rows apart (:func:`row_label_keys`)
     row_keys: tuple = RATIOS
-    #: settings of the certified rechecks (:class:`icosim.stability.policy.Certification`), as a mapping
+    #: settings of the certified rechecks (:class:`icosim.engine.spectral.policy.Certification`), as a mapping
     certify: dict = field(default_factory=dict)
     #: the coupling scheme (:mod:`icosim.engine.schemes`), by name
     scheme: str = "jacobi"

@@ -26,11 +26,11 @@ import copy
 
 import numpy as np
 
-from ..engine.backends import Float64, Multiprecision
-from ..engine.decompositions import get_decomposition
-from ..engine.linear_problem import LinearCosimulation
-from ..engine.model import TestModel
-from ..engine.schemes import JACOBI, get_scheme
+from ..backends import Float64, Multiprecision
+from ..decompositions import get_decomposition
+from ..linear_problem import LinearCosimulation
+from ..model import TestModel
+from ..schemes import JACOBI, get_scheme
 from .matrix import _matrix_from_problem, _problem, as_coefficients
 
 __all__ = ["spectral_radius_float64", "spectral_radius_mp", "SAFETY", "DISTURBANCE"]

@@ -1,10 +1,10 @@
 """The precision policy: float64 first, proofs where float64 cannot decide.
 
 Every point is first computed in float64 with an error estimate
-(:mod:`icosim.stability.spectral`).  A point is *trusted* if its float64 result
+(:mod:`icosim.engine.spectral.radius`).  A point is *trusted* if its float64 result
 is finite and ``|rho - 1|`` exceeds that estimate; its verdict is then
 ``stable`` or ``unstable`` from float64 -- a good heuristic, not a bound.
-Certified in ball arithmetic (:mod:`icosim.stability.certified`, a proven
+Certified in ball arithmetic (:mod:`icosim.engine.spectral.certified`, a proven
 enclosure of ``rho``) are
 
 * every point float64 cannot decide (not trusted),
@@ -35,14 +35,14 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from ..engine.backends import FLOAT64_DIGITS
-from ..engine.bounds import MAX_BITS_LIMIT, MAX_SECONDS, time_budget
-from ..engine.model import Coefficients, TestModel
-from ..engine.schemes import JACOBI, get_scheme
-from ..errors import NotFiniteError, ParameterError, PointTimeout, PrecisionCapError
+from ...errors import NotFiniteError, ParameterError, PointTimeout, PrecisionCapError
+from ..backends import FLOAT64_DIGITS
+from ..bounds import MAX_BITS_LIMIT, MAX_SECONDS, time_budget
+from ..model import Coefficients, TestModel
+from ..schemes import JACOBI, get_scheme
 from .certified import DEFAULT_BITS, MAX_BITS, certify_spectral_radius
 from .matrix import as_coefficients
-from .spectral import spectral_radius_float64, spectral_radius_mp
+from .radius import spectral_radius_float64, spectral_radius_mp
 
 __all__ = [
     "spectral_radius",

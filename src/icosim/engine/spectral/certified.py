@@ -42,10 +42,10 @@ from fractions import Fraction
 
 import numpy as np
 
-from ..engine.backends import Ball
-from ..engine.bounds import MAX_GUARD_BITS, check_finite
-from ..engine.model import Coefficients, PhysicalModel, TestModel
-from ..engine.subsystems import decay_rate
+from ..backends import Ball
+from ..bounds import MAX_GUARD_BITS, check_finite
+from ..model import Coefficients, PhysicalModel, TestModel
+from ..subsystems import decay_rate
 from .matrix import amplification_matrix, as_coefficients
 
 __all__ = [
@@ -137,7 +137,7 @@ class SpectralCertificate:
     rho_upper: Fraction | None
     bits: int
     reason: str = ""
-    cause: str = ""  # for ``undecided``: a code of icosim.stability.policy.REASONS
+    cause: str = ""  # for ``undecided``: a code of icosim.engine.spectral.policy.REASONS
 
     def lower(self, digits: int = 20) -> str:
         """``rho_lower`` as a decimal string, rounded down."""
@@ -327,7 +327,7 @@ def certify_spectral_radius(
     of roots, e.g. a multiple root, stops the narrowing where the arithmetic
     cannot separate it).  The verdict itself never depends on ``digits``: it
     comes from the ``bits``-then-``max_bits`` schedule, and a marginal
-    enclosure is kept as decided there.  ``matrix_kw`` go to :func:`~icosim.stability.matrix.amplification_matrix`.
+    enclosure is kept as decided there.  ``matrix_kw`` go to :func:`~icosim.engine.spectral.matrix.amplification_matrix`.
 
     >>> from icosim import TestModel, make_method
     >>> c = certify_spectral_radius(TestModel(-0.05, 0.5), make_method("weighted", a=1, b=1), "ff", 2)

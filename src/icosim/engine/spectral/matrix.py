@@ -20,13 +20,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..engine.backends import Float64
-from ..engine.decompositions import get_decomposition
-from ..engine.linear_problem import LinearCosimulation
-from ..engine.macrostep import macro_step
-from ..engine.methods import CouplingMethod
-from ..engine.model import Coefficients
-from ..engine.schemes import JACOBI, get_scheme
+from ..backends import Float64
+from ..decompositions import get_decomposition
+from ..linear_problem import LinearCosimulation
+from ..macrostep import macro_step
+from ..methods import CouplingMethod
+from ..model import Coefficients
+from ..schemes import JACOBI, get_scheme
 
 __all__ = ["amplification_matrix", "as_coefficients"]
 
