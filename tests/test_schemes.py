@@ -25,12 +25,12 @@ from icosim import (
     weighted_multiplier,
 )
 from icosim.convergence.experiment import Setup, step_counts
-from icosim.convergence.fit import asymptotic_order
 from icosim.convergence.study import Study
 from icosim.engine.macrostep import macro_step
 from icosim.engine.model import Coefficients
 from icosim.engine.schemes import GS12, GS21, JACOBI, GaussSeidel, Jacobi, get_scheme
 from icosim.engine.spectral import amplification_matrix
+from icosim.order_fit import asymptotic_order
 
 CASES = [
     (baumgarte(mu=1, index=1), "ff"),

@@ -2,7 +2,7 @@
 
 A claim selects curves of the panel datasets (:func:`icosim.convergence.curves.curves`)
 and expects, per ``k``, an order ``p`` or instability at every step size.  An
-order decides only where it is asymptotic (:mod:`icosim.convergence.fit`):
+order decides only where it is asymptotic (:mod:`icosim.order_fit`):
 
 * asymptotic -- pass if within ``tolerance`` of ``p``, else fail;
 * pre-asymptotic, unstable as H -> 0, too few points -- undecided, with the reason;

@@ -5,7 +5,7 @@ Variables: ``nrmse`` (NaN where unstable) and its parts, ``unstable``,
 precision that proved each run's defect (``defect_bits``); the local slopes
 between neighbouring step sizes over ``H_mid``; per curve the asymptotic
 ``order`` read off the smallest-H decade with its ``order_status``
-(:mod:`icosim.convergence.fit`) and range (``fit_H_min``, ``fit_H_max``,
+(:mod:`icosim.order_fit`) and range (``fit_H_min``, ``fit_H_max``,
 ``fit_used``); the row parameters (dimensional) as coordinates along
 ``index``; the set-up, the method and the procedures as attributes.
 """
@@ -18,8 +18,8 @@ import numpy as np
 
 from ..engine.decompositions import get_decomposition
 from ..engine.methods import get_spec, parameter_units
+from ..order_fit import asymptotic_order, local_slopes
 from .experiment import PAPER_MODEL, dimensional_method, units_description
-from .fit import asymptotic_order, local_slopes
 from .panels import PanelSpec
 from .study import Study
 
@@ -279,8 +279,7 @@ def run_panel(
         method_parameters_units=units_description(),
         stepping=stepping,
         spectral_policy=study.spectral_policy,
-        fit_procedure="icosim.convergence.fit.asymptotic_order: "
-        + ", ".join(f"{k}={v}" for k, v in sorted(fit.items())),
+        fit_procedure="icosim.order_fit.asymptotic_order: " + ", ".join(f"{k}={v}" for k, v in sorted(fit.items())),
         startup_steps=study.startup_steps,
         defect_accuracy="stepping error: the one-step defect D = M W - W E is formed in Arb ball arithmetic until every "
         "row is proven to 2^-40 relative (icosim.convergence.errors), then rounded to float64",

@@ -15,7 +15,7 @@ left out before the decade is chosen, so the decade is the smallest-H decade
 *above the floor* (status ``at the error floor`` when none is left, ``no
 stable decade above the floor`` when that decade reaches unstable step sizes).
 The decade rule itself is the linear study's function
-(:func:`icosim.convergence.fit.asymptotic_order`, here also named :func:`decade_order`).
+(:func:`icosim.order_fit.asymptotic_order`, here also named :func:`decade_order`).
 
 >>> import numpy as np
 >>> H = np.geomspace(1e-4, 2e-2, 12)
@@ -32,9 +32,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..convergence.fit import STATUSES as LINEAR_STATUSES
-from ..convergence.fit import AsymptoticOrder, local_slopes
-from ..convergence.fit import asymptotic_order as decade_order
+from ..order_fit import STATUSES as LINEAR_STATUSES
+from ..order_fit import AsymptoticOrder, local_slopes
+from ..order_fit import asymptotic_order as decade_order
 
 __all__ = ["AsymptoticOrder", "decade_order", "pendulum_order", "error_floor", "local_slopes", "STATUSES"]
 

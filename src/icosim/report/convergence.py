@@ -123,7 +123,7 @@ def convergence_section(
             else f" (policy '{unstable['spectral_policy']}')."
         )
         + f" {n_unstable} of {n_runs} runs were unstable; they are drawn as × at the top of a panel, never as an error.",
-        f"Orders decided in the asymptotic range (icosim.convergence.fit.asymptotic_order): the order of a curve is the "
+        f"Orders decided in the asymptotic range (icosim.order_fit.asymptotic_order): the order of a curve is the "
         f"least-squares slope of log NRMSE over log H on its smallest-H decade (at least {fit['min_points']} stable step "
         f"sizes), and counts only if every local slope there is within ±{fit['tolerance']:g} of it; otherwise the curve is "
         "pre-asymptotic and a claim about it is undecided, never passed or failed. A curve unstable at its smallest step "
