@@ -106,7 +106,7 @@ def run(snakemake, workdir, targets, configfiles, cores):
 def work_done(workdir: Path) -> dict:
     """What the part computed: stability panels, convergence curves x step sizes, pendulum macro steps."""
     sys.path.insert(0, str(ROOT / "src"))
-    from icosim.datasets import open_dataset
+    from icosim.io.netcdf import open_dataset
 
     panels = list((workdir / "results/stability").glob("fig*/*.nc"))
     curves = 0

@@ -78,7 +78,7 @@ def main(argv=None):
     sys.path.insert(0, str(ROOT / "src"))
     import numpy as np
 
-    from icosim.datasets import open_dataset
+    from icosim.io.netcdf import open_dataset
 
     workdir = args.keep or Path(tempfile.mkdtemp(prefix="icosim-pendulum-bench-"))
     workdir.mkdir(parents=True, exist_ok=True)

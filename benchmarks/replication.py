@@ -36,7 +36,7 @@ import subprocess
 
 from _workflow import run_workflow, snakemake_binary, tree
 
-from icosim.datasets import open_dataset
+from icosim.io.netcdf import open_dataset
 
 PARTS = (
     ("stability", ["results/report/stability.html"]),

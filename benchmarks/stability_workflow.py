@@ -23,7 +23,7 @@ import json
 
 from _workflow import run_workflow, tree
 
-from icosim.datasets import open_dataset
+from icosim.io.netcdf import open_dataset
 
 TARGET = ["results/report/stability.html"]
 KEYS = ("n_points", "n_high_precision", "n_certified", "n_audited", "n_marginal", "n_overturned")

@@ -29,7 +29,7 @@ from icosim.cli import main
 from icosim.engine.bounds import MAX_DIGITS, MAX_K, time_budget
 from icosim.engine.spectral import spectral_radius, spectral_radius_mp
 from icosim.errors import PointTimeout
-from icosim.integrity import quarantine_corrupt, remove_stale_parts, sidecar, verify
+from icosim.io.integrity import quarantine_corrupt, remove_stale_parts, sidecar, verify
 
 WEIGHTED = ["--method", "weighted", "--a", "1", "--b", "1", "--decomposition", "ff", "--k", "2"]
 ONES = ["--am21", "1", "--alr21", "1", "--ali21", "1"]
@@ -362,8 +362,8 @@ def test_a_huge_grid_is_refused_before_any_allocation(n):
 def test_a_corrupt_dataset_is_refused_and_set_aside_and_stale_temporaries_removed(tmp_path):
     import xarray as xr
 
-    from icosim.datasets import open_dataset, write_netcdf
     from icosim.errors import CorruptDatasetError
+    from icosim.io.netcdf import open_dataset, write_netcdf
 
     path = tmp_path / "results" / "fig9" / "r1_k0_full.nc"
     write_netcdf(xr.Dataset({"rho": ("x", np.arange(4.0))}), path)

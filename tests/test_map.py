@@ -7,8 +7,8 @@ import pytest
 
 from icosim import TestModel, make_method, spectral_radius_float64
 from icosim.cli import main
-from icosim.datasets import open_dataset
 from icosim.engine.spectral import certify_spectral_radius
+from icosim.io.netcdf import open_dataset
 from icosim.maps import boundary_extent, map_specs, marginal_extent, stable_extent
 from icosim.stability.datasets import stability_panel
 

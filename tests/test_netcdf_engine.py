@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from icosim.datasets import ENGINE, open_dataset, provenance_attrs, write_netcdf
+from icosim.io.netcdf import ENGINE, open_dataset, provenance_attrs, write_netcdf
 from icosim.stability.datasets import stability_panel
 from icosim.stability.panels import PanelSpec
 

@@ -321,7 +321,7 @@ def test_bad_input_is_refused_with_the_name():
 
 def test_reference_dataset_keeps_the_naming_contract_after_a_netcdf_round_trip(tmp_path):
     """Other tools read phi1, phi2, g_cax, g_cay, lambda_cax, lambda_cay as data variables over t."""
-    from icosim.datasets import open_dataset, write_netcdf
+    from icosim.io.netcdf import open_dataset, write_netcdf
     from icosim.pendulum.datasets import reference_dataset
     from icosim.pendulum.model import PendulumParameters
 

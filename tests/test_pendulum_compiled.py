@@ -230,7 +230,7 @@ def test_compile_record_lists_what_the_runs_use_in_strict_json():
 
     code = (
         "import json\n"
-        "from icosim.jsonio import dumps\n"
+        "from icosim.io.jsonio import dumps\n"
         "from icosim.pendulum.compiled import compile_kernels\n"
         "print(dumps(compile_kernels()))\n"
     )

@@ -458,7 +458,7 @@ def test_bad_trade_configuration_names_the_key():
 @pytest.fixture(scope="module")
 def small_studies(tmp_path_factory):
     """Every study on a tiny grid, written and read back as NetCDF (as the workflow does)."""
-    from icosim.datasets import open_dataset, write_netcdf
+    from icosim.io.netcdf import open_dataset, write_netcdf
     from icosim.pendulum.adaptive_study import adaptive_study
     from icosim.pendulum.baselines import linear_orders_dataset, monolithic_baselines
     from icosim.pendulum.limits import limits_dataset, limits_group, merge_limits

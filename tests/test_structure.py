@@ -75,7 +75,7 @@ def test_files_hold_one_idea():
 
 def test_claims_machinery_knows_no_part():
     imported = _imports(PACKAGE / "claims.py")
-    assert imported <= {"icosim.errors", "icosim.datasets", "icosim.jsonio"}, imported
+    assert imported <= {"icosim.errors", "icosim.io.netcdf", "icosim.io.jsonio"}, imported
     assert "<" not in (PACKAGE / "claims.py").read_text().split('"""', 2)[2].replace("<=", "")  # no HTML
 
 

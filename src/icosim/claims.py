@@ -42,7 +42,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 from .errors import ParameterError
-from .jsonio import dumps
+from .io.jsonio import dumps
 
 __all__ = [
     "Claim",
@@ -354,7 +354,7 @@ def enforce_references(verdicts, enforce: bool):
 def write_verdicts(verdicts, json_path, tsv_path=None):
     """Every verdict as JSON (``{"claims": [Verdict.as_dict(), ...]}``) and as a TSV table (atomic)."""
 
-    from .datasets import atomic_path
+    from .io.netcdf import atomic_path
 
     records = [v.as_dict() for v in verdicts]
     with atomic_path(json_path) as tmp:

@@ -25,7 +25,7 @@ from .engine.bounds import MAX_BITS_LIMIT, MAX_DIGITS, MAX_GUARD_BITS, MAX_K, MA
 from .engine.decompositions import DECOMPOSITIONS, get_decomposition
 from .engine.schemes import get_scheme
 from .errors import ParameterError
-from .jsonio import dumps
+from .io.jsonio import dumps
 
 __all__ = ["main", "build_parser"]
 

@@ -16,7 +16,7 @@ from .engine.decompositions import DECOMPOSITIONS
 from .engine.schemes import SCHEME_NAMES, get_scheme
 from .engine.spectral.policy import POLICIES
 from .errors import ParameterError
-from .jsonio import dumps
+from .io.jsonio import dumps
 
 __all__ = ["add_parsers", "add_scheme_arguments", "run"]
 

@@ -27,9 +27,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .datasets import provenance_attrs, write_netcdf
 from .engine.decompositions import DECOMPOSITIONS
 from .engine.schemes import get_scheme
+from .io.netcdf import provenance_attrs, write_netcdf
 from .stability.datasets import stability_panel
 from .stability.panels import RATIOS, PanelSpec, grid_axis
 

@@ -37,7 +37,7 @@ from icosim.engine.methods import METHODS  # noqa: E402
 from icosim.engine.methods.schema import with_methods  # noqa: E402
 from icosim.engine.schemes import SCHEMES  # noqa: E402
 from icosim.sources import module_closure, script_closure  # noqa: E402
-from icosim.integrity import quarantine_corrupt, remove_stale_parts  # noqa: E402
+from icosim.io.integrity import quarantine_corrupt, remove_stale_parts  # noqa: E402
 
 # A dataset whose SHA-256 no longer matches the one recorded when it was written is set aside
 # (x.nc -> x.nc.corrupt) before the DAG is built, so this run computes it again instead of trusting it.

@@ -3,7 +3,7 @@ errors for every configuration -> two NetCDF files (thin: icosim.pendulum.baseli
 
 import logging
 
-from icosim.datasets import write_netcdf
+from icosim.io.netcdf import write_netcdf
 from icosim.pendulum.baselines import linear_orders_dataset, monolithic_baselines
 from icosim.pendulum.model import PendulumParameters
 

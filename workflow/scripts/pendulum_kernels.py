@@ -4,7 +4,7 @@
 import json
 import logging
 
-from icosim.integrity import atomic_path
+from icosim.io.integrity import atomic_path
 from icosim.pendulum.compiled import compile_kernels
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")

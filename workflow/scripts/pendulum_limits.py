@@ -3,7 +3,7 @@ linear test model -> NetCDF (thin: icosim.pendulum.limits)."""
 
 import logging
 
-from icosim.datasets import provenance_attrs, write_netcdf
+from icosim.io.netcdf import provenance_attrs, write_netcdf
 from icosim.pendulum.limits import limits_dataset, limits_group
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")

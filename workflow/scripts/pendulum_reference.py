@@ -3,7 +3,7 @@
 import json
 import logging
 
-from icosim.datasets import provenance_attrs, write_netcdf
+from icosim.io.netcdf import provenance_attrs, write_netcdf
 from icosim.pendulum.datasets import reference_dataset
 from icosim.pendulum.model import PendulumParameters
 

@@ -4,7 +4,7 @@
 import json
 import logging
 
-from icosim.datasets import write_netcdf
+from icosim.io.netcdf import write_netcdf
 from icosim.pendulum.datasets import run_job
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")

@@ -4,7 +4,7 @@ spectral radius at the pendulum's point (Sect. 3) per run -> NetCDF (thin: icosi
 import logging
 
 from icosim.checks import load_claims
-from icosim.datasets import open_dataset, write_netcdf
+from icosim.io.netcdf import open_dataset, write_netcdf
 from icosim.pendulum.summary import summary_dataset
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")

@@ -3,7 +3,7 @@
 
 import logging
 
-from icosim.datasets import write_netcdf
+from icosim.io.netcdf import write_netcdf
 from icosim.pendulum.sweep import sweep_group
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")

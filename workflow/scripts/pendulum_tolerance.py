@@ -2,7 +2,7 @@
 
 import logging
 
-from icosim.datasets import write_netcdf
+from icosim.io.netcdf import write_netcdf
 from icosim.pendulum.tolerance import tolerance_study
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")

@@ -3,7 +3,7 @@ linear test model's errors: orders, cheapest scheme per accuracy level (thin: ic
 
 import logging
 
-from icosim.datasets import open_dataset, write_netcdf
+from icosim.io.netcdf import open_dataset, write_netcdf
 from icosim.pendulum.work_precision import work_precision_dataset
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")

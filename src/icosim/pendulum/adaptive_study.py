@@ -16,8 +16,8 @@ import math
 
 import numpy as np
 
-from ..datasets import provenance_attrs
 from ..engine.methods import make_method
+from ..io.netcdf import provenance_attrs
 from .adaptive import run_adaptive
 from .measures import RECORD, angle_errors, check_scheme, config_label, measured_run
 from .model import PendulumParameters

@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-from ..datasets import provenance_attrs
+from ..io.netcdf import provenance_attrs
 from ..radau import radau_batch
 from .measures import angle_errors
 from .model import PendulumParameters

@@ -11,9 +11,9 @@ import time
 
 import numpy as np
 
-from ..datasets import provenance_attrs
 from ..engine.methods import CouplingMethod, make_method, parameter_units
 from ..engine.schemes import get_scheme
+from ..io.netcdf import provenance_attrs
 from .model import PendulumParameters, joint_constraint
 from .names import VARIABLES
 from .reference import Monolithic, reference_solution

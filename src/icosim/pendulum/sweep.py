@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..datasets import provenance_attrs
 from ..engine.methods import make_method
+from ..io.netcdf import provenance_attrs
 from .measures import RECORD, config_label, measured_run
 
 __all__ = ["sweep_group", "records_dataset"]

@@ -21,8 +21,8 @@ import math
 
 import numpy as np
 
-from ..datasets import provenance_attrs
 from ..engine.methods import make_method
+from ..io.netcdf import provenance_attrs
 from .baselines import reference_accuracy
 from .measures import RECORD, check_scheme, config_label, run_record
 from .model import PendulumParameters

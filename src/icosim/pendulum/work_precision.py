@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from ..datasets import provenance_attrs
+from ..io.netcdf import provenance_attrs
 from .orders import error_floor, pendulum_order
 
 __all__ = ["work_precision_dataset", "orders", "cheapest"]

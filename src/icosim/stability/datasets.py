@@ -24,7 +24,7 @@ from ..engine.decompositions import DECOMPOSITIONS
 from ..engine.model import TestModel
 from ..engine.schemes import get_scheme
 from ..engine.spectral.policy import ARITHMETICS, REASONS, VERDICTS, Certification, spectral_radius
-from ..jsonio import dumps
+from ..io.jsonio import dumps
 from .panels import PanelSpec, format_row_label, grid_axis, method_parameters_units
 
 __all__ = ["stability_panel", "LONG_NAMES", "verdict_names"]
@@ -71,7 +71,7 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
     """Compute one panel and return it as an :class:`xarray.Dataset`.
 
     ``provenance`` are extra global attributes (normally
-    :func:`icosim.datasets.provenance_attrs` of the job's configuration).
+    :func:`icosim.io.netcdf.provenance_attrs` of the job's configuration).
     """
     import xarray as xr
 

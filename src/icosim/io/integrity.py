@@ -1,6 +1,6 @@
 """Integrity of the written datasets: a SHA-256 beside each one, corrupt files set aside, stale temporaries removed.
 
-Every dataset ``x.nc`` written by :func:`icosim.datasets.write_netcdf` gets a
+Every dataset ``x.nc`` written by :func:`icosim.io.netcdf.write_netcdf` gets a
 sidecar ``x.nc.sha256`` (``sha256sum`` format) written *before* the dataset is
 renamed into place, so a run killed in between leaves a sidecar that no longer
 matches, never a dataset that looks complete and is not.  Reading a dataset

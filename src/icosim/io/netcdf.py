@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import CorruptDatasetError
+from ..errors import CorruptDatasetError
 from .integrity import atomic_path, verify, write_checksum
 
 __all__ = ["provenance_attrs", "config_json", "write_netcdf", "atomic_path", "open_dataset"]
@@ -40,7 +40,7 @@ def _jsonable(o):
 
 def provenance_attrs(config, *, title: str, command: str = "") -> dict:
     """Global attributes: CF conventions, history, source, config JSON and SHA-256."""
-    from . import __version__
+    from .. import __version__
 
     cfg = config_json(config)
     now = _dt.datetime.now(_dt.UTC).replace(microsecond=0).isoformat()
@@ -64,7 +64,7 @@ ENGINE = "netcdf4"
 
 def write_netcdf(ds, path):
     """Write an :class:`xarray.Dataset` to ``path`` atomically (NetCDF-4, :data:`ENGINE`), with its SHA-256
-    recorded beside it (``path.sha256``, written before the rename: :mod:`icosim.integrity`)."""
+    recorded beside it (``path.sha256``, written before the rename: :mod:`icosim.io.integrity`)."""
 
     with atomic_path(path) as tmp:
         ds.to_netcdf(tmp, engine=ENGINE)
