@@ -59,15 +59,15 @@ def provenance_attrs(config, *, title: str, command: str = "") -> dict:
 #: The NetCDF library: netCDF4 (Unidata's netCDF-C), as the design names it; 5-8x faster than h5netcdf
 #: on the project's datasets with files of the same size (``benchmarks/netcdf_engines.py``), and
 #: either engine reads the other's files (NetCDF-4/HDF5 both).
-ENGINE = "netcdf4"
+NETCDF_ENGINE = "netcdf4"
 
 
 def write_netcdf(ds, path):
-    """Write an :class:`xarray.Dataset` to ``path`` atomically (NetCDF-4, :data:`ENGINE`), with its SHA-256
+    """Write an :class:`xarray.Dataset` to ``path`` atomically (NetCDF-4, :data:`NETCDF_ENGINE`), with its SHA-256
     recorded beside it (``path.sha256``, written before the rename: :mod:`icosim.io.integrity`)."""
 
     with atomic_path(path) as tmp:
-        ds.to_netcdf(tmp, engine=ENGINE)
+        ds.to_netcdf(tmp, engine=NETCDF_ENGINE)
         write_checksum(tmp, path)
 
 
@@ -81,5 +81,5 @@ def open_dataset(path):
             f"{path}: its SHA-256 does not match {Path(path).name}.sha256 (changed or damaged since it was written); "
             "run snakemake again to recompute it"
         )
-    with xr.open_dataset(path, engine=ENGINE) as ds:
+    with xr.open_dataset(path, engine=NETCDF_ENGINE) as ds:
         return ds.load()
