@@ -1,4 +1,4 @@
-"""The claim machinery (icosim.claims) and the stability claims file.
+"""The claim machinery (icosim.claims.core) and the stability claims file.
 
 Synthetic panels with a known stable region test each check kind's pass /
 fail / undecided logic; one real coarse panel computed with the engine checks
@@ -12,8 +12,8 @@ import pytest
 import xarray as xr
 import yaml
 
-from icosim.checks import CHECKS, evaluate, evaluate_claim, load_claims, parse_claims
-from icosim.claims import enforce_references, read_verdicts, reference_mismatches, select, write_verdicts
+from icosim.claims.core import enforce_references, read_verdicts, reference_mismatches, select, write_verdicts
+from icosim.claims.registry import CHECKS, evaluate, evaluate_claim, load_claims, parse_claims
 from icosim.errors import ParameterError
 from icosim.report.claims import claims_table
 from icosim.stability.checks import grid_resolution, stable_share

@@ -11,7 +11,7 @@ from helpers import validate_config
 import icosim
 import icosim.convergence.experiment
 import icosim.convergence.work_precision
-from icosim.checks import load_claims, parse_claims
+from icosim.claims.registry import load_claims, parse_claims
 from icosim.convergence.config import check_claims_against_config, study_from_config
 from icosim.convergence.datasets import run_panel
 from icosim.convergence.experiment import Setup, dimensional_method, method_attrs, oscillation_summary, step_counts

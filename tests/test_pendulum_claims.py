@@ -17,7 +17,7 @@ from helpers import validate_config
 
 import icosim.pendulum.problem
 from icosim import make_method
-from icosim.checks import evaluate_claim, load_claims, parse_claims
+from icosim.claims.registry import evaluate_claim, load_claims, parse_claims
 from icosim.pendulum.checks import expected_outcome
 from icosim.pendulum.config import configured_runs
 from icosim.pendulum.datasets import reference_dataset, run_dataset

@@ -6,7 +6,7 @@ import pytest
 import xarray as xr
 
 from icosim import TestModel, make_method
-from icosim.checks import evaluate_claim, parse_claims
+from icosim.claims.registry import evaluate_claim, parse_claims
 from icosim.engine.spectral.matrix import amplification_matrix
 from icosim.engine.spectral.policy import VERDICTS
 from icosim.errors import ParameterError

@@ -4,7 +4,7 @@
 # against the datasets, and the convergence section of the report.  A figure computed with a
 # Gauss-Seidel scheme (its `schemes:` list) has the figure id <figure>gs12 or <figure>gs21
 # (icosim.engine.schemes.figure_id); its claims and report section are in gauss_seidel.smk.
-from icosim.checks import load_claims  # noqa: E402
+from icosim.claims.registry import load_claims  # noqa: E402
 from icosim.convergence.config import (
     check_claims_against_config,
     study_from_config,

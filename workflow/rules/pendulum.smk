@@ -2,7 +2,7 @@
 # job per (method, decomposition) writing results/pendulum/<method>_<dec>_k<k>.nc per k, the
 # errors and the claim of Sect. 4 in results/pendulum/summary.nc, one figure per k, and
 # the pendulum section of the report.
-from icosim.checks import load_claims  # noqa: E402
+from icosim.claims.registry import load_claims  # noqa: E402
 from icosim.pendulum.config import (  # noqa: E402
     configured_runs,
     run_settings,

@@ -2,7 +2,7 @@
 
 import logging
 
-from icosim.claims import read_verdicts
+from icosim.claims.core import read_verdicts
 from icosim.io.netcdf import atomic_path, open_dataset
 from icosim.report.convergence import convergence_section
 

@@ -2,7 +2,7 @@
 
 import logging
 
-from icosim.claims import read_verdicts
+from icosim.claims.core import read_verdicts
 from icosim.convergence.curves import curves
 from icosim.io.netcdf import atomic_path, open_dataset
 from icosim.report.gauss_seidel import gauss_seidel_section

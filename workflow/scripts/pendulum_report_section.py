@@ -3,7 +3,7 @@
 import logging
 from pathlib import Path
 
-from icosim.claims import read_verdicts
+from icosim.claims.core import read_verdicts
 from icosim.io.netcdf import atomic_path, open_dataset
 from icosim.report.pendulum import pendulum_section, trade_section
 

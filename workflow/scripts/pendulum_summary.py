@@ -3,7 +3,7 @@ spectral radius at the pendulum's point (Sect. 3) per run -> NetCDF (thin: icosi
 
 import logging
 
-from icosim.checks import load_claims
+from icosim.claims.registry import load_claims
 from icosim.io.netcdf import open_dataset, write_netcdf
 from icosim.pendulum.summary import summary_dataset
 

@@ -3,7 +3,7 @@
 import logging
 from pathlib import Path
 
-from icosim.claims import read_verdicts
+from icosim.claims.core import read_verdicts
 from icosim.io.netcdf import atomic_path
 from icosim.report.page import git_commit_text, report_page, utc_now
 

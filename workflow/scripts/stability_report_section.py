@@ -2,7 +2,7 @@
 
 import logging
 
-from icosim.claims import read_verdicts, verdict_counts
+from icosim.claims.core import read_verdicts, verdict_counts
 from icosim.io.netcdf import atomic_path, open_dataset
 from icosim.report.stability import stability_section
 

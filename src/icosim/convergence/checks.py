@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..claims import CheckKind, Outcome, combine_holds, matches
+from ..claims.core import CheckKind, Outcome, combine_holds, matches
 from ..engine.methods import parameters
 from ..errors import ParameterError
 from .curves import curve_label, curves, stable_span
@@ -137,5 +137,5 @@ def _describe(r) -> str:
     return head + what + f" -> {r['verdict']}"
 
 
-#: The convergence check kinds (collected by :mod:`icosim.checks`).
+#: The convergence check kinds (collected by :mod:`icosim.claims.registry`).
 CHECKS = {"convergence_order": CheckKind(check_convergence_order, _validate_order_check, selectors=("select",))}

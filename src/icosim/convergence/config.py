@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..claims import matches
+from ..claims.core import matches
 from ..engine.methods import get_spec
 from ..engine.model import PhysicalModel
 from ..errors import ParameterError

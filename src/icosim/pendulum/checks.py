@@ -9,7 +9,7 @@
 
 from __future__ import annotations
 
-from ..claims import CheckKind, Outcome, combine_holds
+from ..claims.core import CheckKind, Outcome, combine_holds
 from ..engine.schemes import get_scheme
 from ..errors import ParameterError
 from .names import run_name
@@ -98,5 +98,5 @@ def check_pendulum_stability(datasets, *, default: str, exceptions: list | None 
     return Outcome(combine_holds(holds), text, {"runs": numbers, "not_run": missing})
 
 
-#: The pendulum's check kinds (collected by :mod:`icosim.checks`).
+#: The pendulum's check kinds (collected by :mod:`icosim.claims.registry`).
 CHECKS = {"pendulum_stability": CheckKind(check_pendulum_stability, _validate_stability_check)}

@@ -21,7 +21,7 @@ def summarize(runs: list, reference, claims: list, rho_test_model: dict | None =
     """One row per run: status, errors against the reference, claim expectation and verdict.
 
     ``runs`` are run datasets, ``reference`` the monolithic one, ``claims`` the
-    :class:`~icosim.claims.Claim` list of ``config/claims/pendulum.yaml`` (each
+    :class:`~icosim.claims.core.Claim` list of ``config/claims/pendulum.yaml`` (each
     ``pendulum_stability`` claim adds ``expected_<id>`` and ``verdict_<id>``, ``n/a`` for the runs
     of another coupling scheme than the claim's).  Errors are maxima over the
     computed part of the run (up to divergence or failure).  A run is observed

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..claims import verdict_counts
+from ..claims.core import verdict_counts
 from ..convergence.experiment import Setup, oscillation_summary, step_counts
 from ..convergence.work_precision import fastest_schemes
 from . import html as rp

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..claims import CheckKind, Outcome, combine_holds, select
+from ..claims.core import CheckKind, Outcome, combine_holds, select
 from ..engine.spectral.policy import VERDICTS
 from ..errors import ParameterError
 from .pointwise import RELATIONS, check_pointwise, validate_pointwise
@@ -330,7 +330,7 @@ def _validate_compare(label: str, params: dict):
         raise ParameterError(f"{label}: check (compare) with relation 'similar' needs `within`")
 
 
-#: The stability check kinds (collected by :mod:`icosim.checks`).
+#: The stability check kinds (collected by :mod:`icosim.claims.registry`).
 CHECKS = {
     "stable_fraction": CheckKind(
         check_stable_fraction, validate_region, choices={"op": ("==", ">=", "<=", ">", "<")}, selectors=("select",)

@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..claims import Outcome, combine_holds, select
+from ..claims.core import Outcome, combine_holds, select
 from ..engine.spectral.policy import VERDICTS
 from ..errors import ParameterError
 from .regions import region_mask, validate_region, verdict_masks

@@ -22,7 +22,7 @@ value (or list of values) matched against ``ds.attrs``.
 This module knows no part: each part defines its check kinds in its
 ``checks`` module (:mod:`icosim.stability.checks`,
 :mod:`icosim.convergence.checks`, :mod:`icosim.pendulum.checks`), and the
-registry :mod:`icosim.checks` collects them into one table and binds
+registry :mod:`icosim.claims.registry` collects them into one table and binds
 :func:`parse_claims`, :func:`load_claims` and :func:`evaluate` to it.
 :func:`write_verdicts` writes JSON and TSV, :func:`enforce_references` fails a
 CI run whose ``ci: true`` claims do not reproduce their ``reference``.
@@ -41,8 +41,8 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
-from .errors import ParameterError
-from .io.jsonio import dumps
+from ..errors import ParameterError
+from ..io.jsonio import dumps
 
 __all__ = [
     "Claim",
@@ -354,7 +354,7 @@ def enforce_references(verdicts, enforce: bool):
 def write_verdicts(verdicts, json_path, tsv_path=None):
     """Every verdict as JSON (``{"claims": [Verdict.as_dict(), ...]}``) and as a TSV table (atomic)."""
 
-    from .io.netcdf import atomic_path
+    from ..io.netcdf import atomic_path
 
     records = [v.as_dict() for v in verdicts]
     with atomic_path(json_path) as tmp:

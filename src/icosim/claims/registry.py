@@ -2,7 +2,7 @@
 
 Each part defines its kinds in its own ``checks`` module; this registry imports
 them all (as scipy's ``solve_ivp`` keeps its ``METHODS`` table), so the generic
-machinery in :mod:`icosim.claims` needs to import no part and no part needs to
+machinery in :mod:`icosim.claims.core` needs to import no part and no part needs to
 register itself.
 
 ================================  ==========================================================
@@ -19,25 +19,25 @@ module                            check kinds
 
 from __future__ import annotations
 
-from . import claims as _claims
-from .claims import Claim, Verdict
-from .convergence import checks as _convergence
-from .pendulum import checks as _pendulum
-from .stability import checks as _stability
+from ..convergence import checks as _convergence
+from ..pendulum import checks as _pendulum
+from ..stability import checks as _stability
+from . import core as _claims
+from .core import Claim, Verdict
 
 __all__ = ["CHECKS", "parse_claims", "load_claims", "evaluate_claim", "evaluate"]
 
-#: check kind -> :class:`icosim.claims.CheckKind`, for every part.
+#: check kind -> :class:`icosim.claims.core.CheckKind`, for every part.
 CHECKS = {**_stability.CHECKS, **_convergence.CHECKS, **_pendulum.CHECKS}
 
 
 def parse_claims(items, *, where: str = "claims") -> list[Claim]:
-    """:func:`icosim.claims.parse_claims` with every part's check kinds."""
+    """:func:`icosim.claims.core.parse_claims` with every part's check kinds."""
     return _claims.parse_claims(items, CHECKS, where=where)
 
 
 def load_claims(path, key: str = "claims") -> list[Claim]:
-    """:func:`icosim.claims.load_claims` with every part's check kinds."""
+    """:func:`icosim.claims.core.load_claims` with every part's check kinds."""
     return _claims.load_claims(path, CHECKS, key=key)
 
 
@@ -46,5 +46,5 @@ def evaluate_claim(claim: Claim, datasets) -> Verdict:
 
 
 def evaluate(claims, datasets) -> list[Verdict]:
-    """One :class:`~icosim.claims.Verdict` per claim, with every part's check kinds."""
+    """One :class:`~icosim.claims.core.Verdict` per claim, with every part's check kinds."""
     return _claims.evaluate(claims, datasets, CHECKS)
