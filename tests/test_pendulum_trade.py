@@ -15,6 +15,7 @@ import yaml
 from helpers import ROOT, validate_config
 
 from icosim import ParameterError, make_method
+from icosim.control.controller import StepController, pc_estimate
 from icosim.engine.lagrange import (
     corrector_nodes,
     lagrange_coefficients,
@@ -27,7 +28,6 @@ from icosim.engine.lagrange import (
 )
 from icosim.engine.macrostep import macro_step
 from icosim.pendulum import runs as runs_module
-from icosim.pendulum.adaptive import StepController, pc_estimate, run_adaptive
 from icosim.pendulum.adaptive_study import fixed_at_error
 from icosim.pendulum.config import trade_plan
 from icosim.pendulum.limits import stability_limit
@@ -36,7 +36,7 @@ from icosim.pendulum.model import PendulumParameters
 from icosim.pendulum.orders import decade_order, error_floor, pendulum_order
 from icosim.pendulum.problem import PendulumCosimulation
 from icosim.pendulum.reference import consistent_history, reference_solution
-from icosim.pendulum.runs import run_cosimulation
+from icosim.pendulum.runs import run_adaptive, run_cosimulation
 
 P = PendulumParameters()
 CFG = yaml.safe_load((ROOT / "config" / "pendulum.yaml").read_text())["pendulum"]

@@ -18,10 +18,10 @@ import numpy as np
 
 from ..engine.methods import make_method
 from ..io.netcdf import provenance_attrs
-from .adaptive import run_adaptive
 from .measures import RECORD, angle_errors, check_scheme, config_label, measured_run
 from .model import PendulumParameters
 from .reference import reference_solution
+from .runs import run_adaptive
 
 __all__ = ["adaptive_record", "fixed_at_error", "adaptive_study", "equal_error_table"]
 
@@ -80,7 +80,7 @@ def adaptive_study(settings: dict, study: dict, *, reference: dict, command: str
     """Adaptive and fixed-H runs of every configuration of ``study`` -> the ``adaptive.nc`` dataset.
 
     ``study``: ``t_end``, ``drift_tol``, ``H0``, ``controller`` (settings of
-    :class:`~.adaptive.StepController`), ``H_fixed`` (list) and
+    :class:`~icosim.control.controller.StepController`), ``H_fixed`` (list) and
     ``configurations`` (each ``method``, ``decomposition``, ``k``, ``tol``
     list, optional ``scheme``).
     """

@@ -265,7 +265,7 @@ class PendulumCosimulation(CosimulationProblem):
     def constraint(self, state):
         return joint_constraint(self.params, state)
 
-    # -- variable macro steps (icosim.pendulum.adaptive) ----------------------------------
+    # -- variable macro steps (icosim.control.driver) ------------------------------------
     def set_macro_step(self, H: float, past_steps=None):
         """Size ``H`` of the next macro step and the sizes ``H_N-1, ..., H_N-k`` of the past ones.
 
