@@ -19,13 +19,13 @@ from icosim import ParameterError, make_method
 from icosim.engine.macrostep import macro_step
 from icosim.errors import StepFailure
 from icosim.pendulum.config import configured_runs
+from icosim.pendulum.integrator.radau import MU_REAL, IntegrationError, radau_batch
 from icosim.pendulum.links import Link1, Link2
+from icosim.pendulum.manifold import ProjectionError, _constraint_jacobian, project_state
 from icosim.pendulum.model import PendulumParameters, joint_constraint
 from icosim.pendulum.problem import PendulumCosimulation
-from icosim.pendulum.projection import ProjectionError, _constraint_jacobian, project_state
 from icosim.pendulum.reference import Monolithic, consistent_history, reference_solution
 from icosim.pendulum.runs import run_cosimulation
-from icosim.radau import MU_REAL, IntegrationError, radau_batch
 
 P = PendulumParameters()
 H = 1e-3

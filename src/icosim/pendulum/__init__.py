@@ -12,7 +12,8 @@ module                      holds
 :mod:`.model`               parameters, joint points and the joint constraint
 :mod:`.links`               the two links as subsystems (force or kinematically driven)
 :mod:`.problem`             :class:`~.problem.PendulumCosimulation`, the problem
-:mod:`.projection`          the mass-weighted projection (step 4)
+:mod:`.manifold`            the mass-weighted projection onto the constraint (step 4)
+:mod:`.integrator`          the links' integrator: batched Radau IIA, compiled with numba
 :mod:`.reference`           the monolithic model, reference solution, consistent history
 :mod:`.runs`                a whole run up to the end time, divergence or failure
 :mod:`.names`               names of runs, series and coupling variables

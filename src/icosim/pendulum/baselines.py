@@ -3,7 +3,7 @@ test model's errors over H for every configuration (for the orders).
 
 * :func:`monolithic_baselines` -- the monolithic pendulum (minimal
   coordinates, :class:`~.reference.Monolithic`) over tolerances with the
-  links' integrator (Radau IIA, :func:`icosim.radau.radau_batch`, one call
+  links' integrator (Radau IIA, :func:`icosim.pendulum.integrator.radau.radau_batch`, one call
   over ``[0, T]``) and with scipy's DOP853; error at the integrator's own
   accepted steps (as a co-simulation's at its macro nodes), CPU seconds the
   least of ``repeats`` runs after a warm-up.
@@ -19,7 +19,7 @@ import time
 import numpy as np
 
 from ..io.netcdf import provenance_attrs
-from ..radau import radau_batch
+from .integrator.radau import radau_batch
 from .measures import angle_errors
 from .model import PendulumParameters
 from .reference import Monolithic, reference_solution
@@ -129,7 +129,7 @@ def monolithic_baselines(
     attrs = provenance_attrs(job, title="Double pendulum: monolithic baselines", command=command)
     attrs.update(
         t_end=float(t_end),
-        radau="icosim.radau.radau_batch (the links' integrator)",
+        radau="icosim.pendulum.integrator.radau.radau_batch (the links' integrator)",
         dop853="scipy solve_ivp",
         reference_method=reference["method"],
         reference_rtol=float(reference["rtol"]),

@@ -155,7 +155,7 @@ def run_job(job: dict, *, command: str = ""):
     settings = {
         "H": job["H"],
         "t_end": job["t_end"],
-        "integrator": "Radau IIA (3 stages, order 5), icosim.radau, batched",
+        "integrator": "Radau IIA (3 stages, order 5), icosim.pendulum.integrator.radau, batched",
         "rtol": integ["rtol"],
         "atol": integ["atol"],
         "newton_tol": integ["newton_tol"],

@@ -1,7 +1,7 @@
 """The double pendulum split into link 1 and link 2, as the macro step sees it (docs/pendulum.md).
 
-Each link is integrated over a macro step by Radau IIA (:mod:`icosim.radau`,
-compiled for the links in :mod:`icosim.pendulum.compiled`); the sensitivities
+Each link is integrated over a macro step by Radau IIA (:mod:`icosim.pendulum.integrator.radau`,
+compiled for the links in :mod:`icosim.pendulum.integrator.compiled`); the sensitivities
 of the coupling conditions are forward differences, integrated in one batch
 with the predictor.
 """
@@ -25,12 +25,12 @@ from ..engine.lagrange import (
 )
 from ..engine.problem import CosimulationProblem
 from ..errors import ParameterError
-from ..radau import _fd_jacobian, radau_batch
-from .compiled import CompiledLink
+from .integrator.compiled import CompiledLink
+from .integrator.radau import _fd_jacobian, radau_batch
 from .links import Link1, Link2
+from .manifold import project_state
 from .model import PendulumParameters, joint_constraint
 from .names import COUPLING_VARIABLES
-from .projection import project_state
 
 __all__ = ["PendulumCosimulation"]
 
@@ -55,8 +55,8 @@ class PendulumCosimulation(CosimulationProblem):
     multiplier for a kinematically driven one).
     """
 
-    #: Integrate the links with the compiled transcription of icosim.radau (:mod:`.compiled`);
-    #: False: with :func:`icosim.radau.radau_batch` on the links' closures (the reference, for comparisons).
+    #: Integrate the links with the compiled transcription of icosim.pendulum.integrator.radau (:mod:`.integrator.compiled`);
+    #: False: with :func:`icosim.pendulum.integrator.radau.radau_batch` on the links' closures (the reference, for comparisons).
     compiled = True
 
     def __init__(

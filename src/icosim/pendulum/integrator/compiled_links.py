@@ -1,4 +1,4 @@
-"""The links' right-hand sides compiled with numba (:mod:`icosim.pendulum.compiled` integrates them).
+"""The links' right-hand sides compiled with numba (:mod:`icosim.pendulum.integrator.compiled` integrates them).
 
 The same expressions, in the same order, as :class:`~icosim.pendulum.links.Link1`
 and :class:`~icosim.pendulum.links.Link2` (force-driven or kinematically driven),
@@ -13,7 +13,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from .links import Link1
+from ..links import Link1
 
 __all__ = ["FORCE", "KINEMATIC", "link_parameters", "batch_rhs", "member_rhs"]
 

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import StepFailure
+from ...errors import StepFailure
 
 __all__ = ["radau_batch", "RadauResult", "IntegrationError"]
 

@@ -1,4 +1,4 @@
-"""numba's disk cache of the compiled integrator (:mod:`icosim.pendulum.compiled`): kept valid, and filled once.
+"""numba's disk cache of the compiled integrator (:mod:`icosim.pendulum.integrator.compiled`): kept valid, and filled once.
 
 * numba keys a cached kernel on the time stamp of the file that defines it only, so after an edit of
   a file the kernels inline (``compiled_links.py``, ``compiled_algebra.py``) or take constants from
@@ -21,15 +21,16 @@ from pathlib import Path
 
 __all__ = ["KERNEL_SOURCES", "drop_stale_cache", "compile_record"]
 
-#: Sources compiled into the kernels of ``compiled.py`` besides itself, relative to the package root.
-KERNEL_SOURCES = ("pendulum/compiled_links.py", "pendulum/compiled_algebra.py", "radau.py")
+#: Sources compiled into the kernels of ``compiled.py`` besides itself, relative to its package
+#: (:mod:`icosim.pendulum.integrator`).
+KERNEL_SOURCES = ("compiled_links.py", "compiled_algebra.py", "radau.py")
 
 
 def drop_stale_cache() -> bool:
     """Remove the cache of ``compiled.*`` if a file in KERNEL_SOURCES changed since it was written;
     returns whether it did (also when there was no record yet)."""
     here = Path(__file__)
-    root = here.parents[1]
+    root = here.parent
     cache = here.parent / "__pycache__"
     digest = hashlib.sha256(b"".join((root / name).read_bytes() for name in KERNEL_SOURCES)).hexdigest()
     record = cache / "compiled.sources"

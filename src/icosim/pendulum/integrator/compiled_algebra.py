@@ -1,4 +1,4 @@
-"""Small dense algebra for the compiled integrator (:mod:`icosim.pendulum.compiled`), as numba loops.
+"""Small dense algebra for the compiled integrator (:mod:`icosim.pendulum.integrator.compiled`), as numba loops.
 
 Matrices of order n <= 6 (the links' Newton matrices), so plain loops: numba's LAPACK bindings
 (``np.linalg.solve``) would cost about 10 CPU-s of compilation in every process that finds no

@@ -1,23 +1,23 @@
-"""The links' integrator compiled with numba: a transcription of :mod:`icosim.radau` for the two links.
+"""The links' integrator compiled with numba: a transcription of :mod:`icosim.pendulum.integrator.radau` for the two links.
 
 Why: every macro step integrates each link about twice (predictor batch with
-the sensitivities, corrector) with :func:`icosim.radau.radau_batch`, on a batch
+the sensitivities, corrector) with :func:`icosim.pendulum.integrator.radau.radau_batch`, on a batch
 of ``B <= 5`` systems of size 2 (link 1) or 6 (link 2).  On arrays that small
 numpy's per-call overhead is nearly all of the cost (about 1.6 ms per macro
 step).  This module is the *same algorithm* written as loops over scalars and
 compiled (``numba.njit(cache=True)``):
 
-* the right-hand sides of the links (:mod:`icosim.pendulum.compiled_links`);
+* the right-hand sides of the links (:mod:`icosim.pendulum.integrator.compiled_links`);
 * ``radau_batch`` with ``_collocation``, ``_fd_jacobian`` and
   ``_predict_factor`` line by line: the same constants (imported from
-  :mod:`icosim.radau`), simplified Newton in lockstep over the batch, error
+  :mod:`icosim.pendulum.integrator.radau`), simplified Newton in lockstep over the batch, error
   norm (largest RMS over the members), step-size controller, ``jac0``
   handling, counters and error conditions (a status code here, raised as
-  :class:`~icosim.radau.IntegrationError` with the same message by the Python
+  :class:`~icosim.pendulum.integrator.radau.IntegrationError` with the same message by the Python
   wrapper).
 
 Results agree with the numpy path up to round-off, not bitwise: the matrix
-inverses are an LU solve written out (:mod:`~icosim.pendulum.compiled_algebra`,
+inverses are an LU solve written out (:mod:`~icosim.pendulum.integrator.compiled_algebra`,
 where numpy calls LAPACK ``gesv``), ``cos``/``sin`` may come from another library, and
 sums over a state's components run in index order here while numpy's einsum
 sums contiguous axes in a CPU-dependent order.  Sums over the three stages are
@@ -34,7 +34,11 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..radau import (
+from ..links import Link1
+from .compiled_algebra import all_finite, inverse, matvec, nan_maximum
+from .compiled_links import FORCE, KINEMATIC, batch_rhs, link_parameters, member_rhs
+from .kernel_cache import compile_record, drop_stale_cache
+from .radau import (
     EPS,
     MAX_FACTOR,
     MIN_FACTOR,
@@ -48,10 +52,6 @@ from ..radau import (
     RadauResult,
     T,
 )
-from .compiled_algebra import all_finite, inverse, matvec, nan_maximum
-from .compiled_links import FORCE, KINEMATIC, batch_rhs, link_parameters, member_rhs
-from .kernel_cache import compile_record, drop_stale_cache
-from .links import Link1
 
 __all__ = ["CompiledLink", "warm_up", "compile_kernels"]
 
@@ -65,7 +65,7 @@ _MU_COMPLEX_RE, _MU_COMPLEX_IM = MU_COMPLEX.real, MU_COMPLEX.imag
 _TI_REAL, _TI_COMPLEX_RE, _TI_COMPLEX_IM = TI[0].copy(), TI[1].copy(), TI[2].copy()
 
 
-# -- icosim.radau, transcribed ---------------------------------------------------------
+# -- icosim.pendulum.integrator.radau, transcribed ---------------------------------------------------------
 @numba.njit(cache=True)
 def _fd_jacobian(link, kind, par, H, coef, t, y, f, J):
     """``J[b] = d fun / d y`` at ``(t, y[b])`` by forward differences (radau._fd_jacobian)."""
@@ -344,7 +344,7 @@ def warm_up() -> None:
 
 
 def compile_kernels() -> dict:
-    """:func:`warm_up` and its record (:func:`~icosim.pendulum.kernel_cache.compile_record`)."""
+    """:func:`warm_up` and its record (:func:`~icosim.pendulum.integrator.kernel_cache.compile_record`)."""
     return compile_record(warm_up, {"_jacobian": _jacobian, "_radau": _radau})
 
 
