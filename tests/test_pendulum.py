@@ -322,8 +322,8 @@ def test_bad_input_is_refused_with_the_name():
 def test_reference_dataset_keeps_the_naming_contract_after_a_netcdf_round_trip(tmp_path):
     """Other tools read phi1, phi2, g_cax, g_cay, lambda_cax, lambda_cay as data variables over t."""
     from icosim.io.netcdf import open_dataset, write_netcdf
-    from icosim.pendulum.datasets import reference_dataset
     from icosim.pendulum.model import PendulumParameters
+    from icosim.pendulum.replication.datasets import reference_dataset
 
     ds = reference_dataset(PendulumParameters(), 1e-3, 0.01, {"title": "test"})
     write_netcdf(ds, tmp_path / "reference.nc")

@@ -18,14 +18,14 @@ from helpers import validate_config
 import icosim.pendulum.problem
 from icosim import make_method
 from icosim.claims.registry import evaluate_claim, load_claims, parse_claims
-from icosim.pendulum.checks import expected_outcome
 from icosim.pendulum.config import configured_runs
-from icosim.pendulum.datasets import reference_dataset, run_dataset
 from icosim.pendulum.integrator.radau import IntegrationError
 from icosim.pendulum.linearised import linear_test_model_rho, pendulum_test_model
 from icosim.pendulum.model import PendulumParameters
+from icosim.pendulum.replication.checks import expected_outcome
+from icosim.pendulum.replication.datasets import reference_dataset, run_dataset
+from icosim.pendulum.replication.summary import summarize
 from icosim.pendulum.runs import run_cosimulation
-from icosim.pendulum.summary import summarize
 
 ROOT = Path(__file__).resolve().parents[1]
 CFG = yaml.safe_load((ROOT / "config" / "pendulum.yaml").read_text())["pendulum"]

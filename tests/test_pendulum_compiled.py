@@ -16,10 +16,10 @@ from icosim.pendulum.integrator.compiled import CompiledLink
 from icosim.pendulum.integrator.compiled_algebra import all_finite, inverse, nan_maximum
 from icosim.pendulum.integrator.radau import IntegrationError, _fd_jacobian, radau_batch
 from icosim.pendulum.links import Link1, Link2
-from icosim.pendulum.measures import check_scheme
 from icosim.pendulum.model import PendulumParameters
 from icosim.pendulum.problem import PendulumCosimulation
 from icosim.pendulum.runs import run_cosimulation
+from icosim.pendulum.trade.measures import check_scheme
 
 P = PendulumParameters()
 STATE = P.initial_state()

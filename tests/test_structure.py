@@ -113,7 +113,7 @@ def test_library_inputs_cover_what_a_script_loads(script):
 
 def test_stability_claims_do_not_rest_on_the_pendulum_problem():
     files = {p.relative_to(SRC).as_posix() for p in script_closure(ROOT / "workflow/scripts/claims.py", SRC)}
-    assert "icosim/stability/checks.py" in files and "icosim/pendulum/checks.py" in files
+    assert "icosim/stability/checks.py" in files and "icosim/pendulum/replication/checks.py" in files
     assert not {"icosim/pendulum/problem.py", "icosim/pendulum/runs.py", "icosim/convergence/study.py"} & files
     assert "icosim/pendulum/integrator/radau.py" not in {
         p.relative_to(SRC).as_posix() for p in module_closure(["icosim.claims.registry"], SRC)
@@ -175,4 +175,4 @@ def test_the_package_loads_its_public_names_lazily_and_lists_them_for_the_workfl
         "icosim/engine/methods/__init__.py",
     }
     assert engine <= {p.relative_to(SRC).as_posix() for p in module_closure(["icosim.pendulum.names"], SRC)}
-    assert _loaded_after("import icosim.pendulum.measures", {"scipy.linalg", "mpmath"}) == []
+    assert _loaded_after("import icosim.pendulum.trade.measures", {"scipy.linalg", "mpmath"}) == []

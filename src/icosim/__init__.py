@@ -17,7 +17,7 @@ with a coupling method of the registry :mod:`icosim.engine.methods`.
 from typing import TYPE_CHECKING
 
 # The public names are loaded on first use (PEP 562): a Snakemake job importing, say,
-# icosim.pendulum.sweep starts without the linear model, scipy.linalg and mpmath.
+# icosim.pendulum.trade.sweep starts without the linear model, scipy.linalg and mpmath.
 # The imports below are never executed; they are what type checkers and icosim.sources
 # read (every job that imports icosim still lists the whole engine as its input).
 if TYPE_CHECKING:

@@ -2,7 +2,7 @@
 
 Shared by the studies that fit orders: the convergence study of the linear model
 (:mod:`icosim.convergence.datasets`) and the pendulum's speed-accuracy study
-(:mod:`icosim.pendulum.orders`, which adds its error floor), so neither imports the other.
+(:mod:`icosim.pendulum.trade.orders`, which adds its error floor), so neither imports the other.
 
 An order of convergence is a statement about ``H -> 0``.  With floor-free
 errors (:mod:`icosim.convergence.errors`) the smallest step sizes are the best

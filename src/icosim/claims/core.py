@@ -21,7 +21,7 @@ value (or list of values) matched against ``ds.attrs``.
 
 This module knows no part: each part defines its check kinds in its
 ``checks`` module (:mod:`icosim.stability.checks`,
-:mod:`icosim.convergence.checks`, :mod:`icosim.pendulum.checks`), and the
+:mod:`icosim.convergence.checks`, :mod:`icosim.pendulum.replication.checks`), and the
 registry :mod:`icosim.claims.registry` collects them into one table and binds
 :func:`parse_claims`, :func:`load_claims` and :func:`evaluate` to it.
 :func:`write_verdicts` writes JSON and TSV, :func:`enforce_references` fails a

@@ -10,7 +10,7 @@ module                            check kinds
 ================================  ==========================================================
 :mod:`icosim.stability.checks`    ``stable_fraction``, ``compare``, ``trend``, ``pointwise``
 :mod:`icosim.convergence.checks`  ``convergence_order``
-:mod:`icosim.pendulum.checks`     ``pendulum_stability``
+:mod:`icosim.pendulum.replication.checks`     ``pendulum_stability``
 ================================  ==========================================================
 
 >>> sorted(CHECKS)
@@ -20,7 +20,7 @@ module                            check kinds
 from __future__ import annotations
 
 from ..convergence import checks as _convergence
-from ..pendulum import checks as _pendulum
+from ..pendulum.replication import checks as _pendulum
 from ..stability import checks as _stability
 from . import core as _claims
 from .core import Claim, Verdict

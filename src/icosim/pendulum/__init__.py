@@ -15,13 +15,20 @@ module                      holds
 :mod:`.manifold`            the mass-weighted projection onto the constraint (step 4)
 :mod:`.integrator`          the links' integrator: batched Radau IIA, compiled with numba
 :mod:`.reference`           the monolithic model, reference solution, consistent history
-:mod:`.runs`                a whole run up to the end time, divergence or failure
-:mod:`.names`               names of runs, series and coupling variables
-:mod:`.datasets`            run and reference datasets (NetCDF contract)
 :mod:`.linearised`          the pendulum's point in the linear test model (Sect. 3)
-:mod:`.summary`             one row per run: errors, expected and observed behaviour
-:mod:`.checks`              the ``pendulum_stability`` claims
+:mod:`.runs`                a whole run (fixed or adaptive macro steps) up to the end
+                            time, divergence or failure
+:mod:`.names`               names of runs, series, coupling variables and datasets
 :mod:`.config`              a ``pendulum:`` configuration, checked before any job
+==========================  =====================================================
+
+Two studies rest on these modules and import nothing of each other:
+
+==========================  =====================================================
+package                     holds
+==========================  =====================================================
+:mod:`.replication`         Figs. 6-8: run datasets, summary, ``pendulum_stability`` claims
+:mod:`.trade`               the speed-accuracy trade (beyond the paper)
 ==========================  =====================================================
 
 The package imports none of its modules: import the one you need, e.g.

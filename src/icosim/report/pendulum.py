@@ -26,7 +26,7 @@ def pendulum_section(
 
     ``config`` is the configuration (``pendulum:``), ``paper_figure`` maps
     ``k`` to the paper's figure number, ``summary`` is the run summary
-    (:func:`icosim.pendulum.summary.summarize`), ``claims`` the verdict
+    (:func:`icosim.pendulum.replication.summary.summarize`), ``claims`` the verdict
     records, ``figure_pngs`` the figures (``.../pendulum_k<k>.png``) and
     ``error_png`` the error figure; ``trade_html`` (:func:`trade_section`) is appended.
     """

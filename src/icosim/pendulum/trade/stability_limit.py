@@ -40,10 +40,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..engine.methods import make_method
+from ...engine.methods import make_method
+from ..model import PendulumParameters
 from .linear_study import linear_rho, linear_stability
 from .measures import config_label, measured_run
-from .model import PendulumParameters
 
 __all__ = [
     "Limit",

@@ -21,13 +21,13 @@ import math
 
 import numpy as np
 
-from ..engine.methods import make_method
-from ..io.netcdf import provenance_attrs
+from ...engine.methods import make_method
+from ...io.netcdf import provenance_attrs
+from ..model import PendulumParameters
+from ..reference import reference_solution
+from ..runs import run_cosimulation
 from .baselines import reference_accuracy
 from .measures import RECORD, check_scheme, config_label, run_record
-from .model import PendulumParameters
-from .reference import reference_solution
-from .runs import run_cosimulation
 
 __all__ = ["tolerance_study", "sufficient_rtol"]
 

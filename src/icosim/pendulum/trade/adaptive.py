@@ -1,4 +1,4 @@
-"""Adaptive against fixed macro steps at equal error (the study around :mod:`.adaptive`).
+"""Adaptive against fixed macro steps at equal error (the study around :func:`icosim.pendulum.runs.run_adaptive`).
 
 For each configured configuration, adaptive runs over a list of tolerances
 and fixed-H runs over a list of step sizes cover the same horizon
@@ -16,12 +16,12 @@ import math
 
 import numpy as np
 
-from ..engine.methods import make_method
-from ..io.netcdf import provenance_attrs
+from ...engine.methods import make_method
+from ...io.netcdf import provenance_attrs
+from ..model import PendulumParameters
+from ..reference import reference_solution
+from ..runs import run_adaptive
 from .measures import RECORD, angle_errors, check_scheme, config_label, measured_run
-from .model import PendulumParameters
-from .reference import reference_solution
-from .runs import run_adaptive
 
 __all__ = ["adaptive_record", "fixed_at_error", "adaptive_study", "equal_error_table"]
 

@@ -18,11 +18,11 @@ import time
 
 import numpy as np
 
-from ..io.netcdf import provenance_attrs
-from .integrator.radau import radau_batch
+from ...io.netcdf import provenance_attrs
+from ..integrator.radau import radau_batch
+from ..model import PendulumParameters
+from ..reference import Monolithic, reference_solution
 from .measures import angle_errors
-from .model import PendulumParameters
-from .reference import Monolithic, reference_solution
 
 __all__ = ["monolithic_run", "monolithic_baselines", "linear_orders_dataset", "reference_accuracy", "INTEGRATORS"]
 
@@ -149,7 +149,7 @@ def linear_orders_dataset(
     the linear model is co-simulated with the same scheme."""
     import xarray as xr
 
-    from ..engine.methods import make_method
+    from ...engine.methods import make_method
     from .linear_study import linear_errors
 
     labels, err, unst, rho, nsteps = [], [], [], [], []

@@ -30,13 +30,13 @@ import math
 
 import numpy as np
 
-from ..engine import exact
-from ..engine.linear_problem import LinearCosimulation
-from ..engine.methods import CouplingMethod, engine_method
-from ..engine.model import PhysicalModel
-from ..engine.spectral import amplification_matrix, spectral_radius
-from .linearised import linear_test_model_stability
-from .model import PendulumParameters
+from ...engine import exact
+from ...engine.linear_problem import LinearCosimulation
+from ...engine.methods import CouplingMethod, engine_method
+from ...engine.model import PhysicalModel
+from ...engine.spectral import amplification_matrix, spectral_radius
+from ..linearised import linear_test_model_stability
+from ..model import PendulumParameters
 
 __all__ = ["PAPER_LINEAR_MODEL", "linear_errors", "linear_rho", "linear_stability"]
 

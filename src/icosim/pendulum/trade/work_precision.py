@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from ..io.netcdf import provenance_attrs
+from ...io.netcdf import provenance_attrs
 from .orders import error_floor, pendulum_order
 
 __all__ = ["work_precision_dataset", "orders", "cheapest"]
@@ -105,7 +105,7 @@ def work_precision_dataset(sweeps: list, monolithic, linear, *, fit: dict, accur
         fit_rule=(
             "order = least-squares slope of log error_max over log H on the smallest-H decade of stable step sizes "
             "above the error floor; asymptotic if every local slope there is within tolerance of it, else "
-            "pre-asymptotic (icosim.pendulum.orders.pendulum_order)"
+            "pre-asymptotic (icosim.pendulum.trade.orders.pendulum_order)"
         ),
         fit_tolerance=float(fit["tolerance"]),
         fit_floor_factor=float(fit["floor_factor"]),

@@ -1,6 +1,6 @@
 """What one pendulum run costs and how accurate it is: errors against the reference, drift, CPU, counts.
 
-Every study of the speed-accuracy trade (:mod:`.sweep`, :mod:`.limits`,
+Every study of the speed-accuracy trade (:mod:`.sweep`, :mod:`.stability_limit`,
 :mod:`.tolerance`, :mod:`.adaptive`, :mod:`.work_precision`) describes a run by
 the same record (:data:`RECORD`):
 
@@ -31,13 +31,13 @@ import math
 
 import numpy as np
 
-from ..engine.methods import make_method
-from ..engine.schemes import SCHEME_NAMES, get_scheme
-from ..errors import ParameterError
-from .model import PendulumParameters
-from .names import run_name
-from .reference import reference_solution
-from .runs import RunResult, run_cosimulation
+from ...engine.methods import make_method
+from ...engine.schemes import SCHEME_NAMES, get_scheme
+from ...errors import ParameterError
+from ..model import PendulumParameters
+from ..names import run_name
+from ..reference import reference_solution
+from ..runs import RunResult, run_cosimulation
 
 __all__ = ["RECORD", "SCHEMES", "angle_errors", "run_record", "measured_run", "config_label", "check_scheme"]
 

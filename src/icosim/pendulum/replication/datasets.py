@@ -11,13 +11,13 @@ import time
 
 import numpy as np
 
-from ..engine.methods import CouplingMethod, make_method, parameter_units
-from ..engine.schemes import get_scheme
-from ..io.netcdf import provenance_attrs
-from .model import PendulumParameters, joint_constraint
-from .names import VARIABLES
-from .reference import Monolithic, reference_solution
-from .runs import RunResult, run_cosimulation
+from ...engine.methods import CouplingMethod, make_method, parameter_units
+from ...engine.schemes import get_scheme
+from ...io.netcdf import provenance_attrs
+from ..model import PendulumParameters, joint_constraint
+from ..names import VARIABLES
+from ..reference import Monolithic, reference_solution
+from ..runs import RunResult, run_cosimulation
 
 __all__ = ["run_dataset", "reference_dataset", "run_job"]
 

@@ -9,10 +9,10 @@
 
 from __future__ import annotations
 
-from ..claims.core import CheckKind, Outcome, combine_holds
-from ..engine.schemes import get_scheme
-from ..errors import ParameterError
-from .names import run_name
+from ...claims.core import CheckKind, Outcome, combine_holds
+from ...engine.schemes import get_scheme
+from ...errors import ParameterError
+from ..names import run_name
 
 __all__ = ["CHECKS", "check_pendulum_stability", "expected_outcome", "run_verdict", "OUTCOMES"]
 

@@ -2,9 +2,9 @@
 
 One job runs one group -- a scheme, a method and a decomposition, every ``k``
 and every ``H`` (:func:`sweep_group`) -- and writes its records
-(:data:`icosim.pendulum.measures.RECORD`) over ``(config, H)``.
+(:data:`icosim.pendulum.trade.measures.RECORD`) over ``(config, H)``.
 The orders are fitted where the groups are assembled
-(:func:`icosim.pendulum.work_precision.orders`), so that a change of the fit
+(:func:`icosim.pendulum.trade.work_precision.orders`), so that a change of the fit
 reruns no sweep.
 """
 
@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..engine.methods import make_method
-from ..io.netcdf import provenance_attrs
+from ...engine.methods import make_method
+from ...io.netcdf import provenance_attrs
 from .measures import RECORD, config_label, measured_run
 
 __all__ = ["sweep_group", "records_dataset"]

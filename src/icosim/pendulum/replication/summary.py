@@ -6,13 +6,13 @@ import math
 
 import numpy as np
 
-from ..engine.methods import make_method
-from ..engine.schemes import get_scheme
-from ..io.netcdf import config_json, provenance_attrs
+from ...engine.methods import make_method
+from ...engine.schemes import get_scheme
+from ...io.netcdf import config_json, provenance_attrs
+from ..linearised import linear_test_model_rho
+from ..model import PendulumParameters
+from ..names import run_name
 from .checks import expected_outcome, run_verdict
-from .linearised import linear_test_model_rho
-from .model import PendulumParameters
-from .names import run_name
 
 __all__ = ["summarize", "summary_dataset"]
 

@@ -32,9 +32,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..order_fit import STATUSES as LINEAR_STATUSES
-from ..order_fit import AsymptoticOrder, local_slopes
-from ..order_fit import asymptotic_order as decade_order
+from ...order_fit import STATUSES as LINEAR_STATUSES
+from ...order_fit import AsymptoticOrder, local_slopes
+from ...order_fit import asymptotic_order as decade_order
 
 __all__ = ["AsymptoticOrder", "decade_order", "pendulum_order", "error_floor", "local_slopes", "STATUSES"]
 

@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from .adaptive_study import equal_error_table
+from .adaptive import equal_error_table
 from .orders import error_floor
 from .tolerance import sufficient_rtol
 
@@ -175,7 +175,7 @@ def limit_summary(rows, scan0: float, t_end: float = math.nan) -> dict:
 def tolerance_rows(tol, floor_factor: float = 10.0) -> list[dict]:
     """Per configuration and H: errors, the largest integration effect, the loosest sufficient rtol, cost.
 
-    Where the error at the tightest rtol is below the error floor (:func:`~icosim.pendulum.orders.error_floor`)
+    Where the error at the tightest rtol is below the error floor (:func:`~icosim.pendulum.trade.orders.error_floor`)
     the comparison says nothing (both are rounding): ``at_floor`` is then True.
     """
     share = float(tol.attrs.get("share", 0.01))
