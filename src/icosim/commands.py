@@ -35,7 +35,7 @@ def _positive_int(text):
 
 
 def advise_parameters() -> dict:
-    """Method parameters ``icosim advise`` takes: those some scheme of :func:`icosim.advise.schemes` uses."""
+    """Method parameters ``icosim advise`` takes: those some configuration of :func:`icosim.advise.configurations` uses."""
     from .advise.core import _index_params
 
     used = {}
@@ -198,7 +198,7 @@ def _advise(args, parser) -> int:
         advice_text,
         advise,
         check_settings,
-        schemes,
+        configurations,
     )
 
     if len(args.H) > 2:
@@ -209,7 +209,7 @@ def _advise(args, parser) -> int:
         check_settings(args.H, n_scan=args.scan or DEFAULT_SCAN, rtol=args.rtol or DEFAULT_RTOL, policy=args.policy)
         if len(args.H) == 1 and (args.scan is not None or args.rtol is not None):
             raise ParameterError("scan and --rtol apply to an H range (--H H_LO H_HI) only")
-        scheme_list = schemes(
+        configuration_list = configurations(
             methods=args.methods,
             decompositions=args.decompositions,
             k=args.k or DEFAULT_K,
@@ -218,14 +218,14 @@ def _advise(args, parser) -> int:
         )
     except ParameterError as exc:
         _fail(parser, str(exc))
-    if not scheme_list:
+    if not configuration_list:
         parser.error("argument --decompositions: none of the methods asked for is defined for these decompositions")
-    bar = Progress(len(scheme_list))
+    bar = Progress(len(configuration_list))
     try:
         df = advise(
             system,
             args.H,
-            scheme_list=scheme_list,
+            configuration_list=configuration_list,
             n_scan=args.scan or DEFAULT_SCAN,
             rtol=args.rtol or DEFAULT_RTOL,
             policy=args.policy,
