@@ -1,4 +1,4 @@
-"""``icosim advise`` and ``icosim map``: thin command-line wrappers of :mod:`icosim.advise` and :mod:`icosim.maps`.
+"""``icosim advise`` and ``icosim map``: thin command-line wrappers of :mod:`icosim.advise` and :mod:`icosim.advise.maps`.
 
 Both check every argument before any computation; bad input exits with
 status 2 and one line ``icosim <command>: error: argument --<name>: ...``
@@ -244,8 +244,16 @@ def _map(args, parser) -> int:
     import numpy as np
 
     from .advise import Progress
+    from .advise.maps import (
+        boundary_extent,
+        map_figure,
+        map_panels,
+        map_specs,
+        marginal_extent,
+        stable_extent,
+        write_map,
+    )
     from .engine.model import TestModel
-    from .maps import boundary_extent, map_figure, map_panels, map_specs, marginal_extent, stable_extent, write_map
     from .stability.panels import grid_axis
 
     given = {name: getattr(args, name) for name in methods.argument_names() if getattr(args, name) is not None}

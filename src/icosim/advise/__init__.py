@@ -46,6 +46,17 @@ Adding a coupling order (as Gauss-Seidel was added) or certified verdicts touche
 :data:`COUPLINGS` and :func:`evaluate` only: configurations are enumerated by
 :func:`configurations`, every spectral radius is computed by :func:`evaluate`, and the
 ``verdict`` column is the one place a verdict is stated.
+
+==========================  ===================================================
+module                      holds
+==========================  ===================================================
+:mod:`.core`                the system, the configurations, one evaluation
+:mod:`.scan`                stable intervals over an H range, the answer table
+:mod:`.output`              the answer as text and JSON records, the progress bar
+:mod:`.maps`                ``icosim map``: stability maps on demand with the
+                            stability study's panel code (not imported here: it
+                            loads xarray and matplotlib)
+==========================  ===================================================
 """
 
 from .core import COUPLINGS, DEFAULT_K, VERDICTS, Configuration, Evaluation, TwoMassSystem, configurations, evaluate

@@ -27,11 +27,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .engine.decompositions import DECOMPOSITIONS
-from .engine.schemes import get_scheme
-from .io.netcdf import provenance_attrs, write_netcdf
-from .stability.datasets import stability_panel
-from .stability.panels import RATIOS, PanelSpec, grid_axis
+from ..engine.decompositions import DECOMPOSITIONS
+from ..engine.schemes import get_scheme
+from ..io.netcdf import provenance_attrs, write_netcdf
+from ..stability.datasets import stability_panel
+from ..stability.panels import RATIOS, PanelSpec, grid_axis
 
 __all__ = ["map_specs", "map_panels", "map_figure", "stable_extent", "boundary_extent", "write_map", "FIGURE_ID"]
 
@@ -87,7 +87,7 @@ def map_panels(method, method_params, decomposition, ks, *, command: str = "", p
 
 def map_figure(panels, *, title: str = "", style: str = "field"):
     """The map drawn by the report's figure builder (one column per ``k``)."""
-    from .figures.stability import stability_figure
+    from ..figures.stability import stability_figure
 
     return stability_figure(panels, title=title, style=style)
 
@@ -170,7 +170,7 @@ def marginal_extent(ds) -> dict:
 
 def write_map(panels, fig, prefix) -> list[str]:
     """Write ``<prefix>.png``, ``<prefix>.pdf`` and ``<prefix>_k<k>.nc`` per panel (atomically); returns the paths."""
-    from .figures import save_figure
+    from ..figures import save_figure
 
     prefix = Path(prefix)
     images = [prefix.with_name(prefix.name + ".png"), prefix.with_name(prefix.name + ".pdf")]
