@@ -27,6 +27,7 @@ __all__ = [
     "VERDICTS",
     "DEFAULT_K",
     "configurations",
+    "index_parameters",
     "evaluate",
 ]
 
@@ -183,7 +184,7 @@ def _scaled() -> dict:
     return {name: p for name, p in _methods.parameters().items() if p.scaling}
 
 
-def _index_params(spec, index, given: dict) -> dict:
+def index_parameters(spec, index, given: dict) -> dict:
     """The parameters a method takes at ``index``: its own (shorthand ones replace the rest), not those unused there.
 
     A parameter not in ``given`` defaults to 1 in dimensionless form (``mu_bar = 1``, ``a = b = 1``).
@@ -246,7 +247,7 @@ def configurations(
         spec = _methods.get_spec(name)
         decs = [d for d in spec.decompositions if decompositions is None or d in decompositions]
         for index in spec.indices:
-            p = _index_params(spec, index, params)
+            p = index_parameters(spec, index, params)
             for dec in decs:
                 for kk in ks:
                     for coupling in couplings:

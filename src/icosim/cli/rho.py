@@ -2,7 +2,7 @@
 
 Every answer of the command rests on ball arithmetic
 (:func:`icosim.engine.spectral.certify_spectral_radius`): the parameters are taken
-exactly as typed (``--lr1 -0.3`` is -3/10), the verdict is proven (stable,
+exactly as typed (``--lr1 -0.3`` is -3/10, not the nearest double), the verdict is proven (stable,
 unstable, or marginal: the enclosure still contains 1 at ``--max-bits``), and
 the value printed is the midpoint of the proven enclosure narrowed to the
 digits asked for (17 by default, a double's; ``--digits N``), showing only
@@ -10,9 +10,11 @@ digits that are proven.  So the verdict never depends on the precision asked
 for, and a value is never printed to more digits than are known.  float64's own
 value and error estimate are shown beside it for comparison.
 
-A point that cannot be decided (a precision beyond a cap, the time budget
-``--timeout``, every digit lost at the cap) is ``undecided`` with the reason:
-exit status 0, ``"rho": null``.  Bad input never gets here (exit 2 first).
+Bad input -- including input beyond a limit of :mod:`icosim.engine.bounds` -- is reported
+as ``icosim rho: error: ...`` naming the argument, with exit status 2, before
+any work and without a traceback.  A point that cannot be decided (a precision beyond a cap,
+the time budget ``--timeout``, every digit lost at the cap) is ``undecided`` with the reason:
+exit status 0, ``"rho": null``.
 """
 
 from __future__ import annotations
@@ -23,12 +25,132 @@ from fractions import Fraction
 
 import numpy as np
 
-from .engine.bounds import time_budget
-from .engine.schemes import JACOBI, get_scheme
-from .engine.spectral.policy import reason_code
-from .errors import PointTimeout
+from ..engine import methods
+from ..engine.bounds import MAX_BITS_LIMIT, MAX_DIGITS, MAX_GUARD_BITS, MAX_K, check_derived, time_budget
+from ..engine.decompositions import DECOMPOSITIONS, get_decomposition
+from ..engine.schemes import JACOBI, get_scheme
+from ..engine.spectral.policy import reason_code
+from ..errors import ParameterError, PointTimeout
+from ..io.jsonio import dumps
+from . import arguments as arg
 
-__all__ = ["rho_answer", "rho_text"]
+__all__ = ["add_parser", "run", "rho_answer", "rho_text"]
+
+
+def add_parser(sub):
+    """Register ``rho`` on the ``icosim`` sub-command parsers."""
+    rho = sub.add_parser(
+        "rho",
+        help="spectral radius of one parameter point",
+        description="Spectral radius of the co-simulation recurrence for one point of the test model (Eq. 71).",
+    )
+    g = rho.add_argument_group("method and layout")
+    g.add_argument("--method", required=True, choices=tuple(methods.METHODS))
+    g.add_argument("--decomposition", required=True, choices=tuple(DECOMPOSITIONS))
+    g.add_argument("--k", required=True, type=arg.order, help=f"approximation order (integer 0..{MAX_K})")
+    arg.add_scheme_arguments(g)
+    g = rho.add_argument_group("method parameters")
+    with_index = ", ".join(spec.label for spec in methods.METHODS.values() if spec.takes_index)
+    g.add_argument("--index", type=int, choices=methods.indices(), help=f"index of the formulation ({with_index})")
+    for name, p in methods.parameters().items():  # every registered method's parameters
+        g.add_argument(f"--{name}", type=arg.decimal, help=p.help)
+    g = rho.add_argument_group("test-model parameters (Eq. 71)")
+    g.add_argument("--lr1", required=True, type=arg.decimal, help="real part of subsystem 1's eigenvalue (<= 0)")
+    g.add_argument("--li1", required=True, type=arg.decimal, help="imaginary part of subsystem 1's eigenvalue (>= 0)")
+    g.add_argument("--am21", required=True, type=arg.decimal, help="mass ratio m2/m1 (> 0)")
+    g.add_argument("--alr21", required=True, type=arg.decimal, help="damping ratio lr2/lr1 (>= 0)")
+    g.add_argument("--ali21", required=True, type=arg.decimal, help="frequency ratio li2/li1 (>= 0)")
+    g = rho.add_argument_group(
+        "precision and output",
+        "The verdict is always proven in ball arithmetic (python-flint Arb) from the decimals as typed: stable "
+        "(rho < 1), unstable (rho > 1), or marginal (the proven enclosure still contains 1 at --max-bits). "
+        f"Limits: k <= {MAX_K}, --digits <= {MAX_DIGITS}, --max-bits <= {MAX_BITS_LIMIT}, guard bits for heavily "
+        f"damped subsystems <= {MAX_GUARD_BITS}; a point needing more is 'undecided' with the reason.",
+    )
+    g.add_argument(
+        "--digits",
+        type=arg.digits,
+        help="print rho with this many significant digits, all proven (the enclosure narrowed to them; default 17)",
+    )
+    g.add_argument("--certify", action="store_true", help="also print the proven enclosure of rho in the text output")
+    g.add_argument(
+        "--max-bits",
+        type=arg.bits,
+        default=1024,
+        help=f"largest working precision of the ball arithmetic, in bits (default 1024, at most {MAX_BITS_LIMIT})",
+    )
+    g.add_argument(
+        "--timeout",
+        type=arg.seconds,
+        help="give up after this many seconds of wall time: the verdict is then 'undecided' (reason timeout)",
+    )
+    g.add_argument("--json", action="store_true", help="print one JSON object")
+    rho.set_defaults(subparser=rho)
+    return rho
+
+
+def _method_from_args(args):
+    spec = methods.get_spec(args.method)
+    given = {name: getattr(args, name, None) for name in methods.argument_names()}
+    given = {k: v for k, v in given.items() if v is not None}
+    extra = sorted(set(given) - set(spec.arguments))
+    if extra:
+        allowed = ", ".join(f"--{a}" for a in spec.arguments) or "none"
+        raise ParameterError(f"argument --{extra[0]}: not used by --method {args.method} (its parameters: {allowed})")
+    return spec.make(**given)
+
+
+def run(args, parser) -> int:
+    """``icosim rho``: check the arguments (exit 2 naming the bad one), then answer."""
+    from ..engine.model import TestModel
+
+    if args.first is not None and args.scheme != "gauss-seidel":
+        parser.error("argument --first: only used with --scheme gauss-seidel")
+    scheme = get_scheme(args.scheme, args.first)
+    try:
+        method = _method_from_args(args)
+        decomposition = get_decomposition(args.decomposition)
+        method.check_decomposition(decomposition)
+        model = TestModel(args.lr1, args.li1, args.am21, args.alr21, args.ali21)
+        check_derived(model)  # k = lr^2 + li^2, ... finite in float64
+    except ParameterError as exc:
+        parser.error(_argument_message(str(exc)))
+    answer = rho_answer(
+        model,
+        method,
+        decomposition,
+        args.k,
+        digits=args.digits,
+        max_bits=args.max_bits,
+        timeout=args.timeout,
+        scheme=scheme,
+    )
+    result = {
+        **answer,
+        "method": method.name,
+        "decomposition": decomposition.name,
+        "k": args.k,
+        "scheme": scheme.name,
+        "first": getattr(scheme, "first", None),  # the subsystem that advances first (Gauss-Seidel only)
+        "method_parameters": method.params,
+        "model": {n: float(getattr(args, n)) for n in ("lr1", "li1", "am21", "alr21", "ali21")},
+    }
+    if args.json:
+        print(dumps(result))
+    else:
+        print(rho_text(answer, show_enclosure=args.certify, scheme=scheme))
+    return 0
+
+
+def _argument_message(text: str) -> str:
+    """Messages from the library name parameters; make them read like argparse's."""
+    for name in ("lr1", "li1", "am21", "alr21", "ali21") + methods.argument_names():
+        if text.startswith(f"{name} "):  # also "a and b must be ..." -> --a
+            return f"argument --{name}: {text}"
+    if text.startswith("method "):
+        return f"argument --method/--decomposition: {text}"
+    return text
+
 
 #: Digits the value is narrowed to without ``--digits`` (a double's 17 significant digits).
 DEFAULT_DIGITS = 17
@@ -40,7 +162,7 @@ def rho_answer(model, method, decomposition, k, *, digits=None, max_bits=1024, t
     ``model`` is a :class:`~icosim.engine.model.TestModel` of one point (Fractions kept exact); ``scheme`` the
     coupling scheme (:mod:`icosim.engine.schemes`), used by the proof and by float64 alike.
     """
-    from .engine.spectral import certify_spectral_radius
+    from ..engine.spectral import certify_spectral_radius
 
     scheme = get_scheme(scheme)
 
@@ -115,7 +237,7 @@ def rho_text(answer: dict, *, show_enclosure: bool = False, scheme=JACOBI) -> st
 
 def _float64(model, method, decomposition, k, scheme=JACOBI):
     """float64's value and error estimate for comparison (None where float64 gives nothing finite)."""
-    from .engine.spectral import spectral_radius_float64
+    from ..engine.spectral import spectral_radius_float64
 
     try:
         with np.errstate(all="ignore"):
