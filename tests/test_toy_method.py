@@ -40,7 +40,7 @@ NAME = "toy_velocity"
 def toy_velocity(tau=None):
     """The rule: one solve on ``g' + tau g''`` (velocity level, damped by the acceleration level)."""
     if tau is None:
-        raise ParameterError(f"{NAME} needs --tau")
+        raise ParameterError(f"{NAME} needs tau")
     tau = finite("tau", tau)
     if tau <= 0:
         raise ParameterError(f"tau must be > 0, got {tau!r}")

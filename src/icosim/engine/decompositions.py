@@ -63,7 +63,7 @@ DD_NEEDS_POSITION_LEVEL = (
     "with displacement/displacement coupling the kinematics "
     "would have to be prescribed on position level, which needs at least quadratic "
     "approximation polynomials; the paper treats only projection there (Sect. 2.3). "
-    "Use --method projection or --decomposition ff/fd."
+    "Use the method projection or the decomposition ff or fd."
 )
 
 

@@ -38,16 +38,16 @@ def baumgarte(beta: float = None, gamma: float = None, *, mu: float = None, inde
     """
     if index is not None:
         if beta is not None or gamma is not None:
-            raise ParameterError("give either --index (with --mu) or --beta/--gamma, not both")
+            raise ParameterError("give either index (with mu) or beta and gamma, not both")
         if index not in (1, 2, 3):
             raise ParameterError(f"index must be 1, 2 or 3, got {index!r}")
         if index == 3:
             if mu is not None:
-                raise ParameterError("mu is not used at index 3 (beta = gamma = 0); drop --mu")
+                raise ParameterError("mu is not used at index 3 (beta = gamma = 0); drop mu")
             beta, gamma = Fraction(0), Fraction(0)
         else:
             if mu is None:
-                raise ParameterError(f"Baumgarte index {index} needs --mu")
+                raise ParameterError(f"Baumgarte index {index} needs mu")
             mu = exact("mu", mu)
             if mu <= 0:
                 raise ParameterError(f"mu must be > 0, got {float(mu)!r}")
@@ -57,9 +57,9 @@ def baumgarte(beta: float = None, gamma: float = None, *, mu: float = None, inde
                     raise ParameterError(f"mu = {float(mu):g} makes {name} too large for float64 (not finite)")
     else:
         if mu is not None:
-            raise ParameterError("--mu needs --index (1 or 2) for the Baumgarte method")
+            raise ParameterError("mu needs index (1 or 2) for the Baumgarte method")
         if beta is None or gamma is None:
-            raise ParameterError("Baumgarte needs --beta and --gamma, or --index (and --mu)")
+            raise ParameterError("Baumgarte needs beta and gamma, or index (and mu)")
         beta, gamma = exact("beta", beta), exact("gamma", gamma)
         if beta < 0 or gamma < 0:
             raise ParameterError(f"beta and gamma must be >= 0, got beta={float(beta)!r}, gamma={float(gamma)!r}")

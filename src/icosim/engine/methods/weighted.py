@@ -31,18 +31,18 @@ def weighted_multiplier(a: float = None, b: float = None, *, index: int = None):
             raise ParameterError(f"index must be 1, 2 or 3, got {index!r}")
         if index == 3:
             if a not in (None, 0) or b not in (None, 0):
-                raise ParameterError("index 3 means a = b = 0; drop --a/--b")
+                raise ParameterError("index 3 means a = b = 0; drop a and b")
             a, b = 0.0, 0.0
         elif index == 2:
             if b not in (None, 0):
-                raise ParameterError("index 2 means b = 0; drop --b")
+                raise ParameterError("index 2 means b = 0; drop b")
             if a is None:
-                raise ParameterError("weighted multiplier index 2 needs --a")
+                raise ParameterError("weighted multiplier index 2 needs a")
             b = 0.0
         elif a is None or b is None:
-            raise ParameterError("weighted multiplier index 1 needs --a and --b")
+            raise ParameterError("weighted multiplier index 1 needs a and b")
     if a is None or b is None:
-        raise ParameterError("weighted multiplier needs --a and --b (or --index)")
+        raise ParameterError("weighted multiplier needs a and b (or index)")
     # exact rationals (decimal input stays exact), so multiprecision runs are not limited by 1/3 in binary
     fa, fb = exact("a", a), exact("b", b)
     a, b = float(fa), float(fb)
