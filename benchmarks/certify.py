@@ -1,7 +1,7 @@
 """Benchmark: a certified recheck (ball arithmetic) against the 128-digit mpmath recheck, per point, in one run.
 
-The pipeline rechecks the points float64 cannot decide.  Before issue 11 that
-recheck was mpmath at 128 digits (a value, no bound); now it is a proven
+The pipeline rechecks the points float64 cannot decide.  Before the certified
+rechecks that recheck was mpmath at 128 digits (a value, no bound); now it is a proven
 enclosure in ball arithmetic (python-flint Arb).  For each scheme (every method
 and decomposition, k = 0, 1, 2) this takes the points of a grid over the
 paper's plane that the pipeline would recheck (float64 not trusted, or within

@@ -2,7 +2,7 @@
 
 Two copies of the workflow run from clean ``results/``: one with the default configuration
 (Jacobi and both Gauss-Seidel orders), one with ``config/jacobi_only.yaml`` merged over it (the
-paper's scheme only, as before issue 10).  For each part (stability, convergence, pendulum)
+paper's scheme only, as before the Gauss-Seidel scheme).  For each part (stability, convergence, pendulum)
 the Jacobi-only copy builds the part's report section, then the other copy builds the same
 section plus the part's Gauss-Seidel outputs (figures, comparison, claims); then both build
 everything else (`all`: the report, claims tables, PDFs).  The runs alternate, so load on the machine hits both alike.  Printed per part:

@@ -101,7 +101,7 @@ def test_undamped_axis_with_identical_subsystems(method, dec, k):
 
 
 def test_identical_undamped_ff_schemes_are_marginal():
-    """The issue's example: rho = 1 exactly on the undamped axis with identical subsystems (projection, Baumgarte
+    """The marginal case: rho = 1 exactly on the undamped axis with identical subsystems (projection, Baumgarte
     index 1, force/force) comes out marginal, as does the origin (a Jordan block at 1)."""
     cases = (
         (make_method("projection"), 1, (0.0, 0.3, 0.7)),

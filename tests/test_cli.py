@@ -142,7 +142,7 @@ def test_bad_scheme_arguments_exit_2_naming_them(capsys, extra, argument):
     assert argument in err and "Traceback" not in err
 
 
-# -- N-digit results and numbers as users type them (issue: convergence decided) ------------------------
+# -- N-digit results and numbers as users type them (every digit printed is proven) ------------------------
 def test_digits_take_the_decimals_as_typed_and_print_n_digits(capsys):
     """``--lr1 -0.3 --digits 40`` computes at lr1 = -3/10 exactly (not the double -0.29999999999999998890) and prints
     40 significant digits: it equals the library at the exact decimal and differs from the double input's value."""

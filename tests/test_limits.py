@@ -1,6 +1,6 @@
 """Reliability at the extremes (icosim.engine.bounds, icosim rho, the grid API, the datasets' integrity).
 
-Every input the issue found hanging, crashing or printing different answers at different
+Every input once found hanging, crashing or printing different answers at different
 precisions now finishes quickly with exit 0 (an answer, possibly ``undecided`` with the
 reason) or 2 (bad input, one line naming the limit or argument), prints strict JSON, and
 gives the same verdict at every precision.  The expected verdicts come from the proofs
@@ -65,7 +65,7 @@ def run_cli(args, *, seconds=60):
     return proc.returncode, proc.stdout, proc.stderr, time.perf_counter() - t0
 
 
-# -- the cases the issue measured ---------------------------------------------------------------------
+# -- the inputs once measured hanging or crashing ------------------------------------------------------
 
 
 @pytest.mark.parametrize(
@@ -200,7 +200,7 @@ def test_any_accepted_point_answers_in_strict_json_and_its_verdict_does_not_depe
     import io
 
     answers = []
-    for extra in ([], ["--digits", "40"]):  # the default (17 digits) and the issue's 40
+    for extra in ([], ["--digits", "40"]):  # the default (17 digits) and 40
         buf, errbuf = io.StringIO(), io.StringIO()
         with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(errbuf):
             try:

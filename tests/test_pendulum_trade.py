@@ -1,4 +1,4 @@
-"""The pendulum's speed-accuracy studies (issue 12): variable-step Lagrange weights, the step-size
+"""The pendulum's speed-accuracy studies (the speed-accuracy trade): variable-step Lagrange weights, the step-size
 controller, the predictor-corrector error estimate, adaptive runs, counters, fits, limits, datasets.
 
 Every number asserted comes from theory (Lagrange remainders, the controller's formulas, the

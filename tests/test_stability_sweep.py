@@ -1,6 +1,6 @@
 """Stability panels (icosim.stability.panels) and their figures (icosim.figures.stability).
 
-The dataset names are a contract other tools read (issue 3); the numbers are
+The dataset names are a contract other tools read (icosim map, the claims, the report); the numbers are
 checked against an independent route: the multiprecision spectral radius of
 single points.
 """

@@ -25,7 +25,7 @@ come from the same data by the same logic.  Exit status 0 if everything is equal
 variable attribute, or a variable (coordinate), present in NEW only; the name in a variable's
 ``coordinates`` attribute; and a key of that name present only in NEW's ``config_json`` (at any
 depth; ``config_sha256`` is then checked against NEW's own ``config_json`` instead).  Used to show
-that adding the ``scheme`` attribute (Gauss-Seidel, issue 10) left every Jacobi result as it was.
+that adding the ``scheme`` attribute (the Gauss-Seidel scheme) left every Jacobi result as it was.
 """
 
 from __future__ import annotations

@@ -42,7 +42,7 @@ PENDULUM_DATASETS_OF_K = {
 }
 
 
-# -- speed-accuracy trade (issue 12): error over H, work-precision, stability limit in H,
+# -- speed-accuracy trade (beyond the paper): error over H, work-precision, stability limit in H,
 # subsystem tolerance, adaptive macro steps.  One sweep job and one limit job per group
 # (scheme, method, decomposition; every k), then merges; figures and the report section
 # read only the datasets.

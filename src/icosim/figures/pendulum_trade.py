@@ -1,4 +1,4 @@
-"""Figures of the pendulum's speed-accuracy trade (issue 12); they draw datasets and never recompute.
+"""Figures of the pendulum's speed-accuracy trade; they draw datasets and never recompute.
 
 * :func:`work_precision_figure` -- error against CPU seconds, one panel per
   ``k`` (one row per coupling scheme) with one line per configuration (each

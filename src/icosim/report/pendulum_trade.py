@@ -1,4 +1,4 @@
-"""The speed-accuracy part of the pendulum section (issue 12): orders, work-precision, stability limits,
+"""The speed-accuracy part of the pendulum section (the speed-accuracy trade, beyond the paper): orders, work-precision, stability limits,
 subsystem tolerance and adaptive macro steps, with conclusions computed from the datasets.
 
 Every number on the page is read from ``work_precision.nc``,
@@ -57,7 +57,7 @@ def trade_section(*, work_precision, stability_limit, tolerance, adaptive, figur
     wp, lim, tol, ad = work_precision, stability_limit, tolerance, adaptive
     T = float(wp.attrs["t_end"])
     H = wp["H"].values
-    parts = ["<h3>Speed–accuracy trade (issue 12)</h3>"]
+    parts = ["<h3>Speed–accuracy trade</h3>"]
     parts.append(
         f"<p><b>What was measured.</b> Every configuration above ({wp.sizes['config']} in all) at "
         f"{len(H)} macro steps H = {', '.join(_f(h, 'g') for h in H)} s over the same end time "

@@ -48,7 +48,7 @@ def run_dataset(
     provenance: dict,
     scheme: str = "jacobi",
 ):
-    """The NetCDF contract of a co-simulation run (see the issue): series over ``t`` and attributes.
+    """The NetCDF contract of a co-simulation run (README, the pendulum's datasets): series over ``t`` and attributes.
 
     ``scheme`` is the coupling scheme's name (attribute ``scheme``).
 

@@ -1,6 +1,6 @@
 """Orders of convergence of the pendulum over H, decided only where the local slopes have settled.
 
-The rule is the linear study's (issue 8): the order is the least-squares slope
+The rule is the linear study's (the convergence study's floor-free order fit): the order is the least-squares slope
 of ``log error`` over ``log H`` on the **smallest-H decade** ``[H_min, 10 H_min]``
 of the usable step sizes, and it counts as *asymptotic* only if every local
 slope (between neighbouring step sizes) in that decade lies within
@@ -52,7 +52,7 @@ def error_floor(n_steps, *, reference_accuracy: float = 0.0, factor: float = 10.
     for N = 400 to 2000 with a 1e-14 reference, is of that size);
     ``"linear"``, ``eps N``, where one rounded matrix is applied N times
     (the linear model's amplification matrix; the rule the linear study used
-    before issue 8).  ``reference_accuracy`` is the reference's own error
+    before its errors were computed floor-free).  ``reference_accuracy`` is the reference's own error
     (zero for an exact one).
     """
     n = np.asarray(n_steps, float)
