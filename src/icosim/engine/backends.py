@@ -23,7 +23,7 @@ import numpy as np
 
 from .bounds import check_digits, guard_digits
 
-__all__ = ["Float64", "Multiprecision", "Ball", "get_backend", "FLOAT64_DIGITS"]
+__all__ = ["Float64", "Multiprecision", "Ball", "FLOAT64_DIGITS"]
 
 #: Decimal digits float64 carries reliably (``numpy.finfo(float).precision``).
 FLOAT64_DIGITS = int(np.finfo(float).precision)
@@ -222,10 +222,3 @@ class Ball:
 
     def __repr__(self):
         return f"Ball(bits={self.bits})"
-
-
-def get_backend(digits: int | None = None):
-    """float64 for ``digits`` None (or <= 15), otherwise mpmath with ``digits``."""
-    if digits is None or digits <= FLOAT64_DIGITS:
-        return Float64()
-    return Multiprecision(digits)

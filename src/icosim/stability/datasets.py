@@ -27,7 +27,7 @@ from ..engine.spectral.policy import ARITHMETICS, REASONS, VERDICTS, Certificati
 from ..io.jsonio import dumps
 from .panels import PanelSpec, format_row_label, grid_axis, method_parameters_units
 
-__all__ = ["stability_panel", "LONG_NAMES", "verdict_names"]
+__all__ = ["stability_panel", "LONG_NAMES"]
 
 LONG_NAMES = {
     "lr1": "real part of the eigenvalue of subsystem 1, lambda_bar_r1 = -d_bar_1/2",
@@ -60,11 +60,6 @@ def _codes(values, names) -> np.ndarray:
 def _flags(names) -> dict:
     """CF flag attributes of a coded variable."""
     return {"flag_values": np.arange(len(names), dtype=np.int8), "flag_meanings": " ".join(names)}
-
-
-def verdict_names(ds) -> np.ndarray:
-    """The ``verdict`` variable of a panel as names (stable, unstable, marginal, undecided)."""
-    return np.asarray(VERDICTS, dtype=object)[ds["verdict"].values]
 
 
 def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
