@@ -13,12 +13,13 @@ import icosim.convergence.experiment
 import icosim.convergence.work_precision
 from icosim.claims.registry import load_claims, parse_claims
 from icosim.convergence.config import check_claims_against_config, study_from_config
+from icosim.convergence.curves import fastest_schemes
 from icosim.convergence.datasets import run_panel
 from icosim.convergence.experiment import Setup, dimensional_method, method_attrs, oscillation_summary, step_counts
 from icosim.convergence.metric import nrmse
 from icosim.convergence.panels import PanelSpec, figure_layout, figure_panels
 from icosim.convergence.study import Study, iterate_linear_map
-from icosim.convergence.work_precision import fastest_schemes, resolve_scheme, step_cost, time_macro_steps
+from icosim.convergence.work_precision import resolve_scheme, step_cost, time_macro_steps
 from icosim.errors import ParameterError
 from icosim.order_fit import asymptotic_order, local_slopes
 

@@ -22,7 +22,7 @@ from ..errors import ParameterError
 from .experiment import Setup, dimensional_method, method_attrs, units_summary
 from .panels import effective_params, figure_panels
 
-__all__ = ["time_macro_steps", "step_cost", "resolve_scheme", "work_precision", "fastest_schemes"]
+__all__ = ["time_macro_steps", "step_cost", "resolve_scheme", "work_precision"]
 
 
 # --------------------------------------------------------------------------- timing
@@ -278,27 +278,3 @@ def work_precision(entries, datasets: dict, setup: Setup, *, steps=20, repeats=3
         method_parameters_units=units_summary(),
     )
     return ds
-
-
-def fastest_schemes(wp, targets) -> list:
-    """Per decomposition and target error: schemes ordered by the least CPU time reaching it.
-
-    A scheme reaches ``target`` at the measured step sizes with
-    ``nrmse <= target``; its cost is the least CPU time per simulated second
-    among those.  Returns dicts ``{decomposition, target, ranking: [(label, seconds, H), ...]}``.
-    """
-    out = []
-    for dec in sorted(set(wp["decomposition"].values.tolist())):
-        sub = wp.where(wp["decomposition"] == dec, drop=True)
-        for target in targets:
-            ranking = []
-            for s in range(sub.sizes["scheme"]):
-                err = sub["nrmse"].values[s]
-                cost = sub["cpu_seconds_per_simulated_second"].values[s]
-                ok = np.isfinite(err) & np.isfinite(cost) & (err <= target)
-                if ok.any():
-                    i = np.flatnonzero(ok)[np.argmin(cost[ok])]
-                    ranking.append((str(sub["scheme"].values[s]), float(cost[i]), float(sub["H"].values[i])))
-            ranking.sort(key=lambda r: r[1])
-            out.append({"decomposition": dec, "target": float(target), "ranking": ranking})
-    return out

@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 
 from ..claims.core import verdict_counts
+from ..convergence.curves import fastest_schemes
 from ..convergence.experiment import Setup, oscillation_summary, step_counts
-from ..convergence.work_precision import fastest_schemes
 from . import html as rp
 from .claims import claims_table
 

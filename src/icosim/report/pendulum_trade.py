@@ -13,12 +13,12 @@ import math
 
 import numpy as np
 
-from ..pendulum.trade.adaptive import equal_error_table
 from ..pendulum.trade.conclusions import (
     LIMIT_AGREEMENT,
     ORDER_AGREEMENT,
     accuracy_rows,
     adaptive_summary,
+    equal_error_table,
     limit_rows,
     limit_summary,
     order_rows,

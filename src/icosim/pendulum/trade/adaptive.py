@@ -23,7 +23,7 @@ from ..reference import reference_solution
 from ..runs import run_adaptive
 from .measures import RECORD, angle_errors, check_scheme, config_label, measured_run
 
-__all__ = ["adaptive_record", "fixed_at_error", "adaptive_study", "equal_error_table"]
+__all__ = ["adaptive_record", "fixed_at_error", "adaptive_study"]
 
 
 def adaptive_record(result, reference) -> dict:
@@ -233,33 +233,3 @@ def add_equal_error(ds):
     )
     ds["equal_error_how"] = (("config", "tol"), how.astype(str), {"long_name": "interpolated or not bracketed"})
     return ds
-
-
-def equal_error_table(ds) -> list[dict]:
-    """One row per adaptive run: its cost against the fixed H at equal error (the report's comparison)."""
-    rows = []
-    for i, lab in enumerate(ds["config"].values):
-        for j, tol in enumerate(ds["tol"].values):
-            st = str(ds["status"].values[i, j])
-            if not st:
-                continue
-            n_acc = float(ds["n_macro_steps"].values[i, j])
-            n_rej = float(ds["n_rejected_macro_steps"].values[i, j])
-            n_fix = float(ds["n_macro_steps_fixed_equal_error"].values[i, j])
-            rows.append(
-                {
-                    "config": str(lab),
-                    "tol": float(tol),
-                    "status": st,
-                    "error_max": float(ds["error_max"].values[i, j]),
-                    "drift_max": float(ds["drift_max"].values[i, j]),
-                    "n_accepted": n_acc,
-                    "n_rejected": n_rej,
-                    "n_fixed": n_fix,
-                    "how": str(ds["equal_error_how"].values[i, j]),
-                    "fewer": bool(n_acc + n_rej < n_fix) if math.isfinite(n_fix) else None,
-                    "cpu": float(ds["cpu_seconds"].values[i, j]),
-                    "cpu_fixed": float(ds["cpu_seconds_fixed_equal_error"].values[i, j]),
-                }
-            )
-    return rows

@@ -10,8 +10,13 @@ report is a computed statement about the data.
   the monolithic baselines' cost;
 * :func:`limit_rows`, :func:`limit_summary` -- measured against predicted
   stability limits (``stability_limit.nc``);
-* :func:`tolerance_rows` -- the subsystem tolerance study (``tolerance.nc``);
-* :func:`adaptive_summary` -- adaptive against fixed H at equal error (``adaptive.nc``).
+* :func:`tolerance_rows` -- the subsystem tolerance study (``tolerance.nc``), with
+  :func:`sufficient_rtol`;
+* :func:`adaptive_summary` -- adaptive against fixed H at equal error (``adaptive.nc``), with
+  :func:`equal_error_table`.
+
+The module reads datasets only (it imports no module that runs the pendulum): it is the
+trade study's data contract for the report.
 """
 
 from __future__ import annotations
@@ -20,9 +25,7 @@ import math
 
 import numpy as np
 
-from .adaptive import equal_error_table
 from .orders import error_floor
-from .tolerance import sufficient_rtol
 
 __all__ = [
     "ORDER_AGREEMENT",
@@ -34,6 +37,8 @@ __all__ = [
     "limit_summary",
     "tolerance_rows",
     "adaptive_summary",
+    "sufficient_rtol",
+    "equal_error_table",
 ]
 
 #: two asymptotic orders agree if they differ by at most this (the spread allowed within one decade is 0.1)
@@ -250,3 +255,48 @@ def adaptive_summary(adaptive, limits=None) -> dict:
             "H_limit": limit_of.get(str(lab), math.nan),
         }
     return out
+
+
+def sufficient_rtol(ds, config, H, *, share: float = 0.01) -> float:
+    """Loosest ``rtol`` from which on (every tighter one included) the integration effect is at most
+    ``share`` of the error at the tightest tolerance (the yardstick); NaN if not even the next-tightest."""
+    row = ds.sel(config=config, H=H)
+    rtols = row["rtol"].values  # loose to tight
+    effect = row["integration_effect"].values
+    limit = share * float(row["error_max"].values[-1])
+    best = math.nan
+    for r, e in zip(rtols[::-1][1:], effect[::-1][1:]):  # tight to loose, the yardstick left out
+        if not e <= limit:
+            break
+        best = float(r)
+    return best
+
+
+def equal_error_table(ds) -> list[dict]:
+    """One row per adaptive run: its cost against the fixed H at equal error (the report's comparison)."""
+    rows = []
+    for i, lab in enumerate(ds["config"].values):
+        for j, tol in enumerate(ds["tol"].values):
+            st = str(ds["status"].values[i, j])
+            if not st:
+                continue
+            n_acc = float(ds["n_macro_steps"].values[i, j])
+            n_rej = float(ds["n_rejected_macro_steps"].values[i, j])
+            n_fix = float(ds["n_macro_steps_fixed_equal_error"].values[i, j])
+            rows.append(
+                {
+                    "config": str(lab),
+                    "tol": float(tol),
+                    "status": st,
+                    "error_max": float(ds["error_max"].values[i, j]),
+                    "drift_max": float(ds["drift_max"].values[i, j]),
+                    "n_accepted": n_acc,
+                    "n_rejected": n_rej,
+                    "n_fixed": n_fix,
+                    "how": str(ds["equal_error_how"].values[i, j]),
+                    "fewer": bool(n_acc + n_rej < n_fix) if math.isfinite(n_fix) else None,
+                    "cpu": float(ds["cpu_seconds"].values[i, j]),
+                    "cpu_fixed": float(ds["cpu_seconds_fixed_equal_error"].values[i, j]),
+                }
+            )
+    return rows

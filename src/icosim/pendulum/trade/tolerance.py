@@ -12,7 +12,8 @@ run answer the question:
   controls (the coupling error is the same for both).
 
 The integration error stops mattering at the loosest ``rtol`` from which on
-``integration_effect <= share * error_max(rtol_min)`` (:func:`sufficient_rtol`).
+``integration_effect <= share * error_max(rtol_min)``
+(:func:`icosim.pendulum.trade.conclusions.sufficient_rtol`, read from the dataset).
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from ..runs import run_cosimulation
 from .baselines import reference_accuracy
 from .measures import RECORD, check_scheme, config_label, run_record
 
-__all__ = ["tolerance_study", "sufficient_rtol"]
+__all__ = ["tolerance_study"]
 
 
 def _run(settings, method, decomposition, k, H, t_end, rtol, scheme="jacobi"):
@@ -118,18 +119,3 @@ def tolerance_study(
         reference_accuracy=reference_accuracy(params, t_end, reference),
     )
     return xr.Dataset(variables, coords=coords, attrs=attrs)
-
-
-def sufficient_rtol(ds, config, H, *, share: float = 0.01) -> float:
-    """Loosest ``rtol`` from which on (every tighter one included) the integration effect is at most
-    ``share`` of the error at the tightest tolerance (the yardstick); NaN if not even the next-tightest."""
-    row = ds.sel(config=config, H=H)
-    rtols = row["rtol"].values  # loose to tight
-    effect = row["integration_effect"].values
-    limit = share * float(row["error_max"].values[-1])
-    best = math.nan
-    for r, e in zip(rtols[::-1][1:], effect[::-1][1:]):  # tight to loose, the yardstick left out
-        if not e <= limit:
-            break
-        best = float(r)
-    return best
