@@ -15,8 +15,8 @@ error                            raised when
                                  was written
 ===============================  ==============================================================
 
-Failures of one integrator (:class:`icosim.pendulum.integrator.radau.IntegrationError`, the pendulum's projection)
-are :class:`StepFailure` subclasses kept beside the code that raises them.
+Failures of one integrator (:class:`icosim.pendulum.integrator.radau.IntegrationError`, the
+pendulum's projection) are :class:`StepFailure` subclasses kept beside the code that raises them.
 """
 
 from __future__ import annotations
