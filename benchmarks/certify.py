@@ -1,7 +1,7 @@
 """Benchmark: a certified recheck (ball arithmetic) against the 128-digit mpmath recheck, per point, in one run.
 
-The pipeline rechecks the points float64 cannot decide.  Before issue 11 that
-recheck was mpmath at 128 digits (a value, no bound); now it is a proven
+The pipeline rechecks the points float64 cannot decide.  Before the certified
+rechecks that recheck was mpmath at 128 digits (a value, no bound); now it is a proven
 enclosure in ball arithmetic (python-flint Arb).  For each scheme (every method
 and decomposition, k = 0, 1, 2) this takes the points of a grid over the
 paper's plane that the pipeline would recheck (float64 not trusted, or within
@@ -30,8 +30,8 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from icosim import TestModel, make_method  # noqa: E402
-from icosim.decompositions import DECOMPOSITIONS  # noqa: E402
-from icosim.stability import certify_spectral_radius, spectral_radius_float64, spectral_radius_mp  # noqa: E402
+from icosim.engine.decompositions import DECOMPOSITIONS  # noqa: E402
+from icosim.engine.spectral import certify_spectral_radius, spectral_radius_float64, spectral_radius_mp  # noqa: E402
 
 GOAL = 5.0
 METHODS = [("baumgarte", {"mu": 1.0, "index": 1}), ("weighted", {"a": 1.0, "b": 1.0}), ("projection", {})]

@@ -7,9 +7,9 @@
    * this tree with the old range H = 1e-5 ... 1e-2 s (16 sizes): what the extension to 1e-6 costs;
    * an older commit (default ``06f2834``, before the floor-free errors: float64 state stepping,
      H = 1e-5 ... 1e-2 s), from a ``git worktree``.
-   Prints wall and CPU seconds and the ratios new / float64-only and new / old (issue 8's target:
-   at most 1.5x the old convergence part).
-2. Per-step costs of the co-simulation stepping: icosim.macrostep.simulate against the linear-map
+   Prints wall and CPU seconds and the ratios new / float64-only and new / old (the target of the
+   floor-free errors: at most 1.5x the old convergence part).
+2. Per-step costs of the co-simulation stepping: icosim.engine.macrostep.simulate against the linear-map
    paths (float64 state stepping and the error recurrence), for a few schemes.
 
     python benchmarks/convergence.py [--old COMMIT] [--skip-workflow]
@@ -91,7 +91,7 @@ def per_step_costs():
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--old", default="06f2834", help="commit to compare with (default: before issue 8)")
+    ap.add_argument("--old", default="06f2834", help="commit to compare with (default: before the floor-free errors)")
     ap.add_argument("--skip-workflow", action="store_true", help="only the per-step costs")
     args = ap.parse_args(argv)
     per_step_costs()

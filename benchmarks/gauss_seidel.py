@@ -2,7 +2,7 @@
 
 Two copies of the workflow run from clean ``results/``: one with the default configuration
 (Jacobi and both Gauss-Seidel orders), one with ``config/jacobi_only.yaml`` merged over it (the
-paper's scheme only, as before issue 10).  For each part (stability, convergence, pendulum)
+paper's scheme only, as before the Gauss-Seidel scheme).  For each part (stability, convergence, pendulum)
 the Jacobi-only copy builds the part's report section, then the other copy builds the same
 section plus the part's Gauss-Seidel outputs (figures, comparison, claims); then both build
 everything else (`all`: the report, claims tables, PDFs).  The runs alternate, so load on the machine hits both alike.  Printed per part:
@@ -47,7 +47,7 @@ def copy_workflow(dest: Path):
 def gauss_seidel_targets(part: str) -> list:
     """The part's Gauss-Seidel outputs, read from the default configuration."""
     sys.path.insert(0, str(ROOT / "src"))
-    from icosim.schemes import SCHEMES, figure_id
+    from icosim.engine.schemes import SCHEMES, figure_id
 
     cfg = {}
     for name in ("stability", "convergence", "pendulum"):
@@ -106,7 +106,7 @@ def run(snakemake, workdir, targets, configfiles, cores):
 def work_done(workdir: Path) -> dict:
     """What the part computed: stability panels, convergence curves x step sizes, pendulum macro steps."""
     sys.path.insert(0, str(ROOT / "src"))
-    from icosim.datasets import open_dataset
+    from icosim.io.netcdf import open_dataset
 
     panels = list((workdir / "results/stability").glob("fig*/*.nc"))
     curves = 0

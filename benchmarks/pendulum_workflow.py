@@ -4,7 +4,7 @@ Copies the workflow (Snakefile, config, workflow, src) into a temporary director
 after the other in that copy,
 
 1. the Figs. 6-8 part alone (the 21 runs, reference, summary, figures, claims), then
-2. the rest of the pendulum part: the speed-accuracy studies of issue 12 and the pendulum
+2. the rest of the pendulum part: the speed-accuracy studies (beyond the paper) and the pendulum
    section of the report (``results/report/pendulum.html``),
 
 so that the wall time of the whole part (the budget: 6 min on 2 cores for the default
@@ -78,7 +78,7 @@ def main(argv=None):
     sys.path.insert(0, str(ROOT / "src"))
     import numpy as np
 
-    from icosim.datasets import open_dataset
+    from icosim.io.netcdf import open_dataset
 
     workdir = args.keep or Path(tempfile.mkdtemp(prefix="icosim-pendulum-bench-"))
     workdir.mkdir(parents=True, exist_ok=True)

@@ -1,4 +1,4 @@
-"""Benchmark of the full replication, this tree and an older commit side by side in one run (issue 14).
+"""Benchmark of the full replication, this tree and an older commit side by side in one run (the replication speed target).
 
 For each tree, from a clean copy (``git worktree`` for the older commit) and a clean ``results/``,
 the workflow runs part by part, one ``snakemake -c2`` after the other:
@@ -20,7 +20,7 @@ CPU seconds much less.  Never a timed assertion: a measurement to quote.
 ``--ci`` uses the reduced CI configuration (config/ci/*.yaml) for both trees: a quick check of the
 benchmark itself, not the number to quote.
 
-``--same-work`` compares the same work, which is what issue 14's goal is about: both trees build exactly
+``--same-work`` compares the same work, which is what the replication speed target is about: both trees build exactly
 the files the older tree's full replication produces (``snakemake --summary`` of its ``all``: datasets,
 figures, claims tables; not its report pages, whose content differs between the trees), part by part,
 each tree from a clean ``results/``.  The newer tree's extra studies (Gauss-Seidel, trade studies, ...) are then not in
@@ -36,7 +36,7 @@ import subprocess
 
 from _workflow import run_workflow, snakemake_binary, tree
 
-from icosim.datasets import open_dataset
+from icosim.io.netcdf import open_dataset
 
 PARTS = (
     ("stability", ["results/report/stability.html"]),
@@ -141,7 +141,7 @@ def main(argv=None):
     new, old = (r["total"] for r in rows)
     print(
         f"ratio this tree / {args.old}: wall {new['wall'] / old['wall']:.2f}, CPU {new['cpu'] / old['cpu']:.2f} "
-        "(issue 14's goal: wall <= 0.40 on the same machine)"
+        "(the replication speed target: wall <= 0.40 on the same machine)"
     )
     if args.json:
         with open(args.json, "w") as fh:

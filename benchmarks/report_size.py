@@ -39,9 +39,9 @@ def webp(data: bytes) -> int:
 
 def svg_sizes(results: Path) -> dict:
     """SVG bytes of the stability and pendulum figures, re-drawn from their datasets."""
-    from icosim.datasets import open_dataset
     from icosim.figures.pendulum import pendulum_figure
     from icosim.figures.stability import stability_figure
+    from icosim.io.netcdf import open_dataset
 
     out = defaultdict(int)
     for folder in sorted((results / "stability").glob("fig*")):

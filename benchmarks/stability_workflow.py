@@ -8,8 +8,8 @@
   cannot decide), from a ``git worktree``.
 
 Prints wall and CPU seconds of each run (Snakemake and all its jobs, ``getrusage``; CPU seconds do
-not depend on other load, wall time does: the load average is printed too), their ratios (issue 11:
-the wall time of the stability part not above the old one), and from the datasets' attributes the
+not depend on other load, wall time does: the load average is printed too), their ratios (the target
+of the certified rechecks: the wall time of the stability part not above the old one), and from the datasets' attributes the
 points rechecked and the CPU seconds of the float64 pass and of the rechecks.
 
     python benchmarks/stability_workflow.py [--old COMMIT] [--ci] [--json FILE]
@@ -23,7 +23,7 @@ import json
 
 from _workflow import run_workflow, tree
 
-from icosim.datasets import open_dataset
+from icosim.io.netcdf import open_dataset
 
 TARGET = ["results/report/stability.html"]
 KEYS = ("n_points", "n_high_precision", "n_certified", "n_audited", "n_marginal", "n_overturned")

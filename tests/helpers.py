@@ -22,7 +22,7 @@ from pathlib import Path
 
 import yaml
 
-from icosim.methods.schema import with_methods
+from icosim.engine.methods.schema import with_methods
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
@@ -101,7 +101,7 @@ def growth_rate(prob, method, n_chunks=30, chunk=20, seed=0, **step_kw):
     """
     import numpy as np
 
-    from icosim.macrostep import simulate
+    from icosim.engine.macrostep import simulate
 
     rng = np.random.default_rng(seed)
     state = rng.standard_normal((2, 2))

@@ -18,9 +18,9 @@ import numpy as np
 import pytest
 
 from icosim import TestModel, make_method
-from icosim.backend import Ball
-from icosim.stability import spectral_radius_mp
-from icosim.stability.matrix import amplification_matrix
+from icosim.engine.backends import Ball
+from icosim.engine.spectral import spectral_radius_mp
+from icosim.engine.spectral.matrix import amplification_matrix
 
 GS12, GS21 = "gauss-seidel-12", "gauss-seidel-21"
 RATIOS = [Fraction(1, 10), Fraction(1, 2), Fraction(2), Fraction(10)]
@@ -185,7 +185,7 @@ def test_outputs_as_integrated_away_from_the_origin(point, k, built, as_integrat
     50 digits (two arithmetics), and as the growth of plain time stepping (an independent route)."""
     from helpers import growth_rate
 
-    from icosim.linear_problem import LinearCosimulation
+    from icosim.engine.linear_problem import LinearCosimulation
 
     model, method = TestModel(*point), make_method("projection")
     for scheme, want in ((GS12, built), ("gauss-seidel-12-as-integrated", as_integrated)):

@@ -1,8 +1,8 @@
 """``icosim advise``: every scheme for a physical two-mass system.
 
 Expected values come from an independent route: the Eq. (71) point worked out by hand from
-m, c, d and H (not through :class:`icosim.model.PhysicalModel`), evaluated with
-:func:`icosim.stability.spectral_radius_float64` on a :class:`~icosim.model.TestModel`.
+m, c, d and H (not through :class:`icosim.engine.model.PhysicalModel`), evaluated with
+:func:`icosim.engine.spectral.spectral_radius_float64` on a :class:`~icosim.engine.model.TestModel`.
 """
 
 import io
@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from icosim import TestModel, make_method, spectral_radius_float64
-from icosim.advise import Progress, TwoMassSystem, advice_records, advise, schemes
+from icosim.advise import Progress, TwoMassSystem, advice_records, advise, configurations
 from icosim.cli import main
-from icosim.model import Coefficients
+from icosim.engine.model import Coefficients
 
 SYSTEM = dict(m1=1.0, m2=2.0, c1=1e3, c2=2e3, d1=2.0, d2=4.0)
 ARGS = ["--m1", "1", "--m2", "2", "--c1", "1e3", "--c2", "2e3", "--d1", "2", "--d2", "4"]
@@ -68,7 +68,7 @@ def test_baumgarte_mu_in_seconds_is_scaled_by_H():
     df = advise(
         TwoMassSystem(**SYSTEM),
         H,
-        scheme_list=schemes(methods=["baumgarte"], k=[1], params={"mu": mu}, couplings=["jacobi"]),
+        configuration_list=configurations(methods=["baumgarte"], k=[1], params={"mu": mu}, couplings=["jacobi"]),
     )
     row = df[(df["index"] == 1) & (df["decomposition"] == "ff")].iloc[0]
     assert row["parameters"] == "mu = 0.005 s"
@@ -81,8 +81,12 @@ def test_largest_stable_H_is_bracketed():
     system = TwoMassSystem(**SYSTEM)
     rtol = 1e-6
     for method, dec, k in (("projection", "ff", 2), ("baumgarte", "fd", 0)):
-        sl = [s for s in schemes(methods=[method], decompositions=[dec], k=[k], couplings=["jacobi"]) if s.index == 1]
-        row = advise(system, (1e-4, 1e-1), scheme_list=sl, rtol=rtol).iloc[0]
+        sl = [
+            s
+            for s in configurations(methods=[method], decompositions=[dec], k=[k], couplings=["jacobi"])
+            if s.index == 1
+        ]
+        row = advise(system, (1e-4, 1e-1), configuration_list=sl, rtol=rtol).iloc[0]
         assert row["verdict"] == "stable up to H_max" and row["stable_intervals"][0][0] == 1e-4
         H_max, above = row["H_max"], row["unstable_above"]
         assert 0 < above / H_max - 1 <= rtol
@@ -94,8 +98,8 @@ def test_largest_stable_H_is_bracketed():
 
 def test_non_monotone_stability_is_reported_as_intervals():
     """Weighted multiplier ff, k = 2: unstable for small H (near the origin), stable above."""
-    sl = schemes(methods=["weighted"], decompositions=["ff"], k=[2], couplings=["jacobi"])[:1]
-    row = advise(TwoMassSystem(**SYSTEM), (1e-4, 1e-1), scheme_list=sl).iloc[0]
+    sl = configurations(methods=["weighted"], decompositions=["ff"], k=[2], couplings=["jacobi"])[:1]
+    row = advise(TwoMassSystem(**SYSTEM), (1e-4, 1e-1), configuration_list=sl).iloc[0]
     [[lo, hi]] = row["stable_intervals"]
     assert row["verdict"] == "stable on intervals" and 1e-4 < lo < hi == 1e-1
     m = engine(row, lo)
@@ -109,7 +113,11 @@ def test_overdamped_subsystem_has_no_eq71_form_but_a_verdict():
     system = TwoMassSystem(m1=1, m2=1, c1=1, c2=100, d1=10, d2=1)  # d1^2 = 100 > 4 m1 c1 = 4
     H = 0.05
     df = advise(
-        system, H, scheme_list=schemes(methods=["projection"], decompositions=["ff"], k=[0, 1], couplings=["jacobi"])
+        system,
+        H,
+        configuration_list=configurations(
+            methods=["projection"], decompositions=["ff"], k=[0, 1], couplings=["jacobi"]
+        ),
     )
     p = df.attrs["dimensionless"][0]
     assert p["lr1"] is None and "subsystem 1 is overdamped" in p["eq71"]
@@ -147,7 +155,9 @@ def test_json_is_strict_and_explains_nulls(capsys):
     assert data["mode"] == "range" and len(data["schemes"]) == 3
     assert all(s["rank"] is not None for s in data["schemes"])  # projection k = 2 is stable for small H
     df = advise(
-        TwoMassSystem(**SYSTEM), (1e-3, 0.1), scheme_list=schemes(methods=["projection"], k=[2], couplings=["jacobi"])
+        TwoMassSystem(**SYSTEM),
+        (1e-3, 0.1),
+        configuration_list=configurations(methods=["projection"], k=[2], couplings=["jacobi"]),
     )
     assert [s["H_max"] for s in data["schemes"]] == pytest.approx(df["H_max"].tolist())
     # a scheme unstable everywhere: nulls with reasons
@@ -155,7 +165,7 @@ def test_json_is_strict_and_explains_nulls(capsys):
         advise(
             TwoMassSystem(**SYSTEM),
             (1e-3, 1e-2),
-            scheme_list=schemes(methods=["weighted"], k=[2], couplings=["jacobi"])[2:3],
+            configuration_list=configurations(methods=["weighted"], k=[2], couplings=["jacobi"])[2:3],
         )
     )
     [s] = rec["schemes"]
@@ -232,10 +242,10 @@ def test_progress_bar_only_on_a_terminal_after_the_delay():
 
 
 def test_range_ranking_puts_schemes_stable_from_the_lower_end_first():
-    sl = schemes(methods=["weighted"], decompositions=["ff"], k=[2], couplings=["jacobi"])[:1] + schemes(
+    sl = configurations(methods=["weighted"], decompositions=["ff"], k=[2], couplings=["jacobi"])[:1] + configurations(
         methods=["projection"], decompositions=["ff"], k=[2], couplings=["jacobi"]
     )
-    df = advise(TwoMassSystem(**SYSTEM), (1e-4, 1e-1), scheme_list=sl)
+    df = advise(TwoMassSystem(**SYSTEM), (1e-4, 1e-1), configuration_list=sl)
     # weighted ff k = 2 reaches the larger H (0.1) but is unstable at small H: ranked after projection
     assert list(df["method"]) == ["projection", "weighted"] and list(df["rank"]) == [1, 2]
     assert df["H_max"].iloc[1] > df["H_max"].iloc[0]

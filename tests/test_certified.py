@@ -1,4 +1,4 @@
-"""Certified stability verdicts (icosim.stability.certified, the precision policy, ``icosim rho --certify``).
+"""Certified stability verdicts (icosim.engine.spectral.certified, the precision policy, ``icosim rho --certify``).
 
 Every proven enclosure is checked against an independent computation: the
 spectral radius at 160 digits with mpmath (eigenvalues of the amplification
@@ -17,15 +17,15 @@ from flint import arb
 
 from icosim import TestModel, make_method
 from icosim.cli import main
-from icosim.stability import (
+from icosim.engine.spectral import (
     Certification,
     amplification_matrix,
     certify_spectral_radius,
     spectral_radius,
     spectral_radius_float64,
 )
-from icosim.stability.certified import roots_inside
-from icosim.stability.spectral import spectral_radius_mp
+from icosim.engine.spectral.certified import roots_inside
+from icosim.engine.spectral.radius import spectral_radius_mp
 
 SCHEMES = [
     (make_method("baumgarte", index=1, mu=1.0), "ff", 2),
@@ -101,7 +101,7 @@ def test_undamped_axis_with_identical_subsystems(method, dec, k):
 
 
 def test_identical_undamped_ff_schemes_are_marginal():
-    """The issue's example: rho = 1 exactly on the undamped axis with identical subsystems (projection, Baumgarte
+    """The marginal case: rho = 1 exactly on the undamped axis with identical subsystems (projection, Baumgarte
     index 1, force/force) comes out marginal, as does the origin (a Jordan block at 1)."""
     cases = (
         (make_method("projection"), 1, (0.0, 0.3, 0.7)),
@@ -231,8 +231,8 @@ def test_no_scheme_is_stable_at_the_origin(method, dec, k):
     masses there (every coefficient is 0, whatever the ratios) and every scheme reproduces the rigid motion
     x0 + v t, so 1 is an eigenvalue of the recurrence (to 160 digits, up to the square root of the precision a
     Jordan block allows): rho >= 1, and the proof can only say marginal (rho = 1) or unstable, never stable."""
-    from icosim.backend import Multiprecision
-    from icosim.stability.matrix import amplification_matrix
+    from icosim.engine.backends import Multiprecision
+    from icosim.engine.spectral.matrix import amplification_matrix
 
     for ratios in ((1.0, 1.0, 1.0), (0.5, 2.0, 3.0)):
         point = TestModel(0.0, 0.0, *ratios)

@@ -8,8 +8,8 @@ from a dataset.
 import pytest
 
 from icosim import TestModel, make_method
-from icosim.model import PhysicalModel
-from icosim.stability import spectral_radius_mp
+from icosim.engine.model import PhysicalModel
+from icosim.engine.spectral import spectral_radius_mp
 
 BAUMGARTE_1 = make_method("baumgarte", index=1, mu=1)
 
@@ -35,7 +35,7 @@ def test_convergence_model_at_small_H_has_the_added_mass_eigenvalue(method):
     """gs12_heavier_corrected_index23_unstable: the convergence model (m2 = 2 m1) at H = 1e-6 s is close to
     free masses, and Gauss-Seidel 1->2 (the heavier subsystem corrected) has rho near m_2/m_1 = 2 at k = 0;
     2->1 (the lighter corrected) is not unstable."""
-    from icosim.methods import engine_method
+    from icosim.engine.methods import engine_method
 
     model = PhysicalModel(m1=1.0, m2=2.0, c1=1000.0, c2=1000.0, d1=10.0, d2=10.0, H=1e-6)
     engine = engine_method(method, 1e-6)
@@ -56,8 +56,8 @@ def test_disagreements_with_the_paper_are_confirmed_by_time_stepping(method, dec
     import numpy as np
     from helpers import growth_rate
 
-    from icosim.linear_problem import LinearCosimulation
-    from icosim.stability import spectral_radius_float64
+    from icosim.engine.linear_problem import LinearCosimulation
+    from icosim.engine.spectral import spectral_radius_float64
 
     found = 0
     for lr1 in np.linspace(-1.9, -0.1, 7):
@@ -85,10 +85,10 @@ def test_pendulum_link2_is_the_heavier_at_the_joint_along_link1s_direction_of_mo
 
     import numpy as np
 
-    from icosim.methods import engine_method
+    from icosim.engine.methods import engine_method
+    from icosim.engine.spectral import spectral_radius_float64
     from icosim.pendulum.linearised import pendulum_test_model
     from icosim.pendulum.model import PendulumParameters
-    from icosim.stability import spectral_radius_float64
 
     p = PendulumParameters()
     n1 = np.array([-math.sin(p.phi1_0), math.cos(p.phi1_0)])
@@ -117,7 +117,7 @@ def test_gauss_seidel_coupling_systems_are_regular_over_the_plane(k):
     of Figs. 9-15 and with a ten times lighter subsystem 2: no solve of the Gauss-Seidel schemes is singular."""
     import numpy as np
 
-    from icosim.linear_problem import LinearCosimulation
+    from icosim.engine.linear_problem import LinearCosimulation
 
     lr1, li1 = np.meshgrid(np.linspace(-2, 0, 41), np.linspace(0, 2, 41), indexing="ij")
     beta, gamma = 2.0, 1.0  # Baumgarte index 1, mu_bar = 1

@@ -8,7 +8,7 @@ import pytest
 
 from icosim import TestModel, baumgarte, spectral_radius_float64, weighted_multiplier
 from icosim.cli import main
-from icosim.schemes import GS12, GS21
+from icosim.engine.schemes import GS12, GS21
 
 BASE = ["rho", "--lr1", "-0.5", "--li1", "0.7", "--am21", "2", "--alr21", "2", "--ali21", "2"]
 
@@ -142,7 +142,7 @@ def test_bad_scheme_arguments_exit_2_naming_them(capsys, extra, argument):
     assert argument in err and "Traceback" not in err
 
 
-# -- N-digit results and numbers as users type them (issue: convergence decided) ------------------------
+# -- N-digit results and numbers as users type them (every digit printed is proven) ------------------------
 def test_digits_take_the_decimals_as_typed_and_print_n_digits(capsys):
     """``--lr1 -0.3 --digits 40`` computes at lr1 = -3/10 exactly (not the double -0.29999999999999998890) and prints
     40 significant digits: it equals the library at the exact decimal and differs from the double input's value."""
@@ -151,7 +151,7 @@ def test_digits_take_the_decimals_as_typed_and_print_n_digits(capsys):
     import mpmath
 
     from icosim import weighted_multiplier
-    from icosim.stability import spectral_radius_mp
+    from icosim.engine.spectral import spectral_radius_mp
 
     argv = ["rho", "--lr1", "-0.3", "--li1", "0.05", "--am21", "1.1", "--alr21", "0.7", "--ali21", "1.3"]
     argv += ["--method", "weighted", "--a", "0.1", "--b", "0.7", "--decomposition", "ff", "--k", "2"]
@@ -184,7 +184,7 @@ def test_rho_at_128_and_160_digits_agree_to_120_digits():
     import mpmath
 
     from icosim import make_method
-    from icosim.stability import spectral_radius_mp
+    from icosim.engine.spectral import spectral_radius_mp
 
     cases = [
         ("baumgarte", {"index": 1, "mu": "1"}, "ff", 2),

@@ -8,7 +8,7 @@ import xarray as xr
 from helpers import ROOT
 from matplotlib.figure import Figure
 
-from icosim.datasets import write_netcdf
+from icosim.io.netcdf import write_netcdf
 
 spec = importlib.util.spec_from_file_location("compare_results", ROOT / "tools" / "compare_results.py")
 compare_results = importlib.util.module_from_spec(spec)
@@ -55,7 +55,7 @@ def test_report_masks_only_timings():
 
 
 def test_allow_added_forgives_only_what_new_adds(tmp_path):
-    from icosim.datasets import provenance_attrs
+    from icosim.io.netcdf import provenance_attrs
 
     def tree(root, job, extra_attr=None, coord=False, rho=1.0):
         ds = xr.Dataset({"rho": ("x", np.array([0.5, rho]))})

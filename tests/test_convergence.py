@@ -11,16 +11,17 @@ from helpers import validate_config
 import icosim
 import icosim.convergence.experiment
 import icosim.convergence.work_precision
-from icosim.checks import load_claims, parse_claims
+from icosim.claims.registry import load_claims, parse_claims
 from icosim.convergence.config import check_claims_against_config, study_from_config
+from icosim.convergence.curves import fastest_schemes
 from icosim.convergence.datasets import run_panel
 from icosim.convergence.experiment import Setup, dimensional_method, method_attrs, oscillation_summary, step_counts
-from icosim.convergence.fit import asymptotic_order, local_slopes
 from icosim.convergence.metric import nrmse
 from icosim.convergence.panels import PanelSpec, figure_layout, figure_panels
 from icosim.convergence.study import Study, iterate_linear_map
-from icosim.convergence.work_precision import fastest_schemes, resolve_scheme, step_cost, time_macro_steps
-from icosim.model import ParameterError
+from icosim.convergence.work_precision import resolve_scheme, step_cost, time_macro_steps
+from icosim.errors import ParameterError
+from icosim.order_fit import asymptotic_order, local_slopes
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -68,8 +69,8 @@ def test_partial_nrmse_of_a_run_match_an_independent_computation():
         m = dimensional_method("baumgarte", H, index=1, mu=5e-3)
         c = setup.model(H).coefficients()
         prob = icosim.LinearCosimulation(c, "fd", 1)
-        sol = icosim.exact.MonolithicSolution(c, setup.x0, setup.v0 * H)
-        traj = icosim.macrostep.simulate(prob, m, *icosim.exact.consistent_start(prob, sol), int(N))
+        sol = icosim.engine.exact.MonolithicSolution(c, setup.x0, setup.v0 * H)
+        traj = icosim.engine.macrostep.simulate(prob, m, *icosim.engine.exact.consistent_start(prob, sol), int(N))
         states = np.array(traj.states[1:])  # (N, subsystem, (x, v_bar))
         lam = np.array(traj.coupling[1:])[:, 0]  # lambda_c is the first fd coupling variable
         exact = sol.state(np.arange(1, N + 1, dtype=float))
@@ -504,7 +505,7 @@ def test_baumgarte_index1_k0_has_the_drift_mode_of_time_scale_mu(ratio):
     mu = 1.0e-3
     H = ratio * mu
     c = icosim.PhysicalModel(**icosim.convergence.experiment.PAPER_MODEL, H=H).coefficients()
-    M = icosim.stability.amplification_matrix(
+    M = icosim.engine.spectral.amplification_matrix(
         c, icosim.make_method("baumgarte", beta=2 * mu / H, gamma=mu**2 / H**2), "ff", 0
     )
     ev = np.linalg.eigvals(M)

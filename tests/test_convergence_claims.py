@@ -23,7 +23,7 @@ import yaml
 from helpers import ROOT
 from snakemake.utils import update_config
 
-from icosim.checks import evaluate, load_claims
+from icosim.claims.registry import evaluate, load_claims
 from icosim.convergence.config import study_from_config
 from icosim.convergence.curves import curve_label, curves
 from icosim.convergence.datasets import run_panel

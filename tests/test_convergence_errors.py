@@ -12,14 +12,14 @@ import mpmath
 import numpy as np
 import pytest
 
-from icosim.backend import Ball, Multiprecision
 from icosim.convergence.errors import DEFECT_REL_ACCURACY, exact_extension, local_defect, propagate_errors
 from icosim.convergence.experiment import Setup, dimensional_method
 from icosim.convergence.study import Study
-from icosim.decompositions import get_decomposition
-from icosim.linear_problem import LinearCosimulation
-from icosim.macrostep import macro_step
-from icosim.stability import amplification_matrix
+from icosim.engine.backends import Ball, Multiprecision
+from icosim.engine.decompositions import get_decomposition
+from icosim.engine.linear_problem import LinearCosimulation
+from icosim.engine.macrostep import macro_step
+from icosim.engine.spectral import amplification_matrix
 
 #: Every method at every index of Figs. 21-23 (dimensional parameters), with the decompositions used.
 SCHEMES = [
@@ -135,7 +135,7 @@ def test_defect_is_proven_to_its_stated_accuracy(method, params, dec):
 def test_exact_extension_is_the_exact_solution_in_packed_variables():
     """w*_N = W z_N, stepped by E: the state rows are the exact state and the history rows the exact
     coupling variables at T_N, T_N-1, ... (from the closed-form monolithic solution, independently)."""
-    from icosim.exact import MonolithicSolution
+    from icosim.engine.exact import MonolithicSolution
 
     setup, H, k = Setup(), 2e-3, 2
     c = setup.model(H).coefficients()

@@ -10,8 +10,8 @@ from helpers import ROOT
 
 from icosim.convergence.config import study_from_config
 from icosim.convergence.experiment import dimensional_method
-from icosim.convergence.fit import asymptotic_order, local_slopes
-from icosim.stability import amplification_matrix
+from icosim.engine.spectral import amplification_matrix
+from icosim.order_fit import asymptotic_order, local_slopes
 
 CFG = yaml.safe_load((ROOT / "config" / "convergence.yaml").read_text())["convergence"]
 FIT = CFG["fit"]

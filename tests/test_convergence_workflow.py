@@ -14,7 +14,7 @@ from icosim.convergence.datasets import run_panel
 from icosim.convergence.experiment import Setup, step_counts
 from icosim.convergence.panels import PanelSpec
 from icosim.convergence.study import Study
-from icosim.datasets import write_netcdf
+from icosim.io.netcdf import write_netcdf
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -15,6 +15,7 @@ from helpers import copy_workflow, scheduled, snakemake, validate_config
 from icosim import ParameterError, make_method
 from icosim.convergence.config import configured_curves
 from icosim.convergence.panels import figure_panels as conv_figure_panels
+from icosim.engine.schemes import GS12, GS21, figure_id, split_figure_id
 from icosim.pendulum.config import configured_schemes
 from icosim.pendulum.model import PendulumParameters
 from icosim.pendulum.names import run_name
@@ -22,7 +23,6 @@ from icosim.pendulum.problem import PendulumCosimulation
 from icosim.pendulum.reference import Monolithic, consistent_history
 from icosim.pendulum.runs import run_cosimulation
 from icosim.report.gauss_seidel import gauss_seidel_section, order_rows, pendulum_rows, share_cells
-from icosim.schemes import GS12, GS21, figure_id, split_figure_id
 from icosim.stability.comparison import scheme_shares
 from icosim.stability.datasets import stability_panel
 from icosim.stability.panels import PanelSpec, figure_panels

@@ -1,6 +1,6 @@
-"""Reliability at the extremes (icosim.limits, icosim rho, the grid API, the datasets' integrity).
+"""Reliability at the extremes (icosim.engine.bounds, icosim rho, the grid API, the datasets' integrity).
 
-Every input the issue found hanging, crashing or printing different answers at different
+Every input once found hanging, crashing or printing different answers at different
 precisions now finishes quickly with exit 0 (an answer, possibly ``undecided`` with the
 reason) or 2 (bad input, one line naming the limit or argument), prints strict JSON, and
 gives the same verdict at every precision.  The expected verdicts come from the proofs
@@ -26,9 +26,10 @@ from hypothesis import strategies as st
 
 from icosim import TestModel, make_method
 from icosim.cli import main
-from icosim.integrity import quarantine_corrupt, remove_stale_parts, sidecar, verify
-from icosim.limits import MAX_DIGITS, MAX_K, PointTimeout, time_budget
-from icosim.stability import spectral_radius, spectral_radius_mp
+from icosim.engine.bounds import MAX_DIGITS, MAX_K, time_budget
+from icosim.engine.spectral import spectral_radius, spectral_radius_mp
+from icosim.errors import PointTimeout
+from icosim.io.integrity import quarantine_corrupt, remove_stale_parts, sidecar, verify
 
 WEIGHTED = ["--method", "weighted", "--a", "1", "--b", "1", "--decomposition", "ff", "--k", "2"]
 ONES = ["--am21", "1", "--alr21", "1", "--ali21", "1"]
@@ -64,7 +65,7 @@ def run_cli(args, *, seconds=60):
     return proc.returncode, proc.stdout, proc.stderr, time.perf_counter() - t0
 
 
-# -- the cases the issue measured ---------------------------------------------------------------------
+# -- the inputs once measured hanging or crashing ------------------------------------------------------
 
 
 @pytest.mark.parametrize(
@@ -199,7 +200,7 @@ def test_any_accepted_point_answers_in_strict_json_and_its_verdict_does_not_depe
     import io
 
     answers = []
-    for extra in ([], ["--digits", "40"]):  # the default (17 digits) and the issue's 40
+    for extra in ([], ["--digits", "40"]):  # the default (17 digits) and 40
         buf, errbuf = io.StringIO(), io.StringIO()
         with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(errbuf):
             try:
@@ -305,7 +306,7 @@ def test_a_wrong_stability_value_fails_validation_or_is_harmless(data):
     from helpers import ROOT, validate_config
     from snakemake.exceptions import WorkflowError
 
-    from icosim.model import ParameterError
+    from icosim.errors import ParameterError
     from icosim.stability.panels import figure_panels
 
     base = yaml.safe_load((ROOT / "config/stability.yaml").read_text())["stability"]
@@ -343,8 +344,8 @@ def test_a_huge_grid_is_refused_before_any_allocation(n):
     from helpers import ROOT, validate_config
     from snakemake.exceptions import WorkflowError
 
-    from icosim.limits import MAX_GRID_N
-    from icosim.model import ParameterError
+    from icosim.engine.bounds import MAX_GRID_N
+    from icosim.errors import ParameterError
     from icosim.stability.panels import grid_axis
 
     cfg = copy.deepcopy(yaml.safe_load((ROOT / "config/stability.yaml").read_text())["stability"])
@@ -361,8 +362,8 @@ def test_a_huge_grid_is_refused_before_any_allocation(n):
 def test_a_corrupt_dataset_is_refused_and_set_aside_and_stale_temporaries_removed(tmp_path):
     import xarray as xr
 
-    from icosim.datasets import open_dataset, write_netcdf
-    from icosim.integrity import CorruptDatasetError
+    from icosim.errors import CorruptDatasetError
+    from icosim.io.netcdf import open_dataset, write_netcdf
 
     path = tmp_path / "results" / "fig9" / "r1_k0_full.nc"
     write_netcdf(xr.Dataset({"rho": ("x", np.arange(4.0))}), path)

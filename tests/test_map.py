@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from icosim import TestModel, make_method, spectral_radius_float64
+from icosim.advise.maps import boundary_extent, map_specs, marginal_extent, stable_extent
 from icosim.cli import main
-from icosim.datasets import open_dataset
-from icosim.maps import boundary_extent, map_specs, marginal_extent, stable_extent
-from icosim.stability import certify_spectral_radius
+from icosim.engine.spectral import certify_spectral_radius
+from icosim.io.netcdf import open_dataset
 from icosim.stability.datasets import stability_panel
 
 WM = ["map", "--method", "weighted", "--a", "1", "--b", "1", "--decomposition", "ff"]
@@ -116,12 +116,12 @@ def test_json_output_is_strict(tmp_path, capsys):
     ],
 )
 def test_bad_input_exits_2_naming_the_argument(capsys, monkeypatch, tmp_path, argv, argument):
-    import icosim.maps
+    import icosim.advise.maps
 
     def no_work(*a, **k):
         raise AssertionError("computed before the input was checked")
 
-    monkeypatch.setattr(icosim.maps, "stability_panel", no_work)
+    monkeypatch.setattr(icosim.advise.maps, "stability_panel", no_work)
     with pytest.raises(SystemExit) as exc:
         main(["map", *argv, "--out", str(tmp_path / "x")])
     assert exc.value.code == 2

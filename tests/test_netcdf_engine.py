@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from icosim.datasets import ENGINE, open_dataset, provenance_attrs, write_netcdf
+from icosim.io.netcdf import NETCDF_ENGINE, open_dataset, provenance_attrs, write_netcdf
 from icosim.stability.datasets import stability_panel
 from icosim.stability.panels import PanelSpec
 
@@ -57,4 +57,4 @@ def test_files_of_either_engine_read_back_identically(tmp_path, which):
 
 
 def test_engine_is_netcdf4():
-    assert ENGINE == "netcdf4"
+    assert NETCDF_ENGINE == "netcdf4"

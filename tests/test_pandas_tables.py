@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from icosim.claims import write_verdicts
+from icosim.claims.core import write_verdicts
 from icosim.report.convergence import work_cost_table
 from icosim.report.html import table
 from icosim.report.stability import KEYS, cost_table

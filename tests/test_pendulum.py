@@ -16,15 +16,16 @@ from helpers import correct_all, predict_all
 from scipy.integrate import solve_ivp
 
 from icosim import ParameterError, make_method
-from icosim.macrostep import StepFailure, macro_step
+from icosim.engine.macrostep import macro_step
+from icosim.errors import StepFailure
 from icosim.pendulum.config import configured_runs
+from icosim.pendulum.integrator.radau import MU_REAL, IntegrationError, radau_batch
 from icosim.pendulum.links import Link1, Link2
+from icosim.pendulum.manifold import ProjectionError, _constraint_jacobian, project_state
 from icosim.pendulum.model import PendulumParameters, joint_constraint
 from icosim.pendulum.problem import PendulumCosimulation
-from icosim.pendulum.projection import ProjectionError, _constraint_jacobian, project_state
 from icosim.pendulum.reference import Monolithic, consistent_history, reference_solution
 from icosim.pendulum.runs import run_cosimulation
-from icosim.radau import MU_REAL, IntegrationError, radau_batch
 
 P = PendulumParameters()
 H = 1e-3
@@ -192,7 +193,7 @@ def test_forward_difference_sensitivities_match_central_differences(decompositio
 
 def test_predictor_is_the_extrapolation_polynomial():
     """The unperturbed member of the first batch (interpolation through e_p) equals the extrapolation."""
-    from icosim.lagrange import monomial_coefficients, predictor_nodes
+    from icosim.engine.lagrange import monomial_coefficients, predictor_nodes
 
     k = 2
     prob = PendulumCosimulation(P, "ff", k, H)
@@ -320,9 +321,9 @@ def test_bad_input_is_refused_with_the_name():
 
 def test_reference_dataset_keeps_the_naming_contract_after_a_netcdf_round_trip(tmp_path):
     """Other tools read phi1, phi2, g_cax, g_cay, lambda_cax, lambda_cay as data variables over t."""
-    from icosim.datasets import open_dataset, write_netcdf
-    from icosim.pendulum.datasets import reference_dataset
+    from icosim.io.netcdf import open_dataset, write_netcdf
     from icosim.pendulum.model import PendulumParameters
+    from icosim.pendulum.replication.datasets import reference_dataset
 
     ds = reference_dataset(PendulumParameters(), 1e-3, 0.01, {"title": "test"})
     write_netcdf(ds, tmp_path / "reference.nc")

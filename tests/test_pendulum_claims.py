@@ -17,15 +17,15 @@ from helpers import validate_config
 
 import icosim.pendulum.problem
 from icosim import make_method
-from icosim.checks import evaluate_claim, load_claims, parse_claims
-from icosim.pendulum.checks import expected_outcome
+from icosim.claims.registry import evaluate_claim, load_claims, parse_claims
 from icosim.pendulum.config import configured_runs
-from icosim.pendulum.datasets import reference_dataset, run_dataset
+from icosim.pendulum.integrator.radau import IntegrationError
 from icosim.pendulum.linearised import linear_test_model_rho, pendulum_test_model
 from icosim.pendulum.model import PendulumParameters
+from icosim.pendulum.replication.checks import expected_outcome
+from icosim.pendulum.replication.datasets import reference_dataset, run_dataset
+from icosim.pendulum.replication.summary import summarize
 from icosim.pendulum.runs import run_cosimulation
-from icosim.pendulum.summary import summarize
-from icosim.radau import IntegrationError
 
 ROOT = Path(__file__).resolve().parents[1]
 CFG = yaml.safe_load((ROOT / "config" / "pendulum.yaml").read_text())["pendulum"]
@@ -134,7 +134,7 @@ def test_failed_integration_is_not_counted_as_unstable(monkeypatch):
     """A subsystem integration that fails is a failed run (not diverged): the claim gets no pass from it.
 
     weighted/ff/k = 2 is expected unstable, so counting a solver failure as a divergence would make it pass."""
-    compiled_link = icosim.pendulum.problem.CompiledLink  # the links' integrator (icosim.pendulum.compiled)
+    compiled_link = icosim.pendulum.problem.CompiledLink  # the links' integrator (icosim.pendulum.integrator.compiled)
     real_radau, calls = compiled_link.radau, []
     fail_at_step = 11  # four integrations per macro step (predictor+sensitivities and corrector, two links)
 

@@ -1,4 +1,4 @@
-"""The pendulum's speed-accuracy studies (issue 12): variable-step Lagrange weights, the step-size
+"""The pendulum's speed-accuracy studies (the speed-accuracy trade): variable-step Lagrange weights, the step-size
 controller, the predictor-corrector error estimate, adaptive runs, counters, fits, limits, datasets.
 
 Every number asserted comes from theory (Lagrange remainders, the controller's formulas, the
@@ -15,7 +15,8 @@ import yaml
 from helpers import ROOT, validate_config
 
 from icosim import ParameterError, make_method
-from icosim.lagrange import (
+from icosim.control.controller import StepController, pc_estimate
+from icosim.engine.lagrange import (
     corrector_nodes,
     lagrange_coefficients,
     lagrange_weights,
@@ -25,18 +26,17 @@ from icosim.lagrange import (
     variable_predictor_nodes,
     weights_at,
 )
-from icosim.macrostep import macro_step
+from icosim.engine.macrostep import macro_step
 from icosim.pendulum import runs as runs_module
-from icosim.pendulum.adaptive import StepController, pc_estimate, run_adaptive
-from icosim.pendulum.adaptive_study import fixed_at_error
 from icosim.pendulum.config import trade_plan
-from icosim.pendulum.limits import stability_limit
-from icosim.pendulum.measures import SCHEMES, angle_errors, config_label
 from icosim.pendulum.model import PendulumParameters
-from icosim.pendulum.orders import decade_order, error_floor, pendulum_order
 from icosim.pendulum.problem import PendulumCosimulation
 from icosim.pendulum.reference import consistent_history, reference_solution
-from icosim.pendulum.runs import run_cosimulation
+from icosim.pendulum.runs import run_adaptive, run_cosimulation
+from icosim.pendulum.trade.adaptive import fixed_at_error
+from icosim.pendulum.trade.measures import SCHEMES, angle_errors, config_label
+from icosim.pendulum.trade.orders import decade_order, error_floor, pendulum_order
+from icosim.pendulum.trade.stability_limit import stability_limit
 
 P = PendulumParameters()
 CFG = yaml.safe_load((ROOT / "config" / "pendulum.yaml").read_text())["pendulum"]
@@ -384,8 +384,9 @@ def test_stability_limit_search():
 def test_linear_prediction_is_the_policys_verdict(monkeypatch):
     """The predicted limit counts only a ``stable`` verdict as stable: a marginal or undecided step size
     (rho NaN, nothing known) is not, and the dataset records the verdict at the bracket's upper end."""
-    from icosim.pendulum import limits, linear_study
     from icosim.pendulum.linearised import combined_verdict
+    from icosim.pendulum.trade import linear_study
+    from icosim.pendulum.trade import stability_limit as limits
 
     settings = {key: CFG[key] for key in ("model", "methods")}
     rho, verdict = linear_study.linear_stability(
@@ -458,13 +459,13 @@ def test_bad_trade_configuration_names_the_key():
 @pytest.fixture(scope="module")
 def small_studies(tmp_path_factory):
     """Every study on a tiny grid, written and read back as NetCDF (as the workflow does)."""
-    from icosim.datasets import open_dataset, write_netcdf
-    from icosim.pendulum.adaptive_study import adaptive_study
-    from icosim.pendulum.baselines import linear_orders_dataset, monolithic_baselines
-    from icosim.pendulum.limits import limits_dataset, limits_group, merge_limits
-    from icosim.pendulum.sweep import sweep_group
-    from icosim.pendulum.tolerance import tolerance_study
-    from icosim.pendulum.work_precision import work_precision_dataset
+    from icosim.io.netcdf import open_dataset, write_netcdf
+    from icosim.pendulum.trade.adaptive import adaptive_study
+    from icosim.pendulum.trade.baselines import linear_orders_dataset, monolithic_baselines
+    from icosim.pendulum.trade.stability_limit import limits_dataset, limits_group, merge_limits
+    from icosim.pendulum.trade.sweep import sweep_group
+    from icosim.pendulum.trade.tolerance import tolerance_study
+    from icosim.pendulum.trade.work_precision import work_precision_dataset
 
     trade = CFG["trade"]
     settings = {key: CFG[key] for key in ("model", "methods", "integrator", "sensitivities", "corrector", "divergence")}
@@ -557,7 +558,7 @@ def test_datasets_have_the_contract_names_and_dims(small_studies):
 
 def test_report_conclusions_are_the_datasets(small_studies):
     """The trade section's sentences are built from the same rows the tables show."""
-    from icosim.pendulum.conclusions import adaptive_summary, order_rows, order_summary
+    from icosim.pendulum.trade.conclusions import adaptive_summary, order_rows, order_summary
     from icosim.report.pendulum_trade import trade_section
 
     s = small_studies

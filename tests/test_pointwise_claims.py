@@ -6,10 +6,10 @@ import pytest
 import xarray as xr
 
 from icosim import TestModel, make_method
-from icosim.checks import evaluate_claim, parse_claims
-from icosim.model import ParameterError
-from icosim.stability.matrix import amplification_matrix
-from icosim.stability.policy import VERDICTS
+from icosim.claims.registry import evaluate_claim, parse_claims
+from icosim.engine.spectral.matrix import amplification_matrix
+from icosim.engine.spectral.policy import VERDICTS
+from icosim.errors import ParameterError
 
 S, U, M, X = (VERDICTS.index(v) for v in ("stable", "unstable", "marginal", "undecided"))
 

@@ -1,16 +1,16 @@
-"""The registry of coupling methods (icosim.methods) and everything that reads it agree."""
+"""The registry of coupling methods (icosim.engine.methods) and everything that reads it agree."""
 
 import numpy as np
 import pytest
 import yaml
 from helpers import ROOT, validate_config
 
-from icosim import methods
 from icosim.cli import build_parser
 from icosim.convergence.experiment import dimensional_method, units_description, units_summary
-from icosim.methods import METHODS, engine_method, get_spec, make_method, parameter_units
-from icosim.methods.schema import PLACEHOLDERS, schema_defs, with_methods
-from icosim.model import ParameterError
+from icosim.engine import methods
+from icosim.engine.methods import METHODS, engine_method, get_spec, make_method, parameter_units
+from icosim.engine.methods.schema import PLACEHOLDERS, schema_defs, with_methods
+from icosim.errors import ParameterError
 from icosim.stability.panels import method_parameters_units, row_keys
 
 SCHEMAS = ("stability", "convergence", "pendulum")

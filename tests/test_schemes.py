@@ -25,12 +25,12 @@ from icosim import (
     weighted_multiplier,
 )
 from icosim.convergence.experiment import Setup, step_counts
-from icosim.convergence.fit import asymptotic_order
 from icosim.convergence.study import Study
-from icosim.macrostep import macro_step
-from icosim.model import Coefficients
-from icosim.schemes import GS12, GS21, JACOBI, GaussSeidel, Jacobi, get_scheme
-from icosim.stability import amplification_matrix
+from icosim.engine.macrostep import macro_step
+from icosim.engine.model import Coefficients
+from icosim.engine.schemes import GS12, GS21, JACOBI, GaussSeidel, Jacobi, get_scheme
+from icosim.engine.spectral import amplification_matrix
+from icosim.order_fit import asymptotic_order
 
 CASES = [
     (baumgarte(mu=1, index=1), "ff"),
@@ -400,7 +400,7 @@ def test_impulse_defect_of_the_two_polynomials(k, node_integral):
     impulse to the leading term tends to 1 like H."""
     import mpmath
 
-    from icosim.lagrange import corrector_nodes, monomial_coefficients, predictor_nodes
+    from icosim.engine.lagrange import corrector_nodes, monomial_coefficients, predictor_nodes
 
     def integral(nodes, samples):  # int_0^1 of the Lagrange polynomial through (nodes, samples)
         C = monomial_coefficients(nodes)

@@ -1,6 +1,6 @@
 """Stability panels (icosim.stability.panels) and their figures (icosim.figures.stability).
 
-The dataset names are a contract other tools read (issue 3); the numbers are
+The dataset names are a contract other tools read (icosim map, the claims, the report); the numbers are
 checked against an independent route: the multiprecision spectral radius of
 single points.
 """
@@ -16,11 +16,11 @@ import pytest  # noqa: E402
 import yaml  # noqa: E402
 
 from icosim import TestModel, make_method  # noqa: E402
-from icosim.datasets import open_dataset, provenance_attrs, write_netcdf  # noqa: E402
+from icosim.engine.spectral import spectral_radius_mp  # noqa: E402
+from icosim.errors import ParameterError  # noqa: E402
 from icosim.figures import save_figure, stability_figure  # noqa: E402
 from icosim.figures.stability import panel_layout, row_labels  # noqa: E402
-from icosim.model import ParameterError  # noqa: E402
-from icosim.stability import spectral_radius_mp  # noqa: E402
+from icosim.io.netcdf import open_dataset, provenance_attrs, write_netcdf  # noqa: E402
 from icosim.stability.datasets import stability_panel  # noqa: E402
 from icosim.stability.panels import (  # noqa: E402
     PanelSpec,
@@ -283,8 +283,8 @@ def test_force_displacement_instability_is_confirmed_by_time_stepping(method, lr
     """Independent route for the reported disagreements (Figs. 13 and 14, k = 0): from an
     exact start, plain time stepping grows by the panel's rho per macro step."""
     from icosim import LinearCosimulation
-    from icosim.exact import MonolithicSolution, consistent_start
-    from icosim.macrostep import simulate
+    from icosim.engine.exact import MonolithicSolution, consistent_start
+    from icosim.engine.macrostep import simulate
 
     s = spec(
         figure="13",

@@ -1,5 +1,6 @@
-"""The shape of the package: no import cycle, files of one idea, thin workflow scripts, and library
-inputs of the rules that follow the real imports."""
+"""The shape of the package: no import cycle, files of one idea, rooms that keep to themselves (the engine
+imports only itself and the errors, no study imports another, the report reads the studies through their
+data contracts), thin workflow scripts, and library inputs of the rules that follow the real imports."""
 
 import ast
 import json
@@ -64,6 +65,92 @@ def test_no_import_cycle():
             visit(node, [])
 
 
+#: The studies: each replicates (or extends) one part of the paper and writes its own datasets.
+STUDIES = ("icosim.stability", "icosim.convergence", "icosim.pendulum.replication", "icosim.pendulum.trade")
+#: What a study may rest on besides itself: the rooms below the studies.
+BELOW_STUDIES = (
+    "icosim.errors",
+    "icosim.engine",
+    "icosim.control",
+    "icosim.order_fit",
+    "icosim.io",
+    "icosim.claims.core",
+    "icosim.pendulum",  # the pendulum's model, integrator, runs, names, configuration (not its two studies)
+)
+#: The studies' data contracts that the report and the figures may read: module -> what they take from it.
+#: Each reads datasets or configurations and imports no module of a study that computes.
+DATA_CONTRACTS = {
+    "icosim.stability.panels": "a panel's configuration: row labels, ratios, grid axes",
+    "icosim.convergence.experiment": "the convergence experiment's configuration: setup, step counts, the exact oscillation",
+    "icosim.convergence.curves": "panel and work-precision datasets read back as curves and rankings",
+    "icosim.pendulum.trade.conclusions": "the trade datasets read back as the report's rows and counts",
+    "icosim.pendulum.trade.orders": "the order fit above the pendulum's error floor (conclusions apply it)",
+}
+
+
+def _graph():
+    return {_module_name(p): _imports(p) for p in PACKAGE.rglob("*.py")}
+
+
+def _room(module, rooms):
+    """The room of ``rooms`` (dotted prefixes) that ``module`` lies in, or None."""
+    return next((r for r in rooms if module == r or module.startswith(r + ".")), None)
+
+
+def test_the_engine_imports_only_itself_and_the_errors():
+    outside = {
+        (m, i)
+        for m, imported in _graph().items()
+        if _room(m, ("icosim.engine",))
+        for i in imported
+        if not _room(i, ("icosim.engine", "icosim.errors"))
+    }
+    assert not outside, sorted(outside)
+
+
+def test_no_study_imports_another_study():
+    """A study rests on the rooms below the studies (the engine, control, the order fit, the pendulum's model
+    and integrator, claims, io), never on another study: what two studies share lives below them."""
+    wrong = set()
+    for module, imported in _graph().items():
+        study = _room(module, STUDIES)
+        if study is None:
+            continue
+        for i in imported:
+            other = _room(i, STUDIES)
+            if other == study:
+                continue
+            if other is not None or not _room(i, BELOW_STUDIES):
+                wrong.add((module, i))
+    assert not wrong, sorted(wrong)
+
+
+def test_the_rooms_below_the_studies_import_no_study():
+    wrong = {
+        (m, i)
+        for m, imported in _graph().items()
+        if _room(m, BELOW_STUDIES) and not _room(m, STUDIES)
+        for i in imported
+        if _room(i, STUDIES)
+    }
+    assert not wrong, sorted(wrong)
+
+
+def test_the_report_and_the_figures_read_the_studies_through_their_data_contracts():
+    """report/ and figures/ draw what the studies wrote; from a study they import only its data contracts,
+    and a data contract imports no other module of a study (so a report never reruns a study's code)."""
+    graph = _graph()
+    wrong = {
+        (m, i)
+        for m, imported in graph.items()
+        if _room(m, ("icosim.report", "icosim.figures") + tuple(DATA_CONTRACTS))
+        for i in imported
+        if _room(i, STUDIES) and i not in DATA_CONTRACTS
+    }
+    assert not wrong, sorted(wrong)
+    assert all(m in graph for m in DATA_CONTRACTS)
+
+
 def test_files_hold_one_idea():
     long = {
         str(p.relative_to(SRC)): n
@@ -74,9 +161,9 @@ def test_files_hold_one_idea():
 
 
 def test_claims_machinery_knows_no_part():
-    imported = _imports(PACKAGE / "claims.py")
-    assert imported <= {"icosim.model", "icosim.datasets", "icosim.jsonio"}, imported
-    assert "<" not in (PACKAGE / "claims.py").read_text().split('"""', 2)[2].replace("<=", "")  # no HTML
+    imported = _imports(PACKAGE / "claims" / "core.py")
+    assert imported <= {"icosim.errors", "icosim.io.netcdf", "icosim.io.jsonio"}, imported
+    assert "<" not in (PACKAGE / "claims" / "core.py").read_text().split('"""', 2)[2].replace("<=", "")  # no HTML
 
 
 @pytest.mark.parametrize("script", SCRIPTS, ids=lambda p: p.stem)
@@ -113,9 +200,11 @@ def test_library_inputs_cover_what_a_script_loads(script):
 
 def test_stability_claims_do_not_rest_on_the_pendulum_problem():
     files = {p.relative_to(SRC).as_posix() for p in script_closure(ROOT / "workflow/scripts/claims.py", SRC)}
-    assert "icosim/stability/checks.py" in files and "icosim/pendulum/checks.py" in files
+    assert "icosim/stability/checks.py" in files and "icosim/pendulum/replication/checks.py" in files
     assert not {"icosim/pendulum/problem.py", "icosim/pendulum/runs.py", "icosim/convergence/study.py"} & files
-    assert "icosim/radau.py" not in {p.relative_to(SRC).as_posix() for p in module_closure(["icosim.checks"], SRC)}
+    assert "icosim/pendulum/integrator/radau.py" not in {
+        p.relative_to(SRC).as_posix() for p in module_closure(["icosim.claims.registry"], SRC)
+    }
 
 
 def test_an_edited_module_is_read_again(tmp_path):
@@ -144,8 +233,8 @@ def _loaded_after(statement: str, modules) -> list:
     return json.loads(out.stdout.replace("'", '"'))
 
 
-def test_importing_the_stability_package_stays_light():
-    assert _loaded_after("import icosim.stability", {"xarray", "matplotlib"}) == []
+def test_importing_the_spectral_radius_stays_light():
+    assert _loaded_after("import icosim.engine.spectral", {"xarray", "matplotlib"}) == []
 
 
 def _type_checking_imports(path):
@@ -167,6 +256,10 @@ def test_the_package_loads_its_public_names_lazily_and_lists_them_for_the_workfl
     assert _type_checking_imports(SRC / "icosim" / "__init__.py") == icosim._LAZY
     assert set(icosim._LAZY) == set(icosim.__all__)
     assert all(getattr(icosim, name) is not None for name in icosim.__all__)
-    engine = {"icosim/linear_problem.py", "icosim/stability/__init__.py", "icosim/methods/__init__.py"}
+    engine = {
+        "icosim/engine/linear_problem.py",
+        "icosim/engine/spectral/__init__.py",
+        "icosim/engine/methods/__init__.py",
+    }
     assert engine <= {p.relative_to(SRC).as_posix() for p in module_closure(["icosim.pendulum.names"], SRC)}
-    assert _loaded_after("import icosim.pendulum.measures", {"scipy.linalg", "mpmath"}) == []
+    assert _loaded_after("import icosim.pendulum.trade.measures", {"scipy.linalg", "mpmath"}) == []

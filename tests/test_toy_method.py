@@ -2,7 +2,7 @@
 
 A toy method -- a velocity-level correction ``g' + tau g'' = 0`` with a time
 constant ``tau`` (seconds where the setting is dimensional), index 2 -- is
-registered here, in the test, through :func:`icosim.methods.register` alone.
+registered here, in the test, through :func:`icosim.engine.methods.register` alone.
 Nothing else in the package names it, yet the factory, the command line, the
 convergence study, the stability policy, the pendulum and the configuration
 schemas accept it, and its ``tau`` is scaled with ``H`` as the registry says.
@@ -16,20 +16,21 @@ import pytest
 import yaml
 from helpers import ROOT, validate_config
 
-from icosim import TestModel, methods
+from icosim import TestModel
 from icosim.cli import main
 from icosim.convergence.datasets import run_panel
 from icosim.convergence.experiment import Setup, dimensional_method, step_counts
 from icosim.convergence.panels import figure_panels
 from icosim.convergence.study import Study
-from icosim.methods import CouplingMethod, MethodSpec, Parameter, make_method
-from icosim.methods.base import finite
-from icosim.model import ParameterError
+from icosim.engine import methods
+from icosim.engine.methods import CouplingMethod, MethodSpec, Parameter, make_method
+from icosim.engine.methods.base import finite
+from icosim.engine.spectral import spectral_radius
+from icosim.errors import ParameterError
 from icosim.pendulum.config import configured_runs
 from icosim.pendulum.linearised import linear_test_model_rho
 from icosim.pendulum.model import PendulumParameters
 from icosim.pendulum.runs import run_cosimulation
-from icosim.stability import spectral_radius
 from icosim.stability.datasets import stability_panel
 from icosim.stability.panels import PanelSpec as StabilityPanel
 
@@ -39,7 +40,7 @@ NAME = "toy_velocity"
 def toy_velocity(tau=None):
     """The rule: one solve on ``g' + tau g''`` (velocity level, damped by the acceleration level)."""
     if tau is None:
-        raise ParameterError(f"{NAME} needs --tau")
+        raise ParameterError(f"{NAME} needs tau")
     tau = finite("tau", tau)
     if tau <= 0:
         raise ParameterError(f"tau must be > 0, got {tau!r}")
@@ -91,7 +92,7 @@ def test_factory_and_scaling(toy):
 
 
 def _dd():
-    from icosim.decompositions import get_decomposition
+    from icosim.engine.decompositions import get_decomposition
 
     return get_decomposition("dd")
 

@@ -3,7 +3,7 @@
     python tools/claims_table.py            # (re)write docs/claims.md
     python tools/claims_table.py --check    # exit 1 if docs/claims.md is not what the claims say
 
-The table is generated from the claims themselves (icosim.checks.describe_claim), so it cannot
+The table is generated from the claims themselves (icosim.claims.registry.describe_claim), so it cannot
 say more or less than the checks do; tests/test_claims_docs.py keeps the committed file current.
 """
 
@@ -16,7 +16,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
-from icosim.checks import describe_claim, load_claims  # noqa: E402
+from icosim.claims.registry import describe_claim, load_claims  # noqa: E402
 from icosim.report.claims import claims_markdown  # noqa: E402
 
 DOC = ROOT / "docs" / "claims.md"

@@ -25,7 +25,7 @@ come from the same data by the same logic.  Exit status 0 if everything is equal
 variable attribute, or a variable (coordinate), present in NEW only; the name in a variable's
 ``coordinates`` attribute; and a key of that name present only in NEW's ``config_json`` (at any
 depth; ``config_sha256`` is then checked against NEW's own ``config_json`` instead).  Used to show
-that adding the ``scheme`` attribute (Gauss-Seidel, issue 10) left every Jacobi result as it was.
+that adding the ``scheme`` attribute (the Gauss-Seidel scheme) left every Jacobi result as it was.
 """
 
 from __future__ import annotations
@@ -236,7 +236,7 @@ def compare(old_root: Path, new_root: Path, allow_added=()) -> tuple[list, list]
     old_res, new_res = old_root / "results", new_root / "results"
     files_a = {p.relative_to(old_res).as_posix() for p in old_res.rglob("*") if p.is_file()}
     files_b = {p.relative_to(new_res).as_posix() for p in new_res.rglob("*") if p.is_file()}
-    # a dataset's checksum sidecar (icosim.integrity) follows its bytes, timings included: the dataset is compared
+    # a dataset's checksum sidecar (icosim.io.integrity) follows its bytes, timings included: the dataset is compared
     files_a = {f for f in files_a if not f.endswith(".nc.sha256")}
     files_b = {f for f in files_b if not f.endswith(".nc.sha256")}
     for rel in sorted(files_a ^ files_b):

@@ -10,44 +10,45 @@ approximation of any order k, the Jacobi (parallel) and Gauss-Seidel
 float64 and at arbitrary precision.
 
 The map of the package is in the README (section "Layout"); the engine is
-:mod:`icosim.macrostep` driving a :class:`icosim.problem.CosimulationProblem`
-with a coupling method of the registry :mod:`icosim.methods`.
+:mod:`icosim.engine.macrostep` driving a :class:`icosim.engine.problem.CosimulationProblem`
+with a coupling method of the registry :mod:`icosim.engine.methods`.
 """
 
 from typing import TYPE_CHECKING
 
 # The public names are loaded on first use (PEP 562): a Snakemake job importing, say,
-# icosim.pendulum.sweep starts without the linear model, scipy.linalg and mpmath.
+# icosim.pendulum.trade.sweep starts without the linear model, scipy.linalg and mpmath.
 # The imports below are never executed; they are what type checkers and icosim.sources
 # read (every job that imports icosim still lists the whole engine as its input).
 if TYPE_CHECKING:
-    from .linear_problem import LinearCosimulation
-    from .methods import make_method
-    from .methods.baumgarte import baumgarte
-    from .methods.projection import projection
-    from .methods.weighted import weighted_multiplier
-    from .model import Coefficients, ParameterError, PhysicalModel, TestModel
-    from .schemes import JACOBI, GaussSeidel, Jacobi, get_scheme
-    from .stability import amplification_matrix, spectral_radius, spectral_radius_float64, spectral_radius_mp
+    from .engine.linear_problem import LinearCosimulation
+    from .engine.methods import make_method
+    from .engine.methods.baumgarte import baumgarte
+    from .engine.methods.projection import projection
+    from .engine.methods.weighted import weighted_multiplier
+    from .engine.model import Coefficients, PhysicalModel, TestModel
+    from .engine.schemes import JACOBI, GaussSeidel, Jacobi, get_scheme
+    from .engine.spectral import amplification_matrix, spectral_radius, spectral_radius_float64, spectral_radius_mp
+    from .errors import ParameterError
 
 _LAZY = {
-    "LinearCosimulation": ".linear_problem",
-    "make_method": ".methods",
-    "baumgarte": ".methods.baumgarte",
-    "projection": ".methods.projection",
-    "weighted_multiplier": ".methods.weighted",
-    "Coefficients": ".model",
-    "ParameterError": ".model",
-    "PhysicalModel": ".model",
-    "TestModel": ".model",
-    "JACOBI": ".schemes",
-    "GaussSeidel": ".schemes",
-    "Jacobi": ".schemes",
-    "get_scheme": ".schemes",
-    "amplification_matrix": ".stability",
-    "spectral_radius": ".stability",
-    "spectral_radius_float64": ".stability",
-    "spectral_radius_mp": ".stability",
+    "LinearCosimulation": ".engine.linear_problem",
+    "make_method": ".engine.methods",
+    "baumgarte": ".engine.methods.baumgarte",
+    "projection": ".engine.methods.projection",
+    "weighted_multiplier": ".engine.methods.weighted",
+    "Coefficients": ".engine.model",
+    "ParameterError": ".errors",
+    "PhysicalModel": ".engine.model",
+    "TestModel": ".engine.model",
+    "JACOBI": ".engine.schemes",
+    "GaussSeidel": ".engine.schemes",
+    "Jacobi": ".engine.schemes",
+    "get_scheme": ".engine.schemes",
+    "amplification_matrix": ".engine.spectral",
+    "spectral_radius": ".engine.spectral",
+    "spectral_radius_float64": ".engine.spectral",
+    "spectral_radius_mp": ".engine.spectral",
 }
 
 

@@ -33,11 +33,11 @@ for _var in (
 
 # The library, read at parse time: configurations are checked before any job runs.
 sys.path.insert(0, str(Path(workflow.basedir) / "src"))
-from icosim.methods import METHODS  # noqa: E402
-from icosim.methods.schema import with_methods  # noqa: E402
-from icosim.schemes import SCHEMES  # noqa: E402
+from icosim.engine.methods import METHODS  # noqa: E402
+from icosim.engine.methods.schema import with_methods  # noqa: E402
+from icosim.engine.schemes import SCHEMES  # noqa: E402
 from icosim.sources import module_closure, script_closure  # noqa: E402
-from icosim.integrity import quarantine_corrupt, remove_stale_parts  # noqa: E402
+from icosim.io.integrity import quarantine_corrupt, remove_stale_parts  # noqa: E402
 
 # A dataset whose SHA-256 no longer matches the one recorded when it was written is set aside
 # (x.nc -> x.nc.corrupt) before the DAG is built, so this run computes it again instead of trusting it.
@@ -55,7 +55,7 @@ onstart:
 
 
 def validate_part(part_config, schema):
-    """Validate against a schema whose method $defs are filled from the registry (icosim.methods)."""
+    """Validate against a schema whose method $defs are filled from the registry (icosim.engine.methods)."""
     path = Path(workflow.basedir) / "workflow" / "schemas" / schema
     with open(path) as fh:
         filled = with_methods(yaml.safe_load(fh))
@@ -93,7 +93,7 @@ def script_lib(script):
 
 # The engine every numerical result rests on: the macro step, its problems and methods,
 # and the stability analysis.
-ENGINE = lib("macrostep", "stability", "linear_problem", "methods")
+ENGINE = lib("engine.macrostep", "engine.spectral", "engine.linear_problem", "engine.methods")
 
 
 def engine_lib(script):

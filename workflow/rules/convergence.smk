@@ -3,15 +3,15 @@
 # decomposition, the work-precision timing and diagram, the paper's order claims checked
 # against the datasets, and the convergence section of the report.  A figure computed with a
 # Gauss-Seidel scheme (its `schemes:` list) has the figure id <figure>gs12 or <figure>gs21
-# (icosim.schemes.figure_id); its claims and report section are in gauss_seidel.smk.
-from icosim.checks import load_claims  # noqa: E402
+# (icosim.engine.schemes.figure_id); its claims and report section are in gauss_seidel.smk.
+from icosim.claims.registry import load_claims  # noqa: E402
 from icosim.convergence.config import (
     check_claims_against_config,
     study_from_config,
 )  # noqa: E402
 from icosim.convergence.panels import figure_layout, figure_panels  # noqa: E402
 from icosim.convergence.work_precision import resolve_scheme  # noqa: E402
-from icosim.schemes import FIGURE_ID_PATTERN, figure_id  # noqa: E402
+from icosim.engine.schemes import FIGURE_ID_PATTERN, figure_id  # noqa: E402
 
 validate_part(config["convergence"], "convergence.schema.yaml")
 

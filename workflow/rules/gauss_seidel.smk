@@ -3,7 +3,7 @@
 # <N>gs12 / <N>gs21, run names ..._gs12 / ..._gs21); here: the comparison of stable shares,
 # the claims about the schemes (config/claims/*_gauss_seidel.yaml, same mechanism as the
 # paper's) and the Gauss-Seidel section of the report.
-from icosim.schemes import SCHEMES  # noqa: E402
+from icosim.engine.schemes import SCHEMES  # noqa: E402
 
 # -- stability ------------------------------------------------------------------------------------
 # full panels of every figure that has a Gauss-Seidel scheme (all its schemes, Jacobi included)

@@ -2,7 +2,7 @@
 # job per (method, decomposition) writing results/pendulum/<method>_<dec>_k<k>.nc per k, the
 # errors and the claim of Sect. 4 in results/pendulum/summary.nc, one figure per k, and
 # the pendulum section of the report.
-from icosim.checks import load_claims  # noqa: E402
+from icosim.claims.registry import load_claims  # noqa: E402
 from icosim.pendulum.config import (  # noqa: E402
     configured_runs,
     run_settings,
@@ -42,7 +42,7 @@ PENDULUM_DATASETS_OF_K = {
 }
 
 
-# -- speed-accuracy trade (issue 12): error over H, work-precision, stability limit in H,
+# -- speed-accuracy trade (beyond the paper): error over H, work-precision, stability limit in H,
 # subsystem tolerance, adaptive macro steps.  One sweep job and one limit job per group
 # (scheme, method, decomposition; every k), then merges; figures and the report section
 # read only the datasets.

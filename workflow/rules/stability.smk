@@ -2,9 +2,9 @@
 # results/stability/fig<figure>/r<row>_k<k>_<view>.nc, one plot job per figure, the paper's
 # claims checked against the datasets, and the stability section of the report.  A figure
 # computed with another coupling scheme (its `schemes:` list) has the figure id <figure>gs12
-# or <figure>gs21 (icosim.schemes.figure_id); the Gauss-Seidel parts are in gauss_seidel.smk.
-from icosim.checks import load_claims  # noqa: E402
-from icosim.schemes import FIGURE_ID_PATTERN, figure_id  # noqa: E402
+# or <figure>gs21 (icosim.engine.schemes.figure_id); the Gauss-Seidel parts are in gauss_seidel.smk.
+from icosim.claims.registry import load_claims  # noqa: E402
+from icosim.engine.schemes import FIGURE_ID_PATTERN, figure_id  # noqa: E402
 from icosim.stability.panels import figure_panels, panel_id  # noqa: E402
 
 validate_part(config["stability"], "stability.schema.yaml")

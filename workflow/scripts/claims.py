@@ -9,9 +9,9 @@ full-resolution ``reference``: the reduced run no longer reproduces the full one
 
 import logging
 
-from icosim.checks import evaluate, load_claims
-from icosim.claims import enforce_references, verdict_counts, write_verdicts
-from icosim.datasets import open_dataset
+from icosim.claims.core import enforce_references, verdict_counts, write_verdicts
+from icosim.claims.registry import evaluate, load_claims
+from icosim.io.netcdf import open_dataset
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 claims = load_claims(snakemake.input.claims)

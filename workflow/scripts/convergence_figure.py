@@ -2,9 +2,9 @@
 
 import logging
 
-from icosim.datasets import open_dataset
 from icosim.figures import save_figure
 from icosim.figures.convergence import convergence_figure, row_title, slope_figure
+from icosim.io.netcdf import open_dataset
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params

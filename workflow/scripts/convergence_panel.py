@@ -8,7 +8,7 @@ from icosim.convergence.datasets import run_panel
 from icosim.convergence.experiment import Setup, step_counts
 from icosim.convergence.panels import PanelSpec
 from icosim.convergence.study import Study
-from icosim.datasets import provenance_attrs, write_netcdf
+from icosim.io.netcdf import provenance_attrs, write_netcdf
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params

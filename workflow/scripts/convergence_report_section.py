@@ -2,8 +2,8 @@
 
 import logging
 
-from icosim.claims import read_verdicts
-from icosim.datasets import atomic_path, open_dataset
+from icosim.claims.core import read_verdicts
+from icosim.io.netcdf import atomic_path, open_dataset
 from icosim.report.convergence import convergence_section
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")

@@ -5,7 +5,7 @@ import logging
 
 from icosim.convergence.experiment import Setup
 from icosim.convergence.work_precision import work_precision
-from icosim.datasets import open_dataset, provenance_attrs, write_netcdf
+from icosim.io.netcdf import open_dataset, provenance_attrs, write_netcdf
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params

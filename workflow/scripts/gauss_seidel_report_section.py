@@ -2,9 +2,9 @@
 
 import logging
 
-from icosim.claims import read_verdicts
+from icosim.claims.core import read_verdicts
 from icosim.convergence.curves import curves
-from icosim.datasets import atomic_path, open_dataset
+from icosim.io.netcdf import atomic_path, open_dataset
 from icosim.report.gauss_seidel import gauss_seidel_section
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")

@@ -1,10 +1,10 @@
 """Snakemake job: adaptive macro steps against fixed H at equal error -> NetCDF
-(thin: icosim.pendulum.adaptive_study)."""
+(thin: icosim.pendulum.trade.adaptive)."""
 
 import logging
 
-from icosim.datasets import write_netcdf
-from icosim.pendulum.adaptive_study import adaptive_study
+from icosim.io.netcdf import write_netcdf
+from icosim.pendulum.trade.adaptive import adaptive_study
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params

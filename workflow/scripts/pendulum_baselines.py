@@ -1,11 +1,11 @@
 """Snakemake job: the monolithic pendulum over tolerances (Radau IIA, DOP853) and the linear test model's
-errors for every configuration -> two NetCDF files (thin: icosim.pendulum.baselines)."""
+errors for every configuration -> two NetCDF files (thin: icosim.pendulum.trade.baselines)."""
 
 import logging
 
-from icosim.datasets import write_netcdf
-from icosim.pendulum.baselines import linear_orders_dataset, monolithic_baselines
+from icosim.io.netcdf import write_netcdf
 from icosim.pendulum.model import PendulumParameters
+from icosim.pendulum.trade.baselines import linear_orders_dataset, monolithic_baselines
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params

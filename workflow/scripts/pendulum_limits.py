@@ -1,10 +1,10 @@
 """Snakemake job: largest stable H of one group, measured (bisection on divergence) and predicted by the
-linear test model -> NetCDF (thin: icosim.pendulum.limits)."""
+linear test model -> NetCDF (thin: icosim.pendulum.trade.stability_limit)."""
 
 import logging
 
-from icosim.datasets import provenance_attrs, write_netcdf
-from icosim.pendulum.limits import limits_dataset, limits_group
+from icosim.io.netcdf import provenance_attrs, write_netcdf
+from icosim.pendulum.trade.stability_limit import limits_dataset, limits_group
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params

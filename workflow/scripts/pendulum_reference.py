@@ -3,9 +3,9 @@
 import json
 import logging
 
-from icosim.datasets import provenance_attrs, write_netcdf
-from icosim.pendulum.datasets import reference_dataset
+from icosim.io.netcdf import provenance_attrs, write_netcdf
 from icosim.pendulum.model import PendulumParameters
+from icosim.pendulum.replication.datasets import reference_dataset
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params

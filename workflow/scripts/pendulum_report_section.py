@@ -3,8 +3,8 @@
 import logging
 from pathlib import Path
 
-from icosim.claims import read_verdicts
-from icosim.datasets import atomic_path, open_dataset
+from icosim.claims.core import read_verdicts
+from icosim.io.netcdf import atomic_path, open_dataset
 from icosim.report.pendulum import pendulum_section, trade_section
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")

@@ -1,11 +1,11 @@
 """Snakemake job: the co-simulation runs of one (method, decomposition), one per k -> NetCDF each
-(thin: icosim.pendulum.datasets)."""
+(thin: icosim.pendulum.replication.datasets)."""
 
 import json
 import logging
 
-from icosim.datasets import write_netcdf
-from icosim.pendulum.datasets import run_job
+from icosim.io.netcdf import write_netcdf
+from icosim.pendulum.replication.datasets import run_job
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 w, p = snakemake.wildcards, snakemake.params

@@ -1,9 +1,9 @@
-"""Snakemake job: results/pendulum/stability_limit.nc from the groups' limits (thin: icosim.pendulum.limits)."""
+"""Snakemake job: results/pendulum/stability_limit.nc from the groups' limits (thin: icosim.pendulum.trade.stability_limit)."""
 
 import logging
 
-from icosim.datasets import open_dataset, provenance_attrs, write_netcdf
-from icosim.pendulum.limits import merge_limits
+from icosim.io.netcdf import open_dataset, provenance_attrs, write_netcdf
+from icosim.pendulum.trade.stability_limit import merge_limits
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 ds = merge_limits([open_dataset(path) for path in snakemake.input.groups])

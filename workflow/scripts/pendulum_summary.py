@@ -1,11 +1,11 @@
 """Snakemake job: errors against the reference, the claim of Sect. 4 and the linear test model's
-spectral radius at the pendulum's point (Sect. 3) per run -> NetCDF (thin: icosim.pendulum.summary)."""
+spectral radius at the pendulum's point (Sect. 3) per run -> NetCDF (thin: icosim.pendulum.replication.summary)."""
 
 import logging
 
-from icosim.checks import load_claims
-from icosim.datasets import open_dataset, write_netcdf
-from icosim.pendulum.summary import summary_dataset
+from icosim.claims.registry import load_claims
+from icosim.io.netcdf import open_dataset, write_netcdf
+from icosim.pendulum.replication.summary import summary_dataset
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params

@@ -1,10 +1,10 @@
 """Snakemake job: error over H of one group (scheme, method, decomposition; every k) -> NetCDF
-(thin: icosim.pendulum.sweep)."""
+(thin: icosim.pendulum.trade.sweep)."""
 
 import logging
 
-from icosim.datasets import write_netcdf
-from icosim.pendulum.sweep import sweep_group
+from icosim.io.netcdf import write_netcdf
+from icosim.pendulum.trade.sweep import sweep_group
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params

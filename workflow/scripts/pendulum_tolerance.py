@@ -1,9 +1,9 @@
-"""Snakemake job: error over the links' Radau tolerance at fixed H -> NetCDF (thin: icosim.pendulum.tolerance)."""
+"""Snakemake job: error over the links' Radau tolerance at fixed H -> NetCDF (thin: icosim.pendulum.trade.tolerance)."""
 
 import logging
 
-from icosim.datasets import write_netcdf
-from icosim.pendulum.tolerance import tolerance_study
+from icosim.io.netcdf import write_netcdf
+from icosim.pendulum.trade.tolerance import tolerance_study
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params

@@ -3,9 +3,9 @@ tolerance or adaptive) -> PNG + PDF (thin: icosim.figures.pendulum_trade)."""
 
 import logging
 
-from icosim.datasets import open_dataset
 from icosim.figures import save_figure
 from icosim.figures.pendulum_trade import TRADE_FIGURES
+from icosim.io.netcdf import open_dataset
 from icosim.pendulum.names import TRADE_FIGURE_DATASETS
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")

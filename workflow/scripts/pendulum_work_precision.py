@@ -1,10 +1,10 @@
 """Snakemake job: results/pendulum/work_precision.nc from the sweep groups, the monolithic baselines and the
-linear test model's errors: orders, cheapest scheme per accuracy level (thin: icosim.pendulum.work_precision)."""
+linear test model's errors: orders, cheapest scheme per accuracy level (thin: icosim.pendulum.trade.work_precision)."""
 
 import logging
 
-from icosim.datasets import open_dataset, write_netcdf
-from icosim.pendulum.work_precision import work_precision_dataset
+from icosim.io.netcdf import open_dataset, write_netcdf
+from icosim.pendulum.trade.work_precision import work_precision_dataset
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params

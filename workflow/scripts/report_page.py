@@ -3,8 +3,8 @@
 import logging
 from pathlib import Path
 
-from icosim.claims import read_verdicts
-from icosim.datasets import atomic_path
+from icosim.claims.core import read_verdicts
+from icosim.io.netcdf import atomic_path
 from icosim.report.page import git_commit_text, report_page, utc_now
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")

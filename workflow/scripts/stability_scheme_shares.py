@@ -2,7 +2,7 @@
 
 import logging
 
-from icosim.datasets import open_dataset, provenance_attrs, write_netcdf
+from icosim.io.netcdf import open_dataset, provenance_attrs, write_netcdf
 from icosim.stability.comparison import scheme_shares
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")

@@ -3,7 +3,7 @@
 import json
 import logging
 
-from icosim.datasets import provenance_attrs, write_netcdf
+from icosim.io.netcdf import provenance_attrs, write_netcdf
 from icosim.stability.datasets import stability_panel
 from icosim.stability.panels import PanelSpec
 

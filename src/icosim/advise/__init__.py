@@ -1,17 +1,17 @@
-"""Is my coupled system stable?  Every scheme for one physical two-mass system.
+"""Is my coupled system stable?  Every configuration for one physical two-mass system.
 
 A user brings two subsystems -- masses ``m1, m2`` [kg], stiffnesses ``c1, c2``
 [N/m], dampers ``d1, d2`` [N s/m] (overdamped ones included) -- and either a
 macro step ``H`` [s] or a range of them.  :func:`advise` answers, for every
-registered coupling method (:data:`icosim.methods.METHODS`), each index it can
+registered coupling method (:data:`icosim.engine.methods.METHODS`), each index it can
 be formulated at, each decomposition it is defined for, each approximation
 order ``k`` and each coupling order (:data:`COUPLINGS`: Jacobi, and Gauss-Seidel
-with subsystem 1 or subsystem 2 first, :mod:`icosim.schemes`):
+with subsystem 1 or subsystem 2 first, :mod:`icosim.engine.schemes`):
 
 * at one ``H``: the spectral radius ``rho`` of the co-simulation recurrence
-  (the precision policy of :func:`icosim.stability.spectral_radius`: float64,
+  (the precision policy of :func:`icosim.engine.spectral.spectral_radius`: float64,
   certified in ball arithmetic where float64 cannot decide) and the verdict;
-* over a range ``[H_lo, H_hi]``: where the scheme is stable.  Stability need
+* over a range ``[H_lo, H_hi]``: where the configuration is stable.  Stability need
   not be monotone in ``H`` (the weighted multiplier at ``k = 2`` is unstable
   for small ``H`` and stable for larger ones), so the range is first scanned
   on a grid of log-spaced ``H``, then every stable/unstable transition between
@@ -21,9 +21,9 @@ with subsystem 1 or subsystem 2 first, :mod:`icosim.schemes`):
   Intervals narrower than the grid spacing can be missed, and the output says
   so.
 
-The answer is a :class:`pandas.DataFrame`, one row per scheme, stable schemes
-ranked first (at one ``H`` by ``rho``: the smaller, the faster a coupling error
-decays per macro step; over a range first the schemes stable from the range's
+The answer is a :class:`pandas.DataFrame`, one row per configuration (its label in
+the column ``scheme``), stable ones ranked first (at one ``H`` by ``rho``: the smaller, the faster a coupling error
+decays per macro step; over a range first the configurations stable from the range's
 lower end, by how far up they stay stable, then those stable only on higher
 intervals, by their largest stable ``H``).  ``df.attrs`` holds the system, its dimensionless parameters
 (Eq. 71, or the per-unit-mass coefficients when a subsystem is overdamped) and
@@ -43,22 +43,33 @@ not given is 1 in the paper's dimensionless form (``mu_bar = mu/H = 1``,
 ``a = b = 1``), as in Figs. 9-15.
 
 Adding a coupling order (as Gauss-Seidel was added) or certified verdicts touches
-:data:`COUPLINGS` and :func:`evaluate` only: schemes are enumerated by
-:func:`schemes`, every spectral radius is computed by :func:`evaluate`, and the
+:data:`COUPLINGS` and :func:`evaluate` only: configurations are enumerated by
+:func:`configurations`, every spectral radius is computed by :func:`evaluate`, and the
 ``verdict`` column is the one place a verdict is stated.
+
+==========================  ===================================================
+module                      holds
+==========================  ===================================================
+:mod:`.core`                the system, the configurations, one evaluation
+:mod:`.scan`                stable intervals over an H range, the answer table
+:mod:`.output`              the answer as text and JSON records, the progress bar
+:mod:`.maps`                ``icosim map``: stability maps on demand with the
+                            stability study's panel code (not imported here: it
+                            loads xarray and matplotlib)
+==========================  ===================================================
 """
 
-from .core import COUPLINGS, DEFAULT_K, VERDICTS, Evaluation, Scheme, TwoMassSystem, evaluate, schemes
+from .core import COUPLINGS, DEFAULT_K, VERDICTS, Configuration, Evaluation, TwoMassSystem, configurations, evaluate
 from .output import Progress, advice_records, advice_text
 from .scan import DEFAULT_RTOL, DEFAULT_SCAN, advise, check_settings, stable_intervals
 
 __all__ = [
     "TwoMassSystem",
-    "Scheme",
+    "Configuration",
     "Evaluation",
     "COUPLINGS",
     "VERDICTS",
-    "schemes",
+    "configurations",
     "evaluate",
     "stable_intervals",
     "advise",

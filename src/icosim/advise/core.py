@@ -1,8 +1,8 @@
-"""The system, the schemes and one evaluation: what :func:`icosim.advise.advise` is built from.
+"""The system, the configurations and one evaluation: what :func:`icosim.advise.advise` is built from.
 
-:class:`TwoMassSystem` (physical units), :class:`Scheme` (method, index, parameters in physical units,
-decomposition, k, coupling order), :func:`schemes` (every scheme of the method registry) and
-:func:`evaluate` (the spectral radius of one scheme at many H, with the precision policy and a verdict).
+:class:`TwoMassSystem` (physical units), :class:`Configuration` (method, index, parameters in physical units,
+decomposition, k, coupling order), :func:`configurations` (every configuration of the method registry) and
+:func:`evaluate` (the spectral radius of one configuration at many H, with the precision policy and a verdict).
 """
 
 from __future__ import annotations
@@ -12,20 +12,31 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import methods as _methods
-from ..limits import check_k
-from ..model import ParameterError, PhysicalModel
-from ..schemes import SCHEME_NAMES
-from ..stability import spectral_radius
+from ..engine import methods as _methods
+from ..engine.bounds import check_k
+from ..engine.model import PhysicalModel
+from ..engine.schemes import SCHEME_NAMES
+from ..engine.spectral import spectral_radius
+from ..errors import ParameterError
 
-__all__ = ["TwoMassSystem", "Scheme", "Evaluation", "COUPLINGS", "VERDICTS", "DEFAULT_K", "schemes", "evaluate"]
+__all__ = [
+    "TwoMassSystem",
+    "Configuration",
+    "Evaluation",
+    "COUPLINGS",
+    "VERDICTS",
+    "DEFAULT_K",
+    "configurations",
+    "index_parameters",
+    "evaluate",
+]
 
 #: Approximation orders scanned unless others are asked for.
 DEFAULT_K = (0, 1, 2)
 
-#: Coupling orders: name -> keyword arguments of :func:`icosim.stability.spectral_radius`: the Jacobi
+#: Coupling orders: name -> keyword arguments of :func:`icosim.engine.spectral.spectral_radius`: the Jacobi
 #: (parallel) scheme of the paper and Gauss-Seidel (sequential) with subsystem 1 or subsystem 2 first
-#: (:mod:`icosim.schemes`).
+#: (:mod:`icosim.engine.schemes`).
 COUPLINGS: dict[str, dict] = {name: ({} if name == "jacobi" else {"scheme": name}) for name in SCHEME_NAMES}
 
 #: Verdicts of one point: rho <= 1 decided, rho > 1 decided, not decided (failed, or float64 only).
@@ -108,8 +119,9 @@ class TwoMassSystem:
 
 
 @dataclass(frozen=True)
-class Scheme:
-    """One co-simulation scheme: method (registry name), index, parameters, decomposition, k, coupling order.
+class Configuration:
+    """One co-simulation configuration: method (registry name), index, parameters, decomposition, k, coupling order
+    (the scheme, :mod:`icosim.engine.schemes`).
 
     ``params`` are the method's parameters as the user gives them: physical
     units for parameters that scale with ``H`` (``mu`` in s), or their
@@ -172,7 +184,7 @@ def _scaled() -> dict:
     return {name: p for name, p in _methods.parameters().items() if p.scaling}
 
 
-def _index_params(spec, index, given: dict) -> dict:
+def index_parameters(spec, index, given: dict) -> dict:
     """The parameters a method takes at ``index``: its own (shorthand ones replace the rest), not those unused there.
 
     A parameter not in ``given`` defaults to 1 in dimensionless form (``mu_bar = 1``, ``a = b = 1``).
@@ -192,25 +204,25 @@ def _index_params(spec, index, given: dict) -> dict:
     return out
 
 
-def schemes(
+def configurations(
     *,
     methods=None,
     decompositions=None,
     k=DEFAULT_K,
     params: dict | None = None,
     couplings=None,
-) -> list[Scheme]:
-    """Every scheme: each method of the registry (or those named), each index, decomposition and ``k``.
+) -> list[Configuration]:
+    """Every configuration: each method of the registry (or those named), each index, decomposition and ``k``.
 
     ``params`` are method parameters by name in physical units (``{"mu": 5e-3, "a": 0.5}``); each
-    method takes those it has.  Every scheme is built once here, so a parameter value a method
-    refuses is reported (:class:`~icosim.model.ParameterError`) before any computation.
+    method takes those it has.  Every configuration is built once here, so a parameter value a method
+    refuses is reported (:class:`~icosim.errors.ParameterError`) before any computation.
 
-    >>> len(schemes(couplings=["jacobi"]))  # Baumgarte, weighted: 3 indices x (ff, fd); projection: ff, fd, dd; k = 0..2
+    >>> len(configurations(couplings=["jacobi"]))  # Baumgarte, weighted: 3 indices x (ff, fd); projection: ff, fd, dd; k = 0..2
     45
-    >>> len(schemes())  # and each with the three coupling orders (Jacobi, Gauss-Seidel 1->2 and 2->1)
+    >>> len(configurations())  # and each with the three coupling orders (Jacobi, Gauss-Seidel 1->2 and 2->1)
     135
-    >>> schemes(methods=["weighted"], k=[2])[4].label
+    >>> configurations(methods=["weighted"], k=[2])[4].label
     'weighted i1 (a = 1, b = 1) fd k=2 gauss-seidel-12'
     """
     params = dict(params or {})
@@ -235,11 +247,11 @@ def schemes(
         spec = _methods.get_spec(name)
         decs = [d for d in spec.decompositions if decompositions is None or d in decompositions]
         for index in spec.indices:
-            p = _index_params(spec, index, params)
+            p = index_parameters(spec, index, params)
             for dec in decs:
                 for kk in ks:
                     for coupling in couplings:
-                        s = Scheme(name, index, p, dec, kk, coupling)
+                        s = Configuration(name, index, p, dec, kk, coupling)
                         s.engine_method(1.0)  # refuses bad values now (e.g. weighted index 1 with b = 0)
                         out.append(s)
     return out
@@ -247,7 +259,7 @@ def schemes(
 
 @dataclass
 class Evaluation:
-    """Spectral radius per H of one scheme, the verdict, and the arithmetic that decided it."""
+    """Spectral radius per H of one configuration, the verdict, and the arithmetic that decided it."""
 
     H: np.ndarray
     rho: np.ndarray
@@ -261,27 +273,32 @@ class Evaluation:
         return self.verdict == "stable"
 
 
-def evaluate(system: TwoMassSystem, scheme: Scheme, H, *, policy="auto", digits=128) -> Evaluation:
-    """``rho`` of ``scheme`` at every macro step in ``H``: one batched call, or one per H where the engine's
+def evaluate(system: TwoMassSystem, configuration: Configuration, H, *, policy="auto", digits=128) -> Evaluation:
+    """``rho`` of ``configuration`` at every macro step in ``H``: one batched call, or one per H where the engine's
     parameters change with it (a Baumgarte ``mu`` in s).
 
-    The verdict is the precision policy's (:func:`icosim.stability.spectral_radius`): ``stable``,
+    The verdict is the precision policy's (:func:`icosim.engine.spectral.spectral_radius`): ``stable``,
     ``unstable`` (float64 trusted, or proven in ball arithmetic), ``marginal`` (the proven enclosure
     contains 1), or ``undecided``: nothing could compute the point, or (policy ``float64``) float64
     could not decide it.
     """
     H = np.atleast_1d(np.asarray(H, dtype=float))
-    kw = {"digits": digits, "policy": policy, **COUPLINGS[scheme.coupling]}
+    kw = {"digits": digits, "policy": policy, **COUPLINGS[configuration.coupling]}
     names = ("rho", "err", "digits", "verdict", "arithmetic")
-    if scheme.h_dependent:
+    if configuration.h_dependent:
         parts = [
-            spectral_radius(system.model(h), scheme.engine_method(h), scheme.decomposition, scheme.k, **kw) for h in H
+            spectral_radius(
+                system.model(h), configuration.engine_method(h), configuration.decomposition, configuration.k, **kw
+            )
+            for h in H
         ]
         rho, err, dig, verdict, arithmetic = (
             np.concatenate([np.atleast_1d(getattr(r, n)) for r in parts]) for n in names
         )
     else:
-        r = spectral_radius(system.model(H), scheme.engine_method(), scheme.decomposition, scheme.k, **kw)
+        r = spectral_radius(
+            system.model(H), configuration.engine_method(), configuration.decomposition, configuration.k, **kw
+        )
         rho, err, dig, verdict, arithmetic = (np.atleast_1d(np.asarray(getattr(r, n))) for n in names)
     if policy == "float64":  # no recheck: what float64 cannot decide stays undecided
         untrusted = ~(np.isfinite(rho) & (np.abs(rho - 1) > err))

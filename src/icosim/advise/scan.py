@@ -1,12 +1,12 @@
-"""Where a scheme is stable over an H range (scan, then bracket every transition), and the answer as a table."""
+"""Where a configuration is stable over an H range (scan, then bracket every transition), and the answer as a table."""
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
 
-from ..model import ParameterError
-from .core import TwoMassSystem, evaluate, schemes
+from ..errors import ParameterError
+from .core import TwoMassSystem, configurations, evaluate
 
 __all__ = ["stable_intervals", "check_settings", "advise", "DEFAULT_SCAN", "DEFAULT_RTOL"]
 
@@ -39,8 +39,10 @@ def _refine(f, lo, hi, stable_lo: bool, rtol: float):
     return lo, hi, passes
 
 
-def stable_intervals(system, scheme, H_lo, H_hi, *, n_scan=DEFAULT_SCAN, rtol=DEFAULT_RTOL, policy="auto", digits=128):
-    """Where ``scheme`` is stable on ``[H_lo, H_hi]``: scan, then refine every transition.
+def stable_intervals(
+    system, configuration, H_lo, H_hi, *, n_scan=DEFAULT_SCAN, rtol=DEFAULT_RTOL, policy="auto", digits=128
+):
+    """Where ``configuration`` is stable on ``[H_lo, H_hi]``: scan, then refine every transition.
 
     Returns a dict: ``intervals`` (list of ``[lo, hi]``, both ends evaluated stable), ``unstable_above``
     (per interval the evaluated unstable H just above its upper end, None at ``H_hi``), the scan
@@ -49,11 +51,11 @@ def stable_intervals(system, scheme, H_lo, H_hi, *, n_scan=DEFAULT_SCAN, rtol=DE
     """
     H = np.geomspace(H_lo, H_hi, n_scan)
     H[0], H[-1] = H_lo, H_hi
-    ev = evaluate(system, scheme, H, policy=policy, digits=digits)
+    ev = evaluate(system, configuration, H, policy=policy, digits=digits)
     ok = ev.stable
 
     def state(h):
-        return evaluate(system, scheme, h, policy=policy, digits=digits).stable
+        return evaluate(system, configuration, h, policy=policy, digits=digits).stable
 
     intervals, above = [], []
     start = H[0] if ok[0] else None
@@ -98,19 +100,19 @@ def advise(
     system: TwoMassSystem,
     H,
     *,
-    scheme_list=None,
+    configuration_list=None,
     n_scan: int = DEFAULT_SCAN,
     rtol: float = DEFAULT_RTOL,
     policy: str = "auto",
     digits: int = 128,
     progress=None,
 ):
-    """Every scheme of ``scheme_list`` (default :func:`schemes`) for ``system`` at macro step ``H`` or over
-    ``H = (H_lo, H_hi)``: a :class:`pandas.DataFrame`, one row per scheme, stable ones ranked first.
+    """Every configuration of ``configuration_list`` (default :func:`~.core.configurations`) for ``system`` at macro step ``H`` or over
+    ``H = (H_lo, H_hi)``: a :class:`pandas.DataFrame`, one row per configuration (its label in ``scheme``), stable ones ranked first.
 
-    ``progress``, if given, is called with the number of schemes done.
+    ``progress``, if given, is called with the number of configurations done.
 
-    Columns at one H: ``rank`` (1, 2, ... for stable schemes, else missing), ``scheme``, ``coupling``,
+    Columns at one H: ``rank`` (1, 2, ... for stable configurations, else missing), ``scheme``, ``coupling``,
     ``method``, ``index``, ``parameters``, ``decomposition``, ``k``, ``H``, ``rho``, ``rho_float64_error``,
     ``digits``, ``verdict``.  Over a range: ``rank``, the scheme columns, ``H_max`` (largest stable H, missing
     if none), ``H_max_from_lo`` (the largest H such that every H from ``H_lo`` up to it is stable: the
@@ -120,10 +122,10 @@ def advise(
     ``note``.  Where the system has an Eq. (71) form, ``lr1`` and ``li1`` at the row's H.
     """
     H = check_settings(H, n_scan=n_scan, rtol=rtol, policy=policy)
-    scheme_list = schemes() if scheme_list is None else list(scheme_list)
+    configuration_list = configurations() if configuration_list is None else list(configuration_list)
     eq71 = system.dimensionless(float(H[-1]))["eq71"] == "ok"
     rows = []
-    for n, s in enumerate(scheme_list, start=1):
+    for n, s in enumerate(configuration_list, start=1):
         base = {
             "scheme": s.label,
             "coupling": s.coupling,

@@ -3,7 +3,7 @@
 The test model is used in physical units (``m1 = 1, m2 = 2, c1 = c2 = 1000,
 d1 = d2 = 10`` in the paper) with a dimensional macro step ``H`` in seconds, and
 every co-simulation is compared with the exact monolithic solution
-(:class:`icosim.exact.MonolithicSolution`) at the macro-time points.
+(:class:`icosim.engine.exact.MonolithicSolution`) at the macro-time points.
 
 ==============================  ===================================================
 module                          holds
@@ -12,7 +12,6 @@ module                          holds
 :mod:`.experiment`              model, initial conditions, end time, step sizes; method
                                 parameters in physical units
 :mod:`.study`                   the runs over all step sizes: stepping, unstable runs
-:mod:`.fit`                     the order fit over the asymptotic range
 :mod:`.panels`                  figure layout: which curves form a panel dataset
 :mod:`.datasets`                a panel as a NetCDF-ready dataset
 :mod:`.curves`                  panel datasets read back as one record per curve
@@ -21,5 +20,6 @@ module                          holds
 :mod:`.work_precision`          CPU time and counted work against the error
 ==============================  ===================================================
 
-The package imports none of its modules: import the one you need.
+The order fit over the asymptotic range is :mod:`icosim.order_fit`, shared with the pendulum's
+speed-accuracy study.  The package imports none of its modules: import the one you need.
 """

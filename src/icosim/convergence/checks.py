@@ -2,7 +2,7 @@
 
 A claim selects curves of the panel datasets (:func:`icosim.convergence.curves.curves`)
 and expects, per ``k``, an order ``p`` or instability at every step size.  An
-order decides only where it is asymptotic (:mod:`icosim.convergence.fit`):
+order decides only where it is asymptotic (:mod:`icosim.order_fit`):
 
 * asymptotic -- pass if within ``tolerance`` of ``p``, else fail;
 * pre-asymptotic, unstable as H -> 0, too few points -- undecided, with the reason;
@@ -15,9 +15,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..claims import CheckKind, Outcome, combine_holds, matches, selector_text
-from ..methods import parameters
-from ..model import ParameterError
+from ..claims.core import CheckKind, Outcome, combine_holds, matches, selector_text
+from ..engine.methods import parameters
+from ..errors import ParameterError
 from .curves import curve_label, curves, stable_span
 
 __all__ = ["CHECKS", "check_convergence_order", "SELECT_KEYS", "EXPECT_KEYS"]
@@ -148,7 +148,7 @@ def _describe_order(p):
     return what, fails
 
 
-#: The convergence check kinds (collected by :mod:`icosim.checks`).
+#: The convergence check kinds (collected by :mod:`icosim.claims.registry`).
 CHECKS = {
     "convergence_order": CheckKind(
         check_convergence_order, _validate_order_check, selectors=("select",), describe=_describe_order

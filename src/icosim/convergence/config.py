@@ -9,9 +9,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..claims import matches
-from ..methods import get_spec
-from ..model import ParameterError, PhysicalModel
+from ..claims.core import matches
+from ..engine.methods import get_spec
+from ..engine.model import PhysicalModel
+from ..errors import ParameterError
 from .experiment import Setup, method_attrs, step_counts
 from .panels import figure_panels
 from .study import Study

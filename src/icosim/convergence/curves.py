@@ -1,12 +1,16 @@
-"""Panel datasets read back as one record per curve (what the claims and the report select)."""
+"""The convergence datasets read back: panels as one record per curve (what the claims and the report
+select), the work-precision dataset as the fastest schemes per target error.
+
+The module reads datasets only (it imports no module that runs the co-simulation): it is the
+convergence study's data contract for the report."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..methods import METHODS, parameters
+from ..engine.methods import METHODS, parameters
 
-__all__ = ["curves", "curve_label", "stable_span"]
+__all__ = ["curves", "curve_label", "stable_span", "fastest_schemes"]
 
 
 # --------------------------------------------------------------------------- curves and claims
@@ -67,3 +71,27 @@ def stable_span(rec) -> str:
         return "all"
     Hs = H[~u]
     return f"{Hs.min():.2g} to {Hs.max():.2g} s"
+
+
+def fastest_schemes(wp, targets) -> list:
+    """Per decomposition and target error: schemes ordered by the least CPU time reaching it.
+
+    A scheme reaches ``target`` at the measured step sizes with
+    ``nrmse <= target``; its cost is the least CPU time per simulated second
+    among those.  Returns dicts ``{decomposition, target, ranking: [(label, seconds, H), ...]}``.
+    """
+    out = []
+    for dec in sorted(set(wp["decomposition"].values.tolist())):
+        sub = wp.where(wp["decomposition"] == dec, drop=True)
+        for target in targets:
+            ranking = []
+            for s in range(sub.sizes["scheme"]):
+                err = sub["nrmse"].values[s]
+                cost = sub["cpu_seconds_per_simulated_second"].values[s]
+                ok = np.isfinite(err) & np.isfinite(cost) & (err <= target)
+                if ok.any():
+                    i = np.flatnonzero(ok)[np.argmin(cost[ok])]
+                    ranking.append((str(sub["scheme"].values[s]), float(cost[i]), float(sub["H"].values[i])))
+            ranking.sort(key=lambda r: r[1])
+            out.append({"decomposition": dec, "target": float(target), "ranking": ranking})
+    return out

@@ -5,7 +5,7 @@ Variables: ``nrmse`` (NaN where unstable) and its parts, ``unstable``,
 precision that proved each run's defect (``defect_bits``); the local slopes
 between neighbouring step sizes over ``H_mid``; per curve the asymptotic
 ``order`` read off the smallest-H decade with its ``order_status``
-(:mod:`icosim.convergence.fit`) and range (``fit_H_min``, ``fit_H_max``,
+(:mod:`icosim.order_fit`) and range (``fit_H_min``, ``fit_H_max``,
 ``fit_used``); the row parameters (dimensional) as coordinates along
 ``index``; the set-up, the method and the procedures as attributes.
 """
@@ -16,10 +16,10 @@ import time
 
 import numpy as np
 
-from ..decompositions import get_decomposition
-from ..methods import get_spec, parameter_units
+from ..engine.decompositions import get_decomposition
+from ..engine.methods import get_spec, parameter_units
+from ..order_fit import asymptotic_order, local_slopes
 from .experiment import PAPER_MODEL, dimensional_method, units_description
-from .fit import asymptotic_order, local_slopes
 from .panels import PanelSpec
 from .study import Study
 
@@ -154,7 +154,7 @@ def run_panel(
                 arr["spectral_verdict"].astype(str),
                 {
                     "long_name": "stable / unstable / marginal: for stepping error proven from the ball "
-                    "amplification matrix of the defect (icosim.stability.certified); else from the precision policy"
+                    "amplification matrix of the defect (icosim.engine.spectral.certified); else from the precision policy"
                 },
             ),
             "diverged_at": (
@@ -272,15 +272,14 @@ def run_panel(
         growth_bound=s.growth_bound,
         initial_conditions=f"x1 = x2 = {s.x0:g} m, v1 = v2 = {s.v0:g} m/s at t = 0 (consistent with the rigid link)",
         history_initialisation="coupling variables at T_0, T_-1, ..., T_-k from the exact monolithic solution "
-        "(icosim.exact.consistent_start)",
+        "(icosim.engine.exact.consistent_start)",
         nrmse_definition="Eq. (72) read as sqrt of the sum of the four normalised squared-error ratios "
         "(x1, x2, v1, v2), sums over N = 1..N_total; nrmse_x, nrmse_v hold the position and velocity parts "
         "(nrmse^2 = nrmse_x^2 + nrmse_v^2)",
         method_parameters_units=units_description(),
         stepping=stepping,
         spectral_policy=study.spectral_policy,
-        fit_procedure="icosim.convergence.fit.asymptotic_order: "
-        + ", ".join(f"{k}={v}" for k, v in sorted(fit.items())),
+        fit_procedure="icosim.order_fit.asymptotic_order: " + ", ".join(f"{k}={v}" for k, v in sorted(fit.items())),
         startup_steps=study.startup_steps,
         defect_accuracy="stepping error: the one-step defect D = M W - W E is formed in Arb ball arithmetic until every "
         "row is proven to 2^-40 relative (icosim.convergence.errors), then rounded to float64",

@@ -19,7 +19,7 @@ subsystem states (both equal to ``z``) and the exact coupling variables at
     D = M W - W E                 (the one-step defect, n x 2).
 
 ``D`` is a difference of O(1) matrices with entries down to 1e-26: it is
-formed in Arb ball arithmetic (:class:`icosim.backend.Ball`), so its error
+formed in Arb ball arithmetic (:class:`icosim.engine.backends.Ball`), so its error
 bound is proven, with the working precision raised until every row is known
 to 2^-40 relative (or is negligible: below 2^-40 of the largest row), and only
 then rounded to float64.  From there float64 carries the error itself, whose
@@ -34,12 +34,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..backend import Ball
-from ..decompositions import get_decomposition
-from ..exact import exact_coupling, monolithic_matrix
-from ..schemes import JACOBI
-from ..stability.certified import MAX_BITS, SpectralCertificate, certify_matrix
-from ..stability.matrix import amplification_matrix
+from ..engine.backends import Ball
+from ..engine.decompositions import get_decomposition
+from ..engine.exact import exact_coupling, monolithic_matrix
+from ..engine.schemes import JACOBI
+from ..engine.spectral.certified import MAX_BITS, SpectralCertificate, certify_matrix
+from ..engine.spectral.matrix import amplification_matrix
 
 __all__ = ["ExactExtension", "exact_extension", "local_defect", "Defect", "propagate_errors", "ErrorSeries"]
 
@@ -83,7 +83,7 @@ def exact_extension(coefficients, decomposition, k, backend) -> ExactExtension:
 @dataclass
 class Defect:
     """float64 roundings of the proven ``M``, ``D``, ``E``, ``A``, the precision that proved them, and the
-    certified verdict on the spectral radius of the same ball ``M`` (:mod:`icosim.stability.certified`)."""
+    certified verdict on the spectral radius of the same ball ``M`` (:mod:`icosim.engine.spectral.certified`)."""
 
     M: np.ndarray
     D: np.ndarray
@@ -107,7 +107,7 @@ def local_defect(
 ) -> Defect:
     """``D = M W - W E`` of one parameter point, proven in ball arithmetic, then rounded.
 
-    ``M`` is the amplification matrix of ``scheme`` (:mod:`icosim.schemes`); the
+    ``M`` is the amplification matrix of ``scheme`` (:mod:`icosim.engine.schemes`); the
     exact solution's packed form ``W`` is the same for every scheme (the
     history holds the corrected coupling variables, exact on the exact solution).
 

@@ -2,7 +2,7 @@
 
 The step sizes are ``H = end_time / N_total`` for whole numbers of macro steps;
 method parameters are given in physical units and scaled to the engine's
-dimensionless ones by the registry (:mod:`icosim.methods`).
+dimensionless ones by the registry (:mod:`icosim.engine.methods`).
 """
 
 from __future__ import annotations
@@ -11,8 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..methods import METHODS, UNIT_TEXT, get_spec, parameters
-from ..model import ParameterError, PhysicalModel
+from ..engine.methods import METHODS, UNIT_TEXT, get_spec, parameters
+from ..engine.model import PhysicalModel
+from ..errors import ParameterError
 
 __all__ = [
     "PAPER_MODEL",
@@ -112,7 +113,7 @@ def dimensional_method(name: str, H: float, **params):
     """The coupling method at macro step ``H`` from dimensional parameters.
 
     The parameters are given in physical units as in Sect. 3.7 (their units
-    and H scaling are in the registry, :data:`icosim.methods.METHODS`:
+    and H scaling are in the registry, :data:`icosim.engine.methods.METHODS`:
     Baumgarte's ``mu``, ``beta`` in s, ``gamma`` in s^2, index 1
     ``beta = 2 mu``, ``gamma = mu^2``) and scaled to the engine's
     dimensionless ones, ``beta_bar = beta / H``, ``gamma_bar = gamma / H^2``

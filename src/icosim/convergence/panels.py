@@ -10,10 +10,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..decompositions import get_decomposition
-from ..methods import METHODS, get_spec
-from ..model import ParameterError
-from ..schemes import figure_id, get_scheme
+from ..engine.decompositions import get_decomposition
+from ..engine.methods import METHODS, get_spec
+from ..engine.schemes import figure_id, get_scheme
+from ..errors import ParameterError
 from .experiment import dimensional_method
 
 __all__ = ["PanelSpec", "effective_params", "panel_name", "figure_panels", "figure_layout"]
@@ -57,7 +57,7 @@ class PanelSpec:
     rows: tuple  # effective parameters of each row (dicts)
     k: tuple
     shared: bool = False
-    #: the coupling scheme (:mod:`icosim.schemes`), by name
+    #: the coupling scheme (:mod:`icosim.engine.schemes`), by name
     scheme: str = "jacobi"
 
     def as_dict(self) -> dict:
@@ -95,7 +95,7 @@ class PanelSpec:
 def figure_panels(figure: str, fig_cfg: dict, k, scheme="jacobi") -> list:
     """All panel specs of one configured figure (every decomposition and column), for one coupling scheme.
 
-    The specs' ``figure`` is the figure id of ``scheme`` (:func:`icosim.schemes.figure_id`:
+    The specs' ``figure`` is the figure id of ``scheme`` (:func:`icosim.engine.schemes.figure_id`:
     ``"21"`` for Jacobi, ``"21gs12"``, ``"21gs21"``).
 
     ``fig_cfg`` has ``method``, ``columns`` (list of parameter dicts),

@@ -12,7 +12,7 @@ obtains the amplification matrix, from the very macro-step algorithm).
   its size, so there is no round-off floor (NRMSE down to 1e-22 and below).
 * ``stepping="matrix"`` iterates the float64 matrix on the state and subtracts
   the exact solution: a floor near NRMSE ~ 1e-11 (kept to show it).
-* ``stepping="simulate"`` runs :func:`icosim.macrostep.simulate` (float64, the
+* ``stepping="simulate"`` runs :func:`icosim.engine.macrostep.simulate` (float64, the
   same floor, ~100x slower).
 
 All three agree up to their round-off (tested, and the error path against
@@ -24,7 +24,7 @@ Unstable runs
 A run counts as unstable when (a) its state stops being finite or grows beyond
 ``growth_bound`` times the initial amplitude (the run is stopped there), or (b)
 the spectral radius of the recurrence at that ``H`` exceeds 1, decided with the
-engine's precision policy (:func:`icosim.stability.spectral_radius`, float64
+engine's precision policy (:func:`icosim.engine.spectral.spectral_radius`, float64
 with mpmath rechecks).  (b) catches runs that grow too slowly to blow up within
 the end time: their error would otherwise look small.  The NRMSE of an
 unstable run is never reported as an error (``nrmse`` is NaN there; the value
@@ -38,13 +38,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import exact
-from ..decompositions import get_decomposition
-from ..linear_problem import LinearCosimulation
-from ..macrostep import simulate
-from ..model import ParameterError
-from ..schemes import JACOBI, get_scheme
-from ..stability import amplification_matrix, spectral_radius
+from ..engine import exact
+from ..engine.decompositions import get_decomposition
+from ..engine.linear_problem import LinearCosimulation
+from ..engine.macrostep import simulate
+from ..engine.schemes import JACOBI, get_scheme
+from ..engine.spectral import amplification_matrix, spectral_radius
+from ..errors import ParameterError
 from .errors import ErrorSeries, local_defect, propagate_errors
 from .experiment import Setup, dimensional_method
 from .metric import ratio_root, variances
@@ -61,7 +61,7 @@ def iterate_linear_map(M, w0, n_steps: int, *, bound: float | None = None, block
 
     Blocks of ``block`` steps are formed at once from the powers
     ``M^0 ... M^(block-1)`` (vectorised), the block start advances by
-    ``M^block``.  Divergence is judged like :func:`icosim.macrostep.simulate`:
+    ``M^block``.  Divergence is judged like :func:`icosim.engine.macrostep.simulate`:
     the first ``n`` whose first four entries (the subsystem states) are not
     finite or exceed ``bound`` in magnitude.
 

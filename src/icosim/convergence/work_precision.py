@@ -1,7 +1,7 @@
 """Work-precision: CPU time per simulated second and counted work against the NRMSE.
 
 Each scheme of ``convergence.work_precision.schemes`` is timed on the engine's
-own macro-step loop (:func:`icosim.macrostep.simulate`) at every stable step
+own macro-step loop (:func:`icosim.engine.macrostep.simulate`) at every stable step
 size; the error is read from the panel datasets, never recomputed.  The
 subsystems of the linear model are integrated exactly, so the counted work per
 macro step (:func:`step_cost`) is what transfers to numerically integrated
@@ -14,15 +14,15 @@ import time
 
 import numpy as np
 
-from .. import exact
-from ..linear_problem import LinearCosimulation
-from ..macrostep import macro_step, simulate
-from ..methods import get_spec, parameter_units, parameters
-from ..model import ParameterError
+from ..engine import exact
+from ..engine.linear_problem import LinearCosimulation
+from ..engine.macrostep import macro_step, simulate
+from ..engine.methods import get_spec, parameter_units, parameters
+from ..errors import ParameterError
 from .experiment import Setup, dimensional_method, method_attrs, units_summary
 from .panels import effective_params, figure_panels
 
-__all__ = ["time_macro_steps", "step_cost", "resolve_scheme", "work_precision", "fastest_schemes"]
+__all__ = ["time_macro_steps", "step_cost", "resolve_scheme", "work_precision"]
 
 
 # --------------------------------------------------------------------------- timing
@@ -38,7 +38,7 @@ def time_macro_steps(
     repeats: int = 3,
     warmup_steps: int = 5,
 ) -> dict:
-    """CPU time of the co-simulation stepping (:func:`icosim.macrostep.simulate`).
+    """CPU time of the co-simulation stepping (:func:`icosim.engine.macrostep.simulate`).
 
     The problem is built once (its set-up, the subsystem propagators, is timed
     separately: it does not grow with the simulated time); after a warm-up of
@@ -83,7 +83,7 @@ def step_cost(method: str, params: dict, decomposition: str, k: int) -> dict:
     counted; with numerically integrated subsystems they cost extra
     integrations (or are reused).  These counts let the work-precision
     comparison be transferred to subsystems whose integration dominates.
-    The problem counts them itself (:attr:`icosim.problem.CosimulationProblem.work`).
+    The problem counts them itself (:attr:`icosim.engine.problem.CosimulationProblem.work`).
     """
     m = dimensional_method(method, 1.0, **params)  # the counts do not depend on H
     problem = LinearCosimulation(Setup().model(1.0e-3).coefficients(), decomposition, k)
@@ -205,7 +205,10 @@ def work_precision(entries, datasets: dict, setup: Setup, *, steps=20, repeats=3
             "cpu_seconds_per_step": (
                 ("scheme", "H"),
                 per_step,
-                {"long_name": "CPU time of one macro step of icosim.macrostep.simulate (min of repeats)", "units": "s"},
+                {
+                    "long_name": "CPU time of one macro step of icosim.engine.macrostep.simulate (min of repeats)",
+                    "units": "s",
+                },
             ),
             "cpu_seconds_per_simulated_second": (
                 ("scheme", "H"),
@@ -265,7 +268,7 @@ def work_precision(entries, datasets: dict, setup: Setup, *, steps=20, repeats=3
         steps=steps,
         repeats=repeats,
         warmup_steps=warmup_steps,
-        timed="icosim.macrostep.simulate: the engine's macro-step loop (predictor, corrector, "
+        timed="icosim.engine.macrostep.simulate: the engine's macro-step loop (predictor, corrector, "
         "projection) of the linear test model; problem set-up excluded (setup_seconds)",
         cost_caveat="the subsystems of the linear test model are integrated exactly (matrix "
         "exponential blocks), so the timed cost is the coupling algorithm's Python overhead and nearly "
@@ -275,27 +278,3 @@ def work_precision(entries, datasets: dict, setup: Setup, *, steps=20, repeats=3
         method_parameters_units=units_summary(),
     )
     return ds
-
-
-def fastest_schemes(wp, targets) -> list:
-    """Per decomposition and target error: schemes ordered by the least CPU time reaching it.
-
-    A scheme reaches ``target`` at the measured step sizes with
-    ``nrmse <= target``; its cost is the least CPU time per simulated second
-    among those.  Returns dicts ``{decomposition, target, ranking: [(label, seconds, H), ...]}``.
-    """
-    out = []
-    for dec in sorted(set(wp["decomposition"].values.tolist())):
-        sub = wp.where(wp["decomposition"] == dec, drop=True)
-        for target in targets:
-            ranking = []
-            for s in range(sub.sizes["scheme"]):
-                err = sub["nrmse"].values[s]
-                cost = sub["cpu_seconds_per_simulated_second"].values[s]
-                ok = np.isfinite(err) & np.isfinite(cost) & (err <= target)
-                if ok.any():
-                    i = np.flatnonzero(ok)[np.argmin(cost[ok])]
-                    ranking.append((str(sub["scheme"].values[s]), float(cost[i]), float(sub["H"].values[i])))
-            ranking.sort(key=lambda r: r[1])
-            out.append({"decomposition": dec, "target": float(target), "ranking": ranking})
-    return out

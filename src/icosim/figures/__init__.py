@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..datasets import atomic_path
+from ..io.netcdf import atomic_path
 
 __all__ = ["save_figure", "stability_figure"]
 

@@ -20,7 +20,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from ..methods import METHODS, parameters
+from ..engine.methods import METHODS, parameters
 
 __all__ = ["convergence_figure", "slope_figure", "work_precision_figure", "row_title", "K_COLOURS"]
 

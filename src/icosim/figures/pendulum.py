@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..methods import METHODS
+from ..engine.methods import METHODS
 
 __all__ = ["pendulum_figure", "error_figure", "PANELS", "label"]
 

@@ -1,4 +1,4 @@
-"""Figures of the pendulum's speed-accuracy trade (issue 12); they draw datasets and never recompute.
+"""Figures of the pendulum's speed-accuracy trade; they draw datasets and never recompute.
 
 * :func:`work_precision_figure` -- error against CPU seconds, one panel per
   ``k`` (one row per coupling scheme) with one line per configuration (each
@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..methods import METHODS
-from ..schemes import get_scheme
+from ..engine.methods import METHODS
+from ..engine.schemes import get_scheme
 
 __all__ = [
     "TRADE_FIGURES",

@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..methods import METHODS
-from ..schemes import SCHEMES
+from ..engine.methods import METHODS
+from ..engine.schemes import SCHEMES
 
 __all__ = ["scheme_comparison_figure", "SCHEME_COLOURS"]
 

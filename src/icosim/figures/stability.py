@@ -16,19 +16,19 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Rectangle
 
-from ..methods import parameters
+from ..engine.methods import parameters
 from ..stability.panels import format_row_label
 
 __all__ = ["stability_figure", "panel_layout", "row_labels", "STYLES"]
 
 STYLES = ("field", "dots")
-#: How points that are neither stable nor unstable are drawn: verdict code (icosim.stability.policy.VERDICTS)
+#: How points that are neither stable nor unstable are drawn: verdict code (icosim.engine.spectral.policy.VERDICTS)
 #: -> scatter style.  Marginal: the proven enclosure of rho contains 1; undecided: nothing could be computed.
 OPEN_VERDICTS = {
     2: {"color": "#2c7bb6", "marker": "s", "label": "marginal: the proven enclosure of ρ contains 1"},
     3: {"color": "#000000", "marker": "x", "label": "undecided: no result for the point"},
 }
-#: TeX symbols of the ratios; the method parameters' come from the registry (:mod:`icosim.methods`).
+#: TeX symbols of the ratios; the method parameters' come from the registry (:mod:`icosim.engine.methods`).
 RATIO_SYMBOLS = {
     "am21": r"$\alpha_{m21}$",
     "alr21": r"$\alpha_{\lambda r21}$",

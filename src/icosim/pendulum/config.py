@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from ..decompositions import get_decomposition
-from ..methods import make_method
-from ..model import ParameterError
-from ..schemes import get_scheme
+from ..engine.decompositions import get_decomposition
+from ..engine.methods import make_method
+from ..engine.schemes import get_scheme
+from ..errors import ParameterError
+from .names import run_name
 
 __all__ = ["configured_runs", "configured_schemes", "trade_plan", "run_settings", "study_methods", "RUN_KEYS"]
 
@@ -68,8 +69,6 @@ def trade_plan(cfg: dict) -> dict:
     whole number of every ``H``, a tolerance or adaptive configuration whose
     method cannot take its decomposition or that has no parameters.
     """
-    from .measures import config_label
-
     trade = cfg["trade"]
     schemes = configured_schemes(cfg)
     sweep = trade["error_over_H"]
@@ -98,7 +97,7 @@ def trade_plan(cfg: dict) -> dict:
             if (scheme, method, dec) not in groups:
                 groups.append((scheme, method, dec))
         for method, dec, k in runs:
-            configs.append((config_label(scheme, method, dec, k), scheme, method, dec, k))
+            configs.append((run_name(method, dec, int(k), scheme), scheme, method, dec, k))
     for key in ("tolerance", "adaptive"):
         for i, c in enumerate(trade[key]["configurations"]):
             where = f"pendulum.trade.{key}.configurations[{i}]"

@@ -11,15 +11,15 @@ import math
 
 import numpy as np
 
-from ..methods import CouplingMethod, engine_method
-from ..model import TestModel
-from ..stability import spectral_radius
+from ..engine.methods import CouplingMethod, engine_method
+from ..engine.model import TestModel
+from ..engine.spectral import spectral_radius
 from .model import PendulumParameters
 from .reference import Monolithic
 
 __all__ = ["pendulum_test_model", "linear_test_model_rho", "linear_test_model_stability", "combined_verdict"]
 
-#: The verdicts of :mod:`icosim.stability.policy`, the one that decides first when points are combined.
+#: The verdicts of :mod:`icosim.engine.spectral.policy`, the one that decides first when points are combined.
 _VERDICT_ORDER = ("unstable", "undecided", "marginal", "stable")
 
 
@@ -61,11 +61,11 @@ def linear_test_model_stability(
     (:func:`pendulum_test_model`), for the dimensionless form of ``method``.
 
     The method's parameters are in SI units here and are scaled as the registry
-    says (:func:`icosim.methods.engine_method`: Baumgarte's ``beta_bar = beta/H``,
+    says (:func:`icosim.engine.methods.engine_method`: Baumgarte's ``beta_bar = beta/H``,
     ``gamma_bar = gamma/H^2``; the weighted multiplier's ``a``, ``b`` are
     dimensionless already).  ``scheme``: the coupling scheme (link 1 is
     subsystem 1).  The verdict is the precision policy's
-    (:func:`icosim.stability.spectral_radius`) over both points
+    (:func:`icosim.engine.spectral.spectral_radius`) over both points
     (:func:`combined_verdict`); ``rho`` is the larger one, NaN if a point is
     undecided (nothing is known there) unless the other is unstable.  Returns
     ``(rho, verdict, model)``.

@@ -25,11 +25,6 @@ def _poly(coef, tau):
     return u
 
 
-def _cross(a, b):
-    """Planar cross product ``a_x b_y - a_y b_x``."""
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-
-
 # -- the subsystems --------------------------------------------------------------
 class Link1:
     """Link 1 pinned to ground: state ``(phi1, omega1)``."""

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model import ParameterError
+from ..errors import ParameterError
 
 __all__ = ["PendulumParameters", "joint_points", "joint_constraint"]
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..schemes import get_scheme
+from ..engine.schemes import get_scheme
 
 __all__ = ["COUPLING_VARIABLES", "TRADE_FIGURE_DATASETS", "VARIABLES", "run_name"]
 

@@ -1,7 +1,7 @@
 """The double pendulum split into link 1 and link 2, as the macro step sees it (docs/pendulum.md).
 
-Each link is integrated over a macro step by Radau IIA (:mod:`icosim.radau`,
-compiled for the links in :mod:`icosim.pendulum.compiled`); the sensitivities
+Each link is integrated over a macro step by Radau IIA (:mod:`icosim.pendulum.integrator.radau`,
+compiled for the links in :mod:`icosim.pendulum.integrator.compiled`); the sensitivities
 of the coupling conditions are forward differences, integrated in one batch
 with the predictor.
 """
@@ -13,24 +13,24 @@ from fractions import Fraction
 
 import numpy as np
 
-from ..backend import Float64
-from ..decompositions import get_decomposition
-from ..lagrange import (
+from ..engine.backends import Float64
+from ..engine.bounds import check_k
+from ..engine.decompositions import get_decomposition
+from ..engine.lagrange import (
     lagrange_coefficients,
     lagrange_weights,
     monomial_coefficients,
     variable_corrector_nodes,
     variable_predictor_nodes,
 )
-from ..limits import check_k
-from ..model import ParameterError
-from ..problem import CosimulationProblem
-from ..radau import _fd_jacobian, radau_batch
-from .compiled import CompiledLink
+from ..engine.problem import CosimulationProblem
+from ..errors import ParameterError
+from .integrator.compiled import CompiledLink
+from .integrator.radau import _fd_jacobian, radau_batch
 from .links import Link1, Link2
+from .manifold import project_state
 from .model import PendulumParameters, joint_constraint
 from .names import COUPLING_VARIABLES
-from .projection import project_state
 
 __all__ = ["PendulumCosimulation"]
 
@@ -43,7 +43,7 @@ _INPUTS = {
 }
 
 
-# -- the co-simulation problem (protocol of icosim.macrostep) ----------------------
+# -- the co-simulation problem (protocol of icosim.engine.macrostep) ----------------------
 class PendulumCosimulation(CosimulationProblem):
     """The double pendulum split into link 1 and link 2 (decomposition ff, fd or dd).
 
@@ -55,8 +55,8 @@ class PendulumCosimulation(CosimulationProblem):
     multiplier for a kinematically driven one).
     """
 
-    #: Integrate the links with the compiled transcription of icosim.radau (:mod:`.compiled`);
-    #: False: with :func:`icosim.radau.radau_batch` on the links' closures (the reference, for comparisons).
+    #: Integrate the links with the compiled transcription of icosim.pendulum.integrator.radau (:mod:`.integrator.compiled`);
+    #: False: with :func:`icosim.pendulum.integrator.radau.radau_batch` on the links' closures (the reference, for comparisons).
     compiled = True
 
     def __init__(
@@ -72,7 +72,7 @@ class PendulumCosimulation(CosimulationProblem):
         newton_tol: float = 1e-8,
     ):
         dec = get_decomposition(decomposition)
-        k = check_k(k)  # 0 .. icosim.limits.MAX_K
+        k = check_k(k)  # 0 .. icosim.engine.bounds.MAX_K
         for name, v in (("H", H), ("rtol", rtol), ("atol", atol), ("fd_step", fd_step), ("newton_tol", newton_tol)):
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ParameterError(f"{name} must be a finite number > 0, got {v!r}")
@@ -265,13 +265,13 @@ class PendulumCosimulation(CosimulationProblem):
     def constraint(self, state):
         return joint_constraint(self.params, state)
 
-    # -- variable macro steps (icosim.pendulum.adaptive) ----------------------------------
+    # -- variable macro steps (icosim.control.driver) ------------------------------------
     def set_macro_step(self, H: float, past_steps=None):
         """Size ``H`` of the next macro step and the sizes ``H_N-1, ..., H_N-k`` of the past ones.
 
         The extrapolation (Eq. 9) and interpolation (Eq. 11) polynomials then
-        run through the non-equidistant nodes of :mod:`icosim.lagrange`
-        (:func:`~icosim.lagrange.variable_predictor_nodes`), their weights
+        run through the non-equidistant nodes of :mod:`icosim.engine.lagrange`
+        (:func:`~icosim.engine.lagrange.variable_predictor_nodes`), their weights
         computed exactly from the float step sizes and rounded once;
         ``past_steps=None`` means equal steps (the nodes of a fixed ``H``).
         """

@@ -132,7 +132,7 @@ def consistent_history(params: PendulumParameters, decomposition: str, k: int, H
     """Exact coupling variables at ``T_0, T_-1, ..., T_-k`` from the monolithic solution.
 
     Backwards in time from the initial state, as for the linear model
-    (:func:`icosim.exact.consistent_start`): ``lambda_c`` and/or the joint
+    (:func:`icosim.engine.exact.consistent_start`): ``lambda_c`` and/or the joint
     acceleration ``a_tilde``.
     """
     ref = reference_solution(params, -H * np.arange(k + 1), **ref_kw)

@@ -1,9 +1,18 @@
 """A whole co-simulation run of the pendulum: to the end time, or to divergence or failure.
 
-The run goes through :func:`icosim.macrostep.simulate`; it *diverges* at the
+The run goes through :func:`icosim.engine.macrostep.simulate`; it *diverges* at the
 first macro step beyond a bound (or not finite) and *fails* at the first step
-that cannot be computed (a :class:`~icosim.macrostep.StepFailure`: it says
+that cannot be computed (a :class:`~icosim.errors.StepFailure`: it says
 nothing about stability).  The stored series end at the step before.
+
+:func:`run_adaptive` runs the same problem with adaptive macro steps
+(:func:`icosim.control.driver.adaptive_macro_steps`): the same divergence
+bounds, and beside the predictor-corrector estimate a **drift** criterion: the
+joint drift ``|g_c|`` of the accepted state must stay within ``drift_tol`` (m),
+so a step is accepted only if ``max(estimate, |g_c|/drift_tol) <= 1``.  With
+projection the stored state is on the constraint and the drift criterion is met
+by construction.  The starting history is the monolithic solution at
+``T_0, T_0 - H0, ...``.
 """
 
 from __future__ import annotations
@@ -14,17 +23,27 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..decompositions import get_decomposition
-from ..macrostep import StepFailure, simulate
-from ..methods import CouplingMethod
-from ..model import ParameterError
-from ..schemes import JACOBI, get_scheme
-from .compiled import warm_up
+from ..control.controller import StepController
+from ..control.driver import adaptive_macro_steps
+from ..engine.decompositions import get_decomposition
+from ..engine.macrostep import simulate
+from ..engine.methods import CouplingMethod
+from ..engine.schemes import JACOBI, get_scheme
+from ..errors import ParameterError, StepFailure
+from .integrator.compiled import warm_up
 from .model import PendulumParameters, joint_constraint
 from .problem import PendulumCosimulation
 from .reference import consistent_history
 
-__all__ = ["RunResult", "run_cosimulation", "CouplingSolveError", "divergence_reason", "joint_force"]
+__all__ = [
+    "RunResult",
+    "run_cosimulation",
+    "AdaptiveResult",
+    "run_adaptive",
+    "CouplingSolveError",
+    "divergence_reason",
+    "joint_force",
+]
 
 
 # -- a whole run ------------------------------------------------------------------
@@ -139,15 +158,15 @@ def run_cosimulation(
     max_multiplier: float = 1e3,
     max_rate: float = 1e2,
 ) -> RunResult:
-    """Co-simulate from ``t = 0`` to ``t_end`` with macro step ``H`` (:func:`icosim.macrostep.simulate`).
+    """Co-simulate from ``t = 0`` to ``t_end`` with macro step ``H`` (:func:`icosim.engine.macrostep.simulate`).
 
     The run *diverges* at the first macro step whose state, coupling variables
     or outputs are not finite, whose joint constraint (after the step or after
     the corrector) exceeds ``max_constraint`` (m), whose joint force exceeds
     ``max_multiplier`` (N) or whose angular rates exceed ``max_rate`` (rad/s);
     it *fails* at the first step that raises a
-    :class:`~icosim.macrostep.StepFailure`.  The series end at the step before.
-    ``scheme``: the coupling scheme (:mod:`icosim.schemes`; link 1 is subsystem 1).
+    :class:`~icosim.errors.StepFailure`.  The series end at the step before.
+    ``scheme``: the coupling scheme (:mod:`icosim.engine.schemes`; link 1 is subsystem 1).
     """
     scheme = get_scheme(scheme)
     dec = get_decomposition(decomposition)
@@ -216,4 +235,124 @@ def run_cosimulation(
         wall,
         cpu_seconds=cpu,
         jacobian_stats=dict(problem.jacobian_stats),
+    )
+
+
+# -- a whole run with adaptive macro steps ----------------------------------------
+@dataclass
+class AdaptiveResult:
+    """An adaptive run: accepted macro nodes ``t``, series at them, the steps taken and the counts.
+
+    ``H`` holds the accepted step sizes (``H[i] = t[i+1] - t[i]``), ``estimate``
+    and ``drift`` the error norm parts of each accepted step; ``status`` is
+    ``stable`` (reached the end time), ``diverged`` or ``failed`` (no
+    acceptable step even at ``H_min``).
+    """
+
+    t: np.ndarray
+    series: dict
+    H: np.ndarray
+    estimate: np.ndarray
+    drift: np.ndarray
+    status: str
+    reason: str
+    n_rejected: int
+    stats: dict
+    jacobian_stats: dict
+    cpu_seconds: float
+    rejected_H: list = field(default_factory=list)
+
+
+def run_adaptive(
+    params: PendulumParameters,
+    method: CouplingMethod,
+    decomposition: str,
+    k: int,
+    *,
+    t_end: float,
+    tol: float,
+    drift_tol: float,
+    H0: float,
+    controller: dict | None = None,
+    rtol: float = 1e-6,
+    atol: float = 1e-6,
+    fd_step: float = 1e-3,
+    newton_tol: float = 1e-8,
+    iterations: int = 1,
+    corrector_tol: float | None = None,
+    max_constraint: float = 1e-2,
+    max_multiplier: float = 1e3,
+    max_rate: float = 1e2,
+    max_steps: int = 200000,
+    scheme=JACOBI,
+) -> AdaptiveResult:
+    """Co-simulate from 0 to ``t_end`` with adaptive macro steps (module docstring).
+
+    ``controller`` are :class:`~icosim.control.controller.StepController` settings
+    (``order`` is ``k + 1``).  The bounds are those of :func:`run_cosimulation`; a
+    step beyond them is rejected, and only at ``H_min`` ends the run.
+    ``scheme``: the coupling scheme (:mod:`icosim.engine.schemes`; link 1 is subsystem 1).
+    """
+    scheme = get_scheme(scheme)
+    for name, v in (("t_end", t_end), ("tol", tol), ("drift_tol", drift_tol), ("H0", H0)):
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise ParameterError(f"{name} must be a finite number > 0, got {v!r}")
+    ctl = StepController(order=int(k) + 1, **(controller or {}))
+    if not ctl.H_min <= H0 <= ctl.H_max:
+        raise ParameterError(f"H0 = {H0!r} must lie in [H_min, H_max] = [{ctl.H_min!r}, {ctl.H_max!r}]")
+    problem = PendulumCosimulation(
+        params, decomposition, k, H0, rtol=rtol, atol=atol, fd_step=fd_step, newton_tol=newton_tol
+    )
+    method.check_decomposition(problem.decomposition)
+    bounds = dict(max_constraint=max_constraint, max_multiplier=max_multiplier, max_rate=max_rate)
+    dec = problem.decomposition.name
+    state = params.initial_state()
+    lam0 = consistent_history(params, "ff", 0, H0)[0]
+    g0 = joint_constraint(params, state)
+    rows = [_series_row(params, state, g0, lam0)]
+
+    def check(state, history, y):
+        return divergence_reason(problem, state, history[0], y, **bounds)
+
+    def drift(state):
+        return float(np.max(np.abs(joint_constraint(params, state)))) / drift_tol
+
+    def store(state, history, y):
+        rows.append(_series_row(params, state, y[0, 0] - y[1, 0], joint_force(dec, history[0], y)))
+
+    if problem.compiled:
+        warm_up()  # not timed: numba's compilation or cache load
+    steps = adaptive_macro_steps(
+        problem,
+        _SingularSolveAsFailure(method),
+        state,
+        consistent_history(params, dec, k, H0),
+        t_end=t_end,
+        H0=H0,
+        controller=ctl,
+        tol=tol,
+        restart=lambda H: consistent_history(params, dec, k, H),
+        check=check,
+        extra_error=drift,
+        on_accept=store,
+        scheme=scheme,
+        iterations=iterations,
+        corrector_tol=corrector_tol,
+        max_steps=max_steps,
+    )
+    series = {name: np.array([r[name] for r in rows], dtype=float) for name in rows[0]}
+    stats = dict(problem.stats, macro_steps=len(steps.H))
+    return AdaptiveResult(
+        steps.t,
+        series,
+        steps.H,
+        steps.estimate,
+        np.array([d * drift_tol for d in steps.extra]),
+        steps.status,
+        steps.reason,
+        steps.n_rejected,
+        stats,
+        dict(problem.jacobian_stats),
+        steps.cpu_seconds,
+        steps.rejected_H,
     )

@@ -1,4 +1,4 @@
-"""The claims table of a report section, from the verdict records of :func:`icosim.claims.write_verdicts`."""
+"""The claims table of a report section, from the verdict records of :func:`icosim.claims.core.write_verdicts`."""
 
 from __future__ import annotations
 
@@ -45,7 +45,7 @@ def claims_markdown(claims, describe) -> str:
     """A Markdown table of claims for the documentation: what each says, what its check reads, what
     data outcome would make it fail, and its recorded full-resolution verdict.
 
-    ``describe(claim) -> {"check": ..., "fails_if": ...}`` (:func:`icosim.checks.describe_claim`).
+    ``describe(claim) -> {"check": ..., "fails_if": ...}`` (:func:`icosim.claims.registry.describe_claim`).
     """
 
     def cell(text) -> str:

@@ -11,9 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..claims import verdict_counts
+from ..claims.core import verdict_counts
+from ..convergence.curves import fastest_schemes
 from ..convergence.experiment import Setup, oscillation_summary, step_counts
-from ..convergence.work_precision import fastest_schemes
 from . import html as rp
 from .claims import claims_table
 
@@ -29,7 +29,7 @@ STEPPING_TEXT = {
     "so there is no round-off floor. Checked against 40-digit mpmath time stepping (tests).",
     "matrix": " — the float64 state is iterated with the amplification matrix and the exact solution subtracted "
     "(a round-off floor near NRMSE ~ 1e-11).",
-    "simulate": " — icosim.macrostep.simulate in float64 (a round-off floor near NRMSE ~ 1e-11).",
+    "simulate": " — icosim.engine.macrostep.simulate in float64 (a round-off floor near NRMSE ~ 1e-11).",
 }
 
 
@@ -102,7 +102,7 @@ def convergence_section(
         f"consistent with the rigid link; end time T = {s['end_time']:g} s: {horizon} (every NRMSE denominator, the variance "
         "of the reference, must stay well away from zero).",
         "Coupling-variable history: the exact monolithic coupling variables (multiplier λ and/or acceleration) at "
-        "T_0, T_−1, …, T_−k (icosim.exact.consistent_start); both subsystems start at the exact state.",
+        "T_0, T_−1, …, T_−k (icosim.engine.exact.consistent_start); both subsystems start at the exact state.",
         f"Step sizes: {len(H)} sizes H = T/N_total from {H.min():.3g} s to {H.max():.3g} s "
         f"({np.log10(H.max() / H.min()):.1f} decades; N_total from {n_steps.min()} to {n_steps.max()}).",
         "Eq. (72), whose extraction is garbled (two brackets closed by ]^(1/2), one opened), is read as one square root of the "
@@ -117,13 +117,13 @@ def convergence_section(
         f"Unstable: a run is stopped once |state| exceeds {unstable['growth_bound']:g} × the initial amplitude, and is "
         "also unstable where the spectral radius of the recurrence at that H exceeds 1"
         + (
-            ": proven from the same ball amplification matrix as the defect (icosim.stability.certified, "
+            ": proven from the same ball amplification matrix as the defect (icosim.engine.spectral.certified, "
             f"{n_marginal} of {n_runs} runs marginal: the enclosure contains 1)."
             if stepping == "error"
             else f" (policy '{unstable['spectral_policy']}')."
         )
         + f" {n_unstable} of {n_runs} runs were unstable; they are drawn as × at the top of a panel, never as an error.",
-        f"Orders decided in the asymptotic range (icosim.convergence.fit.asymptotic_order): the order of a curve is the "
+        f"Orders decided in the asymptotic range (icosim.order_fit.asymptotic_order): the order of a curve is the "
         f"least-squares slope of log NRMSE over log H on its smallest-H decade (at least {fit['min_points']} stable step "
         f"sizes), and counts only if every local slope there is within ±{fit['tolerance']:g} of it; otherwise the curve is "
         "pre-asymptotic and a claim about it is undecided, never passed or failed. A curve unstable at its smallest step "

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..claims import verdict_counts
-from ..schemes import SCHEMES, split_figure_id
+from ..claims.core import verdict_counts
+from ..engine.schemes import SCHEMES, split_figure_id
 from .claims import claims_table
 from .html import escape, figure, section, table
 

@@ -12,7 +12,6 @@ import itertools
 from pathlib import Path
 
 __all__ = [
-    "embed_png",
     "embed_image",
     "figure",
     "figure_pair",
@@ -44,12 +43,6 @@ tr:target,figure:target{outline:3px solid #f0c040}
 
 #: Longer claim texts (statement, measured, note) fold away behind their first words.
 FOLD_AT = 200
-
-
-def embed_png(path) -> str:
-    """``data:`` URI of a PNG file as it is, so the page needs no other files."""
-    data = base64.b64encode(Path(path).read_bytes()).decode("ascii")
-    return f"data:image/png;base64,{data}"
 
 
 def compact_png(data: bytes) -> bytes:

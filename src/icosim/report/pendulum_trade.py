@@ -1,10 +1,10 @@
-"""The speed-accuracy part of the pendulum section (issue 12): orders, work-precision, stability limits,
+"""The speed-accuracy part of the pendulum section (the speed-accuracy trade, beyond the paper): orders, work-precision, stability limits,
 subsystem tolerance and adaptive macro steps, with conclusions computed from the datasets.
 
 Every number on the page is read from ``work_precision.nc``,
 ``stability_limit.nc``, ``tolerance.nc`` and ``adaptive.nc``; the rows and
 counts behind the sentences that draw conclusions come from
-:mod:`icosim.pendulum.conclusions`, which the tests call on the same datasets.
+:mod:`icosim.pendulum.trade.conclusions`, which the tests call on the same datasets.
 """
 
 from __future__ import annotations
@@ -13,12 +13,12 @@ import math
 
 import numpy as np
 
-from ..pendulum.adaptive_study import equal_error_table
-from ..pendulum.conclusions import (
+from ..pendulum.trade.conclusions import (
     LIMIT_AGREEMENT,
     ORDER_AGREEMENT,
     accuracy_rows,
     adaptive_summary,
+    equal_error_table,
     limit_rows,
     limit_summary,
     order_rows,
@@ -57,7 +57,7 @@ def trade_section(*, work_precision, stability_limit, tolerance, adaptive, figur
     wp, lim, tol, ad = work_precision, stability_limit, tolerance, adaptive
     T = float(wp.attrs["t_end"])
     H = wp["H"].values
-    parts = ["<h3>Speed–accuracy trade (issue 12)</h3>"]
+    parts = ["<h3>Speed–accuracy trade</h3>"]
     parts.append(
         f"<p><b>What was measured.</b> Every configuration above ({wp.sizes['config']} in all) at "
         f"{len(H)} macro steps H = {', '.join(_f(h, 'g') for h in H)} s over the same end time "

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..claims import verdict_counts
+from ..claims.core import verdict_counts
 from ..stability.panels import RATIOS, row_label
 from . import html as rp
 from .claims import claims_table
@@ -120,7 +120,7 @@ def stability_section(
     ``figures``, ``grid``, ``zoom_grid``, ``precision``, ``style`` and
     ``decisions`` are the configuration (``stability:``); ``panel_attrs`` the
     attributes of every panel dataset, ``claims`` the verdict records
-    (:func:`icosim.claims.read_verdicts`), ``figure_pngs`` the figures
+    (:func:`icosim.claims.core.read_verdicts`), ``figure_pngs`` the figures
     (``.../fig<figure>.png``), in the order shown.
     """
     # -- panel attributes: precision and cost, per figure (and all) ---------------------------------

@@ -1,33 +1,17 @@
-"""Stability of the co-simulation recurrence (Sect. 2, Eqs. 21-23).
+"""The stability study: the panels of Figs. 9-20 over parameter grids, their datasets and claims.
 
 ==========================  ===================================================
 module                      holds
 ==========================  ===================================================
-:mod:`.matrix`              the amplification matrix, from the macro step itself
-:mod:`.spectral`            spectral radius in float64 (with an error estimate)
-                            and at any precision (mpmath)
-:mod:`.certified`           proven enclosures of the spectral radius (Arb balls)
-:mod:`.policy`              the precision policy: float64, proofs where it
-                            cannot decide; the verdict of every point
-:mod:`.panels`              one panel of Figs. 9-20 as a dataset (xarray)
+:mod:`.panels`              one panel of Figs. 9-20 as configured (grid, rows)
+:mod:`.datasets`            one panel computed as a dataset (xarray)
+:mod:`.regions`             the grid points a claim reads, the verdict masks
 :mod:`.checks`              the stability claims' check kinds
+:mod:`.pointwise`           the point-by-point check kind ``pointwise``
+:mod:`.comparison`          stable shares of a figure under each coupling scheme
 ==========================  ===================================================
 
-Importing this package loads the first three only (no xarray, no matplotlib).
+The spectral radius of one point (amplification matrix, float64 and mpmath,
+proofs in ball arithmetic, the precision policy) is the engine's:
+:mod:`icosim.engine.spectral`.  The package imports none of its modules.
 """
-
-from .certified import SpectralCertificate, certify_spectral_radius
-from .matrix import amplification_matrix
-from .policy import Certification, StabilityResult, spectral_radius
-from .spectral import spectral_radius_float64, spectral_radius_mp
-
-__all__ = [
-    "amplification_matrix",
-    "spectral_radius_float64",
-    "spectral_radius_mp",
-    "spectral_radius",
-    "StabilityResult",
-    "Certification",
-    "certify_spectral_radius",
-    "SpectralCertificate",
-]

@@ -31,10 +31,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..claims import CheckKind, Outcome, combine_holds, select, selector_text
-from ..model import ParameterError
+from ..claims.core import CheckKind, Outcome, combine_holds, select, selector_text
+from ..engine.spectral.policy import VERDICTS
+from ..errors import ParameterError
 from .pointwise import RELATIONS, check_pointwise, describe_pointwise, validate_pointwise
-from .policy import VERDICTS
 from .regions import region_mask, validate_region, verdict_masks
 
 __all__ = [
@@ -386,7 +386,7 @@ def _describe_trend(p):
     return what, "a step goes the other way by more than one grid spacing (or the whole change is within it)"
 
 
-#: The stability check kinds (collected by :mod:`icosim.checks`).
+#: The stability check kinds (collected by :mod:`icosim.claims.registry`).
 CHECKS = {
     "stable_fraction": CheckKind(
         check_stable_fraction,

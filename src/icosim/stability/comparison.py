@@ -1,7 +1,7 @@
 """Stable shares of the same figure under different coupling schemes (Jacobi, Gauss-Seidel 1→2, 2→1).
 
 Reads the full-view panels of :mod:`icosim.stability.panels` (every scheme of a
-figure has its own figure id, :func:`icosim.schemes.figure_id`) and tabulates
+figure has its own figure id, :func:`icosim.engine.schemes.figure_id`) and tabulates
 the share of stable grid points per paper figure, row, ``k`` and scheme -- what
 the comparison figure draws and the report tabulates.  Nothing is recomputed.
 """
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..schemes import SCHEME_NAMES, split_figure_id
+from ..engine.schemes import SCHEME_NAMES, split_figure_id
 from .checks import stable_share
 
 __all__ = ["scheme_shares"]

@@ -12,22 +12,22 @@ proof), whether it is ``certified`` with the proven enclosure
 ``[rho_lower, rho_upper]``, and whether a float64 verdict was checked by
 certification (``audited``) and ``overturned``; the attributes count them
 and say how long each pass took, so the cost of the policy is measured on
-every run (:mod:`icosim.stability.policy`).
+every run (:mod:`icosim.engine.spectral.policy`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..backend import FLOAT64_DIGITS
-from ..decompositions import DECOMPOSITIONS
-from ..jsonio import dumps
-from ..model import TestModel
-from ..schemes import get_scheme
+from ..engine.backends import FLOAT64_DIGITS
+from ..engine.decompositions import DECOMPOSITIONS
+from ..engine.model import TestModel
+from ..engine.schemes import get_scheme
+from ..engine.spectral.policy import ARITHMETICS, REASONS, VERDICTS, Certification, spectral_radius
+from ..io.jsonio import dumps
 from .panels import PanelSpec, format_row_label, grid_axis, method_parameters_units
-from .policy import ARITHMETICS, REASONS, VERDICTS, Certification, spectral_radius
 
-__all__ = ["stability_panel", "LONG_NAMES", "verdict_names"]
+__all__ = ["stability_panel", "LONG_NAMES"]
 
 LONG_NAMES = {
     "lr1": "real part of the eigenvalue of subsystem 1, lambda_bar_r1 = -d_bar_1/2",
@@ -62,16 +62,11 @@ def _flags(names) -> dict:
     return {"flag_values": np.arange(len(names), dtype=np.int8), "flag_meanings": " ".join(names)}
 
 
-def verdict_names(ds) -> np.ndarray:
-    """The ``verdict`` variable of a panel as names (stable, unstable, marginal, undecided)."""
-    return np.asarray(VERDICTS, dtype=object)[ds["verdict"].values]
-
-
 def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
     """Compute one panel and return it as an :class:`xarray.Dataset`.
 
     ``provenance`` are extra global attributes (normally
-    :func:`icosim.datasets.provenance_attrs` of the job's configuration).
+    :func:`icosim.io.netcdf.provenance_attrs` of the job's configuration).
     """
     import xarray as xr
 
@@ -122,7 +117,7 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
                 np.asarray(result.err, dtype=float),
                 units="1",
                 comment="spread of float64 results under rounding-size disturbances times a safety factor "
-                "(icosim.stability.spectral); a point is certified if |rho - 1| <= this or rho is not finite",
+                "(icosim.engine.spectral.radius); a point is certified if |rho - 1| <= this or rho is not finite",
             ),
         },
         coords={

@@ -16,13 +16,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import methods as _methods
-from ..decompositions import DECOMPOSITIONS
-from ..limits import MAX_GRID_N, check_k
-from ..methods import make_method
-from ..model import ParameterError
-from ..schemes import figure_id, get_scheme
-from .policy import POLICIES, Certification
+from ..engine import methods as _methods
+from ..engine.bounds import MAX_GRID_N, check_k
+from ..engine.decompositions import DECOMPOSITIONS
+from ..engine.methods import make_method
+from ..engine.schemes import figure_id, get_scheme
+from ..engine.spectral.policy import POLICIES, Certification
+from ..errors import ParameterError
 
 __all__ = [
     "PanelSpec",
@@ -121,9 +121,9 @@ class PanelSpec:
     policy: str = "auto"
     #: the parameters that tell this figure's rows apart (:func:`row_label_keys`)
     row_keys: tuple = RATIOS
-    #: settings of the certified rechecks (:class:`icosim.stability.policy.Certification`), as a mapping
+    #: settings of the certified rechecks (:class:`icosim.engine.spectral.policy.Certification`), as a mapping
     certify: dict = field(default_factory=dict)
-    #: the coupling scheme (:mod:`icosim.schemes`), by name
+    #: the coupling scheme (:mod:`icosim.engine.schemes`), by name
     scheme: str = "jacobi"
 
     @classmethod
@@ -149,7 +149,7 @@ class PanelSpec:
             )
         if self.view not in VIEWS:
             raise ParameterError(f"view must be one of {', '.join(VIEWS)}, got {self.view!r}")
-        check_k(self.k)  # 0 .. icosim.limits.MAX_K
+        check_k(self.k)  # 0 .. icosim.engine.bounds.MAX_K
         if self.policy not in POLICIES:
             raise ParameterError(f"policy must be one of {', '.join(POLICIES)}, got {self.policy!r}")
         Certification.from_dict(self.certify)  # refuses a bad setting, naming it
@@ -233,7 +233,7 @@ def figure_panels(
     ``zoom`` and ``schemes``).  Every panel's method is built once here, so a parameter the
     method does not accept is reported with the figure and row before any job
     runs.  The panels' ``figure`` is the figure id of ``scheme``
-    (:func:`icosim.schemes.figure_id`: ``"9"`` for Jacobi, ``"9gs12"``, ``"9gs21"``).
+    (:func:`icosim.engine.schemes.figure_id`: ``"9"`` for Jacobi, ``"9gs12"``, ``"9gs21"``).
     """
     where = f"stability.figures.{figure}"
     n_rows = len(figure_cfg["rows"])

@@ -7,7 +7,7 @@ check pairs the panels two selectors pick (by the attributes ``pair_by``:
 the same method, decomposition, row, ``k`` and view, say) and compares their
 verdicts at every grid point of a region.
 
-Each point has one of four verdicts (:data:`icosim.stability.policy.VERDICTS`):
+Each point has one of four verdicts (:data:`icosim.engine.spectral.policy.VERDICTS`):
 stable ``S``, unstable ``U``, marginal ``M`` (the proven enclosure of ``rho``
 contains 1 at the precision cap) or undecided ``X``.  Per point:
 
@@ -44,9 +44,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..claims import Outcome, combine_holds, select, selector_text
-from ..model import ParameterError
-from .policy import VERDICTS
+from ..claims.core import Outcome, combine_holds, select, selector_text
+from ..engine.spectral.policy import VERDICTS
+from ..errors import ParameterError
 from .regions import region_mask, validate_region, verdict_masks
 
 __all__ = ["check_pointwise", "describe_pointwise", "point_verdicts", "RELATIONS", "PAIR_BY", "MAX_LISTED"]

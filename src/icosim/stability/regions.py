@@ -2,7 +2,7 @@
 
 A claim's ``region`` bounds ``lr1`` and ``li1`` and may leave out the
 undamped axis ``lr1 = 0`` and the origin (free masses); the verdicts
-(:data:`icosim.stability.policy.VERDICTS`) split the points into stable,
+(:data:`icosim.engine.spectral.policy.VERDICTS`) split the points into stable,
 unstable and the rest (marginal or undecided).  Shared by the share checks
 (:mod:`icosim.stability.checks`) and the point-by-point one
 (:mod:`icosim.stability.pointwise`).
@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model import ParameterError
-from .policy import VERDICTS
+from ..engine.spectral.policy import VERDICTS
+from ..errors import ParameterError
 
 __all__ = ["REGION_KEYS", "region_mask", "verdict_masks", "validate_region"]
 

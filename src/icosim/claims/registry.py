@@ -1,0 +1,55 @@
+"""The check kinds of every part in one table, and the claims functions bound to it.
+
+Each part defines its kinds in its own ``checks`` module; this registry imports
+them all (as scipy's ``solve_ivp`` keeps its ``METHODS`` table), so the generic
+machinery in :mod:`icosim.claims.core` needs to import no part and no part needs to
+register itself.
+
+================================  ==========================================================
+module                            check kinds
+================================  ==========================================================
+:mod:`icosim.stability.checks`    ``stable_fraction``, ``compare``, ``trend``, ``pointwise``
+:mod:`icosim.convergence.checks`  ``convergence_order``
+:mod:`icosim.pendulum.replication.checks`     ``pendulum_stability``
+================================  ==========================================================
+
+>>> sorted(CHECKS)
+['compare', 'convergence_order', 'pendulum_stability', 'pointwise', 'stable_fraction', 'trend']
+"""
+
+from __future__ import annotations
+
+from ..convergence import checks as _convergence
+from ..pendulum.replication import checks as _pendulum
+from ..stability import checks as _stability
+from . import core as _claims
+from .core import Claim, Verdict
+
+__all__ = ["CHECKS", "parse_claims", "load_claims", "evaluate_claim", "evaluate", "describe_claim"]
+
+#: check kind -> :class:`icosim.claims.core.CheckKind`, for every part.
+CHECKS = {**_stability.CHECKS, **_convergence.CHECKS, **_pendulum.CHECKS}
+
+
+def parse_claims(items, *, where: str = "claims") -> list[Claim]:
+    """:func:`icosim.claims.core.parse_claims` with every part's check kinds."""
+    return _claims.parse_claims(items, CHECKS, where=where)
+
+
+def load_claims(path, key: str = "claims") -> list[Claim]:
+    """:func:`icosim.claims.core.load_claims` with every part's check kinds."""
+    return _claims.load_claims(path, CHECKS, key=key)
+
+
+def evaluate_claim(claim: Claim, datasets) -> Verdict:
+    return _claims.evaluate_claim(claim, datasets, CHECKS)
+
+
+def evaluate(claims, datasets) -> list[Verdict]:
+    """One :class:`~icosim.claims.core.Verdict` per claim, with every part's check kinds."""
+    return _claims.evaluate(claims, datasets, CHECKS)
+
+
+def describe_claim(claim: Claim) -> dict:
+    """:func:`icosim.claims.core.describe_claim` with every part's check kinds."""
+    return _claims.describe_claim(claim, CHECKS)

@@ -1,0 +1,142 @@
+"""``icosim advise``: which configurations are stable for a two-mass system, and up to which macro step.
+
+A thin command-line wrapper of :mod:`icosim.advise`: every argument is checked before any
+computation; bad input exits with status 2 and one line ``icosim advise: error: argument
+--<name>: ...``.  ``--json`` prints strict JSON (no NaN or infinity: ``null``, with the reason
+next to it).
+"""
+
+from __future__ import annotations
+
+from ..engine import methods
+from ..engine.decompositions import DECOMPOSITIONS
+from ..engine.schemes import SCHEME_NAMES
+from ..errors import ParameterError
+from ..io.jsonio import dumps
+from . import arguments as arg
+
+__all__ = ["add_parser", "run", "advise_parameters"]
+
+
+def advise_parameters() -> dict:
+    """Method parameters ``icosim advise`` takes: those some configuration of :func:`icosim.advise.configurations` uses."""
+    from ..advise.core import index_parameters
+
+    used = {}
+    for spec in methods.METHODS.values():
+        for index in spec.indices:
+            for name in index_parameters(spec, index, {}):
+                name = name.removesuffix("_bar")
+                used.setdefault(name, methods.parameters()[name])
+    return used
+
+
+def add_parser(sub):
+    """Register ``advise`` on the ``icosim`` sub-command parsers."""
+    adv = sub.add_parser(
+        "advise",
+        help="which schemes are stable for my two-mass system, and up to which macro step",
+        description="Every coupling method, index, decomposition and approximation order k for a physical "
+        "two-mass system: the dimensionless parameters, rho at one macro step H (or the largest stable H in a "
+        "range), and a ranking of the stable schemes.",
+        epilog="Method parameters not given are 1 in the paper's dimensionless form: mu = H (mu_bar = 1), "
+        "a = b = 1 (Figs. 9-15).  Over an H range stability is scanned on a log-spaced grid and every "
+        "stable/unstable transition is bracketed to a relative width --rtol; stability need not be monotone in "
+        "H, and the output says where it is not.",
+    )
+    adv._negative_number_matcher = arg.NEGATIVE_NUMBER
+    g = adv.add_argument_group("the two subsystems (SI units; overdamped subsystems accepted)")
+    for name, text in (
+        ("m1", "mass of subsystem 1 in kg (> 0)"),
+        ("m2", "mass of subsystem 2 in kg (> 0)"),
+        ("c1", "stiffness of subsystem 1 in N/m (>= 0)"),
+        ("c2", "stiffness of subsystem 2 in N/m (>= 0)"),
+        ("d1", "damping of subsystem 1 in N s/m (>= 0)"),
+        ("d2", "damping of subsystem 2 in N s/m (>= 0)"),
+    ):
+        g.add_argument(f"--{name}", required=True, type=arg.number, help=text)
+    g.add_argument(
+        "--H", required=True, type=arg.number, nargs="+", metavar="H", help="macro step in s, or a range: H_LO H_HI"
+    )
+    g = adv.add_argument_group("schemes")
+    g.add_argument("--methods", nargs="+", choices=tuple(methods.METHODS), help="default: every method")
+    g.add_argument("--decompositions", nargs="+", choices=tuple(DECOMPOSITIONS), help="default: every one")
+    g.add_argument("--k", nargs="+", type=arg.order, help="approximation orders (default: 0 1 2)")
+    g.add_argument(
+        "--couplings",
+        nargs="+",
+        choices=SCHEME_NAMES,
+        help="coupling orders: jacobi (parallel, the paper's), gauss-seidel-12 (subsystem 1 first), "
+        "gauss-seidel-21 (subsystem 2 first); default: every one",
+    )
+    units = {"s": "in s", "s2": "in s^2", "1": "dimensionless"}
+    for name, p in advise_parameters().items():
+        g.add_argument(
+            f"--{name}",
+            type=arg.number,
+            help=f"{p.help} ({units[p.unit]}; default: {name}_bar = 1)" if p.scaling else f"{p.help} (default: 1)",
+        )
+    g = adv.add_argument_group("precision and output")
+    g.add_argument("--scan", type=arg.positive_int, help="H grid points of the first scan over a range (default: 32)")
+    g.add_argument("--rtol", type=arg.number, help="relative width of a refined transition (default: 1e-6)")
+    g.add_argument(
+        "--policy",
+        choices=("auto", "float64"),
+        default="auto",
+        help="auto: float64, points it cannot decide certified in ball arithmetic (default); float64: no "
+        "recheck, such points are 'undecided' (fast for undamped systems, where rho = 1 everywhere)",
+    )
+    g.add_argument("--json", action="store_true", help="print one JSON object")
+    adv.set_defaults(subparser=adv)
+    return adv
+
+
+def run(args, parser) -> int:
+    """``icosim advise``: check the arguments (exit 2 naming the bad one), then answer."""
+    from ..advise import (
+        DEFAULT_K,
+        DEFAULT_RTOL,
+        DEFAULT_SCAN,
+        Progress,
+        TwoMassSystem,
+        advice_records,
+        advice_text,
+        advise,
+        check_settings,
+        configurations,
+    )
+
+    if len(args.H) > 2:
+        parser.error(f"argument --H: give one macro step or a range H_LO H_HI, got {len(args.H)} values")
+    params = {name: getattr(args, name) for name in advise_parameters() if getattr(args, name) is not None}
+    try:
+        system = TwoMassSystem(args.m1, args.m2, args.c1, args.c2, args.d1, args.d2)
+        check_settings(args.H, n_scan=args.scan or DEFAULT_SCAN, rtol=args.rtol or DEFAULT_RTOL, policy=args.policy)
+        if len(args.H) == 1 and (args.scan is not None or args.rtol is not None):
+            raise ParameterError("scan and --rtol apply to an H range (--H H_LO H_HI) only")
+        configuration_list = configurations(
+            methods=args.methods,
+            decompositions=args.decompositions,
+            k=args.k or DEFAULT_K,
+            params=params,
+            couplings=args.couplings,
+        )
+    except ParameterError as exc:
+        arg.fail(parser, str(exc))
+    if not configuration_list:
+        parser.error("argument --decompositions: none of the methods asked for is defined for these decompositions")
+    bar = Progress(len(configuration_list))
+    try:
+        df = advise(
+            system,
+            args.H,
+            configuration_list=configuration_list,
+            n_scan=args.scan or DEFAULT_SCAN,
+            rtol=args.rtol or DEFAULT_RTOL,
+            policy=args.policy,
+            progress=bar,
+        )
+    finally:
+        bar.close()
+    print(dumps(advice_records(df)) if args.json else advice_text(df))
+    return 0

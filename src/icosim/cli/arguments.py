@@ -1,0 +1,137 @@
+"""Argument types and helpers every sub-command shares, so that every command takes and refuses input alike.
+
+Bad input exits with status 2 and one line ``icosim <command>: error: argument --<name>: ...``
+naming the argument and the allowed values (argparse's own format).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import re
+from fractions import Fraction
+
+from ..engine.backends import FLOAT64_DIGITS
+from ..engine.bounds import MAX_BITS_LIMIT, MAX_DIGITS, MAX_K, MAX_SECONDS, check_k
+from ..errors import ParameterError
+
+__all__ = [
+    "number",
+    "decimal",
+    "order",
+    "digits",
+    "bits",
+    "seconds",
+    "positive_int",
+    "NEGATIVE_NUMBER",
+    "add_scheme_arguments",
+    "fail",
+]
+
+#: Negative numbers in exponent notation (``-1e-3``) are values, also for options taking two of them.
+NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
+
+
+def number(text):
+    """A finite float (NaN and infinity are refused)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
+
+
+def decimal(text):
+    """A finite number, kept exactly as the decimal typed (a :class:`~fractions.Fraction`)."""
+    number(text)  # the same checks and messages as a float argument
+    return Fraction(text.strip())
+
+
+def _nonneg_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return value
+
+
+def order(text):
+    """An approximation order k in 0 .. icosim.engine.bounds.MAX_K."""
+    try:
+        return check_k(_nonneg_int(text), "k")
+    except ParameterError as exc:
+        raise argparse.ArgumentTypeError(f"expected an integer in 0..{MAX_K} (the largest k), got {text!r}") from exc
+
+
+def digits(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer in 16..{MAX_DIGITS}, got {text!r}") from None
+    if value < 16:
+        raise argparse.ArgumentTypeError(
+            f"expected an integer in 16..{MAX_DIGITS} (float64 carries {FLOAT64_DIGITS}; omit --digits for it), "
+            f"got {text!r}"
+        )
+    if value > MAX_DIGITS:
+        raise argparse.ArgumentTypeError(
+            f"expected an integer in 16..{MAX_DIGITS} (the largest --digits), got {text!r}"
+        )
+    return value
+
+
+def bits(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer in 128..{MAX_BITS_LIMIT}, got {text!r}") from None
+    if not 128 <= value <= MAX_BITS_LIMIT:
+        raise argparse.ArgumentTypeError(
+            f"expected an integer in 128..{MAX_BITS_LIMIT} (the first attempt's precision .. the limit), got {text!r}"
+        )
+    return value
+
+
+def seconds(text):
+    value = number(text)
+    if not 0 < value <= MAX_SECONDS:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds in (0, {MAX_SECONDS:g}], got {text!r}")
+    return value
+
+
+def positive_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 2, got {text!r}") from None
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 2, got {text!r}")
+    return value
+
+
+def add_scheme_arguments(group):
+    """``--scheme`` and ``--first``, alike for every command that takes one coupling scheme."""
+    group.add_argument(
+        "--scheme",
+        choices=("jacobi", "gauss-seidel"),
+        default="jacobi",
+        help="coupling scheme: jacobi (parallel, the paper's; default) or gauss-seidel (sequential)",
+    )
+    group.add_argument(
+        "--first", type=int, choices=(1, 2), help="gauss-seidel: the subsystem that advances first (default 1)"
+    )
+
+
+def fail(parser, text: str):
+    """``parser.error`` with the message attributed to the argument it names (the first option word in it)."""
+    if not text.startswith("argument "):
+        options = {s.lstrip("-") for a in parser._actions for s in a.option_strings}
+        for word in re.findall(r"[A-Za-z_][A-Za-z0-9_]*", text):
+            if word in options:
+                text = f"argument --{word}: {text}"
+                break
+    parser.error(text)

@@ -1,0 +1,224 @@
+"""Arithmetic backends: float64 (batched over parameter grids), mpmath, and Arb balls.
+
+The co-simulation algorithm is written once with NumPy array operations
+(``+ - * /``, ``@``, indexing).  With the float64 backend the arrays are float64
+and carry arbitrary leading batch axes (a whole parameter grid at once).  With
+the multiprecision backend they are NumPy *object* arrays of ``mpf`` numbers
+from a private :class:`mpmath.MPContext`, so the very same code runs at, say,
+128 significant digits without touching mpmath's global precision.  With the
+ball backend (:class:`Ball`, python-flint's Arb) they are object arrays of
+balls whose radii are proven error bounds.  Only the matrix exponential and
+the eigenvalues differ between them.  Arithmetic runs inside
+``backend.context()`` (Arb's precision is a global setting; the other
+backends need nothing).
+"""
+
+from __future__ import annotations
+
+import math
+from contextlib import contextmanager, nullcontext
+from fractions import Fraction
+
+import numpy as np
+
+from .bounds import check_digits, guard_digits
+
+__all__ = ["Float64", "Multiprecision", "Ball", "FLOAT64_DIGITS"]
+
+#: Decimal digits float64 carries reliably (``numpy.finfo(float).precision``).
+FLOAT64_DIGITS = int(np.finfo(float).precision)
+
+
+class Float64:
+    """IEEE double precision; every routine is vectorised over leading axes."""
+
+    name = "float64"
+    digits = FLOAT64_DIGITS
+    dtype = np.float64
+    eps = float(np.finfo(float).eps)
+
+    def context(self):
+        return nullcontext(self)
+
+    def asarray(self, x):
+        return np.asarray(x, dtype=float)
+
+    def const(self, q):
+        """A constant (int, Fraction, float) in this arithmetic."""
+        return float(q)
+
+    def expm(self, M, decay=0.0):
+        # scipy's expm accepts stacks (..., n, n): one call for a whole grid.
+        # ``decay`` is ignored: float64 cannot add guard digits (the precision
+        # policy detects the points where that matters).
+        import scipy.linalg  # here, not at the top: jobs that never form expm start faster
+
+        return scipy.linalg.expm(M)
+
+    def eigvals(self, M):
+        return np.linalg.eigvals(M)
+
+    def __repr__(self):
+        return "Float64()"
+
+
+class Multiprecision:
+    """mpmath arithmetic with ``digits`` significant decimal digits."""
+
+    name = "mpmath"
+    dtype = object
+
+    def __init__(self, digits: int = 128):
+        self.digits = check_digits(digits)  # 16 .. icosim.engine.bounds.MAX_DIGITS
+        import mpmath  # here, not at the top: float64-only jobs start faster
+
+        self.ctx = mpmath.MPContext()
+        self.ctx.dps = self.digits
+        self.eps = self.ctx.eps
+
+    def context(self):
+        return nullcontext(self)  # a private MPContext: nothing global to set
+
+    def _mpf(self, v):
+        """Exact for int, float, Fraction and mpf (then rounded to ``digits``); a decimal string is read
+        at the working precision (correctly rounded), so ``"0.3"`` means 3/10."""
+        if isinstance(v, np.ndarray | np.generic):
+            v = v.item()
+        if isinstance(v, Fraction):
+            return self.ctx.mpf(v.numerator) / v.denominator
+        if isinstance(v, complex):
+            return self.ctx.mpc(v)
+        return self.ctx.mpf(v)
+
+    def asarray(self, x):
+        a = np.asarray(x, dtype=object)
+        out = np.empty(a.shape, dtype=object)
+        for idx in np.ndindex(a.shape):
+            out[idx] = self._mpf(a[idx])
+        return out
+
+    def const(self, q):
+        return self._mpf(q)
+
+    def _each_matrix(self, M, fn, out_shape):
+        M = np.asarray(M, dtype=object)
+        batch = M.shape[:-2]
+        out = np.empty(batch + out_shape, dtype=object)
+        for idx in np.ndindex(batch):
+            out[idx] = fn(self.ctx.matrix(M[idx].tolist()))
+        return out
+
+    def expm(self, M, decay=0.0):
+        """Matrix exponential with ``digits`` significant digits in *every* entry.
+
+        Scaling and squaring is accurate relative to the norm of the result,
+        so entries of size ``exp(-decay)`` (a heavily damped subsystem) lose
+        ``decay / ln 10`` digits.  They are computed with that many guard
+        digits, so that 128 digits mean 128 significant digits.
+        """
+        n = np.shape(M)[-1]
+        guard = guard_digits(decay)  # PrecisionCapError beyond icosim.engine.bounds.MAX_GUARD_DIGITS
+
+        def one(m):
+            with self.ctx.extradps(guard):
+                e = self.ctx.expm(m)
+            return np.array([[+v for v in row] for row in e.tolist()], dtype=object)
+
+        return self._each_matrix(M, one, (n, n))
+
+    def eigvals(self, M):
+        n = np.shape(M)[-1]
+
+        def one(m):
+            return np.array(self.ctx.eig(m, left=False, right=False), dtype=object)
+
+        return self._each_matrix(M, one, (n,))
+
+    def __repr__(self):
+        return f"Multiprecision(digits={self.digits})"
+
+
+class Ball:
+    """Arb ball arithmetic (python-flint) with ``bits`` of working precision.
+
+    Every number is a ball ``[mid +/- rad]`` that is guaranteed to contain the
+    exact value of the quantity computed from the exact inputs: the radius is a
+    proven error bound, propagated through every operation of the engine's
+    code (no estimate, no convention).  Arb's precision is a global setting, so
+    arithmetic must run inside :meth:`context`.  There is no ``eigvals``:
+    eigenvalues of a ball matrix with clusters (the Jordan block of the reduced
+    state at 0) cannot be isolated; :mod:`icosim.engine.spectral.certified` encloses
+    the spectral radius from the characteristic polynomial instead.
+    """
+
+    name = "ball"
+    dtype = object
+
+    def __init__(self, bits: int = 128):
+        if isinstance(bits, bool) or int(bits) != bits or bits < 53:
+            raise ValueError(f"bits must be an integer >= 53, got {bits!r}")
+        import flint
+
+        self._flint = flint
+        self.bits = int(bits)
+        self.digits = int(self.bits * math.log10(2))
+
+    @contextmanager
+    def context(self):
+        """Set Arb's working precision to ``bits`` for the arithmetic inside."""
+        ctx = self._flint.ctx
+        old = ctx.prec
+        ctx.prec = self.bits
+        try:
+            yield self
+        finally:
+            ctx.prec = old
+
+    def const(self, q):
+        """``q`` as a ball: exact for int, float, Fraction and mpf; a decimal string is enclosed."""
+        arb = self._flint.arb
+        if isinstance(q, arb):
+            return q
+        if isinstance(q, Fraction):
+            return arb(q.numerator) / q.denominator
+        if isinstance(q, (bool, np.bool_)):
+            return arb(int(q))
+        if isinstance(q, (int, np.integer)):
+            return arb(int(q))
+        if isinstance(q, (float, np.floating)):
+            return arb(float(q))  # a double is a dyadic rational: exact
+        if isinstance(q, str):
+            return arb(q)
+        if hasattr(q, "man_exp"):  # mpmath mpf: man * 2**exp exactly
+            man, exp = q.man_exp
+            return arb(self._flint.fmpz(int(man))) * arb(2) ** int(exp)
+        raise TypeError(f"cannot make a ball of {type(q).__name__}")
+
+    def asarray(self, x):
+        a = np.asarray(x, dtype=object)
+        out = np.empty(a.shape, dtype=object)
+        for idx in np.ndindex(a.shape):
+            out[idx] = self.const(a[idx])
+        return out
+
+    def expm(self, M, decay=0.0):
+        """Matrix exponential with a rigorous error bound (Arb's ``arb_mat_exp``).
+
+        ``decay`` is not needed: a lost digit widens the balls, it is never hidden.
+        """
+        M = np.asarray(M, dtype=object)
+        out = np.empty(M.shape, dtype=object)
+        for idx in np.ndindex(M.shape[:-2]):
+            out[idx] = np.array(self._flint.arb_mat(M[idx].tolist()).exp().tolist(), dtype=object)
+        return out
+
+    def mid(self, x):
+        """Midpoints as float64 (the ball's centre, rounded to nearest)."""
+        return np.vectorize(lambda v: float(v.mid()), otypes=[float])(np.asarray(x, dtype=object))
+
+    def rad(self, x):
+        """Radii as float64, rounded up."""
+        return np.vectorize(lambda v: float(v.rad()) * (1 + 2**-52), otypes=[float])(np.asarray(x, dtype=object))
+
+    def __repr__(self):
+        return f"Ball(bits={self.bits})"

@@ -1,0 +1,253 @@
+"""Coupling schemes: the order in which the two subsystems advance within a macro step.
+
+The paper analyses the **Jacobi** (parallel) scheme: both subsystems integrate
+with the extrapolated coupling variables (predictor), the corrected coupling
+variables are formed from both subsystems' outputs and gradients, and both
+integrate again with the interpolation polynomials (corrector).  In the
+**Gauss-Seidel** (sequential) scheme the *first* subsystem advances once, with
+the extrapolation polynomials, and its state at ``T_N+1`` is final; the
+corrected coupling variables are formed from its finished outputs (it
+contributes only its *algebraic* gradients: its end state is fixed, only the
+outputs that depend on the coupling variables at ``T_N+1`` through its
+equations of motion follow them), and only the *second* subsystem is corrected,
+with the interpolation polynomials through the corrected values.  Derivation,
+equation by equation: ``docs/gauss_seidel.md``.
+
+A scheme is data: which subsystems lead (advance once, algebraic gradients
+only) and which are corrected.  :func:`icosim.engine.macrostep.macro_step` reads it;
+the coupling methods never see it.
+
+>>> get_scheme("gauss-seidel", first=2).name
+'gauss-seidel-21'
+>>> GaussSeidel(first=1).leading, GaussSeidel(first=1).corrected
+((0,), (1,))
+>>> JACOBI.leading, JACOBI.integrations_per_step
+((), 4)
+
+The leading subsystem's outputs at ``T_N+1`` (acceleration, coupling force or
+multiplier) are re-evaluated with the corrected coupling variables by default;
+``leading_outputs="as-integrated"`` leaves them as the subsystem integrated them
+with the extrapolated ones, the other reading of "sequential" (the choice and
+what it changes: ``docs/gauss_seidel.md``):
+
+>>> get_scheme("gauss-seidel-12-as-integrated").reevaluates_leading
+False
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..errors import ParameterError
+
+__all__ = [
+    "Scheme",
+    "Jacobi",
+    "GaussSeidel",
+    "JACOBI",
+    "GS12",
+    "GS21",
+    "SCHEMES",
+    "SCHEME_NAMES",
+    "VARIANTS",
+    "LEADING_OUTPUTS",
+    "get_scheme",
+    "figure_id",
+    "split_figure_id",
+    "FIGURE_ID_PATTERN",
+]
+
+#: Number of subsystems of every problem in this package.
+N_SUBSYSTEMS = 2
+
+
+@dataclass(frozen=True)
+class Scheme:
+    """Which subsystems lead (advance once, with extrapolation) and which are corrected.
+
+    Subsystem indices are 0-based (subsystem 1 of the paper is 0).  A leading
+    subsystem's state at ``T_N+1`` is final after its one integration; in the
+    corrected coupling variables it contributes its algebraic gradients only.
+    A corrected subsystem is predicted (extrapolation, Eq. 9/35/59) and
+    corrected (interpolation through the corrected values, Eq. 11) and
+    contributes its full gradients (Eq. 13/39/63).
+    """
+
+    leading: tuple = ()
+
+    @property
+    def name(self) -> str:  # pragma: no cover - defined by the subclasses
+        raise NotImplementedError
+
+    @property
+    def reevaluates_leading(self) -> bool:
+        """Are the leading subsystems' outputs at ``T_N+1`` re-evaluated with the corrected coupling
+        variables (and do they respond to them algebraically), or left as integrated?"""
+        return True
+
+    @property
+    def corrected(self) -> tuple:
+        return tuple(i for i in range(N_SUBSYSTEMS) if i not in self.leading)
+
+    def fixed(self, ends) -> tuple:
+        """Per subsystem: its final end state if it leads, else ``None`` (what the problems' Jacobians take)."""
+        return tuple(ends[i] if i in self.leading else None for i in range(N_SUBSYSTEMS))
+
+    @property
+    def integrations_per_step(self) -> int:
+        """Subsystem integrations per macro step with one corrector pass."""
+        return len(self.leading) + 2 * len(self.corrected)
+
+    @property
+    def suffix(self) -> str:
+        """File and figure-id suffix: ``""`` (Jacobi), ``"gs12"``, ``"gs21"``."""
+        return ""
+
+    @property
+    def label(self) -> str:  # pragma: no cover - defined by the subclasses
+        raise NotImplementedError
+
+    def __str__(self) -> str:
+        return self.name
+
+
+@dataclass(frozen=True, repr=False)
+class Jacobi(Scheme):
+    """Both subsystems predicted and corrected in parallel (the paper's scheme)."""
+
+    leading: tuple = ()
+
+    @property
+    def name(self) -> str:
+        return "jacobi"
+
+    @property
+    def label(self) -> str:
+        return "Jacobi"
+
+    def __repr__(self) -> str:
+        return "Jacobi()"
+
+
+#: What the leading subsystem's outputs at ``T_N+1`` are in a Gauss-Seidel scheme.
+LEADING_OUTPUTS = ("reevaluated", "as-integrated")
+
+
+@dataclass(frozen=True, init=False, repr=False)
+class GaussSeidel(Scheme):
+    """Subsystem ``first`` (1 or 2) advances once with extrapolation; the other is corrected.
+
+    ``leading_outputs``: ``"reevaluated"`` (default) -- the first subsystem's
+    outputs at ``T_N+1`` follow the corrected coupling variables through its
+    equation of motion, and it enters their solve with its algebraic gradients;
+    ``"as-integrated"`` -- they stay as it integrated them, and it does not
+    respond at all.
+    """
+
+    first: int = 1
+    leading_outputs: str = "reevaluated"
+
+    def __init__(self, first: int = 1, leading_outputs: str = "reevaluated"):
+        if isinstance(first, bool) or first not in (1, 2):
+            raise ParameterError(f"first must be 1 or 2 (the subsystem that advances first), got {first!r}")
+        if leading_outputs not in LEADING_OUTPUTS:
+            raise ParameterError(
+                f"leading_outputs must be one of {', '.join(LEADING_OUTPUTS)}, got {leading_outputs!r}"
+            )
+        object.__setattr__(self, "first", int(first))
+        object.__setattr__(self, "leading", (int(first) - 1,))
+        object.__setattr__(self, "leading_outputs", leading_outputs)
+
+    @property
+    def reevaluates_leading(self) -> bool:
+        return self.leading_outputs == "reevaluated"
+
+    @property
+    def _variant(self) -> str:
+        return "" if self.reevaluates_leading else f"-{self.leading_outputs}"
+
+    @property
+    def second(self) -> int:
+        return 3 - self.first
+
+    @property
+    def name(self) -> str:
+        return f"gauss-seidel-{self.first}{self.second}{self._variant}"
+
+    @property
+    def suffix(self) -> str:
+        return f"gs{self.first}{self.second}" + ("" if self.reevaluates_leading else "ai")
+
+    @property
+    def label(self) -> str:
+        return f"Gauss–Seidel {self.first}→{self.second}" + (
+            "" if self.reevaluates_leading else " (outputs as integrated)"
+        )
+
+    def __repr__(self) -> str:
+        extra = "" if self.reevaluates_leading else f", leading_outputs={self.leading_outputs!r}"
+        return f"GaussSeidel(first={self.first}{extra})"
+
+
+JACOBI = Jacobi()
+GS12 = GaussSeidel(first=1)
+GS21 = GaussSeidel(first=2)
+
+#: Every scheme by its name (the dataset attribute ``scheme``).
+SCHEMES = {s.name: s for s in (JACOBI, GS12, GS21)}
+SCHEME_NAMES = tuple(SCHEMES)
+#: Variants compared with the schemes above in docs/gauss_seidel.md, by name (not run by default).
+VARIANTS = {s.name: s for s in (GaussSeidel(1, "as-integrated"), GaussSeidel(2, "as-integrated"))}
+
+
+def get_scheme(scheme=None, first=None) -> Scheme:
+    """The scheme named ``scheme`` (a :class:`Scheme` is returned as it is).
+
+    Names: ``"jacobi"`` (default for ``None``), ``"gauss-seidel"`` with
+    ``first`` = 1 or 2 (default 1), or the full names ``"gauss-seidel-12"``,
+    ``"gauss-seidel-21"`` and their variants :data:`VARIANTS`.  ``first`` is
+    only allowed with ``"gauss-seidel"`` (or a full name it agrees with).
+    """
+    if isinstance(scheme, Scheme):
+        if first is not None and getattr(scheme, "first", None) != first:
+            raise ParameterError(f"first = {first!r} does not belong to scheme {scheme.name!r}")
+        return scheme
+    name = "jacobi" if scheme is None else scheme
+    if name == "gauss-seidel":
+        return GaussSeidel(1 if first is None else first)
+    if name in SCHEMES or name in VARIANTS:
+        found = SCHEMES.get(name) or VARIANTS[name]
+        if first is not None and getattr(found, "first", None) != first:
+            raise ParameterError(f"first is only used with scheme 'gauss-seidel' (got first = {first!r} with {name!r})")
+        return found
+    allowed = ", ".join(["gauss-seidel", *SCHEME_NAMES, *VARIANTS])
+    raise ParameterError(f"scheme must be one of {allowed}, got {scheme!r}")
+
+
+# -- figure ids: one figure of the workflow per (paper figure, scheme) ------------------------
+def figure_id(figure, scheme=JACOBI) -> str:
+    """The workflow's id of a paper figure computed with ``scheme``: ``"9"`` (Jacobi), ``"9gs12"``, ``"9gs21"``.
+
+    Jacobi keeps the paper's number, so its files, claims and captions are the paper's.
+
+    >>> figure_id("9", "gauss-seidel-21"), figure_id(21)
+    ('9gs21', '21')
+    """
+    return f"{figure}{get_scheme(scheme).suffix}"
+
+
+def split_figure_id(fid) -> tuple:
+    """``(paper figure, scheme)`` of a figure id (inverse of :func:`figure_id`).
+
+    >>> split_figure_id("13gs12")
+    ('13', GaussSeidel(first=1))
+    """
+    fid = str(fid)
+    for scheme in (GS12, GS21):
+        if fid.endswith(scheme.suffix):
+            return fid[: -len(scheme.suffix)], scheme
+    return fid, JACOBI
+
+
+#: Regular expression of a figure id (Snakemake wildcard constraint); ``number`` the paper figure's.
+FIGURE_ID_PATTERN = r"\d+(gs12|gs21)?"

@@ -1,0 +1,17 @@
+"""The links' integrator: batched Radau IIA and its numba transcription (only the pendulum uses it).
+
+==========================  ===================================================
+module                      holds
+==========================  ===================================================
+:mod:`.radau`               batched Radau IIA (scipy's algorithm, one shared
+                            step sequence for a batch of initial values)
+:mod:`.compiled`            the same algorithm for the two links, compiled with
+                            numba
+:mod:`.compiled_links`      the links' right-hand sides as numba kernels
+:mod:`.compiled_algebra`    the small linear algebra the kernels inline
+:mod:`.kernel_cache`        numba's disk cache of the kernels: kept valid, filled
+                            once
+==========================  ===================================================
+
+The package imports none of its modules.
+"""

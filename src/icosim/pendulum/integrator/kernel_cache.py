@@ -1,0 +1,68 @@
+"""numba's disk cache of the compiled integrator (:mod:`icosim.pendulum.integrator.compiled`): kept valid, and filled once.
+
+* numba keys a cached kernel on the time stamp of the file that defines it only, so after an edit of
+  a file the kernels inline (``compiled_links.py``, ``compiled_algebra.py``) or take constants from
+  (``radau.py``) it would load the kernels compiled from the old code.  :func:`drop_stale_cache`
+  keeps a digest of those files beside the cache (``compiled.sources``) and, when it differs, removes
+  the cache files of ``compiled.*``; ``compiled`` calls it before it defines its kernels.
+* :func:`compile_record` compiles (or loads) them now and says what it did
+  (``compiled.compile_kernels``).  The workflow does this once, in one job before the runs
+  (``results/pendulum/kernels.json``), since runs that start together on a cold cache (a fresh
+  clone) would each compile, about 10 CPU-s.
+
+Only numba's default cache place (``__pycache__`` beside the module) is looked after.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from pathlib import Path
+
+__all__ = ["KERNEL_SOURCES", "drop_stale_cache", "compile_record"]
+
+#: Sources compiled into the kernels of ``compiled.py`` besides itself, relative to its package
+#: (:mod:`icosim.pendulum.integrator`).
+KERNEL_SOURCES = ("compiled_links.py", "compiled_algebra.py", "radau.py")
+
+
+def drop_stale_cache() -> bool:
+    """Remove the cache of ``compiled.*`` if a file in KERNEL_SOURCES changed since it was written;
+    returns whether it did (also when there was no record yet)."""
+    here = Path(__file__)
+    root = here.parent
+    cache = here.parent / "__pycache__"
+    digest = hashlib.sha256(b"".join((root / name).read_bytes() for name in KERNEL_SOURCES)).hexdigest()
+    record = cache / "compiled.sources"
+    try:
+        if record.read_text() == digest:
+            return False
+    except OSError:
+        pass
+    try:
+        for path in cache.glob("compiled.*.nb[ic]"):
+            path.unlink(missing_ok=True)
+        cache.mkdir(exist_ok=True)
+        record.write_text(digest)
+    except OSError:  # a read-only install: numba caches elsewhere or not at all
+        pass
+    return True
+
+
+def compile_record(warm_up, kernels: dict) -> dict:
+    """Call ``warm_up`` (compile or load ``kernels``, name -> numba dispatcher) and record it: numba's
+    version, each kernel's signatures and cache hits and misses in this process, the seconds it took."""
+    import numba
+
+    t0, c0 = time.perf_counter(), time.process_time()
+    warm_up()
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    record = {}
+    for name, kernel in kernels.items():
+        stats = kernel.stats
+        record[name] = {
+            "signatures": [str(sig) for sig in kernel.signatures],
+            "cache_hits": sum(stats.cache_hits.values()),
+            "cache_misses": sum(stats.cache_misses.values()),
+        }
+    return {"numba": numba.__version__, "kernels": record, "wall_seconds": wall, "cpu_seconds": cpu}
