@@ -22,7 +22,7 @@ from pathlib import Path
 
 import yaml
 
-from icosim.engine.methods.schema import with_methods
+from icosim.engine.schema import with_registries
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
@@ -76,7 +76,7 @@ def validate_config(part_config: dict, part: str):
     schema = yaml.safe_load((ROOT / "workflow" / "schemas" / f"{part}.schema.yaml").read_text())
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / f"{part}.schema.json"
-        path.write_text(json.dumps(with_methods(schema)))
+        path.write_text(json.dumps(with_registries(schema)))
         validate(part_config, str(path))
 
 

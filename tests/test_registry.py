@@ -9,7 +9,7 @@ from icosim.cli import build_parser
 from icosim.convergence.experiment import dimensional_method, units_description, units_summary
 from icosim.engine import methods
 from icosim.engine.methods import METHODS, engine_method, get_spec, make_method, parameter_units
-from icosim.engine.methods.schema import PLACEHOLDERS, schema_defs, with_methods
+from icosim.engine.schema import PLACEHOLDERS, schema_defs, with_registries
 from icosim.errors import ParameterError
 from icosim.stability.panels import method_parameters_units, row_keys
 
@@ -37,7 +37,7 @@ def test_schemas_name_no_method_or_parameter_themselves(part):
         assert not (set(map(str, node.get("enum", []))) & set(METHODS)), (part, path)
     used = [name for name in PLACEHOLDERS if name in doc.get("$defs", {})]
     assert used and all(doc["$defs"][name] == {} for name in used)
-    filled = with_methods(doc)["$defs"]
+    filled = with_registries(doc)["$defs"]
     assert all(filled[name] == schema_defs()[name] for name in used)
 
 

@@ -34,7 +34,7 @@ for _var in (
 # The library, read at parse time: configurations are checked before any job runs.
 sys.path.insert(0, str(Path(workflow.basedir) / "src"))
 from icosim.engine.methods import METHODS  # noqa: E402
-from icosim.engine.methods.schema import with_methods  # noqa: E402
+from icosim.engine.schema import with_registries  # noqa: E402
 from icosim.engine.schemes import SCHEMES  # noqa: E402
 from icosim.sources import module_closure, script_closure  # noqa: E402
 from icosim.io.integrity import quarantine_corrupt, remove_stale_parts  # noqa: E402
@@ -58,7 +58,7 @@ def validate_part(part_config, schema):
     """Validate against a schema whose method $defs are filled from the registry (icosim.engine.methods)."""
     path = Path(workflow.basedir) / "workflow" / "schemas" / schema
     with open(path) as fh:
-        filled = with_methods(yaml.safe_load(fh))
+        filled = with_registries(yaml.safe_load(fh))
     with tempfile.TemporaryDirectory() as tmp:
         materialised = Path(tmp) / path.name
         materialised.write_text(json.dumps(filled))

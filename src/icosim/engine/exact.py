@@ -37,10 +37,11 @@ def monolithic_matrix(c: Coefficients, backend=None):
 
 def exact_coupling(name: str, c: Coefficients, x, v, a):
     """The exact value of the coupling variable ``name`` for the exact ``x, v, a`` (any arithmetic):
-    the constraint force ``lambda_c = a + k1 x + delta1 v`` or the joint acceleration ``a``."""
+    the constraint force ``lambda_c = a + k1 x + delta1 v`` or a prescribed acceleration (``a_tilde...``: the
+    joint's acceleration ``a``, whichever subsystem it is taken from)."""
     if name == "lambda_c":
         return a + c.k1 * x + c.delta1 * v
-    if name in ("a_tilde_1", "a_tilde"):
+    if name.startswith("a_tilde"):
         return a
     raise ValueError(f"unknown coupling variable {name!r}")
 

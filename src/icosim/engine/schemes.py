@@ -17,8 +17,12 @@ A scheme is data: which subsystems lead (advance once, algebraic gradients
 only) and which are corrected.  :func:`icosim.engine.macrostep.macro_step` reads it;
 the coupling methods never see it.
 
->>> get_scheme("gauss-seidel", first=2).name
-'gauss-seidel-21'
+A scheme is a registry entry (:data:`SCHEMES`, :func:`register`), spelled
+by its name everywhere: in the library, the configuration, on the command
+line, in dataset attributes and in file names.
+
+>>> get_scheme("gauss-seidel-21").label
+'Gauss–Seidel 2→1'
 >>> GaussSeidel(first=1).leading, GaussSeidel(first=1).corrected
 ((0,), (1,))
 >>> JACOBI.leading, JACOBI.integrations_per_step
@@ -48,13 +52,10 @@ __all__ = [
     "GS12",
     "GS21",
     "SCHEMES",
-    "SCHEME_NAMES",
-    "VARIANTS",
     "LEADING_OUTPUTS",
     "get_scheme",
-    "figure_id",
-    "split_figure_id",
-    "FIGURE_ID_PATTERN",
+    "register",
+    "standard_schemes",
 ]
 
 #: Number of subsystems of every problem in this package.
@@ -80,6 +81,11 @@ class Scheme:
         raise NotImplementedError
 
     @property
+    def variant(self) -> bool:
+        """A variant kept for comparison (docs/gauss_seidel.md), not one of the schemes run by default."""
+        return False
+
+    @property
     def reevaluates_leading(self) -> bool:
         """Are the leading subsystems' outputs at ``T_N+1`` re-evaluated with the corrected coupling
         variables (and do they respond to them algebraically), or left as integrated?"""
@@ -97,11 +103,6 @@ class Scheme:
     def integrations_per_step(self) -> int:
         """Subsystem integrations per macro step with one corrector pass."""
         return len(self.leading) + 2 * len(self.corrected)
-
-    @property
-    def suffix(self) -> str:
-        """File and figure-id suffix: ``""`` (Jacobi), ``"gs12"``, ``"gs21"``."""
-        return ""
 
     @property
     def label(self) -> str:  # pragma: no cover - defined by the subclasses
@@ -163,8 +164,8 @@ class GaussSeidel(Scheme):
         return self.leading_outputs == "reevaluated"
 
     @property
-    def _variant(self) -> str:
-        return "" if self.reevaluates_leading else f"-{self.leading_outputs}"
+    def variant(self) -> bool:
+        return not self.reevaluates_leading
 
     @property
     def second(self) -> int:
@@ -172,11 +173,7 @@ class GaussSeidel(Scheme):
 
     @property
     def name(self) -> str:
-        return f"gauss-seidel-{self.first}{self.second}{self._variant}"
-
-    @property
-    def suffix(self) -> str:
-        return f"gs{self.first}{self.second}" + ("" if self.reevaluates_leading else "ai")
+        return f"gauss-seidel-{self.first}{self.second}" + ("" if self.reevaluates_leading else "-as-integrated")
 
     @property
     def label(self) -> str:
@@ -193,61 +190,33 @@ JACOBI = Jacobi()
 GS12 = GaussSeidel(first=1)
 GS21 = GaussSeidel(first=2)
 
-#: Every scheme by its name (the dataset attribute ``scheme``).
-SCHEMES = {s.name: s for s in (JACOBI, GS12, GS21)}
-SCHEME_NAMES = tuple(SCHEMES)
-#: Variants compared with the schemes above in docs/gauss_seidel.md, by name (not run by default).
-VARIANTS = {s.name: s for s in (GaussSeidel(1, "as-integrated"), GaussSeidel(2, "as-integrated"))}
+#: Every registered scheme by its name (the dataset attribute ``scheme``), in the order listed everywhere.
+SCHEMES: dict[str, Scheme] = {}
 
 
-def get_scheme(scheme=None, first=None) -> Scheme:
-    """The scheme named ``scheme`` (a :class:`Scheme` is returned as it is).
+def register(scheme: Scheme) -> Scheme:
+    """Add a scheme to :data:`SCHEMES` (configuration schemas, command line and studies read it)."""
+    if scheme.name in SCHEMES:
+        raise ValueError(f"scheme {scheme.name!r} is already registered")
+    SCHEMES[scheme.name] = scheme
+    return scheme
 
-    Names: ``"jacobi"`` (default for ``None``), ``"gauss-seidel"`` with
-    ``first`` = 1 or 2 (default 1), or the full names ``"gauss-seidel-12"``,
-    ``"gauss-seidel-21"`` and their variants :data:`VARIANTS`.  ``first`` is
-    only allowed with ``"gauss-seidel"`` (or a full name it agrees with).
-    """
+
+for _s in (JACOBI, GS12, GS21, GaussSeidel(1, "as-integrated"), GaussSeidel(2, "as-integrated")):
+    register(_s)
+
+
+def standard_schemes() -> tuple[str, ...]:
+    """The registered schemes that are not variants (what ``icosim advise`` ranks by default)."""
+    return tuple(name for name, s in SCHEMES.items() if not s.variant)
+
+
+def get_scheme(scheme=None) -> Scheme:
+    """The registered scheme named ``scheme`` (``None``: Jacobi; a :class:`Scheme` is returned as it is)."""
     if isinstance(scheme, Scheme):
-        if first is not None and getattr(scheme, "first", None) != first:
-            raise ParameterError(f"first = {first!r} does not belong to scheme {scheme.name!r}")
         return scheme
     name = "jacobi" if scheme is None else scheme
-    if name == "gauss-seidel":
-        return GaussSeidel(1 if first is None else first)
-    if name in SCHEMES or name in VARIANTS:
-        found = SCHEMES.get(name) or VARIANTS[name]
-        if first is not None and getattr(found, "first", None) != first:
-            raise ParameterError(f"first is only used with scheme 'gauss-seidel' (got first = {first!r} with {name!r})")
-        return found
-    allowed = ", ".join(["gauss-seidel", *SCHEME_NAMES, *VARIANTS])
-    raise ParameterError(f"scheme must be one of {allowed}, got {scheme!r}")
-
-
-# -- figure ids: one figure of the workflow per (paper figure, scheme) ------------------------
-def figure_id(figure, scheme=JACOBI) -> str:
-    """The workflow's id of a paper figure computed with ``scheme``: ``"9"`` (Jacobi), ``"9gs12"``, ``"9gs21"``.
-
-    Jacobi keeps the paper's number, so its files, claims and captions are the paper's.
-
-    >>> figure_id("9", "gauss-seidel-21"), figure_id(21)
-    ('9gs21', '21')
-    """
-    return f"{figure}{get_scheme(scheme).suffix}"
-
-
-def split_figure_id(fid) -> tuple:
-    """``(paper figure, scheme)`` of a figure id (inverse of :func:`figure_id`).
-
-    >>> split_figure_id("13gs12")
-    ('13', GaussSeidel(first=1))
-    """
-    fid = str(fid)
-    for scheme in (GS12, GS21):
-        if fid.endswith(scheme.suffix):
-            return fid[: -len(scheme.suffix)], scheme
-    return fid, JACOBI
-
-
-#: Regular expression of a figure id (Snakemake wildcard constraint); ``number`` the paper figure's.
-FIGURE_ID_PATTERN = r"\d+(gs12|gs21)?"
+    try:
+        return SCHEMES[name]
+    except (KeyError, TypeError):
+        raise ParameterError(f"scheme must be one of {', '.join(SCHEMES)}, got {scheme!r}") from None

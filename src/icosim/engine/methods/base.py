@@ -37,15 +37,16 @@ class CouplingMethod:
 
     ``solves`` is a tuple of ``(weight, (w_pos, w_vel, w_acc))``.
     ``params`` records the method parameters under their command-line names.
-    ``decompositions`` are the decompositions the rule is defined for;
-    ``refusal`` says why the others are not.
+    ``requires_constraint``: the rule corrects on the constraint's levels, so
+    it is defined only for decompositions whose conditions include the
+    constraint (a force-driven subsystem); ``refusal`` says why.
     """
 
     name: str
     solves: tuple
     projection: bool = False
     params: dict = field(default_factory=dict)
-    decompositions: tuple = tuple(DECOMPOSITIONS)
+    requires_constraint: bool = False
     refusal: str = ""
 
     @property
@@ -53,8 +54,13 @@ class CouplingMethod:
         """Linear solves of coupling conditions per corrector pass (the solves with a nonzero weight)."""
         return sum(1 for weight, _ in self.solves if weight != 0)
 
+    @property
+    def decompositions(self) -> tuple[str, ...]:
+        """The registered decompositions the rule is defined for."""
+        return supported_decompositions(self.requires_constraint)
+
     def check_decomposition(self, decomposition: Decomposition):
-        if decomposition.name not in self.decompositions:
+        if self.requires_constraint and not decomposition.has_constraint_condition:
             why = self.refusal or f"it is defined for {', '.join(self.decompositions)}"
             raise ParameterError(f"method {self.name!r} is not defined for decomposition {decomposition.name!r}: {why}")
 
@@ -152,7 +158,8 @@ class MethodSpec:
         argument if there is more than one.
     unused_at_index : index -> parameters that index leaves out (Baumgarte at
         index 3 has no ``mu``).
-    decompositions : the decompositions the rule is defined for.
+    requires_constraint : the rule corrects on the constraint's levels (defined only where a
+        decomposition's conditions include the constraint: :attr:`decompositions`).
     label_parameters : parameters named in curve and scheme labels.
     """
 
@@ -163,7 +170,7 @@ class MethodSpec:
     parameters: tuple[Parameter, ...] = ()
     indices: tuple[int, ...] = (1,)
     unused_at_index: Mapping[int, tuple[str, ...]] = field(default_factory=dict)
-    decompositions: tuple[str, ...] = tuple(DECOMPOSITIONS)
+    requires_constraint: bool = False
     label_parameters: tuple[str, ...] = ()
 
     def __post_init__(self):
@@ -177,8 +184,11 @@ class MethodSpec:
                 raise ValueError(f"method {self.name}: unused_at_index[{index}] = {unused} is not a subset of {names}")
         if not set(self.label_parameters) <= set(names):
             raise ValueError(f"method {self.name}: label_parameters {self.label_parameters} not among {names}")
-        if not self.decompositions or not set(self.decompositions) <= set(DECOMPOSITIONS):
-            raise ValueError(f"method {self.name}: decompositions must be among {list(DECOMPOSITIONS)}")
+
+    @property
+    def decompositions(self) -> tuple[str, ...]:
+        """The registered decompositions the method is defined for."""
+        return supported_decompositions(self.requires_constraint)
 
     @property
     def takes_index(self) -> bool:
@@ -216,6 +226,11 @@ class MethodSpec:
         """Dimensional parameters (``mu``, ``beta`` in s, ``gamma`` in s^2, ...) -> the engine's at step ``H``."""
         scale = {p.name: p for p in self.parameters}
         return {k: (scale[k].engine_value(v, H) if k in scale else v) for k, v in params.items() if v is not None}
+
+
+def supported_decompositions(requires_constraint: bool) -> tuple[str, ...]:
+    """Every registered decomposition, or those whose conditions include the constraint."""
+    return tuple(name for name, d in DECOMPOSITIONS.items() if d.has_constraint_condition or not requires_constraint)
 
 
 def finite(name, value) -> float:

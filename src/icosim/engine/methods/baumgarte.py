@@ -19,14 +19,12 @@ import sys
 from fractions import Fraction
 
 from ...errors import ParameterError
-from ..decompositions import DD_NEEDS_POSITION_LEVEL
+from ..decompositions import NEEDS_CONSTRAINT_CONDITION
 from .base import CouplingMethod, MethodSpec, Parameter, exact
 
 _FLOAT_MAX = Fraction(sys.float_info.max)
 
 __all__ = ["baumgarte", "SPEC"]
-
-DECOMPOSITIONS = ("ff", "fd")
 
 
 def baumgarte(beta: float = None, gamma: float = None, *, mu: float = None, index: int = None):
@@ -73,8 +71,8 @@ def baumgarte(beta: float = None, gamma: float = None, *, mu: float = None, inde
         "baumgarte",
         ((1, (1, beta, gamma)),),
         params=params,
-        decompositions=DECOMPOSITIONS,
-        refusal=DD_NEEDS_POSITION_LEVEL,
+        requires_constraint=True,
+        refusal=NEEDS_CONSTRAINT_CONDITION,
     )
 
 
@@ -116,6 +114,6 @@ SPEC = MethodSpec(
     ),
     indices=(1, 2, 3),
     unused_at_index={3: ("mu", "beta", "gamma")},
-    decompositions=DECOMPOSITIONS,
+    requires_constraint=True,
     label_parameters=("mu",),
 )

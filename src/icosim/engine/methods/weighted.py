@@ -13,12 +13,10 @@ for term.  ``a`` and ``b`` are dimensionless in every setting.
 from __future__ import annotations
 
 from ...errors import ParameterError
-from ..decompositions import DD_NEEDS_POSITION_LEVEL
+from ..decompositions import NEEDS_CONSTRAINT_CONDITION
 from .base import CouplingMethod, MethodSpec, Parameter, exact
 
 __all__ = ["weighted_multiplier", "SPEC"]
-
-DECOMPOSITIONS = ("ff", "fd")
 
 
 def weighted_multiplier(a: float = None, b: float = None, *, index: int = None):
@@ -58,8 +56,8 @@ def weighted_multiplier(a: float = None, b: float = None, *, index: int = None):
         "weighted",
         solves,
         params={"a": a, "b": b, "index": index},
-        decompositions=DECOMPOSITIONS,
-        refusal=DD_NEEDS_POSITION_LEVEL,
+        requires_constraint=True,
+        refusal=NEEDS_CONSTRAINT_CONDITION,
     )
 
 
@@ -78,6 +76,6 @@ SPEC = MethodSpec(
     ),
     indices=(1, 2, 3),
     unused_at_index={2: ("b",), 3: ("a", "b")},
-    decompositions=DECOMPOSITIONS,
+    requires_constraint=True,
     label_parameters=("a", "b"),
 )

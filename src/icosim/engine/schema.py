@@ -1,9 +1,12 @@
-"""The registered methods as JSON-schema definitions, filled into the workflow's configuration schemas.
+"""The engine's registries as JSON-schema definitions, filled into the workflow's configuration schemas.
 
 The schemas under ``workflow/schemas/`` refer to these ``$defs`` instead of
-listing methods and parameters themselves; :func:`with_methods` fills them in
-before a configuration is validated (``workflow/rules/common.smk``), so a
-method added to :data:`icosim.engine.methods.METHODS` is accepted by every schema.
+listing methods, parameters, decompositions and schemes themselves;
+:func:`with_registries` fills them in before a configuration is validated
+(``workflow/rules/common.smk``), so a method, decomposition or coupling scheme
+added to its registry (:data:`icosim.engine.methods.METHODS`,
+:data:`icosim.engine.decompositions.DECOMPOSITIONS`,
+:data:`icosim.engine.schemes.SCHEMES`) is accepted by every schema.
 
 ==============================  =====================================================
 ``$defs`` entry                 what it allows
@@ -13,6 +16,8 @@ method added to :data:`icosim.engine.methods.METHODS` is accepted by every schem
                                 open, combine with ``unevaluatedProperties: false``
 ``method_row_parameters``       the same without ``index`` (what a figure row changes)
 ``methods_parameters``          ``{name: {its arguments}}`` for every method
+``decomposition``               a registered decomposition's name
+``scheme``                      a registered coupling scheme's name
 ==============================  =====================================================
 
 >>> defs = schema_defs()
@@ -26,12 +31,21 @@ from __future__ import annotations
 
 import copy
 
-from . import METHODS, indices, parameters
+from .decompositions import DECOMPOSITIONS
+from .methods import METHODS, indices, parameters
+from .schemes import SCHEMES
 
-__all__ = ["schema_defs", "with_methods", "PLACEHOLDERS"]
+__all__ = ["schema_defs", "with_registries", "PLACEHOLDERS"]
 
-#: The ``$defs`` entries a schema may leave for :func:`with_methods` to fill.
-PLACEHOLDERS = ("method", "method_parameters", "method_row_parameters", "methods_parameters")
+#: The ``$defs`` entries a schema may leave for :func:`with_registries` to fill.
+PLACEHOLDERS = (
+    "method",
+    "method_parameters",
+    "method_row_parameters",
+    "methods_parameters",
+    "decomposition",
+    "scheme",
+)
 
 
 def _index() -> dict:
@@ -50,16 +64,18 @@ def schema_defs() -> dict:
         "method_parameters": {"type": "object", "properties": {"index": _index(), **params}},
         "method_row_parameters": {"type": "object", "properties": params},
         "methods_parameters": {"type": "object", "additionalProperties": False, "properties": per_method},
+        "decomposition": {"enum": list(DECOMPOSITIONS)},
+        "scheme": {"enum": list(SCHEMES)},
     }
 
 
-def with_methods(schema: dict) -> dict:
-    """A copy of ``schema`` whose placeholder ``$defs`` hold the registered methods."""
+def with_registries(schema: dict) -> dict:
+    """A copy of ``schema`` whose placeholder ``$defs`` hold the registered methods, decompositions and schemes."""
     out = copy.deepcopy(schema)
     defs = out.setdefault("$defs", {})
     missing = [name for name in defs if name in PLACEHOLDERS and defs[name] not in ({}, None)]
     if missing:
-        raise ValueError(f"schema $defs {missing} are filled from the method registry; leave them empty")
+        raise ValueError(f"schema $defs {missing} are filled from the engine's registries; leave them empty")
     filled = schema_defs()
     for name in PLACEHOLDERS:
         if name in defs:
