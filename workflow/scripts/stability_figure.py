@@ -2,7 +2,8 @@
 
 import logging
 
-from icosim.figures import save_figure, stability_figure
+from icosim.figures import save_figure
+from icosim.figures.stability import stability_figure
 from icosim.io.netcdf import open_dataset
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")

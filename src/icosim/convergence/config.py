@@ -91,11 +91,7 @@ def configured_curves(cfg: dict) -> list:
     """
     out = []
     for fig, fig_cfg in cfg["figures"].items():
-        for spec in (
-            s
-            for scheme in fig_cfg.get("schemes", ["jacobi"])
-            for s in figure_panels(str(fig), fig_cfg, cfg["k"], scheme)
-        ):
+        for spec in figure_panels(str(fig), fig_cfg, cfg["k"]):
             for row, index in zip(spec.rows, spec.indices):
                 attrs = method_attrs(spec.method, **row)
                 rec = {

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..engine.methods import METHODS, parameters
 
-__all__ = ["curves", "curve_label", "stable_span", "fastest_schemes"]
+__all__ = ["curves", "curve_label", "stable_span", "fastest_configurations"]
 
 
 # --------------------------------------------------------------------------- curves and claims
@@ -73,10 +73,10 @@ def stable_span(rec) -> str:
     return f"{Hs.min():.2g} to {Hs.max():.2g} s"
 
 
-def fastest_schemes(wp, targets) -> list:
-    """Per decomposition and target error: schemes ordered by the least CPU time reaching it.
+def fastest_configurations(wp, targets) -> list:
+    """Per decomposition and target error: configurations ordered by the least CPU time reaching it.
 
-    A scheme reaches ``target`` at the measured step sizes with
+    A configuration reaches ``target`` at the measured step sizes with
     ``nrmse <= target``; its cost is the least CPU time per simulated second
     among those.  Returns dicts ``{decomposition, target, ranking: [(label, seconds, H), ...]}``.
     """
@@ -85,13 +85,13 @@ def fastest_schemes(wp, targets) -> list:
         sub = wp.where(wp["decomposition"] == dec, drop=True)
         for target in targets:
             ranking = []
-            for s in range(sub.sizes["scheme"]):
+            for s in range(sub.sizes["configuration"]):
                 err = sub["nrmse"].values[s]
                 cost = sub["cpu_seconds_per_simulated_second"].values[s]
                 ok = np.isfinite(err) & np.isfinite(cost) & (err <= target)
                 if ok.any():
                     i = np.flatnonzero(ok)[np.argmin(cost[ok])]
-                    ranking.append((str(sub["scheme"].values[s]), float(cost[i]), float(sub["H"].values[i])))
+                    ranking.append((str(sub["configuration"].values[s]), float(cost[i]), float(sub["H"].values[i])))
             ranking.sort(key=lambda r: r[1])
             out.append({"decomposition": dec, "target": float(target), "ranking": ranking})
     return out

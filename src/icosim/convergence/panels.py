@@ -12,11 +12,11 @@ from dataclasses import dataclass
 
 from ..engine.decompositions import get_decomposition
 from ..engine.methods import METHODS, get_spec
-from ..engine.schemes import figure_id, get_scheme
+from ..engine.schemes import get_scheme
 from ..errors import ParameterError
 from .experiment import dimensional_method
 
-__all__ = ["PanelSpec", "effective_params", "panel_name", "figure_panels", "figure_layout"]
+__all__ = ["PanelSpec", "effective_params", "panel_name", "figure_panels", "figure_schemes", "figure_layout"]
 
 
 def effective_params(method: str, column: dict, row: dict) -> dict:
@@ -92,21 +92,26 @@ class PanelSpec:
         return [int(dimensional_method(self.method, 1.0, **r).params["index"]) for r in self.rows]
 
 
-def figure_panels(figure: str, fig_cfg: dict, k, scheme="jacobi") -> list:
-    """All panel specs of one configured figure (every decomposition and column), for one coupling scheme.
+def figure_schemes(fig_cfg: dict) -> list[str]:
+    """The coupling schemes a figure is computed with (``schemes``, default ``[jacobi]``, the paper's), checked."""
+    return [get_scheme(name).name for name in fig_cfg.get("schemes", ["jacobi"])]
 
-    The specs' ``figure`` is the figure id of ``scheme`` (:func:`icosim.engine.schemes.figure_id`:
-    ``"21"`` for Jacobi, ``"21gs12"``, ``"21gs21"``).
+
+def figure_panels(figure: str, fig_cfg: dict, k) -> list:
+    """All panel specs of one configured figure: every scheme, decomposition and column.
 
     ``fig_cfg`` has ``method``, ``columns`` (list of parameter dicts),
-    ``rows`` (list of parameter dicts, usually ``{index: i}``) and
-    ``decompositions``.  Where each cell of a figure is stored: :func:`figure_layout`.
+    ``rows`` (list of parameter dicts, usually ``{index: i}``),
+    ``decompositions`` and ``schemes``.  Where each cell of a figure is
+    stored: :func:`figure_layout`.
     """
     method = fig_cfg["method"]
     columns, rows = fig_cfg["columns"], fig_cfg["rows"]
     where = f"figure {figure}"
-    scheme = get_scheme(scheme).name
-    fid = figure_id(figure, scheme)
+    try:
+        schemes = figure_schemes(fig_cfg)
+    except ParameterError as exc:
+        raise ParameterError(f"{where}: {exc}") from None
     try:
         cells = [[effective_params(method, c, r) for r in rows] for c in columns]
     except ParameterError as exc:
@@ -115,19 +120,24 @@ def figure_panels(figure: str, fig_cfg: dict, k, scheme="jacobi") -> list:
         j for j in range(len(rows)) if len(columns) > 1 and all(cells[i][j] == cells[0][j] for i in range(len(columns)))
     ]
     specs = []
-    for dec in fig_cfg["decompositions"]:
-        try:
-            dimensional_method(method, 1.0, **cells[0][0]).check_decomposition(get_decomposition(dec))
-        except ParameterError as exc:
-            raise ParameterError(f"{where}, decomposition {dec!r}: {exc}") from None
-        for i, c in enumerate(columns):
-            own = tuple(cells[i][j] for j in range(len(rows)) if j not in shared_rows)
-            if own:
-                specs.append(PanelSpec(fid, dec, panel_name(c), method, dict(c), own, tuple(k), scheme=scheme))
-        if shared_rows:
-            shared = tuple(cells[0][j] for j in shared_rows)
-            name = "_".join(panel_name({"index": r.get("index")}) for r in shared)
-            specs.append(PanelSpec(fid, dec, name, method, {}, shared, tuple(k), shared=True, scheme=scheme))
+    for scheme in schemes:
+        for dec in fig_cfg["decompositions"]:
+            try:
+                dimensional_method(method, 1.0, **cells[0][0]).check_decomposition(get_decomposition(dec))
+            except ParameterError as exc:
+                raise ParameterError(f"{where}, decomposition {dec!r}: {exc}") from None
+            for i, c in enumerate(columns):
+                own = tuple(cells[i][j] for j in range(len(rows)) if j not in shared_rows)
+                if own:
+                    specs.append(
+                        PanelSpec(str(figure), dec, panel_name(c), method, dict(c), own, tuple(k), scheme=scheme)
+                    )
+            if shared_rows:
+                shared = tuple(cells[0][j] for j in shared_rows)
+                name = "_".join(panel_name({"index": r.get("index")}) for r in shared)
+                specs.append(
+                    PanelSpec(str(figure), dec, name, method, {}, shared, tuple(k), shared=True, scheme=scheme)
+                )
     for spec in specs:
         idx = spec.indices
         if len(set(idx)) != len(idx):
@@ -137,7 +147,11 @@ def figure_panels(figure: str, fig_cfg: dict, k, scheme="jacobi") -> list:
 
 def figure_layout(figure: str, fig_cfg: dict, decomposition: str, k) -> list:
     """``[[(panel, index), ...] per column]``: where each cell's curves are stored."""
-    specs = {s.panel: s for s in figure_panels(figure, fig_cfg, k) if s.decomposition == decomposition}
+    specs = {
+        s.panel: s
+        for s in figure_panels(figure, fig_cfg, k)
+        if s.decomposition == decomposition and s.scheme == figure_schemes(fig_cfg)[0]
+    }
     method = fig_cfg["method"]
     layout = []
     for c in fig_cfg["columns"]:

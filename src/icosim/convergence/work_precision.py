@@ -1,6 +1,7 @@
 """Work-precision: CPU time per simulated second and counted work against the NRMSE.
 
-Each scheme of ``convergence.work_precision.schemes`` is timed on the engine's
+Each configuration of ``convergence.work_precision.configurations`` (a method, its
+parameters, a decomposition and ``k``, with the paper's Jacobi scheme) is timed on the engine's
 own macro-step loop (:func:`icosim.engine.macrostep.simulate`) at every stable step
 size; the error is read from the panel datasets, never recomputed.  The
 subsystems of the linear model are integrated exactly, so the counted work per
@@ -22,7 +23,7 @@ from ..errors import ParameterError
 from .experiment import Setup, dimensional_method, method_attrs, units_summary
 from .panels import effective_params, figure_panels
 
-__all__ = ["time_macro_steps", "step_cost", "resolve_scheme", "work_precision"]
+__all__ = ["time_macro_steps", "step_cost", "resolve_configuration", "work_precision"]
 
 
 # --------------------------------------------------------------------------- timing
@@ -96,17 +97,17 @@ def step_cost(method: str, params: dict, decomposition: str, k: int) -> dict:
 
 
 # --------------------------------------------------------------------------- work-precision
-def resolve_scheme(scheme: dict, figures: dict, k) -> list:
-    """Curves of a work-precision scheme: one per decomposition of its figure and per ``k``.
+def resolve_configuration(configuration: dict, figures: dict, k) -> list:
+    """Curves of a work-precision configuration: one per decomposition of its figure and per ``k``.
 
-    ``scheme`` names a figure and the column and row parameters as configured
+    ``configuration`` names a figure and the column and row parameters as configured
     (e.g. ``{figure: "22", a: 1, b: 1, index: 2}``).
     """
-    fig = str(scheme["figure"])
+    fig = str(configuration["figure"])
     if fig not in figures:
-        raise ParameterError(f"work_precision scheme {scheme}: figure {fig!r} is not configured")
+        raise ParameterError(f"work_precision configuration {configuration}: figure {fig!r} is not configured")
     cfg = figures[fig]
-    rest = {key: v for key, v in scheme.items() if key != "figure"}
+    rest = {key: v for key, v in configuration.items() if key != "figure"}
     col_keys = set().union(*(c.keys() for c in cfg["columns"]))
     col = {key: v for key, v in rest.items() if key in col_keys}
     row = {key: v for key, v in rest.items() if key not in col_keys}
@@ -114,18 +115,19 @@ def resolve_scheme(scheme: dict, figures: dict, k) -> list:
     rows = [r for r in cfg["rows"] if r == row]
     if len(cols) != 1 or len(rows) != 1:
         raise ParameterError(
-            f"work_precision scheme {scheme}: must match exactly one column of {cfg['columns']} "
+            f"work_precision configuration {configuration}: must match exactly one column of {cfg['columns']} "
             f"and one row of {cfg['rows']} of figure {fig}"
         )
     eff = effective_params(cfg["method"], cols[0], rows[0])
     out = []
     for spec in figure_panels(fig, cfg, k):
-        if eff not in spec.rows:
+        if eff not in spec.rows or spec.scheme != "jacobi":  # the paper's scheme
             continue
         index = spec.indices[spec.rows.index(eff)]
         for kk in spec.k:
             entry = {
                 "figure": fig,
+                "scheme": spec.scheme,
                 "decomposition": spec.decomposition,
                 "panel": spec.panel,
                 "index": index,
@@ -134,12 +136,12 @@ def resolve_scheme(scheme: dict, figures: dict, k) -> list:
                 "params": dict(eff),
             }
             rec = {**entry, **{n: v for n, v in method_attrs(cfg["method"], **eff).items()}}
-            entry["label"] = _scheme_label(rec)
+            entry["label"] = _configuration_label(rec)
             out.append(entry)
     return out
 
 
-def _scheme_label(rec) -> str:
+def _configuration_label(rec) -> str:
     """E.g. ``ff Baumgarte i1 mu=0.005 k=0`` (the registry's short label and label parameters)."""
     spec = get_spec(rec["method"])
     head = spec.short_label + (f" i{rec['index']}" if spec.takes_index else "")
@@ -149,20 +151,20 @@ def _scheme_label(rec) -> str:
 
 
 def work_precision(entries, datasets: dict, setup: Setup, *, steps=20, repeats=3, warmup_steps=5, provenance=None):
-    """CPU time per simulated second against NRMSE for each scheme and stable ``H``.
+    """CPU time per simulated second against NRMSE for each configuration and stable ``H``.
 
-    ``datasets`` maps ``(decomposition, figure, panel)`` to the panel dataset
-    holding the scheme's NRMSE (never recomputed here).  Returns a dataset with
-    dims ``(scheme, H)``.
+    ``datasets`` maps ``(scheme, decomposition, figure, panel)`` to the panel dataset
+    holding the configuration's NRMSE (never recomputed here).  Returns a dataset with
+    dims ``(configuration, H)``.
     """
     import xarray as xr
 
     if not entries:
-        raise ParameterError("work_precision needs at least one scheme")
+        raise ParameterError("work_precision needs at least one configuration")
     H = None
     rows = []
     for e in entries:
-        ds = datasets[(e["decomposition"], e["figure"], e["panel"])]
+        ds = datasets[(e["scheme"], e["decomposition"], e["figure"], e["panel"])]
         if H is None:
             H = ds["H"].values
         elif not np.array_equal(H, ds["H"].values):
@@ -197,13 +199,13 @@ def work_precision(entries, datasets: dict, setup: Setup, *, steps=20, repeats=3
     ds = xr.Dataset(
         {
             "nrmse": (
-                ("scheme", "H"),
+                ("configuration", "H"),
                 err,
                 {"long_name": "NRMSE of Eq. (72) (from the panel datasets; NaN where unstable)", "units": "1"},
             ),
-            "unstable": (("scheme", "H"), np.array([r[1] for r in rows])),
+            "unstable": (("configuration", "H"), np.array([r[1] for r in rows])),
             "cpu_seconds_per_step": (
-                ("scheme", "H"),
+                ("configuration", "H"),
                 per_step,
                 {
                     "long_name": "CPU time of one macro step of icosim.engine.macrostep.simulate (min of repeats)",
@@ -211,17 +213,17 @@ def work_precision(entries, datasets: dict, setup: Setup, *, steps=20, repeats=3
                 },
             ),
             "cpu_seconds_per_simulated_second": (
-                ("scheme", "H"),
+                ("configuration", "H"),
                 per_step / H[None, :],
                 {"long_name": "CPU time per simulated second", "units": "s"},
             ),
             "setup_seconds": (
-                ("scheme",),
+                ("configuration",),
                 np.array([r[3] for r in rows]),
                 {"long_name": "CPU time to build the problem (once per run, not per simulated second)", "units": "s"},
             ),
             "subsystem_integrations_per_step": (
-                ("scheme",),
+                ("configuration",),
                 np.array([c["subsystem_integrations"] for c in costs], dtype=np.int32),
                 {
                     "long_name": "subsystem integrations per macro step (predictor and corrector of each subsystem; counted)",
@@ -229,7 +231,7 @@ def work_precision(entries, datasets: dict, setup: Setup, *, steps=20, repeats=3
                 },
             ),
             "coupling_solves_per_step": (
-                ("scheme",),
+                ("configuration",),
                 np.array([c["coupling_solves"] for c in costs], dtype=np.int32),
                 {
                     "long_name": "linear solves of coupling conditions per macro step (the method's nonzero-weight solves)",
@@ -237,22 +239,22 @@ def work_precision(entries, datasets: dict, setup: Setup, *, steps=20, repeats=3
                 },
             ),
             "projections_per_step": (
-                ("scheme",),
+                ("configuration",),
                 np.array([c["projections"] for c in costs], dtype=np.int32),
                 {"long_name": "projection steps per macro step", "units": "1"},
             ),
         },
         coords={
-            "scheme": ("scheme", np.array(labels, dtype=str)),
+            "configuration": ("configuration", np.array(labels, dtype=str)),
             "H": ("H", H, {"long_name": "macro-step size", "units": "s"}),
-            "figure": ("scheme", np.array([e["figure"] for e in entries], dtype=str)),
-            "method": ("scheme", np.array([e["method"] for e in entries], dtype=str)),
-            "decomposition": ("scheme", np.array([e["decomposition"] for e in entries], dtype=str)),
-            "index": ("scheme", np.array([e["index"] for e in entries], dtype=np.int32)),
-            "k": ("scheme", np.array([e["k"] for e in entries], dtype=np.int32)),
+            "figure": ("configuration", np.array([e["figure"] for e in entries], dtype=str)),
+            "method": ("configuration", np.array([e["method"] for e in entries], dtype=str)),
+            "decomposition": ("configuration", np.array([e["decomposition"] for e in entries], dtype=str)),
+            "index": ("configuration", np.array([e["index"] for e in entries], dtype=np.int32)),
+            "k": ("configuration", np.array([e["k"] for e in entries], dtype=np.int32)),
             **{
                 name: (
-                    "scheme",
+                    "configuration",
                     np.array(
                         [method_attrs(e["method"], **e["params"]).get(name, np.nan) for e in entries], dtype=float
                     ),
@@ -272,7 +274,7 @@ def work_precision(entries, datasets: dict, setup: Setup, *, steps=20, repeats=3
         "projection) of the linear test model; problem set-up excluded (setup_seconds)",
         cost_caveat="the subsystems of the linear test model are integrated exactly (matrix "
         "exponential blocks), so the timed cost is the coupling algorithm's Python overhead and nearly "
-        "the same for every scheme: the diagram is close to NRMSE against 1/H. To transfer the "
+        "the same for every configuration: the diagram is close to NRMSE against 1/H. To transfer the "
         "comparison to numerically integrated subsystems, weigh subsystem_integrations_per_step and "
         "coupling_solves_per_step with their cost there.",
         method_parameters_units=units_summary(),

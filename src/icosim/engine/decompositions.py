@@ -75,7 +75,9 @@ class Decomposition:
             raise ValueError(f"decomposition {self.name}: every coupling variable must drive a subsystem")
         for kind, j in zip(self.kinds, self.inputs):
             if self.variable_kind(j) != ("force" if kind == "force" else "acceleration"):
-                raise ValueError(f"decomposition {self.name}: a {kind}-driven subsystem cannot take {self.variables[j]}")
+                raise ValueError(
+                    f"decomposition {self.name}: a {kind}-driven subsystem cannot take {self.variables[j]}"
+                )
 
     @property
     def n_coupling(self) -> int:

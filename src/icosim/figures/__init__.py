@@ -2,7 +2,9 @@
 
 Every builder returns a :class:`matplotlib.figure.Figure` (no global pyplot
 state), so callers choose how to save it; :func:`save_figure` writes PNG and
-PDF atomically.
+PDF atomically.  The builders live in one module per part (:mod:`.stability`,
+:mod:`.convergence`, :mod:`.pendulum`, :mod:`.pendulum_trade`, :mod:`.schemes`);
+importing this package loads none of them.
 """
 
 from __future__ import annotations
@@ -11,7 +13,7 @@ from pathlib import Path
 
 from ..io.netcdf import atomic_path
 
-__all__ = ["save_figure", "stability_figure"]
+__all__ = ["save_figure"]
 
 
 def save_figure(fig, *paths, dpi: int = 110):
@@ -39,5 +41,3 @@ def _metadata(fmt):
         return {"Software": f"icosim {__version__}"}
     return None
 
-
-from .stability import stability_figure  # noqa: E402

@@ -20,6 +20,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
+from ..engine.decompositions import DECOMPOSITIONS
 from ..engine.methods import METHODS, parameters
 
 __all__ = ["convergence_figure", "slope_figure", "work_precision_figure", "row_title", "K_COLOURS"]
@@ -207,18 +208,18 @@ def slope_figure(datasets: dict, layout, *, columns, rows, title="", tolerance=0
 
 
 def work_precision_figure(wp, *, title=""):
-    """CPU time per simulated second over NRMSE, one panel per decomposition, one line per scheme."""
-    decs = [d for d in ("ff", "fd", "dd") if d in set(wp["decomposition"].values.tolist())]
+    """CPU time per simulated second over NRMSE, one panel per decomposition, one line per configuration."""
+    decs = [d for d in DECOMPOSITIONS if d in set(wp["decomposition"].values.tolist())]
     fig = Figure(figsize=(5.2 * len(decs), 4.6), layout="constrained")
     axes = fig.subplots(1, len(decs), squeeze=False, sharey=True)[0]
-    families = sorted({s.split(" k=")[0].split(" ", 1)[1] for s in wp["scheme"].values.tolist()})
+    families = sorted({s.split(" k=")[0].split(" ", 1)[1] for s in wp["configuration"].values.tolist()})
     colours = {f: f"C{i % 10}" for i, f in enumerate(families)}
     markers = ("o", "s", "^", "D", "v")
     for ax, dec in zip(axes, decs):
-        for s in range(wp.sizes["scheme"]):
+        for s in range(wp.sizes["configuration"]):
             if str(wp["decomposition"].values[s]) != dec:
                 continue
-            label = str(wp["scheme"].values[s])
+            label = str(wp["configuration"].values[s])
             err = wp["nrmse"].values[s]
             cost = wp["cpu_seconds_per_simulated_second"].values[s]
             ok = np.isfinite(err) & np.isfinite(cost)
@@ -240,10 +241,7 @@ def work_precision_figure(wp, *, title=""):
         ax.invert_xaxis()  # more accurate to the right
         ax.grid(True, lw=0.4, alpha=0.5)
         ax.set_xlabel(r"NRMSE $\varepsilon_{glo}$, Eq. (72)")
-        ax.set_title(
-            {"ff": "force/force", "fd": "force/displacement", "dd": "displacement/displacement"}[dec],
-            fontsize=10,
-        )
+        ax.set_title(DECOMPOSITIONS[dec].long_name, fontsize=10)
         ax.legend(fontsize=6.5, loc="upper left")
     axes[0].set_ylabel("CPU time per simulated second (s)")
     if title:

@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..engine.methods import METHODS
+from .styles import decomposition_style, method_colour
 
 __all__ = ["pendulum_figure", "error_figure", "PANELS", "label"]
 
@@ -30,9 +31,6 @@ PANELS = (
     ("lambda_cax", r"$\lambda_{cax}$ [N]"),
     ("lambda_cay", r"$\lambda_{cay}$ [N]"),
 )
-
-_STYLES = {"ff": "-", "fd": "--", "dd": ":"}
-_COLOURS = {"baumgarte": "tab:blue", "weighted": "tab:orange", "projection": "tab:green"}
 
 
 def label(ds) -> str:
@@ -66,10 +64,10 @@ def pendulum_figure(runs, reference, *, k: int, title: str | None = None):
             lab = label(ds) + (
                 f" ({status} at t = {float(ds.attrs['t_' + status]):.3f} s)" if status != "stable" else ""
             )
-            ax.plot(ds["t"], ds[name], ls=_STYLES.get(d, "-"), color=_COLOURS.get(m), lw=1.1, label=lab)
+            ax.plot(ds["t"], ds[name], ls=decomposition_style(d)[0], color=method_colour(m), lw=1.1, label=lab)
             if status != "stable":
                 marker = "x" if status == "diverged" else "o"
-                ends.append((float(ds["t"][-1]), float(ds[name][-1]), _COLOURS.get(m), marker))
+                ends.append((float(ds["t"][-1]), float(ds[name][-1]), method_colour(m), marker))
         if name.startswith(("g_", "lambda_")):
             basis = [ds[name].values for ds in stable] + [reference[name].values]
             ax.set_ylim(*_limits(basis))
@@ -106,8 +104,8 @@ def error_figure(runs_by_k: dict, reference, *, title: str | None = None):
                 ax.semilogy(
                     ds["t"][1:],
                     np.maximum(err[1:], floor),
-                    ls=_STYLES.get(d, "-"),
-                    color=_COLOURS.get(m),
+                    ls=decomposition_style(d)[0],
+                    color=method_colour(m),
                     lw=1.0,
                     label=label(ds),
                 )

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..engine.methods import METHODS
 from ..engine.schemes import get_scheme
+from .styles import decomposition_style, method_colour
 
 __all__ = [
     "TRADE_FIGURES",
@@ -27,9 +28,6 @@ __all__ = [
     "adaptive_figure",
 ]
 
-_STYLES = {"ff": "-", "fd": "--", "dd": ":"}
-_MARKERS = {"ff": "o", "fd": "s", "dd": "^"}
-_COLOURS = {"baumgarte": "tab:blue", "weighted": "tab:orange", "projection": "tab:green"}
 _MONO = {"Radau": ("black", "s"), "DOP853": ("0.5", "D")}
 
 
@@ -89,10 +87,10 @@ def work_precision_figure(wp, adaptive, *, title=None):
             ax.loglog(
                 row["cpu_seconds"].values[ok],
                 row["error_max"].values[ok],
-                ls=_STYLES.get(d, "-"),
-                marker=_MARKERS.get(d, "o"),
+                ls=decomposition_style(d)[0],
+                marker=decomposition_style(d)[1],
                 ms=3,
-                color=_COLOURS.get(m),
+                color=method_colour(m),
                 label=_label(m, d),
             )
         _mono_lines(ax, wp)
@@ -112,7 +110,7 @@ def work_precision_figure(wp, adaptive, *, title=None):
         for i in range(adaptive.sizes["config"]):
             row = adaptive.isel(config=i)
             m, d, k = str(row["method"].values), str(row["decomposition"].values), int(row["k"])
-            colour = _COLOURS.get(m)
+            colour = method_colour(m)
             lab = _label(m, d, k, _scheme(row))
             gs = _scheme(row) != "jacobi"  # a Gauss-Seidel configuration: open markers
             ok = row["fixed_status"].values == "stable"
@@ -173,14 +171,14 @@ def error_over_H_figure(wp, *, title=None):
             ax.loglog(
                 H[ok],
                 row["error_max"].values[ok],
-                ls=_STYLES.get(d, "-"),
-                marker=_MARKERS.get(d, "o"),
+                ls=decomposition_style(d)[0],
+                marker=decomposition_style(d)[1],
                 ms=3,
-                color=_COLOURS.get(m),
+                color=method_colour(m),
                 label=f"{_label(m, d)} ({tag})",
             )
             if (~ok).any():
-                ax.plot(H[~ok], np.full((~ok).sum(), top), "x", color=_COLOURS.get(m), ms=7, mew=2, clip_on=False)
+                ax.plot(H[~ok], np.full((~ok).sum(), top), "x", color=method_colour(m), ms=7, mew=2, clip_on=False)
         ax.set_title(f"{get_scheme(scheme).label}, k = {k}")
         ax.set_xlabel("H [s]")
         ax.grid(True, which="major", alpha=0.3)
@@ -224,18 +222,18 @@ def stability_limit_figure(limits, *, title=None):
             ax.plot(
                 x,
                 y,
-                _MARKERS.get(d, "o"),
-                color=_COLOURS.get(m),
+                decomposition_style(d)[1],
+                color=method_colour(m),
                 ms=8,
-                mfc=_COLOURS.get(m) if growth else "none",
+                mfc=method_colour(m) if growth else "none",
                 label=_label(m, d) if key not in seen else None,
             )
             seen.add(key)
             ax.annotate(f"k{k}", (x, y), textcoords="offset points", xytext=(5, 3), fontsize=7)
             if str(row["status"].values) == "stable up to the cap":
-                ax.annotate("", (x, y * 1.6), (x, y), arrowprops={"arrowstyle": "->", "color": _COLOURS.get(m)})
+                ax.annotate("", (x, y * 1.6), (x, y), arrowprops={"arrowstyle": "->", "color": method_colour(m)})
             if str(row["status_linear"].values) == "stable up to the cap":
-                ax.annotate("", (x * 1.6, y), (x, y), arrowprops={"arrowstyle": "->", "color": _COLOURS.get(m)})
+                ax.annotate("", (x * 1.6, y), (x, y), arrowprops={"arrowstyle": "->", "color": method_colour(m)})
         ax.set_xlim(lo, hi)
         ax.set_ylim(lo, hi)
         ax.set_title(get_scheme(scheme).label)
@@ -273,12 +271,12 @@ def tolerance_figure(tol, *, title=None):
         for i in range(tol.sizes["config"]):
             row = tol.isel(config=i).sel(H=H)
             m, d, k = str(row["method"].values), str(row["decomposition"].values), int(row["k"])
-            colour = _COLOURS.get(m)
+            colour = method_colour(m)
             lab = _label(m, d, k, _scheme(row))
             ax.loglog(
                 row["rtol"].values,
                 row["error_max"].values,
-                marker=_MARKERS.get(d, "o"),
+                marker=decomposition_style(d)[1],
                 color=colour,
                 label=f"{lab}: error",
             )

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..claims.core import verdict_counts
-from ..convergence.curves import fastest_schemes
+from ..convergence.curves import fastest_configurations
 from ..convergence.experiment import Setup, oscillation_summary, step_counts
 from . import html as rp
 from .claims import claims_table
@@ -39,13 +39,13 @@ def _bits(panels) -> str:
 
 
 def work_cost_table(wp):
-    """Per scheme of the work-precision dataset: median ms per macro step and the counted work (a DataFrame)."""
+    """Per configuration of the work-precision dataset: median ms per macro step and the counted work (a DataFrame)."""
     work = wp[["subsystem_integrations_per_step", "coupling_solves_per_step", "projections_per_step"]]
     cost = work.reset_coords(drop=True).to_dataframe().astype(int).astype(str)
     cost.insert(0, "ms", wp["cpu_seconds_per_step"].median(dim="H", skipna=True).to_pandas())
     cost["ms"] = cost["ms"].map(lambda t: f"{1e3 * t:.3g}" if np.isfinite(t) else "— (unstable at every H)")
-    cost = cost.reset_index().astype({"scheme": str})
-    cost.columns = ["scheme", "ms per macro step", "subsystem integrations", "coupling solves", "projections"]
+    cost = cost.reset_index().astype({"configuration": str})
+    cost.columns = ["configuration", "ms per macro step", "subsystem integrations", "coupling solves", "projections"]
     return cost
 
 
@@ -232,7 +232,7 @@ def convergence_section(
         + "</p><p><b>Caveat.</b> "
         + esc(
             "The subsystems of the test model are integrated exactly, so what is timed is the coupling algorithm's Python "
-            "overhead, nearly equal for all schemes: the diagram is close to NRMSE over 1/H and says little about "
+            "overhead, nearly equal for all configurations: the diagram is close to NRMSE over 1/H and says little about "
             "numerically integrated subsystems. For those, weigh the counted work per macro step below (subsystem "
             "integrations, coupling-condition solves, projections) with their cost there."
         )
@@ -241,12 +241,12 @@ def convergence_section(
     body.append(
         rp.figure(
             wp_png,
-            "CPU time per simulated second over NRMSE; one line per scheme, each point one H.",
+            "CPU time per simulated second over NRMSE; one line per configuration, each point one H.",
             anchor=rp.figure_anchor("convergence", wp_png),
         )
     )
     table_rows = []
-    for entry in fastest_schemes(wp, targets):
+    for entry in fastest_configurations(wp, targets):
         rk = entry["ranking"]
         if rk:
             best = rk[0]
@@ -264,10 +264,10 @@ def convergence_section(
         else:
             table_rows.append([entry["decomposition"], f"{entry['target']:.0e}", "none reaches it", "—", "—", "—"])
     body.append(
-        "<p>Which scheme reaches a given error fastest (least CPU time per simulated second among the measured step "
+        "<p>Which configuration reaches a given error fastest (least CPU time per simulated second among the measured step "
         "sizes with NRMSE ≤ target):</p>"
         + rp.table(
-            ["decomposition", "target NRMSE", "fastest scheme", "CPU s per simulated s", "at H (s)", "next two"],
+            ["decomposition", "target NRMSE", "fastest configuration", "CPU s per simulated s", "at H (s)", "next two"],
             table_rows,
         )
         + "<p>Cost of one macro step (median over H) and the work it consists of (counted on the engine's macro "

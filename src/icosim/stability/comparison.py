@@ -1,16 +1,16 @@
-"""Stable shares of the same figure under different coupling schemes (Jacobi, Gauss-Seidel 1→2, 2→1).
+"""Stable shares of the same figure under different coupling schemes (Jacobi, Gauss-Seidel 1→2, 2→1, ...).
 
-Reads the full-view panels of :mod:`icosim.stability.panels` (every scheme of a
-figure has its own figure id, :func:`icosim.engine.schemes.figure_id`) and tabulates
-the share of stable grid points per paper figure, row, ``k`` and scheme -- what
-the comparison figure draws and the report tabulates.  Nothing is recomputed.
+Reads the full-view panels of :mod:`icosim.stability.panels` (attributes
+``figure`` and ``scheme``) and tabulates the share of stable grid points per
+figure, row, ``k`` and scheme -- what the comparison figure draws and the
+report tabulates.  Nothing is recomputed.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..engine.schemes import SCHEME_NAMES, split_figure_id
+from ..engine.schemes import SCHEMES
 from .checks import stable_share
 
 __all__ = ["scheme_shares"]
@@ -19,29 +19,32 @@ __all__ = ["scheme_shares"]
 def scheme_shares(panels, *, provenance: dict | None = None):
     """An :class:`xarray.Dataset` ``stable_share(figure, row, k, scheme)`` from full-view panels.
 
-    ``figure`` is the paper's number (``"9"``); ``method``, ``decomposition`` and
-    ``method_label`` are coordinates along it, ``row_label`` along
-    ``(figure, row)``.  Missing combinations are NaN.  Only figures that have at
-    least one Gauss-Seidel scheme are included.
+    ``figure`` is the figure's id (``"9"``); ``method`` and ``decomposition`` are
+    coordinates along it, ``row_label`` along ``(figure, row)``.  Missing
+    combinations are NaN.  Only figures computed with more than one scheme are
+    included; the schemes in registry order (:data:`icosim.engine.schemes.SCHEMES`).
     """
     import xarray as xr
 
     full = [ds for ds in panels if ds.attrs["view"] == "full"]
     by_key, meta, row_labels = {}, {}, {}
     for ds in full:
-        fig, scheme = split_figure_id(ds.attrs["figure"])
-        key = (fig, int(ds.attrs["row"]), int(ds.attrs["k"]), scheme.name)
+        fig, scheme = str(ds.attrs["figure"]), str(ds.attrs["scheme"])
+        key = (fig, int(ds.attrs["row"]), int(ds.attrs["k"]), scheme)
         if key in by_key:
             raise ValueError(f"two panels for figure {fig}, row {key[1]}, k = {key[2]}, scheme {key[3]}")
         share = stable_share(ds)  # stable verdicts; marginal and undecided points apart (icosim.stability.checks)
         by_key[key] = (share.low, share.stable, share.n, share.open)
         meta.setdefault(fig, (str(ds.attrs["method"]), str(ds.attrs["decomposition"])))
         row_labels[(fig, key[1])] = str(ds.attrs.get("row_label", ""))
-    compared = {fig for fig, _, _, s in by_key if s != "jacobi"}
-    figures = sorted(compared, key=lambda f: (int(f), f))
+    schemes_of = {}
+    for fig, _, _, scheme in by_key:
+        schemes_of.setdefault(fig, set()).add(scheme)
+    compared = {fig for fig, found in schemes_of.items() if len(found) > 1}
+    figures = sorted(compared, key=lambda f: (not f.isdigit(), int(f) if f.isdigit() else 0, f))
     rows = sorted({r for fig, r, _, _ in by_key if fig in compared})
     ks = sorted({k for fig, _, k, _ in by_key if fig in compared})
-    schemes = [s for s in SCHEME_NAMES if any(key[3] == s for key in by_key)]
+    schemes = [s for s in SCHEMES if any(key[3] == s and key[0] in compared for key in by_key)]
     shape = (len(figures), len(rows), len(ks), len(schemes))
     share = np.full(shape, np.nan)
     n_stable = np.full(shape, -1, dtype=np.int64)
@@ -74,7 +77,7 @@ def scheme_shares(panels, *, provenance: dict | None = None):
             "n_points": (dims, n_points, {"long_name": "grid points of the panel (-1: not computed)"}),
         },
         coords={
-            "figure": ("figure", np.array(figures, dtype=object).astype(str), {"long_name": "paper figure"}),
+            "figure": ("figure", np.array(figures, dtype=object).astype(str), {"long_name": "figure"}),
             "row": ("row", np.array(rows, dtype=np.int32), {"long_name": "row of the figure (1-based)"}),
             "k": ("k", np.array(ks, dtype=np.int32), {"long_name": "degree of the approximation polynomials"}),
             "scheme": ("scheme", np.array(schemes, dtype=object).astype(str), {"long_name": "coupling scheme"}),
@@ -84,5 +87,5 @@ def scheme_shares(panels, *, provenance: dict | None = None):
         },
     )
     ds.attrs = dict(provenance or {})
-    ds.attrs["source_panels"] = "full views of every configured figure that has a Gauss-Seidel scheme"
+    ds.attrs["source_panels"] = "full views of every configured figure computed with more than one scheme"
     return ds

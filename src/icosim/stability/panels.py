@@ -18,9 +18,9 @@ import numpy as np
 
 from ..engine import methods as _methods
 from ..engine.bounds import MAX_GRID_N, check_k
-from ..engine.decompositions import DECOMPOSITIONS
+from ..engine.decompositions import DECOMPOSITIONS, get_decomposition
 from ..engine.methods import make_method
-from ..engine.schemes import figure_id, get_scheme
+from ..engine.schemes import get_scheme
 from ..engine.spectral.policy import POLICIES, Certification
 from ..errors import ParameterError
 
@@ -29,6 +29,8 @@ __all__ = [
     "grid_axis",
     "panel_id",
     "figure_panels",
+    "figure_schemes",
+    "figure_label",
     "row_label",
     "row_label_keys",
     "format_row_label",
@@ -223,17 +225,39 @@ def _check_grid(name: str, g: dict, *, where: str = "stability"):
         grid_axis(g[axis], g["n"])  # the grid the sweep job will build
 
 
-def figure_panels(
-    figure: str, figure_cfg: dict, *, grid: dict, zoom_grid: dict, precision: dict, scheme="jacobi"
-) -> list[PanelSpec]:
-    """The panels of one figure as configured (rows x k, plus the zooms), for one coupling scheme.
+def figure_schemes(figure: str, figure_cfg: dict) -> list[tuple[str, tuple | None]]:
+    """The coupling schemes a figure is computed with: ``(name, rows)`` per entry of its ``schemes``
+    (default ``[jacobi]``, the paper's); ``rows`` None for every row, else the rows (1-based) the entry
+    names (``{name: gauss-seidel-12-as-integrated, rows: [1]}``)."""
+    where = f"stability.figures.{figure}.schemes"
+    out = []
+    for i, entry in enumerate(figure_cfg.get("schemes", ["jacobi"])):
+        name, rows = (entry, None) if isinstance(entry, str) else (entry.get("name"), entry.get("rows"))
+        try:
+            name = get_scheme(name).name
+        except ParameterError as err:
+            raise ParameterError(f"{where}[{i}]: {err}") from None
+        if rows is not None:
+            bad = [r for r in rows if not 1 <= r <= len(figure_cfg["rows"])]
+            if bad:
+                raise ParameterError(
+                    f"{where}[{i}].rows: {bad} not among the figure's rows 1..{len(figure_cfg['rows'])}"
+                )
+            rows = tuple(int(r) for r in rows)
+        if name in [n for n, _ in out]:
+            raise ParameterError(f"{where}: {name} is listed twice")
+        out.append((name, rows))
+    return out
+
+
+def figure_panels(figure: str, figure_cfg: dict, *, grid: dict, zoom_grid: dict, precision: dict) -> list[PanelSpec]:
+    """The panels of one figure as configured: every scheme x row x k, plus the zooms.
 
     ``figure_cfg`` has the layout of ``config/stability.yaml`` (``method``,
     ``decomposition``, ``params``, ``ratios``, ``rows``, ``k``, optional
-    ``zoom`` and ``schemes``).  Every panel's method is built once here, so a parameter the
-    method does not accept is reported with the figure and row before any job
-    runs.  The panels' ``figure`` is the figure id of ``scheme``
-    (:func:`icosim.engine.schemes.figure_id`: ``"9"`` for Jacobi, ``"9gs12"``, ``"9gs21"``).
+    ``zoom`` and ``schemes``: :func:`figure_schemes`).  Every panel's method is
+    built once here, so a parameter the method does not accept is reported
+    with the figure and row before any job runs.
     """
     where = f"stability.figures.{figure}"
     n_rows = len(figure_cfg["rows"])
@@ -247,42 +271,49 @@ def figure_panels(
     bad_k = [k for k in zoom["k"] if k not in figure_cfg["k"]]
     if bad_k:
         raise ParameterError(f"{where}.zoom.k: {bad_k} not among the figure's k {figure_cfg['k']}")
+    decomposition = get_decomposition(figure_cfg["decomposition"])
     panels = []
-    for row, overrides in enumerate(figure_cfg["rows"], start=1):
-        values = {**figure_cfg["ratios"], **figure_cfg["params"], **overrides}
-        missing = [r for r in RATIOS if r not in values]
-        if missing:
-            raise ParameterError(f"{where}: row {row} has no value for {', '.join(missing)} (give it in ratios)")
-        method_params = {key: values[key] for key in method_param_names() if key in values}
-        try:
-            make_method(figure_cfg["method"], **method_params).check_decomposition(
-                DECOMPOSITIONS[figure_cfg["decomposition"]]
-            )
-        except ParameterError as err:
-            raise ParameterError(f"{where}, row {row}: {err}") from None
-        views = [("full", grid)]
-        for k in figure_cfg["k"]:
-            for view, g in views + ([("zoom", zoom_grid)] if row in zoom["rows"] and k in zoom["k"] else []):
-                panels.append(
-                    PanelSpec(
-                        figure=figure_id(figure, scheme),
-                        row=row,
-                        k=int(k),
-                        view=view,
-                        method=figure_cfg["method"],
-                        method_params=method_params,
-                        decomposition=figure_cfg["decomposition"],
-                        am21=float(values["am21"]),
-                        alr21=float(values["alr21"]),
-                        ali21=float(values["ali21"]),
-                        lr1=tuple(float(v) for v in g["lr1"]),
-                        li1=tuple(float(v) for v in g["li1"]),
-                        n=int(g["n"]),
-                        digits=int(precision["digits"]),
-                        policy=precision["policy"],
-                        row_keys=row_keys,
-                        certify=dict(precision.get("certify") or {}),
-                        scheme=get_scheme(scheme).name,
+    for scheme, scheme_rows in figure_schemes(figure, figure_cfg):
+        for row, overrides in enumerate(figure_cfg["rows"], start=1):
+            if scheme_rows is not None and row not in scheme_rows:
+                continue
+            values = {**figure_cfg["ratios"], **figure_cfg["params"], **overrides}
+            missing = [r for r in RATIOS if r not in values]
+            if missing:
+                raise ParameterError(f"{where}: row {row} has no value for {', '.join(missing)} (give it in ratios)")
+            method_params = {key: values[key] for key in method_param_names() if key in values}
+            try:
+                make_method(figure_cfg["method"], **method_params).check_decomposition(decomposition)
+            except ParameterError as err:
+                raise ParameterError(f"{where}, row {row}: {err}") from None
+            for k in figure_cfg["k"]:
+                views = [("full", grid)] + ([("zoom", zoom_grid)] if row in zoom["rows"] and k in zoom["k"] else [])
+                for view, g in views:
+                    panels.append(
+                        PanelSpec(
+                            figure=str(figure),
+                            row=row,
+                            k=int(k),
+                            view=view,
+                            method=figure_cfg["method"],
+                            method_params=method_params,
+                            decomposition=decomposition.name,
+                            am21=float(values["am21"]),
+                            alr21=float(values["alr21"]),
+                            ali21=float(values["ali21"]),
+                            lr1=tuple(float(v) for v in g["lr1"]),
+                            li1=tuple(float(v) for v in g["li1"]),
+                            n=int(g["n"]),
+                            digits=int(precision["digits"]),
+                            policy=precision["policy"],
+                            row_keys=row_keys,
+                            certify=dict(precision.get("certify") or {}),
+                            scheme=scheme,
+                        )
                     )
-                )
     return panels
+
+
+def figure_label(figure: str) -> str:
+    """How a figure is named in titles: ``Fig. 9`` (the paper's, by number) or its id (the project's own)."""
+    return f"Fig. {figure}" if str(figure).isdigit() else f"Figure {figure}"
