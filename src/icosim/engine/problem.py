@@ -112,6 +112,11 @@ class CosimulationProblem:
         self.w_pred = np.array([be.const(w) for w in weights_at(self.pred_nodes, 1)], dtype=be.dtype)
         self.work = Work()
 
+    @classmethod
+    def check_decomposition(cls, decomposition):
+        """Refuse (:class:`~icosim.errors.ParameterError`) a decomposition whose coupling conditions this
+        problem cannot form; the linear test model forms them for every registered one."""
+
     @property
     def n_coupling(self) -> int:
         """Number of coupling variables ``e`` (per time point)."""

@@ -40,4 +40,3 @@ def _metadata(fmt):
     if fmt == "png":
         return {"Software": f"icosim {__version__}"}
     return None
-

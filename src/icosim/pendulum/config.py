@@ -6,6 +6,7 @@ from ..engine.decompositions import get_decomposition
 from ..engine.methods import make_method
 from ..engine.schemes import get_scheme
 from ..errors import ParameterError
+from .conditions import check_decomposition
 from .names import run_name
 
 __all__ = ["configured_runs", "configured_schemes", "trade_plan", "run_settings", "study_methods", "RUN_KEYS"]
@@ -31,6 +32,7 @@ def configured_runs(cfg: dict) -> list:
         try:
             method = make_method(name, **cfg["methods"][name])
             method.check_decomposition(get_decomposition(dec))
+            check_decomposition(dec)
         except ParameterError as exc:
             raise ParameterError(f"pendulum.configurations[{i}] ({name}, {dec}): {exc}") from None
         runs += [(name, dec, int(k)) for k in cfg["k"]]
@@ -111,6 +113,7 @@ def trade_plan(cfg: dict) -> dict:
                 make_method(c["method"], **cfg["methods"][c["method"]]).check_decomposition(
                     get_decomposition(c["decomposition"])
                 )
+                check_decomposition(c["decomposition"])
             except ParameterError as exc:
                 raise ParameterError(f"{where} ({c['method']}, {c['decomposition']}): {exc}") from None
     ad = trade["adaptive"]

@@ -2,17 +2,24 @@
 
 from __future__ import annotations
 
+from ..engine.decompositions import get_decomposition
 from ..engine.schemes import get_scheme
 
-__all__ = ["COUPLING_VARIABLES", "TRADE_FIGURE_DATASETS", "VARIABLES", "run_name"]
+__all__ = ["coupling_variables", "TRADE_FIGURE_DATASETS", "VARIABLES", "run_name"]
+
+#: The joint's two components of each kind of coupling variable: the joint force or the joint acceleration.
+_JOINT = {"force": ("lambda_cax", "lambda_cay"), "acceleration": ("a_tilde_x", "a_tilde_y")}
 
 
-#: Names of the coupling variables per decomposition.
-COUPLING_VARIABLES = {
-    "ff": ("lambda_cax", "lambda_cay"),
-    "fd": ("lambda_cax", "lambda_cay", "a_tilde_x", "a_tilde_y"),
-    "dd": ("a_tilde_x", "a_tilde_y"),
-}
+def coupling_variables(decomposition) -> tuple[str, ...]:
+    """Names of the pendulum's coupling variables for a decomposition: two per coupling variable of the
+    decomposition (:class:`icosim.engine.decompositions.Decomposition`), its x and y components.
+
+    >>> coupling_variables("fd")
+    ('lambda_cax', 'lambda_cay', 'a_tilde_x', 'a_tilde_y')
+    """
+    dec = get_decomposition(decomposition)
+    return tuple(name for j in range(dec.n_coupling) for name in _JOINT[dec.variable_kind(j)])
 
 
 #: Time series of every dataset: name -> (units, long name).
@@ -39,10 +46,10 @@ TRADE_FIGURE_DATASETS = {
 
 # -- datasets, summary and claims ------------------------------------------------------
 def run_name(method: str, decomposition: str, k: int, scheme="jacobi") -> str:
-    """File stem of a run: ``{method}_{decomposition}_k{k}`` (Jacobi), with ``_gs12``/``_gs21`` for Gauss-Seidel.
+    """Name of a run: ``{method}_{decomposition}_k{k}`` (Jacobi, the paper's), with the scheme's name added otherwise.
 
     >>> run_name("weighted", "fd", 2), run_name("projection", "dd", 0, "gauss-seidel-21")
-    ('weighted_fd_k2', 'projection_dd_k0_gs21')
+    ('weighted_fd_k2', 'projection_dd_k0_gauss-seidel-21')
     """
-    suffix = get_scheme(scheme).suffix
-    return f"{method}_{decomposition}_k{k}" + (f"_{suffix}" if suffix else "")
+    name = get_scheme(scheme).name
+    return f"{method}_{decomposition}_k{k}" + ("" if name == "jacobi" else f"_{name}")

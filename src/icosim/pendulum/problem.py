@@ -25,22 +25,15 @@ from ..engine.lagrange import (
 )
 from ..engine.problem import CosimulationProblem
 from ..errors import ParameterError
+from .conditions import CONDITIONS, check_decomposition
 from .integrator.compiled import CompiledLink
 from .integrator.radau import _fd_jacobian, radau_batch
 from .links import Link1, Link2
 from .manifold import project_state
 from .model import PendulumParameters, joint_constraint
-from .names import COUPLING_VARIABLES
+from .names import coupling_variables
 
 __all__ = ["PendulumCosimulation"]
-
-
-#: Slices of ``e`` driving (link 1, link 2).
-_INPUTS = {
-    "ff": (slice(0, 2), slice(0, 2)),
-    "fd": (slice(0, 2), slice(2, 4)),
-    "dd": (slice(0, 2), slice(0, 2)),
-}
 
 
 # -- the co-simulation problem (protocol of icosim.engine.macrostep) ----------------------
@@ -48,7 +41,7 @@ class PendulumCosimulation(CosimulationProblem):
     """The double pendulum split into link 1 and link 2 (decomposition ff, fd or dd).
 
     State: ``s = (phi1, omega1, x_S2, y_S2, phi2, vx2, vy2, omega2)`` at ``T_N``.
-    History: ``h[j, :] = e_N-j``, ``j = 0..k`` (names :data:`COUPLING_VARIABLES`).
+    History: ``h[j, :] = e_N-j``, ``j = 0..k`` (names :func:`~icosim.pendulum.names.coupling_variables`).
     Outputs at ``T_N+1``: ``y[i, :, :] = (P_i, P_i', P_i'', f_i)`` per link
     (joint point position, velocity, acceleration, joint force on link 2 as
     seen by link ``i``: the input ``lambda_c`` for a force-driven link, the
@@ -72,6 +65,7 @@ class PendulumCosimulation(CosimulationProblem):
         newton_tol: float = 1e-8,
     ):
         dec = get_decomposition(decomposition)
+        self.check_decomposition(dec)
         k = check_k(k)  # 0 .. icosim.engine.bounds.MAX_K
         for name, v in (("H", H), ("rtol", rtol), ("atol", atol), ("fd_step", fd_step), ("newton_tol", newton_tol)):
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
@@ -81,7 +75,8 @@ class PendulumCosimulation(CosimulationProblem):
         self.rtol, self.atol, self.fd_step, self.newton_tol = rtol, atol, fd_step, newton_tol
         self.links = (Link1(params, dec.kinds[0]), Link2(params, dec.kinds[1]))
         self.compiled_links = tuple(CompiledLink(link) for link in self.links)
-        self.inputs = _INPUTS[dec.name]
+        # the two components of the coupling variable driving each link
+        self.inputs = tuple(slice(2 * j, 2 * j + 2) for j in dec.inputs)
         # monomial coefficients of the interpolation polynomial (Eq. 11) in tau = (t - T_N)/H
         self.C_corr = np.array(monomial_coefficients(self.corr_nodes), dtype=float)
         self._cache = None
@@ -92,10 +87,15 @@ class PendulumCosimulation(CosimulationProblem):
         # right-hand side evaluations spent on the shared ones (not in stats["fev"])
         self.jacobian_stats = {"jev": 0, "fev": 0}
 
+    @classmethod
+    def check_decomposition(cls, decomposition):
+        """Refuse a decomposition for which the pendulum has no coupling conditions (:mod:`.conditions`)."""
+        check_decomposition(decomposition)
+
     @property
     def n_coupling(self) -> int:
-        """Coupling variables per time point: two per joint quantity (:data:`COUPLING_VARIABLES`)."""
-        return len(COUPLING_VARIABLES[self.decomposition.name])
+        """Coupling variables per time point: two per joint quantity (:func:`~icosim.pendulum.names.coupling_variables`)."""
+        return len(coupling_variables(self.decomposition))
 
     # -- helpers --------------------------------------------------------------
     def _split(self, state):
@@ -240,23 +240,10 @@ class PendulumCosimulation(CosimulationProblem):
         return np.stack(ys)
 
     def residuals(self, y):
-        """Joint constraint on each level (2 rows; dd: its normal component) and force balance."""
+        """Joint constraint on each level (2 rows; both links kinematic: its normal component) and force balance
+        (:data:`~icosim.pendulum.conditions.CONDITIONS`, by the kinds of the two links)."""
         d = y[..., 0, :, :] - y[..., 1, :, :]  # link 1 minus link 2: g_c, g_c', g_c'', f1 - f2
-        if self.decomposition.name == "dd":
-            P1 = y[..., 0, 0, :]
-            e1 = P1 / np.linalg.norm(P1, axis=-1, keepdims=True)
-            n1 = np.stack([-e1[..., 1], e1[..., 0]], axis=-1)
-            proj = lambda v: np.sum(e1 * v, axis=-1, keepdims=True)  # noqa: E731
-            return {
-                "pos": proj(d[..., 0, :]),
-                "vel": proj(d[..., 1, :]),
-                "acc": proj(d[..., 2, :]),
-                # n1 . mu_2 - mu_1 (f_1 = mu_1 n1)
-                "force": -np.sum(n1 * d[..., 3, :], axis=-1, keepdims=True),
-            }
-        out = {"pos": d[..., 0, :], "vel": d[..., 1, :], "acc": d[..., 2, :]}
-        out["force"] = -d[..., 3, :] if self.decomposition.name == "fd" else d[..., 3, :0]
-        return out
+        return CONDITIONS[self.decomposition.kinds](y, d)
 
     def project(self, state):
         return project_state(self.params, state)

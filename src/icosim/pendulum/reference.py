@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from .model import PendulumParameters
-from .names import COUPLING_VARIABLES
+from .names import coupling_variables
 
 __all__ = ["Monolithic", "reference_solution", "consistent_history"]
 
@@ -142,4 +142,4 @@ def consistent_history(params: PendulumParameters, decomposition: str, k: int, H
         "a_tilde_x": ref["a_x"],
         "a_tilde_y": ref["a_y"],
     }
-    return np.stack([cols[name] for name in COUPLING_VARIABLES[decomposition]], axis=-1)
+    return np.stack([cols[name] for name in coupling_variables(decomposition)], axis=-1)

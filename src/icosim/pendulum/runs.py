@@ -100,8 +100,11 @@ class _SingularSolveAsFailure:
 
 
 def joint_force(decomposition: str, e, y):
-    """The joint force of link 1 on link 2 after a step: ``lambda_c`` (ff, fd) or ``mu_2`` (dd)."""
-    return y[1, 3] if decomposition == "dd" else e[:2]
+    """The joint force of link 1 on link 2 after a step: the coupling variable ``lambda_c`` where one drives a
+    link (ff, fd), else link 2's multiplier ``mu_2`` (dd)."""
+    dec = get_decomposition(decomposition)
+    forces = [j for j in range(dec.n_coupling) if dec.variable_kind(j) == "force"]
+    return e[2 * forces[0] : 2 * forces[0] + 2] if forces else y[1, 3]
 
 
 def divergence_reason(

@@ -32,7 +32,7 @@ import math
 import numpy as np
 
 from ...engine.methods import make_method
-from ...engine.schemes import SCHEME_NAMES, get_scheme
+from ...engine.schemes import SCHEMES, get_scheme
 from ...errors import ParameterError
 from ..model import PendulumParameters
 from ..names import run_name
@@ -57,12 +57,9 @@ RECORD = {
     "t_last": ("s", "time of the last stored state (end time, or the step before divergence or failure)"),
 }
 
-#: Coupling schemes the runs can use (:mod:`icosim.engine.schemes`); the configuration schema lists the same names.
-SCHEMES = SCHEME_NAMES
-
 
 def check_scheme(scheme) -> str:
-    """The scheme's name (``jacobi``, ``gauss-seidel-12``, ``gauss-seidel-21``), checked."""
+    """The registered scheme's name (:data:`icosim.engine.schemes.SCHEMES`), checked."""
     try:
         return get_scheme(scheme).name
     except ParameterError as exc:
@@ -70,8 +67,8 @@ def check_scheme(scheme) -> str:
 
 
 def config_label(scheme, method: str, decomposition: str, k: int) -> str:
-    """Label of a configuration: ``baumgarte_ff_k1`` (Jacobi), ``baumgarte_ff_k1_gs12`` (Gauss-Seidel), as the
-    runs of Figs. 6-8 are named (:func:`icosim.pendulum.names.run_name`)."""
+    """Label of a configuration: ``baumgarte_ff_k1`` (Jacobi), ``baumgarte_ff_k1_gauss-seidel-12`` (another
+    scheme), as the runs of Figs. 6-8 are named (:func:`icosim.pendulum.names.run_name`)."""
     return run_name(method, decomposition, int(k), scheme)
 
 
