@@ -145,9 +145,9 @@ def summary_dataset(runs, reference, claims, *, model: dict, H: float, methods: 
     ds.attrs["test_model_lr1"] = [float(v) for v in point.lr1]
     ds.attrs["test_model_li1"] = [float(v) for v in point.li1]
     ds.attrs["test_model_ratios"] = f"am21 = {point.am21:g}, alr21 = {point.alr21:g}, ali21 = {point.ali21:g}"
-    # the text names the function by the module path it had when the attribute was introduced
     ds.attrs["test_model_point"] = (
         "lr1 = -d H / (2 m1); li1 = H omega for the modal frequencies of the pendulum linearised about its hanging "
-        "rest (icosim.pendulum.pendulum_test_model); rho_test_model is the larger spectral radius of the two points"
+        "rest (icosim.pendulum.linearised.pendulum_test_model); rho_test_model is the larger spectral radius of the "
+        "two points"
     )
     return ds
