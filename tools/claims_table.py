@@ -22,9 +22,11 @@ from icosim.report.claims import claims_markdown  # noqa: E402
 DOC = ROOT / "docs" / "claims.md"
 HEADER = """# The claims and their checks
 
-Every statement the report makes about the data is a claim in `config/claims/`: the paper's own
-(`<part>.yaml`) and the project's (`<part>_gauss_seidel.yaml`). Each is evaluated by its check on
-the part's datasets and gets a verdict: pass, fail, or undecided when the data cannot decide it.
+Every statement the report makes about the data is a claim in `config/claims/<part>.yaml`: the
+paper's own (`scope: paper`) and the project's about data beyond the paper (`scope: beyond`, such
+as the Gauss–Seidel schemes). Each is evaluated by its check on the part's datasets and gets a
+verdict: pass, fail, or undecided when the data cannot decide it. A selector that names no coupling
+scheme reads the paper's, Jacobi.
 Below, per file: the statement, what the check reads, which data outcome would make the claim
 fail, and the verdict of the full-resolution run (`reference`). Where a statement uses a vague word
 ("wide", "notably", "similar"), the note in the claims file says how it is read. A statement about
@@ -37,8 +39,11 @@ def render() -> str:
     parts = [HEADER]
     for path in sorted((ROOT / "config" / "claims").glob("*.yaml")):
         claims = load_claims(path)
-        parts.append(f"\n## {path.relative_to(ROOT)} ({len(claims)} claims)\n\n")
-        parts.append(claims_markdown(claims, describe_claim))
+        parts.append(f"\n## {path.relative_to(ROOT)} ({len(claims)} claims)\n")
+        for scope, heading in (("paper", "The paper's claims"), ("beyond", "Beyond the paper")):
+            chosen = [c for c in claims if c.scope == scope]
+            if chosen:
+                parts.append(f"\n### {heading}\n\n" + claims_markdown(chosen, describe_claim))
     return "".join(parts)
 
 

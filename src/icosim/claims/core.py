@@ -70,7 +70,10 @@ __all__ = [
 VERDICTS = ("pass", "fail", "undecided")
 
 
-CLAIM_KEYS = {"id", "source", "statement", "figures", "check", "each", "ci", "reference", "note"}
+CLAIM_KEYS = {"id", "source", "statement", "figures", "check", "each", "ci", "reference", "note", "scope"}
+
+#: Whose claim it is: the paper's, or the project's own about data beyond the paper (other schemes, ...).
+SCOPES = ("paper", "beyond")
 
 
 REQUIRED_KEYS = {"id", "source", "statement", "figures", "check"}
@@ -87,9 +90,11 @@ class Claim:
     ci: bool = False
     reference: str | None = None
     note: str = ""
+    scope: str = "paper"
 
     def as_dict(self) -> dict:
         return {
+            "scope": self.scope,
             "id": self.id,
             "source": self.source,
             "statement": self.statement,
@@ -189,6 +194,9 @@ def parse_claims(items, checks: Mapping[str, CheckKind], *, where: str = "claims
         reference = item.get("reference")
         if reference is not None and reference not in VERDICTS:
             raise ParameterError(f"{label}: reference must be one of {VERDICTS}, got {reference!r}")
+        scope = item.get("scope", "paper")
+        if scope not in SCOPES:
+            raise ParameterError(f"{label}: scope must be one of {SCOPES}, got {scope!r}")
         each = item.get("each") or {}
         if not isinstance(each, dict) or any(not isinstance(v, list) for v in each.values()):
             raise ParameterError(f"{label}: each must map an attribute to a list of values")
@@ -203,6 +211,7 @@ def parse_claims(items, checks: Mapping[str, CheckKind], *, where: str = "claims
                 ci=bool(item.get("ci", False)),
                 reference=reference,
                 note=str(item.get("note", "")),
+                scope=scope,
             )
         )
     return claims
@@ -296,13 +305,23 @@ def _with_each(check: dict, selectors, key, value) -> dict:
     return out
 
 
-def evaluate_claim(claim: Claim, datasets, checks: Mapping[str, CheckKind]) -> Verdict:
-    """Evaluate one claim with the check kinds ``checks``; a check that raises is a bug and propagates."""
+def evaluate_claim(claim: Claim, datasets, checks: Mapping[str, CheckKind], defaults: Mapping | None = None) -> Verdict:
+    """Evaluate one claim with the check kinds ``checks``; a check that raises is a bug and propagates.
+
+    ``defaults`` (attribute -> value) are filled into every selector that names neither them nor
+    gets them from ``each``: what a claim selects unless it says otherwise.
+    """
     check = dict(claim.check)
     kind = check.pop("kind")
     fn = checks[kind].fn
+
+    def with_defaults(sub):
+        for key, value in (defaults or {}).items():
+            sub = _with_each(sub, checks[kind].selectors, key, value)
+        return sub
+
     if not claim.each:
-        outcome = fn(datasets, **check)
+        outcome = fn(datasets, **with_defaults(check))
         return Verdict(claim, _verdict(outcome.holds), outcome.measured, outcome.numbers)
     # one evaluation per combination of the `each` values
     combos = [{}]
@@ -313,7 +332,7 @@ def evaluate_claim(claim: Claim, datasets, checks: Mapping[str, CheckKind]) -> V
         sub = check
         for key, value in combo.items():
             sub = _with_each(sub, checks[kind].selectors, key, value)
-        outcome = fn(datasets, **sub)
+        outcome = fn(datasets, **with_defaults(sub))
         tag = ", ".join(f"{k} = {v}" for k, v in combo.items())
         parts.append(f"[{tag}] {outcome.measured} -> {_verdict(outcome.holds)}")
         numbers[tag] = outcome.numbers
@@ -343,8 +362,8 @@ def describe_claim(claim: Claim, checks: Mapping[str, CheckKind]) -> dict:
     return {"check": what, "fails_if": fails_if}
 
 
-def evaluate(claims, datasets, checks: Mapping[str, CheckKind]) -> list[Verdict]:
-    return [evaluate_claim(c, datasets, checks) for c in claims]
+def evaluate(claims, datasets, checks: Mapping[str, CheckKind], defaults: Mapping | None = None) -> list[Verdict]:
+    return [evaluate_claim(c, datasets, checks, defaults) for c in claims]
 
 
 def _verdict(holds) -> str:

@@ -25,10 +25,13 @@ from ..stability import checks as _stability
 from . import core as _claims
 from .core import Claim, Verdict
 
-__all__ = ["CHECKS", "parse_claims", "load_claims", "evaluate_claim", "evaluate", "describe_claim"]
+__all__ = ["CHECKS", "DEFAULTS", "parse_claims", "load_claims", "evaluate_claim", "evaluate", "describe_claim"]
 
 #: check kind -> :class:`icosim.claims.core.CheckKind`, for every part.
 CHECKS = {**_stability.CHECKS, **_convergence.CHECKS, **_pendulum.CHECKS}
+
+#: A claim is about the paper's coupling scheme, Jacobi, unless a selector names another.
+DEFAULTS = {"scheme": "jacobi"}
 
 
 def parse_claims(items, *, where: str = "claims") -> list[Claim]:
@@ -42,12 +45,12 @@ def load_claims(path, key: str = "claims") -> list[Claim]:
 
 
 def evaluate_claim(claim: Claim, datasets) -> Verdict:
-    return _claims.evaluate_claim(claim, datasets, CHECKS)
+    return _claims.evaluate_claim(claim, datasets, CHECKS, DEFAULTS)
 
 
 def evaluate(claims, datasets) -> list[Verdict]:
-    """One :class:`~icosim.claims.core.Verdict` per claim, with every part's check kinds."""
-    return _claims.evaluate(claims, datasets, CHECKS)
+    """One :class:`~icosim.claims.core.Verdict` per claim, with every part's check kinds and :data:`DEFAULTS`."""
+    return _claims.evaluate(claims, datasets, CHECKS, DEFAULTS)
 
 
 def describe_claim(claim: Claim) -> dict:
