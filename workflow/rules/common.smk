@@ -35,7 +35,9 @@ for _var in (
 sys.path.insert(0, str(Path(workflow.basedir) / "src"))
 from icosim.engine.methods import METHODS  # noqa: E402
 from icosim.engine.schema import with_registries  # noqa: E402
+from icosim.engine.decompositions import DECOMPOSITIONS  # noqa: E402
 from icosim.engine.schemes import SCHEMES  # noqa: E402
+from icosim.figures.styles import figure_label  # noqa: E402
 from icosim.sources import module_closure, script_closure  # noqa: E402
 from icosim.io.integrity import quarantine_corrupt, remove_stale_parts  # noqa: E402
 
@@ -55,7 +57,8 @@ onstart:
 
 
 def validate_part(part_config, schema):
-    """Validate against a schema whose method $defs are filled from the registry (icosim.engine.methods)."""
+    """Validate against a schema whose registry $defs (methods, decompositions, schemes) are filled in
+    (icosim.engine.schema)."""
     path = Path(workflow.basedir) / "workflow" / "schemas" / schema
     with open(path) as fh:
         filled = with_registries(yaml.safe_load(fh))
@@ -107,18 +110,17 @@ def engine_lib(script):
     return files
 
 
-# Names of the registered coupling methods, for wildcard constraints.
+# Wildcard constraints from the engine's registries: a method, decomposition or scheme added to its
+# registry is a valid value of its wildcard.
 METHOD_NAMES = "|".join(METHODS)
-# Coupling scheme name -> label ("Gauss–Seidel 1→2"), for titles.
-SCHEME_LABELS = {name: scheme.label for name, scheme in SCHEMES.items()}
+DECOMPOSITION_NAMES = "|".join(DECOMPOSITIONS)
+SCHEME_NAMES = "|".join(SCHEMES)
 
 
-def figure_title(fid, figure_ids, figures, detail=""):
-    """Title of a figure id: "Fig. 9<detail>: <title>" (Jacobi, the paper's) or
-    "Fig. 9<detail>, Gauss–Seidel 1→2: <title>" (figure_ids: id -> (figure, scheme))."""
-    fig, scheme = figure_ids[fid]
-    label = "" if scheme == "jacobi" else f", {SCHEME_LABELS[scheme]}"
-    return f"Fig. {fig}{detail}{label}: {figures[fig]['title']}"
+def figure_title(figure, scheme, title, detail=""):
+    """"Fig. 9<detail>: <title>" with the paper's scheme, "Fig. 9<detail>, Gauss–Seidel 1→2: <title>" with another."""
+    label = "" if scheme == "jacobi" else f", {SCHEMES[scheme].label}"
+    return f"{figure_label(figure)}{detail}{label}: {title}"
 
 
 # Filled by each part's .smk file: every final target, and each part's report section

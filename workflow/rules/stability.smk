@@ -1,121 +1,162 @@
-# Stability plots, paper Figs. 9-20: one job per panel (figure x row x k x view) writing
-# results/stability/fig<figure>/r<row>_k<k>_<view>.nc, one plot job per figure, the paper's
-# claims checked against the datasets, and the stability section of the report.  A figure
-# computed with another coupling scheme (its `schemes:` list) has the figure id <figure>gs12
-# or <figure>gs21 (icosim.engine.schemes.figure_id); the Gauss-Seidel parts are in gauss_seidel.smk.
+# Stability plots, paper Figs. 9-20 (and the project's own figures): the spectral radius over the
+# (lr1, li1) plane, one panel per (scheme, row, k, view).  One job per figure computes every panel of
+# it (imports and start-up are paid once per figure, not per panel) and writes one dataset per panel,
+# results/stability/fig<figure>/<scheme>/r<row>_k<k>_<view>.nc; one job per figure draws it for
+# every scheme; the claims (the paper's and the project's) are checked in one job; the scheme
+# comparison and the report section follow.
 from icosim.claims.registry import load_claims  # noqa: E402
-from icosim.engine.schemes import FIGURE_ID_PATTERN, figure_id  # noqa: E402
 from icosim.stability.panels import figure_panels, panel_id  # noqa: E402
 
 validate_part(config["stability"], "stability.schema.yaml")
 
 STABILITY = config["stability"]
-# figure numbers are names ("9"), also if written unquoted in the YAML
+# figure ids are names ("9"), also if written unquoted in the YAML
 STABILITY["figures"] = {str(fig): cfg for fig, cfg in STABILITY["figures"].items()}
+STABILITY_PANEL = "results/stability/fig{figure}/{scheme}/{panel}.nc"
+STABILITY_PLOT = "results/stability/figures/fig{figure}_{scheme}.{ext}"
 
-# figure id -> (paper figure, scheme name): one workflow figure per configured scheme
-STABILITY_FIGURE_IDS = {
-    figure_id(fig, scheme): (fig, scheme)
-    for fig, fig_cfg in STABILITY["figures"].items()
-    for scheme in fig_cfg.get("schemes", ["jacobi"])
-}
-# (figure id, panel id) -> icosim.stability.panels.PanelSpec, for every configured panel.  Built
-# here so that a parameter a method does not take fails before any job runs, naming the figure/row.
+# figure -> its panels (icosim.stability.panels.PanelSpec), every scheme.  Built here so that a
+# parameter a method does not take fails before any job runs, naming the figure and row.
 STABILITY_PANELS = {
-    (spec.figure, panel_id(spec.row, spec.k, spec.view)): spec
-    for fid, (fig, scheme) in STABILITY_FIGURE_IDS.items()
-    for spec in figure_panels(
+    fig: figure_panels(
         fig,
-        STABILITY["figures"][fig],
+        cfg,
         grid=STABILITY["grid"],
         zoom_grid=STABILITY["zoom_grid"],
         precision=STABILITY["precision"],
-        scheme=scheme,
     )
+    for fig, cfg in STABILITY["figures"].items()
 }
 
 
-# figure -> its panel files (a figure's plot job gathers exactly these)
-# The claims file is read here, so a malformed claim (unknown key, check parameter, op,
-# relation, ...) fails before any job runs, naming the claim and the key.  A claim about a
-# figure left out of the configuration is no error: it is reported undecided (no data).
+def stability_panel_file(spec):
+    return STABILITY_PANEL.format(
+        figure=spec.figure,
+        scheme=spec.scheme,
+        panel=panel_id(spec.row, spec.k, spec.view),
+    )
+
+
+def stability_schemes(fig):
+    """The schemes a figure is drawn with, in the order configured."""
+    return list(dict.fromkeys(spec.scheme for spec in STABILITY_PANELS[fig]))
+
+
+STABILITY_FILES = {
+    fig: [stability_panel_file(s) for s in specs] for fig, specs in STABILITY_PANELS.items()
+}
+STABILITY_ALL_PANELS = [path for files in STABILITY_FILES.values() for path in files]
+STABILITY_FIGURES = {
+    fig: [
+        STABILITY_PLOT.format(figure=fig, scheme=scheme, ext=ext)
+        for scheme in stability_schemes(fig)
+        for ext in ("png", "pdf")
+    ]
+    for fig in STABILITY["figures"]
+}
+# A malformed claim (unknown key, check parameter, op, relation, ...) fails here, naming the claim
+# and the key.  A claim about a figure left out of the configuration is no error: it is reported
+# undecided (no data).
 STABILITY_CLAIMS_FILE = STABILITY["claims"]["file"]
 load_claims(STABILITY_CLAIMS_FILE)
-
-STABILITY_PANEL_FILES = {fid: [] for fid in STABILITY_FIGURE_IDS}
-for fid, pid in STABILITY_PANELS:
-    STABILITY_PANEL_FILES[fid].append(f"results/stability/fig{fid}/{pid}.nc")
-
-# the paper's (Jacobi) figures: their claims and report section
-STABILITY_ALL_PANELS = [
-    f"results/stability/fig{fid}/{pid}.nc"
-    for (fid, pid) in STABILITY_PANELS
-    if fid in STABILITY["figures"]
-]
-STABILITY_FIGURES = [
-    f"results/stability/figures/fig{fig}.{ext}"
-    for fig in STABILITY["figures"]
-    if figure_id(fig) in STABILITY_FIGURE_IDS
-    for ext in ("png", "pdf")
-]
 STABILITY_CLAIMS = "results/stability/claims.json"
+# the comparison of schemes: figures computed with more than one scheme
+STABILITY_COMPARED = [fig for fig in STABILITY["figures"] if len(stability_schemes(fig)) > 1]
+STABILITY_SHARES = "results/stability/scheme_shares.nc"
+STABILITY_COMPARISON = "results/stability/figures/scheme_comparison.{ext}"
 STABILITY_SECTION = "results/report/stability.html"
 
 
-rule stability_sweep:
-    """Spectral radius over the (lr1, li1) grid of one panel (float64 + mp rechecks)."""
+for _fig in STABILITY["figures"]:
+
+    rule:
+        name:
+            f"stability_panels_fig{_fig}"
+        input:
+            lib=engine_lib("stability_panels"),
+        output:
+            STABILITY_FILES[_fig],
+        log:
+            f"logs/stability/panels/fig{_fig}.log",
+        conda:
+            "../envs/icosim.yaml"
+        params:
+            # exactly this figure's panels: editing another figure does not rerun this one
+            panels=[spec.as_dict() for spec in STABILITY_PANELS[_fig]],
+        script:
+            "../scripts/stability_panels.py"
+
+    rule:
+        name:
+            f"stability_figure_fig{_fig}"
+        input:
+            panels=STABILITY_FILES[_fig],
+            lib=script_lib("stability_figure"),
+        output:
+            STABILITY_FIGURES[_fig],
+        log:
+            f"logs/stability/figure/fig{_fig}.log",
+        conda:
+            "../envs/icosim.yaml"
+        params:
+            titles={
+                scheme: figure_title(_fig, scheme, STABILITY["figures"][_fig]["title"])
+                for scheme in stability_schemes(_fig)
+            },
+            style=STABILITY["plot"]["style"],
+            rho_max=STABILITY["plot"]["rho_max"],
+            dots_stride=STABILITY["plot"]["dots_stride"],
+            dpi=STABILITY["plot"]["dpi"],
+        script:
+            "../scripts/stability_figure.py"
+
+
+rule stability_scheme_shares:
+    """Stable share per figure, row, k and scheme, from the full panels of the figures with several schemes."""
     input:
-        lib=engine_lib("stability_sweep"),
+        panels=[
+            stability_panel_file(s)
+            for fig in STABILITY_COMPARED
+            for s in STABILITY_PANELS[fig]
+            if s.view == "full"
+        ],
+        lib=script_lib("stability_scheme_shares"),
     output:
-        "results/stability/fig{figure}/{panel}.nc",
+        STABILITY_SHARES,
     log:
-        "logs/stability/sweep/fig{figure}_{panel}.log",
-    wildcard_constraints:
-        figure=FIGURE_ID_PATTERN,
-        panel=r"r\d+_k\d+_(full|zoom)",
+        "logs/stability/scheme_shares.log",
     conda:
         "../envs/icosim.yaml"
-    params:
-        # exactly this panel's parameters: editing another panel does not rerun this one
-        panel=lambda w: STABILITY_PANELS[(w.figure, w.panel)].as_dict(),
     script:
-        "../scripts/stability_sweep.py"
+        "../scripts/stability_scheme_shares.py"
 
 
-rule stability_figure:
-    """One figure of the paper (rows x k, plus zooms) from its panels; PNG and PDF."""
+rule stability_scheme_figure:
+    """The schemes side by side: stable shares per (method, decomposition, k)."""
     input:
-        panels=lambda w: STABILITY_PANEL_FILES[w.figure],
-        lib=script_lib("stability_figure"),
+        shares=STABILITY_SHARES,
+        lib=script_lib("stability_scheme_figure"),
     output:
         png=report(
-            "results/stability/figures/fig{figure}.png",
-            caption="../report/stability_figure.rst",
+            STABILITY_COMPARISON.format(ext="png"),
+            caption="../report/scheme_comparison.rst",
             category="Stability (Figs. 9-20)",
-            subcategory="Fig. {figure}",
-            labels={"figure": "{figure}", "format": "PNG"},
+            subcategory="Coupling schemes",
         ),
-        pdf="results/stability/figures/fig{figure}.pdf",
+        pdf=STABILITY_COMPARISON.format(ext="pdf"),
     log:
-        "logs/stability/figure/fig{figure}.log",
-    wildcard_constraints:
-        figure=FIGURE_ID_PATTERN,
+        "logs/stability/scheme_figure.log",
     conda:
         "../envs/icosim.yaml"
     params:
-        title=lambda w: figure_title(
-            w.figure, STABILITY_FIGURE_IDS, STABILITY["figures"]
-        ),
-        style=STABILITY["plot"]["style"],
-        rho_max=STABILITY["plot"]["rho_max"],
-        dots_stride=STABILITY["plot"]["dots_stride"],
+        title="Stable shares of the coupling schemes",
         dpi=STABILITY["plot"]["dpi"],
     script:
-        "../scripts/stability_figure.py"
+        "../scripts/stability_scheme_figure.py"
 
 
 rule stability_claims:
-    """The paper's stability claims (config/claims/stability.yaml) evaluated on the datasets."""
+    """The stability claims (config/claims/stability.yaml: the paper's and the project's) on the panels."""
     input:
         datasets=STABILITY_ALL_PANELS,
         claims=STABILITY_CLAIMS_FILE,
@@ -127,7 +168,7 @@ rule stability_claims:
             caption="../report/stability_claims.rst",
             category="Stability (Figs. 9-20)",
             subcategory="Claims",
-            labels={"table": "claims of Sects. 3.1-3.6 and 5"},
+            labels={"table": "claims of Sects. 3.1-3.6 and 5, and beyond the paper"},
         ),
     log:
         "logs/stability/claims.log",
@@ -139,10 +180,21 @@ rule stability_claims:
         "../scripts/claims.py"
 
 
+STABILITY_COMPARISON_INPUTS = (
+    dict(
+        shares=STABILITY_SHARES,
+        comparison=STABILITY_COMPARISON.format(ext="png"),
+    )
+    if STABILITY_COMPARED
+    else {}
+)
+
+
 rule stability_report_section:
-    """HTML fragment of the report: decisions, precision and timing, claims, figures."""
+    """HTML fragment of the report: decisions, precision and timing, claims, figures, the schemes compared."""
     input:
-        figures=[f for f in STABILITY_FIGURES if f.endswith(".png")],
+        **STABILITY_COMPARISON_INPUTS,
+        figures=[f for files in STABILITY_FIGURES.values() for f in files if f.endswith(".png")],
         panels=STABILITY_ALL_PANELS,
         claims=STABILITY_CLAIMS,
         lib=script_lib("stability_report_section"),
@@ -163,5 +215,9 @@ rule stability_report_section:
         "../scripts/stability_report_section.py"
 
 
-ALL_TARGETS.extend(STABILITY_FIGURES + [STABILITY_CLAIMS])
+ALL_TARGETS.extend(
+    [f for files in STABILITY_FIGURES.values() for f in files] + [STABILITY_CLAIMS]
+)
+if STABILITY_COMPARED:
+    ALL_TARGETS.extend(STABILITY_COMPARISON.format(ext=e) for e in ("png", "pdf"))
 REPORT_SECTIONS["stability"] = STABILITY_SECTION

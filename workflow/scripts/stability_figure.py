@@ -1,4 +1,4 @@
-"""Snakemake job: draw one figure of the paper from its panel datasets (never recomputes)."""
+"""Snakemake job: draw one figure from its panel datasets, once per scheme (never recomputes)."""
 
 import logging
 
@@ -9,6 +9,10 @@ from icosim.io.netcdf import open_dataset
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params
 panels = [open_dataset(path) for path in snakemake.input.panels]
-fig = stability_figure(panels, title=p.title, style=p.style, rho_max=p.rho_max, dots_stride=p.dots_stride)
-save_figure(fig, snakemake.output.png, snakemake.output.pdf, dpi=p.dpi)
-logging.info("drew %d panels (%s style) into %s", len(panels), p.style, ", ".join(snakemake.output))
+outputs = iter(snakemake.output)
+for scheme, title in p.titles.items():
+    mine = [ds for ds in panels if ds.attrs["scheme"] == scheme]
+    fig = stability_figure(mine, title=title, style=p.style, rho_max=p.rho_max, dots_stride=p.dots_stride)
+    png, pdf = next(outputs), next(outputs)
+    save_figure(fig, png, pdf, dpi=p.dpi)
+    logging.info("%s: drew %d panels (%s style) into %s, %s", scheme, len(mine), p.style, png, pdf)

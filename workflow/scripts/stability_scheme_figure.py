@@ -1,4 +1,4 @@
-"""Snakemake job: the Jacobi / Gauss-Seidel comparison of stable shares (never recomputes)."""
+"""Snakemake job: the coupling schemes' stable shares side by side (never recomputes)."""
 
 import logging
 

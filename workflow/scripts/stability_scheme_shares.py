@@ -11,7 +11,7 @@ job = {"panels": list(snakemake.input.panels)}
 ds = scheme_shares(
     panels,
     provenance=provenance_attrs(
-        job, title="Stable shares: Jacobi and Gauss-Seidel", command="snakemake rule stability_scheme_shares"
+        job, title="Stable shares of the coupling schemes", command="snakemake rule stability_scheme_shares"
     ),
 )
 write_netcdf(ds, snakemake.output[0])

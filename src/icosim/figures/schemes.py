@@ -1,7 +1,7 @@
-"""Jacobi against Gauss-Seidel: stable shares per method, decomposition and ``k`` (one panel per paper figure).
+"""The coupling schemes side by side: stable shares per method, decomposition and ``k`` (one panel per figure).
 
 Drawn from :func:`icosim.stability.comparison.scheme_shares`: per panel (one
-paper figure: a method and a decomposition) a group of bars per ``k``, one bar
+figure: a method and a decomposition) a group of bars per ``k``, one bar
 per scheme (the mean stable share over the figure's rows), with each row's
 share as a marker on its bar.
 """
@@ -13,11 +13,10 @@ from matplotlib.figure import Figure
 
 from ..engine.methods import METHODS
 from ..engine.schemes import SCHEMES
+from .styles import figure_label, scheme_colour
 
-__all__ = ["scheme_comparison_figure", "SCHEME_COLOURS"]
+__all__ = ["scheme_comparison_figure"]
 
-#: One colour per scheme (Jacobi grey: the paper's reference).
-SCHEME_COLOURS = {"jacobi": "0.55", "gauss-seidel-12": "tab:blue", "gauss-seidel-21": "tab:orange"}
 ROW_MARKERS = ("o", "s", "^", "v", "D", "P", "X")
 
 
@@ -25,7 +24,7 @@ def scheme_comparison_figure(ds, *, title: str = "", panel_size: float = 2.6) ->
     """Bars of the mean stable share per ``k`` and scheme, one panel per figure; rows as markers."""
     figures = [str(f) for f in ds["figure"].values]
     if not figures:
-        raise ValueError("no figure with a Gauss-Seidel scheme to compare")
+        raise ValueError("no figure computed with several schemes to compare")
     schemes = [str(s) for s in ds["scheme"].values]
     ks = [int(k) for k in ds["k"].values]
     ncol = min(4, len(figures))
@@ -39,7 +38,9 @@ def scheme_comparison_figure(ds, *, title: str = "", panel_size: float = 2.6) ->
         for j, scheme in enumerate(schemes):
             x = np.arange(len(ks)) + (j - (len(schemes) - 1) / 2) * width
             mean = np.nanmean(share[:, :, j], axis=0)
-            ax.bar(x, mean, width * 0.92, color=SCHEME_COLOURS.get(scheme, "k"), label=SCHEMES[scheme].label)
+            if np.all(np.isnan(mean)):
+                continue  # a scheme this figure is not computed with
+            ax.bar(x, mean, width * 0.92, color=scheme_colour(scheme), label=SCHEMES[scheme].label)
             for r in range(share.shape[0]):
                 if np.all(np.isnan(share[r, :, j])):
                     continue
@@ -48,7 +49,7 @@ def scheme_comparison_figure(ds, *, title: str = "", panel_size: float = 2.6) ->
                 )
         method = str(ds["method"].sel(figure=figure).values)
         label = METHODS[method].label if method in METHODS else method
-        ax.set_title(f"Fig. {figure}: {label}, {ds['decomposition'].sel(figure=figure).values}", fontsize=8)
+        ax.set_title(f"{figure_label(figure)}: {label}, {ds['decomposition'].sel(figure=figure).values}", fontsize=8)
         ax.set_xticks(np.arange(len(ks)), [f"k = {k}" for k in ks], fontsize=7)
         ax.set_ylim(0, 1.05)
         ax.tick_params(labelsize=7)
@@ -56,7 +57,11 @@ def scheme_comparison_figure(ds, *, title: str = "", panel_size: float = 2.6) ->
             ax.set_ylabel("stable share", fontsize=8)
     for n in range(len(figures), nrow * ncol):
         axes[n // ncol, n % ncol].set_axis_off()
-    handles, labels = axes[0, 0].get_legend_handles_labels()
+    legend = {}
+    for ax in axes.flat:
+        for handle, text in zip(*ax.get_legend_handles_labels()):
+            legend.setdefault(text, handle)
+    handles, labels = list(legend.values()), list(legend)
     rows = [int(r) for r in ds["row"].values]
     handles += [
         axes[0, 0].scatter([], [], s=9, marker=ROW_MARKERS[i % len(ROW_MARKERS)], color="k") for i in range(len(rows))

@@ -1,4 +1,4 @@
-"""Line styles, markers and colours the figures share, derived from the engine's registries.
+"""Line styles, markers, colours and labels the figures share, derived from the engine's registries.
 
 A decomposition, method or scheme added to its registry gets a style by its
 place in the registry, so no figure lists the entries itself.
@@ -11,12 +11,15 @@ from __future__ import annotations
 
 from ..engine.decompositions import DECOMPOSITIONS
 from ..engine.methods import METHODS
+from ..engine.schemes import SCHEMES
 
-__all__ = ["decomposition_style", "method_colour"]
+__all__ = ["decomposition_style", "method_colour", "scheme_colour", "figure_label"]
 
 _LINESTYLES = ("-", "--", "-.", ":")
 _MARKERS = ("o", "s", "D", "^", "v", "P")
 _COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
+#: the paper's scheme (the first registered, Jacobi) grey: the reference the others are read against
+_SCHEME_COLOURS = ("0.55", "tab:blue", "tab:orange", "tab:cyan", "tab:red", "tab:olive", "tab:pink")
 
 
 def decomposition_style(name: str) -> tuple[str, str]:
@@ -31,3 +34,18 @@ def method_colour(name: str) -> str:
     """Colour of a registered method (Baumgarte blue, weighted multiplier orange, projection green, ...)."""
     names = list(METHODS)
     return _COLOURS[(names.index(name) if name in names else len(names)) % len(_COLOURS)]
+
+
+def scheme_colour(name: str) -> str:
+    """Colour of a registered coupling scheme (Jacobi grey, Gauss-Seidel 1→2 blue, 2→1 orange, ...)."""
+    names = list(SCHEMES)
+    return _SCHEME_COLOURS[(names.index(name) if name in names else len(names)) % len(_SCHEME_COLOURS)]
+
+
+def figure_label(figure) -> str:
+    """How a figure is named in titles: ``Fig. 9`` (the paper's, by number) or by its id (the project's own).
+
+    >>> figure_label("9"), figure_label("df-baumgarte")
+    ('Fig. 9', 'Figure df-baumgarte')
+    """
+    return f"Fig. {figure}" if str(figure).isdigit() else f"Figure {figure}"

@@ -30,7 +30,6 @@ __all__ = [
     "panel_id",
     "figure_panels",
     "figure_schemes",
-    "figure_label",
     "row_label",
     "row_label_keys",
     "format_row_label",
@@ -312,8 +311,3 @@ def figure_panels(figure: str, figure_cfg: dict, *, grid: dict, zoom_grid: dict,
                         )
                     )
     return panels
-
-
-def figure_label(figure: str) -> str:
-    """How a figure is named in titles: ``Fig. 9`` (the paper's, by number) or its id (the project's own)."""
-    return f"Fig. {figure}" if str(figure).isdigit() else f"Figure {figure}"
