@@ -1,21 +1,20 @@
-# Convergence plots, paper Figs. 21-23 (Sect. 3.7): one job per panel (figure x decomposition x
-# column) writing results/convergence/<dec>/fig<figure>_<panel>.nc, one plot job per figure and
-# decomposition, the work-precision timing and diagram, the paper's order claims checked
-# against the datasets, and the convergence section of the report.  A figure computed with a
-# Gauss-Seidel scheme (its `schemes:` list) has the figure id <figure>gs12 or <figure>gs21
-# (icosim.engine.schemes.figure_id); its claims and report section are in gauss_seidel.smk.
+# Convergence plots, paper Figs. 21-23 (Sect. 3.7): the NRMSE of Eq. (72) over H.  A panel is one
+# (scheme, decomposition, column) of a figure: results/convergence/fig<figure>/<scheme>/<dec>_<panel>.nc
+# with every row (index) and k of the column.  One job per figure and scheme computes its panels (the
+# jobs are long: they run first), one job per figure draws it for every decomposition and scheme; the
+# work-precision timing and diagram, the claims of the part in one job, and the report section follow.
 from icosim.claims.registry import load_claims  # noqa: E402
-from icosim.convergence.config import (
+from icosim.convergence.config import (  # noqa: E402
     check_claims_against_config,
     study_from_config,
-)  # noqa: E402
+)
 from icosim.convergence.panels import figure_layout, figure_panels  # noqa: E402
-from icosim.convergence.work_precision import resolve_scheme  # noqa: E402
-from icosim.engine.schemes import FIGURE_ID_PATTERN, figure_id  # noqa: E402
+from icosim.convergence.work_precision import resolve_configuration  # noqa: E402
 
 validate_part(config["convergence"], "convergence.schema.yaml")
 
 CONVERGENCE = config["convergence"]
+CONVERGENCE["figures"] = {str(fig): cfg for fig, cfg in CONVERGENCE["figures"].items()}
 # Model, initial conditions, end time and step sizes are checked here (H_min >= H_max, H_max
 # beyond the end time, x0 = v0 = 0, ...): a bad value fails before any job, naming its key.
 study_from_config(CONVERGENCE)
@@ -25,136 +24,139 @@ CONV_SETUP = {
     "end_time": CONVERGENCE["end_time"],
     "growth_bound": CONVERGENCE["unstable"]["growth_bound"],
 }
+CONV_PANEL = "results/convergence/fig{figure}/{scheme}/{dec}_{panel}.nc"
+CONV_PLOT = "results/convergence/figures/fig{figure}_{dec}_{scheme}{kind}.{ext}"
 
-# figure id -> (paper figure, scheme name): one workflow figure per configured scheme
-CONV_FIGURE_IDS = {
-    figure_id(fig, scheme): (str(fig), scheme)
-    for fig, fig_cfg in CONVERGENCE["figures"].items()
-    for scheme in fig_cfg.get("schemes", ["jacobi"])
-}
-# (decomposition, figure id, panel) -> icosim.convergence.panels.PanelSpec.  Built here so that a
+# (figure, scheme) -> its panels (icosim.convergence.panels.PanelSpec).  Built here so that a
 # parameter a method does not take fails before any job runs, naming the figure.
-CONV_PANELS = {
-    (spec.decomposition, spec.figure, spec.panel): spec
-    for fid, (fig, scheme) in CONV_FIGURE_IDS.items()
-    for spec in figure_panels(
-        fig, CONVERGENCE["figures"][fig], CONVERGENCE["k"], scheme
+CONV_PANELS = {}
+for _fig, _cfg in CONVERGENCE["figures"].items():
+    for _spec in figure_panels(_fig, _cfg, CONVERGENCE["k"]):
+        CONV_PANELS.setdefault((_fig, _spec.scheme), []).append(_spec)
+
+
+def conv_panel_file(spec):
+    return CONV_PANEL.format(
+        figure=spec.figure, scheme=spec.scheme, dec=spec.decomposition, panel=spec.panel
     )
+
+
+CONV_FILES = {
+    key: [conv_panel_file(s) for s in specs] for key, specs in CONV_PANELS.items()
+}
+CONV_ALL_PANELS = [path for files in CONV_FILES.values() for path in files]
+# figure -> [(decomposition, scheme)] it is drawn for
+CONV_DRAWN = {
+    fig: list(
+        dict.fromkeys(
+            (s.decomposition, s.scheme)
+            for (f, _), specs in CONV_PANELS.items()
+            if f == fig
+            for s in specs
+        )
+    )
+    for fig in CONVERGENCE["figures"]
+}
+CONV_FIGURES = {
+    fig: [
+        CONV_PLOT.format(figure=fig, dec=dec, scheme=scheme, kind=kind, ext=ext)
+        for dec, scheme in CONV_DRAWN[fig]
+        for kind in ("", "_slopes")
+        for ext in ("png", "pdf")
+    ]
+    for fig in CONVERGENCE["figures"]
 }
 CONV_WP_ENTRIES = [
     entry
-    for scheme in CONVERGENCE["work_precision"]["schemes"]
-    for entry in resolve_scheme(scheme, CONVERGENCE["figures"], CONVERGENCE["k"])
+    for configuration in CONVERGENCE["work_precision"]["configurations"]
+    for entry in resolve_configuration(
+        configuration, CONVERGENCE["figures"], CONVERGENCE["k"]
+    )
 ]
 # A malformed claims file, or a claim that selects no configured curve, fails here, naming
 # the claim id and key (not in the claims job after every panel has run).
 CONV_CLAIMS_FILE = CONVERGENCE["claims"]["file"]
 check_claims_against_config(load_claims(CONV_CLAIMS_FILE), CONVERGENCE)
-
-
-CONV_PANEL_FILE = (
-    "results/convergence/{}/fig{}_{}.nc"  # decomposition, figure id, panel
-)
-# the paper's (Jacobi) figures: their claims, work-precision and report section
-CONV_ALL_PANELS = [
-    CONV_PANEL_FILE.format(*key)
-    for key in CONV_PANELS
-    if CONV_FIGURE_IDS[key[1]][1] == "jacobi"
-]
-# (decomposition, figure id) -> the panel files one figure is drawn from
-CONV_FIGURE_PANELS = {
-    key[:2]: [CONV_PANEL_FILE.format(*k) for k in CONV_PANELS if k[:2] == key[:2]]
-    for key in CONV_PANELS
-}
-CONV_FIGURES = sorted(
-    {
-        f"results/convergence/figures/fig{fid}_{dec}.png"
-        for dec, fid, _ in CONV_PANELS
-        if CONV_FIGURE_IDS[fid][1] == "jacobi"
-    }
-)
 CONV_WP = "results/convergence/work_precision.nc"
 CONV_WP_FIGURE = "results/convergence/figures/work_precision.png"
 CONV_CLAIMS = "results/convergence/claims.json"
 CONV_SECTION = "results/report/convergence.html"
 
 
-rule convergence_panel:
-    """NRMSE of Eq. (72) over H for every row (index) and k of one figure column."""
-    input:
-        lib=engine_lib("convergence_panel"),
-    output:
-        "results/convergence/{dec}/fig{figure}_{panel}.nc",
-    log:
-        "logs/convergence/panel/{dec}_fig{figure}_{panel}.log",
-    wildcard_constraints:
-        dec="ff|fd|dd",
-        figure=FIGURE_ID_PATTERN,
-    conda:
-        "../envs/icosim.yaml"
-    params:
-        # exactly this panel's parameters: editing another panel does not rerun this one
-        panel=lambda w: CONV_PANELS[(w.dec, w.figure, w.panel)].as_dict(),
-        setup=CONV_SETUP,
-        step_sizes=CONVERGENCE["step_sizes"],
-        stepping=CONVERGENCE["stepping"],
-        startup_steps=CONVERGENCE["startup_steps"],
-        spectral_policy=CONVERGENCE["unstable"]["spectral_policy"],
-        digits=CONVERGENCE["unstable"]["digits"],
-        fit=CONVERGENCE["fit"],
-    script:
-        "../scripts/convergence_panel.py"
+for (_fig, _scheme), _specs in CONV_PANELS.items():
+
+    rule:
+        name:
+            f"convergence_panels_fig{_fig}_{_scheme}"
+        input:
+            lib=engine_lib("convergence_panels"),
+        output:
+            CONV_FILES[(_fig, _scheme)],
+        log:
+            f"logs/convergence/panels/fig{_fig}_{_scheme}.log",
+        priority: 10  # the longest jobs of the workflow: start them first
+        conda:
+            "../envs/icosim.yaml"
+        params:
+            # exactly this figure's panels with this scheme: editing another does not rerun these
+            panels=[spec.as_dict() for spec in _specs],
+            setup=CONV_SETUP,
+            step_sizes=CONVERGENCE["step_sizes"],
+            stepping=CONVERGENCE["stepping"],
+            startup_steps=CONVERGENCE["startup_steps"],
+            spectral_policy=CONVERGENCE["unstable"]["spectral_policy"],
+            digits=CONVERGENCE["unstable"]["digits"],
+            fit=CONVERGENCE["fit"],
+        script:
+            "../scripts/convergence_panels.py"
 
 
-rule convergence_figure:
-    """One convergence figure (rows = index, columns = parameter set) for one decomposition."""
-    input:
-        panels=lambda w: CONV_FIGURE_PANELS[(w.dec, w.figure)],
-        lib=script_lib("convergence_figure"),
-    output:
-        png=report(
-            "results/convergence/figures/fig{figure}_{dec}.png",
-            caption="../report/convergence_figure.rst",
-            category="Convergence (Figs. 21-23)",
-            subcategory="Fig. {figure}",
-            labels={"figure": "{figure}", "decomposition": "{dec}"},
-        ),
-        pdf="results/convergence/figures/fig{figure}_{dec}.pdf",
-        slopes_png="results/convergence/figures/fig{figure}_{dec}_slopes.png",
-        slopes_pdf="results/convergence/figures/fig{figure}_{dec}_slopes.pdf",
-    log:
-        "logs/convergence/figure/fig{figure}_{dec}.log",
-    wildcard_constraints:
-        dec="ff|fd|dd",
-        figure=FIGURE_ID_PATTERN,
-    conda:
-        "../envs/icosim.yaml"
-    params:
-        title=lambda w: figure_title(
-            w.figure, CONV_FIGURE_IDS, CONVERGENCE["figures"], f" ({w.dec})"
-        ),
-        layout=lambda w: figure_layout(
-            CONV_FIGURE_IDS[w.figure][0],
-            CONVERGENCE["figures"][CONV_FIGURE_IDS[w.figure][0]],
-            w.dec,
-            CONVERGENCE["k"],
-        ),
-        columns=lambda w: CONVERGENCE["figures"][CONV_FIGURE_IDS[w.figure][0]][
-            "columns"
-        ],
-        guide_orders=CONVERGENCE["plot"]["guide_orders"],
-        tolerance=CONVERGENCE["fit"]["tolerance"],
-        dpi=CONVERGENCE["plot"]["dpi"],
-    script:
-        "../scripts/convergence_figure.py"
+for _fig, _cfg in CONVERGENCE["figures"].items():
+
+    rule:
+        name:
+            f"convergence_figure_fig{_fig}"
+        input:
+            panels=[
+                path for (f, _), files in CONV_FILES.items() if f == _fig for path in files
+            ],
+            lib=script_lib("convergence_figure"),
+        output:
+            CONV_FIGURES[_fig],
+        log:
+            f"logs/convergence/figure/fig{_fig}.log",
+        conda:
+            "../envs/icosim.yaml"
+        params:
+            # per drawn (decomposition, scheme): title and where each cell's curves are stored
+            drawn=[
+                {
+                    "decomposition": dec,
+                    "scheme": scheme,
+                    "title": figure_title(_fig, scheme, _cfg["title"], f" ({dec})"),
+                    "layout": figure_layout(_fig, _cfg, dec, CONVERGENCE["k"]),
+                }
+                for dec, scheme in CONV_DRAWN[_fig]
+            ],
+            columns=_cfg["columns"],
+            guide_orders=CONVERGENCE["plot"]["guide_orders"],
+            tolerance=CONVERGENCE["fit"]["tolerance"],
+            dpi=CONVERGENCE["plot"]["dpi"],
+        script:
+            "../scripts/convergence_figure.py"
 
 
 rule convergence_work_precision:
-    """CPU time of the engine's co-simulation stepping per simulated second, per scheme and H."""
+    """CPU time of the engine's co-simulation stepping per simulated second, per configuration and H."""
     input:
         panels=sorted(
             {
-                CONV_PANEL_FILE.format(e["decomposition"], e["figure"], e["panel"])
+                CONV_PANEL.format(
+                    figure=e["figure"],
+                    scheme=e["scheme"],
+                    dec=e["decomposition"],
+                    panel=e["panel"],
+                )
                 for e in CONV_WP_ENTRIES
             }
         ),
@@ -199,7 +201,7 @@ rule convergence_work_precision_figure:
 
 
 rule convergence_claims:
-    """The paper's order claims (config/claims/convergence.yaml) evaluated on the datasets."""
+    """The convergence claims (config/claims/convergence.yaml: the paper's and the project's) on the panels."""
     input:
         datasets=CONV_ALL_PANELS,
         claims=CONV_CLAIMS_FILE,
@@ -218,10 +220,15 @@ rule convergence_claims:
 
 
 rule convergence_report_section:
-    """HTML fragment of the report: decisions, figures, claims table, work-precision."""
+    """HTML fragment of the report: decisions, figures, claims table, work-precision, the schemes compared."""
     input:
-        figures=CONV_FIGURES,
-        slopes=[f.replace(".png", "_slopes.png") for f in CONV_FIGURES],
+        figures=[
+            f
+            for files in CONV_FIGURES.values()
+            for f in files
+            if f.endswith(".png") and not f.endswith("_slopes.png")
+        ],
+        slopes=[f for files in CONV_FIGURES.values() for f in files if f.endswith("_slopes.png")],
         wp_figure=CONV_WP_FIGURE,
         wp=CONV_WP,
         claims=CONV_CLAIMS,
@@ -246,5 +253,8 @@ rule convergence_report_section:
         "../scripts/convergence_report_section.py"
 
 
-ALL_TARGETS.extend(CONV_FIGURES + [CONV_WP_FIGURE, CONV_CLAIMS])
+ALL_TARGETS.extend(
+    [f for files in CONV_FIGURES.values() for f in files]
+    + [CONV_WP_FIGURE, CONV_CLAIMS]
+)
 REPORT_SECTIONS["convergence"] = CONV_SECTION

@@ -1,4 +1,4 @@
-"""Snakemake job: time the co-simulation stepping per scheme and H (error from the panel datasets)."""
+"""Snakemake job: time the co-simulation stepping per configuration and H (error from the panel datasets)."""
 
 import json
 import logging
@@ -14,7 +14,8 @@ logging.info("parameters: %s", json.dumps(job, sort_keys=True))
 datasets = {}
 for path in snakemake.input.panels:
     ds = open_dataset(path)
-    datasets[(ds.attrs["decomposition"], str(ds.attrs["figure"]), ds.attrs["panel"])] = ds
+    key = (ds.attrs["scheme"], ds.attrs["decomposition"], str(ds.attrs["figure"]), ds.attrs["panel"])
+    datasets[key] = ds
 wp = work_precision(
     p.entries,
     datasets,
@@ -23,13 +24,13 @@ wp = work_precision(
     repeats=p.repeats,
     warmup_steps=p.warmup_steps,
     provenance=provenance_attrs(
-        job, title="Work-precision of the co-simulation schemes", command="snakemake rule convergence_work_precision"
+        job, title="Work-precision of the coupling configurations", command="snakemake rule convergence_work_precision"
     ),
 )
 write_netcdf(wp, snakemake.output[0])
-for s in range(wp.sizes["scheme"]):
+for s in range(wp.sizes["configuration"]):
     logging.info(
         "%s: %.3g ms per macro step (median over H)",
-        wp["scheme"].values[s],
+        wp["configuration"].values[s],
         1e3 * float(wp["cpu_seconds_per_step"][s].median(skipna=True)),
     )

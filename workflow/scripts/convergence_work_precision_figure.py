@@ -10,4 +10,4 @@ logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asc
 wp = open_dataset(snakemake.input.wp)
 fig = work_precision_figure(wp, title="Work-precision: CPU time per simulated second over NRMSE (Eq. 72)")
 save_figure(fig, snakemake.output.png, snakemake.output.pdf, dpi=snakemake.params.dpi)
-logging.info("%d schemes drawn", wp.sizes["scheme"])
+logging.info("%d configurations drawn", wp.sizes["configuration"])

@@ -1,0 +1,36 @@
+"""Snakemake job: the panels of one convergence figure and scheme (rows x k of each column) -> one NetCDF each
+(thin: icosim.convergence.datasets)."""
+
+import json
+import logging
+
+from icosim.convergence.curves import curve_label, curves
+from icosim.convergence.datasets import run_panel
+from icosim.convergence.experiment import Setup, step_counts
+from icosim.convergence.panels import PanelSpec
+from icosim.convergence.study import Study
+from icosim.figures.styles import figure_label
+from icosim.io.netcdf import provenance_attrs, write_netcdf
+
+logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+p = snakemake.params
+setup = Setup(**p.setup)
+n_steps = step_counts(setup.end_time, p.step_sizes["H_min"], p.step_sizes["H_max"], p.step_sizes["num"])
+study = Study(setup, n_steps, spectral_policy=p.spectral_policy, digits=p.digits, startup_steps=p.startup_steps)
+shared = {k: p[k] for k in ("setup", "step_sizes", "stepping", "startup_steps", "spectral_policy", "digits", "fit")}
+for panel, path in zip(p.panels, snakemake.output, strict=True):
+    job = {"panel": panel, **shared}
+    logging.info("panel parameters: %s", json.dumps(job, sort_keys=True))
+    spec = PanelSpec.from_dict(panel)
+    title = (
+        f"{figure_label(spec.figure)} ({spec.decomposition}, {spec.scheme}), panel {spec.panel}: "
+        "NRMSE of Eq. (72) over the macro-step size"
+    )
+    provenance = provenance_attrs(job, title=title, command=f"snakemake rule {snakemake.rule}")
+    ds = run_panel(spec, study, p.fit, stepping=p.stepping, provenance=provenance)
+    write_netcdf(ds, path)
+    for rec in curves([ds]):
+        logging.info(
+            "%s: order %.3f (%s), %d unstable", curve_label(rec), rec["order"], rec["order_status"], rec["unstable"].sum()
+        )
+    logging.info("%s: %.2f s", path, ds.attrs["seconds_total"])
