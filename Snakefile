@@ -15,7 +15,6 @@ include: "workflow/rules/common.smk"
 include: "workflow/rules/stability.smk"
 include: "workflow/rules/convergence.smk"
 include: "workflow/rules/pendulum.smk"
-include: "workflow/rules/gauss_seidel.smk"
 include: "workflow/rules/report.smk"
 
 

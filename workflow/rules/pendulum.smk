@@ -1,57 +1,80 @@
-# Double pendulum, paper Sect. 4 and Figs. 6-8: the monolithic reference, one co-simulation
-# job per (method, decomposition) writing results/pendulum/<method>_<dec>_k<k>.nc per k, the
-# errors and the claim of Sect. 4 in results/pendulum/summary.nc, one figure per k, and
-# the pendulum section of the report.
+# Double pendulum, paper Sect. 4 and Figs. 6-8: the monolithic reference, the co-simulation runs
+# (one job per (method, decomposition) runs every scheme and k, writing
+# results/pendulum/runs/<scheme>/<method>_<dec>_k<k>.nc), the errors of every run and the claims in
+# results/pendulum/summary.nc, the figures (one job per scheme draws every k), and the pendulum
+# section of the report.
 from icosim.claims.registry import load_claims  # noqa: E402
 from icosim.pendulum.config import (  # noqa: E402
     configured_runs,
+    configured_schemes,
     run_settings,
     study_methods,
     trade_plan,
 )
-from icosim.pendulum.names import TRADE_FIGURE_DATASETS, run_name  # noqa: E402
+from icosim.pendulum.names import TRADE_FIGURE_DATASETS  # noqa: E402
 
 validate_part(config["pendulum"], "pendulum.schema.yaml")
 
 PENDULUM = config["pendulum"]
-# (method, decomposition, k) of every run; a method parameter it does not take, Baumgarte or
-# the weighted multiplier with dd, or an end time off the macro grid fails here, naming it.
+# (method, decomposition, k) of every run and the schemes each is run with; a method parameter it
+# does not take, a decomposition without coupling conditions for the pendulum, or an end time off
+# the macro grid fails here, naming it.
 PENDULUM_RUNS = configured_runs(PENDULUM)
-load_claims(PENDULUM["claims"])  # a malformed claims file fails before any job runs
+PENDULUM_SCHEMES = configured_schemes(PENDULUM)
+PENDULUM_PAIRS = list(dict.fromkeys((m, d) for m, d, _ in PENDULUM_RUNS))
+load_claims(PENDULUM["claims"]["file"])  # a malformed claims file fails before any job runs
 PENDULUM_CLAIMS = "results/pendulum/claims.json"
 
 PENDULUM_PAPER_FIGURE = {0: 6, 1: 7, 2: 8}  # Fig. 6-8 for k = 0, 1, 2
-PENDULUM_DATASETS = [f"results/pendulum/{run_name(*r)}.nc" for r in PENDULUM_RUNS]
+PENDULUM_RUN = "results/pendulum/runs/{scheme}/{method}_{decomposition}_k{k}.nc"
+PENDULUM_DATASETS = {
+    scheme: [
+        PENDULUM_RUN.format(scheme=scheme, method=m, decomposition=d, k=k)
+        for m, d, k in PENDULUM_RUNS
+    ]
+    for scheme in PENDULUM_SCHEMES
+}
+PENDULUM_ALL_RUNS = [path for runs in PENDULUM_DATASETS.values() for path in runs]
 PENDULUM_REFERENCE = "results/pendulum/reference.nc"
 # numba's compiled integrator, compiled once before the runs: input of every rule that runs it, as
 # ancient() (a recompiled cache changes no run, so it reruns none)
 PENDULUM_KERNELS = "results/pendulum/kernels.json"
 PENDULUM_SUMMARY = "results/pendulum/summary.nc"
-PENDULUM_FIGURES = [
-    f"results/pendulum/figures/pendulum_k{k}.{ext}"
-    for k in PENDULUM["k"]
-    for ext in ("png", "pdf")
-]
+PENDULUM_FIGURE = "results/pendulum/figures/pendulum_k{k}_{scheme}.{ext}"
+PENDULUM_FIGURES = {
+    scheme: [
+        PENDULUM_FIGURE.format(k=k, scheme=scheme, ext=ext)
+        for k in PENDULUM["k"]
+        for ext in ("png", "pdf")
+    ]
+    for scheme in PENDULUM_SCHEMES
+}
 PENDULUM_ERROR_FIGURE = "results/pendulum/figures/pendulum_error.png"
 PENDULUM_SECTION = "results/report/pendulum.html"
-PENDULUM_DATASETS_OF_K = {
-    int(k): [
-        f"results/pendulum/{run_name(*r)}.nc" for r in PENDULUM_RUNS if r[2] == int(k)
-    ]
-    for k in PENDULUM["k"]
-}
 
 
 # -- speed-accuracy trade (beyond the paper): error over H, work-precision, stability limit in H,
-# subsystem tolerance, adaptive macro steps.  One sweep job and one limit job per group
-# (scheme, method, decomposition; every k), then merges; figures and the report section
+# subsystem tolerance, adaptive macro steps.  One sweep job and one limit job per (method,
+# decomposition) write a dataset per scheme (every k), then merges; figures and the report section
 # read only the datasets.
 TRADE = PENDULUM["trade"]
 # groups and configuration labels; bad schemes, end times off the H grid or invalid
 # tolerance/adaptive configurations fail here, naming the key
 TRADE_PLAN = trade_plan(PENDULUM)
-TRADE_GROUPS = {"_".join(g): g for g in TRADE_PLAN["groups"]}
+TRADE_PAIRS = list(dict.fromkeys((m, d) for _, m, d in TRADE_PLAN["groups"]))
 TRADE_DIR = "results/pendulum/trade"
+TRADE_GROUP = TRADE_DIR + "/{study}/{scheme}/{method}_{decomposition}.nc"
+
+
+def trade_group_files(study, method=None, decomposition=None):
+    """The per-scheme datasets of a trade study (sweep, limits), of one (method, decomposition) or all."""
+    return [
+        TRADE_GROUP.format(study=study, scheme=s, method=m, decomposition=d)
+        for s, m, d in TRADE_PLAN["groups"]
+        if (method, decomposition) in ((None, None), (m, d))
+    ]
+
+
 PENDULUM_WORK_PRECISION = "results/pendulum/work_precision.nc"
 PENDULUM_STABILITY_LIMIT = "results/pendulum/stability_limit.nc"
 PENDULUM_ADAPTIVE = "results/pendulum/adaptive.nc"
@@ -97,22 +120,30 @@ rule pendulum_kernels:
 
 
 rule pendulum_run:
-    """The co-simulation runs of one (method, decomposition), every k (Jacobi), each up to t_end or
+    """The co-simulation runs of one (method, decomposition), every scheme and k, each up to t_end or
     divergence: one job, since the runs are short and a job's start-up (interpreter, imports, the
-    compiled integrator) cost about as much as a CI-length run."""
+    compiled integrator) costs about as much as a CI-length run."""
     input:
         lib=engine_lib("pendulum_run"),
         kernels=ancient(PENDULUM_KERNELS),
     output:
-        expand("results/pendulum/{{method}}_{{decomposition}}_k{k}.nc", k=PENDULUM["k"]),
+        expand(
+            PENDULUM_RUN,
+            scheme=PENDULUM_SCHEMES,
+            method="{method}",
+            decomposition="{decomposition}",
+            k=PENDULUM["k"],
+        ),
     log:
-        "logs/pendulum/{method}_{decomposition}.log",
+        "logs/pendulum/runs/{method}_{decomposition}.log",
     wildcard_constraints:
         method=METHOD_NAMES,
-        decomposition="ff|fd|dd",
+        decomposition=DECOMPOSITION_NAMES,
+    priority: 10  # long: start them first
     conda:
         "../envs/icosim.yaml"
     params:
+        schemes=PENDULUM_SCHEMES,
         k=PENDULUM["k"],
         model=PENDULUM["model"],
         H=PENDULUM["H"],
@@ -122,17 +153,17 @@ rule pendulum_run:
         sensitivities=PENDULUM["sensitivities"],
         corrector=PENDULUM["corrector"],
         divergence=PENDULUM["divergence"],
-        scheme="jacobi",
     script:
         "../scripts/pendulum_run.py"
 
 
 rule pendulum_summary:
-    """Errors against the reference, the claim of Sect. 4 and the linear test model's rho, one row per run."""
+    """Errors against the reference, the claims' expectations and the linear test model's rho, one row per run
+    (every scheme)."""
     input:
-        runs=PENDULUM_DATASETS,
+        runs=PENDULUM_ALL_RUNS,
         reference=PENDULUM_REFERENCE,
-        claims=PENDULUM["claims"],
+        claims=PENDULUM["claims"]["file"],
         lib=script_lib("pendulum_summary"),
     output:
         PENDULUM_SUMMARY,
@@ -149,39 +180,39 @@ rule pendulum_summary:
 
 
 rule pendulum_figure:
-    """Fig. 6, 7 or 8 (k = 0, 1, 2): six panels over t, one line per configuration."""
+    """Figs. 6, 7 and 8 (k = 0, 1, 2) with one scheme: six panels over t, one line per configuration."""
     input:
-        runs=lambda w: PENDULUM_DATASETS_OF_K[int(w.k)],
+        runs=lambda w: PENDULUM_DATASETS[w.scheme],
         reference=PENDULUM_REFERENCE,
         lib=script_lib("pendulum_figure"),
     output:
-        png=report(
-            "results/pendulum/figures/pendulum_k{k}.png",
-            caption="../report/pendulum_figure.rst",
-            category="Double pendulum (Figs. 6-8)",
-            labels={"k": "{k}"},
-        ),
-        pdf="results/pendulum/figures/pendulum_k{k}.pdf",
+        expand(PENDULUM_FIGURE, k=PENDULUM["k"], scheme="{scheme}", ext=("png", "pdf")),
     log:
-        "logs/pendulum/figure_k{k}.log",
+        "logs/pendulum/figure_{scheme}.log",
     wildcard_constraints:
-        k=r"\d+",
+        scheme=SCHEME_NAMES,
     conda:
         "../envs/icosim.yaml"
     params:
-        title=lambda w: (
-            f"Fig. {PENDULUM_PAPER_FIGURE.get(int(w.k), '-')} (k = {w.k}): double pendulum, "
-            f"H = {PENDULUM['H']:g} s"
-        ),
+        k=PENDULUM["k"],
+        titles=lambda w: [
+            figure_title(
+                PENDULUM_PAPER_FIGURE.get(int(k), "-"),
+                w.scheme,
+                f"double pendulum, H = {PENDULUM['H']:g} s",
+                f" (k = {k})",
+            )
+            for k in PENDULUM["k"]
+        ],
         dpi=PENDULUM["plot"]["dpi"],
     script:
         "../scripts/pendulum_figure.py"
 
 
 rule pendulum_error_figure:
-    """|phi - phi_ref| of every run against the monolithic reference, one column per k."""
+    """|phi - phi_ref| of every run of the paper's scheme against the monolithic reference, one column per k."""
     input:
-        runs=PENDULUM_DATASETS,
+        runs=PENDULUM_DATASETS["jacobi"],
         reference=PENDULUM_REFERENCE,
         lib=script_lib("pendulum_error_figure"),
     output:
@@ -197,10 +228,10 @@ rule pendulum_error_figure:
 
 
 rule pendulum_claims:
-    """The claim of Sect. 4 (config/claims/pendulum.yaml) evaluated on the run summary."""
+    """The pendulum claims (config/claims/pendulum.yaml: Sect. 4 and the project's) on the run summary."""
     input:
         datasets=[PENDULUM_SUMMARY],
-        claims=PENDULUM["claims"],
+        claims=PENDULUM["claims"]["file"],
         lib=script_lib("claims"),
     output:
         json=PENDULUM_CLAIMS,
@@ -210,16 +241,22 @@ rule pendulum_claims:
     conda:
         "../envs/icosim.yaml"
     params:
-        # the pendulum's claim records no CI reference (config/pendulum.yaml has no enforce_reference)
-        enforce_reference=False,
+        enforce_reference=PENDULUM["claims"]["enforce_reference"],
     script:
         "../scripts/claims.py"
 
 
 rule pendulum_report_section:
-    """HTML fragment of the report: set-up, dd formulation, claim verdicts, errors, figures."""
+    """HTML fragment of the report: set-up, dd formulation, claim verdicts, errors, figures, the schemes compared."""
     input:
-        figures=[f for f in PENDULUM_FIGURES if f.endswith(".png")],
+        figures=[f for f in PENDULUM_FIGURES["jacobi"] if f.endswith(".png")],
+        scheme_figures=[
+            f
+            for scheme, files in PENDULUM_FIGURES.items()
+            if scheme != "jacobi"
+            for f in files
+            if f.endswith(".png")
+        ],
         error_figure=PENDULUM_ERROR_FIGURE,
         summary=PENDULUM_SUMMARY,
         reference=PENDULUM_REFERENCE,
@@ -244,23 +281,29 @@ rule pendulum_report_section:
 
 
 rule pendulum_sweep:
-    """Error over H of one group (scheme, method, decomposition): every k and H over one end time."""
+    """Error over H of one (method, decomposition), for every scheme: every k and H over one end time."""
     input:
         lib=engine_lib("pendulum_sweep"),
         kernels=ancient(PENDULUM_KERNELS),
     output:
-        f"{TRADE_DIR}/sweep/{{group}}.nc",
+        expand(
+            TRADE_GROUP,
+            study="sweep",
+            scheme=PENDULUM_SCHEMES,
+            method="{method}",
+            decomposition="{decomposition}",
+        ),
     log:
-        "logs/pendulum/sweep_{group}.log",
+        "logs/pendulum/sweep/{method}_{decomposition}.log",
     wildcard_constraints:
-        group="|".join(TRADE_GROUPS),
+        method=METHOD_NAMES,
+        decomposition=DECOMPOSITION_NAMES,
+    priority: 10  # long: start them first
     conda:
         "../envs/icosim.yaml"
     params:
-        settings=lambda w: run_settings(PENDULUM, [TRADE_GROUPS[w.group][1]]),
-        scheme=lambda w: TRADE_GROUPS[w.group][0],
-        method=lambda w: TRADE_GROUPS[w.group][1],
-        decomposition=lambda w: TRADE_GROUPS[w.group][2],
+        settings=lambda w: run_settings(PENDULUM, [w.method]),
+        schemes=PENDULUM_SCHEMES,
         k=PENDULUM["k"],
         H=TRADE["error_over_H"]["H"],
         t_end=TRADE["error_over_H"]["t_end"],
@@ -297,7 +340,7 @@ rule pendulum_baselines:
 rule pendulum_work_precision:
     """work_precision.nc: the sweep groups, orders (pendulum and linear model), monolithic baselines."""
     input:
-        sweeps=expand(f"{TRADE_DIR}/sweep/{{group}}.nc", group=TRADE_GROUPS),
+        sweeps=trade_group_files("sweep"),
         monolithic=f"{TRADE_DIR}/monolithic.nc",
         linear=f"{TRADE_DIR}/linear_orders.nc",
         lib=script_lib("pendulum_work_precision"),
@@ -315,23 +358,30 @@ rule pendulum_work_precision:
 
 
 rule pendulum_limits:
-    """Largest stable H of one group: bisection on divergence, and the linear test model's prediction."""
+    """Largest stable H of one (method, decomposition), for every scheme: bisection on divergence, and the
+    linear test model's prediction."""
     input:
         lib=engine_lib("pendulum_limits"),
         kernels=ancient(PENDULUM_KERNELS),
     output:
-        f"{TRADE_DIR}/limits/{{group}}.nc",
+        expand(
+            TRADE_GROUP,
+            study="limits",
+            scheme=PENDULUM_SCHEMES,
+            method="{method}",
+            decomposition="{decomposition}",
+        ),
     log:
-        "logs/pendulum/limits_{group}.log",
+        "logs/pendulum/limits/{method}_{decomposition}.log",
     wildcard_constraints:
-        group="|".join(TRADE_GROUPS),
+        method=METHOD_NAMES,
+        decomposition=DECOMPOSITION_NAMES,
+    priority: 10  # long: start them first
     conda:
         "../envs/icosim.yaml"
     params:
-        settings=lambda w: run_settings(PENDULUM, [TRADE_GROUPS[w.group][1]]),
-        scheme=lambda w: TRADE_GROUPS[w.group][0],
-        method=lambda w: TRADE_GROUPS[w.group][1],
-        decomposition=lambda w: TRADE_GROUPS[w.group][2],
+        settings=lambda w: run_settings(PENDULUM, [w.method]),
+        schemes=PENDULUM_SCHEMES,
         k=PENDULUM["k"],
         limits=TRADE["stability_limit"],
     script:
@@ -341,7 +391,7 @@ rule pendulum_limits:
 rule pendulum_stability_limit:
     """stability_limit.nc: the groups' measured and predicted limits over config."""
     input:
-        groups=expand(f"{TRADE_DIR}/limits/{{group}}.nc", group=TRADE_GROUPS),
+        groups=trade_group_files("limits"),
         lib=script_lib("pendulum_stability_limit"),
     output:
         PENDULUM_STABILITY_LIMIT,
@@ -424,7 +474,7 @@ rule pendulum_trade_figure:
 
 
 ALL_TARGETS.extend(
-    PENDULUM_FIGURES
+    [f for files in PENDULUM_FIGURES.values() for f in files]
     + [PENDULUM_ERROR_FIGURE, PENDULUM_SUMMARY, PENDULUM_CLAIMS]
     + [
         PENDULUM_WORK_PRECISION,

@@ -14,11 +14,6 @@ REPORT_PARTS = {
     for part in config["report"]["sections"]
     if part in REPORT_SECTIONS
 }
-# parts whose claims are the paper's (results/<part>/claims.json): the summary at the top of the page; the
-# Gauss-Seidel section carries its own claims tables (claims about the schemes, not the paper's)
-REPORT_CLAIM_PARTS = [
-    part for part in REPORT_PARTS if part in ("stability", "convergence", "pendulum")
-]
 
 
 rule report:
@@ -26,7 +21,7 @@ rule report:
     input:
         sections=list(REPORT_PARTS.values()),
         # each part's claim verdicts (results/<part>/claims.json): the summary at the top of the page
-        claims=[f"results/{part}/claims.json" for part in REPORT_CLAIM_PARTS],
+        claims=[f"results/{part}/claims.json" for part in REPORT_PARTS],
         configfiles=[
             f for f in dict.fromkeys(workflow.configfiles) if os.path.exists(f)
         ],
@@ -40,7 +35,7 @@ rule report:
     params:
         title=config["report"]["title"],
         parts=list(REPORT_PARTS),
-        claim_parts=REPORT_CLAIM_PARTS,
+        claim_parts=list(REPORT_PARTS),
         skipped=[p for p in config["report"]["sections"] if p not in REPORT_SECTIONS],
         # effective (merged) configuration of each part: its hash changes exactly when it does
         config_sha256={

@@ -31,6 +31,10 @@ for panel, path in zip(p.panels, snakemake.output, strict=True):
     write_netcdf(ds, path)
     for rec in curves([ds]):
         logging.info(
-            "%s: order %.3f (%s), %d unstable", curve_label(rec), rec["order"], rec["order_status"], rec["unstable"].sum()
+            "%s: order %.3f (%s), %d unstable",
+            curve_label(rec),
+            rec["order"],
+            rec["order_status"],
+            rec["unstable"].sum(),
         )
     logging.info("%s: %.2f s", path, ds.attrs["seconds_total"])

@@ -1,14 +1,26 @@
-"""Snakemake job: the convergence section of the report (thin: icosim.report.convergence)."""
+"""Snakemake job: the convergence section of the report (thin: icosim.report.convergence, icosim.report.schemes)."""
 
 import logging
 
 from icosim.claims.core import read_verdicts
+from icosim.convergence.curves import curves
 from icosim.io.netcdf import atomic_path, open_dataset
 from icosim.report.convergence import convergence_section
+from icosim.report.schemes import convergence_schemes
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
-p = snakemake.params
-claims = read_verdicts(snakemake.input.claims)
+i, p = snakemake.input, snakemake.params
+claims = read_verdicts(i.claims)
+panels = [open_dataset(path) for path in i.panels]
+schemes = {ds.attrs["scheme"] for ds in panels}
+jacobi_pngs = [f for f in i.figures if f.endswith("_jacobi.png")]
+schemes_html = ""
+if len(schemes) > 1:
+    schemes_html = convergence_schemes(
+        curves=curves(panels),
+        claims=[c for c in claims if c.get("scope") == "beyond"],
+        figure_pngs=[f for f in i.figures if f not in jacobi_pngs],
+    )
 html = convergence_section(
     setup=p.setup,
     step_sizes=p.step_sizes,
@@ -18,12 +30,13 @@ html = convergence_section(
     unstable=p.unstable,
     targets=p.targets,
     figures=p.figures,
-    panels=[open_dataset(path) for path in snakemake.input.panels],
-    claims=claims,
-    figure_pngs=list(snakemake.input.figures),
-    wp=open_dataset(snakemake.input.wp),
-    wp_png=snakemake.input.wp_figure,
+    panels=[ds for ds in panels if ds.attrs["scheme"] == "jacobi"],
+    claims=[c for c in claims if c.get("scope", "paper") == "paper"],
+    figure_pngs=jacobi_pngs,
+    wp=open_dataset(i.wp),
+    wp_png=i.wp_figure,
+    schemes_html=schemes_html,
 )
 with atomic_path(snakemake.output[0]) as tmp:
     tmp.write_text(html)
-logging.info("section written: %d claims, %d figures", len(claims), len(snakemake.input.figures))
+logging.info("section written: %d claims, %d figures", len(claims), len(i.figures))

@@ -1,4 +1,4 @@
-"""Snakemake job: Fig. 6, 7 or 8 (one k) from the run datasets and the reference -> PNG + PDF."""
+"""Snakemake job: Figs. 6, 7 and 8 (every k) with one scheme, from the run datasets and the reference -> PNG + PDF."""
 
 import logging
 
@@ -7,8 +7,13 @@ from icosim.figures.pendulum import pendulum_figure
 from icosim.io.netcdf import open_dataset
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+p = snakemake.params
 runs = [open_dataset(path) for path in snakemake.input.runs]
 reference = open_dataset(snakemake.input.reference)
-fig = pendulum_figure(runs, reference, k=int(snakemake.wildcards.k), title=snakemake.params.title)
-save_figure(fig, snakemake.output.png, snakemake.output.pdf, dpi=snakemake.params.dpi)
-logging.info("%d runs drawn", len(runs))
+outputs = iter(snakemake.output)
+for k, title in zip(p.k, p.titles, strict=True):
+    mine = [ds for ds in runs if int(ds.attrs["k"]) == int(k)]
+    fig = pendulum_figure(mine, reference, k=int(k), title=title)
+    png, pdf = next(outputs), next(outputs)
+    save_figure(fig, png, pdf, dpi=p.dpi)
+    logging.info("k = %s: %d runs drawn into %s", k, len(mine), png)

@@ -1,5 +1,6 @@
-"""Snakemake job: largest stable H of one group, measured (bisection on divergence) and predicted by the
-linear test model -> NetCDF (thin: icosim.pendulum.trade.stability_limit)."""
+"""Snakemake job: largest stable H of one (method, decomposition), for every scheme, measured (bisection on
+divergence) and predicted by the linear test model -> one NetCDF per scheme
+(thin: icosim.pendulum.trade.stability_limit)."""
 
 import logging
 
@@ -7,7 +8,7 @@ from icosim.io.netcdf import provenance_attrs, write_netcdf
 from icosim.pendulum.trade.stability_limit import limits_dataset, limits_group
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
-p = snakemake.params
+w, p = snakemake.wildcards, snakemake.params
 lim = p.limits
 
 
@@ -18,27 +19,37 @@ def log(label, measured, predicted):
     )
 
 
-groups = limits_group(
-    dict(p.settings),
-    p.scheme,
-    p.method,
-    p.decomposition,
-    list(p.k),
-    scan=list(lim["scan"]),
-    t_end=lim["t_end"],
-    resolution=lim["resolution"],
-    log=log,
-)
-job = {key: p[key] for key in ("settings", "scheme", "method", "decomposition", "k", "limits")}
-attrs = provenance_attrs(job, title="Double pendulum: stability limit in H", command="snakemake rule pendulum_limits")
-ds = limits_dataset(
-    groups,
-    scheme=p.scheme,
-    method=p.method,
-    decomposition=p.decomposition,
-    scan=lim["scan"],
-    t_end=lim["t_end"],
-    resolution=lim["resolution"],
-    attrs=attrs,
-)
-write_netcdf(ds, snakemake.output[0])
+for scheme, path in zip(p.schemes, snakemake.output, strict=True):
+    groups = limits_group(
+        dict(p.settings),
+        scheme,
+        w.method,
+        w.decomposition,
+        list(p.k),
+        scan=list(lim["scan"]),
+        t_end=lim["t_end"],
+        resolution=lim["resolution"],
+        log=log,
+    )
+    job = {
+        "settings": p.settings,
+        "scheme": scheme,
+        "method": w.method,
+        "decomposition": w.decomposition,
+        "k": p.k,
+        "limits": p.limits,
+    }
+    attrs = provenance_attrs(
+        job, title="Double pendulum: stability limit in H", command=f"snakemake rule {snakemake.rule}"
+    )
+    ds = limits_dataset(
+        groups,
+        scheme=scheme,
+        method=w.method,
+        decomposition=w.decomposition,
+        scan=lim["scan"],
+        t_end=lim["t_end"],
+        resolution=lim["resolution"],
+        attrs=attrs,
+    )
+    write_netcdf(ds, path)

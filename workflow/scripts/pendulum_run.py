@@ -1,4 +1,4 @@
-"""Snakemake job: the co-simulation runs of one (method, decomposition), one per k -> NetCDF each
+"""Snakemake job: the co-simulation runs of one (method, decomposition), every scheme and k -> one NetCDF each
 (thin: icosim.pendulum.replication.datasets)."""
 
 import json
@@ -9,7 +9,8 @@ from icosim.pendulum.replication.datasets import run_job
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 w, p = snakemake.wildcards, snakemake.params
-for k, path in zip(p.k, snakemake.output, strict=True):
+jobs = [(scheme, k) for scheme in p.schemes for k in p.k]  # the order of the rule's outputs
+for (scheme, k), path in zip(jobs, snakemake.output, strict=True):
     job = {
         "method": w.method,
         "decomposition": w.decomposition,
@@ -18,10 +19,10 @@ for k, path in zip(p.k, snakemake.output, strict=True):
         "H": p.H,
         "t_end": p.t_end,
         **{key: dict(p[key]) for key in ("integrator", "sensitivities", "corrector", "divergence")},
-        "scheme": p.scheme,
+        "scheme": scheme,
     }
     logging.info("run: %s", json.dumps(job, sort_keys=True))
-    result, ds = run_job(job, command="snakemake rule pendulum_run")
+    result, ds = run_job(job, command=f"snakemake rule {snakemake.rule}")
     write_netcdf(ds, path)
     logging.info(
         "%d macro steps in %.2f s; diverged=%d at t=%s (%s); %s",

@@ -1,5 +1,5 @@
-"""Snakemake job: error over H of one group (scheme, method, decomposition; every k) -> NetCDF
-(thin: icosim.pendulum.trade.sweep)."""
+"""Snakemake job: error over H of one (method, decomposition), for every scheme (every k) -> one NetCDF per
+scheme (thin: icosim.pendulum.trade.sweep)."""
 
 import logging
 
@@ -7,7 +7,7 @@ from icosim.io.netcdf import write_netcdf
 from icosim.pendulum.trade.sweep import sweep_group
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
-p = snakemake.params
+w, p = snakemake.wildcards, snakemake.params
 
 
 def log(label, H, rec):
@@ -17,19 +17,20 @@ def log(label, H, rec):
     )
 
 
-ds = sweep_group(
-    dict(p.settings),
-    p.scheme,
-    p.method,
-    p.decomposition,
-    list(p.k),
-    list(p.H),
-    p.t_end,
-    reference=dict(p.reference),
-    integrator=dict(p.integrator),
-    repeats=p.timing["repeats"],
-    repeat_below=p.timing["repeat_below"],
-    command="snakemake rule pendulum_sweep",
-    log=log,
-)
-write_netcdf(ds, snakemake.output[0])
+for scheme, path in zip(p.schemes, snakemake.output, strict=True):
+    ds = sweep_group(
+        dict(p.settings),
+        scheme,
+        w.method,
+        w.decomposition,
+        list(p.k),
+        list(p.H),
+        p.t_end,
+        reference=dict(p.reference),
+        integrator=dict(p.integrator),
+        repeats=p.timing["repeats"],
+        repeat_below=p.timing["repeat_below"],
+        command=f"snakemake rule {snakemake.rule}",
+        log=log,
+    )
+    write_netcdf(ds, path)

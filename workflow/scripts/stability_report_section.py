@@ -1,14 +1,28 @@
-"""Snakemake job: the stability section of the report (thin: icosim.report.stability)."""
+"""Snakemake job: the stability section of the report (thin: icosim.report.stability, icosim.report.schemes)."""
 
 import logging
 
 from icosim.claims.core import read_verdicts, verdict_counts
 from icosim.io.netcdf import atomic_path, open_dataset
+from icosim.report.schemes import stability_schemes
 from icosim.report.stability import stability_section
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
-p = snakemake.params
-claims = read_verdicts(snakemake.input.claims)
+i, p = snakemake.input, snakemake.params
+claims = read_verdicts(i.claims)
+paper = [c for c in claims if c.get("scope", "paper") == "paper"]
+beyond = [c for c in claims if c.get("scope") == "beyond"]
+attrs = [open_dataset(path).attrs for path in i.panels]
+jacobi_pngs = [f for f in i.figures if f.endswith("_jacobi.png")]
+schemes_html = ""
+if "shares" in i.keys():
+    schemes_html = stability_schemes(
+        shares=open_dataset(i.shares),
+        claims=beyond,
+        comparison_png=i.comparison,
+        figure_pngs=[f for f in i.figures if f not in jacobi_pngs],
+        figures_cfg=p.figures,
+    )
 html = stability_section(
     figures=p.figures,
     grid=p.grid,
@@ -16,12 +30,11 @@ html = stability_section(
     precision=p.precision,
     style=p.style,
     decisions=p.decisions,
-    panel_attrs=[open_dataset(path).attrs for path in snakemake.input.panels],
-    claims=claims,
-    figure_pngs=list(snakemake.input.figures),
+    panel_attrs=[a for a in attrs if a["scheme"] == "jacobi"],
+    claims=paper,
+    figure_pngs=jacobi_pngs,
+    schemes_html=schemes_html,
 )
 with atomic_path(snakemake.output[0]) as tmp:
     tmp.write_text(html)
-logging.info(
-    "section with %d figures and %d claims (%s)", len(snakemake.input.figures), len(claims), verdict_counts(claims)
-)
+logging.info("section with %d figures and %d claims (%s)", len(i.figures), len(claims), verdict_counts(claims))

@@ -64,6 +64,7 @@ def convergence_section(
     figure_pngs: list,
     wp,
     wp_png,
+    schemes_html: str = "",
 ) -> str:
     """The section as an HTML fragment.
 
@@ -201,8 +202,8 @@ def convergence_section(
 
     # -- figures --------------------------------------------------------------------------------------
     for png in figure_pngs:
-        stem = Path(png).stem  # fig21_ff
-        fig, dec = stem[3:].split("_")
+        stem = Path(png).stem  # fig21_ff_jacobi
+        fig, dec, _ = stem[3:].split("_")
         cfg = figures[fig]
         paper = {"21": "Fig. 21", "22": "Fig. 22", "23": "Fig. 23"}.get(fig, f"Fig. {fig}")
         shown = "as in the paper" if dec == "ff" else "not shown in the paper"
@@ -274,7 +275,7 @@ def convergence_section(
         "step):</p>" + rp.table(work_cost_table(wp))
     )
 
-    return rp.section("Convergence (Figs. 21–23)", "".join(body), anchor="convergence")
+    return rp.section("Convergence (Figs. 21–23)", "".join(body) + schemes_html, anchor="convergence")
 
 
 def _fmt(x) -> str:

@@ -27,8 +27,8 @@ __all__ = ["report_page", "summary_section", "why", "figure_anchors", "git_commi
 
 #: Where each part's datasets are, per paper figure (relative to the project directory).
 DATASET_PATHS = {
-    "stability": "results/stability/fig{figure}/",
-    "convergence": "results/convergence/*/fig{figure}_*.nc",
+    "stability": "results/stability/fig{figure}/jacobi/",
+    "convergence": "results/convergence/fig{figure}/jacobi/",
     "pendulum": "results/pendulum/summary.nc",
 }
 #: The report's directory relative to the project directory (links to datasets go up from it).
@@ -91,9 +91,11 @@ def _dataset_link(part, figure, datasets) -> str:
 def summary_section(claims: dict, sections_html, *, datasets=None) -> str:
     """The answer first: per part the claims reproduced / not reproduced / undecided, then each disagreement.
 
-    ``claims`` maps a part to its verdict records (:func:`icosim.claims.core.read_verdicts`), in page order.
+    ``claims`` maps a part to its verdict records (:func:`icosim.claims.core.read_verdicts`), in page order;
+    only the paper's (scope ``paper``) are counted here, the others are in the parts' sections.
     """
     datasets = DATASET_PATHS if datasets is None else datasets
+    claims = {part: [c for c in records if c.get("scope", "paper") == "paper"] for part, records in claims.items()}
     anchors = figure_anchors(sections_html)
     rows, total = [], {"pass": 0, "fail": 0, "undecided": 0}
     for part, records in claims.items():

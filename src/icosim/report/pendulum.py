@@ -20,7 +20,15 @@ def fmt(x, spec=".2e"):
 
 
 def pendulum_section(
-    *, config: dict, paper_figure: dict, summary, claims: list, figure_pngs: list, error_png, trade_html: str = ""
+    *,
+    config: dict,
+    paper_figure: dict,
+    summary,
+    claims: list,
+    figure_pngs: list,
+    error_png,
+    trade_html: str = "",
+    schemes_html: str = "",
 ) -> str:
     """The section as an HTML fragment.
 
@@ -28,7 +36,8 @@ def pendulum_section(
     ``k`` to the paper's figure number, ``summary`` is the run summary
     (:func:`icosim.pendulum.replication.summary.summarize`), ``claims`` the verdict
     records, ``figure_pngs`` the figures (``.../pendulum_k<k>.png``) and
-    ``error_png`` the error figure; ``trade_html`` (:func:`trade_section`) is appended.
+    ``error_png`` the error figure; ``schemes_html`` (:func:`icosim.report.schemes.pendulum_schemes`)
+    and ``trade_html`` (:func:`trade_section`) are appended.
     """
     cfg = config
     paper_figure = {int(k): v for k, v in paper_figure.items()}
@@ -184,7 +193,7 @@ the KKT conditions) and of the velocities onto ġ<sub>c</sub> = 0, the generalis
 
     figs = []
     for path in figure_pngs:
-        k = int(path.rsplit("_k", 1)[1].split(".")[0])
+        k = int(path.rsplit("_k", 1)[1].split("_")[0])  # pendulum_k<k>_<scheme>.png
         figs.append(
             figure(
                 path,
@@ -207,6 +216,6 @@ the KKT conditions) and of the velocities onto ġ<sub>c</sub> = 0, the generalis
 
     return section(
         "Double pendulum (Sect. 4, Figs. 6–8)",
-        setup + "".join(claim_html) + errors + "".join(figs) + trade_html,
+        setup + "".join(claim_html) + errors + "".join(figs) + schemes_html + trade_html,
         "pendulum",
     )

@@ -10,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..claims.core import verdict_counts
+from ..figures.styles import figure_label
 from ..stability.panels import RATIOS, row_label
 from . import html as rp
 from .claims import claims_table
@@ -114,6 +115,7 @@ def stability_section(
     panel_attrs: list,
     claims: list,
     figure_pngs: list,
+    schemes_html: str = "",
 ) -> str:
     """The section as an HTML fragment.
 
@@ -219,7 +221,7 @@ def stability_section(
         else "green circles at stable grid points (the paper's style), black line ρ = 1"
     )
     for png in figure_pngs:
-        fig = Path(png).stem.removeprefix("fig")
+        fig = Path(png).stem.removeprefix("fig").split("_", 1)[0]  # fig<figure>_<scheme>
         cfg = figures[fig]
         tf = per_figure.loc[fig]
         params = ", ".join(f"{k} = {v:g}" for k, v in cfg["params"].items())
@@ -230,7 +232,8 @@ def stability_section(
             else ""
         )
         caption = (
-            f"<b>Fig. {fig}</b> (paper Fig. {fig}): {esc(cfg['title'])}. Method {esc(cfg['method'])}"
+            f"<b>{figure_label(fig)}</b>{f' (paper Fig. {fig})' if fig.isdigit() else ' (beyond the paper)'}: "
+            f"{esc(cfg['title'])}. Method {esc(cfg['method'])}"
             + (f" ({esc(params)})" if params else "")
             + f", decomposition {esc(cfg['decomposition'])}, columns k = {', '.join(map(str, cfg['k']))}; {esc(rows_txt)}. "
             + f"Grid {esc(fmt_grid(grid))}.{esc(zoom_txt)} Precision: {int(tf['cert'])} of {int(tf['points'])} points "
@@ -240,11 +243,11 @@ def stability_section(
             rp.figure(
                 png,
                 caption,
-                alt=f"Fig. {fig}",
+                alt=figure_label(fig),
                 anchor=rp.figure_anchor("stability", png),
                 paper_figures=[fig],
                 claims_html=rp.used_by("stability", [c["id"] for c in claims if fig in c["figures"]]),
             )
         )
 
-    return rp.section("Stability (Figs. 9–20)", "".join(body), "stability")
+    return rp.section("Stability (Figs. 9–20)", "".join(body) + schemes_html, "stability")
