@@ -37,7 +37,7 @@ from icosim.engine.methods import METHODS  # noqa: E402
 from icosim.engine.schema import with_registries  # noqa: E402
 from icosim.engine.decompositions import DECOMPOSITIONS  # noqa: E402
 from icosim.engine.schemes import SCHEMES  # noqa: E402
-from icosim.figures.styles import figure_label  # noqa: E402
+from icosim.labels import figure_label  # noqa: E402
 from icosim.sources import module_closure, script_closure  # noqa: E402
 from icosim.io.integrity import quarantine_corrupt, remove_stale_parts  # noqa: E402
 

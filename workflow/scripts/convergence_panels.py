@@ -9,8 +9,8 @@ from icosim.convergence.datasets import run_panel
 from icosim.convergence.experiment import Setup, step_counts
 from icosim.convergence.panels import PanelSpec
 from icosim.convergence.study import Study
-from icosim.figures.styles import figure_label
 from icosim.io.netcdf import provenance_attrs, write_netcdf
+from icosim.labels import figure_label
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params

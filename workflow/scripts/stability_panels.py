@@ -3,8 +3,8 @@
 import json
 import logging
 
-from icosim.figures.styles import figure_label
 from icosim.io.netcdf import provenance_attrs, write_netcdf
+from icosim.labels import figure_label
 from icosim.stability.datasets import stability_panel
 from icosim.stability.panels import PanelSpec
 

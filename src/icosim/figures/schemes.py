@@ -13,7 +13,8 @@ from matplotlib.figure import Figure
 
 from ..engine.methods import METHODS
 from ..engine.schemes import SCHEMES
-from .styles import figure_label, scheme_colour
+from ..labels import figure_label
+from .styles import scheme_colour
 
 __all__ = ["scheme_comparison_figure"]
 

@@ -1,4 +1,4 @@
-"""Line styles, markers, colours and labels the figures share, derived from the engine's registries.
+"""Line styles, markers and colours the figures share, derived from the engine's registries.
 
 A decomposition, method or scheme added to its registry gets a style by its
 place in the registry, so no figure lists the entries itself.
@@ -13,7 +13,7 @@ from ..engine.decompositions import DECOMPOSITIONS
 from ..engine.methods import METHODS
 from ..engine.schemes import SCHEMES
 
-__all__ = ["decomposition_style", "method_colour", "scheme_colour", "figure_label"]
+__all__ = ["decomposition_style", "method_colour", "scheme_colour"]
 
 _LINESTYLES = ("-", "--", "-.", ":")
 _MARKERS = ("o", "s", "D", "^", "v", "P")
@@ -40,12 +40,3 @@ def scheme_colour(name: str) -> str:
     """Colour of a registered coupling scheme (Jacobi grey, Gauss-Seidel 1→2 blue, 2→1 orange, ...)."""
     names = list(SCHEMES)
     return _SCHEME_COLOURS[(names.index(name) if name in names else len(names)) % len(_SCHEME_COLOURS)]
-
-
-def figure_label(figure) -> str:
-    """How a figure is named in titles: ``Fig. 9`` (the paper's, by number) or by its id (the project's own).
-
-    >>> figure_label("9"), figure_label("df-baumgarte")
-    ('Fig. 9', 'Figure df-baumgarte')
-    """
-    return f"Fig. {figure}" if str(figure).isdigit() else f"Figure {figure}"

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..claims.core import verdict_counts
 from ..engine.schemes import SCHEMES
-from ..figures.styles import figure_label
+from ..labels import figure_label
 from .claims import claims_table
 from .html import escape, figure, table
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..claims.core import verdict_counts
-from ..figures.styles import figure_label
+from ..labels import figure_label
 from ..stability.panels import RATIOS, row_label
 from . import html as rp
 from .claims import claims_table
