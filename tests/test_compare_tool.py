@@ -54,6 +54,16 @@ def test_report_masks_only_timings():
     assert compare_results._mask_html(other.format("1.5")) != compare_results._mask_html(other.format("7.0"))
 
 
+def test_certification_timings_are_volatile(tmp_path):
+    # the certified recheck's seconds (panel attributes) and its share in the stability section
+    assert {"seconds_certify", "cpu_seconds_certify"} <= compare_results.VOLATILE_ATTRS
+    phrase = "<p>The certification took {}% of the sweeps' compute time ({} of {} CPU-seconds in 144 panel jobs).</p>"
+    assert compare_results._mask_html(phrase.format(27, 6, 21)) == compare_results._mask_html(phrase.format(26, 6, 23))
+    cell = "<table><thead><tr><th>certification CPU s</th><th>its share of CPU</th></tr></thead><tbody><tr><td>{}</td><td>{}%</td></tr></tbody></table>"
+    assert compare_results._mask_html(cell.format(0.9, 39)) == compare_results._mask_html(cell.format(1.0, 37))
+    assert compare_results._mask_html("<p>6 of 21 points</p>") != compare_results._mask_html("<p>6 of 23 points</p>")
+
+
 def test_allow_added_forgives_only_what_new_adds(tmp_path):
     from icosim.io.netcdf import provenance_attrs
 

@@ -53,6 +53,8 @@ VOLATILE_ATTRS = {
     "cpu_seconds_total",
     "cpu_seconds_mp",
     "cpu_seconds_float64",
+    "seconds_certify",
+    "cpu_seconds_certify",
     "wall_time_s",
 }
 #: Variables that are timings (file name -> variables).
@@ -65,6 +67,7 @@ VOLATILE_FIGURES = {"convergence/figures/work_precision.png", "convergence/figur
 #: Timing phrases in the report: the numbers in them are masked.
 TIMING_PHRASES = [
     r"The rechecks took [^<]*?CPU-seconds",
+    r"The certification took [^<]*?CPU-seconds",
     r"[\d.]+ s of compute",
 ]
 #: Table columns holding timings (header text), masked in every row; and tables ranked by time.
@@ -72,6 +75,8 @@ TIMING_COLUMNS = {
     "float64 CPU s",
     "mp CPU s",
     "mp share of CPU",
+    "certification CPU s",
+    "its share of CPU",
     "wall [s]",
     "ms per macro step",
     "CPU s per simulated s",
