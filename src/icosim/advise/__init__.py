@@ -5,8 +5,8 @@ A user brings two subsystems -- masses ``m1, m2`` [kg], stiffnesses ``c1, c2``
 macro step ``H`` [s] or a range of them.  :func:`advise` answers, for every
 registered coupling method (:data:`icosim.engine.methods.METHODS`), each index it can
 be formulated at, each decomposition it is defined for, each approximation
-order ``k`` and each coupling order (:data:`COUPLINGS`: Jacobi, and Gauss-Seidel
-with subsystem 1 or subsystem 2 first, :mod:`icosim.engine.schemes`):
+order ``k`` and each coupling scheme (:data:`icosim.engine.schemes.SCHEMES`: Jacobi, and
+Gauss-Seidel with subsystem 1 or subsystem 2 first; the variants when asked for):
 
 * at one ``H``: the spectral radius ``rho`` of the co-simulation recurrence
   (the precision policy of :func:`icosim.engine.spectral.spectral_radius`: float64,
@@ -22,7 +22,7 @@ with subsystem 1 or subsystem 2 first, :mod:`icosim.engine.schemes`):
   so.
 
 The answer is a :class:`pandas.DataFrame`, one row per configuration (its label in
-the column ``scheme``), stable ones ranked first (at one ``H`` by ``rho``: the smaller, the faster a coupling error
+the column ``configuration``), stable ones ranked first (at one ``H`` by ``rho``: the smaller, the faster a coupling error
 decays per macro step; over a range first the configurations stable from the range's
 lower end, by how far up they stay stable, then those stable only on higher
 intervals, by their largest stable ``H``).  ``df.attrs`` holds the system, its dimensionless parameters
@@ -42,10 +42,10 @@ Method parameters are taken in physical units (Baumgarte ``mu`` in s); one
 not given is 1 in the paper's dimensionless form (``mu_bar = mu/H = 1``,
 ``a = b = 1``), as in Figs. 9-15.
 
-Adding a coupling order (as Gauss-Seidel was added) or certified verdicts touches
-:data:`COUPLINGS` and :func:`evaluate` only: configurations are enumerated by
-:func:`configurations`, every spectral radius is computed by :func:`evaluate`, and the
-``verdict`` column is the one place a verdict is stated.
+A coupling scheme, method or decomposition added to its registry is ranked here with no
+change: configurations are enumerated by :func:`configurations` from the registries,
+every spectral radius is computed by :func:`evaluate`, and the ``verdict`` column is the
+one place a verdict is stated.
 
 ==========================  ===================================================
 module                      holds
@@ -59,7 +59,7 @@ module                      holds
 ==========================  ===================================================
 """
 
-from .core import COUPLINGS, DEFAULT_K, VERDICTS, Configuration, Evaluation, TwoMassSystem, configurations, evaluate
+from .core import DEFAULT_K, VERDICTS, Configuration, Evaluation, TwoMassSystem, configurations, evaluate
 from .output import Progress, advice_records, advice_text
 from .scan import DEFAULT_RTOL, DEFAULT_SCAN, advise, check_settings, stable_intervals
 
@@ -67,7 +67,6 @@ __all__ = [
     "TwoMassSystem",
     "Configuration",
     "Evaluation",
-    "COUPLINGS",
     "VERDICTS",
     "configurations",
     "evaluate",

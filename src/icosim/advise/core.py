@@ -15,7 +15,7 @@ import numpy as np
 from ..engine import methods as _methods
 from ..engine.bounds import check_k
 from ..engine.model import PhysicalModel
-from ..engine.schemes import SCHEME_NAMES
+from ..engine.schemes import get_scheme, standard_schemes
 from ..engine.spectral import spectral_radius
 from ..errors import ParameterError
 
@@ -23,7 +23,6 @@ __all__ = [
     "TwoMassSystem",
     "Configuration",
     "Evaluation",
-    "COUPLINGS",
     "VERDICTS",
     "DEFAULT_K",
     "configurations",
@@ -36,8 +35,7 @@ DEFAULT_K = (0, 1, 2)
 
 #: Coupling orders: name -> keyword arguments of :func:`icosim.engine.spectral.spectral_radius`: the Jacobi
 #: (parallel) scheme of the paper and Gauss-Seidel (sequential) with subsystem 1 or subsystem 2 first
-#: (:mod:`icosim.engine.schemes`).
-COUPLINGS: dict[str, dict] = {name: ({} if name == "jacobi" else {"scheme": name}) for name in SCHEME_NAMES}
+#: (:mod:`icosim.engine.schemes`); the variants are ranked when asked for.
 
 #: Verdicts of one point: rho <= 1 decided, rho > 1 decided, not decided (failed, or float64 only).
 VERDICTS = ("stable", "unstable", "undecided")
@@ -120,8 +118,8 @@ class TwoMassSystem:
 
 @dataclass(frozen=True)
 class Configuration:
-    """One co-simulation configuration: method (registry name), index, parameters, decomposition, k, coupling order
-    (the scheme, :mod:`icosim.engine.schemes`).
+    """One co-simulation configuration: method (registry name), index, parameters, decomposition, k and coupling
+    scheme (:mod:`icosim.engine.schemes`).
 
     ``params`` are the method's parameters as the user gives them: physical
     units for parameters that scale with ``H`` (``mu`` in s), or their
@@ -133,7 +131,7 @@ class Configuration:
     params: dict
     decomposition: str
     k: int
-    coupling: str = "jacobi"
+    scheme: str = "jacobi"
 
     @property
     def spec(self):
@@ -176,7 +174,7 @@ class Configuration:
         spec = self.spec
         head = spec.short_label + (f" i{self.index}" if spec.takes_index else "")
         params = self.parameter_text
-        tail = "" if self.coupling == "jacobi" else f" {self.coupling}"
+        tail = "" if self.scheme == "jacobi" else f" {self.scheme}"
         return f"{head}{f' ({params})' if params else ''} {self.decomposition} k={self.k}{tail}"
 
 
@@ -210,7 +208,7 @@ def configurations(
     decompositions=None,
     k=DEFAULT_K,
     params: dict | None = None,
-    couplings=None,
+    schemes=None,
 ) -> list[Configuration]:
     """Every configuration: each method of the registry (or those named), each index, decomposition and ``k``.
 
@@ -218,10 +216,10 @@ def configurations(
     method takes those it has.  Every configuration is built once here, so a parameter value a method
     refuses is reported (:class:`~icosim.errors.ParameterError`) before any computation.
 
-    >>> len(configurations(couplings=["jacobi"]))  # Baumgarte, weighted: 3 indices x (ff, fd); projection: ff, fd, dd; k = 0..2
-    45
-    >>> len(configurations())  # and each with the three coupling orders (Jacobi, Gauss-Seidel 1->2 and 2->1)
-    135
+    >>> len(configurations(schemes=["jacobi"]))  # Baumgarte, weighted: 3 indices x (ff, fd, df); projection: ff, fd, df, dd; k = 0..2
+    66
+    >>> len(configurations())  # and each with the three schemes that are not variants (Jacobi, Gauss-Seidel 1->2 and 2->1)
+    198
     >>> configurations(methods=["weighted"], k=[2])[4].label
     'weighted i1 (a = 1, b = 1) fd k=2 gauss-seidel-12'
     """
@@ -238,10 +236,7 @@ def configurations(
     if unused:
         raise ParameterError(f"{unused[0]} is not used by the methods asked for ({', '.join(names)})")
     ks = sorted({check_k(v) for v in k})
-    couplings = list(COUPLINGS) if couplings is None else list(couplings)
-    for c in couplings:
-        if c not in COUPLINGS:
-            raise ParameterError(f"coupling must be one of {', '.join(COUPLINGS)}, got {c!r}")
+    schemes = list(standard_schemes()) if schemes is None else [get_scheme(s).name for s in schemes]
     out = []
     for name in names:
         spec = _methods.get_spec(name)
@@ -250,8 +245,8 @@ def configurations(
             p = index_parameters(spec, index, params)
             for dec in decs:
                 for kk in ks:
-                    for coupling in couplings:
-                        s = Configuration(name, index, p, dec, kk, coupling)
+                    for scheme in schemes:
+                        s = Configuration(name, index, p, dec, kk, scheme)
                         s.engine_method(1.0)  # refuses bad values now (e.g. weighted index 1 with b = 0)
                         out.append(s)
     return out
@@ -283,7 +278,7 @@ def evaluate(system: TwoMassSystem, configuration: Configuration, H, *, policy="
     could not decide it.
     """
     H = np.atleast_1d(np.asarray(H, dtype=float))
-    kw = {"digits": digits, "policy": policy, **COUPLINGS[configuration.coupling]}
+    kw = {"digits": digits, "policy": policy, "scheme": configuration.scheme}
     names = ("rho", "err", "digits", "verdict", "arithmetic")
     if configuration.h_dependent:
         parts = [

@@ -19,7 +19,7 @@ class Progress:
     >>> p = Progress(3, stream=io.StringIO()); p(1); p(3); p.close()  # not a terminal: prints nothing
     """
 
-    def __init__(self, total: int, *, label: str = "schemes", stream=None, delay: float = 1.0, width: int = 30):
+    def __init__(self, total: int, *, label: str = "configurations", stream=None, delay: float = 1.0, width: int = 30):
         self.total, self.label, self.delay, self.width = total, label, delay, width
         self.stream = sys.stderr if stream is None else stream
         self.start = time.perf_counter()
@@ -85,7 +85,7 @@ def advice_records(df) -> dict:
             out["null_reasons"] = nulls
         rows.append(out)
     attrs = {k: v for k, v in df.attrs.items()}
-    return {**_jsonable(attrs), "schemes": rows}
+    return {**_jsonable(attrs), "configurations": rows}
 
 
 def _jsonable(x):
@@ -98,7 +98,7 @@ def _jsonable(x):
 
 
 def advice_text(df) -> str:
-    """The answer as text: the system, its dimensionless parameters, then the schemes (stable ones ranked first)."""
+    """The answer as text: the system, its dimensionless parameters, then the configurations (stable ones ranked first)."""
     a = df.attrs
     s = a["system"]
     lines = [
@@ -130,23 +130,23 @@ def advice_text(df) -> str:
     n_stable = int(df["rank"].notna().sum())
     if a["mode"] == "point":
         lines.append(
-            f"\n{len(df)} schemes at H = {a['H'][0]:g} s, {n_stable} stable, ranked by rho (smaller: a coupling "
+            f"\n{len(df)} configurations at H = {a['H'][0]:g} s, {n_stable} stable, ranked by rho (smaller: a coupling "
             f"error decays faster per macro step). Precision: {prec}."
         )
-        table = df[["rank", "scheme", "rho", "verdict", "decided_by"]].copy()
+        table = df[["rank", "configuration", "rho", "verdict", "decided_by"]].copy()
         table["rho"] = table["rho"].map(lambda r: f"{r:.6f}" if math.isfinite(r) else "nan")
         table["decided_by"] = table["decided_by"].map({"ball": "proof", "none": "failed"}).fillna(table["decided_by"])
         table = table.rename(columns={"decided_by": "decided by"})
     else:
         lo, hi = a["H"]
         lines.append(
-            f"\n{len(df)} schemes over H in [{lo:g}, {hi:g}] s, {n_stable} stable somewhere in it, ranked: "
+            f"\n{len(df)} configurations over H in [{lo:g}, {hi:g}] s, {n_stable} stable somewhere in it, ranked: "
             "first those stable from the range's lower end, by how far up they stay stable, then those stable only "
             f"on higher intervals, by their largest stable H. Scan: {a['n_scan']} log-spaced H, then every stable/unstable "
             f"transition bracketed to a relative width of {a['rtol']:g}; stable intervals narrower than the scan "
             f"spacing can be missed. Precision: {prec}."
         )
-        table = df[["rank", "scheme", "H_max", "stable_intervals", "verdict"]].copy()
+        table = df[["rank", "configuration", "H_max", "stable_intervals", "verdict"]].copy()
         table["H_max"] = table["H_max"].map(lambda h: "-" if not np.isfinite(h) else f"{h:.6g}")
         table["stable_intervals"] = table["stable_intervals"].map(
             lambda iv: " and ".join(f"[{lo:.4g}, {hi:.4g}]" for lo, hi in iv) or "-"

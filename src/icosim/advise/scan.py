@@ -108,13 +108,14 @@ def advise(
     progress=None,
 ):
     """Every configuration of ``configuration_list`` (default :func:`~.core.configurations`) for ``system`` at macro step ``H`` or over
-    ``H = (H_lo, H_hi)``: a :class:`pandas.DataFrame`, one row per configuration (its label in ``scheme``), stable ones ranked first.
+    ``H = (H_lo, H_hi)``: a :class:`pandas.DataFrame`, one row per configuration (its label in ``configuration``),
+    stable ones ranked first.
 
     ``progress``, if given, is called with the number of configurations done.
 
-    Columns at one H: ``rank`` (1, 2, ... for stable configurations, else missing), ``scheme``, ``coupling``,
+    Columns at one H: ``rank`` (1, 2, ... for stable configurations, else missing), ``configuration``, ``scheme``,
     ``method``, ``index``, ``parameters``, ``decomposition``, ``k``, ``H``, ``rho``, ``rho_float64_error``,
-    ``digits``, ``verdict``.  Over a range: ``rank``, the scheme columns, ``H_max`` (largest stable H, missing
+    ``digits``, ``verdict``.  Over a range: ``rank``, the configuration's columns, ``H_max`` (largest stable H, missing
     if none), ``H_max_from_lo`` (the largest H such that every H from ``H_lo`` up to it is stable: the
     upper end of a stable interval starting at ``H_lo``; missing if ``H_lo`` is unstable), ``unstable_above`` (the evaluated unstable H just above ``H_max``; missing where ``H_max`` is the
     range's end), ``rho_at_H_max``, ``stable_intervals``, ``verdict`` (``stable`` on the whole range, ``stable
@@ -127,8 +128,8 @@ def advise(
     rows = []
     for n, s in enumerate(configuration_list, start=1):
         base = {
-            "scheme": s.label,
-            "coupling": s.coupling,
+            "configuration": s.label,
+            "scheme": s.scheme,
             "method": s.method,
             "index": s.index,
             "parameters": s.parameter_text,

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from ..engine import methods
 from ..engine.decompositions import DECOMPOSITIONS
-from ..engine.schemes import SCHEME_NAMES
+from ..engine.schemes import SCHEMES
 from ..errors import ParameterError
 from ..io.jsonio import dumps
 from . import arguments as arg
@@ -63,11 +63,11 @@ def add_parser(sub):
     g.add_argument("--decompositions", nargs="+", choices=tuple(DECOMPOSITIONS), help="default: every one")
     g.add_argument("--k", nargs="+", type=arg.order, help="approximation orders (default: 0 1 2)")
     g.add_argument(
-        "--couplings",
+        "--schemes",
         nargs="+",
-        choices=SCHEME_NAMES,
-        help="coupling orders: jacobi (parallel, the paper's), gauss-seidel-12 (subsystem 1 first), "
-        "gauss-seidel-21 (subsystem 2 first); default: every one",
+        choices=tuple(SCHEMES),
+        help="coupling schemes: jacobi (parallel, the paper's), gauss-seidel-12 (subsystem 1 first), "
+        "gauss-seidel-21 (subsystem 2 first), or a variant; default: every one but the variants",
     )
     units = {"s": "in s", "s2": "in s^2", "1": "dimensionless"}
     for name, p in advise_parameters().items():
@@ -119,7 +119,7 @@ def run(args, parser) -> int:
             decompositions=args.decompositions,
             k=args.k or DEFAULT_K,
             params=params,
-            couplings=args.couplings,
+            schemes=args.schemes,
         )
     except ParameterError as exc:
         arg.fail(parser, str(exc))

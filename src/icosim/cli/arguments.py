@@ -14,6 +14,7 @@ from fractions import Fraction
 from ..engine.backends import FLOAT64_DIGITS
 from ..engine.bounds import MAX_BITS_LIMIT, MAX_DIGITS, MAX_K, MAX_SECONDS, check_k
 from ..errors import ParameterError
+from ..engine.schemes import SCHEMES
 
 __all__ = [
     "number",
@@ -114,15 +115,13 @@ def positive_int(text):
 
 
 def add_scheme_arguments(group):
-    """``--scheme`` and ``--first``, alike for every command that takes one coupling scheme."""
+    """``--scheme``, alike for every command that takes one coupling scheme (the registry's names)."""
     group.add_argument(
         "--scheme",
-        choices=("jacobi", "gauss-seidel"),
+        choices=tuple(SCHEMES),
         default="jacobi",
-        help="coupling scheme: jacobi (parallel, the paper's; default) or gauss-seidel (sequential)",
-    )
-    group.add_argument(
-        "--first", type=int, choices=(1, 2), help="gauss-seidel: the subsystem that advances first (default 1)"
+        help="coupling scheme: jacobi (parallel, the paper's; default), gauss-seidel-12 (sequential, subsystem 1 "
+        "first), gauss-seidel-21 (subsystem 2 first), or a variant (docs/gauss_seidel.md)",
     )
 
 

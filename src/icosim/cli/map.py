@@ -87,9 +87,7 @@ def run(args, parser) -> int:
         digits=args.digits,
         policy=args.policy,
     )
-    if args.first is not None and args.scheme != "gauss-seidel":
-        parser.error("argument --first: only used with --scheme gauss-seidel")
-    grid["scheme"] = get_scheme(args.scheme, args.first).name
+    grid["scheme"] = get_scheme(args.scheme).name
     try:
         spec = methods.get_spec(args.method)
         extra = sorted(set(given) - set(spec.arguments))

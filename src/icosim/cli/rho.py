@@ -104,9 +104,7 @@ def run(args, parser) -> int:
     """``icosim rho``: check the arguments (exit 2 naming the bad one), then answer."""
     from ..engine.model import TestModel
 
-    if args.first is not None and args.scheme != "gauss-seidel":
-        parser.error("argument --first: only used with --scheme gauss-seidel")
-    scheme = get_scheme(args.scheme, args.first)
+    scheme = get_scheme(args.scheme)
     try:
         method = _method_from_args(args)
         decomposition = get_decomposition(args.decomposition)
@@ -131,7 +129,6 @@ def run(args, parser) -> int:
         "decomposition": decomposition.name,
         "k": args.k,
         "scheme": scheme.name,
-        "first": getattr(scheme, "first", None),  # the subsystem that advances first (Gauss-Seidel only)
         "method_parameters": method.params,
         "model": {n: float(getattr(args, n)) for n in ("lr1", "li1", "am21", "alr21", "ali21")},
     }
