@@ -13,13 +13,13 @@ import icosim.convergence.experiment
 import icosim.convergence.work_precision
 from icosim.claims.registry import load_claims, parse_claims
 from icosim.convergence.config import check_claims_against_config, study_from_config
-from icosim.convergence.curves import fastest_schemes
+from icosim.convergence.curves import fastest_configurations
 from icosim.convergence.datasets import run_panel
 from icosim.convergence.experiment import Setup, dimensional_method, method_attrs, oscillation_summary, step_counts
 from icosim.convergence.metric import nrmse
 from icosim.convergence.panels import PanelSpec, figure_layout, figure_panels
 from icosim.convergence.study import Study, iterate_linear_map
-from icosim.convergence.work_precision import resolve_scheme, step_cost, time_macro_steps
+from icosim.convergence.work_precision import resolve_configuration, step_cost, time_macro_steps
 from icosim.errors import ParameterError
 from icosim.order_fit import asymptotic_order, local_slopes
 
@@ -266,7 +266,7 @@ def test_bad_parameters_name_the_figure():
             [0],
         )
     with pytest.raises(ParameterError, match="exactly one column"):
-        resolve_scheme({"figure": "21", "mu": 7.0, "index": 1}, _config()["figures"], [0])
+        resolve_configuration({"figure": "21", "mu": 7.0, "index": 1}, _config()["figures"], [0])
 
 
 def test_schema_rejects_unknown_key():
@@ -285,7 +285,7 @@ def test_panel_dataset_and_work_precision():
     assert ds["nrmse"].dims == ("index", "k", "H") and ds["H"].attrs["units"] == "s"
     assert ds.attrs["figure"] == "23" and ds.attrs["method"] == "projection" and ds.attrs["decomposition"] == "ff"
     assert np.all(np.diff(ds["order"].values[0]) > 0.5)  # k = 1 converges faster than k = 0
-    entries = resolve_scheme(
+    entries = resolve_configuration(
         {"figure": "23"},
         {"23": {"method": "projection", "columns": [{}], "rows": [{}], "decompositions": ["ff"]}},
         [0, 1],
@@ -295,7 +295,7 @@ def test_panel_dataset_and_work_precision():
     )
     cost = wp["cpu_seconds_per_simulated_second"].values
     assert np.all(cost[np.isfinite(wp["nrmse"].values)] > 0)
-    ranking = fastest_schemes(wp, [1.0])[0]["ranking"]
+    ranking = fastest_configurations(wp, [1.0])[0]["ranking"]
     assert [r[0] for r in ranking] and all(a[1] <= b[1] for a, b in zip(ranking, ranking[1:]))
     assert wp["subsystem_integrations_per_step"].values.tolist() == [4, 4]
     assert wp["coupling_solves_per_step"].values.tolist() == [1, 1]

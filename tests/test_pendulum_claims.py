@@ -29,7 +29,7 @@ from icosim.pendulum.runs import run_cosimulation
 
 ROOT = Path(__file__).resolve().parents[1]
 CFG = yaml.safe_load((ROOT / "config" / "pendulum.yaml").read_text())["pendulum"]
-CLAIMS = load_claims(ROOT / CFG["claims"])
+CLAIMS = load_claims(ROOT / CFG["claims"]["file"])
 RUNS = configured_runs(CFG)
 T_CLAIM = 0.4
 

@@ -148,7 +148,7 @@ def _convergence_inputs(tmp_path):
     from icosim.convergence.experiment import Setup, step_counts
     from icosim.convergence.panels import PanelSpec
     from icosim.convergence.study import Study
-    from icosim.convergence.work_precision import resolve_scheme, work_precision
+    from icosim.convergence.work_precision import resolve_configuration, work_precision
 
     setup = Setup(end_time=0.2)
     steps = {"H_min": 2e-4, "H_max": 2e-2, "num": 5}
@@ -156,7 +156,7 @@ def _convergence_inputs(tmp_path):
     fit = {"decades": 1.0, "tolerance": 0.1, "min_points": 2}
     ds = run_panel(PanelSpec("23", "ff", "all", "projection", {}, ({},), (0, 1)), study, fit)
     fig = {"title": "projection", "method": "projection", "columns": [{}], "rows": [{}], "decompositions": ["ff"]}
-    entries = resolve_scheme({"figure": "23"}, {"23": fig}, [0, 1])
+    entries = resolve_configuration({"figure": "23"}, {"23": fig}, [0, 1])
     wp = work_precision(entries, {("ff", "23", "all"): ds}, setup, steps=1, repeats=1, warmup_steps=0)
     return setup, steps, fig, ds, wp
 

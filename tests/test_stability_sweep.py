@@ -19,8 +19,11 @@ from icosim import TestModel, make_method  # noqa: E402
 from icosim.engine.spectral import spectral_radius_mp  # noqa: E402
 from icosim.errors import ParameterError  # noqa: E402
 from icosim.figures import save_figure  # noqa: E402
-from icosim.figures.stability import stability_figure  # noqa: E402
-from icosim.figures.stability import panel_layout, row_labels  # noqa: E402
+from icosim.figures.stability import (  # noqa: E402
+    panel_layout,
+    row_labels,
+    stability_figure,  # noqa: E402
+)
 from icosim.io.netcdf import open_dataset, provenance_attrs, write_netcdf  # noqa: E402
 from icosim.stability.datasets import stability_panel  # noqa: E402
 from icosim.stability.panels import (  # noqa: E402

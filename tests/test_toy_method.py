@@ -44,7 +44,7 @@ def toy_velocity(tau=None):
     tau = finite("tau", tau)
     if tau <= 0:
         raise ParameterError(f"tau must be > 0, got {tau!r}")
-    return CouplingMethod(NAME, ((1, (0, 1, tau)),), params={"tau": tau, "index": 2}, decompositions=("ff", "fd"))
+    return CouplingMethod(NAME, ((1, (0, 1, tau)),), params={"tau": tau, "index": 2}, requires_constraint=True)
 
 
 SPEC = MethodSpec(
@@ -65,7 +65,7 @@ SPEC = MethodSpec(
         ),
     ),
     indices=(2,),
-    decompositions=("ff", "fd"),
+    requires_constraint=True,
     label_parameters=("tau",),
 )
 

@@ -13,8 +13,8 @@ from fractions import Fraction
 
 from ..engine.backends import FLOAT64_DIGITS
 from ..engine.bounds import MAX_BITS_LIMIT, MAX_DIGITS, MAX_K, MAX_SECONDS, check_k
-from ..errors import ParameterError
 from ..engine.schemes import SCHEMES
+from ..errors import ParameterError
 
 __all__ = [
     "number",

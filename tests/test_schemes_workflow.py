@@ -1,5 +1,6 @@
-"""The Gauss-Seidel parts of the workflow and the library around them: configuration, figure ids,
-scheduling, the comparison of stable shares, the report section, and the pendulum's Gauss-Seidel step.
+"""The coupling scheme as a dimension of the workflow and the library around it: configuration,
+scheduling, the comparison of stable shares, the report's comparison of schemes, and the pendulum's
+Gauss-Seidel step.
 
 Dry runs work on a copy of the workflow; nothing here writes to the checkout's results/.
 """
@@ -15,19 +16,20 @@ from helpers import copy_workflow, scheduled, snakemake, validate_config
 from icosim import ParameterError, make_method
 from icosim.convergence.config import configured_curves
 from icosim.convergence.panels import figure_panels as conv_figure_panels
-from icosim.engine.schemes import GS12, GS21, figure_id, split_figure_id
+from icosim.engine.schemes import GS12, GS21
 from icosim.pendulum.config import configured_schemes
 from icosim.pendulum.model import PendulumParameters
 from icosim.pendulum.names import run_name
 from icosim.pendulum.problem import PendulumCosimulation
 from icosim.pendulum.reference import Monolithic, consistent_history
 from icosim.pendulum.runs import run_cosimulation
-from icosim.report.gauss_seidel import gauss_seidel_section, order_rows, pendulum_rows, share_cells
+from icosim.report.schemes import order_rows, pendulum_rows, share_cells, stability_schemes
 from icosim.stability.comparison import scheme_shares
 from icosim.stability.datasets import stability_panel
 from icosim.stability.panels import PanelSpec, figure_panels
 
 ROOT = Path(__file__).resolve().parents[1]
+BOTH = ("jacobi", "gauss-seidel-12", "gauss-seidel-21")
 
 
 def part(name):
@@ -40,35 +42,28 @@ def workflow_copy(tmp_path_factory):
 
 
 # -- configuration ------------------------------------------------------------------------------
-def test_figure_ids_round_trip():
-    for fig in ("9", "15", "21"):
-        for scheme in ("jacobi", "gauss-seidel-12", "gauss-seidel-21"):
-            assert split_figure_id(figure_id(fig, scheme)) == (fig, __import__("icosim").get_scheme(scheme))
-    assert figure_id("9") == "9"  # the paper's figures keep their numbers
-
-
-def test_jacobi_only_config_switches_off_every_gauss_seidel_scheme():
+def test_jacobi_only_config_switches_off_every_other_scheme():
     only = yaml.safe_load((ROOT / "config" / "jacobi_only.yaml").read_text())
-    assert "gauss_seidel" not in only["report"]["sections"]
     for name in ("stability", "convergence"):
         for fig, cfg in part(name)["figures"].items():
-            if set(cfg.get("schemes", ["jacobi"])) != {"jacobi"}:
+            if [s if isinstance(s, str) else s["name"] for s in cfg.get("schemes", ["jacobi"])] != ["jacobi"]:
                 assert only[name]["figures"][str(fig)]["schemes"] == ["jacobi"], (name, fig)
     assert only["pendulum"]["schemes"] == ["jacobi"]
 
 
 def test_default_config_computes_figs_9_to_15_and_21_to_23_with_both_orders():
-    both = {"jacobi", "gauss-seidel-12", "gauss-seidel-21"}
     for name, figs in (("stability", range(9, 16)), ("convergence", range(21, 24))):
         for fig in figs:
-            assert set(part(name)["figures"][str(fig)]["schemes"]) == both
-    assert set(configured_schemes(part("pendulum"))) == both
+            names = {s if isinstance(s, str) else s["name"] for s in part(name)["figures"][str(fig)]["schemes"]}
+            assert set(BOTH) <= names
+    assert set(configured_schemes(part("pendulum"))) == set(BOTH)
 
 
 @pytest.mark.parametrize(
     "name, override, message",
     [
         ("stability", {"figures": {"9": {"schemes": ["seidel"]}}}, "seidel"),
+        ("stability", {"figures": {"9": {"schemes": [{"name": "gauss-seidel-12"}]}}}, "rows"),
         ("convergence", {"figures": {"21": {"schemes": []}}}, "schemes"),
         ("pendulum", {"schemes": ["gauss-seidel-12"]}, "jacobi"),
     ],
@@ -92,51 +87,63 @@ def test_pendulum_schemes_must_include_jacobi():
         configured_schemes({"schemes": ["jacobi", "sequential"]})
 
 
-def test_gauss_seidel_panels_mirror_the_jacobi_layout():
+def test_every_scheme_of_a_figure_has_the_jacobi_layout():
     cfg = part("stability")
     kw = dict(grid=cfg["grid"], zoom_grid=cfg["zoom_grid"], precision=cfg["precision"])
     for fig in ("9", "13"):
-        jac = figure_panels(fig, cfg["figures"][fig], **kw)
-        gs = figure_panels(fig, cfg["figures"][fig], scheme="gauss-seidel-21", **kw)
-        strip = lambda s: {**s.as_dict(), "figure": None, "scheme": None}  # noqa: E731
-        assert [strip(s) for s in gs] == [strip(s) for s in jac]
-        assert {s.figure for s in gs} == {f"{fig}gs21"} and {s.scheme for s in gs} == {"gauss-seidel-21"}
+        specs = figure_panels(fig, cfg["figures"][fig], **kw)
+        strip = lambda s: {**s.as_dict(), "scheme": None}  # noqa: E731
+        by_scheme = {scheme: [strip(s) for s in specs if s.scheme == scheme] for scheme in BOTH}
+        assert by_scheme["gauss-seidel-21"] == by_scheme["jacobi"] == by_scheme["gauss-seidel-12"]
+        assert {s.figure for s in specs} == {fig}
     conv = part("convergence")
-    specs = conv_figure_panels("21", conv["figures"]["21"], conv["k"], "gauss-seidel-12")
-    assert {s.figure for s in specs} == {"21gs12"} and {s.scheme for s in specs} == {"gauss-seidel-12"}
+    specs = conv_figure_panels("21", conv["figures"]["21"], conv["k"])
+    assert {s.figure for s in specs} == {"21"} and {s.scheme for s in specs} == set(BOTH)
     curves = configured_curves(conv)
-    assert {c["scheme"] for c in curves if c["figure"] == "22gs21"} == {"gauss-seidel-21"}
+    assert {c["scheme"] for c in curves if c["figure"] == "22"} == set(BOTH)
+
+
+def test_a_scheme_for_some_rows_only():
+    cfg = part("stability")
+    fig = dict(cfg["figures"]["11"], schemes=["jacobi", {"name": "gauss-seidel-12-as-integrated", "rows": [1]}])
+    specs = figure_panels("11", fig, grid=cfg["grid"], zoom_grid=cfg["zoom_grid"], precision=cfg["precision"])
+    variant = [s for s in specs if s.scheme == "gauss-seidel-12-as-integrated"]
+    assert {s.row for s in variant} == {1} and len(variant) == len(fig["k"])
+    with pytest.raises(ParameterError, match="rows: \\[5\\]"):
+        figure_panels(
+            "11",
+            dict(fig, schemes=[{"name": "jacobi", "rows": [5]}]),
+            grid=cfg["grid"],
+            zoom_grid=cfg["zoom_grid"],
+            precision=cfg["precision"],
+        )
 
 
 def test_run_names():
     assert run_name("projection", "dd", 1) == "projection_dd_k1"
-    assert run_name("projection", "dd", 1, GS12) == "projection_dd_k1_gs12"
+    assert run_name("projection", "dd", 1, GS12) == "projection_dd_k1_gauss-seidel-12"
 
 
 # -- scheduling -------------------------------------------------------------------------------------
-def test_gauss_seidel_figure_schedules_its_own_panels(workflow_copy):
-    proc = snakemake(workflow_copy, "-n", "results/stability/figures/fig9gs21.png")
-    sweeps = scheduled(proc, "stability_sweep")
-    assert sweeps and all(s.startswith("results/stability/fig9gs21/") for s in sweeps)
-    assert len(sweeps) == 4 * 3 + 1
+def test_one_figure_target_schedules_that_figures_job_only(workflow_copy):
+    proc = snakemake(workflow_copy, "-n", "results/stability/figures/fig9_gauss-seidel-21.png")
+    text = proc.stdout + proc.stderr
+    assert "rule stability_panels_fig9:" in text and "rule stability_figure_fig9:" in text
+    assert "stability_panels_fig10" not in text and "rule pendulum" not in text and "rule convergence" not in text
+    panels = scheduled(proc, "stability_panels_fig9")
+    assert len([p for p in panels if "/gauss-seidel-21/" in p]) == 4 * 3 + 1
+    assert len([p for p in panels if "/jacobi/" in p]) == 4 * 3 + 1
 
 
-def test_default_run_has_every_gauss_seidel_part_and_jacobi_only_has_none(workflow_copy):
+def test_default_run_has_every_scheme_and_jacobi_only_none_but_jacobi(workflow_copy):
     proc = snakemake(workflow_copy, "-n")
     text = proc.stdout + proc.stderr
-    for rule in (
-        "stability_scheme_figure",
-        "stability_gauss_seidel_claims",
-        "convergence_gauss_seidel_claims",
-        "pendulum_gs_run",
-        "pendulum_gauss_seidel_claims",
-        "gauss_seidel_report_section",
-    ):
-        assert f"rule {rule}:" in text, rule
-    assert len(scheduled(proc, "pendulum_gs_run")) == 2 * 21
+    assert "rule stability_scheme_figure:" in text
+    runs = scheduled(proc, "pendulum_run")
+    assert len(runs) == len(BOTH) * 21 and {r.split("/")[3] for r in runs} == set(BOTH)
     only = snakemake(workflow_copy, "-n", "--configfile", "config/jacobi_only.yaml")
     text = only.stdout + only.stderr
-    assert "gs12" not in text and "gs21" not in text and "gauss_seidel" not in text
+    assert "gauss-seidel" not in text and "stability_scheme" not in text
 
 
 # -- the comparison and the report ------------------------------------------------------------------
@@ -164,27 +171,16 @@ def _panel(figure, scheme, row, k, n=5):
 
 
 def test_scheme_shares_tabulates_the_panels():
-    panels = [
-        _panel(figure_id("9", s), s, row, k)
-        for s in ("jacobi", "gauss-seidel-12", "gauss-seidel-21")
-        for row in (1, 2)
-        for k in (1, 2)
-    ]
+    panels = [_panel("9", s, row, k) for s in BOTH for row in (1, 2) for k in (1, 2)]
+    panels += [_panel("16", "jacobi", 1, 1)]  # one scheme only: not compared
     ds = scheme_shares(panels)
-    assert list(ds["figure"].values) == ["9"] and list(ds["scheme"].values) == [
-        "jacobi",
-        "gauss-seidel-12",
-        "gauss-seidel-21",
-    ]
-    for p in panels:
-        fig, scheme = split_figure_id(p.attrs["figure"])
-        share = float(ds["stable_share"].sel(figure=fig, row=p.attrs["row"], k=p.attrs["k"], scheme=scheme.name))
+    assert list(ds["figure"].values) == ["9"] and list(ds["scheme"].values) == list(BOTH)
+    for p in panels[:-1]:
+        share = float(ds["stable_share"].sel(figure="9", row=p.attrs["row"], k=p.attrs["k"], scheme=p.attrs["scheme"]))
         assert share == pytest.approx(float(p["stable"].values.mean()))
     cells = share_cells(ds)
     assert len(cells) == 2 and cells[0]["resolution"] == pytest.approx(0.25)
-    html = gauss_seidel_section(
-        stability={"shares": ds, "claims": [], "comparison_png": _png(), "figure_pngs": [], "figures_cfg": {}}
-    )
+    html = stability_schemes(shares=ds, claims=[], comparison_png=_png(), figure_pngs=[], figures_cfg={})
     assert "Gauss–Seidel 1→2" in html and "Fig. 9 (baumgarte, ff) k = 1" in html
 
 
@@ -203,7 +199,8 @@ def _png(tmp=[]):  # noqa: B006 - one small PNG per session
 def test_order_rows_and_pendulum_rows_read_the_data():
     recs = [
         {
-            "figure": fid,
+            "figure": "23",
+            "scheme": scheme,
             "decomposition": "ff",
             "method": "projection",
             "panel": "all",
@@ -212,10 +209,10 @@ def test_order_rows_and_pendulum_rows_read_the_data():
             "order": order,
             "unstable": np.array([unstable] * 3),
         }
-        for fid, order, unstable in (("23", 2.0, False), ("23gs12", 1.0, False), ("23gs21", np.nan, True))
+        for scheme, order, unstable in zip(BOTH, (2.0, 1.0, np.nan), (False, False, True))
     ]
     schemes, rows = order_rows(recs)
-    assert schemes == ["jacobi", "gauss-seidel-12", "gauss-seidel-21"]
+    assert schemes == list(BOTH)
     [(label, values)] = rows
     assert label.startswith("Fig. 23: ff, projection") and values == {
         "jacobi": 2.0,
