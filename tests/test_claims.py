@@ -13,12 +13,12 @@ import xarray as xr
 import yaml
 
 from icosim.claims.core import enforce_references, read_verdicts, reference_mismatches, select, write_verdicts
-from icosim.claims.registry import CHECKS, evaluate, evaluate_claim, load_claims, parse_claims
+from icosim.claims.registry import CHECKS, DEFAULTS, evaluate, evaluate_claim, load_claims, parse_claims
 from icosim.errors import ParameterError
 from icosim.report.claims import claims_table
 from icosim.stability.checks import grid_resolution, stable_share
 from icosim.stability.datasets import stability_panel
-from icosim.stability.panels import PanelSpec, figure_panels
+from icosim.stability.panels import PanelSpec, figure_panels, figure_schemes
 
 ROOT = Path(__file__).resolve().parents[1]
 CLAIMS_FILE = ROOT / "config" / "claims" / "stability.yaml"
@@ -32,7 +32,17 @@ def panel(stable_cols: int, n: int = 11, lr=(-2.0, 0.0), li=(0.0, 2.0), **attrs)
     stable = np.zeros((n, n), dtype=bool)
     stable[:stable_cols, :] = True
     rho = np.where(stable, 0.5, 1.5)
-    base = {"figure": "9", "row": 1, "k": 0, "view": "full", "am21": 1.0, "alr21": 1.0, "ali21": 1.0}
+    # as an engine panel: the figure and the coupling scheme apart (a selector naming no scheme reads Jacobi's)
+    base = {
+        "figure": "9",
+        "scheme": "jacobi",
+        "row": 1,
+        "k": 0,
+        "view": "full",
+        "am21": 1.0,
+        "alr21": 1.0,
+        "ali21": 1.0,
+    }
     base.update(attrs)
     return xr.Dataset(
         {"rho": (("lr1", "li1"), rho), "stable": (("lr1", "li1"), stable)},
@@ -228,6 +238,10 @@ def test_parse_claims_rejects_duplicates_and_missing_keys():
 # -- the stability claims file -------------------------------------------------------------------
 
 
+def _listed(value):
+    return value if isinstance(value, list) else [value]
+
+
 def test_stability_claims_file_is_consistent_with_the_configuration():
     claims = load_claims(CLAIMS_FILE)
     cfg = yaml.safe_load(CONFIG_FILE.read_text())["stability"]
@@ -236,19 +250,31 @@ def test_stability_claims_file_is_consistent_with_the_configuration():
     for c in claims:
         assert set(c.figures) <= set(figures), c.id
         assert c.reference in ("pass", "fail", "undecided"), f"{c.id}: no full-resolution reference verdict"
-        # every selector names a configured figure, and its rows / k / view exist there
+        # every selector names configured figures (one or a list; a selector naming none reads the claim's
+        # figures), computed with the scheme it selects (its own, from `each`, or the default: Jacobi), and
+        # its rows / k / view exist there
         check = c.check
         selectors = [check[key] for key in ("select", "a") if key in check]
         b = check.get("b", [])
         selectors += b if isinstance(b, list) else [b]
         for sel in selectors:
-            fig = figures[str(sel["figure"])]
-            for row in sel["row"] if isinstance(sel.get("row"), list) else [sel["row"]] if "row" in sel else []:
-                assert 1 <= row <= len(fig["rows"]), c.id
-            for k in [sel["k"]] if "k" in sel else c.each.get("k", []):
-                assert k in fig["k"], c.id
-            if sel.get("view") == "zoom":
-                assert fig.get("zoom"), f"{c.id}: Fig. {sel['figure']} has no zoom panels"
+            named = [str(f) for f in _listed(sel["figure"])] if "figure" in sel else list(c.figures)
+            assert named, c.id
+            for number in named:
+                assert number in figures, f"{c.id}: Fig. {number} is not configured"
+                fig = figures[number]
+                schemes = dict(figure_schemes(number, fig))
+                selected = _listed(sel["scheme"]) if "scheme" in sel else c.each.get("scheme", [DEFAULTS["scheme"]])
+                rows = _listed(sel["row"]) if "row" in sel else c.each.get("row", [])
+                for scheme in selected:
+                    assert scheme in schemes, f"{c.id}: Fig. {number} is not computed with {scheme}"
+                    for row in rows:
+                        assert 1 <= row <= len(fig["rows"]), c.id
+                        assert schemes[scheme] is None or row in schemes[scheme], c.id
+                for k in _listed(sel["k"]) if "k" in sel else c.each.get("k", []):
+                    assert k in fig["k"], c.id
+                if sel.get("view") == "zoom":
+                    assert fig.get("zoom"), f"{c.id}: Fig. {number} has no zoom panels"
 
 
 def test_the_claims_cover_the_papers_statements():

@@ -122,12 +122,16 @@ def test_work_cost_table_rows_as_before():
     H = np.array([1e-3, 1e-2])
     wp = xr.Dataset(
         {
-            "cpu_seconds_per_step": (("scheme", "H"), np.array([[1e-4, 3e-4], [np.nan, np.nan]])),
-            "subsystem_integrations_per_step": ("scheme", np.array([4, 6], dtype=np.int32)),
-            "coupling_solves_per_step": ("scheme", np.array([1, 3], dtype=np.int32)),
-            "projections_per_step": ("scheme", np.array([0, 1], dtype=np.int32)),
+            "cpu_seconds_per_step": (("configuration", "H"), np.array([[1e-4, 3e-4], [np.nan, np.nan]])),
+            "subsystem_integrations_per_step": ("configuration", np.array([4, 6], dtype=np.int32)),
+            "coupling_solves_per_step": ("configuration", np.array([1, 3], dtype=np.int32)),
+            "projections_per_step": ("configuration", np.array([0, 1], dtype=np.int32)),
         },
-        coords={"scheme": ["ff projection k=0", "ff weighted k=2"], "H": H, "method": ("scheme", ["p", "w"])},
+        coords={
+            "configuration": ["ff projection k=0", "ff weighted k=2"],
+            "H": H,
+            "method": ("configuration", ["p", "w"]),
+        },
     )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # median of an all-NaN row, as before
@@ -142,13 +146,13 @@ def test_work_cost_table_rows_as_before():
             str(int(c)),
         ]
         for lab, t, a, b, c in zip(
-            wp["scheme"].values,
+            wp["configuration"].values,
             per_step,
             wp["subsystem_integrations_per_step"].values,
             wp["coupling_solves_per_step"].values,
             wp["projections_per_step"].values,
         )
     ]
-    header = ["scheme", "ms per macro step", "subsystem integrations", "coupling solves", "projections"]
+    header = ["configuration", "ms per macro step", "subsystem integrations", "coupling solves", "projections"]
     assert table(new) == table(header, old_rows)
     assert old_rows[1][1] == "— (unstable at every H)"

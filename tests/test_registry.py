@@ -8,6 +8,7 @@ from helpers import ROOT, validate_config
 from icosim.cli import build_parser
 from icosim.convergence.experiment import dimensional_method, units_description, units_summary
 from icosim.engine import methods
+from icosim.engine.decompositions import DECOMPOSITIONS
 from icosim.engine.methods import METHODS, engine_method, get_spec, make_method, parameter_units
 from icosim.engine.schema import PLACEHOLDERS, schema_defs, with_registries
 from icosim.errors import ParameterError
@@ -128,8 +129,13 @@ def test_spec_checks_its_own_invariants():
     spec = METHODS["baumgarte"]
     with pytest.raises(ValueError, match="unused_at_index"):
         type(spec)(**{**spec.__dict__, "unused_at_index": {3: ("nu",)}})
-    with pytest.raises(ValueError, match="decompositions"):
+    # the decompositions follow from the registry (requires_constraint): a spec cannot name others
+    with pytest.raises(TypeError, match="decompositions"):
         type(spec)(**{**spec.__dict__, "decompositions": ("xx",)})
+    for requires in (False, True):
+        derived = type(spec)(**{**spec.__dict__, "requires_constraint": requires}).decompositions
+        expected = [name for name, d in DECOMPOSITIONS.items() if d.has_constraint_condition or not requires]
+        assert derived and list(derived) == expected
     with pytest.raises(ValueError, match="already registered"):
         methods.register(spec)
     assert np.isclose(spec.parameter("gamma").engine_value(1e-6, 1e-3), 1.0)
