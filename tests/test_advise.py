@@ -1,4 +1,4 @@
-"""``icosim advise``: every scheme for a physical two-mass system.
+"""``icosim advise``: every configuration for a physical two-mass system.
 
 Expected values come from an independent route: the Eq. (71) point worked out by hand from
 m, c, d and H (not through :class:`icosim.engine.model.PhysicalModel`), evaluated with
@@ -48,11 +48,14 @@ def engine(row, H):
 def test_rho_at_one_H_equals_the_hand_computed_point():
     H = 1e-2
     df = advise(TwoMassSystem(**SYSTEM), H)
-    assert len(df) == 3 * 45  # (18 Baumgarte + 18 weighted multiplier + 9 projection) x 3 coupling orders
-    assert df["coupling"].value_counts().to_dict() == {"jacobi": 45, "gauss-seidel-12": 45, "gauss-seidel-21": 45}
+    # (27 Baumgarte + 27 weighted multiplier: 3 indices x (ff, fd, df) x 3 k; 12 projection: (ff, fd, df, dd) x 3 k)
+    # x 3 schemes (the variants only when asked for)
+    assert len(df) == 3 * 66
+    assert df["scheme"].value_counts().to_dict() == {"jacobi": 66, "gauss-seidel-12": 66, "gauss-seidel-21": 66}
+    assert set(df["decomposition"]) == {"ff", "fd", "df", "dd"}  # every registered decomposition, df included
     for _, row in df.iterrows():
-        expected = rho_by_hand(H, engine(row, H), row["decomposition"], row["k"], scheme=row["coupling"])
-        assert row["rho"] == pytest.approx(expected, rel=1e-12), row["scheme"]
+        expected = rho_by_hand(H, engine(row, H), row["decomposition"], row["k"], scheme=row["scheme"])
+        assert row["rho"] == pytest.approx(expected, rel=1e-12), row["configuration"]
         assert (row["verdict"] == "stable") == (expected <= 1)
     stable = df[df["verdict"] == "stable"]
     assert list(stable["rank"]) == list(range(1, len(stable) + 1))  # ranked first, by rho
@@ -68,7 +71,7 @@ def test_baumgarte_mu_in_seconds_is_scaled_by_H():
     df = advise(
         TwoMassSystem(**SYSTEM),
         H,
-        configuration_list=configurations(methods=["baumgarte"], k=[1], params={"mu": mu}, couplings=["jacobi"]),
+        configuration_list=configurations(methods=["baumgarte"], k=[1], params={"mu": mu}, schemes=["jacobi"]),
     )
     row = df[(df["index"] == 1) & (df["decomposition"] == "ff")].iloc[0]
     assert row["parameters"] == "mu = 0.005 s"
@@ -82,9 +85,7 @@ def test_largest_stable_H_is_bracketed():
     rtol = 1e-6
     for method, dec, k in (("projection", "ff", 2), ("baumgarte", "fd", 0)):
         sl = [
-            s
-            for s in configurations(methods=[method], decompositions=[dec], k=[k], couplings=["jacobi"])
-            if s.index == 1
+            s for s in configurations(methods=[method], decompositions=[dec], k=[k], schemes=["jacobi"]) if s.index == 1
         ]
         row = advise(system, (1e-4, 1e-1), configuration_list=sl, rtol=rtol).iloc[0]
         assert row["verdict"] == "stable up to H_max" and row["stable_intervals"][0][0] == 1e-4
@@ -98,7 +99,7 @@ def test_largest_stable_H_is_bracketed():
 
 def test_non_monotone_stability_is_reported_as_intervals():
     """Weighted multiplier ff, k = 2: unstable for small H (near the origin), stable above."""
-    sl = configurations(methods=["weighted"], decompositions=["ff"], k=[2], couplings=["jacobi"])[:1]
+    sl = configurations(methods=["weighted"], decompositions=["ff"], k=[2], schemes=["jacobi"])[:1]
     row = advise(TwoMassSystem(**SYSTEM), (1e-4, 1e-1), configuration_list=sl).iloc[0]
     [[lo, hi]] = row["stable_intervals"]
     assert row["verdict"] == "stable on intervals" and 1e-4 < lo < hi == 1e-1
@@ -115,9 +116,7 @@ def test_overdamped_subsystem_has_no_eq71_form_but_a_verdict():
     df = advise(
         system,
         H,
-        configuration_list=configurations(
-            methods=["projection"], decompositions=["ff"], k=[0, 1], couplings=["jacobi"]
-        ),
+        configuration_list=configurations(methods=["projection"], decompositions=["ff"], k=[0, 1], schemes=["jacobi"]),
     )
     p = df.attrs["dimensionless"][0]
     assert p["lr1"] is None and "subsystem 1 is overdamped" in p["eq71"]
@@ -140,7 +139,7 @@ def test_json_is_strict_and_explains_nulls(capsys):
             "projection",
             "--k",
             "2",
-            "--couplings",
+            "--schemes",
             "jacobi",
             "--json",
         ]
@@ -152,33 +151,40 @@ def test_json_is_strict_and_explains_nulls(capsys):
         raise AssertionError(f"non-strict JSON constant {name}")
 
     data = json.loads(out, parse_constant=refuse)
-    assert data["mode"] == "range" and len(data["schemes"]) == 3
-    assert all(s["rank"] is not None for s in data["schemes"])  # projection k = 2 is stable for small H
+    assert data["mode"] == "range" and len(data["configurations"]) == 4  # ff, fd, df, dd
+    assert all(s["rank"] is not None for s in data["configurations"])  # projection k = 2 is stable for small H
     df = advise(
         TwoMassSystem(**SYSTEM),
         (1e-3, 0.1),
-        configuration_list=configurations(methods=["projection"], k=[2], couplings=["jacobi"]),
+        configuration_list=configurations(methods=["projection"], k=[2], schemes=["jacobi"]),
     )
-    assert [s["H_max"] for s in data["schemes"]] == pytest.approx(df["H_max"].tolist())
+    assert [s["H_max"] for s in data["configurations"]] == pytest.approx(df["H_max"].tolist())
     # a scheme unstable everywhere: nulls with reasons
     rec = advice_records(
         advise(
             TwoMassSystem(**SYSTEM),
             (1e-3, 1e-2),
-            configuration_list=configurations(methods=["weighted"], k=[2], couplings=["jacobi"])[2:3],
+            configuration_list=[
+                c
+                for c in configurations(methods=["weighted"], k=[2], schemes=["jacobi"])
+                if (c.index, c.decomposition) == (2, "ff")
+            ],
         )
     )
-    [s] = rec["schemes"]
+    [s] = rec["configurations"]
     assert s["H_max"] is None and s["null_reasons"]["H_max"] == "no stable H in the range"
     assert s["rank"] is None and s["null_reasons"]["rank"] == "not stable"
     json.dumps(rec, allow_nan=False)
 
 
-def test_text_output_ranks_the_stable_schemes(capsys):
-    assert main(["advise", *ARGS, "--H", "0.01", "--methods", "projection", "--couplings", "jacobi"]) == 0
+def test_text_output_ranks_the_stable_configurations(capsys):
+    assert main(["advise", *ARGS, "--H", "0.01", "--methods", "projection", "--schemes", "jacobi"]) == 0
     out = capsys.readouterr().out
     assert "Eq. (71) at H = 0.01 s: lr1 = -0.01, li1 = 0.3161, am21 = 2, alr21 = 1, ali21 = 1" in out
-    assert "9 schemes at H = 0.01 s, 9 stable" in out
+    n_stable = sum(
+        rho_by_hand(0.01, make_method("projection"), d, k) <= 1 for d in ("ff", "fd", "df", "dd") for k in (0, 1, 2)
+    )
+    assert f"12 configurations at H = 0.01 s, {n_stable} stable" in out  # (ff, fd, df, dd) x 3 k
     lines = [line for line in out.splitlines() if line.strip().startswith("1 ")]
     assert lines and "projection dd k=0" in lines[0]  # smallest rho at this point (Figs. 15: dd damps most)
 
@@ -196,6 +202,7 @@ def test_text_output_ranks_the_stable_schemes(capsys):
         (["--k", "-1"], "--k"),
         (["--methods", "nope"], "--methods"),
         (["--decompositions", "xy"], "--decompositions"),
+        (["--schemes", "gauss-seidel"], "--schemes"),  # the old generic name: a scheme is named with its order
         (["--mu", "-1e-3"], "--mu"),
         (["--methods", "weighted", "--b", "0"], "--b"),
         (["--methods", "projection", "--a", "1"], "--a"),
@@ -234,16 +241,16 @@ def test_progress_bar_only_on_a_terminal_after_the_delay():
         bar = Progress(4, stream=stream, delay=delay)
         bar(2)
         bar.close()
-    assert quiet.getvalue() == "" and "2/4 schemes" in tty.getvalue()
+    assert quiet.getvalue() == "" and "2/4 configurations" in tty.getvalue()
     late = Tty()
     bar = Progress(4, stream=late, delay=60.0)
     bar(4)
     assert late.getvalue() == ""  # a scan shorter than the delay shows nothing
 
 
-def test_range_ranking_puts_schemes_stable_from_the_lower_end_first():
-    sl = configurations(methods=["weighted"], decompositions=["ff"], k=[2], couplings=["jacobi"])[:1] + configurations(
-        methods=["projection"], decompositions=["ff"], k=[2], couplings=["jacobi"]
+def test_range_ranking_puts_configurations_stable_from_the_lower_end_first():
+    sl = configurations(methods=["weighted"], decompositions=["ff"], k=[2], schemes=["jacobi"])[:1] + configurations(
+        methods=["projection"], decompositions=["ff"], k=[2], schemes=["jacobi"]
     )
     df = advise(TwoMassSystem(**SYSTEM), (1e-4, 1e-1), configuration_list=sl)
     # weighted ff k = 2 reaches the larger H (0.1) but is unstable at small H: ranked after projection
@@ -252,11 +259,9 @@ def test_range_ranking_puts_schemes_stable_from_the_lower_end_first():
     assert df["H_max_from_lo"].iloc[0] == df["H_max"].iloc[0] and np.isnan(df["H_max_from_lo"].iloc[1])
 
 
-def test_couplings_option_selects_the_coupling_orders(capsys):
-    """``--couplings gauss-seidel-21``: only that order, its rho the library's with that scheme."""
-    code = main(
-        ["advise", *ARGS, "--H", "1e-2", "--methods", "projection", "--k", "1", "--couplings", "gauss-seidel-21"]
-    )
+def test_schemes_option_selects_the_coupling_schemes(capsys):
+    """``--schemes gauss-seidel-21``: only that scheme, its rho the library's with that scheme."""
+    code = main(["advise", *ARGS, "--H", "1e-2", "--methods", "projection", "--k", "1", "--schemes", "gauss-seidel-21"])
     assert code == 0
     code = main(
         [
@@ -268,13 +273,14 @@ def test_couplings_option_selects_the_coupling_orders(capsys):
             "projection",
             "--k",
             "1",
-            "--couplings",
+            "--schemes",
             "gauss-seidel-21",
             "--json",
         ]
     )
     data = json.loads(capsys.readouterr().out.splitlines()[-1])
-    assert {s["coupling"] for s in data["schemes"]} == {"gauss-seidel-21"} and len(data["schemes"]) == 3
-    for s in data["schemes"]:
+    rows = data["configurations"]
+    assert {s["scheme"] for s in rows} == {"gauss-seidel-21"} and len(rows) == 4  # ff, fd, df, dd
+    for s in rows:
         expected = rho_by_hand(1e-2, make_method("projection"), s["decomposition"], 1, scheme="gauss-seidel-21")
         assert s["rho"] == pytest.approx(expected, rel=1e-12)

@@ -8,7 +8,7 @@ import pytest
 
 from icosim import TestModel, baumgarte, spectral_radius_float64, weighted_multiplier
 from icosim.cli import main
-from icosim.engine.schemes import GS12, GS21
+from icosim.engine.schemes import GS12, GS21, JACOBI, SCHEMES, GaussSeidel, get_scheme
 
 BASE = ["rho", "--lr1", "-0.5", "--li1", "0.7", "--am21", "2", "--alr21", "2", "--ali21", "2"]
 
@@ -103,16 +103,25 @@ def test_missing_parameter_and_real_process_exit_status():
     assert "--ali21" in proc.stderr and "Traceback" not in proc.stderr
 
 
-@pytest.mark.parametrize("first,scheme", [(None, GS12), ("1", GS12), ("2", GS21)])
-def test_gauss_seidel_scheme_matches_library(capsys, first, scheme):
-    argv = BASE + ["--method", "weighted", "--a", "1", "--b", "1", "--decomposition", "fd", "--k", "1"]
-    argv += ["--scheme", "gauss-seidel"] + (["--first", first] if first else []) + ["--json"]
+@pytest.mark.parametrize(
+    "name,scheme,dec",
+    [
+        ("gauss-seidel-12", GS12, "fd"),
+        ("gauss-seidel-21", GS21, "fd"),
+        ("gauss-seidel-21-as-integrated", GaussSeidel(2, "as-integrated"), "ff"),
+    ],
+)
+def test_gauss_seidel_scheme_matches_library(capsys, name, scheme, dec):
+    argv = BASE + ["--method", "weighted", "--a", "1", "--b", "1", "--decomposition", dec, "--k", "1"]
+    argv += ["--scheme", name, "--json"]
     code, out = run(capsys, argv)
     data = json.loads(out)
     expected, _ = spectral_radius_float64(
-        TestModel(-0.5, 0.7, 2, 2, 2), weighted_multiplier(1, 1), "fd", 1, scheme=scheme
+        TestModel(-0.5, 0.7, 2, 2, 2), weighted_multiplier(1, 1), dec, 1, scheme=scheme
     )
-    assert code == 0 and data["scheme"] == scheme.name and data["first"] == scheme.first
+    # the scheme is spelled by its name only: the name says which subsystem advances first
+    assert code == 0 and data["scheme"] == scheme.name == name and get_scheme(data["scheme"]) == scheme
+    assert "first" not in data
     assert data["verdict"] in ("stable", "unstable") and data["certified"]
     assert data["rho"] == pytest.approx(float(expected), rel=1e-13)
     code, out = run(capsys, argv[:-1])
@@ -122,15 +131,17 @@ def test_gauss_seidel_scheme_matches_library(capsys, first, scheme):
 def test_default_scheme_is_jacobi(capsys):
     code, out = run(capsys, BASE + ["--method", "projection", "--decomposition", "ff", "--k", "0", "--json"])
     data = json.loads(out)
-    assert data["scheme"] == "jacobi" and data["first"] is None
+    assert data["scheme"] == "jacobi" and get_scheme(data["scheme"]) is JACOBI and "first" not in data
 
 
 @pytest.mark.parametrize(
     "extra,argument",
     [
-        (["--first", "2"], "argument --first: only used with --scheme gauss-seidel"),
-        (["--scheme", "jacobi", "--first", "1"], "argument --first"),
-        (["--scheme", "gauss-seidel", "--first", "3"], "argument --first"),
+        # the generic name of the old spelling (--scheme gauss-seidel --first 2) is not a scheme any more
+        (["--scheme", "gauss-seidel"], "argument --scheme: invalid choice: 'gauss-seidel'"),
+        # nor is --first an argument: the subsystem that advances first is part of the scheme's name
+        (["--scheme", "gauss-seidel-12", "--first", "1"], "unrecognized arguments: --first 1"),
+        (["--scheme", "gauss-seidel-31"], "argument --scheme: invalid choice: 'gauss-seidel-31'"),
         (["--scheme", "seidel"], "argument --scheme"),
     ],
 )
@@ -140,6 +151,8 @@ def test_bad_scheme_arguments_exit_2_naming_them(capsys, extra, argument):
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert argument in err and "Traceback" not in err
+    if "--scheme" in argument:  # the allowed values are listed: every registered scheme
+        assert all(f"'{name}'" in err for name in SCHEMES)
 
 
 # -- N-digit results and numbers as users type them (every digit printed is proven) ------------------------

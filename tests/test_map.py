@@ -8,6 +8,7 @@ import pytest
 from icosim import TestModel, make_method, spectral_radius_float64
 from icosim.advise.maps import boundary_extent, map_specs, marginal_extent, stable_extent
 from icosim.cli import main
+from icosim.engine.schemes import SCHEMES, GaussSeidel
 from icosim.engine.spectral import certify_spectral_radius
 from icosim.io.netcdf import open_dataset
 from icosim.stability.datasets import stability_panel
@@ -130,21 +131,34 @@ def test_bad_input_exits_2_naming_the_argument(capsys, monkeypatch, tmp_path, ar
     assert not list(tmp_path.iterdir())  # nothing written
 
 
-@pytest.mark.parametrize("first,name", [("1", "gauss-seidel-12"), ("2", "gauss-seidel-21")])
+@pytest.mark.parametrize("first,name", [(1, "gauss-seidel-12"), (2, "gauss-seidel-21")])
 def test_map_with_a_gauss_seidel_scheme(tmp_path, capsys, first, name):
-    """``--scheme gauss-seidel --first N``: the panel is the scheme's (attribute ``scheme``, rho of the library)."""
+    """``--scheme gauss-seidel-12`` / ``-21``: the panel is the scheme's (attribute ``scheme``, rho of the library
+    with subsystem ``first`` advancing first)."""
     prefix = tmp_path / "gs"
-    argv = [*WM, "--k", "0", *GRID, "--out", str(prefix), "--scheme", "gauss-seidel", "--first", first]
+    argv = [*WM, "--k", "0", *GRID, "--out", str(prefix), "--scheme", name]
     assert main(argv) == 0
     assert "Gauss–Seidel" in capsys.readouterr().out
     ds = open_dataset(tmp_path / "gs_k0.nc")
     assert ds.attrs["scheme"] == name
     lr1, li1 = ds["lr1"].values[3], ds["li1"].values[5]
-    rho, _ = spectral_radius_float64(TestModel(lr1, li1), make_method("weighted", a=1, b=1), "ff", 0, scheme=name)
+    method = make_method("weighted", a=1, b=1)
+    rho, _ = spectral_radius_float64(TestModel(lr1, li1), method, "ff", 0, scheme=GaussSeidel(first))
     assert ds["rho"].values[3, 5] == pytest.approx(float(rho), rel=1e-12)
 
 
-def test_map_first_without_gauss_seidel_exits_2(capsys):
+@pytest.mark.parametrize(
+    "extra,argument",
+    [
+        (["--scheme", "gauss-seidel"], "argument --scheme: invalid choice: 'gauss-seidel'"),  # the old generic name
+        (["--scheme", "jacobi", "--first", "2"], "unrecognized arguments: --first 2"),  # first is in the name now
+    ],
+)
+def test_map_old_gauss_seidel_spelling_exits_2(tmp_path, capsys, extra, argument):
     with pytest.raises(SystemExit) as exc:
-        main([*WM, "--k", "0", *GRID, "--first", "2"])
-    assert exc.value.code == 2 and "argument --first" in capsys.readouterr().err
+        main([*WM, "--k", "0", *GRID, "--out", str(tmp_path / "x"), *extra])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and argument in err and "Traceback" not in err
+    if "--scheme" in argument:  # the allowed values are listed: every registered scheme
+        assert all(f"'{name}'" in err for name in SCHEMES)
+    assert not list(tmp_path.iterdir())  # nothing written

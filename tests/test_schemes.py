@@ -28,7 +28,7 @@ from icosim.convergence.experiment import Setup, step_counts
 from icosim.convergence.study import Study
 from icosim.engine.macrostep import macro_step
 from icosim.engine.model import Coefficients
-from icosim.engine.schemes import GS12, GS21, JACOBI, GaussSeidel, Jacobi, get_scheme
+from icosim.engine.schemes import GS12, GS21, JACOBI, SCHEMES, GaussSeidel, Jacobi, get_scheme, standard_schemes
 from icosim.engine.spectral import amplification_matrix
 from icosim.order_fit import asymptotic_order
 
@@ -64,25 +64,48 @@ def _expm_blocks(k_, d_, g_):
 def test_scheme_names_and_roles():
     assert (JACOBI.name, GS12.name, GS21.name) == ("jacobi", "gauss-seidel-12", "gauss-seidel-21")
     assert get_scheme(None) is JACOBI and get_scheme("jacobi") == Jacobi()
-    assert get_scheme("gauss-seidel") == GS12 == GaussSeidel(1)
-    assert get_scheme("gauss-seidel", first=2) == GS21 == get_scheme("gauss-seidel-21")
+    assert get_scheme("gauss-seidel-12") == GS12 == GaussSeidel(1)
+    assert get_scheme("gauss-seidel-21") == GS21 == GaussSeidel(2)
+    assert get_scheme(GS21) is GS21  # a scheme is returned as it is
     assert (GS12.leading, GS12.corrected, GS21.leading, GS21.corrected) == ((0,), (1,), (1,), (0,))
     assert (JACOBI.integrations_per_step, GS12.integrations_per_step) == (4, 3)
-    assert (JACOBI.suffix, GS12.suffix, GS21.suffix) == ("", "gs12", "gs21")
+    # the name is the one spelling (files, attributes): the variants' names, and only the variants are variants
+    as_integrated = (GaussSeidel(1, "as-integrated"), GaussSeidel(2, "as-integrated"))
+    assert [s.name for s in as_integrated] == ["gauss-seidel-12-as-integrated", "gauss-seidel-21-as-integrated"]
+    assert [get_scheme(s.name) for s in as_integrated] == list(as_integrated)
+    assert [s.variant for s in (JACOBI, GS12, GS21, *as_integrated)] == [False, False, False, True, True]
+    assert list(SCHEMES) == ["jacobi", "gauss-seidel-12", "gauss-seidel-21", *(s.name for s in as_integrated)]
+    assert standard_schemes() == ("jacobi", "gauss-seidel-12", "gauss-seidel-21")
+
+
+ALLOWED = "jacobi, gauss-seidel-12, gauss-seidel-21, gauss-seidel-12-as-integrated, gauss-seidel-21-as-integrated"
 
 
 @pytest.mark.parametrize(
-    "args,match",
+    "make,match",
     [
-        (("gauss",), "scheme must be one of gauss-seidel, jacobi, gauss-seidel-12, gauss-seidel-21"),
-        (("gauss-seidel", 3), "first must be 1 or 2"),
-        (("jacobi", 1), "first is only used with scheme 'gauss-seidel'"),
-        (("gauss-seidel-12", 2), "first is only used"),
+        (lambda: get_scheme("gauss"), f"scheme must be one of {ALLOWED}, got 'gauss'"),
+        (lambda: GaussSeidel(3), "first must be 1 or 2"),
+        (lambda: GaussSeidel(True), "first must be 1 or 2"),
+        # the old spelling (a generic name with first=...) is gone: the generic name is refused ...
+        (lambda: get_scheme("gauss-seidel"), f"scheme must be one of {ALLOWED}, got 'gauss-seidel'"),
+        # ... and a name that is not a string is refused naming the argument
+        (lambda: get_scheme(2), f"scheme must be one of {ALLOWED}, got 2"),
+        (lambda: GaussSeidel(1, "as-computed"), "leading_outputs must be one of reevaluated, as-integrated"),
     ],
+    ids=["unknown-name", "first-3", "first-bool", "generic-name", "not-a-name", "leading-outputs"],
 )
-def test_bad_scheme_is_refused_naming_the_argument(args, match):
+def test_bad_scheme_is_refused_naming_the_argument(make, match):
     with pytest.raises(ParameterError, match=match):
-        get_scheme(*args)
+        make()
+
+
+def test_get_scheme_takes_the_name_only():
+    """``first`` is part of the name (gauss-seidel-21), not an argument of its own."""
+    with pytest.raises(TypeError):
+        get_scheme("gauss-seidel", first=2)
+    with pytest.raises(TypeError):
+        get_scheme("jacobi", 1)
 
 
 def test_step_counts_three_integrations_for_gauss_seidel():
@@ -362,7 +385,7 @@ def test_gauss_seidel_on_the_simulate_path_equals_the_matrix_path():
 def test_make_method_and_scheme_by_name():
     m = make_method("projection")
     M1 = amplification_matrix(TestModel(-0.5, 0.5), m, "ff", 1, scheme="gauss-seidel-21")
-    M2 = amplification_matrix(TestModel(-0.5, 0.5), m, "ff", 1, scheme=get_scheme("gauss-seidel", first=2))
+    M2 = amplification_matrix(TestModel(-0.5, 0.5), m, "ff", 1, scheme=GaussSeidel(first=2))
     np.testing.assert_array_equal(M1, M2)
 
 
