@@ -1,11 +1,13 @@
-"""The claim of Sect. 4 (config/claims/pendulum.yaml) on a shorter horizon.
+"""The claims of config/claims/pendulum.yaml (Sect. 4 and the project's about the other schemes) on a shorter horizon.
 
 Every configuration of config/pendulum.yaml at every k is co-simulated for
 ``T_CLAIM`` seconds with the configured method parameters, integrator and
-divergence bounds; the observed outcome (diverged or not) must be the one the
-claim states.  0.4 s decides the claim: the weighted multiplier at k = 2
-diverges after about 0.2 s, while the stable runs stay orders of magnitude
-inside the bounds (checked here too, so that "stable" is not a near miss).
+divergence bounds, with every scheme a claim is about (``check.scheme``, default
+the paper's Jacobi); the observed outcome (diverged or not) must be the one each
+claim about that scheme states.  0.4 s decides the claims: the weighted multiplier at k = 2
+diverges after about 0.2 s with Jacobi (the Gauss-Seidel runs within 0.05 s), while the
+stable runs stay orders of magnitude inside the bounds (checked here too, so that "stable"
+is not a near miss).
 """
 
 from pathlib import Path
@@ -16,9 +18,10 @@ import yaml
 from helpers import validate_config
 
 import icosim.pendulum.problem
-from icosim import make_method
+from icosim import ParameterError, make_method
 from icosim.claims.registry import evaluate_claim, load_claims, parse_claims
-from icosim.pendulum.config import configured_runs
+from icosim.engine.schemes import get_scheme
+from icosim.pendulum.config import configured_runs, configured_schemes
 from icosim.pendulum.integrator.radau import IntegrationError
 from icosim.pendulum.linearised import linear_test_model_rho, pendulum_test_model
 from icosim.pendulum.model import PendulumParameters
@@ -34,12 +37,22 @@ RUNS = configured_runs(CFG)
 T_CLAIM = 0.4
 
 
+def _scheme(claim) -> str:
+    """The scheme whose runs a claim is about (a check that names none: the paper's, Jacobi)."""
+    return get_scheme(claim.check.get("scheme", "jacobi")).name
+
+
+#: The schemes the claims are about, in the order of pendulum.schemes (each with its claims).
+CLAIM_SCHEMES = [s for s in configured_schemes(CFG) if any(_scheme(c) == s for c in CLAIMS)]
+SCHEME_RUNS = [(scheme, *run) for scheme in CLAIM_SCHEMES for run in RUNS]
+
+
 def _claim_with(**check):
     """The shipped claim with some check parameters replaced."""
     return parse_claims([{**CLAIMS[0].as_dict(), "check": {**CLAIMS[0].check, **check}}])[0]
 
 
-def _run(method_name, decomposition, k, t_end=T_CLAIM):
+def _run(method_name, decomposition, k, t_end=T_CLAIM, scheme="jacobi"):
     return run_cosimulation(
         PendulumParameters(**CFG["model"]),
         make_method(method_name, **CFG["methods"][method_name]),
@@ -47,6 +60,7 @@ def _run(method_name, decomposition, k, t_end=T_CLAIM):
         k,
         H=CFG["H"],
         t_end=t_end,
+        scheme=scheme,
         **CFG["integrator"],
         **CFG["sensitivities"],
         **CFG["corrector"],
@@ -55,21 +69,33 @@ def _run(method_name, decomposition, k, t_end=T_CLAIM):
 
 
 def test_the_claim_covers_exactly_the_configured_exceptions():
-    """Every exception of the claim names a configured run (no typo silently ignored)."""
+    """Every exception of a claim names a configured run and every claim a configured scheme (no typo silently
+    ignored); the paper's claim of Sect. 4 is about Jacobi."""
     for claim in CLAIMS:
         assert claim.check["kind"] == "pendulum_stability"
+        assert _scheme(claim) in configured_schemes(CFG), claim.id
         for ex in claim.check.get("exceptions", []):
             assert (ex["method"], ex["decomposition"], int(ex["k"])) in RUNS
+    assert CLAIMS[0].id == "sect4_stability" and _scheme(CLAIMS[0]) == "jacobi"
+    assert {_scheme(c) for c in CLAIMS} == set(CLAIM_SCHEMES)
 
 
-@pytest.mark.parametrize("run", RUNS, ids=["_".join(map(str, r)) for r in RUNS])
-def test_sect4_stability_claim(run):
-    method_name, decomposition, k = run
-    result = _run(method_name, decomposition, k)
+@pytest.mark.parametrize(
+    "scheme, method_name, decomposition, k",
+    SCHEME_RUNS,
+    ids=[f"{m}_{d}_{k}" + ("" if s == "jacobi" else f"_{s}") for s, m, d, k in SCHEME_RUNS],
+)
+def test_sect4_stability_claim(scheme, method_name, decomposition, k):
+    """Each run against every claim about its scheme (Jacobi: the paper's claim of Sect. 4)."""
+    run = (method_name, decomposition, k)
+    claims = [claim for claim in CLAIMS if _scheme(claim) == scheme]
+    assert claims  # CLAIM_SCHEMES holds only schemes some claim is about
+    result = _run(method_name, decomposition, k, scheme=scheme)
     assert result.status in ("stable", "diverged"), result.reason  # a failed run would decide nothing
     observed = "unstable" if result.diverged else "stable"
-    for claim in CLAIMS:
-        assert observed == expected_outcome(claim.check, method_name, decomposition, k), (claim.id, run, result.reason)
+    for claim in claims:
+        expected = expected_outcome(claim.check, method_name, decomposition, k)
+        assert observed == expected, (claim.id, scheme, run, result.reason)
     # the stored series never hold NaN, and a diverged run ends before its divergence time
     for values in result.series.values():
         assert np.all(np.isfinite(values))
@@ -190,7 +216,7 @@ def test_linear_test_model_at_the_pendulum_point_predicts_the_claim():
     [
         ({"t_ned": 3.0}, "t_ned"),
         ({"integrator": {"rtol": 1e-6, "atol": 1e-6, "newton_tol": 1e-8, "method": "BDF"}}, "method"),
-        ({"configurations": [{"method": "weighted", "decomposition": "df"}]}, "df"),
+        ({"configurations": [{"method": "weighted", "decomposition": "fx"}]}, "fx"),
         ({"H": -1e-3}, "-0.001"),
     ],
 )
@@ -199,3 +225,17 @@ def test_schema_rejects_bad_config_naming_it(patch, needle):
     validate_config(dict(CFG), "pendulum")  # the real config passes
     with pytest.raises(Exception, match=needle):
         validate_config(bad, "pendulum")
+
+
+@pytest.mark.parametrize("method_name", ["baumgarte", "weighted", "projection"])
+def test_configuration_with_df_is_refused_naming_it_and_the_reason(method_name):
+    """df is a registered decomposition (the schema takes it), but the pendulum has no coupling conditions for it:
+    the check the workflow makes right after the schema's (configured_runs) refuses it, naming the
+    configuration, df and why."""
+    bad = {**CFG, "configurations": [*CFG["configurations"], {"method": method_name, "decomposition": "df"}]}
+    validate_config(bad, "pendulum")
+    where = rf"pendulum\.configurations\[{len(CFG['configurations'])}\] \({method_name}, df\)"
+    with pytest.raises(
+        ParameterError, match=rf"{where}: .*not for 'df' \(link 1 kinematically driven, link 2 force-driven"
+    ):
+        configured_runs(bad)

@@ -27,6 +27,8 @@ from icosim.engine.lagrange import (
     weights_at,
 )
 from icosim.engine.macrostep import macro_step
+from icosim.engine.schema import with_registries
+from icosim.engine.schemes import SCHEMES, standard_schemes
 from icosim.pendulum import runs as runs_module
 from icosim.pendulum.config import trade_plan
 from icosim.pendulum.model import PendulumParameters
@@ -34,7 +36,7 @@ from icosim.pendulum.problem import PendulumCosimulation
 from icosim.pendulum.reference import consistent_history, reference_solution
 from icosim.pendulum.runs import run_adaptive, run_cosimulation
 from icosim.pendulum.trade.adaptive import fixed_at_error
-from icosim.pendulum.trade.measures import SCHEMES, angle_errors, config_label
+from icosim.pendulum.trade.measures import angle_errors, config_label
 from icosim.pendulum.trade.orders import decade_order, error_floor, pendulum_order
 from icosim.pendulum.trade.stability_limit import stability_limit
 
@@ -419,14 +421,17 @@ def test_fixed_at_error_is_exact_for_a_power_law():
 def test_shipped_configuration_validates_and_schemes_match():
     validate_config(CFG, "pendulum")
     schema = yaml.safe_load((ROOT / "workflow" / "schemas" / "pendulum.schema.yaml").read_text())
-    assert tuple(schema["$defs"]["scheme"]["enum"]) == SCHEMES
+    # the schema's schemes are the registry's, filled in when the workflow validates (no list of its own)
+    assert schema["$defs"]["scheme"] == {}
+    assert with_registries(schema)["$defs"]["scheme"]["enum"] == list(SCHEMES)
     plan = trade_plan(CFG)
-    # the 21 configurations with every scheme of pendulum.schemes (Jacobi, Gauss-Seidel 1->2 and 2->1)
+    # the 21 configurations with every scheme of pendulum.schemes (Jacobi, Gauss-Seidel 1->2 and 2->1:
+    # every registered scheme but the variants)
     assert len(plan["configs"]) == 21 * len(CFG["schemes"]) and len(CFG["trade"]["error_over_H"]["H"]) >= 8
-    assert {c[1] for c in plan["configs"]} == set(CFG["schemes"]) == set(SCHEMES)
+    assert {c[1] for c in plan["configs"]} == set(CFG["schemes"]) == set(standard_schemes())
     assert min(CFG["trade"]["error_over_H"]["H"]) == 1e-4 and max(CFG["trade"]["error_over_H"]["H"]) == 2e-2
     assert config_label("jacobi", "baumgarte", "ff", 1) == "baumgarte_ff_k1"
-    assert config_label("gauss-seidel-12", "baumgarte", "ff", 1) == "baumgarte_ff_k1_gs12"
+    assert config_label("gauss-seidel-12", "baumgarte", "ff", 1) == "baumgarte_ff_k1_gauss-seidel-12"
     # the Gauss-Seidel adaptive configuration runs only while its scheme is configured (config/jacobi_only.yaml)
     assert any(c.get("scheme") == "gauss-seidel-12" for c in plan["adaptive"]["configurations"])
     only = trade_plan(dict(CFG, schemes=["jacobi"]))
@@ -490,7 +495,7 @@ def small_studies(tmp_path_factory):
             ("baumgarte_ff_k0", "jacobi", "baumgarte", "ff", 0),
             ("baumgarte_ff_k1", "jacobi", "baumgarte", "ff", 1),
             ("projection_ff_k1", "jacobi", "projection", "ff", 1),
-            ("projection_ff_k1_gs12", "gauss-seidel-12", "projection", "ff", 1),
+            ("projection_ff_k1_gauss-seidel-12", "gauss-seidel-12", "projection", "ff", 1),
         ],
         H,
         model=trade["linear_orders"]["model"],
@@ -536,17 +541,19 @@ def test_datasets_have_the_contract_names_and_dims(small_studies):
         "baumgarte_ff_k0",
         "baumgarte_ff_k1",
         "projection_ff_k1",
-        "projection_ff_k1_gs12",
+        "projection_ff_k1_gauss-seidel-12",
     ]
     assert list(wp["scheme"].values) == ["jacobi"] * 3 + ["gauss-seidel-12"]
+    # every configuration found its linear model's row (the labels are the same spelling as the sweeps')
+    assert np.all(np.isfinite(wp["rho_linear"].values))
     for name in ("H_max", "H_max_linear"):
         assert lim[name].dims == ("config",)
-    assert list(lim["config"].values) == ["baumgarte_ff_k1", "projection_ff_k0", "projection_ff_k0_gs21"]
+    assert list(lim["config"].values) == ["baumgarte_ff_k1", "projection_ff_k0", "projection_ff_k0_gauss-seidel-21"]
     # the linear bracket's upper end: a verdict of the policy, "" where the search found no unstable H
     assert set(map(str, lim["verdict_linear_unstable"].values)) <= {"", "unstable", "marginal", "undecided"}
     for name in ("error_max", "n_macro_steps", "cpu_seconds"):
         assert ad[name].dims == ("config", "tol")
-    assert list(ad["config"].values) == ["projection_ff_k1", "projection_ff_k1_gs21"]
+    assert list(ad["config"].values) == ["projection_ff_k1", "projection_ff_k1_gauss-seidel-21"]
     assert list(ad["scheme"].values) == ["jacobi", "gauss-seidel-21"]
     # counts over (config, H) are the end time over H for the runs that reached it
     ok = wp["status"].values == "stable"
