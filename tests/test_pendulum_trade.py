@@ -503,6 +503,10 @@ def small_studies(tmp_path_factory):
         t_end=0.1,
     )
     wp = work_precision_dataset(sweeps, mono, lin, fit=trade["fit"], accuracy_levels=[1e-4, 1e-12])
+    # a run the linear study does not hold is an error, not a row of NaN
+    with pytest.raises(ValueError, match="no configuration projection_ff_k1_gauss-seidel-12"):
+        partial = lin.drop_sel(config=["projection_ff_k1_gauss-seidel-12"])
+        work_precision_dataset(sweeps, mono, partial, fit=trade["fit"], accuracy_levels=[1e-4])
     limit_groups = []
     for scheme, method, k in (
         ("jacobi", "baumgarte", 1),

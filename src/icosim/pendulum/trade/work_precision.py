@@ -62,6 +62,9 @@ def work_precision_dataset(sweeps: list, monolithic, linear, *, fit: dict, accur
     wp.attrs["reference_rtol"] = float(monolithic.attrs["reference_rtol"])
     fits = orders(wp, **fit)
     labels = [str(c) for c in wp["config"].values]
+    missing = sorted(set(labels) - {str(c) for c in linear["config"].values})
+    if missing:  # reindex would fill them with NaN and the comparison would go quiet
+        raise ValueError(f"the linear study has no configuration {', '.join(missing)} of the pendulum runs")
     lin = linear.reindex(config=labels)
     lin_fits = {}
     for lab in labels:
