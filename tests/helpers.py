@@ -3,6 +3,8 @@
 * :func:`copy_workflow` and :func:`snakemake`: run the workflow on a copy in a temporary
   directory, never on the checkout's results/;
 * :func:`scheduled`: the outputs a dry run schedules for a rule;
+* :func:`scheduled_jobs`: the same for every rule whose name starts with a prefix (the rules made
+  per figure, e.g. ``stability_panels_fig9``);
 * :func:`validate_config`: a part's configuration against its schema, with the method
   definitions filled in from the registry as the workflow does;
 * :func:`predict_all` and :func:`correct_all`: every subsystem of a problem predicted or
@@ -59,14 +61,31 @@ def snakemake(workdir: Path, *args, check=True):
 def scheduled(proc, rule):
     """Outputs of the jobs of `rule` in a dry-run listing."""
     text = proc.stdout + proc.stderr
-    blocks = re.split(r"\n(?=\S*rule \w+:)", text)
+    blocks = re.split(r"\n(?=\S*rule [\w-]+:)", text)
     outs = []
     for block in blocks:
-        m = re.search(r"rule (\w+):", block)
+        m = re.search(r"rule ([\w-]+):", block)
         if m and m.group(1) == rule:
             out = re.search(r"output: ([^\n]+)", block)
             outs += [o.strip() for o in out.group(1).split(",")] if out else []
     return outs
+
+
+def scheduled_jobs(proc, prefix: str) -> dict:
+    """``{rule: outputs}`` of the jobs in a dry-run listing whose rule name starts with ``prefix``.
+
+    Rule names may hold a hyphen (the per-figure rules of a figure such as ``df-baumgarte``).
+    """
+    text = proc.stdout + proc.stderr
+    jobs = {}
+    for block in re.split(r"\n(?=\S*rule [\w-]+:)", text):
+        m = re.search(r"rule ([\w-]+):", block)
+        if m and m.group(1).startswith(prefix):
+            out = re.search(r"output: ([^\n]+)", block)
+            outs = jobs.setdefault(m.group(1), [])
+            if out:
+                outs += [o.strip() for o in out.group(1).split(",")]
+    return jobs
 
 
 def validate_config(part_config: dict, part: str):

@@ -17,7 +17,7 @@ from icosim.convergence.curves import fastest_configurations
 from icosim.convergence.datasets import run_panel
 from icosim.convergence.experiment import Setup, dimensional_method, method_attrs, oscillation_summary, step_counts
 from icosim.convergence.metric import nrmse
-from icosim.convergence.panels import PanelSpec, figure_layout, figure_panels
+from icosim.convergence.panels import PanelSpec, figure_layout, figure_panels, figure_schemes
 from icosim.convergence.study import Study, iterate_linear_map
 from icosim.convergence.work_precision import resolve_configuration, step_cost, time_macro_steps
 from icosim.errors import ParameterError
@@ -246,9 +246,12 @@ def _config():
 def test_panels_share_the_index3_row():
     cfg = _config()
     specs = figure_panels("21", cfg["figures"]["21"], cfg["k"])
-    ff = [s for s in specs if s.decomposition == "ff"]
-    assert [s.panel for s in ff] == ["mu0.00025", "mu0.001", "mu0.005", "index3"]
-    assert ff[-1].shared and ff[-1].rows == ({"index": 3},)
+    schemes = figure_schemes(cfg["figures"]["21"])
+    assert {s.scheme for s in specs} == set(schemes)
+    for scheme in schemes:  # the same panels for every scheme (a dimension of the figure, like k)
+        ff = [s for s in specs if s.decomposition == "ff" and s.scheme == scheme]
+        assert [s.panel for s in ff] == ["mu0.00025", "mu0.001", "mu0.005", "index3"]
+        assert ff[-1].shared and ff[-1].rows == ({"index": 3},)
     layout = figure_layout("21", cfg["figures"]["21"], "ff", cfg["k"])
     assert layout[1] == [("mu0.001", 1), ("mu0.001", 2), ("index3", 3)]
     assert PanelSpec.from_dict(ff[0].as_dict()) == ff[0]
@@ -291,7 +294,7 @@ def test_panel_dataset_and_work_precision():
         [0, 1],
     )
     wp = icosim.convergence.work_precision.work_precision(
-        entries, {("ff", "23", "all"): ds}, study.setup, steps=2, repeats=1, warmup_steps=1
+        entries, {(spec.scheme, "ff", "23", "all"): ds}, study.setup, steps=2, repeats=1, warmup_steps=1
     )
     cost = wp["cpu_seconds_per_simulated_second"].values
     assert np.all(cost[np.isfinite(wp["nrmse"].values)] > 0)

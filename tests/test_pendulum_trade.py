@@ -467,7 +467,7 @@ def small_studies(tmp_path_factory):
     from icosim.io.netcdf import open_dataset, write_netcdf
     from icosim.pendulum.trade.adaptive import adaptive_study
     from icosim.pendulum.trade.baselines import linear_orders_dataset, monolithic_baselines
-    from icosim.pendulum.trade.stability_limit import limits_dataset, limits_group, merge_limits
+    from icosim.pendulum.trade.stability_limit import limits_study, merge_limits
     from icosim.pendulum.trade.sweep import sweep_group
     from icosim.pendulum.trade.tolerance import tolerance_study
     from icosim.pendulum.trade.work_precision import work_precision_dataset
@@ -513,9 +513,9 @@ def small_studies(tmp_path_factory):
         ("jacobi", "projection", 0),
         ("gauss-seidel-21", "projection", 0),
     ):
-        groups = limits_group(settings, scheme, method, "ff", [k], scan=[5e-3, 2e-2], t_end=0.05, resolution=0.5)
-        kw = dict(scheme=scheme, method=method, decomposition="ff", scan=[5e-3, 2e-2], t_end=0.05, resolution=0.5)
-        limit_groups.append(round_trip(limits_dataset(groups, attrs={}, **kw), f"limits_{scheme}_{method}"))
+        limits = {"scan": [5e-3, 2e-2], "t_end": 0.05, "resolution": 0.5}
+        ds = limits_study(settings, scheme, method, "ff", [k], limits=limits)
+        limit_groups.append(round_trip(ds, f"limits_{scheme}_{method}"))
     lim = merge_limits(limit_groups)
     tol = tolerance_study(
         settings, [{"method": "projection", "decomposition": "ff", "k": 1}], [1e-2], [1e-3, 1e-8], T, reference=ref

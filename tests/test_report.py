@@ -154,10 +154,11 @@ def _convergence_inputs(tmp_path):
     steps = {"H_min": 2e-4, "H_max": 2e-2, "num": 5}
     study = Study(setup, step_counts(0.2, steps["H_min"], steps["H_max"], steps["num"]))
     fit = {"decades": 1.0, "tolerance": 0.1, "min_points": 2}
-    ds = run_panel(PanelSpec("23", "ff", "all", "projection", {}, ({},), (0, 1)), study, fit)
+    spec = PanelSpec("23", "ff", "all", "projection", {}, ({},), (0, 1))
+    ds = run_panel(spec, study, fit)
     fig = {"title": "projection", "method": "projection", "columns": [{}], "rows": [{}], "decompositions": ["ff"]}
     entries = resolve_configuration({"figure": "23"}, {"23": fig}, [0, 1])
-    wp = work_precision(entries, {("ff", "23", "all"): ds}, setup, steps=1, repeats=1, warmup_steps=0)
+    wp = work_precision(entries, {(spec.scheme, "ff", "23", "all"): ds}, setup, steps=1, repeats=1, warmup_steps=0)
     return setup, steps, fig, ds, wp
 
 
@@ -178,9 +179,9 @@ def test_convergence_section_reports_curves_claims_and_work_precision(tmp_path, 
         "verdict": "pass",
     }
     claim = record("proj", "pass", numbers={"rows": [row], "tolerance": 0.3})
-    fig_png = tmp_path / "fig23_ff.png"
+    fig_png = tmp_path / "fig23_ff_jacobi.png"  # results/convergence/figures/fig<figure>_<dec>_<scheme>.png
     fig_png.write_bytes(png.read_bytes())
-    (tmp_path / "fig23_ff_slopes.png").write_bytes(png.read_bytes())
+    (tmp_path / "fig23_ff_jacobi_slopes.png").write_bytes(png.read_bytes())
     html = convergence_section(
         setup=setup.as_dict(),
         step_sizes=steps,
@@ -205,8 +206,8 @@ def test_convergence_section_reports_curves_claims_and_work_precision(tmp_path, 
     assert "within ±0.1 of it" in html and "first 7 macro steps" in html  # the decision rule and start-up window
     assert "no round-off floor" in html and f"proven at {int(ds['defect_bits'].max())} bits" in html
     assert "<b>Fig. 23, ff</b> (as in the paper)" in html and html.count('class="pair"') == 1
-    for scheme in wp["scheme"].values:
-        assert str(scheme) in html or str(scheme).split(" ", 1)[1] in html
+    for configuration in wp["configuration"].values:  # the work-precision curves are configurations
+        assert str(configuration) in html or str(configuration).split(" ", 1)[1] in html
 
 
 def study_H(ds):
@@ -253,7 +254,7 @@ def test_pendulum_section_lists_every_run(tmp_path, png):
     from helpers import ROOT
 
     cfg = yaml.safe_load((ROOT / "config" / "pendulum.yaml").read_text())["pendulum"]
-    k_png = tmp_path / "pendulum_k2.png"
+    k_png = tmp_path / "pendulum_k2_jacobi.png"  # results/pendulum/figures/pendulum_k<k>_<scheme>.png
     k_png.write_bytes(png.read_bytes())
     html = pendulum_section(
         config=cfg,
@@ -327,7 +328,8 @@ def test_summary_first_counts_verdicts_and_links_each_disagreement(tmp_path, png
     # the disagreement: the note's own sentence, and links to the claim row, the figure and the dataset
     assert "<i>Why:</i> Disagreement (the data stand): fd is less stable than ff, e.g. in Fig. 9." in summary
     assert '<a href="#stability-claim-b">b</a>' in summary and '<a href="#stability-fig9">Fig. 9</a>' in summary
-    assert '<a href="../results/stability/fig9/"><code>results/stability/fig9/</code></a>' in summary
+    # a claim that names no scheme reads Jacobi's panels: the link goes to them
+    assert '<a href="../results/stability/fig9/jacobi/"><code>results/stability/fig9/jacobi/</code></a>' in summary
     assert "Undecided" in summary and '<a href="#stability-claim-c">c</a>' in summary
     assert "full-resolution reference" not in summary  # no claim here has a reference
     assert '<li><a href="#summary">summary</a></li>' in html

@@ -29,6 +29,7 @@ from icosim.stability.datasets import stability_panel  # noqa: E402
 from icosim.stability.panels import (  # noqa: E402
     PanelSpec,
     figure_panels,
+    figure_schemes,
     grid_axis,
     panel_id,
     row_label,
@@ -142,30 +143,38 @@ def test_grid_axis_hits_the_end_points_exactly():
 
 
 def test_configured_figures_expand_to_the_papers_layout():
+    """The paper's layout for every scheme a figure is computed with (the scheme is a dimension, like k)."""
     counts = {}
     for fig, fc in CFG["figures"].items():
         specs = figure_panels(fig, fc, grid=CFG["grid"], zoom_grid=CFG["zoom_grid"], precision=CFG["precision"])
-        full = [s for s in specs if s.view == "full"]
-        counts[fig] = (len(full), len(specs) - len(full))
-        assert len({panel_id(s.row, s.k, s.view) for s in specs}) == len(specs)
+        assert len({(s.scheme, panel_id(s.row, s.k, s.view)) for s in specs}) == len(specs)
+        schemes = figure_schemes(fig, fc)
+        assert {s.scheme for s in specs} == set(dict(schemes))
+        for scheme, rows in schemes:
+            if rows is None:  # every row: the figure's whole layout
+                own = [s for s in specs if s.scheme == scheme]
+                full = [s for s in own if s.view == "full"]
+                counts.setdefault(fig, set()).add((len(full), len(own) - len(full)))
+    assert all(len(c) == 1 for c in counts.values())  # the same layout for every scheme
+    counts = {fig: c.pop() for fig, c in counts.items()}
     for fig in map(str, range(9, 16)):  # 4 rows x k = 0, 1, 2
         assert counts[fig][0] == 12
     for fig in ("16", "17", "19", "20"):  # 3 rows x 3 k
         assert counts[fig][0] == 9
     assert counts["18"] == (3, 0)
     assert counts["9"][1] == 1 and counts["10"][1] == 4 and counts["16"][1] == 6
-    # Figs. 9-15: row 1 is (1, 1, 1), rows 2-4 raise am21, alr21, ali21 in turn
+    # Figs. 9-15: row 1 is (1, 1, 1), rows 2-4 raise am21, alr21, ali21 in turn (for every scheme)
     for fig in map(str, range(9, 16)):
         fc = CFG["figures"][fig]
-        triples = [
-            (x.am21, x.alr21, x.ali21)
-            for x in figure_panels(fig, fc, grid=CFG["grid"], zoom_grid=CFG["zoom_grid"], precision=CFG["precision"])
-            if x.k == 0 and x.view == "full"
-        ]
-        assert triples[0] == (1.0, 1.0, 1.0)
-        for row, triple in enumerate(triples[1:]):
-            raised = [i for i, v in enumerate(triple) if v != 1.0]
-            assert raised == [row], (fig, triples)
+        specs = figure_panels(fig, fc, grid=CFG["grid"], zoom_grid=CFG["zoom_grid"], precision=CFG["precision"])
+        for scheme in [name for name, rows in figure_schemes(fig, fc) if rows is None]:
+            triples = [
+                (x.am21, x.alr21, x.ali21) for x in specs if x.scheme == scheme and x.k == 0 and x.view == "full"
+            ]
+            assert triples[0] == (1.0, 1.0, 1.0)
+            for row, triple in enumerate(triples[1:]):
+                raised = [i for i, v in enumerate(triple) if v != 1.0]
+                assert raised == [row], (fig, scheme, triples)
     # Figs. 16-20 use (2, 2, 2)
     for fig in ("16", "17", "18", "19", "20"):
         assert CFG["figures"][fig]["ratios"] == {"am21": 2.0, "alr21": 2.0, "ali21": 2.0}

@@ -2,8 +2,11 @@
 
 Each test works on a copy of the workflow in a temporary directory, so it
 never touches results/ of the checkout.  Dry runs are cheap; one test runs a
-tiny real workflow (one figure, 6 panels of 4 x 4 points) to check the
-params rerun trigger.
+tiny real workflow (two figures: 6 panels of Fig. 18 and 2 of Fig. 19, on 4 x 4
+points) to check the rerun triggers.  One job per figure computes its panels
+(rule stability_panels_fig<figure>), one draws it for every scheme
+(stability_figure_fig<figure>): changing one panel's parameter reruns at most the
+jobs of its figure.
 """
 
 import copy
@@ -13,9 +16,9 @@ from pathlib import Path
 
 import pytest
 import yaml
-from helpers import copy_workflow, scheduled, snakemake
+from helpers import copy_workflow, scheduled, scheduled_jobs, snakemake
 
-from icosim.stability.panels import figure_panels, panel_id
+from icosim.stability.panels import figure_panels, figure_schemes, panel_id
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -25,25 +28,32 @@ def workflow_copy(tmp_path_factory):
     return copy_workflow(tmp_path_factory.mktemp("wf"))
 
 
-def stability_config():
-    return yaml.safe_load((ROOT / "config" / "stability.yaml").read_text())["stability"]
+def stability_config(root=ROOT):
+    return yaml.safe_load((root / "config" / "stability.yaml").read_text())["stability"]
+
+
+def panel_files(cfg, fig):
+    """The datasets of a figure's panels as configured: results/stability/fig<figure>/<scheme>/<panel>.nc."""
+    specs = figure_panels(
+        fig, cfg["figures"][fig], grid=cfg["grid"], zoom_grid=cfg["zoom_grid"], precision=cfg["precision"]
+    )
+    return [f"results/stability/fig{fig}/{s.scheme}/{panel_id(s.row, s.k, s.view)}.nc" for s in specs]
 
 
 def test_one_figure_target_schedules_only_that_figures_panels(workflow_copy):
-    proc = snakemake(workflow_copy, "-n", "results/stability/figures/fig9.png")
-    sweeps = scheduled(proc, "stability_sweep")
+    proc = snakemake(workflow_copy, "-n", "results/stability/figures/fig9_jacobi.png")
+    jobs = scheduled_jobs(proc, "stability_")
+    # one job computes the figure's panels, one draws it: no other figure's job, no claims
+    assert set(jobs) == {"stability_panels_fig9", "stability_figure_fig9"}
     cfg = stability_config()
-    expected = {
-        f"results/stability/fig9/{panel_id(s.row, s.k, s.view)}.nc"
-        for s in figure_panels(
-            "9", cfg["figures"]["9"], grid=cfg["grid"], zoom_grid=cfg["zoom_grid"], precision=cfg["precision"]
-        )
-    }
-    assert set(sweeps) == expected
-    assert len(expected) == 4 * 3 + 1  # 4 rows x k = 0, 1, 2, plus the zoom of row 4, k = 2
-    assert scheduled(proc, "stability_figure") == [
-        "results/stability/figures/fig9.png",
-        "results/stability/figures/fig9.pdf",
+    expected = panel_files(cfg, "9")
+    assert sorted(jobs["stability_panels_fig9"]) == sorted(expected) and len(set(expected)) == len(expected)
+    schemes = [name for name, _ in figure_schemes("9", cfg["figures"]["9"])]
+    assert "jacobi" in schemes
+    for scheme in schemes:  # 4 rows x k = 0, 1, 2, plus the zoom of row 4, k = 2, for every scheme
+        assert len([f for f in expected if f"/fig9/{scheme}/" in f]) == 4 * 3 + 1
+    assert jobs["stability_figure_fig9"] == [
+        f"results/stability/figures/fig9_{scheme}.{ext}" for scheme in schemes for ext in ("png", "pdf")
     ]
     assert not scheduled(proc, "stability_claims")
 
@@ -82,47 +92,79 @@ def test_bad_configuration_fails_before_any_job_naming_the_key(workflow_copy, tm
     assert proc.returncode != 0
     for name in names:
         assert name in out, out[-2000:]
-    assert "rule stability_sweep" not in out  # nothing was scheduled
+    assert "rule stability_panels" not in out and "rule stability_figure" not in out  # nothing was scheduled
+
+
+def ci_config():
+    """config/stability.yaml with config/ci/stability.yaml merged in, as --configfile does."""
+    from snakemake.utils import update_config
+
+    merged = copy.deepcopy(stability_config())
+    update_config(merged, yaml.safe_load((ROOT / "config" / "ci" / "stability.yaml").read_text())["stability"])
+    return merged
+
+
+def layout_count(cfg):
+    """Panels the configuration asks for, counted from its layout: per figure and scheme, rows x k
+    plus the zooms (independent of figure_panels)."""
+    n = 0
+    for fig, fc in cfg["figures"].items():
+        zoom = fc.get("zoom") or {"rows": [], "k": []}
+        for _, rows in figure_schemes(str(fig), fc):
+            rows = rows or range(1, len(fc["rows"]) + 1)
+            n += len(rows) * len(fc["k"]) + len([r for r in rows if r in zoom["rows"]]) * len(zoom["k"])
+    return n
 
 
 def test_ci_override_keeps_every_panel_on_coarse_grids():
     """--configfile is merged recursively (lists replaced): the CI file only coarsens grids."""
-    from snakemake.utils import update_config
-
     full = stability_config()
-    merged = copy.deepcopy(full)
-    ci = yaml.safe_load((ROOT / "config" / "ci" / "stability.yaml").read_text())["stability"]
-    update_config(merged, ci)
+    merged = ci_config()
     assert merged["figures"] == full["figures"]
     assert merged["grid"]["n"] < full["grid"]["n"] and merged["zoom_grid"]["n"] < full["zoom_grid"]["n"]
     assert merged["grid"]["lr1"] == full["grid"]["lr1"]
 
-    def count(cfg):
-        return sum(
-            len(figure_panels(f, fc, grid=cfg["grid"], zoom_grid=cfg["zoom_grid"], precision=cfg["precision"]))
+    def specs(cfg):
+        return [
+            s
             for f, fc in cfg["figures"].items()
-        )
+            for s in figure_panels(f, fc, grid=cfg["grid"], zoom_grid=cfg["zoom_grid"], precision=cfg["precision"])
+        ]
 
-    assert count(merged) == count(full) == 144
+    assert len(specs(merged)) == len(specs(full)) == layout_count(full)
+    assert {s.n for s in specs(merged)} == {merged["grid"]["n"], merged["zoom_grid"]["n"]}
     assert merged["claims"]["enforce_reference"] is True
 
 
 def test_ci_override_is_what_snakemake_schedules(workflow_copy):
     proc = snakemake(workflow_copy, "results/stability/claims.json", "-n", "--configfile", "config/ci/stability.yaml")
-    assert len(scheduled(proc, "stability_sweep")) == 144
+    jobs = scheduled_jobs(proc, "stability_panels_fig")
+    merged = ci_config()
+    assert set(jobs) == {f"stability_panels_fig{fig}" for fig in merged["figures"]}  # one job per figure
+    assert sum(len(outs) for outs in jobs.values()) == layout_count(merged)
+    for fig in merged["figures"]:
+        assert sorted(jobs[f"stability_panels_fig{fig}"]) == sorted(panel_files(merged, str(fig)))
+
+
+#: the figures of the tiny run (Jacobi only, as Figs. 18 and 19 are configured)
+TINY_FIGURES = ("results/stability/figures/fig18_jacobi.png", "results/stability/figures/fig19_jacobi.png")
 
 
 @pytest.fixture(scope="module")
 def tiny_run(tmp_path_factory):
-    """A real run of a one-figure configuration: Fig. 18 with two rows on a 4 x 4 grid."""
+    """A real run of a two-figure configuration on a 4 x 4 grid: Fig. 18 with two rows (6 panels) and,
+    to tell one figure's jobs from another's, Fig. 19 with one row and k = 0, 1 (2 panels)."""
     wf = copy_workflow(tmp_path_factory.mktemp("tiny"))
     cfg = yaml.safe_load((wf / "config" / "stability.yaml").read_text())
     st = cfg["stability"]
     st["grid"]["n"] = 4
     st["zoom_grid"]["n"] = 3
-    st["figures"] = {"18": {**st["figures"]["18"], "rows": [{}, {"am21": 3.0}]}}
+    st["figures"] = {
+        "18": {**st["figures"]["18"], "rows": [{}, {"am21": 3.0}]},
+        "19": {**st["figures"]["19"], "rows": [{"mu": 1.0}], "k": [0, 1]},
+    }
     (wf / "config" / "stability.yaml").write_text(yaml.safe_dump(cfg))
-    snakemake(wf, "-c2", "results/stability/figures/fig18.png")
+    snakemake(wf, "-c2", *TINY_FIGURES)
     return wf
 
 
@@ -136,37 +178,45 @@ def edit_config(wf, fn):
 def test_tiny_run_writes_the_panels_and_the_figure(tiny_run):
     for row in (1, 2):
         for k in (0, 1, 2):
-            assert (tiny_run / f"results/stability/fig18/r{row}_k{k}_full.nc").is_file()
-    assert (tiny_run / "results/stability/figures/fig18.png").read_bytes()[:4] == b"\x89PNG"
-    assert (tiny_run / "results/stability/figures/fig18.pdf").read_bytes()[:4] == b"%PDF"
-    assert (tiny_run / "logs/stability/sweep/fig18_r1_k0_full.log").is_file()
+            assert (tiny_run / f"results/stability/fig18/jacobi/r{row}_k{k}_full.nc").is_file()
+    assert sorted(panel_files(stability_config(tiny_run), "18")) == sorted(
+        str(p.relative_to(tiny_run)) for p in (tiny_run / "results/stability/fig18").rglob("*.nc")
+    )
+    assert (tiny_run / "results/stability/figures/fig18_jacobi.png").read_bytes()[:4] == b"\x89PNG"
+    assert (tiny_run / "results/stability/figures/fig18_jacobi.pdf").read_bytes()[:4] == b"%PDF"
+    assert (tiny_run / "logs/stability/panels/fig18.log").is_file()
 
 
-def test_changing_one_row_reruns_that_rows_panels_only(tiny_run):
-    proc = snakemake(tiny_run, "-n", "results/stability/figures/fig18.png")
-    assert not scheduled(proc, "stability_sweep")  # up to date
+def test_changing_one_row_reruns_that_figures_jobs_only(tiny_run):
+    proc = snakemake(tiny_run, "-n", *TINY_FIGURES)
+    assert not scheduled_jobs(proc, "stability_")  # up to date
     edit_config(tiny_run, lambda st: st["figures"]["18"]["rows"][1].update(am21=4.0))
-    proc = snakemake(tiny_run, "-n", "results/stability/figures/fig18.png")
-    assert sorted(scheduled(proc, "stability_sweep")) == [f"results/stability/fig18/r2_k{k}_full.nc" for k in (0, 1, 2)]
+    proc = snakemake(tiny_run, "-n", *TINY_FIGURES)
+    jobs = scheduled_jobs(proc, "stability_")
+    # at most the jobs of the figure whose panel changed: Fig. 19's panels and figure are not rerun
+    assert set(jobs) == {"stability_panels_fig18", "stability_figure_fig18"}
+    assert sorted(jobs["stability_panels_fig18"]) == sorted(panel_files(stability_config(tiny_run), "18"))
     edit_config(tiny_run, lambda st: st["figures"]["18"]["rows"][1].update(am21=3.0))  # back
+    assert not scheduled_jobs(snakemake(tiny_run, "-n", *TINY_FIGURES), "stability_")
 
 
 def test_restyling_reruns_no_sweep_and_library_edits_rerun_their_users(tiny_run):
+    target = TINY_FIGURES[0]
     edit_config(tiny_run, lambda st: st["plot"].update(style="dots"))
-    proc = snakemake(tiny_run, "-n", "results/stability/figures/fig18.png")
-    assert not scheduled(proc, "stability_sweep")
-    assert scheduled(proc, "stability_figure")
+    proc = snakemake(tiny_run, "-n", target)
+    assert not scheduled_jobs(proc, "stability_panels")
+    assert scheduled(proc, "stability_figure_fig18")
     edit_config(tiny_run, lambda st: st["plot"].update(style="field"))
 
     # Snakemake reruns on an input newer than the output *with different content*: edit the modules
     with open(tiny_run / "src/icosim/figures/stability.py", "a") as fh:
         fh.write("\n# edited by test_stability_workflow\n")
-    proc = snakemake(tiny_run, "-n", "results/stability/figures/fig18.png")
-    assert not scheduled(proc, "stability_sweep") and scheduled(proc, "stability_figure")
+    proc = snakemake(tiny_run, "-n", target)
+    assert not scheduled_jobs(proc, "stability_panels") and scheduled(proc, "stability_figure_fig18")
     with open(tiny_run / "src/icosim/stability/panels.py", "a") as fh:
         fh.write("\n# edited by test_stability_workflow\n")
-    proc = snakemake(tiny_run, "-n", "results/stability/figures/fig18.png")
-    assert len(scheduled(proc, "stability_sweep")) == 6
+    proc = snakemake(tiny_run, "-n", target)
+    assert sorted(scheduled(proc, "stability_panels_fig18")) == sorted(panel_files(stability_config(tiny_run), "18"))
 
 
 def report_inputs(proc):
@@ -225,12 +275,12 @@ def test_enforced_references_fail_the_claims_job_when_not_reproduced(tiny_run):
 def test_library_inputs_follow_the_real_imports(tiny_run):
     """A rule reruns when a module its script imports (directly or not) changes, and only then:
     editing the pendulum's problem reruns no stability job, editing a stability check reruns the claims."""
-    snakemake(tiny_run, "results/stability/claims.json", "-c1")  # up to date with the current config
+    snakemake(tiny_run, "results/stability/claims.json", *TINY_FIGURES, "-c1")  # up to date with the current config
     with open(tiny_run / "src/icosim/pendulum/problem.py", "a") as fh:
         fh.write("\n# edited by test_stability_workflow\n")
-    proc = snakemake(tiny_run, "-n", "results/stability/claims.json", "results/stability/figures/fig18.png")
-    assert not scheduled(proc, "stability_claims") and not scheduled(proc, "stability_sweep")
+    proc = snakemake(tiny_run, "-n", "results/stability/claims.json", *TINY_FIGURES)
+    assert not scheduled_jobs(proc, "stability_")
     with open(tiny_run / "src/icosim/stability/checks.py", "a") as fh:
         fh.write("\n# edited by test_stability_workflow\n")
-    proc = snakemake(tiny_run, "-n", "results/stability/claims.json")
-    assert scheduled(proc, "stability_claims") and not scheduled(proc, "stability_sweep")
+    proc = snakemake(tiny_run, "-n", "results/stability/claims.json", *TINY_FIGURES)
+    assert set(scheduled_jobs(proc, "stability_")) == {"stability_claims"}

@@ -4,12 +4,11 @@ divergence) and predicted by the linear test model -> one NetCDF per scheme
 
 import logging
 
-from icosim.io.netcdf import provenance_attrs, write_netcdf
-from icosim.pendulum.trade.stability_limit import limits_dataset, limits_group
+from icosim.io.netcdf import write_netcdf
+from icosim.pendulum.trade.stability_limit import limits_study
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 w, p = snakemake.wildcards, snakemake.params
-lim = p.limits
 
 
 def log(label, measured, predicted):
@@ -20,36 +19,14 @@ def log(label, measured, predicted):
 
 
 for scheme, path in zip(p.schemes, snakemake.output, strict=True):
-    groups = limits_group(
+    ds = limits_study(
         dict(p.settings),
         scheme,
         w.method,
         w.decomposition,
         list(p.k),
-        scan=list(lim["scan"]),
-        t_end=lim["t_end"],
-        resolution=lim["resolution"],
+        limits=dict(p.limits),
+        command=f"snakemake rule {snakemake.rule}",
         log=log,
-    )
-    job = {
-        "settings": p.settings,
-        "scheme": scheme,
-        "method": w.method,
-        "decomposition": w.decomposition,
-        "k": p.k,
-        "limits": p.limits,
-    }
-    attrs = provenance_attrs(
-        job, title="Double pendulum: stability limit in H", command=f"snakemake rule {snakemake.rule}"
-    )
-    ds = limits_dataset(
-        groups,
-        scheme=scheme,
-        method=w.method,
-        decomposition=w.decomposition,
-        scan=lim["scan"],
-        t_end=lim["t_end"],
-        resolution=lim["resolution"],
-        attrs=attrs,
     )
     write_netcdf(ds, path)

@@ -35,7 +35,7 @@ def pendulum_section(
     ``config`` is the configuration (``pendulum:``), ``paper_figure`` maps
     ``k`` to the paper's figure number, ``summary`` is the run summary
     (:func:`icosim.pendulum.replication.summary.summarize`), ``claims`` the verdict
-    records, ``figure_pngs`` the figures (``.../pendulum_k<k>.png``) and
+    records, ``figure_pngs`` the figures (``.../pendulum_k<k>_<scheme>.png``) and
     ``error_png`` the error figure; ``schemes_html`` (:func:`icosim.report.schemes.pendulum_schemes`)
     and ``trade_html`` (:func:`trade_section`) are appended.
     """

@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...engine.methods import make_method
+from ...io.netcdf import provenance_attrs
 from ..model import PendulumParameters
 from .linear_study import linear_rho, linear_stability
 from .measures import config_label, measured_run
@@ -52,6 +53,7 @@ __all__ = [
     "linear_predicate",
     "limits_group",
     "limits_dataset",
+    "limits_study",
     "merge_limits",
     "limited_by",
     "LIMIT_STATUSES",
@@ -275,8 +277,46 @@ def limits_dataset(groups: dict, *, scheme, method, decomposition, scan, t_end, 
     return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
+def limits_study(settings, scheme, method, decomposition, ks, *, limits: dict, command: str = "", log=None):
+    """One group's limits (:func:`limits_group`) as a dataset (:func:`limits_dataset`) with its provenance.
+
+    ``limits`` is the configuration's ``trade.stability_limit`` (``scan``, ``t_end``, ``resolution``);
+    ``log(label, measured, predicted)`` is called after each ``k``.
+    """
+    groups = limits_group(
+        settings,
+        scheme,
+        method,
+        decomposition,
+        list(ks),
+        scan=list(limits["scan"]),
+        t_end=limits["t_end"],
+        resolution=limits["resolution"],
+        log=log,
+    )
+    job = {
+        "settings": settings,
+        "scheme": scheme,
+        "method": method,
+        "decomposition": decomposition,
+        "k": ks,
+        "limits": limits,
+    }
+    attrs = provenance_attrs(job, title="Double pendulum: stability limit in H", command=command)
+    return limits_dataset(
+        groups,
+        scheme=scheme,
+        method=method,
+        decomposition=decomposition,
+        scan=limits["scan"],
+        t_end=limits["t_end"],
+        resolution=limits["resolution"],
+        attrs=attrs,
+    )
+
+
 def limited_by(reason: str) -> str:
-    """``growth`` (|lambda_c| or |omega| beyond its bound, or not finite), ``constraint bound`` (|g_c| beyond its
+    """``growth`` (``|lambda_c|`` or ``|omega|`` beyond its bound, or not finite), ``constraint bound`` (``|g_c|`` beyond its
     bound: possibly an inaccurate rather than a growing run), ``failed`` or ``""`` (no unstable run)."""
     if not reason:
         return ""
