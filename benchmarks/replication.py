@@ -17,7 +17,7 @@ so the kernel share of CPU and the overhead (interpreter starts, imports, Snakem
 the ratio of the two trees' totals.  Wall time depends on other load (the load average is printed);
 CPU seconds much less.  Never a timed assertion: a measurement to quote.
 
-    python benchmarks/replication.py [--old COMMIT] [--same-work] [--ci] [--cores 2] [--json FILE] [--keep DIR]
+    python benchmarks/replication.py [--old COMMIT] [--new COMMIT] [--same-work] [--ci] [--cores 2] [--json FILE] [--keep DIR]
 
 ``--keep DIR`` keeps each run's ``results/`` and ``reports/`` under ``DIR/<run>/`` (for
 ``tools/compare_results.py --layout ... --tolerances``).
@@ -136,13 +136,14 @@ def main(argv=None):
     ap.add_argument("--same-work", action="store_true", help="both trees build exactly the older tree's files")
     ap.add_argument("--json", help="write the summary to this file")
     ap.add_argument("--keep", type=Path, help="keep each run's results/ and reports/ under this directory")
+    ap.add_argument("--new", help="a commit to run as the newer tree instead of the working tree (a fixed snapshot)")
     args = ap.parse_args(argv)
     configs = CI_CONFIGS if args.ci else []
     files = replication_files(args.old, configs) if args.same_work else PARTS
     keep = (lambda name: args.keep / name) if args.keep else (lambda name: None)  # noqa: E731
     old_label = f"commit {args.old}"
     first = run_tree(args.old, f"{old_label} (1)", configs, args.cores, files, keep("old"))
-    new = run_tree(None, "this tree", configs, args.cores, files, keep("new"))
+    new = run_tree(args.new, f"commit {args.new}" if args.new else "this tree", configs, args.cores, files, keep("new"))
     second = run_tree(args.old, f"{old_label} (2)", configs, args.cores, files)
     old = _mean(first, second, f"{old_label} mean")
     rows = [first, new, second, old]
