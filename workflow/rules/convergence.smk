@@ -35,14 +35,14 @@ for _fig, _cfg in CONVERGENCE["figures"].items():
         CONV_PANELS.setdefault((_fig, _spec.scheme), []).append(_spec)
 
 
-def conv_panel_file(spec):
-    return CONV_PANEL.format(
-        figure=spec.figure, scheme=spec.scheme, dec=spec.decomposition, panel=spec.panel
-    )
-
-
 CONV_FILES = {
-    key: [conv_panel_file(s) for s in specs] for key, specs in CONV_PANELS.items()
+    key: [
+        CONV_PANEL.format(
+            figure=s.figure, scheme=s.scheme, dec=s.decomposition, panel=s.panel
+        )
+        for s in specs
+    ]
+    for key, specs in CONV_PANELS.items()
 }
 CONV_ALL_PANELS = [path for files in CONV_FILES.values() for path in files]
 # figure -> [(decomposition, scheme)] it is drawn for

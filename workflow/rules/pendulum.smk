@@ -63,16 +63,15 @@ TRADE = PENDULUM["trade"]
 TRADE_PLAN = trade_plan(PENDULUM)
 TRADE_PAIRS = list(dict.fromkeys((m, d) for _, m, d in TRADE_PLAN["groups"]))
 TRADE_DIR = "results/pendulum/trade"
-TRADE_GROUP = TRADE_DIR + "/{study}/{scheme}/{method}_{decomposition}.nc"
-
-
-def trade_group_files(study, method=None, decomposition=None):
-    """The per-scheme datasets of a trade study (sweep, limits), of one (method, decomposition) or all."""
-    return [
+TRADE_GROUP = "results/pendulum/trade/{study}/{scheme}/{method}_{decomposition}.nc"
+# study (sweep, limits) -> its per-scheme datasets, one per (scheme, method, decomposition)
+TRADE_GROUP_FILES = {
+    study: [
         TRADE_GROUP.format(study=study, scheme=s, method=m, decomposition=d)
         for s, m, d in TRADE_PLAN["groups"]
-        if (method, decomposition) in ((None, None), (m, d))
     ]
+    for study in ("sweep", "limits")
+}
 
 
 PENDULUM_WORK_PRECISION = "results/pendulum/work_precision.nc"
@@ -340,7 +339,7 @@ rule pendulum_baselines:
 rule pendulum_work_precision:
     """work_precision.nc: the sweep groups, orders (pendulum and linear model), monolithic baselines."""
     input:
-        sweeps=trade_group_files("sweep"),
+        sweeps=TRADE_GROUP_FILES["sweep"],
         monolithic=f"{TRADE_DIR}/monolithic.nc",
         linear=f"{TRADE_DIR}/linear_orders.nc",
         lib=script_lib("pendulum_work_precision"),
@@ -391,7 +390,7 @@ rule pendulum_limits:
 rule pendulum_stability_limit:
     """stability_limit.nc: the groups' measured and predicted limits over config."""
     input:
-        groups=trade_group_files("limits"),
+        groups=TRADE_GROUP_FILES["limits"],
         lib=script_lib("pendulum_stability_limit"),
     output:
         PENDULUM_STABILITY_LIMIT,

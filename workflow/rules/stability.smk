@@ -29,27 +29,26 @@ STABILITY_PANELS = {
 }
 
 
-def stability_panel_file(spec):
-    return STABILITY_PANEL.format(
-        figure=spec.figure,
-        scheme=spec.scheme,
-        panel=panel_id(spec.row, spec.k, spec.view),
-    )
-
-
-def stability_schemes(fig):
-    """The schemes a figure is drawn with, in the order configured."""
-    return list(dict.fromkeys(spec.scheme for spec in STABILITY_PANELS[fig]))
-
-
+# figure -> its panel files, in the order of STABILITY_PANELS[figure]
 STABILITY_FILES = {
-    fig: [stability_panel_file(s) for s in specs] for fig, specs in STABILITY_PANELS.items()
+    fig: [
+        STABILITY_PANEL.format(
+            figure=s.figure, scheme=s.scheme, panel=panel_id(s.row, s.k, s.view)
+        )
+        for s in specs
+    ]
+    for fig, specs in STABILITY_PANELS.items()
+}
+# figure -> the schemes it is drawn with, in the order configured
+STABILITY_SCHEMES = {
+    fig: list(dict.fromkeys(s.scheme for s in specs))
+    for fig, specs in STABILITY_PANELS.items()
 }
 STABILITY_ALL_PANELS = [path for files in STABILITY_FILES.values() for path in files]
 STABILITY_FIGURES = {
     fig: [
         STABILITY_PLOT.format(figure=fig, scheme=scheme, ext=ext)
-        for scheme in stability_schemes(fig)
+        for scheme in STABILITY_SCHEMES[fig]
         for ext in ("png", "pdf")
     ]
     for fig in STABILITY["figures"]
@@ -61,7 +60,7 @@ STABILITY_CLAIMS_FILE = STABILITY["claims"]["file"]
 load_claims(STABILITY_CLAIMS_FILE)
 STABILITY_CLAIMS = "results/stability/claims.json"
 # the comparison of schemes: figures computed with more than one scheme
-STABILITY_COMPARED = [fig for fig in STABILITY["figures"] if len(stability_schemes(fig)) > 1]
+STABILITY_COMPARED = [fig for fig in STABILITY["figures"] if len(STABILITY_SCHEMES[fig]) > 1]
 STABILITY_SHARES = "results/stability/scheme_shares.nc"
 STABILITY_COMPARISON = "results/stability/figures/scheme_comparison.{ext}"
 STABILITY_SECTION = "results/report/stability.html"
@@ -101,7 +100,7 @@ for _fig in STABILITY["figures"]:
         params:
             titles={
                 scheme: figure_title(_fig, scheme, STABILITY["figures"][_fig]["title"])
-                for scheme in stability_schemes(_fig)
+                for scheme in STABILITY_SCHEMES[_fig]
             },
             style=STABILITY["plot"]["style"],
             rho_max=STABILITY["plot"]["rho_max"],
@@ -115,9 +114,9 @@ rule stability_scheme_shares:
     """Stable share per figure, row, k and scheme, from the full panels of the figures with several schemes."""
     input:
         panels=[
-            stability_panel_file(s)
+            path
             for fig in STABILITY_COMPARED
-            for s in STABILITY_PANELS[fig]
+            for s, path in zip(STABILITY_PANELS[fig], STABILITY_FILES[fig])
             if s.view == "full"
         ],
         lib=script_lib("stability_scheme_shares"),
