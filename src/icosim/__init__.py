@@ -9,7 +9,7 @@ approximation of any order k, the Jacobi (parallel) and Gauss-Seidel
 (sequential) coupling schemes, and the spectral radius of the recurrence in
 float64 and at arbitrary precision.
 
-The map of the package is in the README (section "Layout"); the engine is
+The map of the package is in docs/layout.md; the engine is
 :mod:`icosim.engine.macrostep` driving a :class:`icosim.engine.problem.CosimulationProblem`
 with a coupling method of the registry :mod:`icosim.engine.methods`.
 """

@@ -5,13 +5,13 @@ them all (as scipy's ``solve_ivp`` keeps its ``METHODS`` table), so the generic
 machinery in :mod:`icosim.claims.core` needs to import no part and no part needs to
 register itself.
 
-================================  ==========================================================
-module                            check kinds
-================================  ==========================================================
-:mod:`icosim.stability.checks`    ``stable_fraction``, ``compare``, ``trend``, ``pointwise``
-:mod:`icosim.convergence.checks`  ``convergence_order``
-:mod:`icosim.pendulum.replication.checks`     ``pendulum_stability``
-================================  ==========================================================
+=========================================  ==========================================================
+module                                     check kinds
+=========================================  ==========================================================
+:mod:`icosim.stability.checks`             ``stable_fraction``, ``compare``, ``trend``, ``pointwise``
+:mod:`icosim.convergence.checks`           ``convergence_order``
+:mod:`icosim.pendulum.replication.checks`  ``pendulum_stability``
+=========================================  ==========================================================
 
 >>> sorted(CHECKS)
 ['compare', 'convergence_order', 'pendulum_stability', 'pointwise', 'stable_fraction', 'trend']

@@ -46,7 +46,7 @@ def inverse(M, out):
     """``out = M^-1`` (real or complex) by LU with partial pivoting: LAPACK's gesv (getrf, then getrs
     on the identity), written out.  False for an exactly zero pivot (where gesv reports a singular
     matrix).  The operations in OpenBLAS's order where it matters for round-off: pivot by
-    |re| + |im|, columns scaled by the pivot's reciprocal, triangular solves column-oriented with
+    ``|re| + |im|``, columns scaled by the pivot's reciprocal, triangular solves column-oriented with
     the diagonal's inverse (the complex reciprocal is numba's).
     """
     n = M.shape[0]

@@ -1,7 +1,7 @@
 """What one pendulum run costs and how accurate it is: errors against the reference, drift, CPU, counts.
 
 Every study of the speed-accuracy trade (:mod:`.sweep`, :mod:`.stability_limit`,
-:mod:`.tolerance`, :mod:`.adaptive`, :mod:`.work_precision`) describes a run by
+:mod:`.tolerance`, :mod:`.adaptive`, :mod:`icosim.pendulum.trade.work_precision`) describes a run by
 the same record (:data:`RECORD`):
 
 * ``error_max`` -- ``max |phi_i - phi_i,ref|`` over ``phi1``, ``phi2`` and the
