@@ -23,3 +23,6 @@ rule all:
     input:
         ALL_TARGETS,
         REPORT_HTML,
+
+
+include: "workflow/rules/integrity.smk"

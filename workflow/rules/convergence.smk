@@ -253,8 +253,10 @@ rule convergence_report_section:
         "../scripts/convergence_report_section.py"
 
 
+# every panel dataset is a target too: a missing one is built again, and what is built from it after it
 ALL_TARGETS.extend(
-    [f for files in CONV_FIGURES.values() for f in files]
+    CONV_ALL_PANELS
+    + [f for files in CONV_FIGURES.values() for f in files]
     + [CONV_WP_FIGURE, CONV_CLAIMS]
 )
 REPORT_SECTIONS["convergence"] = CONV_SECTION

@@ -472,8 +472,12 @@ rule pendulum_trade_figure:
         "../scripts/pendulum_trade_figure.py"
 
 
+# every run and trade-group dataset is a target too: a missing one is built again, and what is built
+# from it after it
 ALL_TARGETS.extend(
-    [f for files in PENDULUM_FIGURES.values() for f in files]
+    PENDULUM_ALL_RUNS
+    + [f for files in TRADE_GROUP_FILES.values() for f in files]
+    + [f for files in PENDULUM_FIGURES.values() for f in files]
     + [PENDULUM_ERROR_FIGURE, PENDULUM_SUMMARY, PENDULUM_CLAIMS]
     + [
         PENDULUM_WORK_PRECISION,

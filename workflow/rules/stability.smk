@@ -214,8 +214,11 @@ rule stability_report_section:
         "../scripts/stability_report_section.py"
 
 
+# every panel dataset is a target too: a missing one is built again, and what is built from it after it
 ALL_TARGETS.extend(
-    [f for files in STABILITY_FIGURES.values() for f in files] + [STABILITY_CLAIMS]
+    STABILITY_ALL_PANELS
+    + [f for files in STABILITY_FIGURES.values() for f in files]
+    + [STABILITY_CLAIMS]
 )
 if STABILITY_COMPARED:
     ALL_TARGETS.extend(STABILITY_COMPARISON.format(ext=e) for e in ("png", "pdf"))

@@ -5,9 +5,10 @@ sidecar ``x.nc.sha256`` (``sha256sum`` format) written *before* the dataset is
 renamed into place, so a run killed in between leaves a sidecar that no longer
 matches, never a dataset that looks complete and is not.  Reading a dataset
 checks it (:func:`verify`); the workflow, when it starts, sets every dataset
-whose checksum does not match aside as ``x.nc.corrupt`` (:func:`quarantine_corrupt`)
-so Snakemake computes it again, and removes the ``.*.part`` temporaries a killed
-run left behind (:func:`remove_stale_parts`).  A dataset without a sidecar
+whose checksum does not match aside as ``x.nc.corrupt`` (:func:`quarantine_corrupt`),
+forces every dataset that is missing while such a trace remains to be computed again
+with everything built from it (:func:`lost_datasets`), and removes the ``.*.part``
+temporaries a killed run left behind (:func:`remove_stale_parts`).  A dataset without a sidecar
 (written before checksums) is accepted as it is.
 """
 
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import tempfile
 from pathlib import Path
 
@@ -25,6 +27,8 @@ __all__ = [
     "write_checksum",
     "verify",
     "quarantine_corrupt",
+    "lost_datasets",
+    "outputs_built_from",
     "remove_stale_parts",
 ]
 
@@ -106,6 +110,63 @@ def quarantine_corrupt(root) -> list[Path]:
             sidecar(path).unlink(missing_ok=True)
             moved.append(target)
     return moved
+
+
+def lost_datasets(root) -> list[Path]:
+    """Datasets under ``root`` that are missing while a trace of an earlier copy remains: its checksum
+    sidecar (the dataset was deleted) or the copy set aside as ``x.nc.corrupt`` (:func:`quarantine_corrupt`).
+
+    Snakemake does not rerun a job whose output is missing when everything built from it is present and
+    up to date, so the workflow forces these (and through them everything downstream) to be built again.
+    """
+    root = Path(root)
+    if not root.exists():
+        return []
+    traces = [(p, ".sha256") for p in root.rglob("*.nc.sha256")] + [(p, ".corrupt") for p in root.rglob("*.nc.corrupt")]
+    lost = {p.with_name(p.name[: -len(suffix)]) for p, suffix in traces}
+    return sorted(p for p in lost if not p.exists())
+
+
+def _pattern(template: str) -> re.Pattern:
+    """A file pattern with ``{wildcard}`` fields as a regular expression (a field matches any text)."""
+    parts = re.split(r"\{(\w+)(?:,[^}]*)?\}", template)
+    seen, out = set(), []
+    for i, part in enumerate(parts):
+        if i % 2 == 0:
+            out.append(re.escape(part))
+        elif part in seen:
+            out.append(f"(?P={part})")
+        else:
+            seen.add(part)
+            out.append(f"(?P<{part}>.+)")
+    return re.compile("".join(out) + r"\Z")
+
+
+def outputs_built_from(path, rules) -> list[str]:
+    """The outputs of the jobs that read ``path`` directly.
+
+    ``rules`` are ``(inputs, outputs)`` pairs of file templates (``{wildcard}`` fields allowed, as in
+    Snakemake's rules); a job's outputs are its rule's outputs with the wildcards the matching input
+    fixes.  Outputs with a wildcard the input does not fix are left out (no single job is meant).
+
+    >>> rules = [(["r/fig9/{s}/p.nc", "src/a.py"], ["r/fig9_{s}.png"]), (["r/fig9/jacobi/p.nc"], ["r/claims.json"])]
+    >>> outputs_built_from("r/fig9/jacobi/p.nc", rules)
+    ['r/claims.json', 'r/fig9_jacobi.png']
+    """
+    path = str(path)
+    found = set()
+    for inputs, outputs in rules:
+        for template in inputs:
+            match = _pattern(str(template)).match(path)
+            if match is None:
+                continue
+            fixed = match.groupdict()
+            for out in outputs:
+                try:
+                    found.add(str(out).format(**fixed) if fixed or "{" in str(out) else str(out))
+                except (KeyError, IndexError, ValueError):
+                    continue  # a wildcard the input does not fix
+    return sorted(found)
 
 
 def remove_stale_parts(root) -> list[Path]:
