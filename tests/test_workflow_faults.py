@@ -180,3 +180,25 @@ def test_outputs_built_from_follow_wildcards():
         "results/figures/b_gauss-seidel-12.png"
     ]
     assert outputs_built_from("results/elsewhere.nc", rules) == []
+
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """A 200 kB tmpfs (needs root, as CI has); skipped where it cannot be mounted."""
+    mnt = tmp_path / "small"
+    mnt.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=200k", "tmpfs", str(mnt)], capture_output=True).returncode:
+        pytest.skip("cannot mount a tmpfs here (not root)")
+    yield mnt
+    subprocess.run(["umount", str(mnt)], capture_output=True)
+
+
+def test_a_full_disk_is_a_clear_error_and_leaves_no_dataset(small_disk):
+    import xarray as xr
+
+    from icosim.io.netcdf import write_netcdf
+
+    ds = xr.Dataset({"rho": (("lr1", "li1"), np.random.default_rng(0).random((300, 300)))})
+    with pytest.raises(OSError, match=r"could not write .*x\.nc: no space left on its file system"):
+        write_netcdf(ds, small_disk / "x.nc")
+    assert list(small_disk.iterdir()) == []  # no dataset, no sidecar, no temporary

@@ -10,9 +10,11 @@ interrupted job never leaves a complete-looking result behind.
 from __future__ import annotations
 
 import datetime as _dt
+import errno
 import hashlib
 import json
 import platform
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -66,9 +68,20 @@ def write_netcdf(ds, path):
     """Write an :class:`xarray.Dataset` to ``path`` atomically (NetCDF-4, :data:`NETCDF_ENGINE`), with its SHA-256
     recorded beside it (``path.sha256``, written before the rename: :mod:`icosim.io.integrity`)."""
 
-    with atomic_path(path) as tmp:
-        ds.to_netcdf(tmp, engine=NETCDF_ENGINE)
-        write_checksum(tmp, path)
+    try:
+        with atomic_path(path) as tmp:
+            ds.to_netcdf(tmp, engine=NETCDF_ENGINE)
+            write_checksum(tmp, path)
+    except (OSError, RuntimeError) as exc:
+        # the netCDF library reports a full disk as "NetCDF: HDF error": say what happened, and where
+        free = shutil.disk_usage(Path(path).resolve().parent).free
+        if free < 2 * max(ds.nbytes, 1 << 20):
+            raise OSError(
+                errno.ENOSPC,
+                f"could not write {path}: no space left on its file system ({free} bytes free, the dataset needs "
+                f"about {ds.nbytes}); nothing was written in its place",
+            ) from exc
+        raise
 
 
 def open_dataset(path):
