@@ -1,6 +1,7 @@
 """Compare two runs of the workflow: are their results the same?
 
     python tools/compare_results.py OLD NEW [--rerender [--configfile FILE ...]] [--allow-added NAME ...]
+        [--layout COMMIT] [--tolerances] [--allow-new-files]
 
 OLD and NEW are checkouts (or copies) that each hold ``results/`` and ``reports/`` of a run.
 Every file under ``results/`` must exist in both and be equal:
@@ -26,6 +27,18 @@ variable attribute, or a variable (coordinate), present in NEW only; the name in
 ``coordinates`` attribute; and a key of that name present only in NEW's ``config_json`` (at any
 depth; ``config_sha256`` is then checked against NEW's own ``config_json`` instead).  Used to show
 that adding the ``scheme`` attribute (the Gauss-Seidel scheme) left every Jacobi result as it was.
+
+``--layout COMMIT`` reads OLD as written by that older commit (``tools/compare_layouts.py``): each OLD path
+is mapped to NEW's (several OLD files may merge into one NEW file: the claims, the pendulum summary; a file
+dropped by design is a note), OLD's figure ids and run names are spelled as NEW spells them (a note says
+where), and every OLD file without a NEW counterpart and every NEW file without an OLD one is listed.
+``--allow-new-files``: what NEW adds (files, claim ids) is listed as added, not as a difference.
+
+``--tolerances`` compares within the replication speed target's tolerances instead of bitwise
+(``tools/compare_tolerances.py``: rho, NRMSE, pendulum angles; verdicts, statuses and claims' verdicts
+equal; other differences, figures and HTML are notes) and ends with a table per part.
+
+    python tools/compare_results.py OLD NEW --layout 897a1b5 --tolerances --allow-new-files
 """
 
 from __future__ import annotations
@@ -43,6 +56,10 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import compare_tolerances as tol  # noqa: E402
+from compare_layouts import get_layout, pair_files  # noqa: E402
 
 #: Global attributes that record time and cost of a job, never its result.
 VOLATILE_ATTRS = {
@@ -96,21 +113,28 @@ def _drop_added(a, b, names):
     return b
 
 
-def _nc(old: Path, new: Path, rel: str, problems: list, allow_added=(), notes=None):
+def _nc(old: Path, new: Path, rel: str, problems: list, allow_added=(), notes=None, layout=None):
     import h5py
 
-    vol_vars = VOLATILE_VARIABLES.get(rel, set())
+    vol_vars = VOLATILE_VARIABLES.get(rel.split(" -> ")[-1], set())  # rel: NEW's path, or 'OLD's -> NEW's'
     allow_added = set(allow_added)
+    layout, mapped = layout or get_layout(None), set()
     with h5py.File(old, "r") as a, h5py.File(new, "r") as b:
 
-        def attrs(obj):
+        def attrs(obj, spell=lambda k, v: v):
             # netCDF4 writes text attributes as fixed-length strings, which h5py reads as bytes: compare them as text
             return {
-                k: (v.tolist() if isinstance(v, np.ndarray) else v.decode() if isinstance(v, bytes) else v)
+                k: spell(k, v.tolist() if isinstance(v, np.ndarray) else v.decode() if isinstance(v, bytes) else v)
                 for k, v in obj.attrs.items()
             }
 
-        ga, gb = attrs(a), attrs(b)
+        def spell(key, value):  # OLD's figure ids and run names as NEW spells them (--layout)
+            new_value = layout.value(value)
+            if new_value is not value and new_value != value:  # (a NaN is not != itself)
+                mapped.add(key)
+            return new_value
+
+        ga, gb = attrs(a, spell), attrs(b)
         if allow_added and "config_json" in ga and "config_json" in gb and ga["config_json"] != gb["config_json"]:
             ja, jb = json.loads(ga["config_json"]), json.loads(gb["config_json"])
             if ja == _drop_added(ja, jb, allow_added):
@@ -132,7 +156,7 @@ def _nc(old: Path, new: Path, rel: str, problems: list, allow_added=(), notes=No
             if va.shape != vb.shape or va.dtype != vb.dtype:
                 problems.append(f"{rel}:{name}: shape/dtype {va.shape} {va.dtype} != {vb.shape} {vb.dtype}")
                 continue
-            aa, ab = attrs(va), attrs(vb)
+            aa, ab = attrs(va, spell), attrs(vb)
             aa.pop("DIMENSION_LIST", None), ab.pop("DIMENSION_LIST", None)
             aa.pop("REFERENCE_LIST", None), ab.pop("REFERENCE_LIST", None)
             for key in [k for k in ab if k in allow_added and k not in aa]:
@@ -147,11 +171,14 @@ def _nc(old: Path, new: Path, rel: str, problems: list, allow_added=(), notes=No
                 continue
             xa, xb = np.asarray(va[()]), np.asarray(vb[()])
             if xa.dtype == object:  # variable-length strings: compare the strings, not the pointers
-                same = xa.tolist() == xb.tolist()
+                text = lambda v: v.decode() if isinstance(v, bytes) else v  # noqa: E731
+                same = [spell(name, text(v)) for v in xa.ravel().tolist()] == [text(v) for v in xb.ravel().tolist()]
             else:  # bitwise: NaNs, infinities and the sign of zero included
                 same = xa.tobytes() == xb.tobytes()
             if not same:
                 problems.append(f"{rel}:{name}: values differ")
+    if mapped and notes is not None:
+        notes.append(f"{rel}: OLD's spelling mapped ({layout.name}) in {', '.join(sorted(mapped))}")
 
 
 def _same(a, b) -> bool:
@@ -236,37 +263,64 @@ def _html(old: Path, new: Path, rel: str, problems: list, notes: list, old_root:
         notes.append(f"{rel}: equal once timings, figures drawn from timings and provenance are masked")
 
 
-def compare(old_root: Path, new_root: Path, allow_added=()) -> tuple[list, list]:
+def compare(
+    old_root: Path, new_root: Path, allow_added=(), *, layout=None, tolerances=False, allow_new_files=False, stats=None
+) -> tuple[list, list]:
+    """(differences, notes) between OLD's and NEW's results; ``stats`` (:func:`compare_tolerances.new_stats`)
+    collects the largest differences per part with ``tolerances``."""
     problems, notes = [], []
+    layout = get_layout(layout)
+    stats = tol.new_stats() if stats is None else stats
     old_res, new_res = old_root / "results", new_root / "results"
     files_a = {p.relative_to(old_res).as_posix() for p in old_res.rglob("*") if p.is_file()}
     files_b = {p.relative_to(new_res).as_posix() for p in new_res.rglob("*") if p.is_file()}
     # a dataset's checksum sidecar (icosim.io.integrity) follows its bytes, timings included: the dataset is compared
     files_a = {f for f in files_a if not f.endswith(".nc.sha256")}
     files_b = {f for f in files_b if not f.endswith(".nc.sha256")}
-    for rel in sorted(files_a ^ files_b):
-        problems.append(f"{rel}: only in {'OLD' if rel in files_a else 'NEW'}")
+    pairs = pair_files(files_a, files_b, layout, problems, notes, allow_new_files)
     counts = {}
-    for rel in sorted(files_a & files_b):
-        a, b = old_res / rel, new_res / rel
-        suffix = a.suffix
-        counts[suffix] = counts.get(suffix, 0) + 1
-        if rel in VOLATILE_FIGURES:
-            notes.append(f"{rel}: drawn from timings (checked by --rerender)")
-        elif suffix == ".nc":
-            _nc(a, b, rel, problems, allow_added, notes)
-        elif suffix == ".json":
-            if json.loads(a.read_text()) != json.loads(b.read_text()):
-                problems.append(f"{rel}: JSON differs")
-        elif suffix == ".png":
-            _png(a, b, rel, problems, notes)
-        elif suffix == ".html":
-            _html(a, b, rel, problems, notes, old_root, new_root)
-        elif a.read_bytes() != b.read_bytes():
-            problems.append(f"{rel}: bytes differ")
+    for rel, olds in sorted(pairs.items()):
+        b, suffix = new_res / rel, Path(rel).suffix
+        counts[suffix] = counts.get(suffix, 0) + len(olds)
+        if Path(rel).name.startswith("claims") and suffix in (".json", ".tsv"):  # claims: verdict per claim id
+            olds_paths = [old_res / o for o in olds]
+            strict = not tolerances
+            tol.compare_claims(
+                olds_paths, b, rel, layout, problems, notes, stats, strict=strict, allow_new=allow_new_files
+            )
+            a = olds_paths[0]
+            if (
+                strict
+                and olds == [rel]
+                and (json.loads(a.read_text()) if suffix == ".json" else a.read_bytes())
+                != (json.loads(b.read_text()) if suffix == ".json" else b.read_bytes())
+            ):
+                problems.append(f"{rel}: {suffix[1:].upper()} differs")
+            continue
+        # with --tolerances only datasets can differ: figures, HTML and other files are notes
+        found = notes if tolerances and suffix != ".nc" else problems
+        for old in olds:
+            a, label = old_res / old, rel if old == rel else f"{old} -> {rel}"
+            if rel in VOLATILE_FIGURES:
+                notes.append(f"{rel}: drawn from timings (checked by --rerender)")
+            elif suffix == ".nc" and tolerances:
+                volatile = VOLATILE_VARIABLES.get(rel, set())
+                tol.compare_dataset(a, b, label, layout, problems, notes, stats, VOLATILE_ATTRS, volatile)
+            elif suffix == ".nc":
+                _nc(a, b, label, problems, allow_added, notes, layout)
+            elif suffix == ".json":
+                if json.loads(a.read_text()) != json.loads(b.read_text()):
+                    found.append(f"{label}: JSON differs")
+            elif suffix == ".png":
+                _png(a, b, label, found, notes)
+            elif suffix == ".html":
+                _html(a, b, label, found, notes, old_root, new_root)
+            elif a.read_bytes() != b.read_bytes():
+                found.append(f"{label}: bytes differ")
     report = Path("reports/icosim_report.html")
     if (old_root / report).exists() and (new_root / report).exists():
-        _html(old_root / report, new_root / report, str(report), problems, notes, old_root, new_root)
+        found = notes if tolerances else problems
+        _html(old_root / report, new_root / report, str(report), found, notes, old_root, new_root)
     notes.insert(0, "compared: " + ", ".join(f"{n} {s or 'other'}" for s, n in sorted(counts.items())))
     return problems, notes
 
@@ -337,15 +391,30 @@ def main(argv=None) -> int:
         metavar="NAME",
         help="forgive an attribute, coordinate or config_json key of this name that only NEW has (repeatable)",
     )
+    parser.add_argument(
+        "--layout", metavar="COMMIT", help="OLD was written by this older commit: map its paths and spellings"
+    )
+    parser.add_argument("--tolerances", action="store_true", help="the speed target's tolerances instead of bitwise")
+    parser.add_argument("--allow-new-files", action="store_true", help="list what NEW adds (files, claims) as added")
     args = parser.parse_args(argv)
-    problems, notes = compare(args.old, args.new, args.allow_added)
+    if args.rerender and args.layout:
+        parser.error("--rerender needs OLD in NEW's layout (not with --layout)")
+    stats = tol.new_stats()
+    kwargs = dict(layout=args.layout, tolerances=args.tolerances, allow_new_files=args.allow_new_files, stats=stats)
+    problems, notes = compare(args.old, args.new, args.allow_added, **kwargs)
     if args.rerender:
         problems += rerender(args.old, args.new, ["--configfile", *args.configfile] if args.configfile else [])
-    for line in notes:
+    for line in tol.grouped(notes) if args.tolerances else notes:
         print("note:", line)
     for line in problems:
         print("DIFFERS:", line)
-    print("equal" if not problems else f"{len(problems)} difference(s)")
+    if args.tolerances:
+        print(tol.summary_table(stats))
+    print(
+        ("equal" + (" within the tolerances" if args.tolerances else ""))
+        if not problems
+        else f"{len(problems)} difference(s)"
+    )
     print(
         "exceptions made: attributes "
         + ", ".join(sorted(VOLATILE_ATTRS))
