@@ -202,3 +202,35 @@ def test_a_full_disk_is_a_clear_error_and_leaves_no_dataset(small_disk):
     with pytest.raises(OSError, match=r"could not write .*x\.nc: no space left on its file system"):
         write_netcdf(ds, small_disk / "x.nc")
     assert list(small_disk.iterdir()) == []  # no dataset, no sidecar, no temporary
+
+
+# -- the command line, interrupted ---------------------------------------------------------------------
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["map", "--method", "weighted", "--a", "1", "--b", "1", "--decomposition", "ff", "--k", "1", "2"]
+        + ["--lr1", "-0.2", "0", "--li1", "0", "0.2", "--n", "301", "--out", "{out}/wm"],
+        ["advise", "--m1", "1", "--m2", "2", "--c1", "1e3", "--c2", "2e3", "--d1", "2", "--d2", "4"]
+        + ["--H", "1e-4", "1e-1", "--k", "2", "--json"],
+    ],
+    ids=["map", "advise-json"],
+)
+def test_sigint_leaves_no_partial_output(tmp_path, args):
+    import sys
+
+    out = tmp_path / "out"
+    out.mkdir()
+    cmd = [sys.executable, "-m", "icosim.cli", *[a.format(out=out) for a in args]]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(3.0)  # past the imports, inside the computation
+    assert proc.poll() is None, "finished before it could be interrupted"
+    proc.send_signal(signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130
+    assert "interrupted; no output file was left half-written" in stderr and "Traceback" not in stderr
+    assert stdout == ""  # no half-printed JSON
+    leftovers = list(out.iterdir())
+    assert not [p for p in leftovers if p.name.endswith(".part")]
+    for path in leftovers:  # whatever was finished before the signal is whole
+        if path.suffix == ".nc":
+            assert verify(path) is True

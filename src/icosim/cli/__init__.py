@@ -95,4 +95,9 @@ def main(argv=None) -> int:
     parser = build_parser()
     argv = sys.argv[1:] if argv is None else argv
     args = parser.parse_args(_negative_values_attached(argv, parser))
-    return COMMANDS[args.command].run(args, args.subparser)
+    try:
+        return COMMANDS[args.command].run(args, args.subparser)
+    except KeyboardInterrupt:
+        # files are written whole or not at all (renamed into place when complete): say so, no traceback
+        print(f"icosim {args.command}: interrupted; no output file was left half-written", file=sys.stderr)
+        return 130
