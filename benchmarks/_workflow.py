@@ -40,7 +40,7 @@ def tree(commit: str | None):
         if commit is None:
             for name in ("Snakefile", "pyproject.toml"):
                 shutil.copy2(ROOT / name, tmp / name)
-            for name in ("config", "workflow", "src"):
+            for name in ("config", "workflow", "src", "profiles"):
                 shutil.copytree(ROOT / name, tmp / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
             yield tmp
         else:

@@ -33,11 +33,11 @@ if not Path(SNAKEMAKE).exists():
 
 
 def copy_workflow(dest: Path) -> Path:
-    """A copy of the workflow (Snakefile, config, workflow, src) in ``dest``."""
+    """A copy of the workflow (Snakefile, config, workflow, src, profiles) in ``dest``."""
     for name in ("Snakefile", "pyproject.toml"):
         if (ROOT / name).exists():
             shutil.copy2(ROOT / name, dest / name)
-    for name in ("config", "workflow", "src"):
+    for name in ("config", "workflow", "src", "profiles"):
         shutil.copytree(ROOT / name, dest / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
     return dest
 

@@ -130,7 +130,6 @@ def test_a_killed_run_resumes_with_the_documented_recovery(clean_run, tmp_path):
     outputs, as `snakemake` loads it from profiles/default)."""
     (tmp_path / "wf").mkdir()
     wf = copy_workflow(tmp_path / "wf")
-    shutil.copytree(Path(__file__).resolve().parents[1] / "profiles", wf / "profiles")
     _configure(wf)
     cmd = [SNAKEMAKE, "--directory", str(wf), "--snakefile", str(wf / "Snakefile"), "-c2", FIGURE]
     proc = subprocess.Popen(cmd, cwd=wf, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
