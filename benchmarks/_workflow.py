@@ -32,16 +32,34 @@ class Run:
     workdir: Path
 
 
+def _copy_working_tree(dest: Path, whole: bool):
+    """The workflow's files of the working tree, or (``whole``) every file git tracks or would track."""
+    if not whole:
+        for name in ("Snakefile", "pyproject.toml"):
+            shutil.copy2(ROOT / name, dest / name)
+        for name in ("config", "workflow", "src", "profiles"):
+            shutil.copytree(ROOT / name, dest / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+        return
+    listed = subprocess.run(
+        ["git", "-C", str(ROOT), "ls-files", "-co", "--exclude-standard", "-z"],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.split("\0")
+    for rel in filter(None, listed):
+        if (ROOT / rel).is_file():
+            (dest / rel).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(ROOT / rel, dest / rel)
+
+
 @contextlib.contextmanager
-def tree(commit: str | None):
-    """A clean copy of the workflow: the working tree (``commit=None``) or ``git worktree`` of a commit."""
+def tree(commit: str | None, whole: bool = False):
+    """A clean copy of the workflow: the working tree (``commit=None``) or ``git worktree`` of a commit.
+    With ``whole``, the working tree's copy holds every file (tests, tools, docs), as a worktree does."""
     tmp = Path(tempfile.mkdtemp(prefix="icosim-bench-"))
     try:
         if commit is None:
-            for name in ("Snakefile", "pyproject.toml"):
-                shutil.copy2(ROOT / name, tmp / name)
-            for name in ("config", "workflow", "src", "profiles"):
-                shutil.copytree(ROOT / name, tmp / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+            _copy_working_tree(tmp, whole)
             yield tmp
         else:
             path = tmp / "tree"

@@ -13,62 +13,25 @@ a measurement to quote.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
 import os
 import re
 import resource
-import shutil
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-
-
-@contextlib.contextmanager
-def checkout(commit: str | None):
-    """A clean copy of the repository: the working tree (``None``) or a ``git worktree`` of ``commit``."""
-    tmp = Path(tempfile.mkdtemp(prefix="icosim-tests-"))
-    path = tmp / "tree"
-    try:
-        if commit is None:
-            listed = subprocess.run(
-                ["git", "-C", str(ROOT), "ls-files", "-co", "--exclude-standard", "-z"],
-                capture_output=True,
-                text=True,
-                check=True,
-            ).stdout.split("\0")
-            for rel in filter(None, listed):
-                if (ROOT / rel).is_file():
-                    (path / rel).parent.mkdir(parents=True, exist_ok=True)
-                    shutil.copy2(ROOT / rel, path / rel)
-            yield path
-        else:
-            subprocess.run(
-                ["git", "-C", str(ROOT), "worktree", "add", "--detach", str(path), commit],
-                check=True,
-                capture_output=True,
-            )
-            try:
-                yield path
-            finally:
-                subprocess.run(
-                    ["git", "-C", str(ROOT), "worktree", "remove", "--force", str(path)], capture_output=True
-                )
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+from _workflow import tree
 
 
 def run_tests(commit: str | None, label: str, pytest_args: list) -> dict:
-    with checkout(commit) as tree:
-        env = {**os.environ, "PYTHONPATH": str(tree / "src"), "MPLBACKEND": "Agg"}
+    with tree(commit, whole=True) as workdir:
+        env = {**os.environ, "PYTHONPATH": str(workdir / "src"), "MPLBACKEND": "Agg"}
         cmd = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *pytest_args]
         ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.perf_counter()
-        proc = subprocess.run(cmd, cwd=tree, env=env, capture_output=True, text=True)
+        proc = subprocess.run(cmd, cwd=workdir, env=env, capture_output=True, text=True)
         wall = time.perf_counter() - t0
         ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)
