@@ -210,7 +210,7 @@ def test_a_full_disk_is_a_clear_error_and_leaves_no_dataset(small_disk):
         ["map", "--method", "weighted", "--a", "1", "--b", "1", "--decomposition", "ff", "--k", "1", "2"]
         + ["--lr1", "-0.2", "0", "--li1", "0", "0.2", "--n", "301", "--out", "{out}/wm"],
         ["advise", "--m1", "1", "--m2", "2", "--c1", "1e3", "--c2", "2e3", "--d1", "2", "--d2", "4"]
-        + ["--H", "1e-4", "1e-1", "--k", "2", "--json"],
+        + ["--H", "1e-4", "1e-1", "--scan", "2000", "--rtol", "1e-12", "--json"],
     ],
     ids=["map", "advise-json"],
 )
