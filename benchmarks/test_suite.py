@@ -38,6 +38,9 @@ def run_tests(commit: str | None, label: str, pytest_args: list) -> dict:
     last = (proc.stdout.strip().splitlines() or [""])[-1]
     counts = {key: int(n) for n, key in re.findall(r"(\d+) (passed|failed|skipped|errors?)", last)}
     print(f"{label}: {last}", flush=True)
+    for line in proc.stdout.splitlines():
+        if line.startswith(("FAILED", "ERROR")):
+            print("   ", line[:300], flush=True)
     return dict(label=label, wall=wall, cpu=cpu, exit=proc.returncode, counts=counts, load=os.getloadavg()[0])
 
 
