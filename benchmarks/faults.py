@@ -11,7 +11,8 @@ compared with a clean run of the same configuration:
 * **second run**: a second ``snakemake`` on the same directory while one runs is refused, and the first
   completes;
 * **datasets**: truncated, bit-flipped, deleted, replaced by another panel's file, a stale temporary;
-  then the same command.
+  then the same command;
+* **read-only results/**: the run fails naming the path; once writable, the same command completes.
 
 Every dataset of every case is then compared with the clean run's (``tools/compare_results.py``:
 bitwise, timings aside).  Prints a table: faults injected, survived, datasets compared, differences,
@@ -144,6 +145,25 @@ def dataset_faults(workdir: Path, targets, rng: random.Random) -> dict:
     return dict(injected=5, stale_left=len(left))
 
 
+def read_only_results(workdir: Path, targets) -> dict:
+    """``results/`` read-only (a read-only bind mount: root too is refused) with a dataset to rebuild: the run
+    fails naming the path; after the mount is gone the same command completes."""
+    victim = sorted((workdir / "results").rglob("*.nc"))[0]
+    victim.unlink()
+    res = str(workdir / "results")
+    if subprocess.run(["mount", "--bind", res, res], capture_output=True).returncode:
+        return dict(injected=0, note="no bind mount here (not root)")
+    subprocess.run(["mount", "-o", "remount,ro,bind", res], check=True)
+    try:
+        proc = run(workdir, targets)
+        text = proc.stdout + proc.stderr
+        named = proc.returncode != 0 and "Read-only file system" in text and victim.parent.name in text
+    finally:
+        subprocess.run(["umount", res], check=True)
+    run(workdir, targets, check=True)
+    return dict(injected=1, refused_naming_the_path=named)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--kills", type=int, default=20)
@@ -164,11 +184,12 @@ def main(argv=None):
                 "datasets truncated, flipped, deleted, replaced; a stale .part",
                 lambda: dataset_faults(work, targets, rng),
             ),
+            ("results/ read-only", lambda: read_only_results(work, targets)),
         ]
         for i, (name, case) in enumerate(cases):
-            if i:  # each case from a clean results/ (the last one damages a finished run)
+            if i:  # each case from a clean results/ (the last two damage a finished run)
                 shutil.rmtree(work / "results", ignore_errors=True)
-                if i == len(cases) - 1:
+                if i >= len(cases) - 2:
                     run(work, targets, check=True)
             info = case()
             problems, notes = compare(clean, work)
