@@ -220,7 +220,14 @@ def test_sigint_leaves_no_partial_output(tmp_path, args):
     out = tmp_path / "out"
     out.mkdir()
     cmd = [sys.executable, "-m", "icosim.cli", *[a.format(out=out) for a in args]]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # a test worker may ignore SIGINT, and a child inherits that: give the command the terminal's default
+    proc = subprocess.Popen(
+        cmd,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     time.sleep(3.0)  # past the imports, inside the computation
     assert proc.poll() is None, "finished before it could be interrupted"
     proc.send_signal(signal.SIGINT)
