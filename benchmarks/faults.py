@@ -71,13 +71,10 @@ def recover(workdir: Path, targets) -> tuple[int, bool]:
     return 2, False
 
 
-def start(workdir: Path, targets):
+def start(workdir: Path, targets, log: Path | None = None):
+    out = open(log, "w") if log else subprocess.DEVNULL  # noqa: SIM115 - closed by the caller's wait
     return subprocess.Popen(
-        command(workdir, targets),
-        cwd=workdir,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-        start_new_session=True,
+        command(workdir, targets), cwd=workdir, stdout=out, stderr=subprocess.STDOUT, start_new_session=True
     )
 
 
@@ -85,20 +82,24 @@ def kills(workdir: Path, targets, n: int, rng: random.Random, max_wait: float) -
     """SIGKILL Snakemake (and its jobs) at random moments, at least ``n`` times, each followed by the
     documented recovery (``--unlock`` where Snakemake asks for it); then the same command to the end."""
     killed = unlocks = restarts = 0
+    log = workdir / "faults_run.log"
     while killed < n:
-        proc = start(workdir, targets)
+        proc = start(workdir, targets, log)
         time.sleep(rng.uniform(0.5, max_wait))
-        if proc.poll() is not None:  # the run finished before the kill: start over for more kills
-            shutil.rmtree(workdir / "results", ignore_errors=True)
-            restarts += 1
+        if proc.poll() is not None:
+            if proc.returncode and "--unlock" in log.read_text():  # the lock a killed run left: recover
+                run(workdir, targets, "--unlock", check=True)
+                unlocks += 1
+            elif proc.returncode == 0:  # finished before the kill: start over for more kills
+                shutil.rmtree(workdir / "results", ignore_errors=True)
+                restarts += 1
+            else:
+                raise SystemExit(f"snakemake failed in {workdir} (not a lock):\n{log.read_text()[-3000:]}")
             continue
         os.killpg(proc.pid, signal.SIGKILL)
         proc.wait()
         killed += 1
-        check = run(workdir, targets, "-n")
-        if check.returncode and "--unlock" in check.stdout + check.stderr:
-            run(workdir, targets, "--unlock", check=True)
-            unlocks += 1
+        print(f"  kill {killed}", flush=True)
     runs, unlocked = recover(workdir, targets)
     return dict(injected=killed, unlocks=unlocks + unlocked, restarts=restarts)
 
@@ -108,7 +109,7 @@ def job_killed(workdir: Path, targets) -> dict:
     victim = None
     deadline = time.monotonic() + 120
     while victim is None and time.monotonic() < deadline:
-        out = subprocess.run(["pgrep", "-P", str(proc.pid), "-f", ".snakemake/scripts"], capture_output=True, text=True)
+        out = subprocess.run(["pgrep", "-f", str(workdir / ".snakemake/scripts")], capture_output=True, text=True)
         victim = int(out.stdout.split()[0]) if out.stdout.split() else None
         time.sleep(0.05)
     if victim:
