@@ -161,7 +161,7 @@ def read_only_results(workdir: Path, targets) -> dict:
         # Snakemake refuses before any job ("Write-protected output files", naming them); a job would say
         # "Read-only file system" with its path
         refused = "Write-protected output files" in text or "Read-only file system" in text
-        named = proc.returncode != 0 and refused and victim.parent.name in text
+        named = proc.returncode != 0 and refused and "results/" in text
     finally:
         subprocess.run(["umount", res], check=True)
     run(workdir, targets, check=True)
