@@ -438,3 +438,30 @@ def test_impulse_defect_of_the_two_polynomials(k, node_integral):
             leading = -(H ** (k + 2)) / math.factorial(k) * node_integral
             ratios.append(float(impulse / leading))
     assert abs(ratios[1] - 1) < 2e-3 and abs(ratios[1] - 1) < abs(ratios[0] - 1) / 5
+
+
+@pytest.mark.parametrize("name", list(SCHEMES))
+@pytest.mark.parametrize("dec", ["ff", "fd", "df", "dd"])
+def test_a_scheme_refuses_exactly_the_decompositions_whose_corrector_system_is_singular(name, dec):
+    """``couples`` is decided from the registries alone; here the corrector's linear system itself
+    (projection: the acceleration constraint and the force balance, Jacobians from the problem) is
+    singular at random points exactly where the scheme refuses the decomposition."""
+    from icosim.engine.methods.base import _conditions
+
+    scheme = get_scheme(name)
+    rng = np.random.default_rng(7)
+    c = TestModel(*rng.uniform([-1, 0.2, 0.5, 0.5, 0.5], [-0.1, 2, 3, 2, 2], size=(4, 5)).T).coefficients()
+    problem = LinearCosimulation(c, dec, 1)
+    state, history = np.zeros((4, 2, 2)), np.zeros((4, 2, problem.n_coupling))
+    ends = [problem.predict(i, state, history)[0] for i in range(2)]
+    e = problem.extrapolate(history)
+    y = problem.stack([problem.predict(i, state, history)[1] for i in range(2)])
+    J = problem.jacobians(state, history, e, y, scheme.fixed(ends), algebraic=scheme.reevaluates_leading)
+    method = make_method("projection")
+    levels = [lv for w, lv in method.solves if w != 0][0]
+    A = _conditions(levels, J, axis=-2, const=float)
+    singular = np.linalg.matrix_rank(A) < problem.n_coupling
+    assert np.all(singular == (not scheme.couples(dec)))
+    if not scheme.couples(dec):
+        with pytest.raises(ParameterError, match=rf"scheme {name} cannot couple decomposition {dec}.*Allowed"):
+            amplification_matrix(c, method, dec, 1, scheme=scheme)

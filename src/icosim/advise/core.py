@@ -245,7 +245,7 @@ def configurations(
             p = index_parameters(spec, index, params)
             for dec in decs:
                 for kk in ks:
-                    for scheme in schemes:
+                    for scheme in (name for name in schemes if get_scheme(name).couples(dec)):
                         s = Configuration(name, index, p, dec, kk, scheme)
                         s.engine_method(1.0)  # refuses bad values now (e.g. weighted index 1 with b = 0)
                         out.append(s)

@@ -74,6 +74,7 @@ def map_panels(method, method_params, decomposition, ks, *, command: str = "", p
     specs = map_specs(method, method_params, decomposition, ks, **grid)
     for spec in specs:  # every panel checked (method, decomposition, grid) before the first is computed
         spec.coupling_method().check_decomposition(DECOMPOSITIONS[spec.decomposition])
+        get_scheme(spec.scheme).check_decomposition(spec.decomposition)
         grid_axis(spec.lr1, spec.n)
         grid_axis(spec.li1, spec.n)
     out = []

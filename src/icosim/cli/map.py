@@ -99,6 +99,7 @@ def run(args, parser) -> int:
         specs = map_specs(args.method, given, args.decomposition, args.k, **grid)
         for s in specs:
             s.coupling_method().check_decomposition(DECOMPOSITIONS[s.decomposition])
+            get_scheme(s.scheme).check_decomposition(s.decomposition)
         for name in ("lr1", "li1"):
             try:
                 grid_axis(getattr(args, name), args.n)

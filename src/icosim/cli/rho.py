@@ -109,6 +109,7 @@ def run(args, parser) -> int:
         method = _method_from_args(args)
         decomposition = get_decomposition(args.decomposition)
         method.check_decomposition(decomposition)
+        scheme.check_decomposition(decomposition)
         model = TestModel(args.lr1, args.li1, args.am21, args.alr21, args.ali21)
         check_derived(model)  # k = lr^2 + li^2, ... finite in float64
     except ParameterError as exc:
@@ -146,6 +147,8 @@ def _argument_message(text: str) -> str:
             return f"argument --{name}: {text}"
     if text.startswith("method "):
         return f"argument --method/--decomposition: {text}"
+    if text.startswith("scheme "):
+        return f"argument --scheme/--decomposition: {text}"
     return text
 
 

@@ -124,6 +124,7 @@ def figure_panels(figure: str, fig_cfg: dict, k) -> list:
         for dec in fig_cfg["decompositions"]:
             try:
                 dimensional_method(method, 1.0, **cells[0][0]).check_decomposition(get_decomposition(dec))
+                get_scheme(scheme).check_decomposition(dec)
             except ParameterError as exc:
                 raise ParameterError(f"{where}, decomposition {dec!r}: {exc}") from None
             for i, c in enumerate(columns):

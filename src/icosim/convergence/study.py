@@ -204,6 +204,7 @@ class Study:
         nH = self.H.size
         methods = [dimensional_method(method, H, **params) for H in self.H]
         methods[0].check_decomposition(dec)
+        scheme.check_decomposition(dec)
         if stepping == "error":  # certified from the ball matrices of the defects, in the loop below
             rho, digits = np.full(nH, np.nan), np.zeros(nH, dtype=int)
             verdict = np.full(nH, "", dtype=object)

@@ -114,6 +114,7 @@ def simulate(problem, method, state, history, n_steps: int, *, bound: float | No
     is recorded: an unstable run is reported, never silently continued.
     ``step_kw`` go to :func:`macro_step` (``scheme``, ``iterations``, ``tol``).
     """
+    get_scheme(step_kw.get("scheme", JACOBI)).check_decomposition(problem.decomposition)
     states, coupling, outputs = [state], [history[..., 0, :]], [None]
     diverged = failed = reason = None
     for n in range(1, n_steps + 1):

@@ -43,6 +43,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..errors import ParameterError
+from .decompositions import DECOMPOSITIONS, get_decomposition
 
 __all__ = [
     "Scheme",
@@ -107,6 +108,43 @@ class Scheme:
     @property
     def label(self) -> str:  # pragma: no cover - defined by the subclasses
         raise NotImplementedError
+
+    def check_decomposition(self, decomposition):
+        """Refuse (:class:`~icosim.errors.ParameterError`) a decomposition the scheme cannot couple.
+
+        A leading subsystem whose outputs stay as integrated does not respond to
+        the corrected coupling variables; a coupling variable that drives only
+        that subsystem then enters no coupling condition, and the corrector's
+        linear system is singular at every point (fd and df: ``lambda_c`` drives
+        only the force-driven subsystem, ``a_tilde`` only the kinematic one).
+        """
+        decomposition = get_decomposition(decomposition)
+        lone = self._lone_input(decomposition)
+        if lone is None:
+            return
+        i, j = lone
+        allowed = [name for name in DECOMPOSITIONS if self.couples(name)]
+        variable = decomposition.variables[j]
+        raise ParameterError(
+            f"scheme {self.name} cannot couple decomposition {decomposition.name}: subsystem {i + 1} leads and is "
+            f"the only one driven by {variable}, so with its outputs left as integrated no coupling condition "
+            f"depends on {variable} (the corrector's linear system is singular). "
+            f"Allowed decompositions: {', '.join(allowed)}"
+        )
+
+    def couples(self, decomposition) -> bool:
+        """Can the scheme couple ``decomposition`` (see :meth:`check_decomposition`)?"""
+        return self._lone_input(get_decomposition(decomposition)) is None
+
+    def _lone_input(self, decomposition):
+        """``(i, j)``: a leading subsystem ``i`` that does not respond and is the only one driven by ``e_j``."""
+        if self.reevaluates_leading:
+            return None
+        for i in self.leading:
+            j = decomposition.inputs[i]
+            if not any(decomposition.inputs[c] == j for c in self.corrected):
+                return i, j
+        return None
 
     def __str__(self) -> str:
         return self.name

@@ -72,6 +72,7 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
 
     method = spec.coupling_method()
     method.check_decomposition(DECOMPOSITIONS[spec.decomposition])
+    get_scheme(spec.scheme).check_decomposition(spec.decomposition)
     lr1 = grid_axis(spec.lr1, spec.n)
     li1 = grid_axis(spec.li1, spec.n)
     LR, LI = np.meshgrid(lr1, li1, indexing="ij")

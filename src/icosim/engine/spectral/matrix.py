@@ -60,6 +60,7 @@ def amplification_matrix(coefficients, method: CouplingMethod, decomposition, k:
     be = backend or Float64()
     decomposition = get_decomposition(decomposition)
     method.check_decomposition(decomposition)
+    scheme.check_decomposition(decomposition)
     coefficients = as_coefficients(coefficients)
     with be.context():  # Arb's working precision (a no-op for float64 and mpmath)
         return _matrix_from_problem(_problem(coefficients, decomposition, k, be), method, scheme)

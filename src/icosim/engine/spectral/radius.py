@@ -77,6 +77,7 @@ def spectral_radius_float64(coefficients, method, decomposition, k, *, error_est
     scheme = get_scheme(scheme)
     decomposition = get_decomposition(decomposition)
     method.check_decomposition(decomposition)
+    scheme.check_decomposition(decomposition)
     coefficients = as_coefficients(coefficients)
     with np.errstate(all="ignore"):
         problem = _problem(coefficients, decomposition, k, be)
@@ -117,6 +118,7 @@ def spectral_radius_mp(coefficients, method, decomposition, k, digits: int = 128
     be = Multiprecision(digits)
     decomposition = get_decomposition(decomposition)
     method.check_decomposition(decomposition)
+    get_scheme(scheme).check_decomposition(decomposition)
     if isinstance(coefficients, TestModel):
         coefficients = TestModel(
             *(be.const(getattr(coefficients, f)) for f in ("lr1", "li1", "am21", "alr21", "ali21"))
