@@ -1,0 +1,20 @@
+/* Mass-spring-damper to ground driven by a force: m x'' = -c x - d x' + lambda (fmus/README.md). */
+#ifndef ICOSIM_MODEL_H
+#define ICOSIM_MODEL_H
+
+#define MODEL_GUID "{8c4e810f-3df3-4a00-8276-176fa3c9f001}"
+#define MAX_ORDER 12
+enum { VR_M, VR_C, VR_D, VR_X0, VR_V0, VR_LAMBDA, VR_X, VR_V, VR_A, VR_XSET, VR_VSET, VR_FAIL, NREAL };
+#define INPUT_VR VR_LAMBDA
+#define FAIL_TIME_VR VR_FAIL
+
+typedef struct {
+    double m, c, d, x0, v0, lambda, x, v, fail;
+} Model;
+
+void model_defaults(Model *m);
+void model_initialize(Model *m);
+double model_get(const Model *m, unsigned vr);
+int model_set(Model *m, unsigned vr, double value);
+void model_step(Model *m, const double *der, int max_order, double h);
+#endif

@@ -1,0 +1,243 @@
+"""Two FMU units as a co-simulation problem: what :func:`icosim.engine.macrostep.macro_step` needs of them.
+
+The problem holds no method-, order- or scheme-specific code: every method, ``k`` and scheme runs through the
+one macro step unchanged.  Each subsystem is a :class:`~icosim.fmi.units.Unit`; its state at a communication
+point lives inside the FMU, saved with ``fmi2GetFMUstate`` and restored before every integration that starts
+there (docs/fmi.md).  The arrays the macro step sees are the observable part of it:
+
+* state ``s[i] = (x_i, v_i)`` (position and velocity of unit ``i``, SI units);
+* coupling variables ``e``: those of the decomposition in SI units (``lambda_c`` in N, ``a_tilde`` in m/s^2);
+* outputs ``y[i] = (x_i, v_i, a_i, f_i)`` at ``T_N+1`` with ``f_i`` the coupling force as seen by unit ``i``
+  in the units of ``lambda_c``: the input for a force-driven unit, ``force_sign * reaction_force`` for a
+  kinematically driven one.
+
+The constraint residuals are those of the engine's dimensionless setting (``g``, ``H g'``, ``H^2 g''``), so the
+method parameters mean what they mean for the built-in models (:func:`icosim.engine.methods.engine_method`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..engine.lagrange import monomial_coefficients
+from ..engine.problem import CosimulationProblem
+from ..errors import StepFailure
+
+__all__ = ["FmuCosimulation", "Coupling"]
+
+
+class Coupling:
+    """How one unit is coupled: its kind (``"force"`` or ``"kinematic"``), the sign of the coupling force on it,
+    and its mass for the projection (None: the scene does not project)."""
+
+    def __init__(self, kind, force_sign, mass=None):
+        self.kind, self.force_sign, self.mass = kind, float(force_sign), mass
+
+    @property
+    def input_key(self):
+        return "force" if self.kind == "force" else "acceleration_input"
+
+
+class FmuCosimulation(CosimulationProblem):
+    """Two FMU units coupled by a rigid joint (decompositions ff, fd, df, dd).
+
+    Parameters
+    ----------
+    units : two :class:`~icosim.fmi.units.Unit`, opened at ``t0``.
+    couplings : two :class:`Coupling`, the kinds matching the decomposition's.
+    decomposition, k : as for every problem.
+    H : macro-step size in s.
+    t0 : start time.
+    perturbation : the sensitivities are difference quotients with the step ``perturbation * max(1, |e_j|)``
+        (exact up to rounding for linear units).
+    sensitivities : ``"each-step"`` (recomputed every macro step) or ``"first-step"`` (computed once and kept:
+        exact for linear units, whose sensitivities are constant).
+    """
+
+    def __init__(
+        self,
+        units,
+        couplings,
+        decomposition,
+        k,
+        H,
+        *,
+        t0=0.0,
+        perturbation=1e-3,
+        sensitivities="each-step",
+    ):
+        super().__init__(decomposition, k)
+        self.units, self.couplings = tuple(units), tuple(couplings)
+        for i, (c, kind) in enumerate(zip(self.couplings, self.decomposition.kinds)):
+            if c.kind != kind:
+                raise ValueError(f"unit {self.units[i].label} is {c.kind}-driven, decomposition needs {kind}")
+        self.H, self.t0 = float(H), float(t0)
+        self.perturbation, self.sensitivities = float(perturbation), sensitivities
+        self.step_index = 0  # macro steps completed
+        self.C_pred = np.array(monomial_coefficients(self.pred_nodes), dtype=float)
+        self.C_corr = np.array(monomial_coefficients(self.corr_nodes), dtype=float)
+        self._start = [u.save() for u in self.units]  # the FMU states at T_N
+        self._holds = ["start", "start"]  # what each unit holds now: "start", id of an end array, or "scratch"
+        self._ends = [{}, {}]  # id(end) -> (end, FMU state) of this macro step's integrations
+        self._jac = {}
+        self._committed = None
+
+    # -- time and the initial point -----------------------------------------------------------------
+    @property
+    def time(self) -> float:
+        """``T_N``: the communication point the units stand at."""
+        return self.t0 + self.step_index * self.H
+
+    def initial_state(self):
+        """The units' positions and velocities after initialisation, ``(2, 2)``."""
+        self._committed = np.stack([u.get(("position", "velocity")) for u in self.units])
+        return self._committed
+
+    def initial_history(self, e0=None):
+        """The coupling history at ``T_0``: ``e0`` (zeros by default) at every past node, ``(k + 1, n_e)``."""
+        e0 = np.zeros(self.n_coupling) if e0 is None else np.asarray(e0, dtype=float)
+        return np.tile(e0, (self.k + 1, 1))
+
+    # -- one unit integrated --------------------------------------------------------------------------
+    def _to_start(self, i):
+        if self._holds[i] != "start":
+            self.units[i].restore(self._start[i])
+            self._holds[i] = "start"
+
+    def _check_state(self, state):
+        if self._committed is not None and state is not self._committed:
+            raise StepFailure(
+                "an FMU problem advances only from the state it last returned (its units' states live in the FMUs)"
+            )
+
+    def _integrate(self, i, samples, C):
+        """Unit ``i`` over ``[T_N, T_N+1]`` from its start, the input through ``samples`` (``(k+1, n_e)``) with
+        the monomial coefficients ``C``; returns its end ``(x, v)`` and outputs ``(x, v, a, f)``."""
+        self._to_start(i)
+        unit, c = self.units[i], self.couplings[i]
+        j = self.decomposition.inputs[i]
+        coef = C @ samples[:, j]
+        scale = c.force_sign if c.kind == "force" else 1.0
+        unit.step(c.input_key, scale * coef, self.time, self.H, step_index=self.step_index + 1)
+        self.work.subsystem_integrations += 1
+        self._holds[i] = "scratch"
+        return self._outputs(i, coef.sum())
+
+    def _outputs(self, i, u1):
+        """Unit ``i``'s end ``(x, v)`` and outputs ``(x, v, a, f)`` as it stands, its input ``u1`` at ``T_N+1``."""
+        c = self.couplings[i]
+        if c.kind == "force":
+            x, v, a = self.units[i].get(("position", "velocity", "acceleration"))
+            f = u1
+        else:
+            x, v, a, r = self.units[i].get(("position", "velocity", "acceleration", "reaction_force"))
+            f = c.force_sign * r
+        return np.array([x, v]), np.array([x, v, a, f])
+
+    def _keep(self, i, end):
+        """Save unit ``i``'s state as the one belonging to ``end`` (the macro step may finish with it)."""
+        self._ends[i][id(end)] = (end, self.units[i].save())
+        self._holds[i] = id(end)
+
+    def _at_end(self, i, end, u1):
+        """Unit ``i``'s outputs at its end state ``end`` with the input ``u1`` at ``T_N+1`` (no step)."""
+        if self._holds[i] != id(end):
+            self.units[i].restore(self._ends[i][id(end)][1])
+            self._holds[i] = id(end)
+        c = self.couplings[i]
+        self.units[i].set(c.input_key, (c.force_sign if c.kind == "force" else 1.0) * u1)
+        return self._outputs(i, u1)[1]
+
+    # -- the problem interface -------------------------------------------------------------------------
+    def predict(self, i, state, history, *, final=False):
+        self._check_state(state)
+        end, y = self._integrate(i, history, self.C_pred)
+        self._keep(i, end)
+        return end, y
+
+    def correct(self, i, state, history, e_new):
+        self._check_state(state)
+        end, y = self._integrate(i, self.corrector_samples(history, e_new), self.C_corr)
+        self._keep(i, end)
+        return end, y
+
+    def reevaluate(self, i, end, y, e_old, e_new):
+        """Outputs at the fixed end state with the input at ``T_N+1`` set to ``e_new`` (``fmi2SetReal``, no step)."""
+        return self._at_end(i, end, float(e_new[self.decomposition.inputs[i]]))
+
+    def join(self, ends):
+        """The macro step's end: each unit's FMU state of ``ends[i]`` becomes the next start; the rest are freed."""
+        for i, end in enumerate(ends):
+            kept = self._ends[i].pop(id(end))[1]
+            for _, other in self._ends[i].values():
+                self.units[i].free(other)
+            self._ends[i].clear()
+            self.units[i].free(self._start[i])
+            self._start[i] = kept
+            self._holds[i] = "start" if self._holds[i] == id(end) else "scratch"
+        self.step_index += 1
+        self._committed = np.stack(ends)
+        return self._committed
+
+    def stack(self, ys):
+        return np.stack(ys)
+
+    def residuals(self, y):
+        """Joint constraint on three levels (``g``, ``H g'``, ``H^2 g''``, unit 1 minus unit 2) and force balance."""
+        d = y[..., 0, :] - y[..., 1, :]
+        empty = d[..., :0]
+        out = {"pos": empty, "vel": empty, "acc": empty}
+        if self.decomposition.has_constraint_condition:
+            out = {"pos": d[..., 0:1], "vel": self.H * d[..., 1:2], "acc": self.H**2 * d[..., 2:3]}
+        out["force"] = d[..., 3:4] if self.decomposition.has_force_balance else empty
+        return out
+
+    def jacobians(self, state, history, e, y, fixed=(None, None), algebraic=True):
+        """``d residuals / d e_N+1`` by difference quotients: a unit that is corrected repeats its corrector step
+        with the perturbed input (restored start state, one ``doStep`` per coupling variable driving it); a
+        finished (leading) unit is re-evaluated at its end state with the perturbed input (no step)."""
+        key = tuple("full" if f is None else "algebraic" if algebraic else "none" for f in fixed)
+        if self.sensitivities == "first-step" and key in self._jac:
+            return self._jac[key]
+        e = np.asarray(e, dtype=float)
+        h = self.perturbation * np.maximum(1.0, np.abs(e))
+        r0 = self.residuals(y)
+        jac = {name: np.zeros(val.shape + (self.n_coupling,)) for name, val in r0.items()}
+        for j in range(self.n_coupling):
+            yj = np.array(y, dtype=float, copy=True)
+            for i in range(2):
+                if self.decomposition.inputs[i] != j or key[i] == "none":
+                    continue
+                ep = e.copy()
+                ep[j] += h[j]
+                if key[i] == "full":
+                    yj[i] = self._integrate(i, self.corrector_samples(history, ep), self.C_corr)[1]
+                else:
+                    yj[i] = self._at_end(i, fixed[i], ep[j])
+            for name, val in self.residuals(yj).items():
+                jac[name][..., j] = (val - r0[name]) / h[j]
+        self._jac[key] = jac
+        return jac
+
+    def project(self, state):
+        """Mass-weighted projection of positions and velocities (Eq. 30), written into the units."""
+        m = np.array([c.mass for c in self.couplings], dtype=float)
+        xv = (m[0] * state[0] + m[1] * state[1]) / m.sum()
+        for i, unit in enumerate(self.units):
+            self._to_start(i)
+            unit.set("set_position", xv[0])
+            unit.set("set_velocity", xv[1])
+            unit.free(self._start[i])
+            self._start[i] = unit.save()
+        self._committed = np.stack([xv, xv])
+        return self._committed
+
+    def close(self):
+        """Free the saved states (the units themselves are closed by their owner)."""
+        for i, unit in enumerate(self.units):
+            for _, s in self._ends[i].values():
+                unit.free(s)
+            self._ends[i].clear()
+            if self._start[i] is not None:
+                unit.free(self._start[i])
+                self._start[i] = None

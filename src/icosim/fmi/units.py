@@ -1,0 +1,272 @@
+"""One FMU instance of a scene: loaded, checked against what the scene asks of it, stepped, saved and restored.
+
+Only fmpy talks to the FMU (imported when a unit is opened).  A unit reads and writes only the variables its
+scene names (:data:`ROLES`).  Over a macro step the unit's coupling input is a polynomial in the local time
+``tau = (t - T_N)/H``; :meth:`Unit.step` hands it to the FMU either exactly, as its value and derivatives at
+``T_N`` (``fmi2SetRealInputDerivatives``, units that declare ``canInterpolateInputs``), or as ``substeps``
+sub-steps each with the polynomial's value at its midpoint (every other unit; docs/fmi.md).
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import shutil
+import tempfile
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+from .errors import FmuError, UnitStepError
+
+__all__ = ["Unit", "ROLES", "read_description", "check_unit"]
+
+#: Scene key -> (what it names, causalities it may have).
+ROLES = {
+    "position": ("the position output", ("output",)),
+    "velocity": ("the velocity output", ("output",)),
+    "acceleration": ("the acceleration output", ("output",)),
+    "force": ("the coupling-force input", ("input",)),
+    "acceleration_input": ("the prescribed-acceleration input", ("input",)),
+    "reaction_force": ("the output of the force the drive exerts", ("output",)),
+    "set_position": ("a tunable parameter or input that sets the position (projection)", ("parameter", "input")),
+    "set_velocity": ("a tunable parameter or input that sets the velocity (projection)", ("parameter", "input")),
+}
+
+#: Why a unit must save and restore its state: every scheme integrates a unit more than once over a macro step.
+STATE_REASON = (
+    "every coupling scheme integrates a unit more than once from the same macro-step start (predictor, the "
+    "perturbed steps of the sensitivities, corrector), which needs fmi2GetFMUstate/fmi2SetFMUstate"
+)
+
+
+def read_description(label: str, path: Path):
+    """The unit's model description (fmpy), or :class:`FmuError` naming ``label`` and the file."""
+    from fmpy import read_model_description
+
+    if not Path(path).is_file():
+        raise FmuError(f"{label}: FMU file {path} does not exist")
+    if not zipfile.is_zipfile(path):
+        raise FmuError(f"{label}: {path} is not an FMU (not a ZIP archive)")
+    try:
+        return read_model_description(str(path), validate=True)
+    except Exception as exc:  # fmpy raises plain exceptions for unreadable or invalid descriptions
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise FmuError(f"{label}: {path} has no valid modelDescription.xml ({first})") from None
+
+
+def check_unit(label: str, path: Path, md, names: dict, start: dict):
+    """Refuse a unit the scene cannot use: not co-simulation, no saved states, a missing variable or one of the
+    wrong causality (close matches listed).  ``names``: scene key -> variable name."""
+    if md.fmiVersion not in ("2.0",) and not md.fmiVersion.startswith("3."):
+        raise FmuError(f"{label}: {path} is FMI {md.fmiVersion}; FMI 2.0 or 3.0 co-simulation units are supported")
+    if md.coSimulation is None:
+        raise FmuError(
+            f"{label}: {path} is a model-exchange unit only (no <CoSimulation> in its modelDescription.xml); "
+            "a scene needs co-simulation units, which bring their own solver"
+        )
+    if not md.coSimulation.canGetAndSetFMUstate:
+        raise FmuError(f"{label}: {path} declares canGetAndSetFMUstate=false; {STATE_REASON}")
+    variables = {v.name: v for v in md.modelVariables}
+    for key, name in names.items():
+        var = _variable(label, key, name, variables)
+        what, causalities = ROLES[key]
+        if var.causality not in causalities:
+            raise FmuError(
+                f"{label}: {key}: variable {name!r} has causality {var.causality!r}, but {key} must name "
+                f"{what} (causality {' or '.join(causalities)})"
+            )
+        if var.causality == "parameter" and var.variability != "tunable":
+            raise FmuError(f"{label}: {key}: parameter {name!r} is {var.variability}, it must be tunable")
+        if var.type not in ("Real", "Float64"):
+            raise FmuError(f"{label}: {key}: variable {name!r} is {var.type}, it must be Real (Float64)")
+    for name in start:
+        var = _variable(label, "start", name, variables)
+        if var.causality not in ("parameter", "input") or var.variability == "constant":
+            raise FmuError(
+                f"{label}: start: {name!r} has causality {var.causality!r} and variability {var.variability!r}; "
+                "start values go to parameters and inputs"
+            )
+
+
+def _variable(label, key, name, variables):
+    if name in variables:
+        return variables[name]
+    close = difflib.get_close_matches(name, list(variables), n=3, cutoff=0.5)
+    hint = f"; close matches: {', '.join(close)}" if close else f"; it has {', '.join(sorted(variables)[:12])}"
+    raise FmuError(f"{label}: {key}: the unit has no variable {name!r}{hint}")
+
+
+class Unit:
+    """One instance of an FMU, opened with its start values and ready at ``t0``.
+
+    Parameters
+    ----------
+    label : the subsystem's name in the scene (the instance name).
+    path : the ``.fmu`` file.
+    names : scene key (:data:`ROLES`) -> variable name.
+    start : start values (variable name -> value).
+    inputs : ``"auto"`` (derivatives where the unit can interpolate inputs, else sub-steps), ``"derivatives"``
+        or ``"substeps"``.
+    substeps : sub-steps per macro step where the input is sampled.
+
+    Counters: :attr:`do_steps`, :attr:`saved`, :attr:`restored`.
+    """
+
+    def __init__(self, label, path, names, start, *, inputs="auto", substeps=16, t0=0.0):
+        self.label, self.path = label, Path(path)
+        self.md = md = read_description(label, self.path)
+        check_unit(label, self.path, md, names, start)
+        self.fmi3 = md.fmiVersion.startswith("3.")
+        self.interpolates = bool(getattr(md.coSimulation, "canInterpolateInputs", False)) and not self.fmi3
+        if inputs == "derivatives" and not self.interpolates:
+            raise FmuError(
+                f"{label}: coupling.inputs: derivatives needs a unit that declares canInterpolateInputs "
+                f"(FMI 2.0); {self.path.name} does not: use inputs auto or substeps"
+            )
+        self.exact_inputs = self.interpolates and inputs != "substeps"
+        self.substeps = int(substeps)
+        variables = {v.name: v for v in md.modelVariables}
+        self.vr = {key: variables[name].valueReference for key, name in names.items()}
+        self.names = dict(names)
+        self.do_steps = self.saved = self.restored = 0
+        self.messages = []
+        self._tmp = tempfile.mkdtemp(prefix=f"icosim-{label}-")
+        self._open(variables, start, t0)
+
+    # -- lifecycle -------------------------------------------------------------------------
+    def _open(self, variables, start, t0):
+        from fmpy import extract
+
+        md = self.md
+        try:
+            unzipdir = extract(str(self.path), unzipdir=self._tmp)
+        except Exception as exc:
+            raise FmuError(f"{self.label}: cannot unpack {self.path}: {exc}") from None
+        common = dict(unzipDirectory=unzipdir, modelIdentifier=md.coSimulation.modelIdentifier, instanceName=self.label)
+        try:
+            if self.fmi3:
+                from fmpy.fmi3 import FMU3Slave
+
+                self.fmu = FMU3Slave(instantiationToken=md.instantiationToken, **common)
+                self.fmu.instantiate(logMessage=self._log3)
+                self.fmu.enterInitializationMode(startTime=t0)
+            else:
+                from fmpy.fmi2 import FMU2Slave, defaultCallbacks, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+
+                self.fmu = FMU2Slave(guid=md.guid, **common)
+                cb = fmi2CallbackFunctions()
+                cb.logger = fmi2CallbackLoggerTYPE(self._log2)
+                cb.allocateMemory, cb.freeMemory = defaultCallbacks.allocateMemory, defaultCallbacks.freeMemory
+                self._callbacks = cb  # kept alive as long as the instance
+                self.fmu.instantiate(callbacks=cb)
+                self.fmu.setupExperiment(startTime=t0)
+                self.fmu.enterInitializationMode()
+            for name, value in start.items():
+                self._set_refs([variables[name].valueReference], [float(value)])
+            self.fmu.exitInitializationMode()  # co-simulation: step mode follows (FMI 3.0 without event mode)
+        except FmuError:
+            raise
+        except Exception as exc:
+            raise FmuError(f"{self.label}: {self.path.name} could not be instantiated and initialised: {exc}") from None
+
+    def _log2(self, env, instance, status, category, message):
+        self.messages.append(message.decode(errors="replace") if message else "")
+
+    def _log3(self, env, status, category, message):
+        self.messages.append(message.decode(errors="replace") if message else "")
+
+    def close(self):
+        """Terminate and free the instance, remove its unpacked files."""
+        fmu, self.fmu = getattr(self, "fmu", None), None
+        if fmu is not None:
+            try:
+                fmu.terminate()
+            except Exception:
+                pass
+            try:
+                fmu.freeInstance()
+            except Exception:
+                pass
+        shutil.rmtree(self._tmp, ignore_errors=True)
+
+    # -- information -------------------------------------------------------------------------
+    def info(self) -> dict:
+        """Model name, GUID or instantiation token, FMI version, generation tool, input route, counters."""
+        md = self.md
+        return {
+            "model_name": md.modelName,
+            "guid": md.guid if not self.fmi3 else md.instantiationToken,
+            "fmi_version": md.fmiVersion,
+            "generation_tool": md.generationTool or "",
+            "fmu": str(self.path),
+            "inputs": "derivatives" if self.exact_inputs else f"substeps ({self.substeps})",
+            "do_step_calls": self.do_steps,
+            "states_saved": self.saved,
+            "states_restored": self.restored,
+        }
+
+    # -- values -------------------------------------------------------------------------------
+    def _set_refs(self, refs, values):
+        (self.fmu.setFloat64 if self.fmi3 else self.fmu.setReal)(refs, values)
+
+    def get(self, keys) -> np.ndarray:
+        """Values of the variables named under ``keys`` (scene keys), in that order."""
+        refs = [self.vr[k] for k in keys]
+        return np.array(self.fmu.getFloat64(refs) if self.fmi3 else self.fmu.getReal(refs), dtype=float)
+
+    def set(self, key, value):
+        """Set the variable named under the scene key ``key``."""
+        self._set_refs([self.vr[key]], [float(value)])
+
+    def get_named(self, name) -> float:
+        var = next(v for v in self.md.modelVariables if v.name == name)
+        ref = [var.valueReference]
+        return float((self.fmu.getFloat64(ref) if self.fmi3 else self.fmu.getReal(ref))[0])
+
+    # -- states -------------------------------------------------------------------------------
+    def save(self):
+        self.saved += 1
+        return self.fmu.getFMUState() if self.fmi3 else self.fmu.getFMUstate()
+
+    def restore(self, state):
+        self.restored += 1
+        (self.fmu.setFMUState if self.fmi3 else self.fmu.setFMUstate)(state)
+
+    def free(self, state):
+        (self.fmu.freeFMUState if self.fmi3 else self.fmu.freeFMUstate)(state)
+
+    # -- stepping -----------------------------------------------------------------------------
+    def step(self, key, coefficients, t, H, *, step_index):
+        """Advance ``[t, t + H]`` with the input ``key`` following ``u(tau) = sum_m coefficients[m] tau^m``;
+        afterwards the input holds ``u(1)`` (the outputs that depend on it directly are those at ``t + H``)."""
+        c = np.asarray(coefficients, dtype=float)
+        ref = self.vr[key]
+        if self.exact_inputs:
+            self._set_refs([ref], [float(c[0])])
+            orders = [m for m in range(1, c.size) if c[m] != 0]
+            if orders:
+                values = [math.factorial(m) * float(c[m]) / H**m for m in orders]
+                self.fmu.setRealInputDerivatives([ref] * len(orders), orders, values)
+            self._do_step(t, H, step_index)
+        else:
+            n = self.substeps
+            for j in range(n):
+                self._set_refs([ref], [float(np.polyval(c[::-1], (j + 0.5) / n))])
+                self._do_step(t + j * H / n, H / n, step_index)
+        self._set_refs([ref], [float(c.sum())])
+
+    def _do_step(self, t, h, step_index):
+        self.do_steps += 1
+        del self.messages[:]
+        try:
+            self.fmu.doStep(t, h, noSetFMUStatePriorToCurrentPoint=False)
+        except Exception as exc:
+            status = {1: "warning", 2: "discard", 3: "error", 4: "fatal", 5: "pending"}.get(
+                getattr(exc, "status", None), "failure"
+            )
+            said = f": {' '.join(m for m in self.messages if m)}" if any(self.messages) else ""
+            raise UnitStepError(
+                f"unit {self.label} refused macro step {step_index} at t = {t:.12g} s (doStep returned {status}){said}"
+            ) from None
