@@ -8,6 +8,7 @@ sub-command                 module
 ``icosim advise``           :mod:`.advise`: every configuration for a two-mass
                             system, stable or not, up to which macro step
 ``icosim map``              :mod:`.map`: a stability map as PNG, PDF and NetCDF
+``icosim cosim``            :mod:`.cosim`: an FMU scene run with a coupling method
 ==========================  ===================================================
 
 :mod:`.arguments` holds the argument types they share, so that every command takes and
@@ -23,13 +24,13 @@ from __future__ import annotations
 import argparse
 import sys
 
-from . import advise, rho
+from . import advise, cosim, rho
 from . import map as map_
 
 __all__ = ["main", "build_parser", "COMMANDS"]
 
 #: Sub-command name -> its module (``add_parser(sub)``, ``run(args, parser)``), in the order of ``--help``.
-COMMANDS = {"rho": rho, "advise": advise, "map": map_}
+COMMANDS = {"rho": rho, "advise": advise, "map": map_, "cosim": cosim}
 
 
 def build_parser() -> argparse.ArgumentParser:
