@@ -67,7 +67,9 @@ def run(args, parser) -> int:
             result = run_scene(scene, progress=bar)
         finally:
             bar.close()
-    except (SceneError, UnitStepError) as exc:
+    except SceneError as exc:
+        return _error(str(exc))
+    except UnitStepError as exc:
         return _error(f"{exc}; no dataset written")
     write_netcdf(run_dataset(result, command=f"icosim cosim {args.scene} --out {args.out}"), out)
     summary = {**run_summary(result), "out": str(out)}

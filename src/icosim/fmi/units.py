@@ -52,7 +52,7 @@ def read_description(label: str, path: Path):
     try:
         return read_model_description(str(path), validate=True)
     except Exception as exc:  # fmpy raises plain exceptions for unreadable or invalid descriptions
-        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        first = " ".join(str(exc).split()[:40]) or type(exc).__name__
         raise FmuError(f"{label}: {path} has no valid modelDescription.xml ({first})") from None
 
 
