@@ -29,8 +29,11 @@ def cache_dir() -> Path:
 
 
 def is_source_dir(path) -> bool:
-    """Is ``path`` a unit's source directory (a ``modelDescription.xml`` beside ``sources/``)?"""
+    """Is ``path`` a unit's source: a directory (a ``modelDescription.xml`` beside ``sources/``) or a pythonfmu
+    script (``.py``)?"""
     path = Path(path)
+    if path.is_file() and path.suffix == ".py":
+        return True
     return path.is_dir() and (path / "modelDescription.xml").is_file() and (path / "sources").is_dir()
 
 
@@ -54,6 +57,8 @@ def build_unit(source, cache=None) -> Path:
     import fmpy
 
     source = Path(source).resolve()
+    if source.suffix == ".py":
+        return _build_python(source, Path(cache) if cache is not None else cache_dir())
     files = unit_files(source)
     digest = hashlib.sha256(f"fmpy {fmpy.__version__} {fmpy.platform}".encode())
     for name, f in files.items():
@@ -99,3 +104,26 @@ def _compile(source: Path, unzipdir: Path, build_dir: Path):
         if run.returncode != 0:
             tail = " | ".join((run.stderr or run.stdout).strip().splitlines()[-5:])
             raise FmuError(f"{source}: building the unit failed ({' '.join(cmd[:2])}): {tail}")
+
+
+def _build_python(script: Path, out_dir: Path) -> Path:
+    """A pythonfmu script exported as an FMU that can save and restore its state (``--handle-state``)."""
+    try:
+        import pythonfmu
+        from pythonfmu.builder import FmuBuilder
+    except ImportError:
+        raise FmuError(f"{script}: exporting a Python unit needs pythonfmu (pip install 'icosim[fmi]')") from None
+    digest = hashlib.sha256(f"pythonfmu {pythonfmu.__version__}\0".encode() + script.read_bytes()).hexdigest()
+    target = out_dir / f"{script.stem}-{digest[:16]}.fmu"
+    if target.is_file():
+        return target
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="icosim-pythonfmu-") as tmp:
+        try:
+            built = FmuBuilder.build_FMU(script, dest=tmp, canGetAndSetFMUstate=True)
+        except Exception as exc:
+            raise FmuError(f"{script}: pythonfmu could not export it: {exc}") from None
+        part = target.with_name(target.name + f".{os.getpid()}.part")
+        shutil.copyfile(built, part)
+        os.replace(part, target)
+    return target

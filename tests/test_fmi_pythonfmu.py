@@ -1,0 +1,64 @@
+"""A second exporter: the force-driven unit written in Python and exported with pythonfmu (fmus/python), coupled
+with the C unit.  It cannot interpolate inputs, so it gets the coupling polynomial as sub-steps: the run follows
+the built-in model to second order in the sub-step."""
+
+import shutil
+
+import numpy as np
+import pytest
+import yaml
+from helpers import ROOT
+
+pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
+pytest.importorskip("pythonfmu", reason="the Python unit is exported with pythonfmu (the fmi extra)")
+if shutil.which("cmake") is None or (shutil.which("cc") or shutil.which("gcc")) is None:
+    pytest.skip("building the C test unit needs CMake and a C compiler", allow_module_level=True)
+
+from icosim.engine.linear_problem import LinearCosimulation  # noqa: E402
+from icosim.engine.macrostep import simulate  # noqa: E402
+from icosim.engine.methods import engine_method, make_method  # noqa: E402
+from icosim.engine.model import PhysicalModel  # noqa: E402
+from icosim.fmi.run import run_scene  # noqa: E402
+
+SCENE = ROOT / "config" / "scenes" / "two_mass_python.yaml"
+
+
+@pytest.fixture(autouse=True)
+def fmu_cache(monkeypatch):
+    monkeypatch.setenv("ICOSIM_FMU_CACHE", str(ROOT / "build" / "fmus"))
+
+
+def builtin(data):
+    c = data["coupling"]
+    H, n = c["H"], round(data["t_end"] / c["H"])
+    s1, s2 = (data["subsystems"][b]["start"] for b in ("body1", "body2"))
+    model = PhysicalModel(m1=s1["m"], m2=s2["m"], c1=s1["c"], c2=s2["c"], d1=s1["d"], d2=s2["d"], H=H)
+    problem = LinearCosimulation(model.coefficients(), c["decomposition"], c["k"])
+    method = engine_method(make_method(c["method"], index=c["index"], a=c["a"], b=c["b"]), H)
+    state = np.array([[s1["x0"], 0.0], [s2["x0"], 0.0]])
+    traj = simulate(problem, method, state, np.zeros((c["k"] + 1, 1)), n, scheme=c["scheme"])
+    return np.array(traj.states)[..., 0]
+
+
+def run_with(tmp_path, substeps):
+    data = yaml.safe_load(SCENE.read_text())
+    data["coupling"]["substeps"] = substeps
+    data["t_end"] = 0.1
+    for sub in data["subsystems"].values():
+        sub["fmu"] = str((SCENE.parent / sub["fmu"]).resolve())
+    path = tmp_path / f"python_{substeps}.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return data, run_scene(path)
+
+
+def test_pythonfmu_unit_follows_the_builtin_model_to_second_order_in_the_sub_step(tmp_path):
+    errors = []
+    for substeps in (8, 16):
+        data, run = run_with(tmp_path, substeps)
+        assert run.units["body1"]["generation_tool"].startswith("PythonFMU")
+        assert run.units["body1"]["inputs"] == f"substeps ({substeps})"
+        assert run.units["body2"]["inputs"] == "derivatives"
+        x = builtin(data)
+        errors.append(np.max(np.abs(run.states[..., 0] - x)) / np.max(np.abs(x)))
+    assert errors[1] < 1e-4
+    assert 3 < errors[0] / errors[1] < 5
