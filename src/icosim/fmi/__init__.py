@@ -1,4 +1,4 @@
-"""FMU scenes: the implicit coupling methods on people's own co-simulation units (FMI 2.0; docs/fmi.md).
+"""FMU scenes: the implicit coupling methods on people's own co-simulation units (FMI 2.0 and 3.0 co-simulation; docs/fmi.md).
 
 ==================  ===========================================================================
 module              holds

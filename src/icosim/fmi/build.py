@@ -2,7 +2,8 @@
 whose platform binary fmpy's CMake project compiles, once per content (a cache keyed by the SHA-256 of the files).
 
 A unit directory of ``fmus/`` may share code with the others: the files of the sibling directory
-``common/`` are copied into its ``sources/`` before the build (``fmus/README.md``).
+``common/``, and the ``sources/`` of the sibling units its ``uses.txt`` names, are copied into its ``sources/``
+before the build (``fmus/README.md``).
 """
 
 from __future__ import annotations
@@ -41,7 +42,9 @@ def unit_files(source: Path) -> dict[str, Path]:
     """Archive name -> file of the unit built from ``source`` (the shared ``common/`` files under ``sources/``)."""
     files = {"modelDescription.xml": source / "modelDescription.xml"}
     common = source.parent / "common"
-    for folder in ([common] if common.is_dir() else []) + [source / "sources"]:
+    uses = source / "uses.txt"  # sibling units whose sources this one shares (an FMI 3.0 twin of a unit)
+    shared = [source.parent / name / "sources" for name in uses.read_text().split()] if uses.is_file() else []
+    for folder in ([common] if common.is_dir() else []) + shared + [source / "sources"]:
         for f in sorted(folder.iterdir()):
             if f.is_file():
                 files[f"sources/{f.name}"] = f

@@ -149,7 +149,7 @@ class Unit:
             if self.fmi3:
                 from fmpy.fmi3 import FMU3Slave
 
-                self.fmu = FMU3Slave(instantiationToken=md.instantiationToken, **common)
+                self.fmu = FMU3Slave(guid=md.guid, **common)  # fmpy keeps the instantiation token as guid
                 self.fmu.instantiate(logMessage=self._log3)
                 self.fmu.enterInitializationMode(startTime=t0)
             else:
@@ -197,7 +197,7 @@ class Unit:
         md = self.md
         return {
             "model_name": md.modelName,
-            "guid": md.guid if not self.fmi3 else md.instantiationToken,
+            "guid": md.guid,  # FMI 3.0: the instantiation token
             "fmi_version": md.fmiVersion,
             "generation_tool": md.generationTool or "",
             "fmu": str(self.path),
@@ -261,7 +261,7 @@ class Unit:
         self.do_steps += 1
         del self.messages[:]
         try:
-            self.fmu.doStep(t, h, noSetFMUStatePriorToCurrentPoint=False)
+            result = self.fmu.doStep(t, h, noSetFMUStatePriorToCurrentPoint=False)
         except Exception as exc:
             status = {1: "warning", 2: "discard", 3: "error", 4: "fatal", 5: "pending"}.get(
                 getattr(exc, "status", None), "failure"
@@ -270,3 +270,6 @@ class Unit:
             raise UnitStepError(
                 f"unit {self.label} refused macro step {step_index} at t = {t:.12g} s (doStep returned {status}){said}"
             ) from None
+        if self.fmi3 and (result[1] or result[2]):  # terminateSimulation, earlyReturn
+            what = "asked to terminate the simulation" if result[1] else f"returned early at t = {result[3]:.12g} s"
+            raise UnitStepError(f"unit {self.label} {what} in macro step {step_index} (from t = {t:.12g} s)")
