@@ -1,6 +1,7 @@
 """The force-driven test unit (fmus/msd) written in Python and exported with pythonfmu (fmus/README.md).
 
-m x'' = -c x - d x' + lambda with lambda held constant over each doStep (the unit cannot interpolate inputs:
+m x'' = -c x - c3 x^3 - d x' + lambda (``c3 = 0`` by default: the linear unit; a cubic spring makes it a
+nonlinear one) with lambda held constant over each doStep (the unit cannot interpolate inputs:
 icosim hands it the coupling polynomial as sub-steps); the step is integrated by classical Runge-Kutta with
 ``internal_steps`` steps.  Its state is its registered variables, which pythonfmu saves and restores
 (``--handle-state``).
@@ -15,13 +16,13 @@ class msd_python(Fmi2Slave):  # noqa: N801 - pythonfmu names the model after the
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        self.m, self.c, self.d = 1.0, 1000.0, 2.0
+        self.m, self.c, self.d, self.c3 = 1.0, 1000.0, 2.0, 0.0
         self.x0 = self.v0 = 0.0
         self.internal_steps = 20.0
         self.lam = 0.0
         self.x = self.v = 0.0
         fixed = dict(causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed)
-        for name in ("m", "c", "d", "x0", "v0", "internal_steps"):
+        for name in ("m", "c", "d", "c3", "x0", "v0", "internal_steps"):
             self.register_variable(Real(name, **fixed))
         self.register_variable(Real("lam", causality=Fmi2Causality.input, variability=Fmi2Variability.continuous))
         continuous = dict(causality=Fmi2Causality.output, variability=Fmi2Variability.continuous)
@@ -34,7 +35,7 @@ class msd_python(Fmi2Slave):  # noqa: N801 - pythonfmu names the model after the
         self.x, self.v = self.x0, self.v0
 
     def _acc(self, x, v):
-        return (-self.c * x - self.d * v + self.lam) / self.m
+        return (-self.c * x - self.c3 * x**3 - self.d * v + self.lam) / self.m
 
     def do_step(self, current_time, step_size):
         n = max(1, int(self.internal_steps))

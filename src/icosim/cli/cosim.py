@@ -29,8 +29,14 @@ def add_parser(sub):
         "(fmus/) are built on first use into $ICOSIM_FMU_CACHE (default ~/.cache/icosim/fmus).",
     )
     p.add_argument("scene", metavar="SCENE.yaml", help="the scene file")
-    p.add_argument("--out", required=True, metavar="RUN.nc", help="the NetCDF file to write")
-    p.add_argument("--json", action="store_true", help="print a JSON summary instead of text")
+    p.add_argument("--out", metavar="RUN.nc", help="the NetCDF file to write (required unless --predict)")
+    p.add_argument(
+        "--predict",
+        action="store_true",
+        help="do not run: identify m, c, d of the (linear) units from a few probing steps and print the spectral "
+        "radius for the scene's scheme and every other one",
+    )
+    p.add_argument("--json", action="store_true", help="print JSON instead of text")
     p.set_defaults(subparser=p)
     return p
 
@@ -49,6 +55,10 @@ def run(args, parser) -> int:
     from ..io.jsonio import dumps
     from ..io.netcdf import write_netcdf
 
+    if args.predict:
+        return _predict(args)
+    if args.out is None:
+        return _error("argument --out is required (or --predict)")
     out = Path(args.out)
     if not out.parent.resolve().is_dir():
         return _error(f"argument --out: directory {out.parent} does not exist")
@@ -78,6 +88,44 @@ def run(args, parser) -> int:
     else:
         print(_text(summary))
     return 0
+
+
+def _predict(args) -> int:
+    from ..fmi.errors import SceneError, UnitStepError
+    from ..fmi.predict import predict_scene
+    from ..fmi.scene import load_scene
+    from ..io.jsonio import dumps
+
+    try:
+        answer = predict_scene(load_scene(args.scene))
+    except (SceneError, UnitStepError) as exc:
+        return _error(str(exc))
+    print(dumps(answer) if args.json else _prediction_text(answer))
+    return 0
+
+
+def _prediction_text(a: dict) -> str:
+    lines = [f"scene {a['scene']}: {a['method']}, {a['decomposition']}, k = {a['k']}, H = {a['H']:g} s"]
+    for name, u in a["units"].items():
+        lines.append(
+            f"  {name} identified: m = {u['m']:.6g} kg, c = {u['c']:.6g} N/m, d = {u['d']:.6g} N s/m "
+            f"(misfit of the linear model {u['misfit']:.1e}, {u['probe_do_step_calls']} probing doStep calls)"
+        )
+        if u["misfit"] > 1e-6:
+            lines.append(
+                f"    {name} is not a linear oscillator: the prediction is that of a linear fit about its start"
+            )
+    lines.append("spectral radius per macro step (float64, error estimate):")
+    for row in a["schemes"]:
+        mark = "*" if row["scene"] else " "
+        if row["rho"] is None:
+            lines.append(f"  {mark} {row['scheme']:<32} not defined: {row['reason']}")
+        else:
+            lines.append(
+                f"  {mark} {row['scheme']:<32} rho = {row['rho']:.10g} (+- {row['rho_error']:.1e})  {row['verdict']}"
+            )
+    lines.append("  (* the scene's scheme)")
+    return "\n".join(lines)
 
 
 def _text(s: dict) -> str:

@@ -1,0 +1,75 @@
+"""``icosim cosim --predict``: the units identified from probing steps (m, c, d of the linear test units to
+rounding) and the spectral radius of the scene's coupling for every scheme, as for the parameters typed in."""
+
+import json
+import shutil
+
+import pytest
+import yaml
+from helpers import ROOT
+
+pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
+if shutil.which("cmake") is None or (shutil.which("cc") or shutil.which("gcc")) is None:
+    pytest.skip("building the test units needs CMake and a C compiler", allow_module_level=True)
+
+from icosim.cli import main  # noqa: E402
+from icosim.engine.model import PhysicalModel  # noqa: E402
+from icosim.engine.spectral.radius import spectral_radius_float64  # noqa: E402
+from icosim.fmi.predict import predict_scene  # noqa: E402
+from icosim.fmi.scene import load_scene  # noqa: E402
+
+SCENES = ROOT / "config" / "scenes"
+
+
+@pytest.fixture(autouse=True)
+def fmu_cache(monkeypatch):
+    monkeypatch.setenv("ICOSIM_FMU_CACHE", str(ROOT / "build" / "fmus"))
+
+
+@pytest.mark.parametrize("name", ["two_mass_ff", "two_mass_fd", "two_mass_dd", "two_mass_python", "two_mass_fmi3"])
+def test_prediction_matches_the_parameters_typed_in(name):
+    scene = load_scene(SCENES / f"{name}.yaml")
+    answer = predict_scene(scene)
+    starts = [sub["start"] for sub in scene.data["subsystems"].values()]
+    for unit, start in zip(answer["units"].values(), starts):
+        for key in ("m", "c", "d"):
+            assert unit[key] == pytest.approx(start[key], rel=1e-12)
+        assert unit["misfit"] < 1e-12
+    true = PhysicalModel(
+        m1=starts[0]["m"], m2=starts[1]["m"], c1=starts[0]["c"], c2=starts[1]["c"], d1=starts[0]["d"],
+        d2=starts[1]["d"], H=scene.coupling["H"],
+    )  # fmt: skip
+    assert [row["scene"] for row in answer["schemes"]].count(True) == 1
+    for row in answer["schemes"]:
+        rho, _ = spectral_radius_float64(
+            true.coefficients(),
+            scene.method,
+            scene.coupling["decomposition"],
+            scene.coupling["k"],
+            scheme=row["scheme"],
+        )
+        assert row["rho"] == pytest.approx(float(rho), rel=1e-9)
+        assert row["verdict"] == ("stable" if rho < 1 else "unstable")
+
+
+def test_predict_on_the_command_line(capsys):
+    assert main(["cosim", str(SCENES / "two_mass_fd.yaml"), "--predict"]) == 0
+    text = capsys.readouterr().out
+    assert "body2 identified: m = 2 kg, c = 500 N/m, d = 1 N s/m" in text
+    assert "* jacobi" in text and "gauss-seidel-12" in text and "unstable" in text
+    assert main(["cosim", str(SCENES / "two_mass_fd.yaml"), "--predict", "--json"]) == 0
+    answer = json.loads(capsys.readouterr().out)
+    assert {row["scheme"] for row in answer["schemes"]} >= {"jacobi", "gauss-seidel-12", "gauss-seidel-21"}
+
+
+def test_a_unit_that_is_not_linear_is_reported(capsys, tmp_path):
+    """The Python unit with a cubic spring: the probes' linear model misfits, and the text says so."""
+    data = yaml.safe_load((SCENES / "two_mass_python.yaml").read_text())
+    for sub in data["subsystems"].values():
+        sub["fmu"] = str((SCENES / sub["fmu"]).resolve())
+    data["subsystems"]["body1"]["start"]["c3"] = 1.0e6
+    path = tmp_path / "scene.yaml"
+    path.write_text(yaml.safe_dump(data))
+    assert main(["cosim", str(path), "--predict"]) == 0
+    text = capsys.readouterr().out
+    assert "body1 is not a linear oscillator" in text and "body2 is not" not in text
