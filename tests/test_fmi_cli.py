@@ -96,3 +96,23 @@ def test_a_diverging_scene_is_written_with_its_status(capsys, tmp_path):
     summary = json.loads(capsys.readouterr().out)
     assert summary["status"] == "diverged" and "not finite" in summary["reason"]
     assert open_dataset(out).attrs["status"] == "diverged"
+
+
+def test_fmpy_is_imported_only_when_a_scene_runs():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, icosim.cli, icosim.fmi.scene, icosim.fmi.run, icosim.fmi.predict; "
+        "icosim.cli.build_parser(); print('fmpy' in sys.modules, 'pythonfmu' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
+    assert out.stdout.split() == ["False", "False"]
+
+
+def test_help(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["cosim", "--help"])
+    assert exc.value.code == 0
+    text = capsys.readouterr().out
+    assert "--predict" in text and "--out RUN.nc" in text and "SCENE.yaml" in text

@@ -229,9 +229,19 @@ def _validate(path, data):
     elif err.validator == "required":
         keys = err.schema.get("properties", {})
         message = f"{message}; its keys: {', '.join(keys)}"
+    elif err.validator == "type" and isinstance(err.instance, str) and _is_number(err.instance):
+        message = f"{message} (YAML reads {err.instance} as text: write the exponent with its sign, e.g. 1.0e+6)"
     elif err.validator == "additionalProperties":
         message = f"{message}; allowed keys: {', '.join(err.schema.get('properties', {}))}"
     raise SceneError(f"{path}: {where}: {message}")
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def _check_numbers(path, data):

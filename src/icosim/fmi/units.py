@@ -131,9 +131,16 @@ class Unit:
         self.vr = {key: variables[name].valueReference for key, name in names.items()}
         self.names = dict(names)
         self.do_steps = self.saved = self.restored = 0
+        #: the status of a refused call (3 error, 4 fatal): after it the standard allows only fmi2FreeInstance
+        #: (error) or nothing at all (fatal)
+        self.failed = 0
         self.messages = []
         self._tmp = tempfile.mkdtemp(prefix=f"icosim-{label}-")
-        self._open(variables, start, t0)
+        try:
+            self._open(variables, start, t0)
+        except BaseException:
+            self.close()
+            raise
 
     # -- lifecycle -------------------------------------------------------------------------
     def _open(self, variables, start, t0):
@@ -180,11 +187,12 @@ class Unit:
     def close(self):
         """Terminate and free the instance, remove its unpacked files."""
         fmu, self.fmu = getattr(self, "fmu", None), None
-        if fmu is not None:
-            try:
-                fmu.terminate()
-            except Exception:
-                pass
+        if fmu is not None and self.failed < 4:
+            if not self.failed:
+                try:
+                    fmu.terminate()
+                except Exception:
+                    pass
             try:
                 fmu.freeInstance()
             except Exception:
@@ -235,6 +243,8 @@ class Unit:
         (self.fmu.setFMUState if self.fmi3 else self.fmu.setFMUstate)(state)
 
     def free(self, state):
+        if self.failed or self.fmu is None:
+            return  # a refused step leaves only freeing the instance allowed (fmi2Error) or nothing (fmi2Fatal)
         (self.fmu.freeFMUState if self.fmi3 else self.fmu.freeFMUstate)(state)
 
     # -- stepping -----------------------------------------------------------------------------
@@ -263,9 +273,9 @@ class Unit:
         try:
             result = self.fmu.doStep(t, h, noSetFMUStatePriorToCurrentPoint=False)
         except Exception as exc:
-            status = {1: "warning", 2: "discard", 3: "error", 4: "fatal", 5: "pending"}.get(
-                getattr(exc, "status", None), "failure"
-            )
+            code = getattr(exc, "status", None)
+            status = {1: "warning", 2: "discard", 3: "error", 4: "fatal", 5: "pending"}.get(code, "failure")
+            self.failed = code if code in (3, 4) else 0
             said = f": {' '.join(m for m in self.messages if m)}" if any(self.messages) else ""
             raise UnitStepError(
                 f"unit {self.label} refused macro step {step_index} at t = {t:.12g} s (doStep returned {status}){said}"
