@@ -165,6 +165,7 @@ def test_refused_step_names_unit_step_and_time(capsys, tmp_path):
         ({"coupling": {"decomposition": "dd"}}, ["not defined", "'dd'"]),
         ({"t_end": 0.0105}, ["t_end", "whole number"]),
         ({"speed": 1}, ["top level", "'speed' was unexpected"]),
+        ({"t_end": "1.0e6"}, ["t_end", "write the exponent with its sign"]),
     ],
 )
 def test_scene_keys_are_checked_before_loading(capsys, tmp_path, top, needles):
