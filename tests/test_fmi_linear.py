@@ -133,22 +133,28 @@ def test_growth_per_macro_step_is_the_spectral_radius(tmp_path):
 
 
 @pytest.mark.parametrize(
-    "scheme, sensitivities, per_step",
+    "scheme, sensitivities, iterations, per_step",
     [
-        ("jacobi", "each-step", 6),  # 2 predictors, 2 perturbed correctors, 2 correctors
-        ("gauss-seidel-12", "each-step", 4),  # leader once, the other predicted, perturbed, corrected
-        ("jacobi", "first-step", 4),
-        ("gauss-seidel-21", "first-step", 3),
+        ("jacobi", "each-step", 1, 6),  # 2 predictors, 2 perturbed correctors, 2 correctors
+        ("gauss-seidel-12", "each-step", 1, 4),  # leader once, the other predicted, perturbed, corrected
+        ("jacobi", "first-step", 1, 4),
+        ("gauss-seidel-21", "first-step", 1, 3),
+        ("jacobi", "each-step", 2, 10),  # a second pass: perturbed correctors and correctors again
+        ("gauss-seidel-12", "each-step", 2, 6),
+        ("jacobi", "first-step", 2, 6),
+        ("gauss-seidel-21", "first-step", 2, 4),
     ],
 )
-def test_do_step_calls_per_macro_step(tmp_path, scheme, sensitivities, per_step):
+def test_do_step_calls_per_macro_step(tmp_path, scheme, sensitivities, iterations, per_step):
     n = 20
-    run = run_scene(
-        write_scene(tmp_path / "s.yaml", "projection", "ff", 1, scheme, 1e-3, n, sensitivities=sensitivities)
+    scene = write_scene(
+        tmp_path / "s.yaml", "projection", "ff", 1, scheme, 1e-3, n, sensitivities=sensitivities, iterations=iterations
     )
+    run = run_scene(scene)
     calls = sum(u["do_step_calls"] for u in run.units.values())
-    first = 6 if scheme == "jacobi" else 4  # the first macro step computes the sensitivities in both cases
-    assert calls == (per_step * n if sensitivities == "each-step" else first + per_step * (n - 1))
+    perturbed = 2 if scheme == "jacobi" else 1  # the first macro step computes the sensitivities in both cases
+    first = per_step + (perturbed if sensitivities == "first-step" else 0)
+    assert calls == first + per_step * (n - 1)
     assert relative_difference(run, "projection", "ff", 1, scheme, 1e-3, n) < 1e-11
 
 
