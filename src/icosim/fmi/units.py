@@ -255,7 +255,7 @@ class Unit:
         ref = self.vr[key]
         if self.exact_inputs:
             self._set_refs([ref], [float(c[0])])
-            orders = [m for m in range(1, c.size) if c[m] != 0]
+            orders = list(range(1, c.size))  # zeros too: a unit may keep derivatives from the step before
             if orders:
                 values = [math.factorial(m) * float(c[m]) / H**m for m in orders]
                 self.fmu.setRealInputDerivatives([ref] * len(orders), orders, values)
