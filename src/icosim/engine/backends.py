@@ -51,15 +51,39 @@ class Float64:
         # scipy's expm accepts stacks (..., n, n): one call for a whole grid.
         # ``decay`` is ignored: float64 cannot add guard digits (the precision
         # policy detects the points where that matters).
-        import scipy.linalg  # here, not at the top: jobs that never form expm start faster
-
-        return scipy.linalg.expm(M)
+        return _expm_float64(np.ascontiguousarray(M, dtype=float))
 
     def eigvals(self, M):
         return np.linalg.eigvals(M)
 
     def __repr__(self):
         return "Float64()"
+
+
+#: Recent float64 exponentials by the bytes of their argument.  The panels of a figure share their
+#: subsystems' matrices (subsystem 1 depends on the grid and k only, subsystem 2 also on the row, not on
+#: the scheme), so one job forms each exponential once; the cached result is the one scipy returned
+#: (read-only), so nothing changes but the time.
+_EXPM_CACHE: dict = {}
+_EXPM_CACHE_SIZE = 16
+
+
+def _expm_float64(M):
+    import hashlib
+
+    import scipy.linalg  # here, not at the top: jobs that never form expm start faster
+
+    if M.size < 64:  # small: hashing costs about as much as the exponential
+        return scipy.linalg.expm(M)
+    key = (M.shape, hashlib.blake2b(M.tobytes(), digest_size=20).digest())
+    E = _EXPM_CACHE.pop(key, None)
+    if E is None:
+        E = scipy.linalg.expm(M)
+        E.setflags(write=False)
+    _EXPM_CACHE[key] = E  # most recent last
+    while len(_EXPM_CACHE) > _EXPM_CACHE_SIZE:
+        del _EXPM_CACHE[next(iter(_EXPM_CACHE))]
+    return E
 
 
 class Multiprecision:

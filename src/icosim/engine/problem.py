@@ -162,6 +162,8 @@ class CosimulationProblem:
 
 def _prepend(e_new, older):
     """Stack ``e_new`` in front of older samples (leading axes broadcast)."""
+    if e_new.ndim == 1 and older.ndim == 2:  # one point (the pendulum's every macro step): no broadcasting
+        return np.concatenate([e_new[None, :], older])
     lead = np.broadcast_shapes(e_new.shape[:-1], older.shape[:-2])
     older = np.broadcast_to(older, lead + older.shape[-2:])
     return np.concatenate([np.broadcast_to(e_new, lead + e_new.shape[-1:])[..., None, :], older], axis=-2)

@@ -59,6 +59,11 @@ class PendulumParameters:
 
 def joint_points(p: PendulumParameters, state):
     """Joint point of link 1 and of link 2 (each ``(..., 2)``) for a co-simulation state."""
+    if np.ndim(state) == 1:  # one state (the projection's iterations): scalar arithmetic, same values
+        phi1, x2, y2, phi2 = (float(state[j]) for j in (0, 2, 3, 4))
+        P1 = np.array([p.l1 * math.cos(phi1), p.l1 * math.sin(phi1)])
+        P2 = np.array([x2 - p.l2 / 2 * math.cos(phi2), y2 - p.l2 / 2 * math.sin(phi2)])
+        return P1, P2
     phi1, x2, y2, phi2 = state[..., 0], state[..., 2], state[..., 3], state[..., 4]
     P1 = np.stack([p.l1 * np.cos(phi1), p.l1 * np.sin(phi1)], axis=-1)
     P2 = np.stack([x2 - p.l2 / 2 * np.cos(phi2), y2 - p.l2 / 2 * np.sin(phi2)], axis=-1)
