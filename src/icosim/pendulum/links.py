@@ -62,17 +62,18 @@ class Link1:
         """``(P, P', P'', f)`` of the joint point, shape (B, 4, 2)."""
         p = self.p
         phi, w, alpha = Y[..., 0], Y[..., 1], f[..., 1]
-        e = np.stack([np.cos(phi), np.sin(phi)], axis=-1)
-        nrm = np.stack([-e[..., 1], e[..., 0]], axis=-1)
-        P = p.l1 * e
-        V = p.l1 * w[..., None] * nrm
-        A = p.l1 * alpha[..., None] * nrm - p.l1 * (w * w)[..., None] * e
+        e = _unit(phi)
+        nrm = _normal(e)
+        out = np.empty(np.broadcast_shapes(phi.shape, u.shape[:-1]) + (4, 2))
+        out[..., 0, :] = p.l1 * e
+        out[..., 1, :] = p.l1 * w[..., None] * nrm
+        out[..., 2, :] = p.l1 * alpha[..., None] * nrm - p.l1 * (w * w)[..., None] * e
         if self.kind == "force":
-            F = u
+            out[..., 3, :] = u
         else:  # tangential joint force that realises l1 phi1'' = n1 . a_tilde
             mu1 = (self._torque_ext(phi, w) - p.JO1 * alpha) / p.l1
-            F = mu1[..., None] * nrm
-        return np.stack([P, V, A, F], axis=-2)
+            out[..., 3, :] = mu1[..., None] * nrm
+        return out
 
 
 class Link2:
@@ -130,10 +131,27 @@ class Link2:
     def outputs(self, Y, f, u):
         p = self.p
         phi, w, alpha = Y[..., 2], Y[..., 5], f[..., 5]
-        e = np.stack([np.cos(phi), np.sin(phi)], axis=-1)
-        nrm = np.stack([-e[..., 1], e[..., 0]], axis=-1)
-        P = Y[..., 0:2] - p.l2 / 2 * e
-        V = Y[..., 3:5] - p.l2 / 2 * w[..., None] * nrm
-        A = f[..., 3:5] - p.l2 / 2 * (alpha[..., None] * nrm - (w * w)[..., None] * e)
-        F = u if self.kind == "force" else self.p.m2 * f[..., 3:5] - self._force_ext(Y)
-        return np.stack([P, V, A, F], axis=-2)
+        e = _unit(phi)
+        nrm = _normal(e)
+        out = np.empty(np.broadcast_shapes(phi.shape, u.shape[:-1]) + (4, 2))
+        out[..., 0, :] = Y[..., 0:2] - p.l2 / 2 * e
+        out[..., 1, :] = Y[..., 3:5] - p.l2 / 2 * w[..., None] * nrm
+        out[..., 2, :] = f[..., 3:5] - p.l2 / 2 * (alpha[..., None] * nrm - (w * w)[..., None] * e)
+        out[..., 3, :] = u if self.kind == "force" else self.p.m2 * f[..., 3:5] - self._force_ext(Y)
+        return out
+
+
+def _unit(phi):
+    """``(cos phi, sin phi)`` on a new last axis."""
+    e = np.empty(np.shape(phi) + (2,))
+    np.cos(phi, out=e[..., 0])
+    np.sin(phi, out=e[..., 1])
+    return e
+
+
+def _normal(e):
+    """``e`` turned by +90 degrees: ``(-e_y, e_x)``."""
+    n = np.empty(e.shape)
+    np.negative(e[..., 1], out=n[..., 0])
+    n[..., 1] = e[..., 0]
+    return n

@@ -50,7 +50,7 @@ def project_state(p: PendulumParameters, state, *, tol: float = 1e-14, max_iter:
             s = state.copy()
             s[pos] = q
             g = joint_constraint(p, s)
-            if np.max(np.abs(g)) <= tol or not np.all(np.isfinite(g)):
+            if abs(g).max() <= tol or not np.isfinite(g).all():
                 break
             G = _constraint_jacobian(p, q)
             # KKT fixed point: q = q* - M^-1 G^T nu, linearised g(q) + G (q_new - q) = 0

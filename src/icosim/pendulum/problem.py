@@ -134,7 +134,7 @@ class PendulumCosimulation(CosimulationProblem):
         st["fev"] += r.n_fev
         st["split"] += r.n_steps > 1 or r.n_rejected > 0
         self.jacobian_stats["jev"] += r.n_jev
-        u1 = coef.sum(axis=1)  # input at tau = 1
+        u1 = np.add.reduce(coef, axis=1)  # input at tau = 1
         return r.y, link.outputs(r.y, r.f, u1)
 
     def _respond(self, i, state, history, e, fixed=None):

@@ -17,6 +17,7 @@ by construction.  The starting history is the monolithic solution at
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass, field
@@ -102,9 +103,15 @@ class _SingularSolveAsFailure:
 def joint_force(decomposition: str, e, y):
     """The joint force of link 1 on link 2 after a step: the coupling variable ``lambda_c`` where one drives a
     link (ff, fd), else link 2's multiplier ``mu_2`` (dd)."""
+    j = _force_variable(decomposition)
+    return e[2 * j : 2 * j + 2] if j is not None else y[1, 3]
+
+
+@functools.lru_cache
+def _force_variable(decomposition: str):
+    """Index of the coupling variable ``lambda_c`` of a decomposition (None: no link is force driven)."""
     dec = get_decomposition(decomposition)
-    forces = [j for j in range(dec.n_coupling) if dec.variable_kind(j) == "force"]
-    return e[2 * forces[0] : 2 * forces[0] + 2] if forces else y[1, 3]
+    return next((j for j in range(dec.n_coupling) if dec.variable_kind(j) == "force"), None)
 
 
 def divergence_reason(
@@ -118,9 +125,9 @@ def divergence_reason(
     lam = joint_force(problem.decomposition.name, e, y)
     if not np.all(np.isfinite(np.concatenate([state, e, g, g_corr, lam]))):
         return "not finite"
-    if np.max(np.abs(g)) > max_constraint or np.max(np.abs(g_corr)) > max_constraint:
+    if abs(g).max() > max_constraint or abs(g_corr).max() > max_constraint:
         return f"|g_c| > {max_constraint} m"
-    if np.max(np.abs(lam)) > max_multiplier:
+    if abs(lam).max() > max_multiplier:
         return f"|lambda_c| > {max_multiplier} N"
     if max(abs(state[1]), abs(state[7])) > max_rate:
         return f"|omega| > {max_rate} rad/s"

@@ -410,7 +410,7 @@ class CompiledLink:
         )
         if status:
             raise _failure(status, t, h_abs, max_steps)
-        n_steps, n_rejected, n_fev, n_jev = (int(c) for c in counts)
+        n_steps, n_rejected, n_fev, n_jev = counts.tolist()
         return RadauResult(y, f, n_steps, n_rejected, n_fev, n_jev, float(h_next))
 
 
