@@ -1,9 +1,9 @@
 /* FMI 2.0 co-simulation interface shared by the test units of icosim (fmus/README.md).
  *
  * A unit supplies model.h: NREAL real variables addressed by value reference, their defaults,
- * INPUT_VR (the one continuous input, whose derivatives fmi2SetRealInputDerivatives accepts up to
+ * NINPUT continuous inputs INPUT_VRS (whose derivatives fmi2SetRealInputDerivatives accepts up to
  * order MAX_ORDER), FAIL_TIME_VR (a parameter: a step starting at or after it is refused) and
- * model_set/model_get/model_step.  The whole instance is one struct, so fmi2GetFMUstate and
+ * model_set/model_get/model_step (der[k * (MAX_ORDER + 1) + j]: j-th derivative of input k).  The whole instance is one struct, so fmi2GetFMUstate and
  * fmi2SetFMUstate are a copy of it: a restored step repeats bit for bit.
  */
 #include <stdlib.h>
@@ -12,10 +12,18 @@
 #include "fmi2Functions.h"
 #include "model.h"
 
+static const unsigned input_vrs[NINPUT] = INPUT_VRS;
+
+static int input_index(unsigned vr) {
+    for (int k = 0; k < NINPUT; k++)
+        if (input_vrs[k] == vr) return k;
+    return -1;
+}
+
 typedef struct {
     Model m;                      /* the unit's variables and state (model.h) */
     double time;
-    double der[MAX_ORDER + 1];    /* der[j]: j-th derivative of the input at the step start (j >= 1) */
+    double der[NINPUT * (MAX_ORDER + 1)];  /* derivatives of the inputs at the step start (model.h) */
     fmi2CallbackFunctions cb;
     char name[64];
 } Instance;
@@ -142,11 +150,12 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
                                        const fmi2Integer order[], const fmi2Real v[]) {
     Instance *i = (Instance *)c;
     for (size_t k = 0; k < n; k++) {
-        if (vr[k] != INPUT_VR || order[k] < 1 || order[k] > MAX_ORDER) {
+        int in = input_index(vr[k]);
+        if (in < 0 || order[k] < 1 || order[k] > MAX_ORDER) {
             logmsg(i, fmi2Error, "input derivative of an unknown input or beyond the highest order");
             return fmi2Error;
         }
-        i->der[order[k]] = v[k];
+        i->der[in * (MAX_ORDER + 1) + order[k]] = v[k];
     }
     return fmi2OK;
 }
@@ -163,7 +172,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSet
         return fmi2Discard;
     }
     if (!(h > 0)) return fmi2Error;
-    i->der[0] = model_get(&i->m, INPUT_VR);
+    for (int k = 0; k < NINPUT; k++) i->der[k * (MAX_ORDER + 1)] = model_get(&i->m, input_vrs[k]);
     model_step(&i->m, i->der, MAX_ORDER, h);
     memset(i->der, 0, sizeof i->der);  /* derivatives hold for one step (they are set before each) */
     i->time = t + h;

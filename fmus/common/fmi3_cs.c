@@ -236,10 +236,12 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
         return fmi3Discard;
     }
     if (!(communicationStepSize > 0)) return fmi3Error;
-    double der[MAX_ORDER + 1] = {0};
-    der[0] = model_get(&i->m, INPUT_VR);  /* FMI 3.0 has no input derivatives: the input is held */
+    static const unsigned input_vrs[NINPUT] = INPUT_VRS;
+    double der[NINPUT * (MAX_ORDER + 1)] = {0};
+    for (int k = 0; k < NINPUT; k++)  /* FMI 3.0 has no input derivatives: the inputs are held */
+        der[k * (MAX_ORDER + 1)] = model_get(&i->m, input_vrs[k]);
     model_step(&i->m, der, MAX_ORDER, communicationStepSize);
-    model_set(&i->m, INPUT_VR, der[0]);
+    for (int k = 0; k < NINPUT; k++) model_set(&i->m, input_vrs[k], der[k * (MAX_ORDER + 1)]);
     i->time = currentCommunicationPoint + communicationStepSize;
     *lastSuccessfulTime = i->time;
     return fmi3OK;

@@ -5,7 +5,8 @@
 #define MODEL_GUID "{8c4e810f-3df3-4a00-8276-176fa3c9f001}"
 #define MAX_ORDER 12
 enum { VR_M, VR_C, VR_D, VR_X0, VR_V0, VR_LAMBDA, VR_X, VR_V, VR_A, VR_XSET, VR_VSET, VR_FAIL, NREAL };
-#define INPUT_VR VR_LAMBDA
+#define NINPUT 1
+#define INPUT_VRS {VR_LAMBDA}
 #define FAIL_TIME_VR VR_FAIL
 
 typedef struct {

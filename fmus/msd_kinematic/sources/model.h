@@ -6,7 +6,8 @@
 #define MODEL_GUID "{8c4e810f-3df3-4a00-8276-176fa3c9f002}"
 #define MAX_ORDER 12
 enum { VR_M, VR_C, VR_D, VR_X0, VR_V0, VR_AIN, VR_X, VR_V, VR_A, VR_F, VR_XSET, VR_VSET, VR_FAIL, NREAL };
-#define INPUT_VR VR_AIN
+#define NINPUT 1
+#define INPUT_VRS {VR_AIN}
 #define FAIL_TIME_VR VR_FAIL
 
 typedef struct {

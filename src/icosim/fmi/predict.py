@@ -17,6 +17,7 @@ import numpy as np
 from ..engine.decompositions import get_decomposition
 from ..engine.model import PhysicalModel
 from ..engine.schemes import get_scheme, standard_schemes
+from .errors import SceneError
 from .run import open_units
 
 __all__ = ["identify", "predict_scene"]
@@ -32,7 +33,7 @@ def identify(unit, coupling, H) -> dict:
 
         def probe(u):
             unit.set(key, u)
-            return unit.get(("position", "velocity", out))
+            return unit.get(("position", "velocity", out))[:, 0]
 
         x0, v0, q0 = probe(0.0)
         q1 = probe(1.0)[2]
@@ -73,6 +74,11 @@ def predict_scene(scene) -> dict:
 
     c = scene.coupling
     H = float(c["H"])
+    if any(isinstance(sub["position"], list) and len(sub["position"]) > 1 for sub in scene.data["subsystems"].values()):
+        raise SceneError(
+            f"{scene.path}: --predict identifies single-mass oscillators (one position per unit); this scene's "
+            "joint has more components"
+        )
     units, couplings = open_units(scene)
     try:
         found = {u.label: identify(u, cp, H) for u, cp in zip(units, couplings)}

@@ -5,11 +5,14 @@ one macro step unchanged.  Each subsystem is a :class:`~icosim.fmi.units.Unit`; 
 point lives inside the FMU, saved with ``fmi2GetFMUstate`` and restored before every integration that starts
 there (docs/fmi.md).  The arrays the macro step sees are the observable part of it:
 
-* state ``s[i] = (x_i, v_i)`` (position and velocity of unit ``i``, SI units);
-* coupling variables ``e``: those of the decomposition in SI units (``lambda_c`` in N, ``a_tilde`` in m/s^2);
-* outputs ``y[i] = (x_i, v_i, a_i, f_i)`` at ``T_N+1`` with ``f_i`` the coupling force as seen by unit ``i``
-  in the units of ``lambda_c``: the input for a force-driven unit, ``force_sign * reaction_force`` for a
-  kinematically driven one.
+* state ``s[i] = (x_i, v_i)`` (position and velocity of unit ``i``'s joint point, SI units; with ``n_d``
+  components each -- one for a point on a line, two for a joint in the plane -- ``s[i]`` has ``2 n_d``
+  entries, the positions first);
+* coupling variables ``e``: those of the decomposition in SI units (``lambda_c`` in N, ``a_tilde`` in m/s^2),
+  ``n_d`` components each;
+* outputs ``y[i] = (x_i, v_i, a_i, f_i)`` at ``T_N+1``, shape ``(4, n_d)``, with ``f_i`` the coupling force as
+  seen by unit ``i`` in the units of ``lambda_c``: the input for a force-driven unit,
+  ``force_sign * reaction_force`` for a kinematically driven one.
 
 The constraint residuals are those of the engine's dimensionless setting (``g``, ``H g'``, ``H^2 g''``), so the
 method parameters mean what they mean for the built-in models (:func:`icosim.engine.methods.engine_method`).
@@ -68,6 +71,11 @@ class FmuCosimulation(CosimulationProblem):
     ):
         super().__init__(decomposition, k)
         self.units, self.couplings = tuple(units), tuple(couplings)
+        dims = {len(u.vr["position"]) for u in self.units}
+        if len(dims) != 1:
+            raise ValueError("both units must name as many position components")
+        #: components of the joint's position (1: a point on a line; 2: a joint in the plane)
+        self.n_dim = dims.pop()
         for i, (c, kind) in enumerate(zip(self.couplings, self.decomposition.kinds)):
             if c.kind != kind:
                 raise ValueError(f"unit {self.units[i].label} is {c.kind}-driven, decomposition needs {kind}")
@@ -82,6 +90,16 @@ class FmuCosimulation(CosimulationProblem):
         self._jac = {}
         self._committed = None
 
+    @property
+    def n_coupling(self) -> int:
+        """Coupling variables per time point: the decomposition's, ``n_dim`` components each."""
+        return self.decomposition.n_coupling * self.n_dim
+
+    def _inputs(self, i):
+        """The components of ``e`` that drive unit ``i``."""
+        j = self.decomposition.inputs[i]
+        return slice(j * self.n_dim, (j + 1) * self.n_dim)
+
     # -- time and the initial point -----------------------------------------------------------------
     @property
     def time(self) -> float:
@@ -89,8 +107,8 @@ class FmuCosimulation(CosimulationProblem):
         return self.t0 + self.step_index * self.H
 
     def initial_state(self):
-        """The units' positions and velocities after initialisation, ``(2, 2)``."""
-        self._committed = np.stack([u.get(("position", "velocity")) for u in self.units])
+        """The units' positions and velocities after initialisation, ``(2, 2 n_dim)``."""
+        self._committed = np.stack([u.get(("position", "velocity")).ravel() for u in self.units])
         return self._committed
 
     def initial_history(self, e0=None):
@@ -115,24 +133,23 @@ class FmuCosimulation(CosimulationProblem):
         the monomial coefficients ``C``; returns its end ``(x, v)`` and outputs ``(x, v, a, f)``."""
         self._to_start(i)
         unit, c = self.units[i], self.couplings[i]
-        j = self.decomposition.inputs[i]
-        coef = C @ samples[:, j]
+        coef = C @ samples[:, self._inputs(i)]  # (k + 1, n_dim)
         scale = c.force_sign if c.kind == "force" else 1.0
         unit.step(c.input_key, scale * coef, self.time, self.H, step_index=self.step_index + 1)
         self.work.subsystem_integrations += 1
         self._holds[i] = "scratch"
-        return self._outputs(i, coef.sum())
+        return self._outputs(i, coef.sum(axis=0))
 
     def _outputs(self, i, u1):
         """Unit ``i``'s end ``(x, v)`` and outputs ``(x, v, a, f)`` as it stands, its input ``u1`` at ``T_N+1``."""
         c = self.couplings[i]
         if c.kind == "force":
             x, v, a = self.units[i].get(("position", "velocity", "acceleration"))
-            f = u1
+            f = np.broadcast_to(np.asarray(u1, dtype=float), x.shape)
         else:
             x, v, a, r = self.units[i].get(("position", "velocity", "acceleration", "reaction_force"))
             f = c.force_sign * r
-        return np.array([x, v]), np.array([x, v, a, f])
+        return np.concatenate([x, v]), np.stack([x, v, a, f])
 
     def _keep(self, i, end):
         """Save unit ``i``'s state as the one belonging to ``end`` (the macro step may finish with it)."""
@@ -163,7 +180,7 @@ class FmuCosimulation(CosimulationProblem):
 
     def reevaluate(self, i, end, y, e_old, e_new):
         """Outputs at the fixed end state with the input at ``T_N+1`` set to ``e_new`` (``fmi2SetReal``, no step)."""
-        return self._at_end(i, end, float(e_new[self.decomposition.inputs[i]]))
+        return self._at_end(i, end, np.asarray(e_new, dtype=float)[self._inputs(i)])
 
     def join(self, ends):
         """The macro step's end: each unit's FMU state of ``ends[i]`` becomes the next start; the rest are freed."""
@@ -184,12 +201,12 @@ class FmuCosimulation(CosimulationProblem):
 
     def residuals(self, y):
         """Joint constraint on three levels (``g``, ``H g'``, ``H^2 g''``, unit 1 minus unit 2) and force balance."""
-        d = y[..., 0, :] - y[..., 1, :]
-        empty = d[..., :0]
+        d = y[..., 0, :, :] - y[..., 1, :, :]  # (..., 4, n_dim)
+        empty = d[..., 0, :0]
         out = {"pos": empty, "vel": empty, "acc": empty}
         if self.decomposition.has_constraint_condition:
-            out = {"pos": d[..., 0:1], "vel": self.H * d[..., 1:2], "acc": self.H**2 * d[..., 2:3]}
-        out["force"] = d[..., 3:4] if self.decomposition.has_force_balance else empty
+            out = {"pos": d[..., 0, :], "vel": self.H * d[..., 1, :], "acc": self.H**2 * d[..., 2, :]}
+        out["force"] = d[..., 3, :] if self.decomposition.has_force_balance else empty
         return out
 
     def jacobians(self, state, history, e, y, fixed=(None, None), algebraic=True):
@@ -206,14 +223,14 @@ class FmuCosimulation(CosimulationProblem):
         for j in range(self.n_coupling):
             yj = np.array(y, dtype=float, copy=True)
             for i in range(2):
-                if self.decomposition.inputs[i] != j or key[i] == "none":
+                if j not in range(self.n_coupling)[self._inputs(i)] or key[i] == "none":
                     continue
                 ep = e.copy()
                 ep[j] += h[j]
                 if key[i] == "full":
                     yj[i] = self._integrate(i, self.corrector_samples(history, ep), self.C_corr)[1]
                 else:
-                    yj[i] = self._at_end(i, fixed[i], ep[j])
+                    yj[i] = self._at_end(i, fixed[i], ep[self._inputs(i)])
             for name, val in self.residuals(yj).items():
                 jac[name][..., j] = (val - r0[name]) / h[j]
         self._jac[key] = jac
@@ -223,10 +240,11 @@ class FmuCosimulation(CosimulationProblem):
         """Mass-weighted projection of positions and velocities (Eq. 30), written into the units."""
         m = np.array([c.mass for c in self.couplings], dtype=float)
         xv = (m[0] * state[0] + m[1] * state[1]) / m.sum()
+        n = self.n_dim
         for i, unit in enumerate(self.units):
             self._to_start(i)
-            unit.set("set_position", xv[0])
-            unit.set("set_velocity", xv[1])
+            unit.set("set_position", xv[:n])
+            unit.set("set_velocity", xv[n:])
             unit.free(self._start[i])
             self._start[i] = unit.save()
         self._committed = np.stack([xv, xv])

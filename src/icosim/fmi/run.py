@@ -23,13 +23,28 @@ class SceneRun:
 
     scene: Scene
     times: np.ndarray
-    states: np.ndarray  # (n+1, 2, 2)
+    states: np.ndarray  # (n+1, 2, 2 n_dim): positions, then velocities
     coupling: np.ndarray  # (n+1, n_e)
-    outputs: np.ndarray  # (n+1, 2, 4); row 0 NaN (no step has produced it)
+    outputs: np.ndarray  # (n+1, 2, 4, n_dim); row 0 NaN (no step has produced it)
     units: dict = field(default_factory=dict)  # name -> Unit.info()
     status: str = "completed"
     reason: str = ""
     wall_time: float = 0.0
+
+    @property
+    def n_dim(self) -> int:
+        """Components of a joint point's position (1 on a line, 2 in the plane)."""
+        return self.outputs.shape[-1]
+
+    @property
+    def positions(self) -> np.ndarray:
+        """``(n+1, 2, n_dim)``."""
+        return self.states[..., : self.n_dim]
+
+    @property
+    def velocities(self) -> np.ndarray:
+        """``(n+1, 2, n_dim)``."""
+        return self.states[..., self.n_dim :]
 
 
 def fmu_file(path, cache=None):
@@ -98,7 +113,7 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
         )
         state = problem.initial_state()
         history = problem.initial_history(scene.data.get("initial_coupling"))
-        states, coupling, outputs = [state], [history[0]], [np.full((2, 4), np.nan)]
+        states, coupling, outputs = [state], [history[0]], [np.full((2, 4, problem.n_dim), np.nan)]
         status, reason = "completed", ""
         for n in range(1, scene.n_steps + 1):
             with np.errstate(over="ignore", invalid="ignore"):  # a diverging run is reported below
@@ -146,26 +161,35 @@ def run_dataset(run: SceneRun, *, command: str = ""):
     scene = run.scene
     names = list(scene.names)
     dec = get_decomposition(scene.coupling["decomposition"])
-    f1 = run.outputs[:, 0, 3]
+    n = run.n_dim
+    # one component: (subsystem, time) as the scalar test model; more: a trailing component axis
+    comp = () if n == 1 else ("component",)
+    squeeze = (lambda a: a[..., 0]) if n == 1 else (lambda a: a)
+    sub_time = lambda a: squeeze(np.moveaxis(a, 0, 1))  # (time, subsystem, n) -> (subsystem, time[, n])
+    variables = list(dec.variables) if n == 1 else [f"{v}_{c}" for v in dec.variables for c in "xyz"[:n]]
     ds = xr.Dataset(
         {
-            "position": (("subsystem", "time"), run.states[:, :, 0].T, {"units": "m"}),
-            "velocity": (("subsystem", "time"), run.states[:, :, 1].T, {"units": "m s-1"}),
+            "position": (("subsystem", "time") + comp, sub_time(run.positions), {"units": "m"}),
+            "velocity": (("subsystem", "time") + comp, sub_time(run.velocities), {"units": "m s-1"}),
             "acceleration": (
-                ("subsystem", "time"),
-                run.outputs[:, :, 2].T,
+                ("subsystem", "time") + comp,
+                sub_time(run.outputs[:, :, 2, :]),
                 {"units": "m s-2", "comment": "output at the end of each macro step; NaN at the start"},
             ),
             "multiplier": (
-                ("time",),
-                f1,
+                ("time",) + comp,
+                squeeze(run.outputs[:, 0, 3, :]),
                 {
                     "units": "N",
                     "long_name": "coupling force lambda_c on the first subsystem (force_sign 1)",
                     "comment": "as the first subsystem sees it at the end of each macro step; NaN at the start",
                 },
             ),
-            "gap": (("time",), run.states[:, 0, 0] - run.states[:, 1, 0], {"units": "m", "long_name": "x1 - x2"}),
+            "gap": (
+                ("time",) + comp,
+                squeeze(run.positions[:, 0] - run.positions[:, 1]),
+                {"units": "m", "long_name": "position of the first subsystem minus the second's"},
+            ),
             "coupling": (
                 ("time", "coupling_variable"),
                 run.coupling,
@@ -175,8 +199,9 @@ def run_dataset(run: SceneRun, *, command: str = ""):
         coords={
             "time": ("time", run.times, {"units": "s"}),
             "subsystem": ("subsystem", names),
-            "coupling_variable": ("coupling_variable", list(dec.variables)),
-        },
+            "coupling_variable": ("coupling_variable", variables),
+        }
+        | ({} if n == 1 else {"component": ("component", list("xyz"[:n]))}),
     )
     attrs = provenance_attrs(scene.data, title=f"FMU scene {scene.path.name}", command=command)
     attrs["scene_json"] = attrs["config_json"]
@@ -208,7 +233,10 @@ def run_summary(run: SceneRun) -> dict:
         "do_step_calls_per_macro_step": (sum(i["do_step_calls"] for i in run.units.values()) / steps)
         if steps
         else None,
-        "final_position": dict(zip(run.scene.names, map(float, run.states[-1, :, 0]))),
-        "max_abs_gap": float(np.max(np.abs(run.states[:, 0, 0] - run.states[:, 1, 0]))),
+        "final_position": {
+            name: (float(p[0]) if run.n_dim == 1 else [float(v) for v in p])
+            for name, p in zip(run.scene.names, run.positions[-1])
+        },
+        "max_abs_gap": float(np.max(np.abs(run.positions[:, 0] - run.positions[:, 1]))),  # largest component
         "wall_time_s": run.wall_time,
     }

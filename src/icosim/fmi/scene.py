@@ -67,6 +67,8 @@ def scene_schema() -> dict:
     """The JSON schema of a scene (the registries of methods, decompositions and schemes filled in)."""
     defs = schema_defs()
     name = {"type": "string", "minLength": 1}
+    # one variable, or the components of a vector quantity (a joint in the plane: two)
+    names = {"oneOf": [name, {"type": "array", "items": name, "minItems": 1, "maxItems": 3}]}
     sub = {
         "type": "object",
         "additionalProperties": False,
@@ -77,7 +79,7 @@ def scene_schema() -> dict:
                 "type": "object",
                 "additionalProperties": {"type": ["number", "boolean"]},
             },
-            **{k: name for k in SUBSYSTEM_KEYS if k not in ("fmu", "start", "force_sign", "mass")},
+            **{k: names for k in SUBSYSTEM_KEYS if k not in ("fmu", "start", "force_sign", "mass")},
             "force_sign": {"enum": [1, -1]},
             "mass": {"oneOf": [{"type": "number", "exclusiveMinimum": 0}, name]},
         },
@@ -184,14 +186,28 @@ def load_scene(path) -> Scene:
             "t_end",
             f"t_end - t_start = {t_end - t0:g} s must be a whole number (>= 1) of macro steps H = {H:g} s",
         )
-    if "initial_coupling" in data and len(data["initial_coupling"]) != decomposition.n_coupling:
+    fmus = {}
+    entries = {
+        f"{sname}.{key}": len(v) if isinstance(v, list) else 1
+        for sname, sub in data["subsystems"].items()
+        for key, v in sub.items()
+        if key in SUBSYSTEM_KEYS and key not in ("fmu", "start", "force_sign", "mass")
+    }
+    if len(set(entries.values())) > 1:
+        sizes = ", ".join(f"{key}: {n}" for key, n in entries.items())
+        _fail(
+            path,
+            "subsystems",
+            f"every variable entry must name as many components (one name, or lists of one length), got {sizes}",
+        )
+    n_dim = next(iter(entries.values()), 1)
+    if "initial_coupling" in data and len(data["initial_coupling"]) != decomposition.n_coupling * n_dim:
         _fail(
             path,
             "initial_coupling",
-            f"needs {decomposition.n_coupling} values "
-            f"({', '.join(decomposition.variables)}), got {len(data['initial_coupling'])}",
+            f"needs {decomposition.n_coupling * n_dim} values ("
+            f"{', '.join(decomposition.variables)}, {n_dim} component(s) each), got {len(data['initial_coupling'])}",
         )
-    fmus = {}
     for (name, sub), kind in zip(data["subsystems"].items(), decomposition.kinds):
         need = ("force",) if kind == "force" else ("acceleration_input", "reaction_force")
         if method.projection:
@@ -204,6 +220,13 @@ def load_scene(path) -> Scene:
                     else f"method {spec.name} projects"
                 )
                 _fail(path, f"subsystems.{name}.{key}", f"required: subsystem {name} is {why} ({SUBSYSTEM_KEYS[key]})")
+        if method.projection and isinstance(sub["position"], list) and len(sub["position"]) > 1:
+            _fail(
+                path,
+                f"subsystems.{name}.position",
+                "projection moves one position per unit (the mass-weighted "
+                "mean of Eq. 30); a joint with more components needs the method baumgarte or weighted",
+            )
         fmu = (path.parent / sub["fmu"]).resolve()
         if not fmu.exists():
             _fail(path, f"subsystems.{name}.fmu", f"{sub['fmu']} does not exist (resolved to {fmu})")

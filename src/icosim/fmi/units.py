@@ -69,7 +69,7 @@ def check_unit(label: str, path: Path, md, names: dict, start: dict):
     if not md.coSimulation.canGetAndSetFMUstate:
         raise FmuError(f"{label}: {path} declares canGetAndSetFMUstate=false; {STATE_REASON}")
     variables = {v.name: v for v in md.modelVariables}
-    for key, name in names.items():
+    for key, name in ((k, n) for k, ns in names.items() for n in _listed(ns)):
         var = _variable(label, key, name, variables)
         what, causalities = ROLES[key]
         if var.causality not in causalities:
@@ -90,6 +90,11 @@ def check_unit(label: str, path: Path, md, names: dict, start: dict):
             )
 
 
+def _listed(names) -> list:
+    """A scene entry naming one variable or a list of them (the components of a vector), as a list."""
+    return list(names) if isinstance(names, (list, tuple)) else [names]
+
+
 def _variable(label, key, name, variables):
     if name in variables:
         return variables[name]
@@ -105,7 +110,7 @@ class Unit:
     ----------
     label : the subsystem's name in the scene (the instance name).
     path : the ``.fmu`` file.
-    names : scene key (:data:`ROLES`) -> variable name.
+    names : scene key (:data:`ROLES`) -> variable name, or list of names (the components of a vector quantity).
     start : start values (variable name -> value).
     inputs : ``"auto"`` (derivatives where the unit can interpolate inputs, else sub-steps), ``"derivatives"``
         or ``"substeps"``.
@@ -128,7 +133,7 @@ class Unit:
         self.exact_inputs = self.interpolates and inputs != "substeps"
         self.substeps = int(substeps)
         variables = {v.name: v for v in md.modelVariables}
-        self.vr = {key: variables[name].valueReference for key, name in names.items()}
+        self.vr = {key: [variables[n].valueReference for n in _listed(ns)] for key, ns in names.items()}
         self.names = dict(names)
         self.do_steps = self.saved = self.restored = 0
         #: the status of a refused call (3 error, 4 fatal): after it the standard allows only fmi2FreeInstance
@@ -220,13 +225,14 @@ class Unit:
         (self.fmu.setFloat64 if self.fmi3 else self.fmu.setReal)(refs, values)
 
     def get(self, keys) -> np.ndarray:
-        """Values of the variables named under ``keys`` (scene keys), in that order."""
-        refs = [self.vr[k] for k in keys]
-        return np.array(self.fmu.getFloat64(refs) if self.fmi3 else self.fmu.getReal(refs), dtype=float)
+        """Values of the variables named under ``keys`` (scene keys), shape ``(len(keys), components)``."""
+        refs = [r for k in keys for r in self.vr[k]]
+        values = self.fmu.getFloat64(refs) if self.fmi3 else self.fmu.getReal(refs)
+        return np.array(values, dtype=float).reshape(len(keys), -1)
 
     def set(self, key, value):
-        """Set the variable named under the scene key ``key``."""
-        self._set_refs([self.vr[key]], [float(value)])
+        """Set the variable(s) named under the scene key ``key`` (a number per component)."""
+        self._set_refs(self.vr[key], [float(v) for v in np.atleast_1d(value)])
 
     def get_named(self, name) -> float:
         var = next(v for v in self.md.modelVariables if v.name == name)
@@ -249,23 +255,26 @@ class Unit:
 
     # -- stepping -----------------------------------------------------------------------------
     def step(self, key, coefficients, t, H, *, step_index):
-        """Advance ``[t, t + H]`` with the input ``key`` following ``u(tau) = sum_m coefficients[m] tau^m``;
-        afterwards the input holds ``u(1)`` (the outputs that depend on it directly are those at ``t + H``)."""
-        c = np.asarray(coefficients, dtype=float)
-        ref = self.vr[key]
+        """Advance ``[t, t + H]`` with the input(s) ``key`` following ``u(tau) = sum_m coefficients[m] tau^m``
+        (``coefficients`` ``(k + 1,)``, or ``(k + 1, components)``); afterwards the inputs hold ``u(1)`` (the
+        outputs that depend on them directly are those at ``t + H``)."""
+        c = np.asarray(coefficients, dtype=float).reshape(len(coefficients), -1)
+        refs = self.vr[key]
         if self.exact_inputs:
-            self._set_refs([ref], [float(c[0])])
-            orders = list(range(1, c.size))  # zeros too: a unit may keep derivatives from the step before
+            self._set_refs(refs, [float(v) for v in c[0]])
+            # every order up to k, zeros too: a unit may keep the derivatives of the step before
+            orders = [(ref, m) for m in range(1, c.shape[0]) for ref in refs]
             if orders:
-                values = [math.factorial(m) * float(c[m]) / H**m for m in orders]
-                self.fmu.setRealInputDerivatives([ref] * len(orders), orders, values)
+                values = [math.factorial(m) * float(c[m, refs.index(ref)]) / H**m for ref, m in orders]
+                self.fmu.setRealInputDerivatives([r for r, _ in orders], [m for _, m in orders], values)
             self._do_step(t, H, step_index)
         else:
             n = self.substeps
             for j in range(n):
-                self._set_refs([ref], [float(np.polyval(c[::-1], (j + 0.5) / n))])
+                tau = (j + 0.5) / n
+                self._set_refs(refs, [float(np.polyval(c[::-1, q], tau)) for q in range(c.shape[1])])
                 self._do_step(t + j * H / n, H / n, step_index)
-        self._set_refs([ref], [float(c.sum())])
+        self._set_refs(refs, [float(v) for v in c.sum(axis=0)])
 
     def _do_step(self, t, h, step_index):
         self.do_steps += 1
