@@ -12,7 +12,9 @@ A scene (YAML)::
 
 ``fmu`` is an ``.fmu`` file or a unit's source directory (``modelDescription.xml`` and ``sources/``, built on
 first use: :mod:`icosim.fmi.build`), relative to the scene file; two subsystems may name the same one (two
-instances).  The first subsystem is the paper's subsystem 1.  Keys per subsystem: :data:`SUBSYSTEM_KEYS`;
+instances).  The first subsystem is the paper's subsystem 1.  A joint in the plane (the double pendulum,
+``config/scenes/double_pendulum_ff.yaml``) names two components in every variable entry
+(``position: [Px, Py]``).  Keys per subsystem: :data:`SUBSYSTEM_KEYS`;
 coupling keys: :data:`COUPLING_KEYS` and the method's parameters (as :func:`icosim.engine.methods.make_method`
 takes them, dimensional: ``mu`` and ``beta`` in s, ``gamma`` in s^2).  docs/fmi.md has the details.
 """
