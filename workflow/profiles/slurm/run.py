@@ -181,7 +181,7 @@ def plan(account: str | None, partition: str | None) -> tuple[list[str], list[st
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], add_help=True)
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], allow_abbrev=False)
     parser.add_argument("--account", default=os.environ.get("SBATCH_ACCOUNT"), help="default: $SBATCH_ACCOUNT")
     parser.add_argument("--partition", default=os.environ.get("SBATCH_PARTITION"), help="default: $SBATCH_PARTITION")
     parser.add_argument("--check", action="store_true", help="print the cluster found and the command; run nothing")
