@@ -11,15 +11,17 @@ module                                     check kinds
 :mod:`icosim.stability.checks`             ``stable_fraction``, ``compare``, ``trend``, ``pointwise``
 :mod:`icosim.convergence.checks`           ``convergence_order``
 :mod:`icosim.pendulum.replication.checks`  ``pendulum_stability``
+:mod:`icosim.fmi.checks`                   ``fmi_bound``, ``fmi_orders``
 =========================================  ==========================================================
 
 >>> sorted(CHECKS)
-['compare', 'convergence_order', 'pendulum_stability', 'pointwise', 'stable_fraction', 'trend']
+['compare', 'convergence_order', 'fmi_bound', 'fmi_orders', 'pendulum_stability', 'pointwise', 'stable_fraction', 'trend']
 """
 
 from __future__ import annotations
 
 from ..convergence import checks as _convergence
+from ..fmi import checks as _fmi
 from ..pendulum.replication import checks as _pendulum
 from ..stability import checks as _stability
 from . import core as _claims
@@ -28,7 +30,7 @@ from .core import Claim, Verdict
 __all__ = ["CHECKS", "DEFAULTS", "parse_claims", "load_claims", "evaluate_claim", "evaluate", "describe_claim"]
 
 #: check kind -> :class:`icosim.claims.core.CheckKind`, for every part.
-CHECKS = {**_stability.CHECKS, **_convergence.CHECKS, **_pendulum.CHECKS}
+CHECKS = {**_stability.CHECKS, **_convergence.CHECKS, **_pendulum.CHECKS, **_fmi.CHECKS}
 
 #: A claim is about the paper's coupling scheme, Jacobi, unless a selector names another.
 DEFAULTS = {"scheme": "jacobi"}

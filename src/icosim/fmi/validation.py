@@ -1,0 +1,400 @@
+"""FMU scenes checked against the built-in models: the datasets of the workflow's FMU part (docs/fmi.md).
+
+Three checks, each a dataset that the claims (``config/claims/fmi.yaml``) and the report read:
+
+* :func:`scene_validation` -- one scene's run next to the built-in model from the same start at the same
+  dimensionless point (:func:`linear_builtin` for the two-mass units, :func:`pendulum_builtin` for the double
+  pendulum's links), the spectral radius predicted before the run (:func:`icosim.fmi.predict.predict_scene`)
+  and the growth per macro step measured on the run (:func:`measured_growth`);
+* :func:`order_case` -- one configuration of the linear convergence study (Sect. 3.7) on the FMU units over
+  a list of ``H``: the error against the exact monolithic solution, of the FMU run and of the built-in model,
+  from the exact start (the coupling history at ``T_0 ... T_-k`` too), and the asymptotic order of each
+  (:func:`icosim.order_fit.asymptotic_order`, the linear study's rule).
+
+The scene's units are built into ``cache`` (:func:`icosim.fmi.build.build_unit`), as the scene runs are.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+
+from ..engine.decompositions import get_decomposition
+from ..engine.exact import MonolithicSolution, consistent_start
+from ..engine.linear_problem import LinearCosimulation
+from ..engine.macrostep import macro_step, simulate
+from ..engine.methods import engine_method, make_method
+from ..engine.model import PhysicalModel
+from ..order_fit import asymptotic_order
+from .config import case_label
+from .errors import SceneError
+from .problem import FmuCosimulation
+from .run import open_units
+from .scene import COUPLING_KEYS, load_scene
+
+__all__ = [
+    "BUILTINS",
+    "linear_builtin",
+    "pendulum_builtin",
+    "measured_growth",
+    "builtin_difference",
+    "scene_validation",
+    "order_case",
+    "case_label",
+]
+
+#: The built-in model a scene is compared with (``config/fmi.yaml``, ``scenes.<name>.builtin``).
+BUILTINS = ("linear", "pendulum", "none")
+
+
+@contextmanager
+def fmu_cache(cache):
+    """``$ICOSIM_FMU_CACHE`` set to ``cache`` for the block (the units built by the workflow's build job)."""
+    if cache is None:
+        yield
+        return
+    old = os.environ.get("ICOSIM_FMU_CACHE")
+    os.environ["ICOSIM_FMU_CACHE"] = str(cache)
+    try:
+        yield
+    finally:
+        if old is None:
+            del os.environ["ICOSIM_FMU_CACHE"]
+        else:
+            os.environ["ICOSIM_FMU_CACHE"] = old
+
+
+def _method_params(scene) -> dict:
+    """The method's parameters as the scene gives them (dimensional)."""
+    return {k: v for k, v in scene.data["coupling"].items() if k not in COUPLING_KEYS}
+
+
+def _history(scene, n_coupling) -> np.ndarray:
+    e0 = scene.data.get("initial_coupling")
+    e0 = np.zeros(n_coupling) if e0 is None else np.asarray(e0, dtype=float)
+    return np.tile(e0, (int(scene.coupling["k"]) + 1, 1))
+
+
+def linear_builtin(scene):
+    """The built-in linear model (:class:`~icosim.engine.linear_problem.LinearCosimulation`) at the scene's
+    dimensionless point: masses, stiffnesses, dampings and start ``x0, v0`` from the units' start values, the
+    scene's method, ``k``, scheme and corrector passes, its initial coupling history.  Returns positions
+    and velocities (SI), each ``(n + 1, 2)``."""
+    subs = list(scene.data["subsystems"].values())
+    start = [s.get("start", {}) for s in subs]
+    for name, st in zip(scene.names, start):
+        missing = [key for key in ("m", "c", "d") if key not in st]
+        if missing or float(st.get("c3", 0.0)) != 0.0:
+            raise SceneError(f"{scene.path}: {name}: not a linear single-mass unit with start m, c, d: {missing}")
+    if [s["force_sign"] for s in subs] != [1, -1]:
+        raise SceneError(f"{scene.path}: the built-in model has force_sign 1 on the first unit, -1 on the second")
+    c = scene.coupling
+    H, k = float(c["H"]), int(c["k"])
+    model = PhysicalModel(
+        m1=float(start[0]["m"]),
+        m2=float(start[1]["m"]),
+        c1=float(start[0]["c"]),
+        c2=float(start[1]["c"]),
+        d1=float(start[0]["d"]),
+        d2=float(start[1]["d"]),
+        H=H,
+    )
+    dec = get_decomposition(c["decomposition"])
+    problem = LinearCosimulation(model.coefficients(), dec.name, k)
+    state = np.array([[float(st.get("x0", 0.0)), float(st.get("v0", 0.0)) * H] for st in start])
+    # SI -> dimensionless coupling variables: lambda_bar = lambda H^2 / m1, a_bar = a H^2
+    scale = np.array([H**2 / model.m1 if name == "lambda_c" else H**2 for name in dec.variables])
+    history = _history(scene, dec.n_coupling) * scale
+    with np.errstate(over="ignore", invalid="ignore"):
+        traj = simulate(
+            problem, scene.method, state, history, scene.n_steps, scheme=c["scheme"], iterations=c["iterations"]
+        )
+    s = np.array(traj.states)
+    return s[..., 0], s[..., 1] / H
+
+
+def pendulum_builtin(scene):
+    """The built-in double pendulum (:class:`~icosim.pendulum.problem.PendulumCosimulation`, Radau IIA at
+    1e-10) from the links' start values, with the scene's method, ``k``, scheme and initial coupling history.
+    Returns the joint point of each link ``(n, 2, 2)`` and the coupling force on link 1 ``(n, 2)`` at
+    ``T_1 ... T_n``."""
+    from ..pendulum.model import PendulumParameters
+    from ..pendulum.problem import PendulumCosimulation
+
+    s1, s2 = (sub.get("start", {}) for sub in scene.data["subsystems"].values())
+    p = PendulumParameters(
+        m1=s1["m"], m2=s2["m"], J1=s1["J"], J2=s2["J"], l1=s1["l"], l2=s2["l"], g=s1["g"], d=s1["d"],
+        phi1_0=s1["phi0"], phi2_0=s2["phi0"],
+    )  # fmt: skip
+    c = scene.coupling
+    dec = get_decomposition(c["decomposition"])
+    problem = PendulumCosimulation(p, dec.name, int(c["k"]), float(c["H"]), rtol=1e-10, atol=1e-10)
+    method = make_method(c["method"], **_method_params(scene))
+    history = _history(scene, 2 * dec.n_coupling)
+    traj = simulate(
+        problem, method, p.initial_state(), history, scene.n_steps, scheme=c["scheme"], iterations=c["iterations"]
+    )
+    y = np.array(traj.outputs[1:])  # (n, 2, 4, 2): x, v, a, f per link
+    return y[:, :, 0, :], y[:, 0, 3, :]
+
+
+def measured_growth(run) -> float:
+    """Growth per macro step measured on a run of a scalar joint: the largest amplitude
+    ``max_i sqrt(x_i^2 + (v_i/omega)^2)`` (``omega^2 = (c1 + c2)/(m1 + m2)``, the coupled oscillation) over
+    the last eighth of the run against that over the eighth after its middle, per step between them.
+    NaN for a joint in the plane (its equilibrium is not the origin) or a run too short to measure."""
+    if "component" in run.dims:
+        return float("nan")
+    subs = json.loads(run.attrs["scene_json"])["subsystems"].values()
+    st = [s.get("start", {}) for s in subs]
+    try:
+        omega = np.sqrt((float(st[0]["c"]) + float(st[1]["c"])) / (float(st[0]["m"]) + float(st[1]["m"])))
+    except KeyError:
+        omega = 1.0 / float(run["time"][1] - run["time"][0])
+    x, v = run["position"].values, run["velocity"].values  # (subsystem, time)
+    with np.errstate(over="ignore", invalid="ignore"):
+        amp = np.max(np.sqrt(x**2 + (v / omega) ** 2), axis=0)
+    n = amp.size - 1
+    w = n // 8
+    if w < 1:
+        return float("nan")
+    early, late = amp[n // 2 : n // 2 + w], amp[n - w + 1 :]
+    steps = (n - w + 1) - n // 2
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        return float((np.max(late) / np.max(early)) ** (1.0 / steps))
+
+
+def builtin_difference(scene, run, builtin) -> dict:
+    """The run against the built-in model: ``difference`` (linear: largest position or velocity difference
+    relative to the largest value, as ``tests/test_fmi_linear.py`` measures; pendulum: largest joint point
+    difference in m) and, for the pendulum, ``force_difference`` (relative to the largest joint force)."""
+    nan = float("nan")
+    if builtin == "linear":
+        x, v = linear_builtin(scene)
+        n = min(len(x), run.sizes["time"])
+        got_x, got_v = run["position"].values.T[:n], run["velocity"].values.T[:n]
+        with np.errstate(over="ignore", invalid="ignore"):
+            dx = np.max(np.abs(got_x - x[:n])) / max(1.0, np.max(np.abs(x[:n])))
+            dv = np.max(np.abs(got_v - v[:n])) / max(1.0, np.max(np.abs(v[:n])))
+        return {"difference": float(max(dx, dv)), "force_difference": nan}
+    if builtin == "pendulum":
+        joint, force = pendulum_builtin(scene)
+        n = min(len(joint), run.sizes["time"] - 1)
+        got = np.moveaxis(run["position"].values, 0, 1)[1 : n + 1]  # (time, subsystem, component)
+        dp = np.max(np.abs(got - joint[:n]))
+        df = np.max(np.abs(run["multiplier"].values[1 : n + 1] - force[:n])) / np.max(np.abs(force[:n]))
+        return {"difference": float(dp), "force_difference": float(df)}
+    return {"difference": nan, "force_difference": nan}
+
+
+def scene_validation(scene, run, *, name: str, builtin: str = "none", cache=None):
+    """One scene's validation dataset: the prediction before the run, the growth measured on it, the
+    difference to the built-in model.  ``run``: the scene's dataset (:func:`icosim.fmi.run.run_dataset`)."""
+    import xarray as xr
+
+    from ..io.netcdf import provenance_attrs
+    from .predict import predict_scene
+
+    if builtin not in BUILTINS:
+        raise SceneError(f"{name}: builtin must be one of {BUILTINS}, got {builtin!r}")
+    scene = scene if hasattr(scene, "data") else load_scene(scene)
+    c = scene.coupling
+    nan = float("nan")
+    schemes, rhos, errs, verdicts = [], [], [], []
+    try:
+        with fmu_cache(cache):
+            prediction = predict_scene(scene)
+        for row in prediction["schemes"]:
+            schemes.append(row["scheme"])
+            rhos.append(nan if row["rho"] is None else row["rho"])
+            errs.append(row.get("rho_error", nan))
+            verdicts.append(row["verdict"])
+        mine = next(row for row in prediction["schemes"] if row["scene"])
+        predicted, predicted_verdict, why_not = mine["rho"], mine["verdict"], ""
+        identified = {
+            u: {k: v for k, v in p.items() if k != "probe_do_step_calls"} for u, p in prediction["units"].items()
+        }
+    except SceneError as exc:  # a joint in the plane: no single-mass units to identify
+        predicted, predicted_verdict, why_not, identified = nan, "not predicted", str(exc), {}
+    growth = measured_growth(run)
+    diff = builtin_difference(scene, run, builtin)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        deviation = abs(growth / predicted - 1.0) if predicted and np.isfinite(predicted) else nan
+    names = list(scene.names)
+    units = "; ".join(
+        f"{u}: {run.attrs[f'{u}_model_name']} (FMI {run.attrs[f'{u}_fmi_version']}, inputs by "
+        f"{run.attrs[f'{u}_inputs']})"
+        for u in names
+    )
+    exact = all(run.attrs[f"{u}_inputs"] == "derivatives" for u in names)
+    ds = xr.Dataset(
+        {
+            "predicted_rho": ((), float(predicted if predicted is not None else nan)),
+            "measured_growth": ((), growth, {"comment": "per macro step (icosim.fmi.validation.measured_growth)"}),
+            "growth_deviation": ((), float(deviation), {"comment": "|measured growth / predicted rho - 1|"}),
+            "builtin_difference": ((), diff["difference"], {"comment": _DIFFERENCE_TEXT[builtin]}),
+            "builtin_force_difference": ((), diff["force_difference"]),
+            "scheme_rho": (("predicted_for",), np.array(rhos, dtype=float)),
+            "scheme_rho_error": (("predicted_for",), np.array(errs, dtype=float)),
+            "scheme_verdict": (("predicted_for",), np.array(verdicts, dtype=str)),
+        },
+        coords={"predicted_for": ("predicted_for", np.array(schemes, dtype=str))},
+    )
+    attrs = provenance_attrs(scene.data, title=f"FMU scene {name}: validation")
+    attrs.update(
+        part="fmi",
+        dataset="scene",
+        scene=name,
+        method=scene.method.name,
+        decomposition=c["decomposition"],
+        k=int(c["k"]),
+        scheme=c["scheme"],
+        H=float(c["H"]),
+        t_end=float(scene.data["t_end"]),
+        macro_steps=int(run.sizes["time"] - 1),
+        status=run.attrs["status"],
+        builtin=builtin,
+        units=units,
+        exact_inputs="yes" if exact else "no",
+        predicted_verdict=predicted_verdict,
+        prediction_note=why_not,
+        identified_json=json.dumps(identified, sort_keys=True),
+        do_step_calls=int(run.attrs["do_step_calls"]),
+        wall_time_s=float(run.attrs["wall_time_s"]),
+    )
+    ds.attrs.update(attrs)
+    return ds
+
+
+_DIFFERENCE_TEXT = {
+    "linear": "largest position or velocity difference to the built-in linear model, relative to the largest value",
+    "pendulum": "largest joint point difference to the built-in pendulum (m)",
+    "none": "no built-in model",
+}
+
+
+# -- orders over H ----------------------------------------------------------------------------------------------
+
+
+def _order_scene(tmp: Path, units_dir: Path, model: dict, x0: float, case: dict, H: float, t_end: float) -> Path:
+    import yaml
+
+    kinds = get_decomposition(case["decomposition"]).kinds
+
+    def unit(i, kind):
+        sub = {
+            "start": {"m": model[f"m{i}"], "c": model[f"c{i}"], "d": model[f"d{i}"], "x0": x0},
+            "position": "x",
+            "velocity": "v",
+            "acceleration": "a",
+            "force_sign": 1 if i == 1 else -1,
+            "mass": "m",
+            "set_position": "x_set",
+            "set_velocity": "v_set",
+        }
+        if kind == "force":
+            return sub | {"fmu": str(units_dir / "msd"), "force": "lambda"}
+        return sub | {"fmu": str(units_dir / "msd_kinematic"), "acceleration_input": "a_in", "reaction_force": "F"}
+
+    coupling = {k: case[k] for k in ("method", "decomposition", "k")} | {"scheme": case.get("scheme", "jacobi")}
+    scene = {
+        "subsystems": {"body1": unit(1, kinds[0]), "body2": unit(2, kinds[1])},
+        "coupling": coupling | {"H": float(H), "perturbation": 1.0} | dict(case.get("params", {})),
+        "t_end": float(t_end),
+    }
+    path = tmp / f"order_{H:.6e}.yaml"
+    path.write_text(yaml.safe_dump(scene))
+    return path
+
+
+def _fmu_states(scene, history, *, cache=None) -> np.ndarray:
+    """The FMU run of ``scene`` from the given coupling history (SI): states ``(n + 1, 2, 2)``, SI."""
+    c = scene.coupling
+    units, couplings = open_units(scene, cache=cache)
+    problem = None
+    try:
+        problem = FmuCosimulation(units, couplings, c["decomposition"], c["k"], c["H"], perturbation=c["perturbation"])
+        state = problem.initial_state()
+        states = [state]
+        for _ in range(scene.n_steps):
+            with np.errstate(over="ignore", invalid="ignore"):
+                state, history, _ = macro_step(problem, scene.method, state, history, scheme=c["scheme"])
+            states.append(state)
+            if not np.all(np.isfinite(state)):
+                break
+        return np.array(states)
+    finally:
+        if problem is not None:
+            problem.close()
+        for unit in units:
+            unit.close()
+
+
+def order_case(case: dict, *, H, t_end: float, model: dict, x0: float, units_dir, cache=None, fit=None):
+    """Errors over ``H`` of one configuration of the linear convergence study on the FMU units and on the
+    built-in model, both from the exact start, and the asymptotic order of each.
+
+    ``case``: ``method``, ``decomposition``, ``k``, ``scheme`` (default Jacobi), ``params`` (the method's,
+    dimensional).  The error is the largest position error of either body against the exact monolithic
+    solution over ``[0, t_end]`` (m).  ``fit``: :func:`~icosim.order_fit.asymptotic_order`'s options."""
+    import xarray as xr
+
+    from ..io.netcdf import provenance_attrs
+
+    fit = dict(fit or {})
+    H = np.asarray(sorted(float(h) for h in H), dtype=float)
+    err_fmu, err_builtin, diff = [], [], []
+    with tempfile.TemporaryDirectory(prefix="icosim-orders-") as tmp:
+        for h in H:
+            scene = load_scene(_order_scene(Path(tmp), Path(units_dir).resolve(), model, x0, case, h, t_end))
+            coeffs = PhysicalModel(H=h, **model).coefficients()
+            problem = LinearCosimulation(coeffs, case["decomposition"], case["k"])
+            solution = MonolithicSolution(coeffs, x0, 0.0)
+            state, history = consistent_start(problem, solution)
+            method = engine_method(make_method(case["method"], **case.get("params", {})), h)
+            traj = simulate(problem, method, state, history, scene.n_steps, scheme=scene.coupling["scheme"])
+            builtin = np.array(traj.states)[..., 0]  # (n + 1, 2)
+            dec = get_decomposition(case["decomposition"])
+            scale = np.array([model["m1"] / h**2 if v == "lambda_c" else 1 / h**2 for v in dec.variables])
+            fmu = _fmu_states(scene, np.asarray(history) * scale, cache=cache)[..., 0]
+            exact = solution.state(np.arange(scene.n_steps + 1, dtype=float))[:, :1]
+            with np.errstate(invalid="ignore", over="ignore"):
+                err_fmu.append(float(np.max(np.abs(fmu - exact[: len(fmu)]))) if len(fmu) == len(exact) else np.nan)
+                err_builtin.append(float(np.max(np.abs(builtin - exact))))
+                diff.append(float(np.max(np.abs(fmu - builtin[: len(fmu)])) / max(1.0, np.max(np.abs(builtin)))))
+    f_fmu, f_builtin = asymptotic_order(H, err_fmu, **fit), asymptotic_order(H, err_builtin, **fit)
+    ds = xr.Dataset(
+        {
+            "error_fmu": (("H",), np.array(err_fmu), {"units": "m", "long_name": "largest position error, FMU run"}),
+            "error_builtin": (("H",), np.array(err_builtin), {"units": "m", "long_name": "the same, built-in model"}),
+            "difference": (("H",), np.array(diff), {"comment": "FMU minus built-in positions, relative"}),
+        },
+        coords={"H": ("H", H, {"units": "s"})},
+    )
+    attrs = provenance_attrs(
+        {"case": case, "H": H.tolist(), "t_end": t_end, "model": model, "x0": x0, "fit": fit},
+        title=f"FMU units: convergence order of {case_label(case)}",
+    )
+    params = {k: v for k, v in case.get("params", {}).items()}
+    attrs.update(
+        part="fmi",
+        dataset="orders",
+        case=case_label(case),
+        method=case["method"],
+        decomposition=case["decomposition"],
+        k=int(case["k"]),
+        scheme=case.get("scheme", "jacobi"),
+        **params,
+        t_end=float(t_end),
+        order_fmu=float(f_fmu.order),
+        order_builtin=float(f_builtin.order),
+        status_fmu=f_fmu.status,
+        status_builtin=f_builtin.status,
+    )
+    ds.attrs.update(attrs)
+    return ds
