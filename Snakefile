@@ -9,12 +9,14 @@ configfile: "config/config.yaml"
 configfile: "config/stability.yaml"
 configfile: "config/convergence.yaml"
 configfile: "config/pendulum.yaml"
+configfile: "config/fmi.yaml"
 
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/stability.smk"
 include: "workflow/rules/convergence.smk"
 include: "workflow/rules/pendulum.smk"
+include: "workflow/rules/fmi.smk"
 include: "workflow/rules/report.smk"
 
 

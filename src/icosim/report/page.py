@@ -30,6 +30,7 @@ DATASET_PATHS = {
     "stability": "results/stability/fig{figure}/jacobi/",
     "convergence": "results/convergence/fig{figure}/jacobi/",
     "pendulum": "results/pendulum/summary.nc",
+    "fmi": "results/fmi/validation/",
 }
 #: The report's directory relative to the project directory (links to datasets go up from it).
 REPORT_DIR = "reports"

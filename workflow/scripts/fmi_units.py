@@ -1,0 +1,18 @@
+"""Snakemake job: the test units built from source into the cache the scene jobs read (thin: icosim.fmi.build)."""
+
+import json
+import logging
+from pathlib import Path
+
+from icosim.fmi.build import build_unit
+from icosim.io.netcdf import atomic_path
+
+logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+cache = Path(snakemake.output[0]).parent
+built = {}
+for source in snakemake.params.sources:
+    fmu = build_unit(source, cache)
+    built[source] = fmu.name
+    logging.info("%s -> %s", source, fmu)
+with atomic_path(snakemake.output[0]) as tmp:
+    tmp.write_text(json.dumps(built, indent=1, sort_keys=True) + "\n")
