@@ -31,6 +31,14 @@ stop_pid() { # stop_pid NAME PIDFILE: TERM the recorded pid, wait up to 20 s, th
 }
 
 down() {
+    # jobs first: a job's slurmstepd outlives slurmd, so cancel every job and wait until none is left
+    if [[ -s $DIR/slurmctld.pid ]] && kill -0 "$(cat "$DIR/slurmctld.pid")" 2>/dev/null; then
+        squeue -h -o %i 2>/dev/null | xargs -r scancel 2>/dev/null || true
+        for _ in $(seq 60); do
+            [[ -z $(squeue -h -t PENDING,RUNNING,COMPLETING,SUSPENDED -o %i 2>/dev/null) ]] && break
+            sleep 0.5
+        done
+    fi
     stop_pid slurmd "$DIR/slurmd.pid"
     stop_pid slurmctld "$DIR/slurmctld.pid"
     stop_pid munged "$DIR/munged.started.pid" # only if `up` started it
