@@ -1,0 +1,303 @@
+"""The FMU part of the workflow (workflow/rules/fmi.smk): its jobs, its rerun triggers, the validation functions
+it calls (icosim.fmi.validation) against independent computations, its check kinds and its report section.
+
+The dry runs need neither fmpy nor a compiler; the runs build the test units (fmpy, CMake, a C compiler) and are
+skipped without them.
+"""
+
+import json
+import os
+import shutil
+import time
+
+import numpy as np
+import pytest
+import xarray as xr
+import yaml
+from helpers import ROOT, copy_workflow, scheduled_jobs, snakemake
+
+from icosim.claims.core import parse_claims
+from icosim.claims.registry import CHECKS, evaluate
+from icosim.fmi.checks import check_bound, check_orders
+from icosim.fmi.config import order_cases, scene_files
+from icosim.fmi.errors import SceneError
+from icosim.report.fmi import fmi_section
+
+CI = ["config/ci/stability.yaml", "config/ci/convergence.yaml", "config/ci/pendulum.yaml", "config/ci/fmi.yaml"]
+CACHE = ROOT / "build" / "fmus"
+
+
+def can_build():
+    try:
+        import fmpy  # noqa: F401
+    except ImportError:
+        return False
+    return shutil.which("cmake") is not None and (shutil.which("cc") or shutil.which("gcc")) is not None
+
+
+needs_units = pytest.mark.skipif(not can_build(), reason="running scenes needs fmpy, CMake and a C compiler")
+
+
+def ci_fmi_config():
+    base = yaml.safe_load((ROOT / "config" / "fmi.yaml").read_text())["fmi"]
+    ci = yaml.safe_load((ROOT / "config" / "ci" / "fmi.yaml").read_text())["fmi"]
+    base["orders"] |= ci["orders"]
+    return base
+
+
+@pytest.fixture(scope="module")
+def workflow_copy(tmp_path_factory):
+    wf = copy_workflow(tmp_path_factory.mktemp("wf"))
+    shutil.copytree(ROOT / "fmus", wf / "fmus", ignore=shutil.ignore_patterns("__pycache__"))
+    return wf
+
+
+# -- the DAG -------------------------------------------------------------------------------------------------
+
+
+def test_ci_dry_run_lists_the_fmu_jobs(workflow_copy):
+    proc = snakemake(workflow_copy, "-n", "--configfile", *CI)
+    jobs = scheduled_jobs(proc, "fmi_")
+    cfg = ci_fmi_config()
+    assert jobs["fmi_units"] == ["results/fmi/units/units.json"]
+    scenes = sorted(cfg["scenes"])
+    assert sorted(jobs["fmi_scene"]) == sorted(
+        [f"results/fmi/{s}.nc" for s in scenes] + [f"results/fmi/validation/{s}.nc" for s in scenes]
+    )
+    assert sorted(jobs["fmi_orders"]) == sorted(f"results/fmi/orders/{c}.nc" for c in order_cases(cfg))
+    assert len(jobs["fmi_orders"]) == 6  # projection and Baumgarte index 1, ff, k = 0, 1, 2
+    assert jobs["fmi_claims"][0] == "results/fmi/claims.json"
+    assert jobs["fmi_report_section"] == ["results/report/fmi.html"]
+
+
+def _make_outputs(wf):
+    """Every FMU output as an empty file, each newer than what it is built from (the order of the DAG), all in
+    the past."""
+    cfg = ci_fmi_config()
+    stages = [
+        ["results/fmi/units/units.json"],
+        [f"results/fmi/{s}.nc" for s in cfg["scenes"]]
+        + [f"results/fmi/validation/{s}.nc" for s in cfg["scenes"]]
+        + [f"results/fmi/orders/{c}.nc" for c in order_cases(cfg)],
+        ["results/fmi/claims.json", "results/fmi/claims.tsv"],
+        ["results/report/fmi.html"],
+    ]
+    t = time.time() - 1000
+    for path in wf.rglob("*"):  # the sources older than every output
+        if path.is_file():
+            os.utime(path, (t, t))
+    for stage in stages:
+        t += 10
+        for name in stage:
+            path = wf / name
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text("")
+            os.utime(path, (t, t))
+
+
+def test_editing_a_scene_reruns_only_that_scenes_jobs(tmp_path):
+    wf = copy_workflow(tmp_path)
+    shutil.copytree(ROOT / "fmus", wf / "fmus", ignore=shutil.ignore_patterns("__pycache__"))
+    _make_outputs(wf)
+    target = "results/report/fmi.html"
+    proc = snakemake(wf, "-n", target, "--configfile", *CI)
+    assert not scheduled_jobs(proc, "fmi_"), proc.stdout[-2000:]
+    scene = wf / "config" / "scenes" / "two_mass_fd.yaml"
+    scene.write_text(scene.read_text() + "\n# edited\n")
+    jobs = scheduled_jobs(snakemake(wf, "-n", target, "--configfile", *CI), "fmi_")
+    assert sorted(jobs) == ["fmi_claims", "fmi_report_section", "fmi_scene"]
+    assert sorted(jobs["fmi_scene"]) == ["results/fmi/two_mass_fd.nc", "results/fmi/validation/two_mass_fd.nc"]
+
+
+def test_a_scene_that_fails_its_schema_stops_the_workflow(tmp_path):
+    wf = copy_workflow(tmp_path)
+    scene = wf / "config" / "scenes" / "two_mass_ff.yaml"
+    scene.write_text(scene.read_text().replace("scheme: jacobi", "scheme: sideways"))
+    proc = snakemake(wf, "-n", "--configfile", *CI, check=False)
+    assert proc.returncode != 0
+    assert "two_mass_ff.yaml" in proc.stdout + proc.stderr and "sideways" in proc.stdout + proc.stderr
+
+
+def test_the_configuration_names_existing_scenes_and_whole_step_counts():
+    cfg = ci_fmi_config()
+    assert set(scene_files(cfg, ROOT)) == set(cfg["scenes"])
+    bad = {**cfg, "scenes": {"nowhere": {"builtin": "none"}}}
+    with pytest.raises(SceneError, match="nowhere"):
+        scene_files(bad, ROOT)
+    odd = json.loads(json.dumps(cfg))
+    odd["orders"]["cases"][0]["H"] = [3.0e-3, 1.0e-3]
+    with pytest.raises(SceneError, match="does not divide"):
+        order_cases(odd)
+
+
+# -- the validation functions against independent computations -----------------------------------------------
+
+
+def test_measured_growth_of_a_synthetic_mode():
+    """A pure mode growing by r per step (the phase turning): the measure gives r."""
+    from icosim.fmi.validation import measured_growth
+
+    n, r, theta = 400, 1.05, 2.6
+    steps = np.arange(n + 1)
+    x = 0.1 * r**steps * np.cos(theta * steps)
+    omega = np.sqrt(1500.0 / 3.0)
+    v = -0.1 * omega * r**steps * np.sin(theta * steps)
+    scene = {"subsystems": {"a": {"start": {"m": 1.0, "c": 1000.0}}, "b": {"start": {"m": 2.0, "c": 500.0}}}}
+    ds = xr.Dataset(
+        {"position": (("subsystem", "time"), np.stack([x, x])), "velocity": (("subsystem", "time"), np.stack([v, v]))},
+        coords={"time": steps * 1e-3},
+        attrs={"scene_json": json.dumps(scene)},
+    )
+    assert measured_growth(ds) == pytest.approx(r, rel=1e-12)
+
+
+@needs_units
+def test_unstable_scene_against_the_engine(monkeypatch):
+    """two_mass_unstable: the predicted rho is the engine's spectral radius for the typed-in parameters, the
+    measured growth is that rho, and the built-in difference is that of an independent built-in run."""
+    from icosim.engine.linear_problem import LinearCosimulation
+    from icosim.engine.macrostep import simulate
+    from icosim.engine.methods import engine_method, make_method
+    from icosim.engine.model import PhysicalModel
+    from icosim.engine.spectral.radius import spectral_radius_float64
+    from icosim.fmi.run import run_dataset, run_scene
+    from icosim.fmi.scene import load_scene
+    from icosim.fmi.validation import scene_validation
+
+    monkeypatch.setenv("ICOSIM_FMU_CACHE", str(CACHE))
+    scene = load_scene(ROOT / "config" / "scenes" / "two_mass_unstable.yaml")
+    run = run_dataset(run_scene(scene, cache=CACHE))
+    checked = scene_validation(scene, run, name="two_mass_unstable", builtin="linear", cache=CACHE)
+    H, P = 1e-3, dict(m1=1.0, m2=2.0, c1=1000.0, c2=500.0, d1=2.0, d2=1.0)
+    method = engine_method(make_method("weighted", index=1, a=1.0, b=1.0), H)
+    rho, _ = spectral_radius_float64(PhysicalModel(H=H, **P).coefficients(), method, "ff", 2, scheme="jacobi")
+    assert float(checked["predicted_rho"]) == pytest.approx(float(rho), rel=1e-9)
+    assert float(checked["measured_growth"]) == pytest.approx(float(rho), rel=1e-3)
+    assert checked.attrs["predicted_verdict"] == "unstable"
+    problem = LinearCosimulation(PhysicalModel(H=H, **P).coefficients(), "ff", 2)
+    traj = simulate(problem, method, np.array([[0.1, 0.0], [0.1, 0.0]]), np.zeros((3, 1)), 400)
+    x = np.array(traj.states)[..., 0]
+    independent = np.max(np.abs(run["position"].values.T - x)) / np.max(np.abs(x))
+    assert float(checked["builtin_difference"]) >= independent * (1 - 1e-12)
+    assert float(checked["builtin_difference"]) < 1e-9
+
+
+@needs_units
+def test_order_case_against_the_exact_solution():
+    """Projection ff, k = 1 on three step sizes: the built-in errors are those of an independent run against
+    the exact solution, the FMU errors agree with them, and the order is about 3."""
+    from icosim.engine.exact import MonolithicSolution, consistent_start
+    from icosim.engine.linear_problem import LinearCosimulation
+    from icosim.engine.macrostep import simulate
+    from icosim.engine.methods import engine_method, make_method
+    from icosim.engine.model import PhysicalModel
+    from icosim.fmi.validation import order_case
+
+    model = dict(m1=1.0, m2=2.0, c1=1000.0, c2=1000.0, d1=10.0, d2=10.0)
+    H = [2.5e-3, 1.25e-3, 5.0e-4]
+    case = {"method": "projection", "decomposition": "ff", "k": 1}
+    ds = order_case(case, H=H, t_end=0.05, model=model, x0=0.1, units_dir=ROOT / "fmus", cache=CACHE)
+    for h, err in zip(ds["H"].values, ds["error_builtin"].values):
+        c = PhysicalModel(H=h, **model).coefficients()
+        problem = LinearCosimulation(c, "ff", 1)
+        sol = MonolithicSolution(c, 0.1, 0.0)
+        n = int(round(0.05 / h))
+        traj = simulate(problem, engine_method(make_method("projection"), h), *consistent_start(problem, sol), n)
+        exact = sol.state(np.arange(n + 1.0))[:, 0]
+        assert err == pytest.approx(np.max(np.abs(np.array(traj.states)[..., 0] - exact[:, None])), rel=1e-12)
+    np.testing.assert_allclose(ds["error_fmu"].values, ds["error_builtin"].values, rtol=1e-6, atol=1e-14)
+    assert ds.attrs["order_fmu"] == pytest.approx(3.0, abs=0.25)
+    assert ds.attrs["case"] == "projection_ff_k1" and ds.attrs["scheme"] == "jacobi"
+
+
+# -- the check kinds and the report section ---------------------------------------------------------------------
+
+
+def scene_ds(name, *, difference, growth, rho, builtin="linear", verdict="stable"):
+    ds = xr.Dataset(
+        {
+            "predicted_rho": ((), rho),
+            "measured_growth": ((), growth),
+            "growth_deviation": ((), abs(growth / rho - 1)),
+            "builtin_difference": ((), difference),
+            "builtin_force_difference": ((), np.nan),
+            "scheme_rho": (("predicted_for",), [rho, 1.4]),
+            "scheme_rho_error": (("predicted_for",), [1e-14, 1e-14]),
+            "scheme_verdict": (("predicted_for",), [verdict, "unstable"]),
+        },
+        coords={"predicted_for": ["jacobi", "gauss-seidel-12"]},
+    )
+    ds.attrs.update(
+        part="fmi", dataset="scene", scene=name, method="projection", decomposition="ff", k=1, scheme="jacobi",
+        H=1e-3, t_end=0.5, macro_steps=500, status="completed", builtin=builtin, exact_inputs="yes",
+        units="body1: msd (FMI 2.0, inputs by derivatives)", predicted_verdict=verdict, do_step_calls=3000,
+    )  # fmt: skip
+    return ds
+
+
+def orders_ds(k, order_fmu, order_builtin, status="asymptotic"):
+    ds = xr.Dataset(
+        {"error_fmu": (("H",), [1e-6, 1e-8]), "error_builtin": (("H",), [1e-6, 1e-8]), "difference": (("H",), [0, 0])},
+        coords={"H": [1e-4, 1e-3]},
+    )
+    ds.attrs.update(
+        part="fmi", dataset="orders", case=f"projection_ff_k{k}", method="projection", decomposition="ff", k=k,
+        scheme="jacobi", t_end=0.1, order_fmu=order_fmu, order_builtin=order_builtin, status_fmu=status,
+        status_builtin="asymptotic",
+    )  # fmt: skip
+    return ds
+
+
+def test_bound_check_passes_fails_and_cannot_decide():
+    good, bad = (
+        scene_ds("a", difference=1e-13, growth=0.9995, rho=0.9995),
+        scene_ds("b", difference=1e-6, growth=1, rho=1),
+    )
+    kw = dict(quantity="builtin_difference", op="<", value=1e-9)
+    assert check_bound([good], select={"builtin": "linear"}, **kw).holds is True
+    out = check_bound([good, bad], select={"builtin": "linear"}, **kw)
+    assert out.holds is False and "b: 1e-06" in out.measured
+    assert check_bound([good], select={"builtin": "pendulum"}, **kw).holds is None
+
+
+def test_orders_check_compares_with_the_claim_and_the_builtin_model():
+    expect = [{"k": 0, "order": 2}, {"k": 1, "order": 3}]
+    kw = dict(select={"method": "projection"}, expect=expect, tolerance=0.25, match=0.05)
+    assert check_orders([orders_ds(0, 2.07, 2.07), orders_ds(1, 3.07, 3.06)], **kw).holds is True
+    assert check_orders([orders_ds(0, 2.07, 2.07), orders_ds(1, 3.07, 2.9)], **kw).holds is False  # built-in differs
+    assert check_orders([orders_ds(0, 1.5, 1.5), orders_ds(1, 3.07, 3.07)], **kw).holds is False  # claim differs
+    undecided = check_orders([orders_ds(0, 2.0, 2.0, "pre-asymptotic"), orders_ds(1, 3.0, 3.0)], **kw)
+    assert undecided.holds is None
+
+
+def test_the_claims_file_reads_and_evaluates():
+    claims = parse_claims(yaml.safe_load((ROOT / "config" / "claims" / "fmi.yaml").read_text())["claims"], CHECKS)
+    assert {c.check["kind"] for c in claims} == {"fmi_bound", "fmi_orders"}
+    data = [
+        scene_ds("two_mass_ff", difference=1e-13, growth=0.9996, rho=0.9995),
+        scene_ds("two_mass_unstable", difference=1e-11, growth=1.1312, rho=1.1312, verdict="unstable"),
+    ]
+    verdicts = {v.claim.id: v.verdict for v in evaluate(claims, data)}
+    assert verdicts["fmu_two_mass_follows_builtin_linear"] == "pass"
+    assert verdicts["fmu_growth_is_the_predicted_rho"] == "pass"
+    assert verdicts["fmu_pendulum_follows_builtin_pendulum"] == "undecided"  # no pendulum scene given
+
+
+def test_the_report_section_renders():
+    validations = [
+        scene_ds("two_mass_ff", difference=4e-14, growth=0.9996, rho=0.9995001),
+        scene_ds("double_pendulum_ff", difference=4e-14, growth=np.nan, rho=np.nan, builtin="pendulum", verdict="not predicted"),
+    ]  # fmt: skip
+    claims = [
+        {
+            "id": "fmu_two_mass_follows_builtin_linear", "source": "docs/fmi.md", "statement": "s", "figures": ["scenes"],
+            "verdict": "pass", "reference": "pass", "matches_reference": True, "measured": "m", "note": "",
+            "scope": "beyond", "numbers": {"rows": [{"scene": "two_mass_ff", "holds": True}]},
+        }
+    ]  # fmt: skip
+    html = fmi_section(validations=validations, orders=[orders_ds(0, 2.07, 2.07)], claims=claims)
+    assert html.startswith('<section id="fmi">')
+    for text in ("two_mass_ff", "double_pendulum_ff", "0.9995001 (stable)", "not predicted", "projection_ff_k0"):
+        assert text in html
+    assert 'id="claim-fmi-fmu_two_mass_follows_builtin_linear"' in html or "fmu_two_mass_follows_builtin_linear" in html
+    assert "gauss-seidel-12: 1.4 (unstable)" in html
