@@ -13,13 +13,19 @@
   independent route to the spectral radius).
 """
 
+import atexit
+import copy
+import functools
 import json
 import os
 import re
+import select
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import yaml
@@ -43,19 +49,121 @@ def copy_workflow(dest: Path) -> Path:
 
 
 def snakemake(workdir: Path, *args, check=True):
-    """Run Snakemake on the workflow in ``workdir``; with ``check``, a failure raises with its output."""
+    """Run Snakemake on the workflow in ``workdir``; with ``check``, a failure raises with its output.
+
+    Each call is a new Snakemake process (a fork of :class:`_SnakemakeForkServer`, which has imported
+    Snakemake already, but nothing of icosim); ``ICOSIM_TEST_SNAKEMAKE_FORK=0`` runs the ``snakemake``
+    command instead.
+    """
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
-    proc = subprocess.run(
-        [SNAKEMAKE, "--directory", str(workdir), "--snakefile", str(workdir / "Snakefile"), *args],
-        capture_output=True,
-        text=True,
-        cwd=workdir,
-        env=env,
-        timeout=600,
-    )
+    argv = [SNAKEMAKE, "--directory", str(workdir), "--snakefile", str(workdir / "Snakefile"), *args]
+    if os.environ.get("ICOSIM_TEST_SNAKEMAKE_FORK", "1") != "0":
+        proc = _SnakemakeForkServer.get().run(argv, cwd=workdir, env=env, timeout=600)
+    else:
+        proc = subprocess.run(argv, capture_output=True, text=True, cwd=workdir, env=env, timeout=600)
     if check and proc.returncode != 0:
         raise AssertionError(f"snakemake {' '.join(args)} failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}")
     return proc
+
+
+#: The fork server: imports Snakemake (about half of the CPU time of a dry run of this workflow), then
+#: for each request forks a child that is the ``snakemake`` command -- ``sys.exit(snakemake.cli.main())``
+#: with the request's argv, working directory, environment and stdout/stderr files, exiting as that
+#: script exits (atexit handlers, flushed streams).  It imports nothing of icosim: the Snakefile of the
+#: copy imports the copy's src/ as it would in a new process.  Single-threaded, so forking is safe.
+_FORK_SERVER = r"""
+import json, os, sys
+sys.path[0] = os.path.dirname(SNAKEMAKE)  # as the console script: its own directory, not the cwd
+import snakemake.api, snakemake.cli, snakemake.dag, snakemake.persistence, snakemake.script, snakemake.utils
+import snakemake.scheduling.job_scheduler, snakemake.workflow
+from snakemake_interface_executor_plugins.registry import ExecutorPluginRegistry
+from snakemake_interface_logger_plugins.registry import LoggerPluginRegistry
+from snakemake_interface_report_plugins.registry import ReportPluginRegistry
+from snakemake_interface_storage_plugins.registry import StoragePluginRegistry
+ExecutorPluginRegistry().get_plugin("local"), LoggerPluginRegistry(), ReportPluginRegistry(), StoragePluginRegistry()
+import threading
+assert threading.active_count() == 1, "the fork server must be single-threaded"
+requests, replies = os.fdopen(0, "r"), os.fdopen(os.dup(1), "w")
+for line in requests:
+    req = json.loads(line)
+    pid = os.fork()
+    if pid == 0:  # the child: never returns to the loop
+        try:
+            requests.close(), replies.close()
+            os.chdir(req["cwd"])
+            os.environ.clear()
+            os.environ.update(req["env"])
+            null = os.open(os.devnull, os.O_RDONLY)
+            os.dup2(null, 0)
+            for fd, path in ((1, req["stdout"]), (2, req["stderr"])):
+                os.dup2(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644), fd)
+            sys.argv = list(req["argv"])
+        except BaseException:
+            os._exit(121)
+        sys.exit(snakemake.cli.main())
+    replies.write(f"{pid}\n")
+    replies.flush()
+    _, status = os.waitpid(pid, 0)
+    replies.write(f"{os.waitstatus_to_exitcode(status)}\n")
+    replies.flush()
+"""
+
+
+class _SnakemakeForkServer:
+    """One fork server per test process, started at the first call (see ``_FORK_SERVER``)."""
+
+    _instance = None
+
+    @classmethod
+    def get(cls):
+        if cls._instance is None or cls._instance.proc.poll() is not None:
+            cls._instance = cls()
+        return cls._instance
+
+    def __init__(self):
+        env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+        code = f"SNAKEMAKE = {SNAKEMAKE!r}\n{_FORK_SERVER}"
+        self.proc = subprocess.Popen(
+            [sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env, bufsize=1
+        )
+        self.buffer = b""
+        self.tmp = Path(tempfile.mkdtemp(prefix="snakemake-fork-"))
+        atexit.register(self.close)
+
+    def close(self):
+        """End of the test process: the server reads the end of its requests and exits."""
+        self.proc.stdin.close()
+        self.proc.wait(timeout=60)
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    def run(self, argv, cwd, env, timeout):
+        out, err = self.tmp / "stdout", self.tmp / "stderr"
+        req = {"argv": argv, "cwd": str(cwd), "env": env, "stdout": str(out), "stderr": str(err)}
+        self.proc.stdin.write(json.dumps(req) + "\n")
+        self.proc.stdin.flush()
+        pid = int(self._readline(None))
+        try:
+            returncode = int(self._readline(timeout))
+        except subprocess.TimeoutExpired:
+            os.kill(pid, signal.SIGKILL)
+            self._readline(None)
+            raise subprocess.TimeoutExpired(argv, timeout) from None
+        return subprocess.CompletedProcess(argv, returncode, out.read_text(), err.read_text())
+
+    def _readline(self, timeout):
+        """A line of the server's replies (its stdout, read unbuffered so that select sees what is left)."""
+        fd = self.proc.stdout.fileno()
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while b"\n" not in self.buffer:
+            wait = None if deadline is None else max(0.0, deadline - time.monotonic())
+            if not select.select([fd], [], [], wait)[0]:
+                raise subprocess.TimeoutExpired("snakemake", timeout)
+            chunk = os.read(fd, 4096)
+            if not chunk:
+                raise RuntimeError("the Snakemake fork server exited")
+            self.buffer += chunk
+        line, self.buffer = self.buffer.split(b"\n", 1)
+        return line.decode()
 
 
 def scheduled(proc, rule):
@@ -89,14 +197,34 @@ def scheduled_jobs(proc, prefix: str) -> dict:
 
 
 def validate_config(part_config: dict, part: str):
-    """Validate like ``validate_part`` of workflow/rules/common.smk (raises on a bad configuration)."""
+    """Validate like ``validate_part`` of workflow/rules/common.smk (raises on a bad configuration).
+
+    The schema's ``$defs`` are filled from the registries as they are at each call (a test may register
+    or remove entries); the JSON file for a given content is written once per test process.
+    """
     from snakemake.utils import validate
 
-    schema = yaml.safe_load((ROOT / "workflow" / "schemas" / f"{part}.schema.yaml").read_text())
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / f"{part}.schema.json"
-        path.write_text(json.dumps(with_registries(schema)))
-        validate(part_config, str(path))
+    text = json.dumps(with_registries(_schema(part)))
+    validate(part_config, str(_schema_file(part, text)))
+
+
+def _schema(part: str) -> dict:
+    """The parsed schema file (parsed once; a fresh copy each call)."""
+    return copy.deepcopy(_parsed_schema(part))
+
+
+@functools.lru_cache(maxsize=None)
+def _parsed_schema(part: str) -> dict:
+    return yaml.safe_load((ROOT / "workflow" / "schemas" / f"{part}.schema.yaml").read_text())
+
+
+@functools.lru_cache(maxsize=None)
+def _schema_file(part: str, text: str) -> Path:
+    tmp = Path(tempfile.mkdtemp(prefix="icosim-schema-"))
+    atexit.register(shutil.rmtree, tmp, ignore_errors=True)
+    path = tmp / f"{part}.schema.json"
+    path.write_text(text)
+    return path
 
 
 def predict_all(prob, state, history):

@@ -10,6 +10,7 @@ earlier output.
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import resource
@@ -298,6 +299,15 @@ def _paths(obj, prefix=()):
     yield prefix
 
 
+@functools.lru_cache(maxsize=None)
+def _stability_config():
+    """config/stability.yaml's stability part, read once (each example changes a deep copy)."""
+    import yaml
+    from helpers import ROOT
+
+    return yaml.safe_load((ROOT / "config/stability.yaml").read_text())["stability"]
+
+
 WRONG = st.one_of(
     st.none(),
     st.booleans(),
@@ -316,15 +326,13 @@ def test_a_wrong_stability_value_fails_validation_or_is_harmless(data):
     the parse-time panel construction, naming the key) refuses it, or every panel it implies is valid."""
     import copy
 
-    import yaml
-    from helpers import ROOT, validate_config
+    from helpers import validate_config
     from snakemake.exceptions import WorkflowError
 
     from icosim.errors import ParameterError
     from icosim.stability.panels import figure_panels
 
-    base = yaml.safe_load((ROOT / "config/stability.yaml").read_text())["stability"]
-    cfg = copy.deepcopy(base)
+    cfg = copy.deepcopy(_stability_config())
     paths = [p for p in _paths(cfg) if p]
     path = data.draw(st.sampled_from(paths))
     target = cfg
