@@ -12,7 +12,9 @@ compared with a clean run of the same configuration:
   completes;
 * **datasets**: truncated, bit-flipped, deleted, replaced by another panel's file, a stale temporary;
   then the same command;
-* **read-only results/**: the run fails naming the path; once writable, the same command completes.
+* **read-only results/**: the run fails naming the path; once writable, the same command completes;
+* **full disk**: ``results/`` on a small tmpfs: the run fails naming the path, every dataset left behind
+  verifies (none half-written that looks complete); moved to a roomy disk, the same command completes.
 
 Every dataset of every case is then compared with the clean run's (``tools/compare_results.py``:
 bitwise, timings aside).  Prints a table: faults injected, survived, datasets compared, differences,
@@ -168,6 +170,47 @@ def read_only_results(workdir: Path, targets) -> dict:
     return dict(injected=1, refused_naming_the_path=named)
 
 
+def full_disk(workdir: Path, targets, clean: Path) -> dict:
+    """``results/`` on a tmpfs a third the size of a finished run's: the run fails naming a path and the full
+    disk; every dataset it left verifies against its checksum and opens (none half-written that looks
+    complete) and no temporary is left; the finished datasets moved to a roomy disk, the same command completes."""
+    from icosim.io.integrity import verify
+    from icosim.io.netcdf import open_dataset
+
+    size = sum(p.stat().st_size for p in (clean / "results").rglob("*") if p.is_file())
+    res = workdir / "results"
+    res.mkdir(exist_ok=True)
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size // 3}", "tmpfs", str(res)]).returncode:
+        return dict(injected=0, note="no tmpfs mount here (not root)")
+    try:
+        proc = run(workdir, targets)
+        text = proc.stdout + proc.stderr
+        named = proc.returncode != 0 and "results/" in text and ("no space left" in text.lower())
+        datasets = sorted(res.rglob("*.nc"))
+        whole = 0
+        for path in datasets:
+            ok = verify(path)
+            if ok:
+                open_dataset(path).close()
+                whole += 1
+        parts = list(res.rglob("*.part"))
+        keep = workdir / "results.kept"
+        shutil.copytree(res, keep, symlinks=True)
+    finally:
+        subprocess.run(["umount", str(res)], check=True)
+    res.rmdir()
+    keep.rename(res)
+    run(workdir, targets, check=True)
+    return dict(
+        injected=1,
+        refused_naming_the_path=named,
+        datasets_left=len(datasets),
+        verified=whole,
+        unverified=len(datasets) - whole,
+        parts_left=len(parts),
+    )
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--kills", type=int, default=20)
@@ -189,11 +232,12 @@ def main(argv=None):
                 lambda: dataset_faults(work, targets, rng),
             ),
             ("results/ read-only", lambda: read_only_results(work, targets)),
+            ("results/ on a full disk (tmpfs)", lambda: full_disk(work, targets, clean)),
         ]
         for i, (name, case) in enumerate(cases):
-            if i:  # each case from a clean results/ (the last two damage a finished run)
+            if i:  # each case from a clean results/
                 shutil.rmtree(work / "results", ignore_errors=True)
-                if i >= len(cases) - 2:
+                if name.startswith(("datasets", "results/ read-only")):  # these damage a finished run
                     run(work, targets, check=True)
             info = case()
             set_aside = sorted((work / "results").rglob("*.corrupt"))  # the damaged copies, kept for a look
