@@ -1,18 +1,18 @@
 /* FMI 2.0 co-simulation interface shared by the test units of icosim (fmus/README.md).
  *
- * A unit supplies model.h: NREAL real variables addressed by value reference, their defaults,
- * NINPUT continuous inputs INPUT_VRS (whose derivatives fmi2SetRealInputDerivatives accepts up to
- * order MAX_ORDER), FAIL_TIME_VR (a parameter: a step starting at or after it is refused) and
- * model_set/model_get/model_step (der[k * (MAX_ORDER + 1) + j]: j-th derivative of input k).  The whole instance is one struct, so fmi2GetFMUstate and
- * fmi2SetFMUstate are a copy of it: a restored step repeats bit for bit.
+ * A unit supplies model.h: NREAL real variables addressed by value reference, NINPUT continuous inputs INPUT_VRS
+ * (whose derivatives fmi2SetRealInputDerivatives accepts up to order MAX_ORDER) and, through unit.h, FAIL_TIME_VR
+ * (a parameter: a step starting at or after it is refused) and model_defaults/model_set/model_get/model_step
+ * (der[k * (MAX_ORDER + 1) + j]: j-th derivative of input k).  The whole instance is one struct, so
+ * fmi2GetFMUstate and fmi2SetFMUstate are a copy of it (state.h): a restored step repeats bit for bit.
  */
 #include <stdlib.h>
 #include <string.h>
 #include <stdio.h>
 #include "fmi2Functions.h"
 #include "model.h"
-
-static const unsigned input_vrs[NINPUT] = INPUT_VRS;
+#include "state.h"
+#include "step.h"
 
 static int input_index(unsigned vr) {
     for (int k = 0; k < NINPUT; k++)
@@ -105,38 +105,24 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
     (void)c; (void)vr; (void)v; return n ? fmi2Error : fmi2OK;
 }
 
-/* the state is the instance itself (no pointers inside): saving is a copy */
+/* the state is the instance itself (state.h) */
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *s) {
-    Instance *i = (Instance *)c;
-    if (*s == NULL) *s = malloc(sizeof(Instance));
-    if (*s == NULL) return fmi2Error;
-    memcpy(*s, i, sizeof(Instance));
-    return fmi2OK;
+    return state_save(c, s, sizeof(Instance)) ? fmi2Error : fmi2OK;
 }
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate s) {
-    if (s == NULL) return fmi2Error;
-    memcpy(c, s, sizeof(Instance));
-    return fmi2OK;
+    return state_restore(c, s, sizeof(Instance)) ? fmi2Error : fmi2OK;
 }
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *s) {
-    (void)c;
-    if (s && *s) { free(*s); *s = NULL; }
-    return fmi2OK;
+    (void)c; state_free(s); return fmi2OK;
 }
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate s, size_t *size) {
     (void)c; (void)s; *size = sizeof(Instance); return fmi2OK;
 }
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate s, fmi2Byte b[], size_t size) {
-    (void)c;
-    if (size != sizeof(Instance)) return fmi2Error;
-    memcpy(b, s, size);
-    return fmi2OK;
+    (void)c; return state_serialize(s, b, size, sizeof(Instance)) ? fmi2Error : fmi2OK;
 }
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte b[], size_t size, fmi2FMUstate *s) {
-    if (size != sizeof(Instance)) return fmi2Error;
-    if (*s == NULL) *s = malloc(sizeof(Instance));
-    if (*s == NULL) return fmi2Error;
-    memcpy(*s, b, size);
+    if (state_deserialize(b, size, s, sizeof(Instance))) return fmi2Error;
     /* the callbacks belong to the running instance, not to the serialised one */
     ((Instance *)*s)->cb = ((Instance *)c)->cb;
     return fmi2OK;
@@ -167,13 +153,9 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSetPrior) {
     Instance *i = (Instance *)c;
     (void)noSetPrior;
-    if (model_get(&i->m, FAIL_TIME_VR) >= 0 && t >= model_get(&i->m, FAIL_TIME_VR)) {
-        logmsg(i, fmi2Discard, "step refused: the communication point reached fail_time");
-        return fmi2Discard;
-    }
-    if (!(h > 0)) return fmi2Error;
-    for (int k = 0; k < NINPUT; k++) i->der[k * (MAX_ORDER + 1)] = model_get(&i->m, input_vrs[k]);
-    model_step(&i->m, i->der, MAX_ORDER, h);
+    int refused = unit_step(&i->m, i->der, t, h);
+    if (refused > 0) logmsg(i, fmi2Discard, STEP_REFUSED);
+    if (refused) return refused > 0 ? fmi2Discard : fmi2Error;
     memset(i->der, 0, sizeof i->der);  /* derivatives hold for one step (they are set before each) */
     i->time = t + h;
     return fmi2OK;

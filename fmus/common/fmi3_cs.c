@@ -1,11 +1,13 @@
 /* FMI 3.0 co-simulation interface of the test units (fmus/README.md): the same model.h/model.c as the
  * FMI 2.0 units (common/fmi2_cs.c).  FMI 3.0 co-simulation has no input derivatives: over a step the input is
  * held constant.  The instance is one struct without pointers besides the callbacks, so saving and restoring a
- * state is a copy of it.  Functions a co-simulation unit need not offer return fmi3Error. */
+ * state is a copy of it (state.h).  Functions a co-simulation unit need not offer return fmi3Error. */
 #include <stdlib.h>
 #include <string.h>
 #include "fmi3Functions.h"
 #include "model.h"
+#include "state.h"
+#include "step.h"
 
 #define TIME_VR 1000
 
@@ -134,39 +136,18 @@ fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance, fmi3ValueR
 
 fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference dependent, size_t elementIndicesOfDependent[], fmi3ValueReference independents[], size_t elementIndicesOfIndependents[], fmi3DependencyKind dependencyKinds[], size_t nDependencies) { (void)instance; (void)dependent; (void)elementIndicesOfDependent; (void)independents; (void)elementIndicesOfIndependents; (void)dependencyKinds; (void)nDependencies; return fmi3Error; }
 
-fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState* FMUState) {
-    if (*FMUState == NULL) *FMUState = malloc(sizeof(Instance));
-    if (*FMUState == NULL) return fmi3Error;
-    memcpy(*FMUState, instance, sizeof(Instance));
-    return fmi3OK;
-}
+fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState* FMUState) { return state_save(instance, FMUState, sizeof(Instance)) ? fmi3Error : fmi3OK; }
 
-fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState) {
-    if (FMUState == NULL) return fmi3Error;
-    memcpy(instance, FMUState, sizeof(Instance));
-    return fmi3OK;
-}
+fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState) { return state_restore(instance, FMUState, sizeof(Instance)) ? fmi3Error : fmi3OK; }
 
-fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState* FMUState) {
-    (void)instance;
-    if (FMUState && *FMUState) { free(*FMUState); *FMUState = NULL; }
-    return fmi3OK;
-}
+fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState* FMUState) { (void)instance; state_free(FMUState); return fmi3OK; }
 
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState, size_t* size) { (void)instance; (void)FMUState; *size = sizeof(Instance); return fmi3OK; }
 
-fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState, fmi3Byte serializedState[], size_t size) {
-    (void)instance;
-    if (size != sizeof(Instance)) return fmi3Error;
-    memcpy(serializedState, FMUState, size);
-    return fmi3OK;
-}
+fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState, fmi3Byte serializedState[], size_t size) { (void)instance; return state_serialize(FMUState, serializedState, size, sizeof(Instance)) ? fmi3Error : fmi3OK; }
 
 fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[], size_t size, fmi3FMUState* FMUState) {
-    if (size != sizeof(Instance)) return fmi3Error;
-    if (*FMUState == NULL) *FMUState = malloc(sizeof(Instance));
-    if (*FMUState == NULL) return fmi3Error;
-    memcpy(*FMUState, serializedState, size);
+    if (state_deserialize(serializedState, size, FMUState, sizeof(Instance))) return fmi3Error;
     ((Instance *)*FMUState)->env = ((Instance *)instance)->env;   /* the callbacks of the running instance */
     ((Instance *)*FMUState)->log = ((Instance *)instance)->log;
     return fmi3OK;
@@ -231,16 +212,10 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     *terminateSimulation = fmi3False;
     *earlyReturn = fmi3False;
     *lastSuccessfulTime = currentCommunicationPoint;
-    if (model_get(&i->m, FAIL_TIME_VR) >= 0 && currentCommunicationPoint >= model_get(&i->m, FAIL_TIME_VR)) {
-        logmsg(i, fmi3Discard, "step refused: the communication point reached fail_time");
-        return fmi3Discard;
-    }
-    if (!(communicationStepSize > 0)) return fmi3Error;
-    static const unsigned input_vrs[NINPUT] = INPUT_VRS;
-    double der[NINPUT * (MAX_ORDER + 1)] = {0};
-    for (int k = 0; k < NINPUT; k++)  /* FMI 3.0 has no input derivatives: the inputs are held */
-        der[k * (MAX_ORDER + 1)] = model_get(&i->m, input_vrs[k]);
-    model_step(&i->m, der, MAX_ORDER, communicationStepSize);
+    double der[NINPUT * (MAX_ORDER + 1)] = {0};  /* FMI 3.0 has no input derivatives: the inputs are held */
+    int refused = unit_step(&i->m, der, currentCommunicationPoint, communicationStepSize);
+    if (refused > 0) logmsg(i, fmi3Discard, STEP_REFUSED);
+    if (refused) return refused > 0 ? fmi3Discard : fmi3Error;
     for (int k = 0; k < NINPUT; k++) model_set(&i->m, input_vrs[k], der[k * (MAX_ORDER + 1)]);
     i->time = currentCommunicationPoint + communicationStepSize;
     *lastSuccessfulTime = i->time;

@@ -3,19 +3,14 @@
 #define ICOSIM_MODEL_H
 
 #define MODEL_GUID "{8c4e810f-3df3-4a00-8276-176fa3c9f001}"
-#define MAX_ORDER 12
 enum { VR_M, VR_C, VR_D, VR_X0, VR_V0, VR_LAMBDA, VR_X, VR_V, VR_A, VR_XSET, VR_VSET, VR_FAIL, NREAL };
 #define NINPUT 1
 #define INPUT_VRS {VR_LAMBDA}
-#define FAIL_TIME_VR VR_FAIL
+#define INPUT_FIELDS(X) X(VR_LAMBDA, u)
 
 typedef struct {
-    double m, c, d, x0, v0, lambda, x, v, fail;
+    double m, c, d, x0, v0, u, x, v, fail; /* u: the force lambda */
 } Model;
 
-void model_defaults(Model *m);
-void model_initialize(Model *m);
-double model_get(const Model *m, unsigned vr);
-int model_set(Model *m, unsigned vr, double value);
-void model_step(Model *m, const double *der, int max_order, double h);
+#include "unit.h"
 #endif

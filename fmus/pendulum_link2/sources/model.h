@@ -4,23 +4,18 @@
 #define ICOSIM_MODEL_H
 
 #define MODEL_GUID "{8c4e810f-3df3-4a00-8276-176fa3c9f012}"
-#define MAX_ORDER 12
 enum {
     VR_M, VR_L, VR_J, VR_G, VR_D, VR_X0, VR_Y0, VR_PHI0, VR_VX0, VR_VY0, VR_OMEGA0, VR_LX, VR_LY,
     VR_PX, VR_PY, VR_VX, VR_VY, VR_AX, VR_AY, VR_FAIL, VR_NSTEPS, NREAL
 };
 #define NINPUT 2
 #define INPUT_VRS {VR_LX, VR_LY}
-#define FAIL_TIME_VR VR_FAIL
+#define MODEL_FIELDS(X) LINK2_FIELDS(X) X(VR_LX, ux) X(VR_LY, uy) /* besides the links' common ones (link.h) */
 
 typedef struct {
-    double m, l, J, g, d, x0, y0, phi0, vx0, vy0, omega0, lx, ly, fail, nsteps;
+    double m, l, J, g, d, x0, y0, phi0, vx0, vy0, omega0, ux, uy, fail, nsteps; /* (ux, uy): the joint force */
     double z[6]; /* x, y, phi, vx, vy, omega */
 } Model;
 
-void model_defaults(Model *m);
-void model_initialize(Model *m);
-double model_get(const Model *m, unsigned vr);
-int model_set(Model *m, unsigned vr, double value);
-void model_step(Model *m, const double *der, int max_order, double h);
+#include "unit.h"
 #endif
