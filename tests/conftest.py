@@ -10,3 +10,43 @@ import os
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 os.environ.setdefault("MPLBACKEND", "Agg")
+
+
+# -- distribution over the xdist workers -------------------------------------------------------------
+# pyproject's addopts run the suite with `--dist loadfile --no-loadscope-reorder`: every test file is one
+# work unit (its module fixtures built once), handed out in the order the workers collected them.  This
+# hook orders the files longest first, so that the few long ones (Snakemake runs, the CI convergence
+# datasets, numba compilation) start at once on different workers and the many short ones fill in at the
+# end; xdist's own order (most tests first) started them last, leaving one worker alone with them.
+# (--dist loadgroup cannot be used: with pytest 9 its group names do not reach the node ids.)
+#: seconds of one core per file, measured (pytest -n 0 --durations, rounded); a file not listed counts
+#: 0.05 s a test.  Only the order matters: a wrong number costs some balance, never a test.
+FILE_SECONDS = {
+    "tests/test_workflow_faults.py": 55,  # a real run of one figure, then one per fault case
+    "tests/test_stability_workflow.py": 40,  # some 25 Snakemake runs, one real
+    "tests/test_convergence_claims.py": 40,  # the CI convergence datasets (module fixture)
+    "tests/test_pendulum_compiled.py": 25,  # numba compiles the kernels twice in fresh processes
+    "tests/test_engine.py": 19,
+    "tests/test_limits.py": 9,
+    "tests/test_claims_mechanisms.py": 7,
+    "tests/test_convergence_workflow.py": 6,
+    "tests/test_report_browser.py": 5,
+    "tests/test_pendulum.py": 5,
+    "tests/test_schemes_workflow.py": 5,
+}
+
+
+def _file_of(item):
+    return item.nodeid.split("::", 1)[0]
+
+
+def pytest_collection_modifyitems(config, items):
+    if not hasattr(config, "workerinput"):  # an xdist worker; the order of a run without xdist is kept
+        return
+    count, first = {}, {}
+    for i, item in enumerate(items):
+        count[_file_of(item)] = count.get(_file_of(item), 0) + 1
+        first.setdefault(_file_of(item), i)
+    seconds = {f: FILE_SECONDS.get(f, 0.05 * n) for f, n in count.items()}
+    # longest first; a file's tests stay together and in their order
+    items.sort(key=lambda item: (-seconds[_file_of(item)], first[_file_of(item)]))
