@@ -53,7 +53,11 @@ def test_example_scene_is_valid_and_runs(capsys, tmp_path, scene):
     ds = open_dataset(out)
     assert ds.attrs["status"] == "completed"
     assert np.all(np.isfinite(ds["position"].values))
-    assert np.max(np.abs(ds["gap"].values)) < 1e-3  # the joint holds (to the method's drift)
+    gap = np.abs(ds["gap"].values)
+    if scene.stem == "two_mass_unstable":  # unstable by design (rho = 1.13 per macro step): the gap grows
+        assert gap[-5:].max() > 10 * gap[1:6].max()
+    else:
+        assert gap.max() < 1e-3  # the joint holds (to the method's drift)
 
 
 def test_dataset_contents(capsys, tmp_path):
