@@ -41,7 +41,7 @@ def _file_of(item):
 
 
 def pytest_collection_modifyitems(config, items):
-    if not hasattr(config, "workerinput"):  # an xdist worker; the order of a run without xdist is kept
+    if not hasattr(config, "workerinput"):  # not an xdist worker: a run without xdist keeps its order
         return
     count, first = {}, {}
     for i, item in enumerate(items):
