@@ -213,12 +213,12 @@ def _schema(part: str) -> dict:
     return copy.deepcopy(_parsed_schema(part))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _parsed_schema(part: str) -> dict:
     return yaml.safe_load((ROOT / "workflow" / "schemas" / f"{part}.schema.yaml").read_text())
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _schema_file(part: str, text: str) -> Path:
     tmp = Path(tempfile.mkdtemp(prefix="icosim-schema-"))
     atexit.register(shutil.rmtree, tmp, ignore_errors=True)

@@ -299,7 +299,7 @@ def _paths(obj, prefix=()):
     yield prefix
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _stability_config():
     """config/stability.yaml's stability part, read once (each example changes a deep copy)."""
     import yaml
