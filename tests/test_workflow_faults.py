@@ -204,6 +204,18 @@ def test_a_full_disk_is_a_clear_error_and_leaves_no_dataset(small_disk):
 
 
 # -- the command line, interrupted ---------------------------------------------------------------------
+def _wait_for_cpu(proc, seconds: float, timeout: float = 300.0):
+    """Until ``proc`` has used ``seconds`` of CPU (its own, from /proc) or ended: a wall-clock sleep is too
+    short on a loaded machine, where the imports alone can take longer."""
+    tick = os.sysconf("SC_CLK_TCK")
+    deadline = time.monotonic() + timeout
+    while proc.poll() is None and time.monotonic() < deadline:
+        fields = Path(f"/proc/{proc.pid}/stat").read_text().rsplit(")", 1)[1].split()
+        if (int(fields[11]) + int(fields[12])) / tick >= seconds:  # utime + stime
+            return
+        time.sleep(0.05)
+
+
 @pytest.mark.parametrize(
     "args",
     [
@@ -228,7 +240,7 @@ def test_sigint_leaves_no_partial_output(tmp_path, args):
         text=True,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
-    time.sleep(3.0)  # past the imports, inside the computation
+    _wait_for_cpu(proc, 2.0)  # past the imports (about 1 CPU-s), inside the computation, however loaded the machine
     assert proc.poll() is None, "finished before it could be interrupted"
     proc.send_signal(signal.SIGINT)
     stdout, stderr = proc.communicate(timeout=60)
