@@ -2,17 +2,15 @@
 provenance and counters; ``--json`` prints a summary."""
 
 import json
-import shutil
 
 import numpy as np
 import pytest
 import yaml
-from helpers import ROOT
+from helpers import ROOT, skip_without_c_toolchain
 
 pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
 pytest.importorskip("jsonschema", reason="scene files are checked with jsonschema (the fmi extra)")
-if shutil.which("cmake") is None or (shutil.which("cc") or shutil.which("gcc")) is None:
-    pytest.skip("building the test units needs CMake and a C compiler", allow_module_level=True)
+skip_without_c_toolchain()
 
 from icosim.cli import main  # noqa: E402
 from icosim.fmi.scene import load_scene  # noqa: E402

@@ -1,17 +1,15 @@
 """Bad FMU scenes: exit status 2 and one line naming the file, the unit and the key, before any work; a unit
 that refuses a step stops the run naming the unit, the macro step and the time, and no dataset is written."""
 
-import shutil
 import zipfile
 
 import pytest
 import yaml
-from helpers import ROOT
+from helpers import ROOT, skip_without_c_toolchain
 
 pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
 pytest.importorskip("jsonschema", reason="scene files are checked with jsonschema (the fmi extra)")
-if shutil.which("cmake") is None or (shutil.which("cc") or shutil.which("gcc")) is None:
-    pytest.skip("building the test units needs CMake and a C compiler", allow_module_level=True)
+skip_without_c_toolchain()
 
 from icosim.cli import main  # noqa: E402
 from icosim.fmi.build import build_unit  # noqa: E402

@@ -2,16 +2,13 @@
 FMI 3.0 has no input derivatives, so it takes the sub-step route: bit for bit what the FMI 2.0 unit does on that
 route, and coupled with the FMI 2.0 unit it follows the built-in model to second order in the sub-step."""
 
-import shutil
-
 import numpy as np
 import pytest
 import yaml
-from helpers import ROOT
+from helpers import ROOT, skip_without_c_toolchain
 
 pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
-if shutil.which("cmake") is None or (shutil.which("cc") or shutil.which("gcc")) is None:
-    pytest.skip("building the test units needs CMake and a C compiler", allow_module_level=True)
+skip_without_c_toolchain()
 
 from icosim.cli import main  # noqa: E402
 from icosim.fmi.run import run_scene  # noqa: E402

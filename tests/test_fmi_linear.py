@@ -4,15 +4,12 @@ decomposition), the growth per macro step of an unstable scene equal to the spec
 The test units are built from fmus/ with fmpy (CMake and a C compiler); without them the tests are skipped.
 """
 
-import shutil
-
 import numpy as np
 import pytest
-from helpers import ROOT
+from helpers import ROOT, skip_without_c_toolchain
 
 fmpy = pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
-if shutil.which("cmake") is None or (shutil.which("cc") or shutil.which("gcc")) is None:
-    pytest.skip("building the test units needs CMake and a C compiler", allow_module_level=True)
+skip_without_c_toolchain()
 
 from icosim.engine.linear_problem import LinearCosimulation  # noqa: E402
 from icosim.engine.macrostep import simulate  # noqa: E402

@@ -2,16 +2,13 @@
 in the plane, two components per coupling variable): the same joint trajectory and joint force as the built-in
 pendulum (icosim.pendulum.problem, Radau IIA at tolerance 1e-10) through the same macro step."""
 
-import shutil
-
 import numpy as np
 import pytest
 import yaml
-from helpers import ROOT
+from helpers import ROOT, skip_without_c_toolchain
 
 pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
-if shutil.which("cmake") is None or (shutil.which("cc") or shutil.which("gcc")) is None:
-    pytest.skip("building the test units needs CMake and a C compiler", allow_module_level=True)
+skip_without_c_toolchain()
 
 from icosim.cli import main  # noqa: E402
 from icosim.engine.macrostep import macro_step, simulate  # noqa: E402

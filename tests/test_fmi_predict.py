@@ -2,15 +2,13 @@
 rounding) and the spectral radius of the scene's coupling for every scheme, as for the parameters typed in."""
 
 import json
-import shutil
 
 import pytest
 import yaml
-from helpers import ROOT
+from helpers import ROOT, skip_without_c_toolchain
 
 pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
-if shutil.which("cmake") is None or (shutil.which("cc") or shutil.which("gcc")) is None:
-    pytest.skip("building the test units needs CMake and a C compiler", allow_module_level=True)
+skip_without_c_toolchain()
 
 from icosim.cli import main  # noqa: E402
 from icosim.engine.model import PhysicalModel  # noqa: E402

@@ -2,17 +2,14 @@
 with the C unit.  It cannot interpolate inputs, so it gets the coupling polynomial as sub-steps: the run follows
 the built-in model to second order in the sub-step."""
 
-import shutil
-
 import numpy as np
 import pytest
 import yaml
-from helpers import ROOT
+from helpers import ROOT, skip_without_c_toolchain
 
 pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
 pytest.importorskip("pythonfmu", reason="the Python unit is exported with pythonfmu (the fmi extra)")
-if shutil.which("cmake") is None or (shutil.which("cc") or shutil.which("gcc")) is None:
-    pytest.skip("building the C test unit needs CMake and a C compiler", allow_module_level=True)
+skip_without_c_toolchain()
 
 from icosim.engine.linear_problem import LinearCosimulation  # noqa: E402
 from icosim.engine.macrostep import simulate  # noqa: E402

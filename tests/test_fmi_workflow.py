@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import xarray as xr
 import yaml
-from helpers import ROOT, copy_workflow, scheduled_jobs, snakemake
+from helpers import ROOT, c_toolchain_present, copy_workflow, scheduled_jobs, snakemake
 
 from icosim.claims.core import parse_claims
 from icosim.claims.registry import CHECKS, evaluate
@@ -32,7 +32,7 @@ def can_build():
         import fmpy  # noqa: F401
     except ImportError:
         return False
-    return shutil.which("cmake") is not None and (shutil.which("cc") or shutil.which("gcc")) is not None
+    return c_toolchain_present()
 
 
 needs_units = pytest.mark.skipif(not can_build(), reason="running scenes needs fmpy, CMake and a C compiler")
