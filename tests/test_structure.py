@@ -162,7 +162,7 @@ def test_files_hold_one_idea():
 
 def test_claims_machinery_knows_no_part():
     imported = _imports(PACKAGE / "claims" / "core.py")
-    assert imported <= {"icosim.errors", "icosim.io.netcdf", "icosim.io.jsonio"}, imported
+    assert imported <= {"icosim.errors", "icosim.io.netcdf", "icosim.io.jsonio", "icosim.io.yamlio"}, imported
     assert "<" not in (PACKAGE / "claims" / "core.py").read_text().split('"""', 2)[2].replace("<=", "")  # no HTML
 
 
@@ -218,6 +218,37 @@ def test_an_edited_module_is_read_again(tmp_path):
     assert [p.name for p in module_closure(["icosim.a"], tmp_path)] == ["__init__.py", "a.py", "b.py"]
     (pkg / "a.py").write_text("from . import b, c\n")
     assert [p.name for p in module_closure(["icosim.a"], tmp_path)] == ["__init__.py", "a.py", "b.py", "c.py"]
+
+
+def test_the_imports_kept_across_processes_follow_the_text(tmp_path):
+    """What a source imports is kept by its text in the user's cache (Snakemake reads the workflow in
+    every process): a second process parses nothing, an edited file is parsed again, a broken cache
+    file is ignored."""
+    pkg = tmp_path / "tree" / "icosim"
+    pkg.mkdir(parents=True)
+    for name, text in (("__init__.py", ""), ("b.py", ""), ("c.py", ""), ("a.py", "from . import b\n")):
+        (pkg / name).write_text(text)
+    env = {"PYTHONPATH": str(SRC), "PATH": "", "XDG_CACHE_HOME": str(tmp_path / "cache")}
+
+    def closure(parse_allowed=True):
+        code = (
+            "import ast, json, sys\n"
+            "from icosim.sources import module_closure\n"
+            + ("" if parse_allowed else "ast.parse = None\n")
+            + f"print(json.dumps([p.name for p in module_closure(['icosim.a'], {str(tmp_path / 'tree')!r})]))"
+        )
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+        return json.loads(out.stdout) if out.returncode == 0 else "failed"
+
+    assert closure() == ["__init__.py", "a.py", "b.py"]
+    assert closure(parse_allowed=False) == ["__init__.py", "a.py", "b.py"]
+    (pkg / "a.py").write_text("from . import b, c\n")
+    assert closure(parse_allowed=False) == "failed"  # a new text is parsed, never looked up by its name
+    assert closure() == ["__init__.py", "a.py", "b.py", "c.py"]
+    (cache_file,) = (tmp_path / "cache" / "icosim").glob("source-imports-*.json")
+    cache_file.write_text("{broken")
+    (pkg / "a.py").write_text("from . import c\n")
+    assert closure() == ["__init__.py", "a.py", "c.py"]
 
 
 def _loaded_after(statement: str, modules) -> list:

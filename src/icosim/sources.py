@@ -18,6 +18,10 @@ The pendulum's claims rest on its check kinds, not on its co-simulation:
 from __future__ import annotations
 
 import ast
+import hashlib
+import json
+import os
+import tempfile
 from functools import cache
 from pathlib import Path
 
@@ -39,12 +43,13 @@ def _package_of(name: str, path: Path) -> str:
     return name if path.name == "__init__.py" else name.rpartition(".")[0]
 
 
-def _imported(tree, package: str, root: Path) -> set[str]:
-    """Module names (of this package) imported anywhere in ``tree``; ``package`` resolves relative imports."""
-    out = set()
+def _import_names(tree, package: str) -> tuple[list[str], list[str]]:
+    """``(names, candidates)`` of the imports anywhere in ``tree``: the modules named, and the
+    ``package.name`` of each ``from package import name`` (a module if such a file exists)."""
+    names, candidates = set(), set()
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
-            out.update(alias.name for alias in node.names)
+            names.update(alias.name for alias in node.names)
         elif isinstance(node, ast.ImportFrom):
             if node.level:
                 parts = package.split(".")
@@ -52,11 +57,19 @@ def _imported(tree, package: str, root: Path) -> set[str]:
                 base = f"{base}.{node.module}" if node.module else base
             else:
                 base = node.module or ""
-            out.add(base)
-            for alias in node.names:  # `from package import module`
-                if module_path(f"{base}.{alias.name}", root) is not None:
-                    out.add(f"{base}.{alias.name}")
-    return {n for n in out if n == PACKAGE or n.startswith(PACKAGE + ".")}
+            names.add(base)
+            candidates.update(f"{base}.{alias.name}" for alias in node.names)
+    return sorted(_ours(names)), sorted(_ours(candidates))
+
+
+def _ours(names):
+    return {n for n in names if n == PACKAGE or n.startswith(PACKAGE + ".")}
+
+
+def _imported(names: tuple[list[str], list[str]], root: Path) -> set[str]:
+    """Module names (of this package) among ``names`` (:func:`_import_names`), the candidates that are modules."""
+    plain, candidates = names
+    return set(plain) | {c for c in candidates if module_path(c, root) is not None}
 
 
 def _with_parents(name: str) -> list[str]:
@@ -86,16 +99,68 @@ def module_closure(modules, root) -> list[Path]:
 
 @cache
 def _module_imports(name: str, path: Path, root: Path, mtime_ns: int, size: int) -> frozenset[str]:
-    """_imported of one module file, parsed once per version of the file.
+    """The package modules one module file imports, read once per version of the file.
 
     The workflow asks for the closure of every rule's script, and those closures share most
-    modules: without the cache Snakemake's start parsed about 1200 files (5 CPU-s) for 35 scripts.
+    modules: without this cache Snakemake's start parsed about 1200 files (5 CPU-s) for 35 scripts.
     """
-    tree = ast.parse(path.read_text(), filename=str(path))
-    return frozenset(_imported(tree, _package_of(name, path), root))
+    return frozenset(_imported(_source_imports(path, _package_of(name, path)), root))
 
 
 def script_closure(script, root) -> list[Path]:
     """Package files a script (not itself part of the package) imports, directly or indirectly."""
-    tree = ast.parse(Path(script).read_text(), filename=str(script))
-    return module_closure(sorted(_imported(tree, "", Path(root))), root)
+    return module_closure(sorted(_imported(_source_imports(Path(script), ""), Path(root))), root)
+
+
+# -- the imports of a source text, kept across processes ----------------------------------------
+# Snakemake reads the workflow again in every process that runs it (each test's dry run, each
+# cluster job), and parsing the package's sources is a third of that.  What a text imports depends
+# on the text and its package only, so it is kept by the text's SHA-256 in one JSON file of the
+# user's cache directory; any problem with that file means parsing as if it were not there.
+_CACHE_VERSION = 1
+
+
+def _cache_file() -> Path:
+    base = os.environ.get("XDG_CACHE_HOME") or Path(os.path.expanduser("~"), ".cache")
+    return Path(base) / "icosim" / f"source-imports-v{_CACHE_VERSION}.json"
+
+
+@cache
+def _disk_cache() -> dict:
+    try:
+        data = json.loads(_cache_file().read_text())
+        return data if isinstance(data, dict) else {}
+    except (OSError, ValueError):
+        return {}
+
+
+def _source_imports(path: Path, package: str) -> tuple[list[str], list[str]]:
+    """:func:`_import_names` of the file at ``path`` (``package`` resolves its relative imports)."""
+    text = path.read_bytes()
+    key = f"{package}:{hashlib.sha256(text).hexdigest()}"
+    known = _disk_cache().get(key)
+    if isinstance(known, list) and len(known) == 2 and all(isinstance(v, list) for v in known):
+        return known[0], known[1]
+    names = _import_names(ast.parse(text, filename=str(path)), package)
+    _remember(key, names)
+    return names
+
+
+def _remember(key: str, names) -> None:
+    """Add one entry to the cache file: read, merge, replace atomically (a concurrent writer may win)."""
+    cached = _disk_cache()
+    cached[key] = list(names)
+    target = _cache_file()
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            on_disk = json.loads(target.read_text())
+            cached.update((k, v) for k, v in on_disk.items() if k not in cached)
+        except (OSError, ValueError, AttributeError):
+            pass
+        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=target.name, suffix=".part")
+        with os.fdopen(fd, "w") as fh:
+            json.dump(cached, fh)
+        os.replace(tmp, target)
+    except OSError:
+        pass

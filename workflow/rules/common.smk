@@ -6,7 +6,6 @@ import sys
 import tempfile
 from pathlib import Path
 
-import yaml
 from snakemake.exceptions import WorkflowError
 from snakemake.logging import logger
 from snakemake.utils import validate
@@ -40,6 +39,7 @@ from icosim.engine.schemes import SCHEMES  # noqa: E402
 from icosim.labels import figure_label  # noqa: E402
 from icosim.sources import module_closure, script_closure  # noqa: E402
 from icosim.io.integrity import quarantine_corrupt, remove_stale_parts  # noqa: E402
+from icosim.io.yamlio import load_yaml  # noqa: E402
 
 # A dataset whose SHA-256 no longer matches the one recorded when it was written is set aside
 # (x.nc -> x.nc.corrupt) before the DAG is built, so this run computes it again instead of trusting it.
@@ -61,7 +61,7 @@ def validate_part(part_config, schema):
     (icosim.engine.schema)."""
     path = Path(workflow.basedir) / "workflow" / "schemas" / schema
     with open(path) as fh:
-        filled = with_registries(yaml.safe_load(fh))
+        filled = with_registries(load_yaml(fh))
     with tempfile.TemporaryDirectory() as tmp:
         materialised = Path(tmp) / path.name
         materialised.write_text(json.dumps(filled))

@@ -243,10 +243,10 @@ def _check_parameters(label: str, kind: str, spec: CheckKind, params: dict):
 
 def load_claims(path, checks: Mapping[str, CheckKind], key: str = "claims") -> list[Claim]:
     """Read claims from a YAML file whose top-level ``key`` holds the list."""
-    import yaml
+    from ..io.yamlio import load_yaml
 
     with open(path) as fh:
-        doc = yaml.safe_load(fh)
+        doc = load_yaml(fh)
     if not isinstance(doc, dict) or key not in doc:
         raise ParameterError(f"{path}: expected a top-level key {key!r}")
     unknown = sorted(set(doc) - {key})

@@ -21,8 +21,7 @@ def case_label(case: dict) -> str:
 
 def scene_files(cfg: dict, root) -> dict:
     """Scene name -> its file (relative to ``root``), each read and checked against the scene schema."""
-    import yaml
-
+    from ..io.yamlio import load_yaml
     from .scene import _validate
 
     root = Path(root)
@@ -31,18 +30,18 @@ def scene_files(cfg: dict, root) -> dict:
         path = Path(cfg["scene_dir"]) / f"{name}.yaml"
         if not (root / path).is_file():
             raise SceneError(f"fmi.scenes: {name}: no scene file {path}")
-        _validate(path, yaml.safe_load((root / path).read_text()))
+        _validate(path, load_yaml((root / path).read_text()))
         out[name] = str(path)
     return out
 
 
 def scene_units(scene_path, root) -> list:
     """The unit sources a scene names (source directories and pythonfmu scripts), relative to ``root``."""
-    import yaml
+    from ..io.yamlio import load_yaml
 
     root = Path(root).resolve()
     scene_path = root / scene_path
-    data = yaml.safe_load(scene_path.read_text())
+    data = load_yaml(scene_path.read_text())
     out = []
     for sub in data["subsystems"].values():
         source = (scene_path.parent / sub["fmu"]).resolve()

@@ -153,9 +153,11 @@ def load_scene(path) -> Scene:
     the key and what is allowed."""
     import yaml
 
+    from ..io.yamlio import load_yaml
+
     path = Path(path)
     try:
-        data = yaml.safe_load(path.read_text())
+        data = load_yaml(path.read_text())
     except FileNotFoundError:
         raise SceneError(f"{path}: no such scene file") from None
     except (OSError, UnicodeDecodeError) as exc:

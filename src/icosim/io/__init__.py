@@ -9,6 +9,8 @@ module                      holds
                             aside, stale temporaries removed
 :mod:`.jsonio`              strict JSON (no NaN or Infinity) for every file and
                             answer icosim writes
+:mod:`.yamlio`              safe YAML through libyaml where PyYAML has it (the
+                            configuration, claims and scene files)
 ==========================  ===================================================
 
 The package imports none of its modules.  (``icosim.sources``, the modules a job's script
