@@ -160,17 +160,17 @@ def test_failed_integration_is_not_counted_as_unstable(monkeypatch):
     """A subsystem integration that fails is a failed run (not diverged): the claim gets no pass from it.
 
     weighted/ff/k = 2 is expected unstable, so counting a solver failure as a divergence would make it pass."""
-    compiled_link = icosim.pendulum.problem.CompiledLink  # the links' integrator (icosim.pendulum.integrator.compiled)
-    real_radau, calls = compiled_link.radau, []
+    # a link's compiled macro step (icosim.pendulum.integrator.compiled), as the problem calls it
+    real_step, calls = icosim.pendulum.problem._link_step, []
     fail_at_step = 11  # four integrations per macro step (predictor+sensitivities and corrector, two links)
 
-    def failing_radau(*args, **kwargs):
+    def failing_step(*args, **kwargs):
         calls.append(1)
         if len(calls) == 4 * (fail_at_step - 1) + 1:
             raise IntegrationError("injected failure")
-        return real_radau(*args, **kwargs)
+        return real_step(*args, **kwargs)
 
-    monkeypatch.setattr(compiled_link, "radau", failing_radau)
+    monkeypatch.setattr(icosim.pendulum.problem, "_link_step", failing_step)
     t_end = 0.05
     res = _run("weighted", "ff", 2, t_end=t_end)
     assert res.status == "failed" and res.failed and not res.diverged

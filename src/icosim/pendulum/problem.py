@@ -26,7 +26,7 @@ from ..engine.lagrange import (
 from ..engine.problem import CosimulationProblem
 from ..errors import ParameterError
 from .conditions import CONDITIONS, check_decomposition
-from .integrator.compiled import CompiledLink
+from .integrator.compiled import STATS, CompiledLink, _link_outputs, _link_step, link_failure
 from .integrator.radau import _fd_jacobian, radau_batch
 from .links import Link1, Link2
 from .manifold import project_state
@@ -48,7 +48,8 @@ class PendulumCosimulation(CosimulationProblem):
     multiplier for a kinematically driven one).
     """
 
-    #: Integrate the links with the compiled transcription of icosim.pendulum.integrator.radau (:mod:`.integrator.compiled`);
+    #: Integrate the links with the compiled transcription of icosim.pendulum.integrator.radau (:mod:`.integrator.compiled`):
+    #: one call per link integration forms its input polynomial, integrates and evaluates its outputs;
     #: False: with :func:`icosim.pendulum.integrator.radau.radau_batch` on the links' closures (the reference, for comparisons).
     compiled = True
 
@@ -77,15 +78,18 @@ class PendulumCosimulation(CosimulationProblem):
         self.compiled_links = tuple(CompiledLink(link) for link in self.links)
         # the two components of the coupling variable driving each link
         self.inputs = tuple(slice(2 * j, 2 * j + 2) for j in dec.inputs)
+        self._cols = tuple(2 * j for j in dec.inputs)  # their first column in e
+        self._n_coupling = len(coupling_variables(dec))
         # monomial coefficients of the interpolation polynomial (Eq. 11) in tau = (t - T_N)/H
         self.C_corr = np.array(monomial_coefficients(self.corr_nodes), dtype=float)
         self._cache = None
-        self._jac0 = {}
-        # split: integrations that took more than one step or rejected one (docs/pendulum.md)
-        self.stats = {"integrations": 0, "steps": 0, "rejected": 0, "fev": 0, "split": 0}
-        # Jacobians of the links' right-hand sides (Radau's own and the shared first-step one) and the
-        # right-hand side evaluations spent on the shared ones (not in stats["fev"])
-        self.jacobian_stats = {"jev": 0, "fev": 0}
+        self._extrapolated = (None, None)  # (history, e_p): macro_step and both predictors ask for it
+        # the Newton matrix of the first Radau step, per link: the state it belongs to and the matrix
+        self._jac0 = [None, None]
+        self._jac0_matrix = tuple(np.zeros((link.n, link.n)) for link in self.links)
+        self._tolerances = np.array([rtol, atol, newton_tol], dtype=float)
+        # the counters of stats and jacobian_stats (integrator.compiled.STATS), which the kernel adds to
+        self._counts = np.zeros(len(STATS), dtype=np.int64)
 
     @classmethod
     def check_decomposition(cls, decomposition):
@@ -93,16 +97,32 @@ class PendulumCosimulation(CosimulationProblem):
         check_decomposition(decomposition)
 
     @property
+    def stats(self) -> dict:
+        """Link integrations, their accepted and rejected Radau steps, right-hand side evaluations, and
+        ``split``: integrations that took more than one step or rejected one (docs/pendulum.md)."""
+        c = self._counts.tolist()
+        return {"integrations": c[0], "steps": c[1], "rejected": c[2], "fev": c[3], "split": c[4]}
+
+    @property
+    def jacobian_stats(self) -> dict:
+        """Jacobians of the links' right-hand sides (Radau's own and the shared first-step one) and the
+        right-hand side evaluations spent on the shared ones (not in ``stats["fev"]``)."""
+        c = self._counts.tolist()
+        return {"jev": c[5], "fev": c[6]}
+
+    @property
     def n_coupling(self) -> int:
         """Coupling variables per time point: two per joint quantity (:func:`~icosim.pendulum.names.coupling_variables`)."""
-        return len(coupling_variables(self.decomposition))
+        return self._n_coupling
 
     # -- helpers --------------------------------------------------------------
     def _split(self, state):
         return state[:2], state[2:]
 
     def _integrate(self, i, state, samples):
-        """Integrate link ``i`` over one macro step for a batch of input samples.
+        """Integrate link ``i`` over one macro step for a batch of input samples, with
+        :func:`~.integrator.radau.radau_batch` on the link's closures (the path without :attr:`compiled`;
+        :meth:`_step_link` is the compiled one).
 
         ``samples`` (B, k+1, n_u) at the corrector nodes ``1, 0, ..., -k+1``.
         Returns end states (B, n) and outputs (B, 4, 2).
@@ -111,31 +131,62 @@ class PendulumCosimulation(CosimulationProblem):
         coef = np.einsum("mj,bju->bmu", self.C_corr, samples)
         y0 = np.broadcast_to(self._split(state)[i], (samples.shape[0], link.n))
         options = dict(rtol=self.rtol, atol=self.atol, newton_tol=self.newton_tol)
-        if self.compiled:
-            kernel = self.compiled_links[i]
-            jacobian = lambda: kernel.fd_jacobian(coef[:1], self.H, 0.0, y0[:1])[0]
-            integrate = lambda jac0: kernel.radau(coef, self.H, 0.0, self.H, y0, jac0=jac0, **options)
-        else:
-            fun = link.rhs(coef, self.H)
-            jacobian = lambda: _fd_jacobian(fun, 0.0, y0[:1], fun(0.0, y0[:1]))[0]
-            integrate = lambda jac0: radau_batch(fun, 0.0, self.H, y0, jac0=jac0, **options)
+        fun = link.rhs(coef, self.H)
+        jacobian = lambda: _fd_jacobian(fun, 0.0, y0[:1], fun(0.0, y0[:1]))[0]
+        integrate = lambda jac0: radau_batch(fun, 0.0, self.H, y0, jac0=jac0, **options)
         # The Newton matrix of the first Radau step is shared by all integrations
         # of this link from this state (predictor, sensitivities, corrector).
-        if self._jac0.get(i, (None,))[0] is not state:
-            self._jac0[i] = (state, jacobian())
-            self.jacobian_stats["jev"] += 1
-            self.jacobian_stats["fev"] += 2
-        r = integrate(self._jac0[i][1])
+        counts = self._counts
+        if self._jac0[i] is not state:
+            self._jac0[i] = state
+            self._jac0_matrix[i][...] = jacobian()
+            counts[5] += 1
+            counts[6] += 2
+        r = integrate(self._jac0_matrix[i])
         self.work.subsystem_integrations += 1
-        st = self.stats
-        st["integrations"] += 1
-        st["steps"] += r.n_steps
-        st["rejected"] += r.n_rejected
-        st["fev"] += r.n_fev
-        st["split"] += r.n_steps > 1 or r.n_rejected > 0
-        self.jacobian_stats["jev"] += r.n_jev
+        counts[0] += 1
+        counts[1] += r.n_steps
+        counts[2] += r.n_rejected
+        counts[3] += r.n_fev
+        counts[4] += r.n_steps > 1 or r.n_rejected > 0
+        counts[5] += r.n_jev
         u1 = np.add.reduce(coef, axis=1)  # input at tau = 1
         return r.y, link.outputs(r.y, r.f, u1)
+
+    def _step_link(self, i, state, e, history, perturb):
+        """Link ``i`` over one macro step from ``state`` in one compiled call (:func:`~.integrator.compiled._link_step`):
+        the samples ``e``, ``history[0..k-1]`` of its input (with ``perturb``, two more members whose
+        ``e`` is moved by the forward-difference steps), as :meth:`_integrate` does with
+        :meth:`corrector_samples` (and :meth:`_respond`'s batch).  Returns end states (B, n) and outputs (B, 4, 2)."""
+        if history.shape[0] < self.k:
+            raise ValueError(f"need {self.k} past samples of the coupling variables, got {history.shape[0]}")
+        link = self.compiled_links[i]
+        fresh = self._jac0[i] is not state
+        if fresh:
+            self._jac0[i] = state
+        start = state[:2] if i == 0 else state[2:]
+        y, out, status, t, h_abs = _link_step(
+            link.link_id,
+            link.kind_id,
+            link.par,
+            self.H,
+            self.C_corr,
+            _floats(e),
+            _floats(history),
+            self._cols[i],
+            perturb,
+            self.fd_step,
+            _floats(start),
+            self._jac0_matrix[i],
+            fresh,
+            self._tolerances,
+            100000,
+            self._counts,
+        )
+        if status:
+            raise link_failure(status, t, h_abs, 100000)
+        self.work.subsystem_integrations += 1
+        return y, out
 
     def _respond(self, i, state, history, e, fixed=None):
         """Outputs of link ``i`` at ``e`` and, per coupling variable ``j`` driving it, at ``e + h_j``.
@@ -146,10 +197,22 @@ class PendulumCosimulation(CosimulationProblem):
         there (algebraic gradients of a leading link, no integration).
         Returns ``(end_i, y_i, {j: y_i(e + h_j)})`` (``end_i`` the end state of the base member).
         """
+        sl = self.inputs[i]
+        if self.compiled:
+            col = self._cols[i]
+            if fixed is None:
+                ends, y = self._step_link(i, state, e, history, True)
+                end = ends[0]
+            else:
+                link = self.compiled_links[i]
+                end = fixed
+                y = _link_outputs(
+                    link.link_id, link.kind_id, link.par, self.H, _floats(fixed), _floats(e), col, True, self.fd_step
+                )
+            return end, y[0], {col: y[1], col + 1: y[2]}
         base = self.corrector_samples(history, e)
         n_e = self.n_coupling
         h = self.fd_step * np.maximum(1.0, np.abs(e))
-        sl = self.inputs[i]
         idx = np.arange(n_e)[sl]
         batch = np.broadcast_to(base, (1 + idx.size,) + base.shape).copy()
         batch[1 + np.arange(idx.size), 0, idx] += h[idx]
@@ -164,7 +227,9 @@ class PendulumCosimulation(CosimulationProblem):
         """Outputs at ``e`` and ``d residuals / d e`` by forward differences.
 
         ``responses[i]`` (optional) is link ``i``'s :meth:`_respond` at ``e``
-        already computed (the predictor's batch).
+        already computed (the predictor's batch).  The residuals of the base
+        outputs and of every perturbed ``e_j`` are formed in one batch: the
+        same elementwise arithmetic as one call per member.
         """
         n_e = self.n_coupling
         h = self.fd_step * np.maximum(1.0, np.abs(e))
@@ -175,16 +240,14 @@ class PendulumCosimulation(CosimulationProblem):
             ys.append(y_i)
             perturbed.append(pert_i)
         y0 = np.stack(ys)
-        r0 = self.residuals(y0)
-        jac = {key: np.zeros(val.shape + (n_e,)) for key, val in r0.items()}
-        for j in range(n_e):
-            # every link driven by e_j responds (in ff and dd both links are)
-            y = y0.copy()
-            for i in range(2):
-                if j in perturbed[i]:
-                    y[i] = perturbed[i][j]
-            for key, val in self.residuals(y).items():
-                jac[key][..., j] = (val - r0[key]) / h[j]
+        # member 0: the base outputs; member 1 + j: every link driven by e_j responds (in ff and dd both are)
+        Y = np.empty((1 + n_e,) + y0.shape)
+        Y[...] = y0
+        for i in range(2):
+            for j, y_ij in perturbed[i].items():
+                Y[1 + j, i] = y_ij
+        r = self.residuals(Y)
+        jac = {key: ((val[1:] - val[0]) / h[:, None]).T for key, val in r.items()}
         return y0, jac
 
     def _outputs_at(self, i, end, u1):
@@ -198,7 +261,10 @@ class PendulumCosimulation(CosimulationProblem):
     def extrapolate(self, history):
         # The base class's sum, formed as one BLAS dot product: equal up to rounding, and kept so
         # that the pendulum's results stay bitwise those computed before the base class existed.
-        return np.tensordot(self.w_pred, history, axes=(0, 0))
+        # Formed once per history (macro_step and each link's predictor ask for it).
+        if self._extrapolated[0] is not history:
+            self._extrapolated = (history, np.tensordot(self.w_pred, history, axes=(0, 0)))
+        return self._extrapolated[1]
 
     def predict(self, i, state, history, *, final=False):
         """Link ``i`` with the extrapolation polynomial, i.e. the interpolation polynomial through ``e_p``.
@@ -208,7 +274,10 @@ class PendulumCosimulation(CosimulationProblem):
         """
         e_p = self.extrapolate(history)
         if final:
-            end, y = self._integrate(i, state, self.corrector_samples(history, e_p)[None][:, :, self.inputs[i]])
+            if self.compiled:
+                end, y = self._step_link(i, state, e_p, history, False)
+            else:
+                end, y = self._integrate(i, state, self.corrector_samples(history, e_p)[None][:, :, self.inputs[i]])
             return end[0], y[0]
         if self._cache is None or self._cache[0] is not state or self._cache[1] is not history:
             self._cache = (state, history, e_p, [None, None])
@@ -225,12 +294,20 @@ class PendulumCosimulation(CosimulationProblem):
         return self._linearise(state, history, e, fixed, responses)[1]
 
     def correct(self, i, state, history, e_new):
+        if self.compiled:
+            end, y = self._step_link(i, state, e_new, history, False)
+            return end[0], y[0]
         samples = self.corrector_samples(history, e_new)[None]
         end, y = self._integrate(i, state, samples[:, :, self.inputs[i]])
         return end[0], y[0]
 
     def reevaluate(self, i, end, y, e_old, e_new):
         """Link ``i``'s outputs at its fixed end state with the input ``e_new`` at ``T_N+1`` (exact)."""
+        if self.compiled:
+            link = self.compiled_links[i]
+            return _link_outputs(
+                link.link_id, link.kind_id, link.par, self.H, _floats(end), _floats(e_new), self._cols[i], False, 0.0
+            )[0]
         return self._outputs_at(i, end, np.asarray(e_new)[None, self.inputs[i]])[0]
 
     def join(self, ends):
@@ -274,3 +351,9 @@ class PendulumCosimulation(CosimulationProblem):
         self.w_pred = np.array([float(w) for w in lagrange_weights(pred, 1)], dtype=float)
         self.C_corr = np.array(lagrange_coefficients(corr), dtype=float)
         self._cache = None  # the predictor's responses (kept for the Jacobians) belong to the old nodes
+        self._extrapolated = (None, None)  # and so does e_p
+
+
+def _floats(a):
+    """``a`` as a C-contiguous float64 array (itself when it is one): one specialisation of the kernels."""
+    return np.ascontiguousarray(a, dtype=np.float64)

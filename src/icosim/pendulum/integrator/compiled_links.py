@@ -15,7 +15,7 @@ import numpy as np
 
 from ..links import Link1
 
-__all__ = ["FORCE", "KINEMATIC", "link_parameters", "batch_rhs", "member_rhs"]
+__all__ = ["FORCE", "KINEMATIC", "link_parameters", "batch_rhs", "member_rhs", "member_outputs"]
 
 FORCE, KINEMATIC = 0, 1  # the link's kind (links.py: "force" or the kinematically driven one)
 
@@ -79,6 +79,39 @@ def batch_rhs(link, kind, par, H, t, Y, coef, out):
         for v in out[b]:
             finite = finite and np.isfinite(v)
     return finite
+
+
+@numba.njit(cache=True)
+def member_outputs(link, kind, par, y, f, ux, uy, out):
+    """``out`` (4, 2) = ``(P, P', P'', f)`` of the joint point for one member: ``Link1.outputs`` or
+    ``Link2.outputs`` at state ``y`` with ``f = y'`` and the input ``(ux, uy)``, the expressions in
+    the order of links.py (``par`` as for :func:`member_rhs`)."""
+    if link == 1:
+        l1 = par[2]
+        phi, w, alpha = y[0], y[1], f[1]
+        c, s = np.cos(phi), np.sin(phi)  # e = (c, s), its normal (-s, c)
+        out[0, 0], out[0, 1] = l1 * c, l1 * s
+        out[1, 0], out[1, 1] = (l1 * w) * -s, (l1 * w) * c
+        out[2, 0] = (l1 * alpha) * -s - (l1 * (w * w)) * c
+        out[2, 1] = (l1 * alpha) * c - (l1 * (w * w)) * s
+        if kind == FORCE:
+            out[3, 0], out[3, 1] = ux, uy
+        else:  # tangential joint force that realises l1 phi1'' = n1 . a_tilde
+            mu1 = ((par[0] * c - par[1] * w) - par[3] * alpha) / l1
+            out[3, 0], out[3, 1] = mu1 * -s, mu1 * c
+        return
+    l2h, d, m2, g = par[0], par[1], par[2], par[3]
+    phi, w, alpha = y[2], y[5], f[5]
+    c, s = np.cos(phi), np.sin(phi)
+    out[0, 0], out[0, 1] = y[0] - l2h * c, y[1] - l2h * s
+    out[1, 0], out[1, 1] = y[3] - (l2h * w) * -s, y[4] - (l2h * w) * c
+    out[2, 0] = f[3] - l2h * (alpha * -s - (w * w) * c)
+    out[2, 1] = f[4] - l2h * (alpha * c - (w * w) * s)
+    if kind == FORCE:
+        out[3, 0], out[3, 1] = ux, uy
+    else:  # m2 a_S - F_ext
+        out[3, 0] = m2 * f[3] - -d * y[3]
+        out[3, 1] = m2 * f[4] - (-m2 * g - d * y[4])
 
 
 def link_parameters(link) -> np.ndarray:
