@@ -33,16 +33,19 @@ def _force_kinematic(y, d):  # fd: the constraint, and link 2's multiplier balan
 
 
 def _both_kinematic(y, d):  # dd: link 1 moves its joint only along n1; the normal component balances
-    P1 = y[..., 0, 0, :]
-    e1 = P1 / np.linalg.norm(P1, axis=-1, keepdims=True)
-    n1 = np.stack([-e1[..., 1], e1[..., 0]], axis=-1)
-    proj = lambda v: np.sum(e1 * v, axis=-1, keepdims=True)  # noqa: E731
+    P1x, P1y = y[..., 0, 0, 0], y[..., 0, 0, 1]
+    length = np.sqrt(P1x * P1x + P1y * P1y)  # np.linalg.norm's sum of squares, in its order
+    e1x, e1y = P1x / length, P1y / length
+
+    def along_e1(v):
+        return (e1x * v[..., 0] + e1y * v[..., 1])[..., None]
+
     return {
-        "pos": proj(d[..., 0, :]),
-        "vel": proj(d[..., 1, :]),
-        "acc": proj(d[..., 2, :]),
-        # n1 . mu_2 - mu_1 (f_1 = mu_1 n1)
-        "force": -np.sum(n1 * d[..., 3, :], axis=-1, keepdims=True),
+        "pos": along_e1(d[..., 0, :]),
+        "vel": along_e1(d[..., 1, :]),
+        "acc": along_e1(d[..., 2, :]),
+        # n1 . mu_2 - mu_1 (f_1 = mu_1 n1), n1 = (-e1y, e1x)
+        "force": -((-e1y) * d[..., 3, 0] + e1x * d[..., 3, 1])[..., None],
     }
 
 

@@ -239,16 +239,15 @@ class PendulumCosimulation(CosimulationProblem):
             _, y_i, pert_i = got if got is not None else self._respond(i, state, history, e, fixed[i])
             ys.append(y_i)
             perturbed.append(pert_i)
-        y0 = np.stack(ys)
         # member 0: the base outputs; member 1 + j: every link driven by e_j responds (in ff and dd both are)
-        Y = np.empty((1 + n_e,) + y0.shape)
-        Y[...] = y0
+        Y = np.empty((1 + n_e, 2) + ys[0].shape)
         for i in range(2):
+            Y[:, i] = ys[i]
             for j, y_ij in perturbed[i].items():
                 Y[1 + j, i] = y_ij
         r = self.residuals(Y)
         jac = {key: ((val[1:] - val[0]) / h[:, None]).T for key, val in r.items()}
-        return y0, jac
+        return Y[0], jac
 
     def _outputs_at(self, i, end, u1):
         """Outputs of link ``i`` at its end state ``end`` for inputs ``u1`` (B, n_u) at ``T_N+1``."""
@@ -263,7 +262,11 @@ class PendulumCosimulation(CosimulationProblem):
         # that the pendulum's results stay bitwise those computed before the base class existed.
         # Formed once per history (macro_step and each link's predictor ask for it).
         if self._extrapolated[0] is not history:
-            self._extrapolated = (history, np.tensordot(self.w_pred, history, axes=(0, 0)))
+            if history.ndim == 2:  # tensordot's own dot product, (1, k+1) @ (k+1, n_e), without its reshaping
+                e_p = np.dot(self.w_pred[None, :], history).reshape(history.shape[1])
+            else:
+                e_p = np.tensordot(self.w_pred, history, axes=(0, 0))
+            self._extrapolated = (history, e_p)
         return self._extrapolated[1]
 
     def predict(self, i, state, history, *, final=False):
@@ -314,7 +317,7 @@ class PendulumCosimulation(CosimulationProblem):
         return np.concatenate(ends)
 
     def stack(self, ys):
-        return np.stack(ys)
+        return np.array(ys)
 
     def residuals(self, y):
         """Joint constraint on each level (2 rows; both links kinematic: its normal component) and force balance
