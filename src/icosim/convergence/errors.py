@@ -25,12 +25,12 @@ to 2^-40 relative (or is negligible: below 2^-40 of the largest row), and only
 then rounded to float64.  From there float64 carries the error itself, whose
 relative accuracy no longer depends on its size.  The same ``M`` (rounded) and
 ``E`` (rounded) drive the recurrence; their rounding errors are relative to
-the error, not to the state.
+the error, not to the state.  The recurrence is stepped in blocks (:mod:`icosim.convergence.blocks`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -40,8 +40,19 @@ from ..engine.exact import exact_coupling, monolithic_matrix
 from ..engine.schemes import JACOBI
 from ..engine.spectral.certified import MAX_BITS, SpectralCertificate, certify_matrix
 from ..engine.spectral.matrix import amplification_matrix
+from .blocks import BlockErrors, ErrorSeries, error_recurrence, error_recurrences
 
-__all__ = ["ExactExtension", "exact_extension", "local_defect", "Defect", "propagate_errors", "ErrorSeries"]
+__all__ = [
+    "ExactExtension",
+    "exact_extension",
+    "local_defect",
+    "Defect",
+    "error_recurrence",
+    "error_recurrences",
+    "propagate_errors",
+    "BlockErrors",
+    "ErrorSeries",
+]
 
 #: Every row of D is known to this relative accuracy (or is negligible at this level).
 DEFECT_REL_ACCURACY = 2.0**-40
@@ -94,6 +105,32 @@ class Defect:
     certificate: SpectralCertificate
 
 
+#: :func:`_exact_parts` per parameter point, decomposition, k and precision: shared by every method, index
+#: and scheme at that point (the curves of a panel, the panels of a job).
+_EXACT_PARTS: dict = {}
+
+
+def _exact_parts(coefficients, decomposition, k, be):
+    """The coefficients as balls, :func:`exact_extension`, ``W E`` and the midpoints of ``E`` and ``A`` at
+    ``be``'s precision (inside its context), cached: Arb balls are values, and the same inputs at the same
+    precision give the same balls."""
+    try:
+        values = tuple(float(getattr(coefficients, f.name)) for f in fields(coefficients))
+        key = (type(coefficients), values, get_decomposition(decomposition).name, int(k), be.bits)
+    except (TypeError, ValueError):  # not scalar floats: no cache
+        key = None
+    parts = _EXACT_PARTS.get(key) if key is not None else None
+    if parts is None:
+        c = coefficients.map(be.const)
+        ext = exact_extension(c, decomposition, k, be)
+        parts = (c, ext, ext.W @ ext.E, be.mid(ext.E), be.mid(ext.A))
+        if key is not None:
+            if len(_EXACT_PARTS) >= 1024:
+                _EXACT_PARTS.clear()
+            _EXACT_PARTS[key] = parts
+    return parts
+
+
 def local_defect(
     coefficients,
     method,
@@ -120,10 +157,9 @@ def local_defect(
     while True:
         be = Ball(b)
         with be.context():
-            c = coefficients.map(be.const)
+            c, ext, WE, E_mid, A_mid = _exact_parts(coefficients, decomposition, k, be)
             M = amplification_matrix(c, method, decomposition, k, backend=be, scheme=scheme)
-            ext = exact_extension(c, decomposition, k, be)
-            D = M @ ext.W - ext.W @ ext.E
+            D = M @ ext.W - WE
             mid, rad = be.mid(D), be.rad(D)
             size = np.max(np.abs(mid), axis=1)
             floor = DEFECT_REL_ACCURACY * np.max(size)
@@ -138,112 +174,10 @@ def local_defect(
                         f"defect not resolved at {max_bits} bits (max relative radius {np.max(rel):.1e})"
                     )
                 cert = cert or certify_matrix(M, b)
-                return Defect(be.mid(M), mid, be.mid(ext.E), be.mid(ext.A), b, float(np.max(rel)), cert)
+                return Defect(be.mid(M), mid, E_mid.copy(), A_mid.copy(), b, float(np.max(rel)), cert)
         b = min(2 * b, max_bits)
 
 
-class ErrorSeries:
-    """The errors ``eps_0 ... eps_N`` of one run, kept in the block layout they are computed in.
-
-    ``blocks[j, :, b]`` is ``eps`` at step ``b * B + j``.  The metrics of
-    Eq. (72) are sums of squares over step ranges: :meth:`sum_squares` forms
-    them without the (N, n) copy, and :meth:`max_abs` the largest entry;
-    :meth:`array` gives the plain ``(N + 1, n)`` array when one is needed.
-    """
-
-    def __init__(self, blocks: np.ndarray, n_steps: int):
-        self.blocks = blocks
-        self.n_steps = int(n_steps)
-        self.B = blocks.shape[0]
-
-    @classmethod
-    def from_array(cls, errors) -> ErrorSeries:
-        errors = np.asarray(errors, dtype=float)
-        return cls(errors[:, :, None], errors.shape[0] - 1)
-
-    def array(self) -> np.ndarray:
-        n = self.blocks.shape[1]
-        return self.blocks.transpose(2, 0, 1).reshape(-1, n)[: self.n_steps + 1]
-
-    def max_abs(self, columns: slice = slice(None)) -> float:
-        return float(np.max(self.block_max_abs(columns)))
-
-    def block_max_abs(self, columns: slice = slice(None)) -> np.ndarray:
-        """The largest ``|eps_N[columns]|`` of each block over the steps that exist (NaN if one is NaN)."""
-        B, nb = self.B, self.blocks.shape[2]
-        last = self.n_steps - (nb - 1) * B  # the last block's last step
-        with np.errstate(invalid="ignore"):
-            out = np.abs(self.blocks[:, columns, : nb - 1]).max(axis=(0, 1)) if nb > 1 else np.empty(0)
-            return np.append(out, np.abs(self.blocks[: last + 1, columns, nb - 1]).max())
-
-    def first_step_beyond(self, exact: np.ndarray, bound: float, columns: slice = slice(None)) -> int | None:
-        """The first step ``N >= 1`` whose ``max |exact[N - 1] + eps_N[columns]|`` exceeds ``bound`` or is not
-        finite, else None (``exact``: the exact values at ``T_1 ... T_N``, the same columns).
-
-        Block by block, in order; a block is skipped when ``max |eps| + max |exact|`` is finite and
-        ``<= bound`` (rounding is monotone, so no sum in it can exceed the bound or overflow): the same
-        answer as checking every step, with the per-step sums formed only from the first block that could
-        cross (a diverging run's early blocks are far below the bound).
-        """
-        B = self.B
-        exact_max = float(np.max(np.abs(exact))) if exact.size else 0.0
-        for b, err_max in enumerate(self.block_max_abs(columns)):
-            screen = err_max + exact_max
-            if np.isfinite(screen) and screen <= bound:  # NaN or an overflow: checked step by step
-                continue
-            steps = np.arange(max(b * B, 1), min((b + 1) * B, self.n_steps + 1))
-            with np.errstate(invalid="ignore"):
-                mag = np.max(np.abs(exact[steps - 1] + self.blocks[steps - b * B, columns, b]), axis=-1)
-            bad = ~np.isfinite(mag) | (mag > bound)
-            if bad.any():
-                return int(steps[np.argmax(bad)])
-        return None
-
-    def sum_squares(self, columns: slice, first: int, last: int | None = None) -> np.ndarray:
-        """``sum_{N = first}^{last} eps_N[columns]^2`` per column (``last`` defaults to the final step)."""
-        last = self.n_steps if last is None else min(last, self.n_steps)
-        if last < first:
-            return np.zeros(self.blocks[:, columns, 0].shape[1])
-        sq = np.square(self.blocks[:, columns, :])
-        b0, j0 = divmod(first, self.B)
-        b1, j1 = divmod(last, self.B)
-        if b0 == b1:
-            return sq[j0 : j1 + 1, :, b0].sum(axis=0)
-        return sq[j0:, :, b0].sum(axis=0) + sq[:, :, b0 + 1 : b1].sum(axis=(0, 2)) + sq[: j1 + 1, :, b1].sum(axis=0)
-
-
 def propagate_errors(M, D, E, z_at, n_steps: int, *, block: int | None = None) -> ErrorSeries:
-    """``eps_0 ... eps_n_steps`` of ``eps_N+1 = M eps_N + D z_N``, ``eps_0 = 0``, as an :class:`ErrorSeries`.
-
-    ``z_at(N)`` gives the exact ``z`` at the macro-time points ``N`` (an array
-    of step indices; called once, for the block starts).  Inside a block of
-    ``B`` steps from ``s``: ``eps_s+j = M^j eps_s + G_j z_s`` with
-    ``G_j+1 = M G_j + D E^j``; block starts advance sequentially.  ``B``
-    defaults to about ``sqrt(n_steps)``: the Python loops building the block
-    (``B`` steps) and advancing it (``n_steps / B``) then cost the least.
-    """
-    M = np.asarray(M, dtype=float)
-    n = M.shape[0]
-    if block is None:
-        block = int(np.clip(np.sqrt(n_steps + 1), 16, 2048))
-    B = max(1, min(block, n_steps + 1))
-    with np.errstate(over="ignore", invalid="ignore"):  # an unstable run grows without bound
-        P = np.empty((B, n, n))
-        G = np.zeros((B, n, 2))
-        P[0] = np.eye(n)
-        Ej = np.eye(2)
-        for j in range(1, B):
-            P[j] = M @ P[j - 1]
-            G[j] = M @ G[j - 1] + D @ Ej
-            Ej = E @ Ej
-        MB = M @ P[B - 1]
-        GB = M @ G[B - 1] + D @ Ej
-        starts = np.arange(0, n_steps + 1, B)
-        Z = z_at(starts)
-        eps_start = np.empty((starts.size, n))
-        e = np.zeros(n)
-        for i in range(starts.size):
-            eps_start[i] = e
-            e = MB @ e + GB @ Z[i]
-        blocks = np.matmul(P, eps_start.T) + np.matmul(G, Z.T)  # (B, n, blocks)
-    return ErrorSeries(blocks, n_steps)
+    """Every ``eps_0 ... eps_n_steps`` of :func:`error_recurrence` as an :class:`ErrorSeries`."""
+    return error_recurrence(M, D, E, z_at, n_steps, block=block).materialize()

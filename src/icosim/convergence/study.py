@@ -45,7 +45,7 @@ from ..engine.macrostep import simulate
 from ..engine.schemes import JACOBI, get_scheme
 from ..engine.spectral import amplification_matrix, spectral_radius
 from ..errors import ParameterError
-from .errors import ErrorSeries, local_defect, propagate_errors
+from .errors import ErrorSeries, error_recurrences, local_defect
 from .experiment import Setup, dimensional_method
 from .metric import ratio_root, variances
 
@@ -187,6 +187,14 @@ class Study:
             )
         return self._references[key]
 
+    def _exact_max(self, i):
+        """The largest ``|x|`` and ``|v_bar| = H |v|`` of the exact solution at ``T_1 ... T_N`` for ``H[i]``."""
+        key = ("exact_max", i)
+        if key not in self._references:
+            ref, H = self.reference(i), self.H[i]
+            self._references[key] = float(max(np.max(np.abs(ref[:, 0])), H * np.max(np.abs(ref[:, 2]))))
+        return self._references[key]
+
     def bound(self, H):
         s = self.setup
         return s.growth_bound * max(abs(s.x0), abs(s.v0) * H)
@@ -216,8 +224,13 @@ class Study:
         out["defect_bits"] = np.zeros(nH, dtype=np.int32)
         # the constraint force is a coupling variable with ff and fd only
         lam = dec.variables.index("lambda_c") if "lambda_c" in dec.variables else None
+        if stepping == "error":  # every step size's recurrence stepped together
+            runs = self._floor_free(methods, dec.name, k, range(nH), scheme)
         for i, (H, N) in enumerate(zip(self.H, self.n_steps)):
-            errors, diverged, bits, cert = self._errors(methods[i], dec.name, k, i, stepping, scheme)
+            if stepping == "error":
+                errors, diverged, bits, cert = runs[i]
+            else:
+                errors, diverged, bits, cert = self._errors(methods[i], dec.name, k, i, stepping, scheme)
             out["defect_bits"][i] = bits
             if cert is not None:
                 rho[i], digits[i], verdict[i] = _midpoint(cert), int(cert.bits * np.log10(2)), cert.verdict
@@ -279,6 +292,44 @@ class Study:
             rho[i], digits[i], verdict[i] = float(res.rho), int(res.digits), str(res.verdict)
         return rho, digits, verdict
 
+    def _exact_z(self, i, A, steps):
+        """The exact ``z = (x, v_bar)`` at the steps ``steps`` (an arange) for ``H[i]`` from the rounded ``A``
+        of a defect (the same for every curve at that step size: kept per ``A``)."""
+        key = ("z", i, A.tobytes(), int(steps[0]), int(steps[-1]) if steps.size else -1, steps.size)
+        if key not in self._references:
+            z0 = np.array([self.setup.x0, self.setup.v0 * self.H[i]])
+            self._references[key] = exact.expm_2x2(A, steps) @ z0
+        return self._references[key]
+
+    def _floor_free(self, methods, decomposition, k, indices, scheme=JACOBI):
+        """``_errors`` of stepping "error" for the step sizes ``H[indices]`` (``methods[i]`` the method at
+        ``H[i]``), their error recurrences stepped together (:func:`~icosim.convergence.errors.error_recurrences`)."""
+        defects, runs = [], []
+        for i in indices:
+            H, N = self.H[i], int(self.n_steps[i])
+            d = local_defect(self.setup.model(H).coefficients(), methods[i], decomposition, k, scheme=scheme)
+            defects.append(d)
+            runs.append((d.M, d.D, d.E, lambda steps, i=i, A=d.A: self._exact_z(i, A, steps), N))
+        out = []
+        for i, d, errors in zip(indices, defects, error_recurrences(runs)):
+            # the state itself (exact + error, engine units) against the growth bound, as the other steppings;
+            # step by step only where a bound of the errors and the largest exact value together could cross it
+            H = self.H[i]
+            bound, exact_max = self.bound(H), self._exact_max(i)
+            err_max = errors.max_abs_bound(slice(0, 4))
+            if not (np.isfinite(err_max) and err_max + exact_max <= bound):
+                ref, scale = self.reference(i), np.array([1.0, H, 1.0, H])
+
+                def exact_state(steps, ref=ref, scale=scale):  # (x, v_bar, x, v_bar) at T_steps, engine units
+                    return ref[steps - 1][:, [0, 2, 0, 2]] * scale
+
+                diverged = errors.first_step_beyond(exact_state, bound, slice(0, 4), exact_max=exact_max)
+                if diverged is not None:
+                    out.append((None, diverged, d.bits, d.certificate))
+                    continue
+            out.append((errors, None, d.bits, d.certificate))
+        return out
+
     def _errors(self, method, decomposition, k, i, stepping, scheme=JACOBI):
         """``(errors, diverged_at, defect_bits, certificate)`` for step size ``H[i]`` under ``scheme``.
 
@@ -294,20 +345,8 @@ class Study:
         c = self.setup.model(H).coefficients()
         bound = self.bound(H)
         if stepping == "error":
-            d = local_defect(c, method, decomposition, k, scheme=scheme)
-            z0 = np.array([self.setup.x0, self.setup.v0 * H])
-            errors = propagate_errors(d.M, d.D, d.E, lambda steps: exact.expm_2x2(d.A, steps) @ z0, N)
-            # the state itself (exact + error, engine units) against the growth bound, as the other steppings;
-            # step by step only if the largest error and the largest exact value together could cross it
-            ref = self.reference(i)
-            exact_max = max(np.max(np.abs(ref[:, 0])), H * np.max(np.abs(ref[:, 2])))
-            err_max = errors.max_abs(slice(0, 4))
-            if not (np.isfinite(err_max) and err_max + exact_max <= bound):
-                exact_state = np.stack([ref[:, 0], H * ref[:, 2]], axis=-1)[:, [0, 1, 0, 1]]
-                diverged = errors.first_step_beyond(exact_state, bound, slice(0, 4))
-                if diverged is not None:
-                    return None, diverged, d.bits, d.certificate
-            return errors, None, d.bits, d.certificate
+            methods = {i: method}
+            return self._floor_free(methods, decomposition, k, [i], scheme)[0]
         problem = LinearCosimulation(c, decomposition, k)
         solution = self.solution(H)
         state, history = exact.consistent_start(problem, solution)
