@@ -245,3 +245,43 @@ def test_no_scheme_is_stable_at_the_origin(method, dec, k):
             assert min(abs(z - 1) for z in eigenvalues) < mpmath.mpf(10) ** -60
         cert = certify_spectral_radius(point, method, dec, k)
         assert cert.verdict in ("marginal", "unstable") and cert.rho_upper >= 1
+
+
+def test_batched_certificates_are_those_of_each_point_alone():
+    """A panel's points certified in one batch (icosim.engine.spectral.batched) get, point for point, the
+    certificate each gets alone: stable, unstable, marginal (the undamped axis, the origin), points with
+    guard bits (heavy damping), one beyond the guard cap; twice, the second time from the cache of ball
+    exponentials."""
+    from icosim.engine import backends
+    from icosim.engine.spectral.batched import certify_spectral_radii
+
+    points = [
+        TestModel(-0.05, 0.5),
+        TestModel(0.0, 0.3),
+        TestModel(0.0, 0.0),
+        TestModel(-1.9, 0.1, 2.0, 10.0, 1.0),  # decay ~ 38 macro steps: 55 guard bits
+        TestModel(-0.4, 1.3, 10.0, 1.0, 10.0),
+        TestModel(-12000.0, 0.0),  # past the guard cap: undecided, alone as in the batch
+    ]
+    for method, dec, k in SCHEMES[:2] + SCHEMES[6:]:
+        for scheme in ("jacobi", "gauss-seidel-21"):
+            alone = [certify_spectral_radius(p, method, dec, k, scheme=scheme) for p in points]
+            backends._BALL_EXPM_CACHE.clear()
+            for _ in range(2):
+                batch = certify_spectral_radii(points, method, dec, k, scheme=scheme)
+                assert batch == alone
+    assert {c.verdict for c in alone} >= {"marginal", "undecided"}
+
+
+def test_float64_grid_matrices_are_those_of_each_point_alone():
+    """The amplification matrices of a grid in float64 (its arrays laid out with the grid axes fastest:
+    icosim.engine.layout) are bit for bit those of each point computed alone (small arrays, NumPy's order)."""
+    lr, li = np.meshgrid(np.linspace(-2, 0, 24), np.linspace(0, 2, 23), indexing="ij")
+    grid = TestModel(lr, li, 10.0, 1.0, 10.0)
+    for method, dec, k in SCHEMES:
+        for scheme in ("jacobi", "gauss-seidel-12"):
+            M = amplification_matrix(grid, method, dec, k, scheme=scheme)
+            assert M.shape[:2] == lr.shape and lr.size * M.shape[-1] * 2 >= 4096  # the step's arrays laid out as a grid
+            for idx in [(0, 0), (3, 5), (23, 22), (23, 0), (11, 17)]:
+                one = amplification_matrix(TestModel(lr[idx], li[idx], 10.0, 1.0, 10.0), method, dec, k, scheme=scheme)
+                assert M[idx].tobytes() == np.ascontiguousarray(one).tobytes()

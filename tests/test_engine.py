@@ -537,16 +537,20 @@ def test_policy_accepts_physical_models_including_overdamped():
 
 
 def test_policy_survives_a_point_no_precision_can_decide(monkeypatch):
+    import icosim.engine.spectral.batched as batched
+    import icosim.engine.spectral.certified as cert
     import icosim.engine.spectral.policy as st
 
-    original = st.certify_spectral_radius
+    original = cert._exact_coefficients
 
     def fails_at_origin(point, *args, **kwargs):
         if float(point.lr1) == 0 and float(point.li1) == 0:
             raise ZeroDivisionError("no result here")
         return original(point, *args, **kwargs)
 
-    monkeypatch.setattr(st, "certify_spectral_radius", fails_at_origin)
+    # the batch of certified points fails as a whole, then each point is certified alone: only the origin fails
+    monkeypatch.setattr(cert, "_exact_coefficients", fails_at_origin)
+    monkeypatch.setattr(batched, "_exact_coefficients", fails_at_origin)
     # identical undamped subsystems: rho = 1 exactly at (0, 0.3) (tests/test_certified.py checks it to 80 digits)
     model = TestModel(np.array([0.0, 0.0, -0.5]), np.array([0.0, 0.3, 0.5]), 1.0, 1.0, 1.0)
     res = st.spectral_radius(model, baumgarte(mu=1, index=1), "ff", 2)

@@ -65,7 +65,7 @@ class Float64:
 #: the scheme), so one job forms each exponential once; the cached result is the one scipy returned
 #: (read-only), so nothing changes but the time.
 _EXPM_CACHE: dict = {}
-_EXPM_CACHE_SIZE = 16
+_EXPM_CACHE_SIZE = 64
 
 
 def _expm_float64(M):
@@ -91,6 +91,8 @@ class Multiprecision:
 
     name = "mpmath"
     dtype = object
+    #: :meth:`expm` adds guard digits for the decay of a damped subsystem
+    uses_decay = True
 
     def __init__(self, digits: int = 128):
         self.digits = check_digits(digits)  # 16 .. icosim.engine.bounds.MAX_DIGITS
@@ -162,6 +164,11 @@ class Multiprecision:
         return f"Multiprecision(digits={self.digits})"
 
 
+#: Recent ball exponentials by working precision and a key that determines the matrix (:meth:`Ball.expm`).
+_BALL_EXPM_CACHE: dict = {}
+_BALL_EXPM_CACHE_SIZE = 16384
+
+
 class Ball:
     """Arb ball arithmetic (python-flint) with ``bits`` of working precision.
 
@@ -225,16 +232,37 @@ class Ball:
             out[idx] = self.const(a[idx])
         return out
 
-    def expm(self, M, decay=0.0):
+    def expm(self, M, decay=0.0, keys=None):
         """Matrix exponential with a rigorous error bound (Arb's ``arb_mat_exp``).
 
-        ``decay`` is not needed: a lost digit widens the balls, it is never hidden.
+        ``decay`` is not needed: a lost digit widens the balls, it is never hidden.  ``keys`` (optional, an
+        object array over the batch axes of ``M``): per matrix a hashable value that determines it
+        entirely (made with :meth:`identity`); a matrix exponentiated before at the same working precision
+        under the same key is taken from a cache.  The balls are the very ones computed then (Arb is
+        deterministic), so nothing changes but the time: the points certified in several panels of a
+        figure share their subsystems' exponentials.
         """
         M = np.asarray(M, dtype=object)
         out = np.empty(M.shape, dtype=object)
+        prec = self._flint.ctx.prec
         for idx in np.ndindex(M.shape[:-2]):
-            out[idx] = np.array(self._flint.arb_mat(M[idx].tolist()).exp().tolist(), dtype=object)
+            key = None if keys is None or keys[idx] is None else (prec, keys[idx])
+            E = _BALL_EXPM_CACHE.pop(key, None) if key is not None else None
+            if E is None:
+                E = np.array(self._flint.arb_mat(M[idx].tolist()).exp().tolist(), dtype=object)
+            if key is not None:
+                _BALL_EXPM_CACHE[key] = E  # most recent last
+                if len(_BALL_EXPM_CACHE) > _BALL_EXPM_CACHE_SIZE:
+                    del _BALL_EXPM_CACHE[next(iter(_BALL_EXPM_CACHE))]
+            out[idx] = E
         return out
+
+    def identity(self, x):
+        """A hashable value that determines the ball ``x`` exactly (midpoint and radius), or None (not finite)."""
+        try:
+            return (x.mid().man_exp(), x.rad().man_exp())
+        except Exception:  # noqa: BLE001 -- an infinite or NaN ball has no exact mantissa: not cached
+            return None
 
     def mid(self, x):
         """Midpoints as float64 (the ball's centre, rounded to nearest)."""

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import layout
 from .model import Coefficients
 from .problem import CosimulationProblem
 from .subsystems import OscillatorSubsystem
@@ -80,7 +81,10 @@ class LinearCosimulation(CosimulationProblem):
         lead = np.broadcast_shapes(state.shape[:-2], history.shape[:-2])
         state = np.broadcast_to(state, lead + (2, 2))
         history = np.broadcast_to(history, lead + history.shape[-2:])
-        return np.concatenate([state.reshape(lead + (4,)), history.reshape(lead + (-1,))], axis=-1)
+        # (x1, v1, x2, v2, e_N, ..., e_N-k): the rows of state and history one after the other (no reshape: that
+        # would copy a grid laid out with its grid axes fastest into C order first)
+        parts = [state[..., i, :] for i in range(2)] + [history[..., j, :] for j in range(history.shape[-2])]
+        return layout.concatenate(parts, axis=-1)
 
     def unpack(self, w):
         lead = w.shape[:-1]
@@ -140,8 +144,8 @@ class LinearCosimulation(CosimulationProblem):
             for sub, how in zip(self.subsystems, response):
                 dy = sub.algebraic_sensitivity() if how != "full" else sub.step_sensitivity(self.corr_nodes)
                 per_sub.append(dy if sub.input == j and how != "none" else 0 * dy)
-            cols.append(np.stack(np.broadcast_arrays(*per_sub), axis=-2))
-        return np.stack(cols, axis=-3)
+            cols.append(layout.stack(np.broadcast_arrays(*per_sub), axis=-2))
+        return layout.stack(cols, axis=-3)
 
     def jacobians(self, state, history, e, y, fixed=(None, None), algebraic=True):
         """Constant (Eq. 13): built once per scheme from the exact output sensitivities, not counted as work."""
@@ -158,8 +162,8 @@ class LinearCosimulation(CosimulationProblem):
         am = self.coefficients.am21
         am = am[..., None] if np.ndim(am) else am
         xv = (state[..., 0, :] + am * state[..., 1, :]) / (1 + am)
-        return np.stack([xv, xv], axis=-2)
+        return layout.stack([xv, xv], axis=-2)
 
 
 def _stack(arrays):
-    return np.stack(np.broadcast_arrays(*arrays), axis=-2)
+    return layout.stack(np.broadcast_arrays(*arrays), axis=-2)

@@ -21,6 +21,7 @@ evaluated in one call.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -31,6 +32,13 @@ __all__ = ["Coefficients", "TestModel", "PhysicalModel"]
 
 
 def _check(name: str, value, *, positive=False, nonnegative=False, nonpositive=False):
+    if type(value) is float:  # one point (e.g. of a grid, each certified alone): the same checks, no array
+        if not math.isfinite(value):
+            raise ParameterError(f"{name} must be a finite number, got {value!r}")
+        if (positive and not value > 0) or (nonnegative and not value >= 0) or (nonpositive and not value <= 0):
+            bound = "> 0" if positive else ">= 0" if nonnegative else "<= 0"
+            raise ParameterError(f"{name} must be {bound}, got {value!r}")
+        return
     arr = np.asarray(value, dtype=float)
     if not np.all(np.isfinite(arr)):
         raise ParameterError(f"{name} must be a finite number, got {value!r}")
@@ -128,13 +136,7 @@ class TestModel:
 
     def coefficients(self) -> Coefficients:
         """Subsystem coefficients: ``k = lr^2 + li^2``, ``delta = -2 lr``."""
-        return Coefficients(
-            k1=self.lr1**2 + self.li1**2,
-            delta1=-2 * self.lr1,
-            k2=self.lr2**2 + self.li2**2,
-            delta2=-2 * self.lr2,
-            am21=self.am21,
-        )
+        return eq71_coefficients(self.lr1, self.li1, self.am21, self.alr21, self.ali21)
 
     def to_physical(self, m1: float = 1.0, H: float = 1.0) -> PhysicalModel:
         """One physical realisation (mass ``m1`` and macro step ``H`` are free scales)."""
@@ -149,6 +151,22 @@ class TestModel:
             d2=c.delta2 * m2 / H,
             H=H,
         )
+
+
+def eq71_coefficients(lr1, li1, am21, alr21, ali21) -> Coefficients:
+    """:meth:`TestModel.coefficients` of parameters in any arithmetic, unchecked (the same operations).
+
+    For values a :class:`TestModel` was already checked with, e.g. its parameters as balls
+    (:mod:`icosim.engine.spectral.certified`), without checking each again.
+    """
+    lr2, li2 = alr21 * lr1, ali21 * li1
+    return Coefficients(
+        k1=lr1**2 + li1**2,
+        delta1=-2 * lr1,
+        k2=lr2**2 + li2**2,
+        delta2=-2 * lr2,
+        am21=am21,
+    )
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from . import layout
 from .backends import Float64
 from .bounds import check_k
 from .decompositions import get_decomposition
@@ -166,4 +167,4 @@ def _prepend(e_new, older):
         return np.concatenate([e_new[None, :], older])
     lead = np.broadcast_shapes(e_new.shape[:-1], older.shape[:-2])
     older = np.broadcast_to(older, lead + older.shape[-2:])
-    return np.concatenate([np.broadcast_to(e_new, lead + e_new.shape[-1:])[..., None, :], older], axis=-2)
+    return layout.concatenate([np.broadcast_to(e_new, lead + e_new.shape[-1:])[..., None, :], older], axis=-2)

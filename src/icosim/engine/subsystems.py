@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import layout
 from .lagrange import monomial_coefficients, weights_at
 
 __all__ = ["OscillatorSubsystem", "FORCE", "KINEMATIC", "decay_rate"]
@@ -97,7 +98,24 @@ class OscillatorSubsystem:
         for j in range(n - 1):
             M[..., 2 + j, 3 + j] = one
         self._factorials = be.asarray([math.factorial(m) for m in range(n)])
-        self.set_blocks(be.expm(M, decay=self.decay_rate()))
+        if hasattr(be, "identity"):  # balls: each matrix is determined by the kind, k and (k, delta, gain)
+            self.set_blocks(be.expm(M, keys=self._expm_keys(shape, n)))
+        else:
+            self.set_blocks(be.expm(M, decay=self.decay_rate() if getattr(be, "uses_decay", False) else 0.0))
+
+    def _expm_keys(self, shape, n):
+        """Per matrix of the batch, what determines it: ``(kind, n)`` and, force driven, the coefficients'
+        identities (:meth:`icosim.engine.backends.Ball.identity`); None where one is not finite."""
+        be = self.backend
+        keys = np.empty(shape, dtype=object)
+        if self.kind == KINEMATIC:
+            keys[()] = (KINEMATIC, n)
+            return keys
+        parts = [np.broadcast_to(np.asarray(a, dtype=object), shape) for a in (self.stiffness, self.damping, self.gain)]
+        for idx in np.ndindex(shape):
+            ids = tuple(be.identity(a[idx]) for a in parts)
+            keys[idx] = None if None in ids else (FORCE, n) + ids
+        return keys
 
     def decay_rate(self) -> float:
         """Largest ``-Re(eigenvalue of A)`` over the batch: entries of the
@@ -112,6 +130,7 @@ class OscillatorSubsystem:
 
         ``E`` is kept so that the precision policy can disturb it.
         """
+        E = layout.batched(E)  # a grid's blocks with the grid axes fastest (the same values)
         self.blocks = E
         self.Phi = E[..., :2, :2]
         self.R = E[..., :2, 2:] * self._factorials  # R[:, m] = m! phi_{m+1}(A) b
@@ -141,7 +160,8 @@ class OscillatorSubsystem:
             )
             w0 = np.array([be.const(w) for w in weights_at(nodes, 0)], dtype=be.dtype)
             w1 = np.array([be.const(w) for w in weights_at(nodes, 1)], dtype=be.dtype)
-            cache[nodes] = (self.R @ Cm, self.R @ dC, w0, w1)
+            R = np.ascontiguousarray(self.R)  # the products as ever (BLAS sees the layout), then laid out for the grid
+            cache[nodes] = (layout.batched(R @ Cm), layout.batched(R @ dC), w0, w1)
         return cache[nodes]
 
     def _rate(self, s, u):
@@ -151,7 +171,7 @@ class OscillatorSubsystem:
             a = -self.stiffness * x - self.damping * v + self.gain * u
         else:
             a = u + 0 * x
-        return np.stack(np.broadcast_arrays(v, a), axis=-1)
+        return layout.stack(np.broadcast_arrays(v, a), axis=-1)
 
     def step(self, s0, U, nodes):
         """Exact end-of-step state and outputs ``(x, v, a, f)`` for samples ``U``.
@@ -187,7 +207,7 @@ class OscillatorSubsystem:
         """
         one = self.backend.const(1)
         zero = 0 * self.gain
-        return self._outputs(np.stack([zero, zero], axis=-1), self.gain * one, one + zero)
+        return self._outputs(layout.stack([zero, zero], axis=-1), self.gain * one, one + zero)
 
     def _outputs(self, s, a, u):
         x, v = s[..., 0], s[..., 1]
@@ -196,9 +216,25 @@ class OscillatorSubsystem:
         else:
             a = u + 0 * x
             f = (u + self.stiffness * x + self.damping * v) / self.gain
-        return np.stack(np.broadcast_arrays(x, v, a, f), axis=-1)
+        return layout.stack(np.broadcast_arrays(x, v, a, f), axis=-1)
 
 
 def _matvec(A, x):
-    """``A @ x`` over leading axes; a broadcast sum beats batched matmul for 2 x n."""
-    return sum(A[..., :, j] * x[..., None, j] for j in range(A.shape[-1]))
+    """``A @ x`` over leading axes; a broadcast sum beats batched matmul for 2 x n.
+
+    The sum is ``0 + t_0 + t_1 + ...`` with ``t_j = A[..., :, j] x_j``, as :func:`sum` forms it; over a
+    grid in float64 it is formed in place in arrays laid out with the grid axes fastest
+    (:mod:`icosim.engine.layout`): the same operations on the same values, hence the same bits.
+    """
+    m = A.shape[-1]
+    if A.dtype.kind == "f" and x.dtype.kind == "f" and m:
+        shape = np.broadcast_shapes(A.shape[:-1], x.shape[:-1] + (1,))
+        if len(shape) >= 3 and math.prod(shape) >= layout.BATCH_SIZE:
+            acc, term = np.empty(shape, order="F"), np.empty(shape, order="F")
+            np.multiply(A[..., :, 0], x[..., None, 0], out=acc)
+            np.add(acc, 0, out=acc)  # sum() starts from 0 (0 + -0.0 is +0.0)
+            for j in range(1, m):
+                np.multiply(A[..., :, j], x[..., None, j], out=term)
+                np.add(acc, term, out=acc)
+            return acc
+    return sum(A[..., :, j] * x[..., None, j] for j in range(m))

@@ -26,6 +26,7 @@ from fractions import Fraction
 import numpy as np
 
 from ...errors import ParameterError
+from .. import layout
 from ..decompositions import DECOMPOSITIONS, Decomposition
 
 __all__ = ["CouplingMethod", "MethodSpec", "Parameter", "solve_small", "finite", "exact"]
@@ -91,7 +92,7 @@ class CouplingMethod:
         none of its three conditions on its own.
         """
         rows = [_conditions(levels, residuals, axis=-1) for weight, levels in self.solves if weight != 0]
-        return np.concatenate(rows, axis=-1)
+        return layout.concatenate(rows, axis=-1)
 
 
 #: How a unit of the dimensional setting is written in running text.
@@ -275,7 +276,7 @@ def _conditions(levels, parts, axis, const=float):
         rows.append(combined)
     if parts["force"].shape[axis]:
         rows.append(parts["force"])
-    return rows[0] if len(rows) == 1 else np.concatenate(rows, axis=axis)
+    return rows[0] if len(rows) == 1 else layout.concatenate(rows, axis=axis)
 
 
 def solve_small(J, b):
@@ -295,7 +296,7 @@ def solve_small(J, b):
         det = a * d - bb * c
         x0 = (d * b[..., 0] - bb * b[..., 1]) / det
         x1 = (a * b[..., 1] - c * b[..., 0]) / det
-        return np.stack([x0, x1], axis=-1)
+        return layout.stack([x0, x1], axis=-1)
     if J.dtype != object:
         return np.linalg.solve(J, b[..., None])[..., 0]
     out = np.empty(b.shape, dtype=object)

@@ -7,6 +7,7 @@ module                      holds
 :mod:`.radius`              spectral radius in float64 (with an error estimate)
                             and at any precision (mpmath)
 :mod:`.certified`           proven enclosures of the spectral radius (Arb balls)
+:mod:`.batched`             the certificates of a panel's points in one batch
 :mod:`.policy`              the precision policy: float64, proofs where it
                             cannot decide; the verdict of every point
 ==========================  ===================================================

@@ -44,7 +44,7 @@ import numpy as np
 
 from ..backends import Ball
 from ..bounds import MAX_GUARD_BITS, check_finite
-from ..model import Coefficients, PhysicalModel, TestModel
+from ..model import Coefficients, PhysicalModel, TestModel, eq71_coefficients
 from ..subsystems import decay_rate
 from .matrix import amplification_matrix, as_coefficients
 
@@ -376,9 +376,9 @@ def certify_spectral_radius(
 
 
 def _exact_coefficients(model, be):
-    if isinstance(model, TestModel):
+    if isinstance(model, TestModel):  # checked when it was made: its values as balls need no second check
         values = (getattr(model, f) for f in ("lr1", "li1", "am21", "alr21", "ali21"))
-        return TestModel(*(be.const(v) for v in values)).coefficients()
+        return eq71_coefficients(*(be.const(v) for v in values))
     if isinstance(model, PhysicalModel):
         model = model.coefficients()
     return Coefficients(*(be.const(getattr(model, f)) for f in ("k1", "delta1", "k2", "delta2", "am21")))

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import layout
 from ..backends import Float64
 from ..decompositions import get_decomposition
 from ..linear_problem import LinearCosimulation
@@ -33,7 +34,7 @@ __all__ = ["amplification_matrix", "as_coefficients"]
 
 def _problem(coefficients: Coefficients, decomposition, k, backend, batch_axis=True):
     if batch_axis:  # room for the basis vectors the step is applied to
-        coefficients = coefficients.map(lambda a: backend.asarray(a)[..., None])
+        coefficients = coefficients.map(lambda a: layout.batched(backend.asarray(a)[..., None]))
     return LinearCosimulation(coefficients, decomposition, k, backend)
 
 

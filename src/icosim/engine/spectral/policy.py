@@ -40,7 +40,8 @@ from ..backends import FLOAT64_DIGITS
 from ..bounds import MAX_BITS_LIMIT, MAX_SECONDS, time_budget
 from ..model import Coefficients, TestModel
 from ..schemes import JACOBI, get_scheme
-from .certified import DEFAULT_BITS, MAX_BITS, certify_spectral_radius
+from .batched import certify_spectral_radii
+from .certified import DEFAULT_BITS, MAX_BITS
 from .matrix import as_coefficients
 from .radius import spectral_radius_float64, spectral_radius_mp
 
@@ -247,25 +248,25 @@ def spectral_radius(
             out["audited"] = audit | near
             todo_ball = (~trusted | near | audit) & ~overflow
     t1, c1 = time.perf_counter(), time.process_time()
-    for idx in np.ndindex(shape):
-        if not todo_ball[idx]:
-            continue
-        point = point_type(*(float(a[idx]) for a in arrays))  # a double is exact: no rounding here
-        try:
-            with time_budget(cert_settings.point_seconds):
-                c = certify_spectral_radius(
-                    point,
-                    method,
-                    decomposition,
-                    k,
-                    bits=cert_settings.bits,
-                    max_bits=cert_settings.max_bits,
-                    scheme=scheme,
-                )
-        except Exception as exc:  # one point's failure must not abort a grid
-            _undecided(out, idx, exc)
-            continue
-        _store(out, idx, c)
+    todo = [idx for idx in np.ndindex(shape) if todo_ball[idx]]
+    # a double is exact: no rounding here; the points are certified together (batched ball arithmetic, every
+    # certificate as if alone), one point's failure leaves only that point undecided
+    points = [point_type(*(float(a[idx]) for a in arrays)) for idx in todo]
+    certificates = certify_spectral_radii(
+        points,
+        method,
+        decomposition,
+        k,
+        bits=cert_settings.bits,
+        max_bits=cert_settings.max_bits,
+        point_seconds=cert_settings.point_seconds,
+        scheme=scheme,
+    )
+    for idx, c in zip(todo, certificates):
+        if isinstance(c, BaseException):
+            _undecided(out, idx, c)
+        else:
+            _store(out, idx, c)
     t2, c2 = time.perf_counter(), time.process_time()
     for idx in np.ndindex(shape):
         if not todo_mp[idx]:
