@@ -231,18 +231,21 @@ def test_compile_record_lists_what_the_runs_use_in_strict_json():
     code = (
         "import json\n"
         "from icosim.io.jsonio import dumps\n"
-        "from icosim.pendulum.integrator.compiled import compile_kernels\n"
+        "from icosim.pendulum.integrator.compiled_step import compile_kernels\n"
         "print(dumps(compile_kernels()))\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     record = json.loads(out.stdout)
-    from icosim.pendulum.integrator import compiled
+    from icosim.pendulum.integrator import compiled, compiled_step
 
-    compiled.warm_up()
+    compiled_step.warm_up()
+    # a Gauss-Seidel run: every entry point (the leading link's outputs re-evaluated: _link_outputs)
+    run_cosimulation(P, make_method("baumgarte", **BAUMGARTE), "fd", 1, H=1e-3, t_end=2e-3, scheme="gauss-seidel-12")
     assert record["numba"] == compiled.numba.__version__
-    for name in ("_jacobian", "_radau"):
-        kernel = record["kernels"][name]
-        assert kernel["signatures"] == [str(s) for s in getattr(compiled, name).signatures]
+    assert set(record["kernels"]) == {"_jacobian", "_radau", "_link_step", "_link_outputs"}
+    for name, kernel in record["kernels"].items():
+        module = compiled if hasattr(compiled, name) else compiled_step
+        assert kernel["signatures"] == [str(s) for s in getattr(module, name).signatures]
         assert kernel["cache_hits"] + kernel["cache_misses"] == 1
     assert record["cpu_seconds"] > 0 and record["wall_seconds"] > 0
 
@@ -276,7 +279,8 @@ def test_every_job_that_runs_the_integrator_waits_for_the_one_compile_job(tmp_pa
 def test_an_edited_source_the_kernels_inline_recompiles_them(tmp_path):
     """numba alone would load kernels compiled from an old compiled_links.py (its cache is keyed on
     compiled.py's time stamp only): on a copy of the package, the second process loads the cache, and
-    after an edit of compiled_links.py the third compiles again."""
+    after an edit of compiled_links.py the third compiles again; so does the fourth after an edit of
+    compiled.py, which the kernels of compiled_step.py inline."""
     import os
     import shutil
     import subprocess
@@ -285,17 +289,22 @@ def test_an_edited_source_the_kernels_inline_recompiles_them(tmp_path):
 
     src = Path(__file__).resolve().parents[1] / "src"
     shutil.copytree(src, tmp_path / "src", ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
-    code = "import json\nfrom icosim.pendulum.integrator.compiled import compile_kernels\nprint(json.dumps(compile_kernels()))\n"
+    code = "import json\nfrom icosim.pendulum.integrator.compiled_step import compile_kernels\nprint(json.dumps(compile_kernels()))\n"
     env = {**os.environ, "PYTHONPATH": str(tmp_path / "src"), "OPENBLAS_NUM_THREADS": "1"}
 
-    def radau_cache():
+    def caches():
+        """(hits, misses) of the integrator and of the macro-step kernel that inlines it (compiled_step.py)."""
         out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env)
-        kernel = json.loads(out.stdout)["kernels"]["_radau"]
-        return kernel["cache_hits"], kernel["cache_misses"]
+        kernels = json.loads(out.stdout)["kernels"]
+        return [(kernels[name]["cache_hits"], kernels[name]["cache_misses"]) for name in ("_radau", "_link_step")]
 
-    assert radau_cache() == (0, 1)
-    assert radau_cache() == (1, 0)
-    links = tmp_path / "src" / "icosim" / "pendulum" / "integrator" / "compiled_links.py"
+    assert caches() == [(0, 1), (0, 1)]
+    assert caches() == [(1, 0), (1, 0)]
+    package = tmp_path / "src" / "icosim" / "pendulum" / "integrator"
+    links = package / "compiled_links.py"
     links.write_text(links.read_text() + "\n# an edit\n")
-    assert radau_cache() == (0, 1)
-    assert radau_cache() == (1, 0)
+    assert caches() == [(0, 1), (0, 1)]
+    # compiled.py's own time stamp keys its cache (numba), its digest that of the kernels inlining it
+    integrator = package / "compiled.py"
+    integrator.write_text(integrator.read_text() + "\n# an edit\n")
+    assert caches() == [(0, 1), (0, 1)]

@@ -5,7 +5,7 @@ import json
 import logging
 
 from icosim.io.integrity import atomic_path
-from icosim.pendulum.integrator.compiled import compile_kernels
+from icosim.pendulum.integrator.compiled_step import compile_kernels
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 record = compile_kernels()

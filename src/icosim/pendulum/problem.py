@@ -26,7 +26,8 @@ from ..engine.lagrange import (
 from ..engine.problem import CosimulationProblem
 from ..errors import ParameterError
 from .conditions import CONDITIONS, check_decomposition
-from .integrator.compiled import STATS, CompiledLink, _link_outputs, _link_step, link_failure
+from .integrator.compiled import CompiledLink, link_failure
+from .integrator.compiled_step import STATS, _link_outputs, _link_step
 from .integrator.radau import _fd_jacobian, radau_batch
 from .links import Link1, Link2
 from .manifold import project_state
@@ -88,7 +89,7 @@ class PendulumCosimulation(CosimulationProblem):
         self._jac0 = [None, None]
         self._jac0_matrix = tuple(np.zeros((link.n, link.n)) for link in self.links)
         self._tolerances = np.array([rtol, atol, newton_tol], dtype=float)
-        # the counters of stats and jacobian_stats (integrator.compiled.STATS), which the kernel adds to
+        # the counters of stats and jacobian_stats (integrator.compiled_step.STATS), which the kernel adds to
         self._counts = np.zeros(len(STATS), dtype=np.int64)
 
     @classmethod
@@ -154,7 +155,7 @@ class PendulumCosimulation(CosimulationProblem):
         return r.y, link.outputs(r.y, r.f, u1)
 
     def _step_link(self, i, state, e, history, perturb):
-        """Link ``i`` over one macro step from ``state`` in one compiled call (:func:`~.integrator.compiled._link_step`):
+        """Link ``i`` over one macro step from ``state`` in one compiled call (:func:`~.integrator.compiled_step._link_step`):
         the samples ``e``, ``history[0..k-1]`` of its input (with ``perturb``, two more members whose
         ``e`` is moved by the forward-difference steps), as :meth:`_integrate` does with
         :meth:`corrector_samples` (and :meth:`_respond`'s batch).  Returns end states (B, n) and outputs (B, 4, 2)."""

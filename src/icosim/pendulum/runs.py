@@ -31,7 +31,7 @@ from ..engine.macrostep import simulate
 from ..engine.methods import CouplingMethod
 from ..engine.schemes import JACOBI, get_scheme
 from ..errors import ParameterError, StepFailure
-from .integrator.compiled import warm_up
+from .integrator.compiled_step import warm_up
 from .model import PendulumParameters, joint_constraint
 from .problem import PendulumCosimulation
 from .reference import consistent_history

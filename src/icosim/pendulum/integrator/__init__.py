@@ -7,7 +7,10 @@ module                      holds
                             step sequence for a batch of initial values)
 :mod:`.compiled`            the same algorithm for the two links, compiled with
                             numba
-:mod:`.compiled_links`      the links' right-hand sides as numba kernels
+:mod:`.compiled_step`       a link's part of a macro step (input, integration,
+                            outputs) in one compiled call
+:mod:`.compiled_links`      the links' right-hand sides and outputs as numba
+                            kernels
 :mod:`.compiled_algebra`    the small linear algebra the kernels inline
 :mod:`.kernel_cache`        numba's disk cache of the kernels: kept valid, filled
                             once

@@ -25,13 +25,7 @@ in index order in both.  A Newton matrix that is not finite (``MU / h`` overflow
 step near underflow) gets an all-NaN inverse, where numpy's LAPACK returns one
 with some NaNs: either way the Newton iterations fail and the step is halved.
 
-The co-simulation calls :func:`_link_step` once per link integration: the samples of the link's
-input (with the forward-difference members), the monomial coefficients of its polynomial, the shared
-first-step Jacobian, :func:`_radau` and the link's outputs (:func:`~.compiled_links.member_outputs`,
-the expressions of :mod:`icosim.pendulum.links`) in one compiled call, where the numpy calls around a
-call of the integrator cost several times the integration itself.  The sums are in numpy's order
-(einsum's and ``np.add.reduce``'s over three terms or fewer: index order), so the runs stay bitwise
-those with the links' outputs in numpy.
+The co-simulation calls them through :mod:`.compiled_step` (one call per link integration).
 
 One specialisation per entry point (C-contiguous float64 arrays of fixed ndim,
 int64 ids), so a cold disk cache costs one compilation per process.
@@ -44,7 +38,7 @@ import numpy as np
 
 from ..links import Link1
 from .compiled_algebra import all_finite, inverse, matvec, nan_maximum
-from .compiled_links import FORCE, KINEMATIC, batch_rhs, link_parameters, member_outputs, member_rhs
+from .compiled_links import FORCE, KINEMATIC, batch_rhs, link_parameters, member_rhs
 from .kernel_cache import compile_record, drop_stale_cache
 from .radau import (
     EPS,
@@ -61,7 +55,7 @@ from .radau import (
     T,
 )
 
-__all__ = ["CompiledLink", "STATS", "warm_up", "compile_kernels", "link_failure"]
+__all__ = ["CompiledLink", "warm_up", "compile_kernels", "link_failure"]
 
 drop_stale_cache()  # before the kernels are defined: numba loads their cache as it defines them
 
@@ -340,106 +334,6 @@ def _jacobian(link, kind, par, H, coef, t, y):
     return J
 
 
-# -- a link's part of a macro step: input polynomial, integration and outputs in one call -------------
-#: Counters of :func:`_link_step` (``stats[...]``): integrations, accepted steps, rejected steps,
-#: right-hand side evaluations of the integrations, integrations that split the macro step, Jacobians
-#: (the integrations' and the shared first-step ones), right-hand side evaluations of the shared ones.
-STATS = ("integrations", "steps", "rejected", "fev", "split", "jev", "jac_fev")
-
-
-@numba.njit(cache=True)
-def _link_samples(K, e, history, col, perturb, fd_step):
-    """The samples (B, K, 2) of one link's input at the corrector nodes ``1, 0, ..., -K+2``:
-    ``e[col:col+2]``, then ``history[0..K-2, col:col+2]`` (``corrector_samples`` of the engine's problem);
-    with ``perturb`` two more members whose first sample has component ``m`` moved by
-    ``fd_step * max(1, |e|)`` (the problem's forward differences)."""
-    B = 3 if perturb else 1
-    S = np.empty((B, K, 2))
-    for b in range(B):
-        S[b, 0, 0], S[b, 0, 1] = e[col], e[col + 1]
-        for j in range(1, K):
-            S[b, j, 0], S[b, j, 1] = history[j - 1, col], history[j - 1, col + 1]
-    if perturb:
-        for m in range(2):
-            v = e[col + m]
-            S[1 + m, 0, m] = v + fd_step * nan_maximum(1.0, abs(v))
-    return S
-
-
-@numba.njit(cache=True)
-def _link_step(
-    link, kind, par, H, C, e, history, col, perturb, fd_step, y_start, jac0, fresh_jac, tol, max_steps, stats
-):
-    """One link over one macro step from ``y_start`` for the samples of :func:`_link_samples`.
-
-    The monomial coefficients ``coef[b, m] = sum_j C[m, j] S[b, j]`` (``C`` (k+1, k+1): the problem's
-    ``C_corr``), the Newton matrix of the first step from member 0 at ``t = 0`` when ``fresh_jac``
-    (written to ``jac0`` (n, n), else read from it), :func:`_radau` over ``[0, H]`` and the outputs
-    (4, 2) of every member at ``H`` with the input ``sum_m coef[b, m]``.  ``tol`` =
-    ``(rtol, atol, newton_tol)``.  Adds to ``stats`` (:data:`STATS`): the shared Jacobian when computed,
-    the integration's counts when it succeeds.  Returns ``(y, out, status, t, h_abs)`` (status as
-    :func:`_radau`'s).
-    """
-    S = _link_samples(C.shape[0], e, history, col, perturb, fd_step)
-    B, K, _ = S.shape
-    n = jac0.shape[0]
-    coef = np.empty((B, K, 2))
-    for b in range(B):  # einsum("mj,bju->bmu", C, S): the sum over j in index order
-        for m in range(K):
-            for u in range(2):
-                acc = C[m, 0] * S[b, 0, u]
-                for j in range(1, K):
-                    acc += C[m, j] * S[b, j, u]
-                coef[b, m, u] = acc
-    y0 = np.empty((B, n))
-    for b in range(B):
-        for i in range(n):
-            y0[b, i] = y_start[i]
-    if fresh_jac:
-        J = _jacobian(link, kind, par, H, coef[0:1].copy(), 0.0, y0[0:1].copy())
-        for i in range(n):
-            for j in range(n):
-                jac0[i, j] = J[0, i, j]
-        stats[5] += 1
-        stats[6] += 2
-    y, f, counts, h_next, status, t, h_abs = _radau(
-        link, kind, par, H, coef, 0.0, H, y0, jac0, tol[0], tol[1], tol[2], max_steps
-    )
-    out = np.empty((B, 4, 2))
-    if status:
-        return y, out, status, t, h_abs
-    for b in range(B):
-        ux, uy = coef[b, 0, 0], coef[b, 0, 1]  # np.add.reduce(coef, axis=1): the input at tau = 1
-        for m in range(1, K):
-            ux += coef[b, m, 0]
-            uy += coef[b, m, 1]
-        member_outputs(link, kind, par, y[b], f[b], ux, uy, out[b])
-    n_steps, n_rejected = counts[0], counts[1]
-    stats[0] += 1
-    stats[1] += n_steps
-    stats[2] += n_rejected
-    stats[3] += counts[2]
-    stats[4] += 1 if n_steps > 1 or n_rejected > 0 else 0
-    stats[5] += counts[3]
-    return y, out, status, t, h_abs
-
-
-@numba.njit(cache=True)
-def _link_outputs(link, kind, par, H, end, e, col, perturb, fd_step):
-    """The outputs (B, 4, 2) of a link at its end state ``end`` for the input ``e[col:col+2]`` held at
-    ``T_N+1`` (the right-hand side at ``t = H`` with a constant input polynomial), with ``perturb`` also
-    for the two perturbed inputs of :func:`_link_samples`."""
-    S = _link_samples(1, e, e.reshape((1, e.shape[0])), col, perturb, fd_step)
-    B = S.shape[0]
-    n = end.shape[0]
-    f = np.empty(n)
-    out = np.empty((B, 4, 2))
-    for b in range(B):
-        member_rhs(link, kind, par, H, H, end, S[b, 0:1], f)
-        member_outputs(link, kind, par, end, f, S[b, 0, 0], S[b, 0, 1], out[b])
-    return out
-
-
 # -- the Python side --------------------------------------------------------------
 def warm_up() -> None:
     """Compile the kernels, or load them from numba's disk cache, now (about 10 s cold, 0.5 s warm).
@@ -449,17 +343,11 @@ def warm_up() -> None:
     y, coef, par = np.zeros((1, 2)), np.zeros((1, 1, 2)), np.ones(4)
     _jacobian(1, FORCE, par, 1.0, coef, 0.0, y)
     _radau(1, FORCE, par, 1.0, coef, 0.0, 0.0, y, np.empty((0, 0)), 1e-6, 1e-6, 1e-8, 1)
-    # the argument types of icosim.pendulum.problem.PendulumCosimulation's calls
-    e, history, C = np.zeros(2), np.zeros((1, 2)), np.ones((1, 1))
-    tol, stats = np.array([1e-6, 1e-6, 1e-8]), np.zeros(len(STATS), np.int64)
-    _link_step(1, FORCE, par, 1.0, C, e, history, 0, False, 1e-3, y[0], np.zeros((2, 2)), True, tol, 1, stats)
-    _link_outputs(1, FORCE, par, 1.0, y[0], e, 0, False, 1e-3)
 
 
 def compile_kernels() -> dict:
     """:func:`warm_up` and its record (:func:`~icosim.pendulum.integrator.kernel_cache.compile_record`)."""
-    kernels = {"_jacobian": _jacobian, "_radau": _radau, "_link_step": _link_step, "_link_outputs": _link_outputs}
-    return compile_record(warm_up, kernels)
+    return compile_record(warm_up, {"_jacobian": _jacobian, "_radau": _radau})
 
 
 def _float_array(x, ndim):

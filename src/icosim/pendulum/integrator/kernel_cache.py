@@ -4,9 +4,10 @@
   a file the kernels inline (``compiled_links.py``, ``compiled_algebra.py``) or take constants from
   (``radau.py``) it would load the kernels compiled from the old code.  :func:`drop_stale_cache`
   keeps a digest of those files beside the cache (``compiled.sources``) and, when it differs, removes
-  the cache files of ``compiled.*``; ``compiled`` calls it before it defines its kernels.
+  the cache files of ``compiled.*``; ``compiled`` calls it before it defines its kernels, and
+  ``compiled_step`` likewise for its own (which inline ``compiled.py`` too).
 * :func:`compile_record` compiles (or loads) them now and says what it did
-  (``compiled.compile_kernels``).  The workflow does this once, in one job before the runs
+  (``compiled_step.compile_kernels``).  The workflow does this once, in one job before the runs
   (``results/pendulum/kernels.json``), since runs that start together on a cold cache (a fresh
   clone) would each compile, about 10 CPU-s.
 
@@ -26,21 +27,21 @@ __all__ = ["KERNEL_SOURCES", "drop_stale_cache", "compile_record"]
 KERNEL_SOURCES = ("compiled_links.py", "compiled_algebra.py", "radau.py")
 
 
-def drop_stale_cache() -> bool:
-    """Remove the cache of ``compiled.*`` if a file in KERNEL_SOURCES changed since it was written;
-    returns whether it did (also when there was no record yet)."""
+def drop_stale_cache(module: str = "compiled", sources: tuple = KERNEL_SOURCES) -> bool:
+    """Remove the cache of ``{module}.*`` if a file in ``sources`` (the files its kernels inline) changed
+    since it was written; returns whether it did (also when there was no record yet)."""
     here = Path(__file__)
     root = here.parent
     cache = here.parent / "__pycache__"
-    digest = hashlib.sha256(b"".join((root / name).read_bytes() for name in KERNEL_SOURCES)).hexdigest()
-    record = cache / "compiled.sources"
+    digest = hashlib.sha256(b"".join((root / name).read_bytes() for name in sources)).hexdigest()
+    record = cache / f"{module}.sources"
     try:
         if record.read_text() == digest:
             return False
     except OSError:
         pass
     try:
-        for path in cache.glob("compiled.*.nb[ic]"):
+        for path in cache.glob(f"{module}.*.nb[ic]"):
             path.unlink(missing_ok=True)
         cache.mkdir(exist_ok=True)
         record.write_text(digest)
