@@ -47,6 +47,16 @@ def test_values_attributes_verdicts_and_pixels_are_caught(tmp_path):
     assert any("only in NEW" in p for p in compare_results.compare(old, new)[0])
 
 
+def test_a_directory_without_datasets_is_refused_not_equal(tmp_path):
+    """Comparing nothing proves nothing: a run directory given one level too deep (its results/ itself)
+    or an empty one is a difference that names the side, not "equal"."""
+    run = _tree(tmp_path / "run")
+    for old, new, side in ((run / "results", run, "OLD"), (run, tmp_path / "empty", "NEW")):
+        problems, _ = compare_results.compare(old, new)
+        assert len(problems) == 1 and problems[0].startswith(f"{side} ") and "no datasets" in problems[0]
+        assert compare_results.main([str(old), str(new), "--tolerances"]) == 1
+
+
 def test_report_masks_only_timings():
     cell = "<table><thead><tr><th>figure</th><th>mp CPU s</th></tr></thead><tbody><tr><td>Fig. 9</td><td>{}</td></tr></tbody></table>"
     assert compare_results._mask_html(cell.format("1.5")) == compare_results._mask_html(cell.format("7.0"))

@@ -284,6 +284,11 @@ def compare(
     layout = get_layout(layout)
     stats = tol.new_stats() if stats is None else stats
     old_res, new_res = old_root / "results", new_root / "results"
+    for side, res in (("OLD", old_res), ("NEW", new_res)):
+        if not any(res.rglob("*.nc")):  # nothing to compare is no evidence of equality
+            problems.append(f"{side} {res}: no datasets here (give the directory of a run, the one holding results/)")
+    if problems:
+        return problems, notes
     files_a = {p.relative_to(old_res).as_posix() for p in old_res.rglob("*") if p.is_file()}
     files_b = {p.relative_to(new_res).as_posix() for p in new_res.rglob("*") if p.is_file()}
     # a dataset's checksum sidecar (icosim.io.integrity) follows its bytes, timings included: the dataset is compared
