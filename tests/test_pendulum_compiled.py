@@ -10,6 +10,7 @@ import json
 
 import numpy as np
 import pytest
+import yaml
 
 from icosim import make_method
 from icosim.pendulum.integrator.compiled import CompiledLink
@@ -256,24 +257,29 @@ def test_every_job_that_runs_the_integrator_waits_for_the_one_compile_job(tmp_pa
     would each compile), and to no other (the figures, merges and report never integrate)."""
     import re
 
-    from helpers import copy_workflow, snakemake
+    from helpers import ROOT, copy_workflow, snakemake
 
-    # pendulum_run runs every scheme of pendulum.schemes (Jacobi and Gauss-Seidel) of its (method, decomposition)
+    # pendulum_run runs every scheme of pendulum.schemes (Jacobi and Gauss-Seidel) of its (method, decomposition);
+    # an FMU scene checked against the built-in pendulum (config/fmi.yaml) runs it too
     runners = {"pendulum_run", "pendulum_sweep", "pendulum_limits", "pendulum_tolerance", "pendulum_adaptive"}
+    fmi = yaml.safe_load((ROOT / "config" / "fmi.yaml").read_text())["fmi"]["scenes"]
+    pendulum_scenes = {name for name, scene in fmi.items() if scene["builtin"] == "pendulum"}
+    assert pendulum_scenes and len(pendulum_scenes) < len(fmi)
     dag = snakemake(copy_workflow(tmp_path), "--dag").stdout
     labels = dict(re.findall(r'^\s*(\d+)\[label = "(\w+)', dag, flags=re.M))
+    scenes = dict(re.findall(r'^\s*(\d+)\[label = "fmi_scene\\nscene: (\w+)', dag, flags=re.M))
     edges = re.findall(r"^\s*(\d+) -> (\d+)", dag, flags=re.M)
     kernels = [i for i, rule in labels.items() if rule == "pendulum_kernels"]
     assert len(kernels) == 1
-    waiting = {labels[b] for a, b in edges if a == kernels[0]}
-    assert waiting == runners
-    jobs = [i for i, rule in labels.items() if rule in runners]
     fed = {b for a, b in edges if a == kernels[0]}
+    assert {labels[b] for b in fed} == runners | {"fmi_scene"}
+    jobs = [i for i, rule in labels.items() if rule in runners]
     assert jobs and set(jobs) <= fed
+    assert len(scenes) == len(fmi) and {scenes[i] for i in fed if i in scenes} == pendulum_scenes
     # as ancient(): a rerun of the compile job (an edited script, -R, a deleted record) reruns no run
     rules = "".join(f.read_text() for f in sorted((tmp_path / "workflow" / "rules").glob("*.smk")))
     uses = re.findall(r"kernels=(.*),", rules)
-    assert len(uses) == len(runners) and set(uses) == {"ancient(PENDULUM_KERNELS)"}
+    assert len(uses) == len(runners) + 1 and all("ancient(PENDULUM_KERNELS)" in use for use in uses)
 
 
 def test_an_edited_source_the_kernels_inline_recompiles_them(tmp_path):

@@ -48,6 +48,9 @@ rule fmi_scene:
     input:
         scene=lambda w: FMI_SCENES[w.scene],
         units=FMI_UNITS,
+        # a scene checked against the built-in pendulum runs its compiled integrator: it waits for the one
+        # compile job, as every pendulum run does (two jobs on a cold cache would each compile)
+        kernels=lambda w: [ancient(PENDULUM_KERNELS)] if FMI["scenes"][w.scene]["builtin"] == "pendulum" else [],
         lib=engine_lib("fmi_scene"),
     output:
         run=FMI_RUN,
