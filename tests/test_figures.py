@@ -48,6 +48,21 @@ def test_the_png_is_what_matplotlib_draws(tmp_path):
     assert (tmp_path / "a.pdf").read_bytes().startswith(b"%PDF")
 
 
+def test_a_matplotlib_without_the_tick_internals_draws_as_usual(tmp_path, monkeypatch):
+    """The tick shortcuts stand in for private matplotlib methods: where one of them is missing (here: a
+    name no matplotlib has), no axis is touched and the file is matplotlib's own drawing, not an error."""
+    import icosim.figures as figures
+
+    monkeypatch.setattr(figures, "_TICK_INTERNALS", (*figures._TICK_INTERNALS, "_a_method_no_matplotlib_has"))
+    fig = _figure()
+    with _ticks_once(fig):
+        assert not any("_update_ticks" in vars(axis) for ax in fig.axes for axis in (ax.xaxis, ax.yaxis))
+    save_figure(fig, tmp_path / "a.png", dpi=90)
+    plain = io.BytesIO()
+    _figure().savefig(plain, format="png", dpi=90)
+    assert np.array_equal(_pixels((tmp_path / "a.png").read_bytes()), _pixels(plain.getvalue()))
+
+
 def test_titles_and_labels_keep_their_place_at_another_resolution(tmp_path):
     """The PDF keeps the places the PNG's draw gave the titles and axis labels (in axes coordinates):
     the places matplotlib computes again at the PDF's resolution, to a fraction of a point."""

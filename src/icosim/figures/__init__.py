@@ -64,6 +64,10 @@ def _keep_decorations(fig):
                 axis._autolabelpos = False  # nothing to place
 
 
+#: The matplotlib methods :func:`_ticks_once` stands in for (private: checked before each use).
+_TICK_INTERNALS = ("_update_ticks", "_get_ticklabel_bboxes", "get_majorticklocs", "get_minorticklocs")
+
+
 @contextlib.contextmanager
 def _ticks_once(fig):
     """Within one save, compute each axis's ticks once for each state it is drawn in.
@@ -78,6 +82,8 @@ def _ticks_once(fig):
     patched = []
     for ax in fig.axes:
         for axis in (ax.xaxis, ax.yaxis):
+            if not all(callable(getattr(axis, name, None)) for name in _TICK_INTERNALS):
+                continue  # a matplotlib whose internals differ: its own ticks, every time
             axis._update_ticks, axis._get_ticklabel_bboxes = _memoised(axis)
             axis.get_majorticklocs, axis.get_minorticklocs = _in_view(axis)
             patched.append(axis)
