@@ -37,7 +37,7 @@ def _copy_working_tree(dest: Path, whole: bool):
     if not whole:
         for name in ("Snakefile", "pyproject.toml"):
             shutil.copy2(ROOT / name, dest / name)
-        for name in ("config", "workflow", "src", "profiles"):
+        for name in ("config", "workflow", "src", "profiles", "fmus"):  # fmus/: the FMU scenes' unit sources
             shutil.copytree(ROOT / name, dest / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
         return
     listed = subprocess.run(
