@@ -220,6 +220,36 @@ def test_an_edited_module_is_read_again(tmp_path):
     assert [p.name for p in module_closure(["icosim.a"], tmp_path)] == ["__init__.py", "a.py", "b.py", "c.py"]
 
 
+def test_the_library_digest_follows_paths_and_contents_not_time_stamps(tmp_path):
+    """A rule's `library` parameter: the same files give the same digest wherever the checkout is; an
+    edit, another file or a renamed one gives another; a touch does not."""
+    import hashlib
+    import os
+
+    from icosim.sources import library_digest
+
+    def tree(root, texts):
+        for name, text in texts.items():
+            (root / name).parent.mkdir(parents=True, exist_ok=True)
+            (root / name).write_text(text)
+        return root
+
+    a = tree(tmp_path / "a", {"icosim/x.py": "x = 1\n", "icosim/y.py": "y = 2\n"})
+    b = tree(tmp_path / "b", {"icosim/x.py": "x = 1\n", "icosim/y.py": "y = 2\n"})
+    names = ["icosim/y.py", "icosim/x.py"]
+    expected = hashlib.sha256()
+    for name in sorted(names):
+        expected.update(name.encode() + b"\0" + hashlib.sha256((a / name).read_bytes()).hexdigest().encode())
+    assert library_digest(names, a) == library_digest(names[::-1], b) == expected.hexdigest()
+    os.utime(a / "icosim/x.py", ns=(1, 1))
+    assert library_digest(names, a) == expected.hexdigest()
+    (a / "icosim/x.py").write_text("x = 3\n")
+    assert library_digest(names, a) != expected.hexdigest()
+    assert library_digest(["icosim/x.py"], b) != library_digest(names, b)
+    (b / "icosim/z.py").write_text("y = 2\n")
+    assert library_digest(["icosim/x.py", "icosim/z.py"], b) != library_digest(names, b)
+
+
 def test_the_imports_kept_across_processes_follow_the_text(tmp_path):
     """What a source imports is kept by its text in the user's cache (Snakemake reads the workflow in
     every process): a second process parses nothing, an edited file is parsed again, a broken cache

@@ -1,8 +1,9 @@
 """Which source files of the package a module or script rests on: its transitive ``icosim`` imports.
 
-Snakemake does not see the modules a job's script imports.  The workflow lists
-them as inputs (``workflow/rules/common.smk``), so that editing a module reruns
-exactly the jobs whose code imports it, directly or through other modules.
+Snakemake does not see the modules a job's script imports.  The workflow gives
+each job the :func:`library_digest` of them as a parameter
+(``workflow/rules/common.smk``), so that editing a module reruns exactly the
+jobs whose code imports it, directly or through other modules.
 The imports are read from the source with :mod:`ast` (nothing is imported):
 absolute and relative imports anywhere in a file, ``from package import
 module`` included, and the ``__init__.py`` of every package on the way.
@@ -25,7 +26,7 @@ import tempfile
 from functools import cache
 from pathlib import Path
 
-__all__ = ["module_closure", "script_closure", "module_path"]
+__all__ = ["module_closure", "script_closure", "module_path", "library_digest"]
 
 PACKAGE = "icosim"
 
@@ -110,6 +111,28 @@ def _module_imports(name: str, path: Path, root: Path, mtime_ns: int, size: int)
 def script_closure(script, root) -> list[Path]:
     """Package files a script (not itself part of the package) imports, directly or indirectly."""
     return module_closure(sorted(_imported(_source_imports(Path(script), ""), Path(root))), root)
+
+
+def library_digest(files, root) -> str:
+    """SHA-256 over the paths (relative to ``root``) and contents of ``files``: a job's parameter.
+
+    A parameter, not a list of inputs: Snakemake reruns a job whose parameters changed, as it does
+    one whose input is newer, and the scheduler does not stat the ~100 files of every waiting
+    job at each step (a twentieth of a full run's CPU).  Content, not time stamps, decides: a
+    checkout that only touches a file reruns nothing.
+    """
+    digest = hashlib.sha256()
+    root = Path(root)
+    for path in sorted(root / f for f in files):  # a relative name is relative to root
+        stat = path.stat()
+        digest.update(path.relative_to(root).as_posix().encode() + b"\0")
+        digest.update(_file_sha256(path, stat.st_mtime_ns, stat.st_size).encode())
+    return digest.hexdigest()
+
+
+@cache
+def _file_sha256(path: Path, mtime_ns: int, size: int) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
 # -- the imports of a source text, kept across processes ----------------------------------------

@@ -37,7 +37,7 @@ from icosim.engine.schema import with_registries  # noqa: E402
 from icosim.engine.decompositions import DECOMPOSITIONS  # noqa: E402
 from icosim.engine.schemes import SCHEMES  # noqa: E402
 from icosim.labels import figure_label  # noqa: E402
-from icosim.sources import module_closure, script_closure  # noqa: E402
+from icosim.sources import library_digest, module_closure, script_closure  # noqa: E402
 from icosim.io.integrity import quarantine_corrupt, remove_stale_parts  # noqa: E402
 from icosim.io.yamlio import load_yaml  # noqa: E402
 
@@ -74,11 +74,7 @@ def _relative(paths):
 
 def lib(*modules):
     """Library source files the named modules rest on (their transitive icosim imports).
-
-    Snakemake does not see modules that a script imports, so rules list them as input:
-    editing one reruns exactly what imports it.  Names are relative to the package
-    ('stability.panels').
-    """
+    Names are relative to the package ('stability.panels')."""
     return _relative(
         module_closure([f"icosim.{m}" for m in modules], Path(workflow.basedir) / "src")
     )
@@ -94,20 +90,28 @@ def script_lib(script):
     )
 
 
+def script_library(script):
+    """The `library` parameter of a rule: the digest of the library files its script rests on.
+
+    Snakemake does not see the modules a script imports; with their digest as a parameter, editing
+    one reruns exactly what imports it (icosim.sources.library_digest says why not as inputs)."""
+    return library_digest(script_lib(script), workflow.basedir)
+
+
 # The engine every numerical result rests on: the macro step, its problems and methods,
 # and the stability analysis.
 ENGINE = lib("engine.macrostep", "engine.spectral", "engine.linear_problem", "engine.methods")
 
 
-def engine_lib(script):
-    """script_lib of a job that computes numerical results: it must rest on the whole ENGINE."""
+def engine_library(script):
+    """script_library of a job that computes numerical results: it must rest on the whole ENGINE."""
     files = script_lib(script)
     missing = sorted(set(ENGINE) - set(files))
     if missing:
         raise WorkflowError(
             f"{script}.py does not import the engine ({', '.join(missing)})"
         )
-    return files
+    return library_digest(files, workflow.basedir)
 
 
 # Wildcard constraints from the engine's registries: a method, decomposition or scheme added to its

@@ -88,8 +88,6 @@ for (_fig, _scheme), _specs in CONV_PANELS.items():
     rule:
         name:
             f"convergence_panels_fig{_fig}_{_scheme}"
-        input:
-            lib=engine_lib("convergence_panels"),
         output:
             CONV_FILES[(_fig, _scheme)],
         log:
@@ -98,6 +96,7 @@ for (_fig, _scheme), _specs in CONV_PANELS.items():
         conda:
             "../envs/icosim.yaml"
         params:
+            library=engine_library("convergence_panels"),
             # exactly this figure's panels with this scheme: editing another does not rerun these
             panels=[spec.as_dict() for spec in _specs],
             setup=CONV_SETUP,
@@ -120,7 +119,6 @@ for _fig, _cfg in CONVERGENCE["figures"].items():
             panels=[
                 path for (f, _), files in CONV_FILES.items() if f == _fig for path in files
             ],
-            lib=script_lib("convergence_figure"),
         output:
             CONV_FIGURES[_fig],
         log:
@@ -128,6 +126,7 @@ for _fig, _cfg in CONVERGENCE["figures"].items():
         conda:
             "../envs/icosim.yaml"
         params:
+            library=script_library("convergence_figure"),
             # per drawn (decomposition, scheme): title and where each cell's curves are stored
             drawn=[
                 {
@@ -160,7 +159,6 @@ rule convergence_work_precision:
                 for e in CONV_WP_ENTRIES
             }
         ),
-        lib=engine_lib("convergence_work_precision"),
     output:
         CONV_WP,
     log:
@@ -168,6 +166,7 @@ rule convergence_work_precision:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=engine_library("convergence_work_precision"),
         entries=CONV_WP_ENTRIES,
         setup=CONV_SETUP,
         steps=CONVERGENCE["work_precision"]["steps"],
@@ -181,7 +180,6 @@ rule convergence_work_precision_figure:
     """Work-precision diagram: log-log CPU time per simulated second over NRMSE."""
     input:
         wp=CONV_WP,
-        lib=script_lib("convergence_work_precision_figure"),
     output:
         png=report(
             CONV_WP_FIGURE,
@@ -195,6 +193,7 @@ rule convergence_work_precision_figure:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=script_library("convergence_work_precision_figure"),
         dpi=CONVERGENCE["plot"]["dpi"],
     script:
         "../scripts/convergence_work_precision_figure.py"
@@ -205,7 +204,6 @@ rule convergence_claims:
     input:
         datasets=CONV_ALL_PANELS,
         claims=CONV_CLAIMS_FILE,
-        lib=script_lib("claims"),
     output:
         json=CONV_CLAIMS,
         tsv="results/convergence/claims.tsv",
@@ -214,6 +212,7 @@ rule convergence_claims:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=script_library("claims"),
         enforce_reference=CONVERGENCE["claims"]["enforce_reference"],
     script:
         "../scripts/claims.py"
@@ -233,7 +232,6 @@ rule convergence_report_section:
         wp=CONV_WP,
         claims=CONV_CLAIMS,
         panels=CONV_ALL_PANELS,
-        lib=script_lib("convergence_report_section"),
     output:
         CONV_SECTION,
     log:
@@ -241,6 +239,7 @@ rule convergence_report_section:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=script_library("convergence_report_section"),
         setup=CONV_SETUP,
         step_sizes=CONVERGENCE["step_sizes"],
         stepping=CONVERGENCE["stepping"],

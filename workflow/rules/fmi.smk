@@ -29,7 +29,6 @@ rule fmi_units:
     compiler; the Python unit exported with pythonfmu) into results/fmi/units/, once per content."""
     input:
         sources=unit_inputs(FMI_UNIT_SOURCES, workflow.basedir),
-        lib=script_lib("fmi_units"),
     output:
         FMI_UNITS,
     log:
@@ -37,6 +36,7 @@ rule fmi_units:
     conda:
         "../envs/fmi.yaml"
     params:
+        library=script_library("fmi_units"),
         sources=FMI_UNIT_SOURCES,
     script:
         "../scripts/fmi_units.py"
@@ -51,7 +51,6 @@ rule fmi_scene:
         # a scene checked against the built-in pendulum runs its compiled integrator: it waits for the one
         # compile job, as every pendulum run does (two jobs on a cold cache would each compile)
         kernels=lambda w: [ancient(PENDULUM_KERNELS)] if FMI["scenes"][w.scene]["builtin"] == "pendulum" else [],
-        lib=engine_lib("fmi_scene"),
     output:
         run=FMI_RUN,
         validation=FMI_VALIDATION,
@@ -62,6 +61,7 @@ rule fmi_scene:
     conda:
         "../envs/fmi.yaml"
     params:
+        library=engine_library("fmi_scene"),
         builtin=lambda w: FMI["scenes"][w.scene]["builtin"],
     script:
         "../scripts/fmi_scene.py"
@@ -71,7 +71,6 @@ rule fmi_orders:
     """One configuration of the linear convergence study on the units over H, and on the built-in model."""
     input:
         units=FMI_UNITS,
-        lib=engine_lib("fmi_orders"),
     output:
         FMI_ORDERS,
     log:
@@ -81,6 +80,7 @@ rule fmi_orders:
     conda:
         "../envs/fmi.yaml"
     params:
+        library=engine_library("fmi_orders"),
         case=lambda w: FMI_CASES[w.case],
         model=FMI["orders"]["model"],
         x0=FMI["orders"]["x0"],
@@ -96,7 +96,6 @@ rule fmi_claims:
     input:
         datasets=FMI_VALIDATIONS + FMI_ORDER_FILES,
         claims=FMI["claims"]["file"],
-        lib=script_lib("claims"),
     output:
         json=FMI_CLAIMS,
         tsv="results/fmi/claims.tsv",
@@ -105,6 +104,7 @@ rule fmi_claims:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=script_library("claims"),
         enforce_reference=FMI["claims"]["enforce_reference"],
     script:
         "../scripts/claims.py"
@@ -117,13 +117,14 @@ rule fmi_report_section:
         validations=FMI_VALIDATIONS,
         orders=FMI_ORDER_FILES,
         claims=FMI_CLAIMS,
-        lib=script_lib("fmi_report_section"),
     output:
         FMI_SECTION,
     log:
         "logs/fmi/report_section.log",
     conda:
         "../envs/icosim.yaml"
+    params:
+        library=script_library("fmi_report_section"),
     script:
         "../scripts/fmi_report_section.py"
 

@@ -86,8 +86,6 @@ TRADE_FIGURES = {
 
 rule pendulum_reference:
     """Monolithic reference (minimal coordinates) on the macro-time grid."""
-    input:
-        lib=script_lib("pendulum_reference"),
     output:
         PENDULUM_REFERENCE,
     log:
@@ -95,6 +93,7 @@ rule pendulum_reference:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=script_library("pendulum_reference"),
         model=PENDULUM["model"],
         H=PENDULUM["H"],
         t_end=PENDULUM["t_end"],
@@ -106,14 +105,14 @@ rule pendulum_reference:
 rule pendulum_kernels:
     """Compile the links' integrator (numba) into its disk cache, once: the runs load it from there,
     where runs starting together on a cold cache (a fresh clone) would each compile it (~10 CPU-s)."""
-    input:
-        lib=script_lib("pendulum_kernels"),
     output:
         PENDULUM_KERNELS,
     log:
         "logs/pendulum/kernels.log",
     conda:
         "../envs/icosim.yaml"
+    params:
+        library=script_library("pendulum_kernels"),
     script:
         "../scripts/pendulum_kernels.py"
 
@@ -123,7 +122,6 @@ rule pendulum_run:
     divergence: one job, since the runs are short and a job's start-up (interpreter, imports, the
     compiled integrator) costs about as much as a CI-length run."""
     input:
-        lib=engine_lib("pendulum_run"),
         kernels=ancient(PENDULUM_KERNELS),
     output:
         expand(
@@ -142,6 +140,7 @@ rule pendulum_run:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=engine_library("pendulum_run"),
         schemes=PENDULUM_SCHEMES,
         k=PENDULUM["k"],
         model=PENDULUM["model"],
@@ -163,7 +162,6 @@ rule pendulum_summary:
         runs=PENDULUM_ALL_RUNS,
         reference=PENDULUM_REFERENCE,
         claims=PENDULUM["claims"]["file"],
-        lib=script_lib("pendulum_summary"),
     output:
         PENDULUM_SUMMARY,
     log:
@@ -171,6 +169,7 @@ rule pendulum_summary:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=script_library("pendulum_summary"),
         model=PENDULUM["model"],
         H=PENDULUM["H"],
         methods=PENDULUM["methods"],
@@ -183,7 +182,6 @@ rule pendulum_figure:
     input:
         runs=lambda w: PENDULUM_DATASETS[w.scheme],
         reference=PENDULUM_REFERENCE,
-        lib=script_lib("pendulum_figure"),
     output:
         expand(PENDULUM_FIGURE, k=PENDULUM["k"], scheme="{scheme}", ext=("png", "pdf")),
     log:
@@ -193,6 +191,7 @@ rule pendulum_figure:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=script_library("pendulum_figure"),
         k=PENDULUM["k"],
         titles=lambda w: [
             figure_title(
@@ -213,7 +212,6 @@ rule pendulum_error_figure:
     input:
         runs=PENDULUM_DATASETS["jacobi"],
         reference=PENDULUM_REFERENCE,
-        lib=script_lib("pendulum_error_figure"),
     output:
         PENDULUM_ERROR_FIGURE,
     log:
@@ -221,6 +219,7 @@ rule pendulum_error_figure:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=script_library("pendulum_error_figure"),
         dpi=PENDULUM["plot"]["dpi"],
     script:
         "../scripts/pendulum_error_figure.py"
@@ -231,7 +230,6 @@ rule pendulum_claims:
     input:
         datasets=[PENDULUM_SUMMARY],
         claims=PENDULUM["claims"]["file"],
-        lib=script_lib("claims"),
     output:
         json=PENDULUM_CLAIMS,
         tsv="results/pendulum/claims.tsv",
@@ -240,6 +238,7 @@ rule pendulum_claims:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=script_library("claims"),
         enforce_reference=PENDULUM["claims"]["enforce_reference"],
     script:
         "../scripts/claims.py"
@@ -265,7 +264,6 @@ rule pendulum_report_section:
         tolerance=PENDULUM_TOLERANCE,
         adaptive=PENDULUM_ADAPTIVE,
         trade_figures=list(TRADE_FIGURES.values()),
-        lib=script_lib("pendulum_report_section"),
     output:
         PENDULUM_SECTION,
     log:
@@ -273,6 +271,7 @@ rule pendulum_report_section:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=script_library("pendulum_report_section"),
         config=PENDULUM,
         paper_figure=PENDULUM_PAPER_FIGURE,
     script:
@@ -282,7 +281,6 @@ rule pendulum_report_section:
 rule pendulum_sweep:
     """Error over H of one (method, decomposition), for every scheme: every k and H over one end time."""
     input:
-        lib=engine_lib("pendulum_sweep"),
         kernels=ancient(PENDULUM_KERNELS),
     output:
         expand(
@@ -301,6 +299,7 @@ rule pendulum_sweep:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=engine_library("pendulum_sweep"),
         settings=lambda w: run_settings(PENDULUM, [w.method]),
         schemes=PENDULUM_SCHEMES,
         k=PENDULUM["k"],
@@ -315,8 +314,6 @@ rule pendulum_sweep:
 
 rule pendulum_baselines:
     """Monolithic pendulum over tolerances (Radau IIA, DOP853) and the linear test model's errors."""
-    input:
-        lib=engine_lib("pendulum_baselines"),
     output:
         monolithic=f"{TRADE_DIR}/monolithic.nc",
         linear=f"{TRADE_DIR}/linear_orders.nc",
@@ -325,6 +322,7 @@ rule pendulum_baselines:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=engine_library("pendulum_baselines"),
         settings=run_settings(PENDULUM),
         configs=[list(c) for c in TRADE_PLAN["configs"]],
         H=TRADE["error_over_H"]["H"],
@@ -342,7 +340,6 @@ rule pendulum_work_precision:
         sweeps=TRADE_GROUP_FILES["sweep"],
         monolithic=f"{TRADE_DIR}/monolithic.nc",
         linear=f"{TRADE_DIR}/linear_orders.nc",
-        lib=script_lib("pendulum_work_precision"),
     output:
         PENDULUM_WORK_PRECISION,
     log:
@@ -350,6 +347,7 @@ rule pendulum_work_precision:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=script_library("pendulum_work_precision"),
         fit=TRADE["fit"],
         accuracy_levels=TRADE["accuracy_levels"],
     script:
@@ -360,7 +358,6 @@ rule pendulum_limits:
     """Largest stable H of one (method, decomposition), for every scheme: bisection on divergence, and the
     linear test model's prediction."""
     input:
-        lib=engine_lib("pendulum_limits"),
         kernels=ancient(PENDULUM_KERNELS),
     output:
         expand(
@@ -379,6 +376,7 @@ rule pendulum_limits:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=engine_library("pendulum_limits"),
         settings=lambda w: run_settings(PENDULUM, [w.method]),
         schemes=PENDULUM_SCHEMES,
         k=PENDULUM["k"],
@@ -391,13 +389,14 @@ rule pendulum_stability_limit:
     """stability_limit.nc: the groups' measured and predicted limits over config."""
     input:
         groups=TRADE_GROUP_FILES["limits"],
-        lib=script_lib("pendulum_stability_limit"),
     output:
         PENDULUM_STABILITY_LIMIT,
     log:
         "logs/pendulum/stability_limit.log",
     conda:
         "../envs/icosim.yaml"
+    params:
+        library=script_library("pendulum_stability_limit"),
     script:
         "../scripts/pendulum_stability_limit.py"
 
@@ -405,7 +404,6 @@ rule pendulum_stability_limit:
 rule pendulum_tolerance:
     """Error over the links' Radau tolerance at fixed H for a few configurations."""
     input:
-        lib=engine_lib("pendulum_tolerance"),
         kernels=ancient(PENDULUM_KERNELS),
     output:
         PENDULUM_TOLERANCE,
@@ -414,6 +412,7 @@ rule pendulum_tolerance:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=engine_library("pendulum_tolerance"),
         settings=run_settings(PENDULUM, study_methods(PENDULUM, "tolerance")),
         tolerance=TRADE_PLAN["tolerance"],
         t_end=TRADE["error_over_H"]["t_end"],
@@ -425,7 +424,6 @@ rule pendulum_tolerance:
 rule pendulum_adaptive:
     """Adaptive macro steps (PI control of the predictor-corrector estimate) against fixed H."""
     input:
-        lib=engine_lib("pendulum_adaptive"),
         kernels=ancient(PENDULUM_KERNELS),
     output:
         PENDULUM_ADAPTIVE,
@@ -434,6 +432,7 @@ rule pendulum_adaptive:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=engine_library("pendulum_adaptive"),
         settings=run_settings(PENDULUM, study_methods(PENDULUM, "adaptive")),
         adaptive=TRADE_PLAN["adaptive"],
         reference=TRADE["reference"],
@@ -451,7 +450,6 @@ rule pendulum_trade_figure:
                 for stem in TRADE_FIGURE_DATASETS[w.name]
             }
         ),
-        lib=script_lib("pendulum_trade_figure"),
     output:
         png=report(
             "results/pendulum/figures/{name}.png",
@@ -467,6 +465,7 @@ rule pendulum_trade_figure:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=script_library("pendulum_trade_figure"),
         dpi=PENDULUM["plot"]["dpi"],
     script:
         "../scripts/pendulum_trade_figure.py"

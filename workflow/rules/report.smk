@@ -25,7 +25,6 @@ rule report:
         configfiles=[
             f for f in dict.fromkeys(workflow.configfiles) if os.path.exists(f)
         ],
-        lib=script_lib("report_page"),
     output:
         REPORT_HTML,
     log:
@@ -33,6 +32,7 @@ rule report:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=script_library("report_page"),
         title=config["report"]["title"],
         parts=list(REPORT_PARTS),
         claim_parts=list(REPORT_PARTS),

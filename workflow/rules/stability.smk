@@ -71,8 +71,6 @@ for _fig in STABILITY["figures"]:
     rule:
         name:
             f"stability_panels_fig{_fig}"
-        input:
-            lib=engine_lib("stability_panels"),
         output:
             STABILITY_FILES[_fig],
         log:
@@ -80,6 +78,7 @@ for _fig in STABILITY["figures"]:
         conda:
             "../envs/icosim.yaml"
         params:
+            library=engine_library("stability_panels"),
             # exactly this figure's panels: editing another figure does not rerun this one
             panels=[spec.as_dict() for spec in STABILITY_PANELS[_fig]],
         script:
@@ -90,7 +89,6 @@ for _fig in STABILITY["figures"]:
             f"stability_figure_fig{_fig}"
         input:
             panels=STABILITY_FILES[_fig],
-            lib=script_lib("stability_figure"),
         output:
             STABILITY_FIGURES[_fig],
         log:
@@ -98,6 +96,7 @@ for _fig in STABILITY["figures"]:
         conda:
             "../envs/icosim.yaml"
         params:
+            library=script_library("stability_figure"),
             titles={
                 scheme: figure_title(_fig, scheme, STABILITY["figures"][_fig]["title"])
                 for scheme in STABILITY_SCHEMES[_fig]
@@ -119,13 +118,14 @@ rule stability_scheme_shares:
             for s, path in zip(STABILITY_PANELS[fig], STABILITY_FILES[fig])
             if s.view == "full"
         ],
-        lib=script_lib("stability_scheme_shares"),
     output:
         STABILITY_SHARES,
     log:
         "logs/stability/scheme_shares.log",
     conda:
         "../envs/icosim.yaml"
+    params:
+        library=script_library("stability_scheme_shares"),
     script:
         "../scripts/stability_scheme_shares.py"
 
@@ -134,7 +134,6 @@ rule stability_scheme_figure:
     """The schemes side by side: stable shares per (method, decomposition, k)."""
     input:
         shares=STABILITY_SHARES,
-        lib=script_lib("stability_scheme_figure"),
     output:
         png=report(
             STABILITY_COMPARISON.format(ext="png"),
@@ -148,6 +147,7 @@ rule stability_scheme_figure:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=script_library("stability_scheme_figure"),
         title="Stable shares of the coupling schemes",
         dpi=STABILITY["plot"]["dpi"],
     script:
@@ -159,7 +159,6 @@ rule stability_claims:
     input:
         datasets=STABILITY_ALL_PANELS,
         claims=STABILITY_CLAIMS_FILE,
-        lib=script_lib("claims"),
     output:
         json=STABILITY_CLAIMS,
         tsv=report(
@@ -174,6 +173,7 @@ rule stability_claims:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=script_library("claims"),
         enforce_reference=STABILITY["claims"]["enforce_reference"],
     script:
         "../scripts/claims.py"
@@ -196,7 +196,6 @@ rule stability_report_section:
         figures=[f for files in STABILITY_FIGURES.values() for f in files if f.endswith(".png")],
         panels=STABILITY_ALL_PANELS,
         claims=STABILITY_CLAIMS,
-        lib=script_lib("stability_report_section"),
     output:
         STABILITY_SECTION,
     log:
@@ -204,6 +203,7 @@ rule stability_report_section:
     conda:
         "../envs/icosim.yaml"
     params:
+        library=script_library("stability_report_section"),
         figures=STABILITY["figures"],
         grid=STABILITY["grid"],
         zoom_grid=STABILITY["zoom_grid"],
