@@ -385,17 +385,25 @@ def test_a_corrupt_dataset_is_refused_and_set_aside_and_stale_temporaries_remove
     import xarray as xr
 
     from icosim.errors import CorruptDatasetError
-    from icosim.io.netcdf import open_dataset, write_netcdf
+    from icosim.io.netcdf import open_attributes, open_dataset, write_netcdf
 
     path = tmp_path / "results" / "fig9" / "r1_k0_full.nc"
-    write_netcdf(xr.Dataset({"rho": ("x", np.arange(4.0))}), path)
+    attrs = {"title": "t", "k": np.int64(2), "rho_max": 1.5, "n_points": np.int32(4), "shares": np.array([0.5, 0.25])}
+    write_netcdf(xr.Dataset({"rho": ("x", np.arange(4.0))}, attrs=attrs), path)
     assert verify(path) is True and sidecar(path).read_text().split()[1] == path.name
     assert open_dataset(path)["rho"].values.tolist() == [0, 1, 2, 3]
+    # the attributes alone (without the variables), with the types and values open_dataset gives
+    whole, alone = open_dataset(path).attrs, open_attributes(path)
+    assert list(alone) == list(whole) == list(attrs)
+    for name, value in whole.items():
+        assert type(alone[name]) is type(value) and np.array_equal(alone[name], value), name
     raw = bytearray(path.read_bytes())
     raw[-20] ^= 0xFF  # one damaged byte
     path.write_bytes(bytes(raw))
     with pytest.raises(CorruptDatasetError, match="SHA-256"):
         open_dataset(path)
+    with pytest.raises(CorruptDatasetError, match="SHA-256"):
+        open_attributes(path)
     stale = path.parent / ".r1_k1_full.nc.abc123.part"
     stale.write_bytes(b"half a file")
     assert quarantine_corrupt(tmp_path / "results") == [path.with_name(path.name + ".corrupt")]

@@ -3,7 +3,7 @@
 import logging
 
 from icosim.claims.core import read_verdicts, verdict_counts
-from icosim.io.netcdf import atomic_path, open_dataset
+from icosim.io.netcdf import atomic_path, open_attributes, open_dataset
 from icosim.report.schemes import stability_schemes
 from icosim.report.stability import stability_section
 
@@ -12,7 +12,7 @@ i, p = snakemake.input, snakemake.params
 claims = read_verdicts(i.claims)
 paper = [c for c in claims if c.get("scope", "paper") == "paper"]
 beyond = [c for c in claims if c.get("scope") == "beyond"]
-attrs = [open_dataset(path).attrs for path in i.panels]
+attrs = [open_attributes(path) for path in i.panels]
 jacobi_pngs = [f for f in i.figures if f.endswith("_jacobi.png")]
 schemes_html = ""
 if "shares" in i.keys():

@@ -22,7 +22,7 @@ import numpy as np
 from ..errors import CorruptDatasetError
 from .integrity import atomic_path, verify, write_checksum
 
-__all__ = ["provenance_attrs", "config_json", "write_netcdf", "atomic_path", "open_dataset"]
+__all__ = ["provenance_attrs", "config_json", "write_netcdf", "atomic_path", "open_dataset", "open_attributes"]
 
 CONVENTIONS = "CF-1.10"
 
@@ -84,15 +84,30 @@ def write_netcdf(ds, path):
         raise
 
 
-def open_dataset(path):
-    """Open a result written by :func:`write_netcdf` (loaded into memory); a file whose SHA-256 no longer
-    matches the recorded one is refused (:class:`~icosim.errors.CorruptDatasetError`), never read."""
-    import xarray as xr
+def open_attributes(path) -> dict:
+    """The global attributes of a result written by :func:`write_netcdf`, as :func:`open_dataset` gives them,
+    without reading its variables (a report section that lists hundreds of panels needs only these);
+    a file that fails its SHA-256 is refused as there."""
+    import netCDF4
 
+    _refuse_corrupt(path)
+    with netCDF4.Dataset(path) as nc:
+        return {name: nc.getncattr(name) for name in nc.ncattrs()}
+
+
+def _refuse_corrupt(path):
     if verify(path) is False:
         raise CorruptDatasetError(
             f"{path}: its SHA-256 does not match {Path(path).name}.sha256 (changed or damaged since it was written); "
             "run snakemake again to recompute it"
         )
+
+
+def open_dataset(path):
+    """Open a result written by :func:`write_netcdf` (loaded into memory); a file whose SHA-256 no longer
+    matches the recorded one is refused (:class:`~icosim.errors.CorruptDatasetError`), never read."""
+    import xarray as xr
+
+    _refuse_corrupt(path)
     with xr.open_dataset(path, engine=NETCDF_ENGINE) as ds:
         return ds.load()
