@@ -20,11 +20,12 @@ from icosim.engine.spectral import spectral_radius_mp  # noqa: E402
 from icosim.errors import ParameterError  # noqa: E402
 from icosim.figures import save_figure  # noqa: E402
 from icosim.figures.stability import (  # noqa: E402
+    drawn_variables,
     panel_layout,
     row_labels,
     stability_figure,  # noqa: E402
 )
-from icosim.io.netcdf import open_dataset, provenance_attrs, write_netcdf  # noqa: E402
+from icosim.io.netcdf import open_dataset, open_variables, provenance_attrs, write_netcdf  # noqa: E402
 from icosim.stability.datasets import stability_panel  # noqa: E402
 from icosim.stability.panels import (  # noqa: E402
     PanelSpec,
@@ -281,6 +282,44 @@ def test_figure_is_written_as_png_and_pdf(fig16_panels, tmp_path, style):
     assert (tmp_path / "f.png").read_bytes()[:4] == b"\x89PNG"
     assert (tmp_path / "f.pdf").read_bytes()[:4] == b"%PDF"
     assert not list(tmp_path.glob("*.part"))
+
+
+@pytest.mark.parametrize("style", ["field", "dots"])
+def test_figure_from_the_drawn_variables_alone_is_the_figure_from_the_datasets(fig16_panels, tmp_path, style):
+    """The figure job reads only what is drawn (open_variables, no xarray): the same values, the same pixels."""
+    from PIL import Image
+
+    paths = []
+    for n, ds in enumerate(fig16_panels):
+        ds = ds.copy()
+        ds["rho"][0, 0] = np.nan  # a point without a result: written as the fill value, read back as NaN
+        write_netcdf(ds, tmp_path / f"p{n}.nc")
+        paths.append(tmp_path / f"p{n}.nc")
+    whole = [open_dataset(p) for p in paths]
+    drawn = [open_variables(p, drawn_variables(style) + ("no_such_variable",)) for p in paths]
+    for ds, light in zip(whole, drawn):
+        assert set(light) == set(drawn_variables(style)) and np.isnan(light["rho"][0, 0])
+        assert list(light.attrs) == list(ds.attrs)
+        assert all(type(light.attrs[a]) is type(v) and np.array_equal(light.attrs[a], v) for a, v in ds.attrs.items())
+        for name, values in light.items():
+            assert values.dtype == ds[name].dtype and np.array_equal(values, ds[name].values, equal_nan=True), name
+    pixels = []
+    for panels, name in ((whole, "a"), (drawn, "b")):
+        save_figure(stability_figure(panels, title="Fig. 16", style=style), tmp_path / f"{name}.png", dpi=40)
+        pixels.append(np.asarray(Image.open(tmp_path / f"{name}.png").convert("RGBA")))
+    assert np.array_equal(*pixels)
+
+
+def test_variables_encoded_beyond_what_open_variables_decodes_are_refused(tmp_path):
+    import xarray as xr
+
+    ds = xr.Dataset({"rho": ("x", np.array([0.5, 1.5])), "verdict": ("x", np.array([0, 1], np.int8))})
+    ds["rho"].encoding = {"scale_factor": 0.5, "dtype": "int16", "_FillValue": -1}  # xarray: rho = 0.5 * stored
+    ds["verdict"].encoding = {"_FillValue": np.int8(-1)}  # xarray: a float, -1 read as NaN
+    write_netcdf(ds, tmp_path / "encoded.nc")
+    for name in ("rho", "verdict"):
+        with pytest.raises(ValueError, match=name):
+            open_variables(tmp_path / "encoded.nc", [name])
 
 
 def test_figure_rejects_unknown_style(fig16_panels):

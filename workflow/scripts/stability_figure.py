@@ -3,12 +3,12 @@
 import logging
 
 from icosim.figures import save_figure
-from icosim.figures.stability import stability_figure
-from icosim.io.netcdf import open_dataset
+from icosim.figures.stability import drawn_variables, stability_figure
+from icosim.io.netcdf import open_variables
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params
-panels = [open_dataset(path) for path in snakemake.input.panels]
+panels = [open_variables(path, drawn_variables(p.style)) for path in snakemake.input.panels]
 outputs = iter(snakemake.output)
 for scheme, title in p.titles.items():
     mine = [ds for ds in panels if ds.attrs["scheme"] == scheme]

@@ -19,7 +19,7 @@ from matplotlib.patches import Rectangle
 from ..engine.methods import parameters
 from ..stability.panels import format_row_label
 
-__all__ = ["stability_figure", "panel_layout", "row_labels", "STYLES"]
+__all__ = ["stability_figure", "drawn_variables", "panel_layout", "row_labels", "STYLES"]
 
 STYLES = ("field", "dots")
 #: How points that are neither stable nor unstable are drawn: verdict code (icosim.engine.spectral.policy.VERDICTS)
@@ -34,6 +34,11 @@ RATIO_SYMBOLS = {
     "alr21": r"$\alpha_{\lambda r21}$",
     "ali21": r"$\alpha_{\lambda i21}$",
 }
+
+
+def drawn_variables(style: str) -> tuple:
+    """The panel variables :func:`stability_figure` draws in ``style`` (a reader need not load the others)."""
+    return ("lr1", "li1", "rho", "verdict") + (("stable",) if style == "dots" else ())
 
 
 def symbols() -> dict:
@@ -80,10 +85,9 @@ def row_labels(panels) -> dict:
 
 
 def _draw_panel(ax, ds, *, style, norm, cmap, dots_stride):
-    lr1 = ds["lr1"].values
-    li1 = ds["li1"].values
-    rho = ds["rho"].values
-    stable = ds["stable"].values.astype(bool)
+    lr1 = np.asarray(ds["lr1"])
+    li1 = np.asarray(ds["li1"])
+    rho = np.asarray(ds["rho"])
     mappable = None
     if style == "field":
         shown = np.where(np.isfinite(rho), np.minimum(rho, norm.vmax), np.nan)
@@ -95,14 +99,14 @@ def _draw_panel(ax, ds, *, style, norm, cmap, dots_stride):
         idx_r = np.unique(np.r_[np.arange(lr1.size)[sel[0]], lr1.size - 1])
         idx_i = np.unique(np.r_[np.arange(li1.size)[sel[1]], li1.size - 1])
         sub = np.ix_(idx_r, idx_i)
-        s = stable[sub]
+        s = np.asarray(ds["stable"]).astype(bool)[sub]
         ax.scatter(LR[sub][s], LI[sub][s], s=6, facecolors="none", edgecolors="#1a9641", linewidths=0.6)
     finite = np.where(np.isfinite(rho), rho, np.inf)
     if np.nanmin(finite) < 1 < np.nanmax(finite):
         ax.contour(lr1, li1, np.minimum(finite, 1e6).T, levels=[1.0], colors="k", linewidths=0.7)
     if "verdict" in ds:  # marginal (the proven enclosure contains 1) and undecided points in their own colours
         LR, LI = np.meshgrid(lr1, li1, indexing="ij")
-        verdict = ds["verdict"].values
+        verdict = np.asarray(ds["verdict"])
         for code, style_kw in OPEN_VERDICTS.items():
             sel = verdict == code
             if sel.any():
@@ -126,7 +130,8 @@ def stability_figure(
 
     Parameters
     ----------
-    panels : list of :class:`xarray.Dataset` written by :func:`icosim.stability.panels.stability_panel`.
+    panels : the panel datasets written by :func:`icosim.stability.panels.stability_panel`, each an
+        :class:`xarray.Dataset` or its :func:`drawn_variables` as :func:`icosim.io.netcdf.open_variables` reads them.
     style : ``"field"`` (rho colour field and boundary) or ``"dots"`` (the
         paper's green dots at stable points, every ``dots_stride``-th grid point).
     rho_max : top of the colour scale; larger values use the top colour.
@@ -161,7 +166,7 @@ def stability_figure(
     _mark_zoom_regions(panels, place, columns, axes)
     if mappable is not None:
         fig.colorbar(mappable, ax=axes, shrink=0.6, extend="max", label=r"spectral radius $\rho$")
-    shown = {int(c) for ds in panels if "verdict" in ds for c in np.unique(ds["verdict"].values)}
+    shown = {int(c) for ds in panels if "verdict" in ds for c in np.unique(np.asarray(ds["verdict"]))}
     handles = [
         Line2D([], [], ls="none", ms=4, color=kw["color"], marker=kw["marker"], label=kw["label"])
         for code, kw in OPEN_VERDICTS.items()
@@ -183,7 +188,7 @@ def _mark_zoom_regions(panels, place, columns, axes):
         target = full.get((ds.attrs["row"], ds.attrs["k"]))
         if target is None:
             continue
-        lr1, li1 = ds["lr1"].values, ds["li1"].values
+        lr1, li1 = np.asarray(ds["lr1"]), np.asarray(ds["li1"])
         axes[target].add_patch(
             Rectangle(
                 (lr1[0], li1[0]),
