@@ -48,6 +48,27 @@ def test_the_png_is_what_matplotlib_draws(tmp_path):
     assert (tmp_path / "a.pdf").read_bytes().startswith(b"%PDF")
 
 
+def test_one_draw_per_file_writes_the_files_of_matplotlibs_draw_before_each(tmp_path, monkeypatch):
+    """The layout run before the PNG and no layout engine afterwards: each file is drawn once, and both files
+    are those written when savefig draws the figure once more before each file (the layout engine, then its
+    do-nothing placeholder)."""
+    import icosim.figures as figures
+
+    draws = []
+    draw = Figure.draw
+    monkeypatch.setattr(Figure, "draw", lambda self, renderer: draws.append(self) or draw(self, renderer))
+    fig = _figure()
+    save_figure(fig, tmp_path / "a.png", tmp_path / "a.pdf", dpi=90)
+    assert len(draws) == 2 and fig.get_layout_engine() is None
+    monkeypatch.setattr(figures, "_lay_out", lambda fig: None)
+    monkeypatch.setattr(figures, "_drop_layout_engine", lambda fig: fig.set_layout_engine("none"))
+    plain = _figure()
+    save_figure(plain, tmp_path / "b.png", tmp_path / "b.pdf", dpi=90)
+    assert len(draws) == 6 and plain.get_layout_engine() is not None
+    assert np.array_equal(_pixels((tmp_path / "a.png").read_bytes()), _pixels((tmp_path / "b.png").read_bytes()))
+    assert (tmp_path / "a.pdf").read_bytes() == (tmp_path / "b.pdf").read_bytes()
+
+
 def test_a_matplotlib_without_the_tick_internals_draws_as_usual(tmp_path, monkeypatch):
     """The tick shortcuts stand in for private matplotlib methods: where one of them is missing (here: a
     name no matplotlib has), no axis is touched and the file is matplotlib's own drawing, not an error."""

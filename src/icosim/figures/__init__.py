@@ -23,11 +23,12 @@ __all__ = ["save_figure"]
 def save_figure(fig, *paths, dpi: int = 110):
     """Write ``fig`` to each path; the format follows the suffix (``.png``, ``.pdf``).
 
-    The first file lays the figure out (constrained layout, if the figure uses it) and places the
+    The first file lays the figure out (constrained layout, if the figure uses it; for a PNG before
+    the draw that writes it, :func:`_lay_out`) and places the
     titles and axis labels beside their tick labels; both are in figure or axes coordinates, so they
     are kept for the other files instead of computed again (for a figure with many panels, the
-    slowest part of saving).  ``fig``'s layout engine is ``"none"`` afterwards and its titles and
-    axis labels stay where the first file put them.  Within each file an axis's ticks are computed
+    slowest part of saving).  ``fig`` has no layout engine afterwards (:func:`_drop_layout_engine`)
+    and its titles and axis labels stay where the first file put them.  Within each file an axis's ticks are computed
     once per state (:func:`_ticks_once`), and mathematical text (log-scale tick labels, symbols in
     labels) is typeset once per process, not once per file (:func:`_share_mathtext`).  The files
     show what matplotlib draws without these shortcuts (``tests/test_figures.py``).
@@ -37,10 +38,42 @@ def save_figure(fig, *paths, dpi: int = 110):
     for i, path in enumerate(paths):
         fmt = Path(path).suffix.lstrip(".").lower()
         with atomic_path(path) as tmp, _ticks_once(fig):
+            if i == 0 and fmt == "png":
+                _lay_out(fig)
             fig.savefig(tmp, format=fmt, dpi=dpi, metadata=_metadata(fmt))
         if i == 0:
-            fig.set_layout_engine("none")
+            _drop_layout_engine(fig)
             _keep_decorations(fig)
+
+
+def _lay_out(fig):
+    """Run ``fig``'s layout engine once, as matplotlib's ``Figure.draw`` does, and leave it without one.
+
+    ``savefig`` of a figure with a layout engine draws the figure twice: once (to no output) only to
+    run the engine, then to write the file.  Run here, for a PNG (the renderer the engine measures
+    text with is the same Agg renderer at the same resolution), the engine's work is the same and
+    the file is drawn once.
+    """
+    engine = fig.get_layout_engine()
+    if engine is not None and fig.axes:
+        with contextlib.suppress(ValueError):  # as Figure.draw: a layout that cannot be made is left out
+            engine.execute(fig)
+    _drop_layout_engine(fig)
+
+
+def _drop_layout_engine(fig):
+    """Leave ``fig`` without a layout engine: laid out by the first file, it needs none.
+
+    With any engine, even matplotlib's do-nothing placeholder (``set_layout_engine("none")``),
+    ``savefig`` draws the whole figure once before the draw that writes the file, only to run
+    the engine.  Without one it draws once.  The private attribute is checked before use; a
+    matplotlib without it gets the placeholder (the same file, one draw more).
+    """
+    fig.set_layout_engine("none")
+    from matplotlib.layout_engine import PlaceHolderLayoutEngine
+
+    if isinstance(getattr(fig, "_layout_engine", None), PlaceHolderLayoutEngine):
+        fig._layout_engine = None
 
 
 def _keep_decorations(fig):
