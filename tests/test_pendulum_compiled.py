@@ -261,7 +261,7 @@ def test_every_job_that_runs_the_integrator_waits_for_the_one_compile_job(tmp_pa
 
     # pendulum_run runs every scheme of pendulum.schemes (Jacobi and Gauss-Seidel) of its (method, decomposition);
     # an FMU scene checked against the built-in pendulum (config/fmi.yaml) runs it too
-    runners = {"pendulum_run", "pendulum_sweep", "pendulum_limits", "pendulum_tolerance", "pendulum_adaptive"}
+    runners = {"pendulum_run", "pendulum_trade_group", "pendulum_tolerance", "pendulum_adaptive"}
     fmi = yaml.safe_load((ROOT / "config" / "fmi.yaml").read_text())["fmi"]["scenes"]
     pendulum_scenes = {name for name, scene in fmi.items() if scene["builtin"] == "pendulum"}
     assert pendulum_scenes and len(pendulum_scenes) < len(fmi)

@@ -146,6 +146,31 @@ def test_default_run_has_every_scheme_and_jacobi_only_none_but_jacobi(workflow_c
     assert "gauss-seidel" not in text and "stability_scheme" not in text
 
 
+def test_one_trade_job_per_method_and_decomposition_writes_both_studies_for_every_scheme(workflow_copy):
+    """Error over H and the stability limit of one (method, decomposition) share one job (one start-up),
+    which writes each study's dataset of every scheme at its own path."""
+    import re
+
+    proc = snakemake(workflow_copy, "-n", "--forceall")
+    text = proc.stdout + proc.stderr
+    jobs = [
+        re.search(r"output: ([^\n]+)", block).group(1).split(", ")
+        for block in re.split(r"\n(?=\S*rule [\w-]+:)", text)
+        if re.match(r"\S*rule pendulum_trade_group:", block)
+    ]
+    pairs = {(c["method"], c["decomposition"]) for c in part("pendulum")["configurations"]}
+    assert len(jobs) == len(pairs)
+    expected = {
+        f"results/pendulum/trade/{study}/{scheme}/{m}_{d}.nc": (m, d)
+        for m, d in pairs
+        for study in ("sweep", "limits")
+        for scheme in BOTH
+    }
+    assert sorted(o for outputs in jobs for o in outputs) == sorted(expected)
+    assert all(len({expected[o] for o in outputs}) == 1 for outputs in jobs)
+    assert "rule pendulum_sweep:" not in text and "rule pendulum_limits:" not in text
+
+
 # -- the comparison and the report ------------------------------------------------------------------
 def _panel(figure, scheme, row, k, n=5):
     spec = PanelSpec.from_params(

@@ -54,9 +54,9 @@ PENDULUM_SECTION = "results/report/pendulum.html"
 
 
 # -- speed-accuracy trade (beyond the paper): error over H, work-precision, stability limit in H,
-# subsystem tolerance, adaptive macro steps.  One sweep job and one limit job per (method,
-# decomposition) write a dataset per scheme (every k), then merges; figures and the report section
-# read only the datasets.
+# subsystem tolerance, adaptive macro steps.  One job per (method, decomposition) writes a sweep
+# and a limits dataset per scheme (every k), then merges; figures and the report section read only
+# the datasets.
 TRADE = PENDULUM["trade"]
 # groups and configuration labels; bad schemes, end times off the H grid or invalid
 # tolerance/adaptive configurations fail here, naming the key
@@ -278,20 +278,30 @@ rule pendulum_report_section:
         "../scripts/pendulum_report_section.py"
 
 
-rule pendulum_sweep:
-    """Error over H of one (method, decomposition), for every scheme: every k and H over one end time."""
+rule pendulum_trade_group:
+    """The trade studies of one (method, decomposition), for every scheme: error over H (every k and H over
+    one end time) and the largest stable H (bisection on divergence, and the linear test model's
+    prediction).  One job for both: each pays about a CPU-second of start-up (interpreter, imports,
+    the compiled integrator)."""
     input:
         kernels=ancient(PENDULUM_KERNELS),
     output:
-        expand(
+        sweep=expand(
             TRADE_GROUP,
             study="sweep",
             scheme=PENDULUM_SCHEMES,
             method="{method}",
             decomposition="{decomposition}",
         ),
+        limits=expand(
+            TRADE_GROUP,
+            study="limits",
+            scheme=PENDULUM_SCHEMES,
+            method="{method}",
+            decomposition="{decomposition}",
+        ),
     log:
-        "logs/pendulum/sweep/{method}_{decomposition}.log",
+        "logs/pendulum/trade/{method}_{decomposition}.log",
     wildcard_constraints:
         method=METHOD_NAMES,
         decomposition=DECOMPOSITION_NAMES,
@@ -299,7 +309,7 @@ rule pendulum_sweep:
     conda:
         "../envs/icosim.yaml"
     params:
-        library=engine_library("pendulum_sweep"),
+        library=engine_library("pendulum_trade_group"),
         settings=lambda w: run_settings(PENDULUM, [w.method]),
         schemes=PENDULUM_SCHEMES,
         k=PENDULUM["k"],
@@ -308,8 +318,9 @@ rule pendulum_sweep:
         integrator=TRADE["error_over_H"]["integrator"],
         timing=TRADE["error_over_H"]["timing"],
         reference=TRADE["reference"],
+        limits=TRADE["stability_limit"],
     script:
-        "../scripts/pendulum_sweep.py"
+        "../scripts/pendulum_trade_group.py"
 
 
 rule pendulum_baselines:
@@ -352,37 +363,6 @@ rule pendulum_work_precision:
         accuracy_levels=TRADE["accuracy_levels"],
     script:
         "../scripts/pendulum_work_precision.py"
-
-
-rule pendulum_limits:
-    """Largest stable H of one (method, decomposition), for every scheme: bisection on divergence, and the
-    linear test model's prediction."""
-    input:
-        kernels=ancient(PENDULUM_KERNELS),
-    output:
-        expand(
-            TRADE_GROUP,
-            study="limits",
-            scheme=PENDULUM_SCHEMES,
-            method="{method}",
-            decomposition="{decomposition}",
-        ),
-    log:
-        "logs/pendulum/limits/{method}_{decomposition}.log",
-    wildcard_constraints:
-        method=METHOD_NAMES,
-        decomposition=DECOMPOSITION_NAMES,
-    priority: 10  # long: start them first
-    conda:
-        "../envs/icosim.yaml"
-    params:
-        library=engine_library("pendulum_limits"),
-        settings=lambda w: run_settings(PENDULUM, [w.method]),
-        schemes=PENDULUM_SCHEMES,
-        k=PENDULUM["k"],
-        limits=TRADE["stability_limit"],
-    script:
-        "../scripts/pendulum_limits.py"
 
 
 rule pendulum_stability_limit:
