@@ -10,6 +10,7 @@ from helpers import validate_config
 
 import icosim
 import icosim.convergence.experiment
+import icosim.convergence.study
 import icosim.convergence.work_precision
 from icosim.claims.registry import load_claims, parse_claims
 from icosim.convergence.config import check_claims_against_config, study_from_config
@@ -92,6 +93,19 @@ def test_partial_nrmse_of_a_run_match_an_independent_computation():
 
 
 # ------------------------------------------------------------------ setup, reference, methods
+def test_the_reference_in_pieces_is_the_exact_solution_at_once(monkeypatch):
+    """Study.reference evaluates the exact solution a piece of times at a time (here pieces of 7, the last
+    one short): bit for bit the exact solution at every T_N at once."""
+    monkeypatch.setattr(icosim.convergence.study, "REFERENCE_CHUNK", 7)
+    setup = Setup(end_time=0.2)
+    study = Study(setup, [100, 40])
+    for i, (H, N) in enumerate(zip(study.H, study.n_steps)):
+        st = study.solution(H).state(np.arange(1, N + 1, dtype=float))
+        x, v = st[:, 0], st[:, 1] / H
+        assert np.array_equal(study.reference(i), np.stack([x, x, v, v], axis=-1))
+        assert np.array_equal(study.reference_multiplier(i), st[:, 3])
+
+
 def test_step_counts_end_exactly_at_end_time():
     n = step_counts(1.0, 1e-5, 1e-2, 16)
     assert n[0] == 100 and n[-1] == 100000 and len(n) == 16

@@ -51,6 +51,8 @@ from .metric import ratio_root, variances
 
 #: How a curve's errors are computed (module docstring).
 STEPPINGS = ("error", "matrix", "simulate")
+#: Times per piece of the exact reference (:meth:`Study.reference`).
+REFERENCE_CHUNK = 16384
 
 __all__ = ["Study", "CurveResult", "iterate_linear_map"]
 
@@ -170,9 +172,14 @@ class Study:
     def _reference(self, i):
         if i not in self._references:
             H, N = self.H[i], int(self.n_steps[i])
-            st = self.solution(H).state(np.arange(1, N + 1, dtype=float))
-            x, v = st[:, 0], st[:, 1] / H
-            self._references[i] = (np.stack([x, x, v, v], axis=-1), st[:, 3])
+            solution, ref, lam = self.solution(H), np.empty((N, 4)), np.empty(N)
+            # in pieces that stay in the cache (each time on its own: the same values as at once)
+            for start in range(0, N, REFERENCE_CHUNK):
+                st = solution.state(np.arange(start + 1, min(start + REFERENCE_CHUNK, N) + 1, dtype=float))
+                x, v = st[:, 0], st[:, 1] / H
+                ref[start : start + len(st)] = np.stack([x, x, v, v], axis=-1)
+                lam[start : start + len(st)] = st[:, 3]
+            self._references[i] = (ref, lam)
         return self._references[i]
 
     def _variances(self, i):
