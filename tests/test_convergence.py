@@ -359,6 +359,36 @@ def test_step_cost_counts_the_work_of_one_macro_step(method, params, solves, pro
     assert cost == {"subsystem_integrations": 4, "coupling_solves": solves, "projections": projections}
 
 
+def test_figures_from_the_drawn_variables_are_those_from_the_whole_dataset(tmp_path):
+    """The figure job reads only DRAWN_VARIABLES (open_variables, no xarray): the same pixels as the
+    figures drawn from the whole dataset (open_dataset), for a panel of two rows."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from icosim.figures.convergence import DRAWN_VARIABLES, convergence_figure, slope_figure
+    from icosim.io.netcdf import open_dataset, open_variables, write_netcdf
+
+    rows = ({"index": 1, "mu": 5e-3}, {"index": 2, "mu": 5e-3})
+    spec = PanelSpec("21", "ff", "p", "baumgarte", {"mu": 5e-3}, rows, (0, 1))
+    study = Study(Setup(end_time=0.2), step_counts(0.2, 2e-4, 2e-2, 5))
+    write_netcdf(run_panel(spec, study, {"min_points": 2, "decades": 1.0, "tolerance": 0.1}), tmp_path / "p.nc")
+    layout = [[("p", 2), ("p", 1)]]
+    kw = {"columns": [{"mu": 5e-3}], "rows": ["index 2", "index 1"]}
+
+    def pixels(ds, draw):
+        canvas = FigureCanvasAgg(draw({"p": ds}, layout, **kw))
+        canvas.draw()
+        return np.asarray(canvas.buffer_rgba())
+
+    drawn, whole = open_variables(tmp_path / "p.nc", DRAWN_VARIABLES), open_dataset(tmp_path / "p.nc")
+    assert set(drawn) == set(DRAWN_VARIABLES)
+    for draw in (convergence_figure, slope_figure):
+        assert np.array_equal(pixels(drawn, draw), pixels(whole, draw))
+    # each cell draws its own row: index 2 on top, as xarray selects it
+    top = convergence_figure({"p": drawn}, layout, **kw).axes[0].get_lines()[0]
+    assert np.array_equal(top.get_ydata(), whole.sel(index=2)["nrmse"].values[0], equal_nan=True)
+    assert not np.array_equal(top.get_ydata(), whole.sel(index=1)["nrmse"].values[0], equal_nan=True)
+
+
 def test_figure_never_draws_unstable_as_error():
     from icosim.figures.convergence import convergence_figure
 

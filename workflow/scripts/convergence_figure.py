@@ -3,12 +3,13 @@
 import logging
 
 from icosim.figures import save_figure
-from icosim.figures.convergence import convergence_figure, row_title, slope_figure
-from icosim.io.netcdf import open_dataset
+from icosim.figures.convergence import DRAWN_VARIABLES, convergence_figure, row_title, slope_figure
+from icosim.io.netcdf import open_variables
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params
-panels = [open_dataset(path) for path in snakemake.input.panels]
+# only the variables drawn, without xarray (icosim.io.netcdf.open_variables)
+panels = [open_variables(path, DRAWN_VARIABLES) for path in snakemake.input.panels]
 outputs = iter(snakemake.output)
 for drawn in p.drawn:
     datasets = {

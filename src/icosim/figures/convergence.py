@@ -23,7 +23,23 @@ from matplotlib.lines import Line2D
 from ..engine.decompositions import DECOMPOSITIONS
 from ..engine.methods import METHODS, parameters
 
-__all__ = ["convergence_figure", "slope_figure", "work_precision_figure", "row_title", "K_COLOURS"]
+__all__ = ["convergence_figure", "slope_figure", "work_precision_figure", "row_title", "K_COLOURS", "DRAWN_VARIABLES"]
+
+#: The variables of a panel :func:`convergence_figure` and :func:`slope_figure` draw.
+DRAWN_VARIABLES = (
+    "H",
+    "H_mid",
+    "k",
+    "index",
+    "nrmse",
+    "unstable",
+    "fit_used",
+    "order",
+    "order_status",
+    "local_slope",
+    "fit_H_min",
+    "fit_H_max",
+)
 
 #: How an order that is not asymptotic is shown in a legend.
 STATUS_SHORT = {
@@ -64,8 +80,20 @@ def _column_label(column: dict) -> str:
     return ", ".join(param_label(k, v) for k, v in column.items())
 
 
+def _values(ds, name):
+    """A variable of a panel as a numpy array: ``ds`` an :class:`xarray.Dataset` or the arrays of
+    :func:`icosim.io.netcdf.open_variables` (what the figure job reads: only :data:`DRAWN_VARIABLES`)."""
+    return np.asarray(ds[name])
+
+
+def _row(ds, index):
+    """The variables of a panel at the row ``index`` (the curves of one cell), by name."""
+    (row,) = np.flatnonzero(_values(ds, "index") == index)
+    return lambda name: _values(ds, name)[row]
+
+
 def _limits(datasets):
-    vals = np.concatenate([ds["nrmse"].values.ravel() for ds in datasets])
+    vals = np.concatenate([_values(ds, "nrmse").ravel() for ds in datasets])
     vals = vals[np.isfinite(vals) & (vals > 0)]
     if vals.size == 0:
         return 1e-12, 10.0
@@ -87,14 +115,14 @@ def _guides(ax, H, orders, ylo, yhi):
 
 
 def _draw_cell(ax, ds, index, guide_orders, ylo, yhi):
-    sub = ds.sel(index=index)
-    H = ds["H"].values
-    for j, k in enumerate(ds["k"].values):
+    sub = _row(ds, index)
+    H = _values(ds, "H")
+    for j, k in enumerate(_values(ds, "k")):
         colour = K_COLOURS[j % len(K_COLOURS)]
-        err = sub["nrmse"].values[j]
-        unstable = sub["unstable"].values[j].astype(bool)
-        used = sub["fit_used"].values[j].astype(bool)
-        label = _order_label(k, float(sub["order"].values[j]), str(sub["order_status"].values[j]))
+        err = sub("nrmse")[j]
+        unstable = sub("unstable")[j].astype(bool)
+        used = sub("fit_used")[j].astype(bool)
+        label = _order_label(k, float(sub("order")[j]), str(sub("order_status")[j]))
         ax.plot(H, err, "-", color=colour, lw=1.2, label=label, zorder=3)
         ax.plot(H[~used], err[~used], "o", mfc="white", mec=colour, ms=3.5, zorder=4)
         ax.plot(H[used], err[used], "o", color=colour, ms=3.5, zorder=4)
@@ -158,16 +186,16 @@ def _cell_title(ds, index, row: str, column: dict, n_cols: int) -> str:
 
 
 def _draw_slopes(ax, ds, index, tolerance):
-    sub = ds.sel(index=index)
-    H_mid = ds["H_mid"].values
-    for j, k in enumerate(ds["k"].values):
+    sub = _row(ds, index)
+    H_mid = _values(ds, "H_mid")
+    for j, k in enumerate(_values(ds, "k")):
         colour = K_COLOURS[j % len(K_COLOURS)]
-        slope = sub["local_slope"].values[j]
-        status = str(sub["order_status"].values[j])
-        order = float(sub["order"].values[j])
+        slope = sub("local_slope")[j]
+        status = str(sub("order_status")[j])
+        order = float(sub("order")[j])
         ax.plot(H_mid, slope, "o-", color=colour, ms=3, lw=1.1, label=_order_label(k, order, status), zorder=3)
         if np.isfinite(order):  # the decade the order is read off, with the tolerance band
-            lo, hi = float(sub["fit_H_min"].values[j]), float(sub["fit_H_max"].values[j])
+            lo, hi = float(sub("fit_H_min")[j]), float(sub("fit_H_max")[j])
             ax.fill_between([lo, hi], order - tolerance, order + tolerance, color=colour, alpha=0.18, lw=0)
             ax.plot([lo, hi], [order, order], "--", color=colour, lw=1.0)
     ax.set_xscale("log")
@@ -183,7 +211,7 @@ def slope_figure(datasets: dict, layout, *, columns, rows, title="", tolerance=0
     +/- ``tolerance``: every point inside it means the order is asymptotic.
     """
     n_cols, n_rows = len(layout), len(rows)
-    values = np.concatenate([ds["local_slope"].values.ravel() for ds in datasets.values()])
+    values = np.concatenate([_values(ds, "local_slope").ravel() for ds in datasets.values()])
     values = values[np.isfinite(values)]
     lo, hi = (np.floor(values.min()) - 0.5, np.ceil(values.max()) + 0.5) if values.size else (0.0, 5.0)
     fig = Figure(figsize=(4.0 * n_cols + 0.6, 3.0 * n_rows + 0.9), layout="constrained")
