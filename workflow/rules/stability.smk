@@ -5,6 +5,7 @@
 # every scheme; the claims (the paper's and the project's) are checked in one job; the scheme
 # comparison and the report section follow.
 from icosim.claims.registry import load_claims  # noqa: E402
+from icosim.stability.checks import PANEL_VARIABLES  # noqa: E402
 from icosim.stability.panels import figure_panels, panel_id  # noqa: E402
 
 validate_part(config["stability"], "stability.schema.yaml")
@@ -175,6 +176,8 @@ rule stability_claims:
     params:
         library=script_library("claims"),
         enforce_reference=STABILITY["claims"]["enforce_reference"],
+        # the variables the stability checks read: the claims job reads no others
+        variables=list(PANEL_VARIABLES),
     script:
         "../scripts/claims.py"
 

@@ -11,11 +11,14 @@ import logging
 
 from icosim.claims.core import enforce_references, verdict_counts, write_verdicts
 from icosim.claims.registry import evaluate, load_claims
-from icosim.io.netcdf import open_dataset
+from icosim.io.netcdf import open_dataset, open_variables
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 claims = load_claims(snakemake.input.claims)
-verdicts = evaluate(claims, [open_dataset(path) for path in snakemake.input.datasets])
+# a part whose checks name the variables they read (params.variables) has only those read
+variables = getattr(snakemake.params, "variables", None)
+datasets = [open_variables(p, variables) if variables else open_dataset(p) for p in snakemake.input.datasets]
+verdicts = evaluate(claims, datasets)
 for v in verdicts:
     logging.info("%-9s %-45s (reference %s) %s", v.verdict, v.claim.id, v.claim.reference, v.measured)
 enforce_references(verdicts, snakemake.params.enforce_reference)

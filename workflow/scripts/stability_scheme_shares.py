@@ -2,11 +2,12 @@
 
 import logging
 
-from icosim.io.netcdf import open_dataset, provenance_attrs, write_netcdf
+from icosim.io.netcdf import open_variables, provenance_attrs, write_netcdf
+from icosim.stability.checks import PANEL_VARIABLES
 from icosim.stability.comparison import scheme_shares
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
-panels = [open_dataset(path) for path in snakemake.input.panels]
+panels = [open_variables(path, PANEL_VARIABLES) for path in snakemake.input.panels]  # the shares read no others
 job = {"panels": list(snakemake.input.panels)}
 ds = scheme_shares(
     panels,

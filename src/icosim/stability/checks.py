@@ -45,6 +45,7 @@ __all__ = [
     "stable_share",
     "Share",
     "grid_resolution",
+    "PANEL_VARIABLES",
 ]
 
 _select = select  # the checks take a parameter called `select`
@@ -52,7 +53,7 @@ _select = select  # the checks take a parameter called `select`
 
 def grid_resolution(datasets) -> float:
     """``1/(n - 1)`` of the coarsest axis: the resolution of a stable share."""
-    n = min(min(ds.sizes["lr1"], ds.sizes["li1"]) for ds in datasets)
+    n = min(min(np.asarray(ds["lr1"]).size, np.asarray(ds["li1"]).size) for ds in datasets)
     return 1.0 / (n - 1)
 
 
@@ -92,8 +93,10 @@ def stable_share(ds, region=None) -> Share:
     if n == 0:
         raise ParameterError(f"region {region} holds no grid point of figure {ds.attrs.get('figure')}")
     stable, unstable = verdict_masks(ds)
-    certified = ds["certified"].values.astype(bool) if "certified" in ds else np.zeros(mask.shape, bool)
-    undecided = ds["verdict"].values == VERDICTS.index("undecided") if "verdict" in ds else np.zeros(mask.shape, bool)
+    certified = np.asarray(ds["certified"]).astype(bool) if "certified" in ds else np.zeros(mask.shape, bool)
+    undecided = (
+        np.asarray(ds["verdict"]) == VERDICTS.index("undecided") if "verdict" in ds else np.zeros(mask.shape, bool)
+    )
     s, u = int(stable[mask].sum()), int(unstable[mask].sum())
     return Share(s, n - s - u, int(certified[mask].sum()), n, int(undecided[mask].sum()))
 
@@ -112,7 +115,7 @@ def _nearest_unstable(ds, region):
     mask = region_mask(ds, region) & verdict_masks(ds)[1]
     if not mask.any():
         return None
-    LR, LI = np.meshgrid(ds["lr1"].values, ds["li1"].values, indexing="ij")
+    LR, LI = np.meshgrid(np.asarray(ds["lr1"]), np.asarray(ds["li1"]), indexing="ij")
     return float(np.min(np.hypot(LR[mask], LI[mask])))
 
 
@@ -157,7 +160,7 @@ def check_stable_fraction(datasets, *, select: dict, op: str, value: float, regi
             text += f", nearest unstable point at distance {nearest:.3g} from the origin"
         if region and region.get("exclude_undamped"):
             axis_mask = region_mask(ds, {**region, "exclude_undamped": False})
-            axis_mask &= np.broadcast_to(ds["lr1"].values[:, None] == 0, axis_mask.shape)
+            axis_mask &= np.broadcast_to(np.asarray(ds["lr1"])[:, None] == 0, axis_mask.shape)
             if axis_mask.any():
                 stable, unstable = verdict_masks(ds)
                 n_axis_unstable, n_axis_marginal = (
@@ -179,7 +182,7 @@ def check_stable_fraction(datasets, *, select: dict, op: str, value: float, regi
 
 def _origin_text(ds, entry: dict) -> str:
     """The verdict at the origin lr1 = li1 = 0 (left out of the share), if the grid holds it."""
-    i, j = np.flatnonzero(ds["lr1"].values == 0), np.flatnonzero(ds["li1"].values == 0)
+    i, j = np.flatnonzero(np.asarray(ds["lr1"]) == 0), np.flatnonzero(np.asarray(ds["li1"]) == 0)
     if not (i.size and j.size):
         return ""
     stable, unstable = verdict_masks(ds)
@@ -418,3 +421,6 @@ CHECKS = {
         describe=_describe_trend,
     ),
 }
+
+#: The panel variables the check kinds read (the claims job reads only these: :func:`icosim.io.netcdf.open_variables`).
+PANEL_VARIABLES = ("lr1", "li1", "rho", "stable", "verdict", "certified")

@@ -68,7 +68,7 @@ def point_verdicts(ds) -> np.ndarray:
     code = np.full(stable.shape, 3)
     code[stable], code[unstable] = 0, 1
     if "verdict" in ds:
-        code[ds["verdict"].values == VERDICTS.index("marginal")] = 2
+        code[np.asarray(ds["verdict"]) == VERDICTS.index("marginal")] = 2
     return _LETTERS[code]
 
 
@@ -109,7 +109,7 @@ def _describe(key, pair_by) -> str:
 
 
 def _points(ds, mask, va, vb, rho_a, rho_b):
-    lr1, li1 = np.meshgrid(ds["lr1"].values, ds["li1"].values, indexing="ij")
+    lr1, li1 = np.meshgrid(np.asarray(ds["lr1"]), np.asarray(ds["li1"]), indexing="ij")
     return [
         {
             "lr1": float(lr1[i, j]),
@@ -148,7 +148,8 @@ def check_pointwise(datasets, *, a: dict, b: dict, relation: str, pair_by: list 
             texts.append(f"{label}: no panel of b = {b}")
             continue
         if not (
-            np.array_equal(da["lr1"].values, db["lr1"].values) and np.array_equal(da["li1"].values, db["li1"].values)
+            np.array_equal(np.asarray(da["lr1"]), np.asarray(db["lr1"]))
+            and np.array_equal(np.asarray(da["li1"]), np.asarray(db["li1"]))
         ):
             holds.append(None)
             texts.append(f"{label}: the two panels lie on different grids")
@@ -165,7 +166,7 @@ def check_pointwise(datasets, *, a: dict, b: dict, relation: str, pair_by: list 
         if relation == "differ":  # per pair: the panels differ where "same" fails
             h = None if h is None else not h
         holds.append(h)
-        rho_a, rho_b = da["rho"].values, db["rho"].values
+        rho_a, rho_b = np.asarray(da["rho"]), np.asarray(db["rho"])
         bad = _points(da, failed, va, vb, rho_a, rho_b)
         entry = {
             "n_points": int(mask.sum()),

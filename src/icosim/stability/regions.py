@@ -23,8 +23,8 @@ REGION_KEYS = ("lr1", "li1", "exclude_undamped", "exclude_origin")
 
 def region_mask(ds, region):
     """Boolean ``(lr1, li1)`` mask of the points of ``ds`` inside ``region`` (None: every point)."""
-    lr1 = ds["lr1"].values[:, None]
-    li1 = ds["li1"].values[None, :]
+    lr1 = np.asarray(ds["lr1"])[:, None]
+    li1 = np.asarray(ds["li1"])[None, :]
     mask = np.ones((lr1.size, li1.size), dtype=bool)
     region = region or {}
     unknown = sorted(set(region) - set(REGION_KEYS))
@@ -49,9 +49,9 @@ def region_mask(ds, region):
 def verdict_masks(ds):
     """``(stable, unstable)`` masks of a panel; the rest is marginal or undecided."""
     if "verdict" not in ds:  # a panel without verdicts (written before certification): every point decided
-        stable = ds["stable"].values.astype(bool)
+        stable = np.asarray(ds["stable"]).astype(bool)
         return stable, ~stable
-    v = ds["verdict"].values
+    v = np.asarray(ds["verdict"])
     return v == VERDICTS.index("stable"), v == VERDICTS.index("unstable")  # the datasets' flag values
 
 
