@@ -69,6 +69,31 @@ def test_one_draw_per_file_writes_the_files_of_matplotlibs_draw_before_each(tmp_
     assert (tmp_path / "a.pdf").read_bytes() == (tmp_path / "b.pdf").read_bytes()
 
 
+def test_texts_measured_once_per_process_give_the_files_of_texts_measured_per_file(tmp_path, monkeypatch):
+    """Two figures saved one after the other (the second measures its texts from the first's sizes): the
+    same PNG pixels and PDF bytes as with matplotlib's measurement per renderer; matplotlib's function is
+    back in place after each save."""
+    import contextlib
+
+    from matplotlib import text as mtext
+
+    import icosim.figures as figures
+
+    own = mtext._get_text_metrics_with_cache
+    figures._TEXT_METRICS.clear()
+    for n in range(2):
+        save_figure(_figure(), tmp_path / f"a{n}.png", tmp_path / f"a{n}.pdf", dpi=90)
+        assert mtext._get_text_metrics_with_cache is own
+    assert any(figures._TEXT_METRICS.values())
+    monkeypatch.setattr(figures, "_shared_text_metrics", contextlib.nullcontext)
+    for n in range(2):
+        save_figure(_figure(), tmp_path / f"b{n}.png", tmp_path / f"b{n}.pdf", dpi=90)
+        assert np.array_equal(
+            _pixels((tmp_path / f"a{n}.png").read_bytes()), _pixels((tmp_path / f"b{n}.png").read_bytes())
+        )
+        assert (tmp_path / f"a{n}.pdf").read_bytes() == (tmp_path / f"b{n}.pdf").read_bytes()
+
+
 def test_a_matplotlib_without_the_tick_internals_draws_as_usual(tmp_path, monkeypatch):
     """The tick shortcuts stand in for private matplotlib methods: where one of them is missing (here: a
     name no matplotlib has), no axis is touched and the file is matplotlib's own drawing, not an error."""

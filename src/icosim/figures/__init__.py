@@ -29,7 +29,8 @@ def save_figure(fig, *paths, dpi: int = 110):
     are kept for the other files instead of computed again (for a figure with many panels, the
     slowest part of saving).  ``fig`` has no layout engine afterwards (:func:`_drop_layout_engine`)
     and its titles and axis labels stay where the first file put them.  Within each file an axis's ticks are computed
-    once per state (:func:`_ticks_once`), and mathematical text (log-scale tick labels, symbols in
+    once per state (:func:`_ticks_once`), texts are measured once per process (:func:`_shared_text_metrics`),
+    and mathematical text (log-scale tick labels, symbols in
     labels) is typeset once per process, not once per file (:func:`_share_mathtext`).  The files
     show what matplotlib draws without these shortcuts (``tests/test_figures.py``).
     """
@@ -37,7 +38,7 @@ def save_figure(fig, *paths, dpi: int = 110):
     fig.set_dpi(dpi)  # the first file is drawn at the figure's own resolution: positions read from it hold
     for i, path in enumerate(paths):
         fmt = Path(path).suffix.lstrip(".").lower()
-        with atomic_path(path) as tmp, _ticks_once(fig):
+        with atomic_path(path) as tmp, _ticks_once(fig), _shared_text_metrics():
             if i == 0 and fmt == "png":
                 _lay_out(fig)
             fig.savefig(tmp, format=fmt, dpi=dpi, metadata=_metadata(fmt))
@@ -173,6 +174,52 @@ def _in_view(axis):
         return locations
 
     return trimmed(axis.get_majorticklocs, axis.major), trimmed(axis.get_minorticklocs, axis.minor)
+
+
+#: Text sizes measured by :func:`_shared_text_metrics`, for the text settings (rcParams) they were measured with.
+_TEXT_METRICS: dict = {}
+#: The rcParams a text's measured size may depend on besides its string, font and resolution.
+_TEXT_SETTINGS = ("font.", "text.", "mathtext.", "pdf.", "ps.", "svg.")
+
+
+@contextlib.contextmanager
+def _shared_text_metrics():
+    """Within one save, measure each text once per process, output kind and resolution.
+
+    Matplotlib keeps a text's measured size per renderer, and each file has a new renderer, so
+    every figure measures its texts again (tick labels, legend entries, titles: the same strings
+    in every figure of a job).  The size depends only on the string, the font, the math mode, the
+    resolution, the kind of renderer and the text settings, so one cache keyed by those serves
+    every renderer.  Matplotlib's own function again after the save; left as it is where
+    matplotlib's internals differ.
+    """
+    import matplotlib as mpl
+    from matplotlib import text as mtext
+
+    measure = getattr(mtext, "_get_text_metrics_with_cache", None)
+    if not callable(measure):
+        yield
+        return
+    settings = tuple(sorted((k, repr(v)) for k, v in mpl.rcParams.items() if k.startswith(_TEXT_SETTINGS)))
+    if settings not in _TEXT_METRICS:
+        _TEXT_METRICS.clear()
+        _TEXT_METRICS[settings] = {}
+    sizes = _TEXT_METRICS[settings]
+
+    def shared(renderer, text, fontprop, ismath, dpi):
+        key = (type(renderer), getattr(renderer, "dpi", None), text, fontprop.copy(), ismath, dpi)
+        size = sizes.get(key)
+        if size is None:
+            if len(sizes) >= 65536:  # a bound on the memory of a long process
+                sizes.clear()
+            size = sizes[key] = measure(renderer, text, fontprop, ismath, dpi)
+        return size
+
+    mtext._get_text_metrics_with_cache = shared
+    try:
+        yield
+    finally:
+        mtext._get_text_metrics_with_cache = measure
 
 
 @functools.cache
