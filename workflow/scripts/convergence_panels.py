@@ -5,7 +5,7 @@ import json
 import logging
 
 from icosim.convergence.curves import curve_label, curves
-from icosim.convergence.datasets import run_panel
+from icosim.convergence.datasets import run_panel_data
 from icosim.convergence.experiment import Setup, step_counts
 from icosim.convergence.panels import PanelSpec
 from icosim.convergence.study import Study
@@ -27,7 +27,7 @@ for panel, path in zip(p.panels, snakemake.output, strict=True):
         "NRMSE of Eq. (72) over the macro-step size"
     )
     provenance = provenance_attrs(job, title=title, command=f"snakemake rule {snakemake.rule}")
-    ds = run_panel(spec, study, p.fit, stepping=p.stepping, provenance=provenance)
+    ds = run_panel_data(spec, study, p.fit, stepping=p.stepping, provenance=provenance)
     write_netcdf(ds, path)
     for rec in curves([ds]):
         logging.info(

@@ -1,16 +1,16 @@
 """Snakemake job: one configuration of the linear convergence study on the FMU units over H, with the built-in
-model's errors and both orders (thin: icosim.fmi.validation.order_case)."""
+model's errors and both orders (thin: icosim.fmi.validation.order_case_data)."""
 
 import logging
 from pathlib import Path
 
-from icosim.fmi.validation import order_case
+from icosim.fmi.validation import order_case_data
 from icosim.io.netcdf import write_netcdf
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params
 case = {key: value for key, value in p.case.items() if key != "H"}
-ds = order_case(
+ds = order_case_data(
     case,
     H=p.case["H"],
     t_end=p.t_end,

@@ -5,7 +5,7 @@ import logging
 
 from icosim.io.netcdf import provenance_attrs, write_netcdf
 from icosim.pendulum.model import PendulumParameters
-from icosim.pendulum.replication.datasets import reference_dataset
+from icosim.pendulum.replication.datasets import reference_dataset_data
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params
@@ -15,6 +15,6 @@ logging.info("reference: %s", json.dumps(job, sort_keys=True))
 prov = provenance_attrs(
     job, title="Double pendulum (Sect. 4): monolithic reference", command="snakemake rule pendulum_reference"
 )
-ds = reference_dataset(PendulumParameters(**p.model), p.H, p.t_end, prov, **p.reference)
+ds = reference_dataset_data(PendulumParameters(**p.model), p.H, p.t_end, prov, **p.reference)
 write_netcdf(ds, snakemake.output[0])
-logging.info("%d points, %.2f s", ds.sizes["t"], ds.attrs["wall_time_s"])
+logging.info("%d points, %.2f s", ds.dims["t"], ds.attrs["wall_time_s"])

@@ -5,7 +5,7 @@ import json
 import logging
 
 from icosim.io.netcdf import write_netcdf
-from icosim.pendulum.replication.datasets import run_job
+from icosim.pendulum.replication.datasets import run_job_data
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 w, p = snakemake.wildcards, snakemake.params
@@ -22,7 +22,7 @@ for (scheme, k), path in zip(jobs, snakemake.output, strict=True):
         "scheme": scheme,
     }
     logging.info("run: %s", json.dumps(job, sort_keys=True))
-    result, ds = run_job(job, command=f"snakemake rule {snakemake.rule}")
+    result, ds = run_job_data(job, command=f"snakemake rule {snakemake.rule}")
     write_netcdf(ds, path)
     logging.info(
         "%d macro steps in %.2f s; diverged=%d at t=%s (%s); %s",

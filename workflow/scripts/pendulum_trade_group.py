@@ -6,8 +6,8 @@ the start-up (interpreter, imports, the compiled integrator) once; each dataset 
 import logging
 
 from icosim.io.netcdf import write_netcdf
-from icosim.pendulum.trade.stability_limit import limits_study
-from icosim.pendulum.trade.sweep import sweep_group
+from icosim.pendulum.trade.stability_limit import limits_study_data
+from icosim.pendulum.trade.sweep import sweep_group_data
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 w, p, out = snakemake.wildcards, snakemake.params, snakemake.output
@@ -32,6 +32,8 @@ def log_limits(label, measured, predicted):
 sweep = dict(H_values=list(p.H), t_end=p.t_end, reference=dict(p.reference), integrator=dict(p.integrator))
 timing = dict(repeats=p.timing["repeats"], repeat_below=p.timing["repeat_below"])
 for scheme, path in zip(p.schemes, out.sweep, strict=True):
-    write_netcdf(sweep_group(scheme=scheme, **common, **sweep, **timing, command=command, log=log_sweep), path)
+    write_netcdf(sweep_group_data(scheme=scheme, **common, **sweep, **timing, command=command, log=log_sweep), path)
 for scheme, path in zip(p.schemes, out.limits, strict=True):
-    write_netcdf(limits_study(scheme=scheme, **common, limits=dict(p.limits), command=command, log=log_limits), path)
+    write_netcdf(
+        limits_study_data(scheme=scheme, **common, limits=dict(p.limits), command=command, log=log_limits), path
+    )

@@ -5,7 +5,7 @@ import logging
 
 from icosim.io.netcdf import provenance_attrs, write_netcdf
 from icosim.labels import figure_label
-from icosim.stability.datasets import stability_panel
+from icosim.stability.datasets import stability_panel_data
 from icosim.stability.panels import PanelSpec
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
@@ -17,7 +17,7 @@ for params, path in zip(snakemake.params.panels, snakemake.output, strict=True):
         "spectral radius over (lr1, li1)"
     )
     provenance = provenance_attrs(params, title=title, command=f"snakemake rule {snakemake.rule}")
-    ds = stability_panel(spec, provenance=provenance)
+    ds = stability_panel_data(spec, provenance=provenance)
     write_netcdf(ds, path)
     a = ds.attrs
     logging.info(

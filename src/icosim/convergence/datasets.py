@@ -18,20 +18,26 @@ import numpy as np
 
 from ..engine.decompositions import get_decomposition
 from ..engine.methods import get_spec, parameter_units
+from ..io.dataset import DatasetDict
 from ..order_fit import asymptotic_order, local_slopes
 from .experiment import PAPER_MODEL, dimensional_method, units_description
 from .panels import PanelSpec
 from .study import Study
 
-__all__ = ["run_panel"]
+__all__ = ["run_panel", "run_panel_data"]
 
 
 def run_panel(
     spec: PanelSpec, study: Study, fit: dict | None = None, *, stepping: str = "error", provenance: dict | None = None
 ):
-    """Every curve of a panel as an :class:`xarray.Dataset` (dims ``index``, ``k``, ``H``)."""
-    import xarray as xr
+    """Every curve of a panel as an :class:`xarray.Dataset` (dims ``index``, ``k``, ``H``; :func:`run_panel_data`)."""
+    return run_panel_data(spec, study, fit, stepping=stepping, provenance=provenance).to_xarray()
 
+
+def run_panel_data(
+    spec: PanelSpec, study: Study, fit: dict | None = None, *, stepping: str = "error", provenance: dict | None = None
+) -> DatasetDict:
+    """Every curve of a panel as a :class:`~icosim.io.dataset.DatasetDict` (what :func:`run_panel` converts)."""
     fit = dict(fit or {})
     t0 = time.perf_counter()
     nI, nK, nH = len(spec.rows), len(spec.k), study.H.size
@@ -80,7 +86,13 @@ def run_panel(
     H_mid = H_mid[::-1]
     dims3, dims2, dims_mid = ("index", "k", "H"), ("index", "k"), ("index", "k", "H_mid")
     H_attrs = {"long_name": "macro-step size", "units": "s"}
-    ds = xr.Dataset(
+    # row parameters (dimensional) as coordinates along index
+    units = parameter_units(index=True)
+    row_coords = {}
+    for name in get_spec(spec.method).coordinates:
+        vals = [dimensional_method(spec.method, 1.0, **r).params.get(name, np.nan) for r in spec.rows]
+        row_coords[name] = ("index", np.array(vals, dtype=float), {"units": units[name]})
+    ds = DatasetDict(
         {
             "nrmse": (
                 dims3,
@@ -247,13 +259,9 @@ def run_panel(
                 {"long_name": "index of the coupling formulation"},
             ),
             "k": ("k", np.array(spec.k, dtype=np.int32), {"long_name": "degree of the approximation polynomials"}),
+            **row_coords,
         },
     )
-    # row parameters (dimensional) as coordinates along index
-    units = parameter_units(index=True)
-    for name in get_spec(spec.method).coordinates:
-        vals = [dimensional_method(spec.method, 1.0, **r).params.get(name, np.nan) for r in spec.rows]
-        ds = ds.assign_coords({name: ("index", np.array(vals, dtype=float), {"units": units[name]})})
     s = study.setup
     attrs = dict(provenance or {})
     attrs.update(

@@ -150,12 +150,16 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
 
 
 def run_dataset(run: SceneRun, *, command: str = ""):
-    """The run as an :class:`xarray.Dataset`: ``position``/``velocity``/``acceleration`` (subsystem, time),
+    """:func:`run_dataset_data` as an :class:`xarray.Dataset`."""
+    return run_dataset_data(run, command=command).to_xarray()
+
+
+def run_dataset_data(run: SceneRun, *, command: str = ""):
+    """The run as a :class:`~icosim.io.dataset.DatasetDict`: ``position``/``velocity``/``acceleration`` (subsystem, time),
     ``multiplier`` and ``gap`` (time), the coupling variables, the scene and the units' provenance as attributes."""
     import json
 
-    import xarray as xr
-
+    from ..io.dataset import DatasetDict
     from ..io.netcdf import provenance_attrs
 
     scene = run.scene
@@ -167,7 +171,7 @@ def run_dataset(run: SceneRun, *, command: str = ""):
     squeeze = (lambda a: a[..., 0]) if n == 1 else (lambda a: a)
     sub_time = lambda a: squeeze(np.moveaxis(a, 0, 1))  # (time, subsystem, n) -> (subsystem, time[, n])
     variables = list(dec.variables) if n == 1 else [f"{v}_{c}" for v in dec.variables for c in "xyz"[:n]]
-    ds = xr.Dataset(
+    ds = DatasetDict(
         {
             "position": (("subsystem", "time") + comp, sub_time(run.positions), {"units": "m"}),
             "velocity": (("subsystem", "time") + comp, sub_time(run.velocities), {"units": "m s-1"}),

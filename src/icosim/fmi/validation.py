@@ -30,6 +30,7 @@ from ..engine.linear_problem import LinearCosimulation
 from ..engine.macrostep import macro_step, simulate
 from ..engine.methods import engine_method, make_method
 from ..engine.model import PhysicalModel
+from ..io.dataset import DatasetDict
 from ..order_fit import asymptotic_order
 from .config import case_label
 from .errors import SceneError
@@ -44,7 +45,9 @@ __all__ = [
     "measured_growth",
     "builtin_difference",
     "scene_validation",
+    "scene_validation_data",
     "order_case",
+    "order_case_data",
     "case_label",
 ]
 
@@ -143,6 +146,11 @@ def pendulum_builtin(scene):
     return y[:, :, 0, :], y[:, 0, 3, :]
 
 
+def _array(run, name) -> np.ndarray:
+    """A variable of a run's dataset (:func:`icosim.fmi.run.run_dataset_data` or an :class:`xarray.Dataset`)."""
+    return run.array(name) if isinstance(run, DatasetDict) else run[name].values
+
+
 def measured_growth(run) -> float:
     """Growth per macro step measured on a run of a scalar joint: the largest amplitude
     ``max_i sqrt(x_i^2 + (v_i/omega)^2)`` (``omega^2 = (c1 + c2)/(m1 + m2)``, the coupled oscillation) over
@@ -155,8 +163,8 @@ def measured_growth(run) -> float:
     try:
         omega = np.sqrt((float(st[0]["c"]) + float(st[1]["c"])) / (float(st[0]["m"]) + float(st[1]["m"])))
     except KeyError:
-        omega = 1.0 / float(run["time"][1] - run["time"][0])
-    x, v = run["position"].values, run["velocity"].values  # (subsystem, time)
+        omega = 1.0 / float(_array(run, "time")[1] - _array(run, "time")[0])
+    x, v = _array(run, "position"), _array(run, "velocity")  # (subsystem, time)
     with np.errstate(over="ignore", invalid="ignore"):
         amp = np.max(np.sqrt(x**2 + (v / omega) ** 2), axis=0)
     n = amp.size - 1
@@ -177,7 +185,7 @@ def builtin_difference(scene, run, builtin) -> dict:
     if builtin == "linear":
         x, v = linear_builtin(scene)
         n = min(len(x), run.sizes["time"])
-        got_x, got_v = run["position"].values.T[:n], run["velocity"].values.T[:n]
+        got_x, got_v = _array(run, "position").T[:n], _array(run, "velocity").T[:n]
         with np.errstate(over="ignore", invalid="ignore"):
             dx = np.max(np.abs(got_x - x[:n])) / max(1.0, np.max(np.abs(x[:n])))
             dv = np.max(np.abs(got_v - v[:n])) / max(1.0, np.max(np.abs(v[:n])))
@@ -185,18 +193,22 @@ def builtin_difference(scene, run, builtin) -> dict:
     if builtin == "pendulum":
         joint, force = pendulum_builtin(scene)
         n = min(len(joint), run.sizes["time"] - 1)
-        got = np.moveaxis(run["position"].values, 0, 1)[1 : n + 1]  # (time, subsystem, component)
+        got = np.moveaxis(_array(run, "position"), 0, 1)[1 : n + 1]  # (time, subsystem, component)
         dp = np.max(np.abs(got - joint[:n]))
-        df = np.max(np.abs(run["multiplier"].values[1 : n + 1] - force[:n])) / np.max(np.abs(force[:n]))
+        df = np.max(np.abs(_array(run, "multiplier")[1 : n + 1] - force[:n])) / np.max(np.abs(force[:n]))
         return {"difference": float(dp), "force_difference": float(df)}
     return {"difference": nan, "force_difference": nan}
 
 
 def scene_validation(scene, run, *, name: str, builtin: str = "none", cache=None):
-    """One scene's validation dataset: the prediction before the run, the growth measured on it, the
-    difference to the built-in model.  ``run``: the scene's dataset (:func:`icosim.fmi.run.run_dataset`)."""
-    import xarray as xr
+    """:func:`scene_validation_data` as an :class:`xarray.Dataset`."""
+    return scene_validation_data(scene, run, name=name, builtin=builtin, cache=cache).to_xarray()
 
+
+def scene_validation_data(scene, run, *, name: str, builtin: str = "none", cache=None) -> DatasetDict:
+    """One scene's validation dataset: the prediction before the run, the growth measured on it, the
+    difference to the built-in model.  ``run``: the scene's dataset (:func:`icosim.fmi.run.run_dataset_data`
+    or :func:`~icosim.fmi.run.run_dataset`)."""
     from ..io.netcdf import provenance_attrs
     from .predict import predict_scene
 
@@ -232,7 +244,7 @@ def scene_validation(scene, run, *, name: str, builtin: str = "none", cache=None
         for u in names
     )
     exact = all(run.attrs[f"{u}_inputs"] == "derivatives" for u in names)
-    ds = xr.Dataset(
+    ds = DatasetDict(
         {
             "predicted_rho": ((), float(predicted if predicted is not None else nan)),
             "measured_growth": ((), growth, {"comment": "per macro step (icosim.fmi.validation.measured_growth)"}),
@@ -335,15 +347,18 @@ def _fmu_states(scene, history, *, cache=None) -> np.ndarray:
             unit.close()
 
 
-def order_case(case: dict, *, H, t_end: float, model: dict, x0: float, units_dir, cache=None, fit=None):
+def order_case(case: dict, **kwargs):
+    """:func:`order_case_data` as an :class:`xarray.Dataset`."""
+    return order_case_data(case, **kwargs).to_xarray()
+
+
+def order_case_data(case: dict, *, H, t_end: float, model: dict, x0: float, units_dir, cache=None, fit=None):
     """Errors over ``H`` of one configuration of the linear convergence study on the FMU units and on the
     built-in model, both from the exact start, and the asymptotic order of each.
 
     ``case``: ``method``, ``decomposition``, ``k``, ``scheme`` (default Jacobi), ``params`` (the method's,
     dimensional).  The error is the largest position error of either body against the exact monolithic
     solution over ``[0, t_end]`` (m).  ``fit``: :func:`~icosim.order_fit.asymptotic_order`'s options."""
-    import xarray as xr
-
     from ..io.netcdf import provenance_attrs
 
     fit = dict(fit or {})
@@ -368,7 +383,7 @@ def order_case(case: dict, *, H, t_end: float, model: dict, x0: float, units_dir
                 err_builtin.append(float(np.max(np.abs(builtin - exact))))
                 diff.append(float(np.max(np.abs(fmu - builtin[: len(fmu)])) / max(1.0, np.max(np.abs(builtin)))))
     f_fmu, f_builtin = asymptotic_order(H, err_fmu, **fit), asymptotic_order(H, err_builtin, **fit)
-    ds = xr.Dataset(
+    ds = DatasetDict(
         {
             "error_fmu": (("H",), np.array(err_fmu), {"units": "m", "long_name": "largest position error, FMU run"}),
             "error_builtin": (("H",), np.array(err_builtin), {"units": "m", "long_name": "the same, built-in model"}),

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CorruptDatasetError
+from .dataset import DatasetDict, write_nc4
 from .integrity import atomic_path, verify, write_checksum
 
 __all__ = [
@@ -73,12 +74,20 @@ NETCDF_ENGINE = "netcdf4"
 
 
 def write_netcdf(ds, path):
-    """Write an :class:`xarray.Dataset` to ``path`` atomically (NetCDF-4, :data:`NETCDF_ENGINE`), with its SHA-256
-    recorded beside it (``path.sha256``, written before the rename: :mod:`icosim.io.integrity`)."""
+    """Write a result to ``path`` atomically (NetCDF-4, :data:`NETCDF_ENGINE`), with its SHA-256 recorded beside it
+    (``path.sha256``, written before the rename: :mod:`icosim.io.integrity`).
 
+    ``ds`` is a :class:`~icosim.io.dataset.DatasetDict` (xarray's dictionary form of a dataset, written with
+    netCDF4 directly, without importing xarray: the same file as xarray writes) or an :class:`xarray.Dataset`."""
+
+    if not hasattr(ds, "to_netcdf") and not isinstance(ds, DatasetDict):
+        ds = DatasetDict.from_dict(ds)
     try:
         with atomic_path(path) as tmp:
-            ds.to_netcdf(tmp, engine=NETCDF_ENGINE)
+            if isinstance(ds, DatasetDict):
+                write_nc4(ds, tmp)
+            else:
+                ds.to_netcdf(tmp, engine=NETCDF_ENGINE)
             write_checksum(tmp, path)
     except (OSError, RuntimeError) as exc:
         # the netCDF library reports a full disk as "NetCDF: HDF error": say what happened, and where

@@ -24,10 +24,11 @@ from ..engine.decompositions import DECOMPOSITIONS
 from ..engine.model import TestModel
 from ..engine.schemes import get_scheme
 from ..engine.spectral.policy import ARITHMETICS, REASONS, VERDICTS, Certification, spectral_radius
+from ..io.dataset import DatasetDict
 from ..io.jsonio import dumps
 from .panels import PanelSpec, format_row_label, grid_axis, method_parameters_units
 
-__all__ = ["stability_panel", "LONG_NAMES"]
+__all__ = ["stability_panel", "stability_panel_data", "LONG_NAMES"]
 
 LONG_NAMES = {
     "lr1": "real part of the eigenvalue of subsystem 1, lambda_bar_r1 = -d_bar_1/2",
@@ -63,13 +64,16 @@ def _flags(names) -> dict:
 
 
 def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
-    """Compute one panel and return it as an :class:`xarray.Dataset`.
+    """Compute one panel and return it as an :class:`xarray.Dataset` (:func:`stability_panel_data`, converted).
 
     ``provenance`` are extra global attributes (normally
     :func:`icosim.io.netcdf.provenance_attrs` of the job's configuration).
     """
-    import xarray as xr
+    return stability_panel_data(spec, provenance=provenance).to_xarray()
 
+
+def stability_panel_data(spec: PanelSpec, *, provenance: dict | None = None) -> DatasetDict:
+    """Compute one panel as a :class:`~icosim.io.dataset.DatasetDict` (written without xarray)."""
     method = spec.coupling_method()
     method.check_decomposition(DECOMPOSITIONS[spec.decomposition])
     get_scheme(spec.scheme).check_decomposition(spec.decomposition)
@@ -94,7 +98,7 @@ def stability_panel(spec: PanelSpec, *, provenance: dict | None = None):
     def var(name, values, **attrs):
         return (dims, values, {"long_name": LONG_NAMES[name], **attrs})
 
-    ds = xr.Dataset(
+    ds = DatasetDict(
         {
             "rho": var("rho", np.asarray(result.rho, dtype=float), units="1"),
             "stable": var("stable", np.asarray(result.stable, dtype=bool)),

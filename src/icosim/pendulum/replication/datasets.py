@@ -13,18 +13,24 @@ import numpy as np
 
 from ...engine.methods import CouplingMethod, make_method, parameter_units
 from ...engine.schemes import get_scheme
+from ...io.dataset import DatasetDict
 from ...io.netcdf import provenance_attrs
 from ..model import PendulumParameters, joint_constraint
 from ..names import VARIABLES
 from ..reference import Monolithic, reference_solution
 from ..runs import RunResult, run_cosimulation
 
-__all__ = ["run_dataset", "reference_dataset", "run_job"]
+__all__ = [
+    "run_dataset",
+    "run_dataset_data",
+    "reference_dataset",
+    "reference_dataset_data",
+    "run_job",
+    "run_job_data",
+]
 
 
-def _series_dataset(t, series, attrs):
-    import xarray as xr
-
+def _series_dataset(t, series, attrs) -> DatasetDict:
     data_vars = {}
     for name, values in series.items():
         if name in VARIABLES:
@@ -36,10 +42,17 @@ def _series_dataset(t, series, attrs):
             )
         data_vars[name] = ("t", np.asarray(values, dtype=float), {"units": units, "long_name": long_name})
     coords = {"t": ("t", np.asarray(t, dtype=float), {"units": "s", "long_name": "time", "standard_name": "time"})}
-    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    return DatasetDict(data_vars, coords=coords, attrs=attrs)
 
 
 def run_dataset(
+    result: RunResult, method: CouplingMethod, decomposition: str, k: int, settings, provenance, scheme="jacobi"
+):
+    """:func:`run_dataset_data` as an :class:`xarray.Dataset`."""
+    return run_dataset_data(result, method, decomposition, k, settings, provenance, scheme).to_xarray()
+
+
+def run_dataset_data(
     result: RunResult,
     method: CouplingMethod,
     decomposition: str,
@@ -47,7 +60,7 @@ def run_dataset(
     settings: dict,
     provenance: dict,
     scheme: str = "jacobi",
-):
+) -> DatasetDict:
     """The NetCDF contract of a co-simulation run (README, the pendulum's datasets): series over ``t`` and attributes.
 
     ``scheme`` is the coupling scheme's name (attribute ``scheme``).
@@ -88,9 +101,14 @@ def run_dataset(
     return _series_dataset(result.t, result.series, attrs)
 
 
-def reference_dataset(
+def reference_dataset(params: PendulumParameters, H: float, t_end: float, provenance: dict, **solver):
+    """:func:`reference_dataset_data` as an :class:`xarray.Dataset`."""
+    return reference_dataset_data(params, H, t_end, provenance, **solver).to_xarray()
+
+
+def reference_dataset_data(
     params: PendulumParameters, H: float, t_end: float, provenance: dict, *, method="DOP853", rtol=1e-12, atol=1e-12
-):
+) -> DatasetDict:
     """The monolithic reference on the macro-time grid, stored like a run (``method = "monolithic"``)."""
     n = int(round(t_end / H))
     t = H * np.arange(n + 1)
@@ -132,6 +150,12 @@ def reference_dataset(
 
 
 def run_job(job: dict, *, command: str = ""):
+    """:func:`run_job_data` with the dataset as an :class:`xarray.Dataset`."""
+    result, data = run_job_data(job, command=command)
+    return result, data.to_xarray()
+
+
+def run_job_data(job: dict, *, command: str = "") -> tuple[RunResult, DatasetDict]:
     """One run as the workflow describes it (``job``: method, decomposition, k, method_params, model, H,
     t_end, integrator, sensitivities, corrector, divergence) -> ``(RunResult, dataset)``.
 
@@ -169,4 +193,4 @@ def run_job(job: dict, *, command: str = ""):
     if scheme.name != "jacobi":
         title += f", {scheme.label}"
     provenance = provenance_attrs(job, title=title, command=command)
-    return result, run_dataset(result, method, job["decomposition"], job["k"], settings, provenance, scheme.name)
+    return result, run_dataset_data(result, method, job["decomposition"], job["k"], settings, provenance, scheme.name)

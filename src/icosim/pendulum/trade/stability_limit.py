@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...engine.methods import make_method
+from ...io.dataset import DatasetDict
 from ...io.netcdf import provenance_attrs
 from ..model import PendulumParameters
 from .linear_study import linear_rho, linear_stability
@@ -54,6 +55,7 @@ __all__ = [
     "limits_group",
     "limits_dataset",
     "limits_study",
+    "limits_study_data",
     "merge_limits",
     "limited_by",
     "LIMIT_STATUSES",
@@ -173,10 +175,8 @@ def limits_group(settings, scheme, method, decomposition, ks, *, scan, t_end, re
     return out
 
 
-def limits_dataset(groups: dict, *, scheme, method, decomposition, scan, t_end, resolution, attrs):
+def limits_dataset(groups: dict, *, scheme, method, decomposition, scan, t_end, resolution, attrs) -> DatasetDict:
     """One group's limits as a dataset over ``config`` (the contract names ``H_max``, ``H_max_linear``)."""
-    import xarray as xr
-
     labels = list(groups)
 
     def col(fn, dtype=float):
@@ -274,10 +274,17 @@ def limits_dataset(groups: dict, *, scheme, method, decomposition, scan, t_end, 
     }
     attrs = dict(attrs)
     attrs.update(t_end=float(t_end), resolution=float(resolution), scan=[float(h) for h in sorted(scan)])
-    return xr.Dataset(data, coords=coords, attrs=attrs)
+    return DatasetDict(data, coords=coords, attrs=attrs)
 
 
 def limits_study(settings, scheme, method, decomposition, ks, *, limits: dict, command: str = "", log=None):
+    """:func:`limits_study_data` as an :class:`xarray.Dataset`."""
+    return limits_study_data(
+        settings, scheme, method, decomposition, ks, limits=limits, command=command, log=log
+    ).to_xarray()
+
+
+def limits_study_data(settings, scheme, method, decomposition, ks, *, limits: dict, command: str = "", log=None):
     """One group's limits (:func:`limits_group`) as a dataset (:func:`limits_dataset`) with its provenance.
 
     ``limits`` is the configuration's ``trade.stability_limit`` (``scan``, ``t_end``, ``resolution``);

@@ -13,16 +13,15 @@ from __future__ import annotations
 import numpy as np
 
 from ...engine.methods import make_method
+from ...io.dataset import DatasetDict
 from ...io.netcdf import provenance_attrs
 from .measures import RECORD, config_label, measured_run
 
-__all__ = ["sweep_group", "records_dataset"]
+__all__ = ["sweep_group", "sweep_group_data", "records_dataset"]
 
 
-def records_dataset(records: dict, labels: list, H_values, coords: dict, attrs: dict, dim: str = "H"):
+def records_dataset(records: dict, labels: list, H_values, coords: dict, attrs: dict, dim: str = "H") -> DatasetDict:
     """Records ``{(label, H): record}`` as a dataset over ``(config, dim)`` (NaN where none)."""
-    import xarray as xr
-
     H_values = [float(h) for h in H_values]
     data = {}
     for name, (units, long_name) in RECORD.items():
@@ -39,10 +38,15 @@ def records_dataset(records: dict, labels: list, H_values, coords: dict, attrs: 
     data["reason"] = (("config", dim), np.array(reason, dtype=str), {"long_name": "why a run diverged or failed"})
     all_coords = {"config": ("config", list(labels)), dim: (dim, H_values, {"units": "s"})}
     all_coords.update({key: ("config", list(v)) for key, v in coords.items()})
-    return xr.Dataset(data, coords=all_coords, attrs=attrs)
+    return DatasetDict(data, coords=all_coords, attrs=attrs)
 
 
-def sweep_group(
+def sweep_group(*args, **kwargs):
+    """:func:`sweep_group_data` as an :class:`xarray.Dataset`."""
+    return sweep_group_data(*args, **kwargs).to_xarray()
+
+
+def sweep_group_data(
     settings: dict,
     scheme: str,
     method: str,
