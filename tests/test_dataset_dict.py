@@ -40,7 +40,8 @@ def test_stability_panel(tmp_path):
 
 
 def test_convergence_panel(tmp_path):
-    from icosim.convergence.datasets import run_panel_data
+    from icosim.convergence.curves import curve_label, curves
+    from icosim.convergence.datasets import curve_summaries, run_panel_data
     from icosim.convergence.experiment import Setup, step_counts
     from icosim.convergence.panels import PanelSpec
     from icosim.convergence.study import Study
@@ -49,7 +50,10 @@ def test_convergence_panel(tmp_path):
     spec = PanelSpec("21", "ff", "p", "baumgarte", {"mu": 5e-3}, rows, (0, 1))
     study = Study(Setup(end_time=0.05), step_counts(0.05, 1e-3, 1e-2, 3))
     d = run_panel_data(spec, study, {"min_points": 2}, provenance=provenance_attrs({"a": 1}, title="t"))
-    assert_written_as_xarray_writes(d, tmp_path)
+    read = assert_written_as_xarray_writes(d, tmp_path)
+    # the job's log line per curve: as the curves read back are labelled
+    back = [(curve_label(r), r["order"], r["order_status"], int(r["unstable"].sum())) for r in curves([read])]
+    np.testing.assert_equal(curve_summaries(d), back)
 
 
 PENDULUM = yaml.safe_load((ROOT / "config" / "pendulum.yaml").read_text())["pendulum"]
@@ -91,6 +95,60 @@ def test_pendulum_trade_sweep_and_limits(tmp_path):
     limits = {"scan": [5e-3, 2e-2], "t_end": 0.05, "resolution": 0.5}
     lim = limits_study_data(SETTINGS, "gauss-seidel-21", "projection", "ff", [0, 1], limits=limits)
     assert_written_as_xarray_writes(lim, tmp_path, "limits")
+
+
+def test_pendulum_trade_tolerance_and_baselines(tmp_path):
+    from icosim.pendulum.model import PendulumParameters
+    from icosim.pendulum.trade.baselines import linear_orders_dataset_data, monolithic_baselines_data
+    from icosim.pendulum.trade.tolerance import tolerance_study_data
+
+    ref = PENDULUM["trade"]["reference"]
+    configs = [{"method": "projection", "decomposition": "ff", "k": 1}]
+    tol = tolerance_study_data(SETTINGS, configs, [1e-2], [1e-3, 1e-8], 0.02, reference=ref)
+    assert_written_as_xarray_writes(tol, tmp_path, "tolerance")
+    mono = monolithic_baselines_data(PendulumParameters(), [1e-4, 1e-8], 0.02, reference=ref, repeats=1)
+    assert_written_as_xarray_writes(mono, tmp_path, "monolithic")
+    configurations = [
+        ("baumgarte_ff_k0", "jacobi", "baumgarte", "ff", 0),
+        ("p", "gauss-seidel-12", "projection", "ff", 1),
+    ]
+    model = PENDULUM["trade"]["linear_orders"]["model"]
+    lin = linear_orders_dataset_data(SETTINGS, configurations, [1e-2, 2e-2], model=model, x0=0.1, t_end=0.1)
+    assert_written_as_xarray_writes(lin, tmp_path, "linear")
+
+
+def test_stability_scheme_shares(tmp_path):
+    from icosim.stability.checks import PANEL_VARIABLES
+    from icosim.stability.comparison import scheme_shares_data
+    from icosim.stability.datasets import stability_panel_data
+    from icosim.stability.panels import PanelSpec
+
+    def panel(figure, scheme, row, k):
+        spec = PanelSpec(
+            figure=figure,
+            row=row,
+            k=k,
+            view="full",
+            method="baumgarte",
+            method_params={"index": 1, "mu": 1.0},
+            decomposition="ff",
+            am21=10.0 if row == 2 else 1.0,
+            alr21=1.0,
+            ali21=1.0,
+            lr1=[-2.0, 0.0],
+            li1=[0.0, 2.0],
+            n=3,
+            policy="float64",
+            scheme=scheme,
+        )
+        path = tmp_path / f"panel_{figure}_{scheme}_{row}_{k}.nc"
+        write_netcdf(stability_panel_data(spec), path)
+        return open_variables(path, PANEL_VARIABLES)  # as the workflow's job reads them
+
+    panels = [panel("9", s, row, 1) for s in ("jacobi", "gauss-seidel-12") for row in (1, 2)] + [
+        panel("16", "jacobi", 1, 1)
+    ]
+    assert_written_as_xarray_writes(scheme_shares_data(panels), tmp_path)
 
 
 def _can_run_units():

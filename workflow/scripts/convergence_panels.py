@@ -4,8 +4,7 @@
 import json
 import logging
 
-from icosim.convergence.curves import curve_label, curves
-from icosim.convergence.datasets import run_panel_data
+from icosim.convergence.datasets import curve_summaries, run_panel_data
 from icosim.convergence.experiment import Setup, step_counts
 from icosim.convergence.panels import PanelSpec
 from icosim.convergence.study import Study
@@ -29,12 +28,6 @@ for panel, path in zip(p.panels, snakemake.output, strict=True):
     provenance = provenance_attrs(job, title=title, command=f"snakemake rule {snakemake.rule}")
     ds = run_panel_data(spec, study, p.fit, stepping=p.stepping, provenance=provenance)
     write_netcdf(ds, path)
-    for rec in curves([ds]):
-        logging.info(
-            "%s: order %.3f (%s), %d unstable",
-            curve_label(rec),
-            rec["order"],
-            rec["order_status"],
-            rec["unstable"].sum(),
-        )
+    for label, order, status, unstable in curve_summaries(ds):
+        logging.info("%s: order %.3f (%s), %d unstable", label, order, status, unstable)
     logging.info("%s: %.2f s", path, ds.attrs["seconds_total"])

@@ -5,11 +5,11 @@ import logging
 
 from icosim.io.netcdf import write_netcdf
 from icosim.pendulum.model import PendulumParameters
-from icosim.pendulum.trade.baselines import linear_orders_dataset, monolithic_baselines
+from icosim.pendulum.trade.baselines import linear_orders_dataset_data, monolithic_baselines_data
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params
-mono = monolithic_baselines(
+mono = monolithic_baselines_data(
     PendulumParameters(**p.settings["model"]),
     p.monolithic["tolerances"],
     p.t_end,
@@ -20,7 +20,7 @@ mono = monolithic_baselines(
 write_netcdf(mono, snakemake.output.monolithic)
 logging.info("monolithic: %s", mono["error_max"].values.tolist())
 lin = p.linear_orders
-ds = linear_orders_dataset(
+ds = linear_orders_dataset_data(
     dict(p.settings),
     [tuple(c) for c in p.configs],
     list(p.H),

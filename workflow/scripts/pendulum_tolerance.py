@@ -3,7 +3,7 @@
 import logging
 
 from icosim.io.netcdf import write_netcdf
-from icosim.pendulum.trade.tolerance import tolerance_study
+from icosim.pendulum.trade.tolerance import tolerance_study_data
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params
@@ -14,7 +14,7 @@ def log(label, H, rtol, rec, effect):
     logging.info("%-22s H=%.0e rtol=%.0e err %.3e effect %.2e", label, H, rtol, rec["error_max"], effect)
 
 
-ds = tolerance_study(
+ds = tolerance_study_data(
     dict(p.settings),
     [dict(c) for c in tol["configurations"]],
     list(tol["H"]),

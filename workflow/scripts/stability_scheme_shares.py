@@ -4,16 +4,16 @@ import logging
 
 from icosim.io.netcdf import open_variables, provenance_attrs, write_netcdf
 from icosim.stability.checks import PANEL_VARIABLES
-from icosim.stability.comparison import scheme_shares
+from icosim.stability.comparison import scheme_shares_data
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 panels = [open_variables(path, PANEL_VARIABLES) for path in snakemake.input.panels]  # the shares read no others
 job = {"panels": list(snakemake.input.panels)}
-ds = scheme_shares(
+ds = scheme_shares_data(
     panels,
     provenance=provenance_attrs(
         job, title="Stable shares of the coupling schemes", command="snakemake rule stability_scheme_shares"
     ),
 )
 write_netcdf(ds, snakemake.output[0])
-logging.info("shares of %d figures x %d rows x %d k x %d schemes", *(ds.sizes[d] for d in ds["stable_share"].dims))
+logging.info("shares of %d figures x %d rows x %d k x %d schemes", *ds.sizes.values())

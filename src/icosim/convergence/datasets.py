@@ -17,14 +17,15 @@ import time
 import numpy as np
 
 from ..engine.decompositions import get_decomposition
-from ..engine.methods import get_spec, parameter_units
+from ..engine.methods import get_spec, parameter_units, parameters
 from ..io.dataset import DatasetDict
 from ..order_fit import asymptotic_order, local_slopes
+from .curves import curve_label
 from .experiment import PAPER_MODEL, dimensional_method, units_description
 from .panels import PanelSpec
 from .study import Study
 
-__all__ = ["run_panel", "run_panel_data"]
+__all__ = ["run_panel", "run_panel_data", "curve_summaries"]
 
 
 def run_panel(
@@ -295,3 +296,25 @@ def run_panel_data(
     )
     ds.attrs = attrs
     return ds
+
+
+def curve_summaries(ds: DatasetDict) -> list[tuple]:
+    """``(label, order, order_status, unstable step sizes)`` of each curve of a panel from :func:`run_panel_data`,
+    labelled as :func:`~icosim.convergence.curves.curves` labels the panel read back (for the job's log)."""
+    a, v = ds.attrs, ds.array
+    out = []
+    for i, index in enumerate(v("index")):
+        for j, k in enumerate(v("k")):
+            rec = {"decomposition": a["decomposition"], "method": a["method"], "index": int(index), "k": int(k)}
+            for name in parameters():
+                if name in ds["coords"] or name in a:
+                    rec[name] = float(v(name)[i] if name in ds["coords"] else a[name])
+            out.append(
+                (
+                    curve_label(rec),
+                    float(v("order")[i, j]),
+                    str(v("order_status")[i, j]),
+                    int(v("unstable")[i, j].sum()),
+                )
+            )
+    return out

@@ -11,21 +11,25 @@ from __future__ import annotations
 import numpy as np
 
 from ..engine.schemes import SCHEMES
+from ..io.dataset import DatasetDict
 from .checks import stable_share
 
-__all__ = ["scheme_shares"]
+__all__ = ["scheme_shares", "scheme_shares_data"]
 
 
 def scheme_shares(panels, *, provenance: dict | None = None):
-    """An :class:`xarray.Dataset` ``stable_share(figure, row, k, scheme)`` from full-view panels.
+    """:func:`scheme_shares_data` as an :class:`xarray.Dataset`."""
+    return scheme_shares_data(panels, provenance=provenance).to_xarray()
+
+
+def scheme_shares_data(panels, *, provenance: dict | None = None) -> DatasetDict:
+    """A dataset (:class:`~icosim.io.dataset.DatasetDict`) ``stable_share(figure, row, k, scheme)`` from full-view panels.
 
     ``figure`` is the figure's id (``"9"``); ``method`` and ``decomposition`` are
     coordinates along it, ``row_label`` along ``(figure, row)``.  Missing
     combinations are NaN.  Only figures computed with more than one scheme are
     included; the schemes in registry order (:data:`icosim.engine.schemes.SCHEMES`).
     """
-    import xarray as xr
-
     full = [ds for ds in panels if ds.attrs["view"] == "full"]
     by_key, meta, row_labels = {}, {}, {}
     for ds in full:
@@ -57,7 +61,7 @@ def scheme_shares(panels, *, provenance: dict | None = None):
         share[idx], n_stable[idx], n_points[idx], n_marginal[idx] = sh, ns, n, nm
     labels = np.array([[row_labels.get((fig, r), "") for r in rows] for fig in figures], dtype=object).astype(str)
     dims = ("figure", "row", "k", "scheme")
-    ds = xr.Dataset(
+    ds = DatasetDict(
         {
             "stable_share": (
                 dims,

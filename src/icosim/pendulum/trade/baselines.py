@@ -18,13 +18,22 @@ import time
 
 import numpy as np
 
+from ...io.dataset import DatasetDict
 from ...io.netcdf import provenance_attrs
 from ..integrator.radau import radau_batch
 from ..model import PendulumParameters
 from ..reference import Monolithic, reference_solution
 from .measures import angle_errors
 
-__all__ = ["monolithic_run", "monolithic_baselines", "linear_orders_dataset", "reference_accuracy", "INTEGRATORS"]
+__all__ = [
+    "monolithic_run",
+    "monolithic_baselines",
+    "monolithic_baselines_data",
+    "linear_orders_dataset",
+    "linear_orders_dataset_data",
+    "reference_accuracy",
+    "INTEGRATORS",
+]
 
 #: Monolithic integrators of the baseline: the links' own Radau IIA and scipy's DOP853.
 INTEGRATORS = ("Radau", "DOP853")
@@ -86,13 +95,16 @@ def monolithic_run(params: PendulumParameters, integrator: str, tol: float, t_en
     raise ValueError(f"integrator must be one of {', '.join(INTEGRATORS)}, got {integrator!r}")
 
 
-def monolithic_baselines(
+def monolithic_baselines(*args, **kwargs):
+    """:func:`monolithic_baselines_data` as an :class:`xarray.Dataset`."""
+    return monolithic_baselines_data(*args, **kwargs).to_xarray()
+
+
+def monolithic_baselines_data(
     params: PendulumParameters, tolerances, t_end: float, *, reference: dict, repeats: int = 3, command=""
-):
+) -> DatasetDict:
     """Every integrator of :data:`INTEGRATORS` at every tolerance -> dataset over ``(integrator, tol)``."""
     import warnings
-
-    import xarray as xr
 
     tols = sorted((float(t) for t in tolerances), reverse=True)
     names = ("error_max", "error_rms", "cpu_seconds", "n_steps", "n_rhs_evaluations", "n_jacobian_evaluations")
@@ -135,20 +147,23 @@ def monolithic_baselines(
         reference_rtol=float(reference["rtol"]),
         reference_accuracy=reference_accuracy(params, t_end, reference),
     )
-    return xr.Dataset(
+    return DatasetDict(
         variables, coords={"integrator": ("integrator", list(INTEGRATORS)), "tol": ("tol", tols)}, attrs=attrs
     )
 
 
-def linear_orders_dataset(
+def linear_orders_dataset(*args, **kwargs):
+    """:func:`linear_orders_dataset_data` as an :class:`xarray.Dataset`."""
+    return linear_orders_dataset_data(*args, **kwargs).to_xarray()
+
+
+def linear_orders_dataset_data(
     settings: dict, configurations, H_values, *, model: dict, x0: float, t_end: float, command=""
-):
+) -> DatasetDict:
     """Errors of the linear test model (:func:`.linear_study.linear_errors`) for every configuration -> dataset.
 
     ``configurations``: ``(label, scheme, method, decomposition, k)`` (as :func:`~.config.trade_plan` gives them);
     the linear model is co-simulated with the same scheme."""
-    import xarray as xr
-
     from ...engine.methods import make_method
     from .linear_study import linear_errors
 
@@ -174,7 +189,7 @@ def linear_orders_dataset(
     attrs = provenance_attrs(job, title="Linear test model (Sect. 3.7) at the pendulum's step sizes", command=command)
     attrs.update(model_json=str(model), x0=float(x0), t_end=float(t_end))
     dims = ("config", "H")
-    return xr.Dataset(
+    return DatasetDict(
         {
             "error_linear": (
                 dims,

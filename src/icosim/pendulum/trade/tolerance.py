@@ -23,6 +23,7 @@ import math
 import numpy as np
 
 from ...engine.methods import make_method
+from ...io.dataset import DatasetDict
 from ...io.netcdf import provenance_attrs
 from ..model import PendulumParameters
 from ..reference import reference_solution
@@ -30,7 +31,7 @@ from ..runs import run_cosimulation
 from .baselines import reference_accuracy
 from .measures import RECORD, check_scheme, config_label, run_record
 
-__all__ = ["tolerance_study"]
+__all__ = ["tolerance_study", "tolerance_study_data"]
 
 
 def _run(settings, method, decomposition, k, H, t_end, rtol, scheme="jacobi"):
@@ -52,16 +53,19 @@ def _run(settings, method, decomposition, k, H, t_end, rtol, scheme="jacobi"):
     )
 
 
-def tolerance_study(
+def tolerance_study(*args, **kwargs):
+    """:func:`tolerance_study_data` as an :class:`xarray.Dataset`."""
+    return tolerance_study_data(*args, **kwargs).to_xarray()
+
+
+def tolerance_study_data(
     settings: dict, configurations: list, H_values, rtols, t_end: float, *, reference: dict, command: str = "", log=None
-):
+) -> DatasetDict:
     """Error over the subsystem tolerance at each fixed ``H`` -> dataset over ``(config, H, rtol)``.
 
     ``configurations``: dicts with ``scheme`` (default ``jacobi``), ``method``,
     ``decomposition``, ``k``.
     """
-    import xarray as xr
-
     rtols = sorted((float(r) for r in rtols), reverse=True)  # loose to tight
     H_values = [float(h) for h in H_values]
     names = list(RECORD) + ["integration_effect"]
@@ -118,4 +122,4 @@ def tolerance_study(
         reference_rtol=float(reference["rtol"]),
         reference_accuracy=reference_accuracy(params, t_end, reference),
     )
-    return xr.Dataset(variables, coords=coords, attrs=attrs)
+    return DatasetDict(variables, coords=coords, attrs=attrs)
