@@ -117,6 +117,22 @@ def test_pendulum_trade_tolerance_and_baselines(tmp_path):
     assert_written_as_xarray_writes(lin, tmp_path, "linear")
 
 
+def test_pendulum_adaptive(tmp_path):
+    from icosim.pendulum.trade.adaptive import adaptive_study_data
+
+    study = dict(
+        PENDULUM["trade"]["adaptive"],
+        t_end=0.04,
+        H_fixed=[2e-3, 1e-2],
+        configurations=[
+            {"method": "projection", "decomposition": "ff", "k": 1, "tol": [1e-2, 1e-4]},
+            {"scheme": "gauss-seidel-21", "method": "projection", "decomposition": "ff", "k": 1, "tol": [1e-2]},
+        ],
+    )
+    d = adaptive_study_data(SETTINGS, study, reference=PENDULUM["trade"]["reference"])
+    assert_written_as_xarray_writes(d, tmp_path)
+
+
 def test_stability_scheme_shares(tmp_path):
     from icosim.stability.checks import PANEL_VARIABLES
     from icosim.stability.comparison import scheme_shares_data

@@ -4,7 +4,7 @@
 import logging
 
 from icosim.io.netcdf import write_netcdf
-from icosim.pendulum.trade.adaptive import adaptive_study
+from icosim.pendulum.trade.adaptive import adaptive_study_data
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params
@@ -17,7 +17,7 @@ def log(kind, label, x, rec):
     )
 
 
-ds = adaptive_study(
+ds = adaptive_study_data(
     dict(p.settings), dict(p.adaptive), reference=dict(p.reference), command="snakemake rule pendulum_adaptive", log=log
 )
 write_netcdf(ds, snakemake.output[0])

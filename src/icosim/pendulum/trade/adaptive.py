@@ -17,13 +17,14 @@ import math
 import numpy as np
 
 from ...engine.methods import make_method
+from ...io.dataset import DatasetDict
 from ...io.netcdf import provenance_attrs
 from ..model import PendulumParameters
 from ..reference import reference_solution
 from ..runs import run_adaptive
 from .measures import RECORD, angle_errors, check_scheme, config_label, measured_run
 
-__all__ = ["adaptive_record", "fixed_at_error", "adaptive_study"]
+__all__ = ["adaptive_record", "fixed_at_error", "adaptive_study", "adaptive_study_data"]
 
 
 def adaptive_record(result, reference) -> dict:
@@ -77,6 +78,11 @@ def fixed_at_error(H, error, n_steps, cpu, target: float):
 
 
 def adaptive_study(settings: dict, study: dict, *, reference: dict, command: str = "", log=None):
+    """:func:`adaptive_study_data` as an :class:`xarray.Dataset`."""
+    return adaptive_study_data(settings, study, reference=reference, command=command, log=log).to_xarray()
+
+
+def adaptive_study_data(settings: dict, study: dict, *, reference: dict, command: str = "", log=None) -> DatasetDict:
     """Adaptive and fixed-H runs of every configuration of ``study`` -> the ``adaptive.nc`` dataset.
 
     ``study``: ``t_end``, ``drift_tol``, ``H0``, ``controller`` (settings of
@@ -84,8 +90,6 @@ def adaptive_study(settings: dict, study: dict, *, reference: dict, command: str
     ``configurations`` (each ``method``, ``decomposition``, ``k``, ``tol``
     list, optional ``scheme``).
     """
-    import xarray as xr
-
     params = PendulumParameters(**settings["model"])
     T = float(study["t_end"])
     confs = study["configurations"]
@@ -177,7 +181,7 @@ def adaptive_study(settings: dict, study: dict, *, reference: dict, command: str
         np.array([[fixed[(lab, H)]["status"] for H in H_fixed] for lab in labels], dtype=str),
         {"long_name": "fixed H: stable, diverged or failed"},
     )
-    ds = xr.Dataset(
+    ds = DatasetDict(
         data,
         coords={
             "config": ("config", labels),
@@ -202,34 +206,39 @@ def adaptive_study(settings: dict, study: dict, *, reference: dict, command: str
     return ds
 
 
-def add_equal_error(ds):
-    """Add the fixed-H macro steps and CPU seconds at each adaptive run's error (:func:`fixed_at_error`)."""
+def add_equal_error(ds: DatasetDict) -> DatasetDict:
+    """``ds`` with the fixed-H macro steps and CPU seconds at each adaptive run's error (:func:`fixed_at_error`)."""
+    v = ds.array
     n_eq = np.full((ds.sizes["config"], ds.sizes["tol"]), np.nan)
     c_eq = np.full_like(n_eq, np.nan)
     how = np.full(n_eq.shape, "", dtype=object)
     for i in range(ds.sizes["config"]):
-        row = ds.isel(config=i)
-        stable = row["fixed_status"].values == "stable"
-        e_fixed = np.where(stable, row["fixed_error_max"].values, np.nan)
+        stable = v("fixed_status")[i] == "stable"
+        e_fixed = np.where(stable, v("fixed_error_max")[i], np.nan)
         for j in range(ds.sizes["tol"]):
-            if str(row["status"].values[j]) != "stable":
+            if str(v("status")[i, j]) != "stable":
                 continue
             n_eq[i, j], c_eq[i, j], how[i, j] = fixed_at_error(
-                row["H_fixed"].values,
+                v("H_fixed"),
                 e_fixed,
-                row["fixed_n_macro_steps"].values,
-                row["fixed_cpu_seconds"].values,
-                float(row["error_max"].values[j]),
+                v("fixed_n_macro_steps")[i],
+                v("fixed_cpu_seconds")[i],
+                float(v("error_max")[i, j]),
             )
-    ds["n_macro_steps_fixed_equal_error"] = (
+
+    def specs(group):
+        return {name: (var["dims"], var["data"], var["attrs"]) for name, var in ds[group].items()}
+
+    data = specs("data_vars")
+    data["n_macro_steps_fixed_equal_error"] = (
         ("config", "tol"),
         n_eq,
         {"long_name": "macro steps of a fixed H with the same error_max (log-log interpolation)"},
     )
-    ds["cpu_seconds_fixed_equal_error"] = (
+    data["cpu_seconds_fixed_equal_error"] = (
         ("config", "tol"),
         c_eq,
         {"units": "s", "long_name": "CPU seconds of a fixed H with the same error_max (log-log interpolation)"},
     )
-    ds["equal_error_how"] = (("config", "tol"), how.astype(str), {"long_name": "interpolated or not bracketed"})
-    return ds
+    data["equal_error_how"] = (("config", "tol"), how.astype(str), {"long_name": "interpolated or not bracketed"})
+    return DatasetDict(data, coords=specs("coords"), attrs=ds.attrs)
