@@ -244,7 +244,9 @@ def growth_rate(prob, method, n_chunks=30, chunk=20, seed=0, **step_kw):
     Power iteration: run ``chunk`` steps, record the growth of the norm of
     (state, coupling history), rescale, repeat; the second half is averaged,
     which also averages out the oscillation of a complex dominant pair.
-    ``step_kw`` go to the macro step (e.g. ``scheme``).
+    ``step_kw`` go to the macro step (e.g. ``scheme``).  A problem with leading
+    batch axes (array coefficients) runs every point at once, each from the same
+    start and with its own norm: an array of growth factors, one per point.
     """
     import numpy as np
 
@@ -255,13 +257,14 @@ def growth_rate(prob, method, n_chunks=30, chunk=20, seed=0, **step_kw):
     hist = rng.standard_normal((prob.k + 1, prob.n_coupling))
     logs = []
     for _ in range(n_chunks):
-        norm0 = np.linalg.norm(prob.pack(state, hist))
+        norm0 = np.linalg.norm(prob.pack(state, hist), axis=-1)[..., None, None]
         traj = simulate(prob, method, state / norm0, hist / norm0, chunk, **step_kw)
         assert traj.diverged_at is None
         state = traj.states[-1]
-        hist = np.stack([traj.coupling[-1 - j] for j in range(prob.k + 1)])
-        logs.append(np.log(np.linalg.norm(prob.pack(state, hist))))
-    return float(np.exp(np.mean(logs[n_chunks // 2 :]) / chunk))
+        hist = np.stack([traj.coupling[-1 - j] for j in range(prob.k + 1)], axis=-2)
+        logs.append(np.log(np.linalg.norm(prob.pack(state, hist), axis=-1)))
+    rate = np.exp(np.mean(logs[n_chunks // 2 :], axis=0) / chunk)
+    return float(rate) if np.ndim(rate) == 0 else rate
 
 
 def c_toolchain_present() -> bool:
