@@ -300,3 +300,20 @@ def test_bad_attributes_are_refused_by_name(tmp_path):
     with pytest.raises(TypeError, match="not a dataset in xarray's dictionary form"):
         write_netcdf({"rho": np.zeros(2)}, tmp_path / "c.nc")
     assert not list(tmp_path.iterdir())  # nothing complete-looking left behind
+
+
+def test_a_full_disk_is_a_clear_error_and_leaves_no_dataset(tmp_path):
+    """As for an xarray.Dataset (tests/test_workflow_faults.py): a 200 kB tmpfs, where it can be mounted."""
+    import subprocess
+
+    mnt = tmp_path / "small"
+    mnt.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=200k", "tmpfs", str(mnt)], capture_output=True).returncode:
+        pytest.skip("cannot mount a tmpfs here (not root)")
+    try:
+        d = DatasetDict({"rho": (("lr1", "li1"), np.random.default_rng(0).random((300, 300)))})
+        with pytest.raises(OSError, match=r"could not write .*x\.nc: no space left on its file system"):
+            write_netcdf(d, mnt / "x.nc")
+        assert list(mnt.iterdir()) == []  # no dataset, no sidecar, no temporary
+    finally:
+        subprocess.run(["umount", str(mnt)], capture_output=True)
