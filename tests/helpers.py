@@ -66,7 +66,25 @@ def snakemake(workdir: Path, *args, check=True):
     return proc
 
 
-#: The fork server: imports Snakemake (about half of the CPU time of a dry run of this workflow), then
+#: Modules besides Snakemake's own that every parse of the workflow imports (none of icosim): the fork
+#: server imports them once, not each Snakemake process (about 0.1 CPU-s of each).
+_PRELOAD = (
+    "smart_open",
+    "jsonschema",
+    "fastjsonschema",
+    "nbformat",
+    "requests",
+    "yte",
+    "argparse_dataclass",
+    "platformdirs",
+    "graphlib",
+    "packaging.version",
+    "snakemake.profiles",
+    "snakemake.storage",
+)
+
+#: The fork server: imports Snakemake and :data:`_PRELOAD` (about half of the CPU time of a dry run of this
+#: workflow), then
 #: for each request forks a child that is the ``snakemake`` command -- ``sys.exit(snakemake.cli.main())``
 #: with the request's argv, working directory, environment and stdout/stderr files, exiting as that
 #: script exits (atexit handlers, flushed streams).  It imports nothing of icosim: the Snakefile of the
@@ -81,8 +99,15 @@ from snakemake_interface_logger_plugins.registry import LoggerPluginRegistry
 from snakemake_interface_report_plugins.registry import ReportPluginRegistry
 from snakemake_interface_storage_plugins.registry import StoragePluginRegistry
 ExecutorPluginRegistry().get_plugin("local"), LoggerPluginRegistry(), ReportPluginRegistry(), StoragePluginRegistry()
-import threading
+import importlib
+for name in PRELOAD:  # what parsing the workflow imports later (Snakemake's source cache, schema validation)
+    try:
+        importlib.import_module(name)
+    except ImportError:
+        pass
+import gc, threading
 assert threading.active_count() == 1, "the fork server must be single-threaded"
+gc.freeze()  # the children's collections skip what the server imported: fewer pages copied on write
 requests, replies = os.fdopen(0, "r"), os.fdopen(os.dup(1), "w")
 for line in requests:
     req = json.loads(line)
@@ -122,7 +147,7 @@ class _SnakemakeForkServer:
 
     def __init__(self):
         env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
-        code = f"SNAKEMAKE = {SNAKEMAKE!r}\n{_FORK_SERVER}"
+        code = f"SNAKEMAKE = {SNAKEMAKE!r}\nPRELOAD = {_PRELOAD!r}\n{_FORK_SERVER}"
         self.proc = subprocess.Popen(
             [sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env, bufsize=1
         )
