@@ -18,7 +18,7 @@ mono = monolithic_baselines_data(
     command="snakemake rule pendulum_baselines",
 )
 write_netcdf(mono, snakemake.output.monolithic)
-logging.info("monolithic: %s", mono["error_max"].values.tolist())
+logging.info("monolithic: %s", mono.array("error_max").tolist())
 lin = p.linear_orders
 ds = linear_orders_dataset_data(
     dict(p.settings),
