@@ -3,13 +3,14 @@
 import logging
 
 from icosim.figures import save_figure
-from icosim.figures.pendulum import pendulum_figure
-from icosim.io.netcdf import open_dataset
+from icosim.figures.pendulum import DRAWN_VARIABLES, pendulum_figure
+from icosim.io.netcdf import open_variables
 
 logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
 p = snakemake.params
-runs = [open_dataset(path) for path in snakemake.input.runs]
-reference = open_dataset(snakemake.input.reference)
+# only the variables drawn, without xarray (icosim.io.netcdf.open_variables)
+runs = [open_variables(path, DRAWN_VARIABLES) for path in snakemake.input.runs]
+reference = open_variables(snakemake.input.reference, DRAWN_VARIABLES)
 outputs = iter(snakemake.output)
 for k, title in zip(p.k, p.titles, strict=True):
     mine = [ds for ds in runs if int(ds.attrs["k"]) == int(k)]

@@ -20,7 +20,7 @@ import numpy as np
 from ..engine.methods import METHODS
 from .styles import decomposition_style, method_colour
 
-__all__ = ["pendulum_figure", "error_figure", "PANELS", "label"]
+__all__ = ["pendulum_figure", "error_figure", "PANELS", "DRAWN_VARIABLES", "label"]
 
 #: (variable, y label) of the six panels, in the paper's order.
 PANELS = (
@@ -31,6 +31,8 @@ PANELS = (
     ("lambda_cax", r"$\lambda_{cax}$ [N]"),
     ("lambda_cay", r"$\lambda_{cay}$ [N]"),
 )
+#: The variables of a run or reference dataset the figures draw (a reader need not load the others).
+DRAWN_VARIABLES = ("t",) + tuple(name for name, _ in PANELS)
 
 
 def label(ds) -> str:
@@ -49,7 +51,11 @@ def _limits(values, pad=0.08):
 
 
 def pendulum_figure(runs, reference, *, k: int, title: str | None = None):
-    """Figure with the six panels for the runs of one ``k`` (a list of datasets) and the reference."""
+    """Figure with the six panels for the runs of one ``k`` (a list of datasets) and the reference.
+
+    The datasets are :class:`xarray.Dataset` or their :data:`DRAWN_VARIABLES` as
+    :func:`icosim.io.netcdf.open_variables` reads them (numpy arrays and the attributes).
+    """
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(12, 10.5), layout="constrained")
@@ -69,7 +75,7 @@ def pendulum_figure(runs, reference, *, k: int, title: str | None = None):
                 marker = "x" if status == "diverged" else "o"
                 ends.append((float(ds["t"][-1]), float(ds[name][-1]), method_colour(m), marker))
         if name.startswith(("g_", "lambda_")):
-            basis = [ds[name].values for ds in stable] + [reference[name].values]
+            basis = [np.asarray(ds[name]) for ds in stable] + [np.asarray(reference[name])]
             ax.set_ylim(*_limits(basis))
         lo, hi = ax.get_ylim()
         for t_end, value, colour, marker in ends:  # the last stored step, clipped into view
@@ -87,7 +93,8 @@ def pendulum_figure(runs, reference, *, k: int, title: str | None = None):
 
 
 def error_figure(runs_by_k: dict, reference, *, title: str | None = None):
-    """``|phi1 - phi1_ref|`` and ``|phi2 - phi2_ref|`` (log scale) per k: one column per k."""
+    """``|phi1 - phi1_ref|`` and ``|phi2 - phi2_ref|`` (log scale) per k: one column per k (datasets as for
+    :func:`pendulum_figure`)."""
     from matplotlib.figure import Figure
 
     ks = sorted(runs_by_k)
@@ -98,8 +105,8 @@ def error_figure(runs_by_k: dict, reference, *, title: str | None = None):
         for i, name in enumerate(("phi1", "phi2")):
             ax = axes[i, j]
             for ds in runs_by_k[k]:
-                n = ds.sizes["t"]
-                err = np.abs(ds[name].values - reference[name].values[:n])
+                n = len(ds["t"])
+                err = np.abs(np.asarray(ds[name]) - np.asarray(reference[name])[:n])
                 m, d = ds.attrs["method"], ds.attrs["decomposition"]
                 ax.semilogy(
                     ds["t"][1:],
