@@ -71,3 +71,31 @@ def test_the_palette_png_has_the_pixels_of_its_quantization_at_any_compression()
     pal.save(strongest, "PNG", optimize=True)
     with Image.open(io.BytesIO(small)) as a, Image.open(strongest) as b:
         assert a.mode == "P" and np.array_equal(np.asarray(a.convert("RGB")), np.asarray(b.convert("RGB")))
+
+
+def test_the_work_precision_figure_from_its_drawn_variables_is_that_from_the_whole_dataset(tmp_path):
+    """The convergence work-precision job reads only WORK_PRECISION_VARIABLES (open_variables): the same pixels
+    as from the whole dataset (open_dataset), strings, a configuration without finite points and NaN included."""
+    from icosim.figures.convergence import WORK_PRECISION_VARIABLES, work_precision_figure
+
+    H = np.geomspace(1e-4, 1e-2, 5)
+    configs = ["21 Baumgarte k=0", "21 Baumgarte k=1", "21 projection k=0", "22 Baumgarte k=2"]
+    decs = ["ff", "ff", "fd", "fd"]
+    nrmse = np.outer([1.0, 0.1, 2.0, 0.05], H) ** np.array([[1.0], [2.0], [1.0], [3.0]])
+    nrmse[1, -1] = np.nan
+    cost = 1.0 / np.outer([1.0, 1.5, 2.0, 3.0], H)
+    cost[3] = np.nan  # drawn nowhere
+    wp = xr.Dataset(
+        {
+            "nrmse": (("configuration", "H"), nrmse),
+            "cpu_seconds_per_simulated_second": (("configuration", "H"), cost),
+            "setup_seconds": ("configuration", np.ones(4)),
+            "decomposition": ("configuration", np.array(decs, dtype=object)),
+            "k": ("configuration", np.array([0, 1, 0, 2], dtype=np.int32)),
+        },
+        coords={"configuration": np.array(configs, dtype=object), "H": H},
+    )
+    write_netcdf(wp, tmp_path / "wp.nc")
+    drawn, whole = open_variables(tmp_path / "wp.nc", WORK_PRECISION_VARIABLES), open_dataset(tmp_path / "wp.nc")
+    assert set(drawn) == set(WORK_PRECISION_VARIABLES)
+    assert np.array_equal(_pixels(work_precision_figure(drawn)), _pixels(work_precision_figure(whole)))

@@ -23,7 +23,15 @@ from matplotlib.lines import Line2D
 from ..engine.decompositions import DECOMPOSITIONS
 from ..engine.methods import METHODS, parameters
 
-__all__ = ["convergence_figure", "slope_figure", "work_precision_figure", "row_title", "K_COLOURS", "DRAWN_VARIABLES"]
+__all__ = [
+    "convergence_figure",
+    "slope_figure",
+    "work_precision_figure",
+    "row_title",
+    "K_COLOURS",
+    "DRAWN_VARIABLES",
+    "WORK_PRECISION_VARIABLES",
+]
 
 #: The variables of a panel :func:`convergence_figure` and :func:`slope_figure` draw.
 DRAWN_VARIABLES = (
@@ -40,6 +48,9 @@ DRAWN_VARIABLES = (
     "fit_H_min",
     "fit_H_max",
 )
+
+#: The variables of the work-precision dataset :func:`work_precision_figure` draws.
+WORK_PRECISION_VARIABLES = ("configuration", "decomposition", "k", "nrmse", "cpu_seconds_per_simulated_second")
 
 #: How an order that is not asymptotic is shown in a legend.
 STATUS_SHORT = {
@@ -236,25 +247,30 @@ def slope_figure(datasets: dict, layout, *, columns, rows, title="", tolerance=0
 
 
 def work_precision_figure(wp, *, title=""):
-    """CPU time per simulated second over NRMSE, one panel per decomposition, one line per configuration."""
-    decs = [d for d in DECOMPOSITIONS if d in set(wp["decomposition"].values.tolist())]
+    """CPU time per simulated second over NRMSE, one panel per decomposition, one line per configuration.
+
+    ``wp``: the work-precision dataset, an :class:`xarray.Dataset` or its :data:`WORK_PRECISION_VARIABLES` as
+    :func:`icosim.io.netcdf.open_variables` reads them.
+    """
+    v = {name: np.asarray(wp[name]) for name in WORK_PRECISION_VARIABLES}
+    decs = [d for d in DECOMPOSITIONS if d in set(v["decomposition"].tolist())]
     fig = Figure(figsize=(5.2 * len(decs), 4.6), layout="constrained")
     axes = fig.subplots(1, len(decs), squeeze=False, sharey=True)[0]
-    families = sorted({s.split(" k=")[0].split(" ", 1)[1] for s in wp["configuration"].values.tolist()})
+    families = sorted({s.split(" k=")[0].split(" ", 1)[1] for s in v["configuration"].tolist()})
     colours = {f: f"C{i % 10}" for i, f in enumerate(families)}
     markers = ("o", "s", "^", "D", "v")
     for ax, dec in zip(axes, decs):
-        for s in range(wp.sizes["configuration"]):
-            if str(wp["decomposition"].values[s]) != dec:
+        for s in range(len(v["configuration"])):
+            if str(v["decomposition"][s]) != dec:
                 continue
-            label = str(wp["configuration"].values[s])
-            err = wp["nrmse"].values[s]
-            cost = wp["cpu_seconds_per_simulated_second"].values[s]
+            label = str(v["configuration"][s])
+            err = v["nrmse"][s]
+            cost = v["cpu_seconds_per_simulated_second"][s]
             ok = np.isfinite(err) & np.isfinite(cost)
             if not ok.any():
                 continue
             fam = label.split(" k=")[0].split(" ", 1)[1]
-            k = int(wp["k"].values[s])
+            k = int(v["k"][s])
             ax.plot(
                 err[ok],
                 cost[ok],
