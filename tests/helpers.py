@@ -303,3 +303,29 @@ def skip_without_c_toolchain():
 
     if not c_toolchain_present():
         pytest.skip("building the FMU test units needs CMake and a C compiler", allow_module_level=True)
+
+
+def scheme_panel_spec(figure, scheme, row, k, n=5):
+    """A small stability panel of one coupling scheme (Baumgarte ff, float64 only; row 2 with am21 = 10),
+    as the scheme comparison reads them."""
+    from icosim.stability.panels import PanelSpec
+
+    return PanelSpec.from_params(
+        dict(
+            figure=figure,
+            row=row,
+            k=k,
+            view="full",
+            method="baumgarte",
+            method_params={"index": 1, "mu": 1.0},
+            decomposition="ff",
+            am21=10.0 if row == 2 else 1.0,
+            alr21=1.0,
+            ali21=1.0,
+            lr1=[-2.0, 0.0],
+            li1=[0.0, 2.0],
+            n=n,
+            policy="float64",
+            scheme=scheme,
+        )
+    )

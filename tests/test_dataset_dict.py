@@ -10,7 +10,7 @@ import pytest
 import xarray as xr
 import yaml
 from dataset_files import assert_written_as_xarray_writes, structure
-from helpers import ROOT
+from helpers import ROOT, scheme_panel_spec
 
 from icosim.io.dataset import DatasetDict
 from icosim.io.netcdf import open_variables, provenance_attrs, write_netcdf
@@ -137,26 +137,9 @@ def test_stability_scheme_shares(tmp_path):
     from icosim.stability.checks import PANEL_VARIABLES
     from icosim.stability.comparison import scheme_shares_data
     from icosim.stability.datasets import stability_panel_data
-    from icosim.stability.panels import PanelSpec
 
     def panel(figure, scheme, row, k):
-        spec = PanelSpec(
-            figure=figure,
-            row=row,
-            k=k,
-            view="full",
-            method="baumgarte",
-            method_params={"index": 1, "mu": 1.0},
-            decomposition="ff",
-            am21=10.0 if row == 2 else 1.0,
-            alr21=1.0,
-            ali21=1.0,
-            lr1=[-2.0, 0.0],
-            li1=[0.0, 2.0],
-            n=3,
-            policy="float64",
-            scheme=scheme,
-        )
+        spec = scheme_panel_spec(figure, scheme, row, k, n=3)
         path = tmp_path / f"panel_{figure}_{scheme}_{row}_{k}.nc"
         write_netcdf(stability_panel_data(spec), path)
         return open_variables(path, PANEL_VARIABLES)  # as the workflow's job reads them

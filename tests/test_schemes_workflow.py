@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import xarray as xr
 import yaml
-from helpers import copy_workflow, scheduled, snakemake, validate_config
+from helpers import copy_workflow, scheduled, scheme_panel_spec, snakemake, validate_config
 
 from icosim import ParameterError, make_method
 from icosim.convergence.config import configured_curves
@@ -26,7 +26,7 @@ from icosim.pendulum.runs import run_cosimulation
 from icosim.report.schemes import order_rows, pendulum_rows, share_cells, stability_schemes
 from icosim.stability.comparison import scheme_shares
 from icosim.stability.datasets import stability_panel
-from icosim.stability.panels import PanelSpec, figure_panels
+from icosim.stability.panels import figure_panels
 
 ROOT = Path(__file__).resolve().parents[1]
 BOTH = ("jacobi", "gauss-seidel-12", "gauss-seidel-21")
@@ -173,26 +173,7 @@ def test_one_trade_job_per_method_and_decomposition_writes_both_studies_for_ever
 
 # -- the comparison and the report ------------------------------------------------------------------
 def _panel(figure, scheme, row, k, n=5):
-    spec = PanelSpec.from_params(
-        dict(
-            figure=figure,
-            row=row,
-            k=k,
-            view="full",
-            method="baumgarte",
-            method_params={"index": 1, "mu": 1.0},
-            decomposition="ff",
-            am21=10.0 if row == 2 else 1.0,
-            alr21=1.0,
-            ali21=1.0,
-            lr1=[-2.0, 0.0],
-            li1=[0.0, 2.0],
-            n=n,
-            policy="float64",
-            scheme=scheme,
-        )
-    )
-    return stability_panel(spec)
+    return stability_panel(scheme_panel_spec(figure, scheme, row, k, n))
 
 
 def test_scheme_shares_tabulates_the_panels():
