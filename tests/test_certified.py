@@ -3,8 +3,8 @@
 Every proven enclosure is checked against an independent computation: the
 spectral radius at 160 digits with mpmath (eigenvalues of the amplification
 matrix, a different algorithm in a different arithmetic), numpy's roots for the
-root count, and -- where it matters -- where rho = 1 lies, found by bisection at
-60 digits.
+root count, and -- where it matters -- where rho = 1 lies, found by a bracketing
+root finder at 60 digits.
 """
 
 import json
