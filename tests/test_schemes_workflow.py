@@ -135,8 +135,15 @@ def test_one_figure_target_schedules_that_figures_job_only(workflow_copy):
     assert len([p for p in panels if "/jacobi/" in p]) == 4 * 3 + 1
 
 
-def test_default_run_has_every_scheme_and_jacobi_only_none_but_jacobi(workflow_copy):
-    proc = snakemake(workflow_copy, "-n")
+@pytest.fixture(scope="module")
+def full_dry_run(workflow_copy):
+    """The default command's dry run on the fresh copy, where nothing is built yet: every job of the workflow
+    is listed (as ``--forceall`` would list them); one run for the tests that read the whole listing."""
+    return snakemake(workflow_copy, "-n")
+
+
+def test_default_run_has_every_scheme_and_jacobi_only_none_but_jacobi(workflow_copy, full_dry_run):
+    proc = full_dry_run
     text = proc.stdout + proc.stderr
     assert "rule stability_scheme_figure:" in text
     runs = scheduled(proc, "pendulum_run")
@@ -146,12 +153,12 @@ def test_default_run_has_every_scheme_and_jacobi_only_none_but_jacobi(workflow_c
     assert "gauss-seidel" not in text and "stability_scheme" not in text
 
 
-def test_one_trade_job_per_method_and_decomposition_writes_both_studies_for_every_scheme(workflow_copy):
+def test_one_trade_job_per_method_and_decomposition_writes_both_studies_for_every_scheme(full_dry_run):
     """Error over H and the stability limit of one (method, decomposition) share one job (one start-up),
     which writes each study's dataset of every scheme at its own path."""
     import re
 
-    proc = snakemake(workflow_copy, "-n", "--forceall")
+    proc = full_dry_run
     text = proc.stdout + proc.stderr
     jobs = [
         re.search(r"output: ([^\n]+)", block).group(1).split(", ")
