@@ -6,6 +6,9 @@
   keeps a digest of those files beside the cache (``compiled.sources``) and, when it differs, removes
   the cache files of ``compiled.*``; ``compiled`` calls it before it defines its kernels, and
   ``compiled_step`` likewise for its own (which inline ``compiled.py`` too).
+* :func:`gc_paused`: Python's cyclic garbage collector is off while the ``warm_up`` functions compile
+  (numba's compiler allocates many short-lived objects; the collections it triggers were 5-10 % of a
+  cold compile's CPU, the more the larger the process's heap); nothing compiled changes.
 * :func:`compile_record` compiles (or loads) them now and says what it did
   (``compiled_step.compile_kernels``).  The workflow does this once, in one job before the runs
   (``results/pendulum/kernels.json``), since runs that start together on a cold cache (a fresh
@@ -16,11 +19,13 @@ Only numba's default cache place (``__pycache__`` beside the module) is looked a
 
 from __future__ import annotations
 
+import contextlib
+import gc
 import hashlib
 import time
 from pathlib import Path
 
-__all__ = ["KERNEL_SOURCES", "drop_stale_cache", "compile_record"]
+__all__ = ["KERNEL_SOURCES", "drop_stale_cache", "gc_paused", "compile_record"]
 
 #: Sources compiled into the kernels of ``compiled.py`` besides itself, relative to its package
 #: (:mod:`icosim.pendulum.integrator`).
@@ -48,6 +53,18 @@ def drop_stale_cache(module: str = "compiled", sources: tuple = KERNEL_SOURCES) 
     except OSError:  # a read-only install: numba caches elsewhere or not at all
         pass
     return True
+
+
+@contextlib.contextmanager
+def gc_paused():
+    """Python's cyclic garbage collector off inside the block, as it was after it (nested blocks too)."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
 
 
 def compile_record(warm_up, kernels: dict) -> dict:
