@@ -23,24 +23,24 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 #: counts 0.05 s a test.  Only the order matters: a wrong number costs some balance, never a test.
 FILE_SECONDS = {
     "tests/test_workflow_faults.py": 38,  # a real run of one figure, then one per fault case
-    "tests/test_engine.py": 35,
+    "tests/test_engine.py": 32,
     "tests/test_pendulum_compiled.py": 30,  # numba compiles the kernels (cold in a fresh checkout), twice more in copies
     "tests/test_stability_workflow.py": 21,  # some 25 Snakemake runs, one real
     "tests/test_schemes.py": 15,
     "tests/test_convergence_claims.py": 14,  # the CI convergence datasets (module fixture)
     "tests/test_structure.py": 12,
-    "tests/test_certified.py": 10,
     "tests/test_fmi_linear.py": 10,
     "tests/test_figures.py": 8,
     "tests/test_limits.py": 8,
-    "tests/test_convergence_errors.py": 8,
     "tests/test_pendulum.py": 7,
     "tests/test_panel_readers.py": 6,
     "tests/test_convergence.py": 6,
     "tests/test_report_browser.py": 5,  # where the workflow's report exists
     "tests/test_pendulum_claims.py": 5,
+    "tests/test_certified.py": 5,
+    "tests/test_convergence_errors.py": 5,
     "tests/test_stability_sweep.py": 5,
-    "tests/test_schemes_workflow.py": 5,
+    "tests/test_schemes_workflow.py": 4,
     "tests/test_fmi_workflow.py": 5,
 }
 
