@@ -84,12 +84,22 @@ def snakemake_binary() -> str:
 
 
 def run_workflow(
-    workdir: Path, targets, *, label: str, cores: int = 2, configfiles=(), overrides=None, keep_results=False
+    workdir: Path,
+    targets,
+    *,
+    label: str,
+    cores: int = 2,
+    configfiles=(),
+    overrides=None,
+    keep_results=False,
+    env=None,
 ) -> Run:
     """``snakemake -c<cores> <targets>`` in ``workdir`` from a clean results/ (unless ``keep_results``: a later
-    part of the same run); wall and CPU seconds of the run.
+    part of the same run); wall and CPU seconds of the run (Snakemake and every process it waited for).
 
-    ``overrides`` (a nested mapping) is written to a config file given after ``configfiles``.
+    ``overrides`` (a nested mapping) is written to a config file given after ``configfiles``.  Snakemake runs
+    with an empty ``PYTHONPATH`` (the tree's ``common.smk`` puts its own ``src`` first), or with ``env``'s
+    variables (one may be ``PYTHONPATH``) added to the environment.
     """
     if not keep_results:
         shutil.rmtree(workdir / "results", ignore_errors=True)
@@ -103,7 +113,9 @@ def run_workflow(
         cmd += ["--configfile", *files]
     ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    proc = subprocess.run(cmd, cwd=workdir, capture_output=True, text=True, env={**os.environ, "PYTHONPATH": ""})
+    proc = subprocess.run(
+        cmd, cwd=workdir, capture_output=True, text=True, env={**os.environ, "PYTHONPATH": "", **(env or {})}
+    )
     wall = time.perf_counter() - t0
     ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     if proc.returncode != 0:
