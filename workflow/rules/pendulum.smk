@@ -113,6 +113,7 @@ rule pendulum_kernels:
         "../envs/icosim.yaml"
     params:
         library=script_library("pendulum_kernels"),
+    priority: 20  # before the long jobs: every co-simulation run waits for it
     script:
         "../scripts/pendulum_kernels.py"
 

@@ -82,6 +82,7 @@ for _fig in STABILITY["figures"]:
             library=engine_library("stability_panels"),
             # exactly this figure's panels: editing another figure does not rerun this one
             panels=[spec.as_dict() for spec in STABILITY_PANELS[_fig]],
+        priority: 5  # the panels (seconds each) before the figures: the run ends on short jobs
         script:
             "../scripts/stability_panels.py"
 
