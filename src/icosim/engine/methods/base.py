@@ -287,8 +287,9 @@ def solve_small(J, b):
     catches it).  Larger systems use LU (numpy) or mpmath's ``lu_solve``.
     """
     n = J.shape[-1]
-    J, b = np.broadcast_arrays(J, b[..., None])
-    b = b[..., 0]
+    if J.shape[:-1] != b.shape:  # (a single point's shapes agree: no broadcast to pay for)
+        J, b = np.broadcast_arrays(J, b[..., None])
+        b = b[..., 0]
     if n == 1:
         return b / J[..., 0]
     if n == 2:
@@ -296,6 +297,8 @@ def solve_small(J, b):
         det = a * d - bb * c
         x0 = (d * b[..., 0] - bb * b[..., 1]) / det
         x1 = (a * b[..., 1] - c * b[..., 0]) / det
+        if np.ndim(det) == 0:  # one point: the pair as numpy.stack would make it
+            return np.array([x0, x1])
         return layout.stack([x0, x1], axis=-1)
     if J.dtype != object:
         return np.linalg.solve(J, b[..., None])[..., 0]
