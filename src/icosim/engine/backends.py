@@ -48,7 +48,7 @@ class Float64:
         return float(q)
 
     def expm(self, M, decay=0.0):
-        # a whole grid's stack (..., n, n) in one vectorised call (:mod:`.expm`).
+        # scipy's expm accepts stacks (..., n, n): one call for a whole grid.
         # ``decay`` is ignored: float64 cannot add guard digits (the precision
         # policy detects the points where that matters).
         return _expm_float64(np.ascontiguousarray(M, dtype=float))
@@ -62,25 +62,23 @@ class Float64:
 
 #: Recent float64 exponentials by the bytes of their argument.  The panels of a figure share their
 #: subsystems' matrices (subsystem 1 depends on the grid and k only, subsystem 2 also on the row, not on
-#: the scheme), so one job forms each exponential once; the cached result is the one computed
+#: the scheme), so one job forms each exponential once; the cached result is the one scipy returned
 #: (read-only), so nothing changes but the time.
 _EXPM_CACHE: dict = {}
 _EXPM_CACHE_SIZE = 64
 
 
 def _expm_float64(M):
-    """``exp`` of each matrix of ``M`` (:func:`.expm.expm_stack`: a matrix's exponential is bit for bit the
-    same alone and in a grid's stack), a large stack kept in :data:`_EXPM_CACHE`."""
     import hashlib
 
-    from .expm import expm_stack
+    import scipy.linalg  # here, not at the top: jobs that never form expm start faster
 
     if M.size < 64:  # small: hashing costs about as much as the exponential
-        return expm_stack(M)
+        return scipy.linalg.expm(M)
     key = (M.shape, hashlib.blake2b(M.tobytes(), digest_size=20).digest())
     E = _EXPM_CACHE.pop(key, None)
     if E is None:
-        E = expm_stack(M)
+        E = scipy.linalg.expm(M)
         E.setflags(write=False)
     _EXPM_CACHE[key] = E  # most recent last
     while len(_EXPM_CACHE) > _EXPM_CACHE_SIZE:

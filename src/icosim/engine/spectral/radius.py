@@ -118,9 +118,7 @@ def spectral_radius_float64(
         spread = _disturbed_spread(problem, method, scheme, rho, rng, rel)
         # the second disturbed run only where the first one's estimate, ``doubt`` times over, reaches |rho - 1|:
         # elsewhere no second spread seen on the project's grids came near deciding (docs/engine.md)
-        # the eigensolver's own rounding, which a disturbed run can miss by chance (its spread vanishing at a
-        # point where rho is 9 u off was seen): 4 * DISTURBANCE u per unit of rho
-        floor = 4 * rel * np.maximum(rho, 1.0)
+        floor = 2 * rel * np.maximum(rho, 1.0)
         twice = np.isfinite(rho) & np.isfinite(spread) & ~(doubt * (SAFETY * spread + floor) < np.abs(rho - 1))
         if twice.any():
             points = coefficients.map(lambda a: np.broadcast_to(np.asarray(a, dtype=float), rho.shape)[twice])
