@@ -12,8 +12,9 @@ import logging
 from icosim.claims.core import enforce_references, verdict_counts, write_verdicts
 from icosim.claims.registry import evaluate, load_claims
 from icosim.io.netcdf import open_dataset, open_variables
+from icosim.job import start_job
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 claims = load_claims(snakemake.input.claims)
 # a part whose checks name the variables they read (params.variables) has only those read
 variables = getattr(snakemake.params, "variables", None)

@@ -5,8 +5,9 @@ import logging
 from icosim.figures import save_figure
 from icosim.figures.convergence import DRAWN_VARIABLES, convergence_figure, row_title, slope_figure
 from icosim.io.netcdf import open_variables
+from icosim.job import start_job
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 p = snakemake.params
 # only the variables drawn, without xarray (icosim.io.netcdf.open_variables)
 panels = [open_variables(path, DRAWN_VARIABLES) for path in snakemake.input.panels]

@@ -9,9 +9,10 @@ from icosim.convergence.experiment import Setup, step_counts
 from icosim.convergence.panels import PanelSpec
 from icosim.convergence.study import Study
 from icosim.io.netcdf import provenance_attrs, write_netcdf
+from icosim.job import start_job
 from icosim.labels import figure_label
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 p = snakemake.params
 setup = Setup(**p.setup)
 n_steps = step_counts(setup.end_time, p.step_sizes["H_min"], p.step_sizes["H_max"], p.step_sizes["num"])

@@ -5,10 +5,11 @@ import logging
 from icosim.claims.core import read_verdicts
 from icosim.convergence.curves import curves
 from icosim.io.netcdf import atomic_path, open_dataset
+from icosim.job import start_job
 from icosim.report.convergence import convergence_section
 from icosim.report.schemes import convergence_schemes
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 i, p = snakemake.input, snakemake.params
 claims = read_verdicts(i.claims)
 panels = [open_dataset(path) for path in i.panels]

@@ -6,8 +6,9 @@ import logging
 from icosim.convergence.experiment import Setup
 from icosim.convergence.work_precision import work_precision
 from icosim.io.netcdf import open_dataset, provenance_attrs, write_netcdf
+from icosim.job import start_job
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 p = snakemake.params
 job = {k: p[k] for k in ("entries", "setup", "steps", "repeats", "warmup_steps")}
 logging.info("parameters: %s", json.dumps(job, sort_keys=True))

@@ -6,8 +6,9 @@ from pathlib import Path
 
 from icosim.fmi.validation import order_case_data
 from icosim.io.netcdf import write_netcdf
+from icosim.job import start_job
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 p = snakemake.params
 case = {key: value for key, value in p.case.items() if key != "H"}
 ds = order_case_data(

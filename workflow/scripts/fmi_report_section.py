@@ -4,9 +4,10 @@ import logging
 
 from icosim.claims.core import read_verdicts
 from icosim.io.netcdf import atomic_path, open_dataset
+from icosim.job import start_job
 from icosim.report.fmi import fmi_section
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 i = snakemake.input
 html = fmi_section(
     validations=[open_dataset(path) for path in i.validations],

@@ -8,8 +8,9 @@ from icosim.fmi.run import run_dataset, run_scene
 from icosim.fmi.scene import load_scene
 from icosim.fmi.validation import scene_validation
 from icosim.io.netcdf import write_netcdf
+from icosim.job import start_job
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 name = snakemake.wildcards.scene
 cache = Path(snakemake.input.units).parent
 scene = load_scene(snakemake.input.scene)

@@ -6,8 +6,9 @@ from pathlib import Path
 
 from icosim.fmi.build import build_unit
 from icosim.io.netcdf import atomic_path
+from icosim.job import start_job
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 cache = Path(snakemake.output[0]).parent
 built = {}
 for source in snakemake.params.sources:

@@ -4,10 +4,11 @@ errors for every configuration -> two NetCDF files (thin: icosim.pendulum.trade.
 import logging
 
 from icosim.io.netcdf import write_netcdf
+from icosim.job import start_job
 from icosim.pendulum.model import PendulumParameters
 from icosim.pendulum.trade.baselines import linear_orders_dataset_data, monolithic_baselines_data
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 p = snakemake.params
 mono = monolithic_baselines_data(
     PendulumParameters(**p.settings["model"]),

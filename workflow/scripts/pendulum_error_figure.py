@@ -5,8 +5,9 @@ import logging
 from icosim.figures import save_figure
 from icosim.figures.pendulum import DRAWN_VARIABLES, error_figure
 from icosim.io.netcdf import open_variables
+from icosim.job import start_job
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 runs_by_k = {}
 for path in snakemake.input.runs:
     ds = open_variables(path, DRAWN_VARIABLES)  # only the variables drawn, without xarray

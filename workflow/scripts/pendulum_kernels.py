@@ -5,9 +5,10 @@ import json
 import logging
 
 from icosim.io.integrity import atomic_path
+from icosim.job import start_job
 from icosim.pendulum.integrator.compiled_step import compile_kernels
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 record = compile_kernels()
 with atomic_path(snakemake.output[0]) as tmp:
     tmp.write_text(json.dumps(record, indent=1, allow_nan=False) + "\n")

@@ -4,10 +4,11 @@ import json
 import logging
 
 from icosim.io.netcdf import provenance_attrs, write_netcdf
+from icosim.job import start_job
 from icosim.pendulum.model import PendulumParameters
 from icosim.pendulum.replication.datasets import reference_dataset_data
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 p = snakemake.params
 job = {"model": dict(p.model), "H": p.H, "t_end": p.t_end, "reference": dict(p.reference)}
 logging.info("reference: %s", json.dumps(job, sort_keys=True))

@@ -5,10 +5,11 @@ from pathlib import Path
 
 from icosim.claims.core import read_verdicts
 from icosim.io.netcdf import atomic_path, open_dataset
+from icosim.job import start_job
 from icosim.report.pendulum import pendulum_section, trade_section
 from icosim.report.schemes import pendulum_schemes
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 i, p = snakemake.input, snakemake.params
 summary = open_dataset(i.summary)
 claims = read_verdicts(i.claims)

@@ -5,9 +5,10 @@ import json
 import logging
 
 from icosim.io.netcdf import write_netcdf
+from icosim.job import start_job
 from icosim.pendulum.replication.datasets import run_job_data
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 w, p = snakemake.wildcards, snakemake.params
 jobs = [(scheme, k) for scheme in p.schemes for k in p.k]  # the order of the rule's outputs
 for (scheme, k), path in zip(jobs, snakemake.output, strict=True):

@@ -3,9 +3,10 @@
 import logging
 
 from icosim.io.netcdf import open_dataset, provenance_attrs, write_netcdf
+from icosim.job import start_job
 from icosim.pendulum.trade.stability_limit import merge_limits
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 ds = merge_limits([open_dataset(path) for path in snakemake.input.groups])
 ds.attrs.update(
     provenance_attrs(

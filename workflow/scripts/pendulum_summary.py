@@ -5,9 +5,10 @@ import logging
 
 from icosim.claims.registry import load_claims
 from icosim.io.netcdf import open_dataset, write_netcdf
+from icosim.job import start_job
 from icosim.pendulum.replication.summary import summary_dataset
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 p = snakemake.params
 ds = summary_dataset(
     [open_dataset(path) for path in snakemake.input.runs],

@@ -3,9 +3,10 @@
 import logging
 
 from icosim.io.netcdf import write_netcdf
+from icosim.job import start_job
 from icosim.pendulum.trade.tolerance import tolerance_study_data
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 p = snakemake.params
 tol = p.tolerance
 

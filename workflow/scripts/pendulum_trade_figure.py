@@ -6,9 +6,10 @@ import logging
 from icosim.figures import save_figure
 from icosim.figures.pendulum_trade import TRADE_FIGURES
 from icosim.io.netcdf import open_dataset
+from icosim.job import start_job
 from icosim.pendulum.names import TRADE_FIGURE_DATASETS
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 name = snakemake.wildcards.name
 fig = TRADE_FIGURES[name](*(open_dataset(snakemake.input[stem]) for stem in TRADE_FIGURE_DATASETS[name]))
 save_figure(fig, snakemake.output.png, snakemake.output.pdf, dpi=snakemake.params.dpi)

@@ -6,10 +6,11 @@ the start-up (interpreter, imports, the compiled integrator) once; each dataset 
 import logging
 
 from icosim.io.netcdf import write_netcdf
+from icosim.job import start_job
 from icosim.pendulum.trade.stability_limit import limits_study_data
 from icosim.pendulum.trade.sweep import sweep_group_data
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 w, p, out = snakemake.wildcards, snakemake.params, snakemake.output
 common = dict(settings=dict(p.settings), method=w.method, decomposition=w.decomposition, ks=list(p.k))
 command = f"snakemake rule {snakemake.rule}"

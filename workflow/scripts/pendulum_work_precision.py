@@ -4,9 +4,10 @@ linear test model's errors: orders, cheapest scheme per accuracy level (thin: ic
 import logging
 
 from icosim.io.netcdf import open_dataset, write_netcdf
+from icosim.job import start_job
 from icosim.pendulum.trade.work_precision import work_precision_dataset
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 p = snakemake.params
 ds = work_precision_dataset(
     [open_dataset(path) for path in snakemake.input.sweeps],

@@ -5,9 +5,10 @@ from pathlib import Path
 
 from icosim.claims.core import read_verdicts
 from icosim.io.netcdf import atomic_path
+from icosim.job import start_job
 from icosim.report.page import git_commit_text, report_page, utc_now
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 p = snakemake.params
 commit_text = git_commit_text()
 html = report_page(

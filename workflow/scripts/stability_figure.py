@@ -5,8 +5,9 @@ import logging
 from icosim.figures import save_figure
 from icosim.figures.stability import drawn_variables, stability_figure
 from icosim.io.netcdf import open_variables
+from icosim.job import start_job
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 p = snakemake.params
 panels = [open_variables(path, drawn_variables(p.style)) for path in snakemake.input.panels]
 outputs = iter(snakemake.output)

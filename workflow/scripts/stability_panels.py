@@ -4,11 +4,12 @@ import json
 import logging
 
 from icosim.io.netcdf import provenance_attrs, write_netcdf
+from icosim.job import start_job
 from icosim.labels import figure_label
 from icosim.stability.datasets import stability_panel_data
 from icosim.stability.panels import PanelSpec
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 for params, path in zip(snakemake.params.panels, snakemake.output, strict=True):
     logging.info("panel parameters: %s", json.dumps(params, sort_keys=True))
     spec = PanelSpec.from_params(params)

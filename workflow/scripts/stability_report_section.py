@@ -4,10 +4,11 @@ import logging
 
 from icosim.claims.core import read_verdicts, verdict_counts
 from icosim.io.netcdf import atomic_path, open_attributes, open_dataset
+from icosim.job import start_job
 from icosim.report.schemes import stability_schemes
 from icosim.report.stability import stability_section
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 i, p = snakemake.input, snakemake.params
 claims = read_verdicts(i.claims)
 paper = [c for c in claims if c.get("scope", "paper") == "paper"]

@@ -5,8 +5,9 @@ import logging
 from icosim.figures import save_figure
 from icosim.figures.schemes import scheme_comparison_figure
 from icosim.io.netcdf import open_dataset
+from icosim.job import start_job
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 ds = open_dataset(snakemake.input.shares)
 fig = scheme_comparison_figure(ds, title=snakemake.params.title)
 save_figure(fig, snakemake.output.png, snakemake.output.pdf, dpi=snakemake.params.dpi)

@@ -3,10 +3,11 @@
 import logging
 
 from icosim.io.netcdf import open_variables, provenance_attrs, write_netcdf
+from icosim.job import start_job
 from icosim.stability.checks import PANEL_VARIABLES
 from icosim.stability.comparison import scheme_shares_data
 
-logging.basicConfig(filename=snakemake.log[0], level=logging.INFO, format="%(asctime)s %(message)s")
+start_job(snakemake.log[0])
 panels = [open_variables(path, PANEL_VARIABLES) for path in snakemake.input.panels]  # the shares read no others
 job = {"panels": list(snakemake.input.panels)}
 ds = scheme_shares_data(
