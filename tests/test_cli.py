@@ -223,3 +223,16 @@ def test_rho_at_128_and_160_digits_agree_to_120_digits():
                 dec,
                 k,
             )
+
+
+def test_rho_and_the_parsers_import_no_table_or_plot_library():
+    """``icosim rho`` builds every command's parser (advise's included) but answers without pandas,
+    xarray or matplotlib: their imports would be most of a one-point answer's time."""
+    code = (
+        "import sys\nfrom icosim.cli import main\n"
+        f"main({BASE + ['--method', 'projection', '--decomposition', 'dd', '--k', '1', '--json']!r})\n"
+        "print(sorted({'pandas', 'xarray', 'matplotlib'} & set(sys.modules)), file=sys.stderr)\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert json.loads(proc.stdout)["verdict"] == "stable"
+    assert proc.stderr.strip().splitlines()[-1] == "[]"

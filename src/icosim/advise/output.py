@@ -7,7 +7,6 @@ import sys
 import time
 
 import numpy as np
-import pandas as pd
 
 __all__ = ["Progress", "advice_records", "advice_text"]
 
@@ -47,13 +46,21 @@ def _isatty(stream) -> bool:
         return False
 
 
+def _pandas_na():
+    """pandas' missing value, imported only where a table is written: ``icosim rho`` and ``map`` build the
+    ``advise`` parser too, and need not pay pandas' import (about 0.15 s)."""
+    import pandas as pd
+
+    return pd.NA
+
+
 def _clean(value, reason: str):
     """A JSON-safe value: non-finite floats become None, with the reason recorded."""
     if isinstance(value, (float, np.floating)):
         return (float(value), None) if math.isfinite(value) else (None, reason)
     if isinstance(value, np.integer):
         return int(value), None
-    if value is None or value is pd.NA:
+    if value is None or value is _pandas_na():
         return None, reason
     return value, None
 
@@ -156,7 +163,8 @@ def advice_text(df) -> str:
             f"A largest stable H equal to {hi:g} s means stable at the range's upper end (larger H not scanned); "
             "'stable on intervals': not stable at every H below it."
         )
-    table["rank"] = table["rank"].map(lambda r: "-" if r is None or r is pd.NA else str(r))
+    na = _pandas_na()
+    table["rank"] = table["rank"].map(lambda r: "-" if r is None or r is na else str(r))
     table = table.astype(str)
     widths = {c: max(len(c), *(len(v) for v in table[c])) for c in table.columns}
     left = {c: (lambda w: lambda v: f"{v:<{w}}")(widths[c]) for c in table.columns}

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-import pandas as pd
 
 from ..errors import ParameterError
 from .core import TwoMassSystem, configurations, evaluate
@@ -157,6 +156,8 @@ def advise(
         rows.append(row)
         if progress is not None:
             progress(n)
+    import pandas as pd  # here: the commands that only build advise's parser need not import it
+
     df = pd.DataFrame(rows)
     if H.size == 1:
         order = df.assign(_s=df["verdict"] != "stable").sort_values(["_s", "rho"], kind="stable").index
