@@ -3,10 +3,12 @@ imports only itself and the errors, no study imports another, the report reads t
 data contracts), thin workflow scripts, and library inputs of the rules that follow the real imports."""
 
 import ast
+import functools
 import json
 import subprocess
 import sys
 from pathlib import Path
+from types import MappingProxyType
 
 import pytest
 from forkserver_imports import ImportForkServer
@@ -48,9 +50,15 @@ def _imports(path):
     return {m for m in out if m.split(".")[0] == "icosim" and m != name}
 
 
+@functools.cache
+def _graph():
+    """Module -> the icosim modules it imports; parsed once for the tests that read it (none changes it)."""
+    return MappingProxyType({_module_name(p): frozenset(_imports(p)) for p in PACKAGE.rglob("*.py")})
+
+
 def test_no_import_cycle():
     """Every import counts, also one inside a function (the trick that used to hide a cycle)."""
-    graph = {_module_name(p): _imports(p) for p in PACKAGE.rglob("*.py")}
+    graph = _graph()
     state = {}
 
     def visit(node, stack):
@@ -88,10 +96,6 @@ DATA_CONTRACTS = {
     "icosim.pendulum.trade.conclusions": "the trade datasets read back as the report's rows and counts",
     "icosim.pendulum.trade.orders": "the order fit above the pendulum's error floor (conclusions apply it)",
 }
-
-
-def _graph():
-    return {_module_name(p): _imports(p) for p in PACKAGE.rglob("*.py")}
 
 
 def _room(module, rooms):
