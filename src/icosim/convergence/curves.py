@@ -18,34 +18,58 @@ def curves(datasets) -> list:
     """Flatten panel datasets into one record per curve (dict)."""
     out = []
     for ds in datasets:
-        for i, index in enumerate(ds["index"].values):
-            for j, k in enumerate(ds["k"].values):
-                rec = {
-                    "figure": str(ds.attrs["figure"]),
-                    "scheme": str(ds.attrs.get("scheme", "jacobi")),
-                    "decomposition": ds.attrs["decomposition"],
-                    "method": ds.attrs["method"],
-                    "panel": ds.attrs["panel"],
-                    "index": int(index),
-                    "k": int(k),
-                }
+        # every variable read once per dataset: a dataset lookup builds a new DataArray each time
+        var = ds.variables
+        values = {name: var[name].values for name in _CURVE_VARIABLES}
+        params = {name: var[name].values for name in parameters() if name in ds.coords}
+        head = {
+            "figure": str(ds.attrs["figure"]),
+            "scheme": str(ds.attrs.get("scheme", "jacobi")),
+            "decomposition": ds.attrs["decomposition"],
+            "method": ds.attrs["method"],
+            "panel": ds.attrs["panel"],
+        }
+        for i, index in enumerate(values["index"]):
+            for j, k in enumerate(values["k"]):
+                rec = {**head, "index": int(index), "k": int(k)}
                 for name in parameters():
-                    if name in ds.coords:
-                        rec[name] = float(ds[name].values[i])
+                    if name in params:
+                        rec[name] = float(params[name][i])
                     elif name in ds.attrs:
                         rec[name] = float(ds.attrs[name])
                 for name in ("order", "order_spread", "fit_H_min", "fit_H_max", "order_second_half", "order_startup"):
-                    rec[name] = float(ds[name].values[i, j])
-                rec["order_status"] = str(ds["order_status"].values[i, j])
-                rec["fit_note"] = str(ds["fit_note"].values[i, j])
-                rec["fit_n_points"] = int(ds["fit_n_points"].values[i, j])
-                rec["H"] = ds["H"].values
-                rec["nrmse"] = ds["nrmse"].values[i, j]
-                rec["unstable"] = ds["unstable"].values[i, j].astype(bool)
-                rec["H_mid"] = ds["H_mid"].values
-                rec["local_slope"] = ds["local_slope"].values[i, j]
+                    rec[name] = float(values[name][i, j])
+                rec["order_status"] = str(values["order_status"][i, j])
+                rec["fit_note"] = str(values["fit_note"][i, j])
+                rec["fit_n_points"] = int(values["fit_n_points"][i, j])
+                rec["H"] = values["H"]
+                rec["nrmse"] = values["nrmse"][i, j]
+                rec["unstable"] = values["unstable"][i, j].astype(bool)
+                rec["H_mid"] = values["H_mid"]
+                rec["local_slope"] = values["local_slope"][i, j]
                 out.append(rec)
     return out
+
+
+#: The variables and coordinates of a panel dataset a curve record is made of.
+_CURVE_VARIABLES = (
+    "index",
+    "k",
+    "order",
+    "order_spread",
+    "fit_H_min",
+    "fit_H_max",
+    "order_second_half",
+    "order_startup",
+    "order_status",
+    "fit_note",
+    "fit_n_points",
+    "H",
+    "nrmse",
+    "unstable",
+    "H_mid",
+    "local_slope",
+)
 
 
 def curve_label(rec) -> str:

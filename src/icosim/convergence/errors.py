@@ -41,11 +41,13 @@ from ..engine.schemes import JACOBI
 from ..engine.spectral.certified import MAX_BITS, SpectralCertificate, certify_matrix
 from ..engine.spectral.matrix import amplification_matrix
 from .blocks import BlockErrors, ErrorSeries, error_recurrence, error_recurrences
+from .pointwise import PointwiseBall, pointwise_method, structure
 
 __all__ = [
     "ExactExtension",
     "exact_extension",
     "local_defect",
+    "local_defects",
     "Defect",
     "error_recurrence",
     "error_recurrences",
@@ -157,25 +159,91 @@ def local_defect(
     while True:
         be = Ball(b)
         with be.context():
-            c, ext, WE, E_mid, A_mid = _exact_parts(coefficients, decomposition, k, be)
-            M = amplification_matrix(c, method, decomposition, k, backend=be, scheme=scheme)
-            D = M @ ext.W - WE
-            mid, rad = be.mid(D), be.rad(D)
-            size = np.max(np.abs(mid), axis=1)
-            floor = DEFECT_REL_ACCURACY * np.max(size)
-            rel = np.where(size > floor, np.max(rad, axis=1) / np.where(size > 0, size, 1), 0.0)
-            ok = np.all(np.max(rad, axis=1) <= DEFECT_REL_ACCURACY * np.maximum(size, floor)) and np.all(
-                np.isfinite(mid)
-            )
-            cert = certify_matrix(M, b, final=b >= min(certify_bits, max_bits))
-            if (ok and cert is not None) or b >= max_bits:
-                if not ok:
-                    raise ArithmeticError(
-                        f"defect not resolved at {max_bits} bits (max relative radius {np.max(rel):.1e})"
-                    )
-                cert = cert or certify_matrix(M, b)
-                return Defect(be.mid(M), mid, E_mid.copy(), A_mid.copy(), b, float(np.max(rel)), cert)
+            parts = _exact_parts(coefficients, decomposition, k, be)
+            M = amplification_matrix(parts[0], method, decomposition, k, backend=be, scheme=scheme)
+            defect = _resolved_defect(M, parts, be, max_bits, certify_bits)
+        if defect is not None:
+            return defect
         b = min(2 * b, max_bits)
+
+
+def _resolved_defect(M, parts, be, max_bits, certify_bits) -> Defect | None:
+    """The :class:`Defect` of the ball ``M`` at ``be``'s precision (inside its context), or None where this
+    precision leaves a row of ``D`` or the stability verdict unresolved (below ``max_bits``)."""
+    b = be.bits
+    c, ext, WE, E_mid, A_mid = parts
+    D = M @ ext.W - WE
+    mid, rad = be.mid(D), be.rad(D)
+    size = np.max(np.abs(mid), axis=1)
+    floor = DEFECT_REL_ACCURACY * np.max(size)
+    rel = np.where(size > floor, np.max(rad, axis=1) / np.where(size > 0, size, 1), 0.0)
+    ok = np.all(np.max(rad, axis=1) <= DEFECT_REL_ACCURACY * np.maximum(size, floor)) and np.all(np.isfinite(mid))
+    cert = certify_matrix(M, b, final=b >= min(certify_bits, max_bits))
+    if (ok and cert is not None) or b >= max_bits:
+        if not ok:
+            raise ArithmeticError(f"defect not resolved at {max_bits} bits (max relative radius {np.max(rel):.1e})")
+        cert = cert or certify_matrix(M, b)
+        return Defect(be.mid(M), mid, E_mid.copy(), A_mid.copy(), b, float(np.max(rel)), cert)
+    return None
+
+
+def local_defects(
+    coefficients,
+    methods,
+    decomposition,
+    k,
+    *,
+    bits: int = 256,
+    max_bits: int = 4096,
+    certify_bits: int = MAX_BITS,
+    scheme=JACOBI,
+) -> list[Defect]:
+    """:func:`local_defect` of several parameter points (``coefficients[i]`` with ``methods[i]``), each the
+    very one it gets alone.
+
+    The ball macro step costs mostly Python calls, not arithmetic: the points whose methods differ at
+    most in the values of their levels (:mod:`icosim.convergence.pointwise`) have their ball matrices at
+    ``bits`` formed in one batched macro step (a leading axis of object arrays: the same ball operations
+    on every point as alone, hence the same balls, as
+    :func:`icosim.engine.spectral.batched.certify_spectral_radii`).  A point this precision leaves
+    unresolved, and every point of a batch that fails, continues alone.
+    """
+    out: list = [None] * len(methods)
+    groups: dict = {}  # structure -> indices of its points
+    for i, m in enumerate(methods):
+        groups.setdefault(structure(m), []).append(i)
+    kw = {"max_bits": max_bits, "certify_bits": certify_bits, "scheme": scheme}
+    for members in groups.values():
+        if len(members) == 1:
+            i = members[0]
+            out[i] = local_defect(coefficients[i], methods[i], decomposition, k, bits=bits, **kw)
+            continue
+        batch = [methods[i] for i in members]
+        same = all(m == batch[0] for m in batch)
+        method, be = (batch[0], Ball(int(bits))) if same else (pointwise_method(batch), PointwiseBall(int(bits)))
+        try:
+            with be.context():
+                parts = [_exact_parts(coefficients[i], decomposition, k, be) for i in members]
+                Ms = amplification_matrix(
+                    _stacked([p[0] for p in parts]), method, decomposition, k, backend=be, scheme=scheme
+                )
+                first = [_resolved_defect(M, p, be, max_bits, certify_bits) for M, p in zip(Ms, parts)]
+            again = min(2 * be.bits, max_bits)  # the precision schedule of local_defect from its next step
+        except Exception:  # noqa: BLE001 -- the batch cannot tell which point failed: each alone
+            first, again = [None] * len(members), be.bits
+        for i, defect in zip(members, first):
+            out[i] = defect or local_defect(coefficients[i], methods[i], decomposition, k, bits=again, **kw)
+    return out
+
+
+def _stacked(points):
+    """Coefficients of single points (balls) as one set of coefficients with a leading axis of the points."""
+    columns = []
+    for f in fields(points[0]):
+        column = np.empty(len(points), dtype=object)
+        column[:] = [getattr(c, f.name) for c in points]
+        columns.append(column)
+    return type(points[0])(*columns)
 
 
 def propagate_errors(M, D, E, z_at, n_steps: int, *, block: int | None = None) -> ErrorSeries:

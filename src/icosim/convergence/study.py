@@ -45,7 +45,7 @@ from ..engine.macrostep import simulate
 from ..engine.schemes import JACOBI, get_scheme
 from ..engine.spectral import amplification_matrix, spectral_radius
 from ..errors import ParameterError
-from .errors import ErrorSeries, error_recurrences, local_defect
+from .errors import ErrorSeries, error_recurrences, local_defects
 from .experiment import Setup, dimensional_method
 from .metric import ratio_root, variances
 
@@ -311,12 +311,13 @@ class Study:
     def _floor_free(self, methods, decomposition, k, indices, scheme=JACOBI):
         """``_errors`` of stepping "error" for the step sizes ``H[indices]`` (``methods[i]`` the method at
         ``H[i]``), their error recurrences stepped together (:func:`~icosim.convergence.errors.error_recurrences`)."""
-        defects, runs = [], []
-        for i in indices:
-            H, N = self.H[i], int(self.n_steps[i])
-            d = local_defect(self.setup.model(H).coefficients(), methods[i], decomposition, k, scheme=scheme)
-            defects.append(d)
-            runs.append((d.M, d.D, d.E, lambda steps, i=i, A=d.A: self._exact_z(i, A, steps), N))
+        indices = list(indices)
+        coefficients = [self.setup.model(self.H[i]).coefficients() for i in indices]
+        defects = local_defects(coefficients, [methods[i] for i in indices], decomposition, k, scheme=scheme)
+        runs = [
+            (d.M, d.D, d.E, lambda steps, i=i, A=d.A: self._exact_z(i, A, steps), int(self.n_steps[i]))
+            for i, d in zip(indices, defects)
+        ]
         out = []
         for i, d, errors in zip(indices, defects, error_recurrences(runs)):
             # the state itself (exact + error, engine units) against the growth bound, as the other steppings;

@@ -1,0 +1,76 @@
+"""One coupling method for the points of a batch whose constraint levels differ per point.
+
+The ball macro step of one point costs mostly Python calls, not arithmetic, so the step sizes of a
+convergence curve have their ball matrices formed in one batched step (a leading axis of object
+arrays).  A dimensional method (Baumgarte's ``mu``) has other engine levels ``beta_bar = beta / H``,
+``gamma_bar = gamma / H^2`` at every step size: :func:`pointwise_method` stands for all of them, its
+levels :class:`PointLevels` that :class:`PointwiseBall` turns into one ball per point, multiplying
+each point's rows as that point's level does alone (the same ball products, hence the same balls).
+Anything else the batch would need makes it fail, and its points are formed one by one.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..engine.backends import Ball
+
+__all__ = ["PointLevels", "PointwiseBall", "pointwise_method", "structure"]
+
+
+class PointLevels:
+    """A constraint level with one exact value per point; ``== 0`` and ``== 1`` answer as every point does."""
+
+    __hash__ = None
+
+    def __init__(self, values):
+        self.values = tuple(values)
+        self._zero, self._one = self.values[0] == 0, self.values[0] == 1
+
+    def __eq__(self, other):
+        if isinstance(other, int) and not isinstance(other, bool) and other in (0, 1):
+            return self._one if other else self._zero
+        return NotImplemented
+
+
+class _Leading:
+    """One ball per point, multiplying an array whose leading axis holds the points (``level * rows``)."""
+
+    def __init__(self, balls):
+        self.balls = balls
+
+    def __mul__(self, other):
+        if not (isinstance(other, np.ndarray) and other.ndim >= 2 and other.shape[0] == self.balls.shape[0]):
+            raise TypeError("a per-point level multiplies arrays with the points on the leading axis only")
+        return self.balls.reshape(self.balls.shape + (1,) * (other.ndim - 1)) * other
+
+
+class PointwiseBall(Ball):
+    """:class:`~icosim.engine.backends.Ball` whose constants may be :class:`PointLevels` (one ball per point)."""
+
+    def const(self, q):
+        if isinstance(q, PointLevels):
+            balls = np.empty(len(q.values), dtype=object)
+            balls[:] = [super(PointwiseBall, self).const(v) for v in q.values]
+            return _Leading(balls)
+        return super().const(q)
+
+
+def structure(method):
+    """What must agree for methods to share one batched step: all but the values of their levels (whether
+    each is 0 or 1 included, which decides which products the rule forms)."""
+    solves = tuple((weight, tuple((level == 0, level == 1) for level in levels)) for weight, levels in method.solves)
+    return (type(method), method.name, method.projection, method.requires_constraint, method.refusal, solves)
+
+
+def pointwise_method(methods):
+    """The method standing for ``methods`` (one per point, the same :func:`structure`): their first, with
+    each level that differs between the points as :class:`PointLevels`."""
+    first = methods[0]
+    solves = []
+    for s, (weight, _) in enumerate(first.solves):
+        columns = zip(*(m.solves[s][1] for m in methods))
+        solves.append((weight, tuple(c[0] if len(set(c)) == 1 else PointLevels(c) for c in columns)))
+    return dataclasses.replace(first, solves=tuple(solves))
