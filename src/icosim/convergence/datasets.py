@@ -67,9 +67,10 @@ def run_panel_data(
     status = {n: np.full((nI, nK), "", dtype=object) for n in ("order_status", "fit_note")}
     fit_n = np.zeros((nI, nK), dtype=np.int32)
     H_mid = None
-    for i, row in enumerate(spec.rows):
-        for j, k in enumerate(spec.k):
-            r = study.run(spec.method, row, spec.decomposition, k, stepping=stepping, scheme=spec.scheme)
+    for j, k in enumerate(spec.k):
+        # the rows of one k stepped together (Study.run_curves: the numbers of each curve alone)
+        rows = study.run_curves(spec.method, spec.rows, spec.decomposition, k, stepping=stepping, scheme=spec.scheme)
+        for i, r in enumerate(rows):
             for n in names_f + ("spectral_radius_digits", "spectral_verdict", "diverged_at", "unstable", "defect_bits"):
                 arr[n][i, j] = getattr(r, n)
             f = asymptotic_order(r.H, r.nrmse, r.unstable, **fit)

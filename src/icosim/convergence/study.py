@@ -206,20 +206,55 @@ class Study:
         s = self.setup
         return s.growth_bound * max(abs(s.x0), abs(s.v0) * H)
 
-    # -- one curve ----------------------------------------------------------------------
+    # -- curves ------------------------------------------------------------------------
     def run(
         self, method: str, params: dict, decomposition: str, k: int, *, stepping: str = "error", scheme=JACOBI
     ) -> CurveResult:
         """NRMSE over all step sizes for one scheme (dimensional ``params``; ``scheme``: Jacobi or Gauss-Seidel)."""
+        return self.run_curves(method, [params], decomposition, k, stepping=stepping, scheme=scheme)[0]
+
+    def run_curves(
+        self, method: str, rows, decomposition: str, k: int, *, stepping: str = "error", scheme=JACOBI
+    ) -> list[CurveResult]:
+        """:meth:`run` of every parameter set of ``rows`` (e.g. the rows of a panel), in that order.
+
+        With stepping "error" the error recurrences of every curve and step size are stepped together:
+        each product of a stacked step is the one of a curve alone, so these are the numbers of :meth:`run`.
+        """
         if stepping not in STEPPINGS:
             raise ParameterError(f"stepping must be one of {', '.join(STEPPINGS)}, got {stepping!r}")
         scheme = get_scheme(scheme)
         dec = get_decomposition(decomposition)
         t0 = time.perf_counter()
-        nH = self.H.size
-        methods = [dimensional_method(method, H, **params) for H in self.H]
-        methods[0].check_decomposition(dec)
+        curves = []
+        for params in rows:
+            methods = [dimensional_method(method, H, **params) for H in self.H]
+            methods[0].check_decomposition(dec)
+            curves.append(methods)
         scheme.check_decomposition(dec)
+        nH = self.H.size
+        if stepping == "error":  # every curve's and step size's recurrence stepped together
+            runs = self._floor_free_curves(curves, dec.name, k, range(nH), scheme)
+        else:
+            runs = [None] * len(curves)
+        out = []
+        for params, methods, curve_runs in zip(rows, curves, runs):
+            result = self._curve(methods, dec, k, stepping, scheme, curve_runs)
+            result.seconds = time.perf_counter() - t0  # with stepping "error": the curves before it included
+            result.meta = {
+                "method": method,
+                "decomposition": dec.name,
+                "k": int(k),
+                "stepping": stepping,
+                "scheme": scheme.name,
+                **params,
+            }
+            out.append(result)
+        return out
+
+    def _curve(self, methods, dec, k, stepping, scheme, runs) -> CurveResult:
+        """One curve from its methods per ``H`` (and, for stepping "error", its :meth:`_floor_free` runs)."""
+        nH = self.H.size
         if stepping == "error":  # certified from the ball matrices of the defects, in the loop below
             rho, digits = np.full(nH, np.nan), np.zeros(nH, dtype=int)
             verdict = np.full(nH, "", dtype=object)
@@ -231,8 +266,6 @@ class Study:
         out["defect_bits"] = np.zeros(nH, dtype=np.int32)
         # the constraint force is a coupling variable with ff and fd only
         lam = dec.variables.index("lambda_c") if "lambda_c" in dec.variables else None
-        if stepping == "error":  # every step size's recurrence stepped together
-            runs = self._floor_free(methods, dec.name, k, range(nH), scheme)
         for i, (H, N) in enumerate(zip(self.H, self.n_steps)):
             if stepping == "error":
                 errors, diverged, bits, cert = runs[i]
@@ -274,15 +307,6 @@ class Study:
             diverged_at=out["diverged_at"],
             unstable=unstable,
             defect_bits=out["defect_bits"],
-            seconds=time.perf_counter() - t0,
-            meta={
-                "method": method,
-                "decomposition": dec.name,
-                "k": int(k),
-                "stepping": stepping,
-                "scheme": scheme.name,
-                **params,
-            },
         )
 
     def _spectral_radii(self, methods, decomposition, k, scheme=JACOBI):
@@ -311,15 +335,28 @@ class Study:
     def _floor_free(self, methods, decomposition, k, indices, scheme=JACOBI):
         """``_errors`` of stepping "error" for the step sizes ``H[indices]`` (``methods[i]`` the method at
         ``H[i]``), their error recurrences stepped together (:func:`~icosim.convergence.errors.error_recurrences`)."""
+        return self._floor_free_curves([methods], decomposition, k, indices, scheme)[0]
+
+    def _floor_free_curves(self, curves, decomposition, k, indices, scheme=JACOBI):
+        """:meth:`_floor_free` of several curves (each a ``methods``), every recurrence stepped together."""
         indices = list(indices)
         coefficients = [self.setup.model(self.H[i]).coefficients() for i in indices]
-        defects = local_defects(coefficients, [methods[i] for i in indices], decomposition, k, scheme=scheme)
-        runs = [
-            (d.M, d.D, d.E, lambda steps, i=i, A=d.A: self._exact_z(i, A, steps), int(self.n_steps[i]))
-            for i, d in zip(indices, defects)
-        ]
+        defects, runs = [], []
+        for methods in curves:
+            curve = local_defects(coefficients, [methods[i] for i in indices], decomposition, k, scheme=scheme)
+            defects += curve
+            runs += [
+                (d.M, d.D, d.E, lambda steps, i=i, A=d.A: self._exact_z(i, A, steps), int(self.n_steps[i]))
+                for i, d in zip(indices, curve)
+            ]
+        out = self._checked_runs(indices * len(curves), defects, error_recurrences(runs))
+        return [out[c * len(indices) : (c + 1) * len(indices)] for c in range(len(curves))]
+
+    def _checked_runs(self, indices, defects, recurrences):
+        """Per run ``(errors, diverged_at, defect_bits, certificate)``: its errors, or the first step its
+        state left the growth bound."""
         out = []
-        for i, d, errors in zip(indices, defects, error_recurrences(runs)):
+        for i, d, errors in zip(indices, defects, recurrences):
             # the state itself (exact + error, engine units) against the growth bound, as the other steppings;
             # step by step only where a bound of the errors and the largest exact value together could cross it
             H = self.H[i]
