@@ -29,11 +29,12 @@ from icosim import (
     weighted_multiplier,
 )
 from icosim.engine.backends import Float64, Multiprecision
+from icosim.engine.bounds import guard_digits
 from icosim.engine.exact import MonolithicSolution, consistent_start
 from icosim.engine.lagrange import corrector_nodes, predictor_nodes, weights_at
 from icosim.engine.macrostep import simulate
 from icosim.engine.spectral import amplification_matrix
-from icosim.engine.subsystems import OscillatorSubsystem
+from icosim.engine.subsystems import OscillatorSubsystem, decay_rate
 
 SCHEMES = [
     (baumgarte(mu=1, index=1), "ff"),
@@ -289,14 +290,16 @@ def test_test_model_validation_names_the_parameter(kwargs, name):
 def test_float64_agrees_with_128_digits_where_trusted(method, dec):
     rng = np.random.default_rng(5)
     lr, li = -2 * rng.random(6), 2 * rng.random(6)
-    model = TestModel(lr, li, 2.0, 2.0, 2.0)
+    model, be = TestModel(lr, li, 2.0, 2.0, 2.0), Multiprecision(128)
     for k in (0, 2):
         rho, err = spectral_radius_float64(model, method, dec, k)
         trusted = np.isfinite(rho) & (np.abs(rho - 1) > err)
         assert trusted.any()
-        for i in np.flatnonzero(trusted):
-            with _exponentials_computed_once():  # the schemes of a decomposition share them
-                ref = float(spectral_radius_mp(TestModel(lr[i], li[i], 2.0, 2.0, 2.0), method, dec, k, 128))
+        at = np.flatnonzero(trusted)
+        with _exponentials_computed_once():  # the schemes of a decomposition share them
+            matrices = _matrices_128_digits(lr[at], li[at], (2.0, 2.0, 2.0), method, dec, k, be)
+        for i, M in zip(at, matrices):
+            ref = float(np.max(np.abs(be.eigvals(M))))
             # the error estimate is honest and float64 is accurate here
             assert abs(rho[i] - ref) <= err[i]
             assert rho[i] == pytest.approx(ref, rel=1e-9)
@@ -334,26 +337,78 @@ _MP_EXPM = {}
 @contextlib.contextmanager
 def _exponentials_computed_once():
     """The 128-digit references of these cases and of the float64 comparison above share their subsystems'
-    exponentials (subsystem 1's matrix depends on the point, its kind and k, subsystem 2's on am21, its kind
-    and k): each distinct matrix is exponentiated once, by the backend itself, and its entries handed out
+    exponentials (subsystem 1's matrix depends on the point, its kind and k, subsystem 2's also on am21): each
+    distinct matrix, alone or in a batch, is exponentiated once, by the backend itself, and its entries handed out
     again as the same numbers in the asking backend's context, where each reference used to exponentiate
     both again."""
     original = Multiprecision.expm
 
     def expm(self, M, *args, **kwargs):
-        entries = tuple(getattr(v, "_mpf_", None) or getattr(v, "_mpc_", v) for v in np.ravel(M))
-        key = (self.digits, args, tuple(sorted(kwargs.items())), np.shape(M), entries)
-        if key not in _MP_EXPM:
-            _MP_EXPM[key] = original(self, M, *args, **kwargs)
-        E = _MP_EXPM[key]
-        out = np.empty(E.shape, dtype=object)
-        for idx in np.ndindex(E.shape):
-            out[idx] = self.ctx.convert(E[idx])  # exact: the value as it is, in this backend's context
+        M = np.asarray(M, dtype=object)
+        out = np.empty(M.shape, dtype=object)
+        for at in np.ndindex(M.shape[:-2]):  # each matrix of a batch on its own
+            entries = tuple(getattr(v, "_mpf_", None) or getattr(v, "_mpc_", v) for v in np.ravel(M[at]))
+            key = (self.digits, args, tuple(sorted(kwargs.items())), M.shape[-2:], entries)
+            if key not in _MP_EXPM:
+                _MP_EXPM[key] = original(self, M[at], *args, **kwargs)
+            for idx, v in np.ndenumerate(_MP_EXPM[key]):
+                out[at + idx] = self.ctx.convert(v)  # exact: the value as it is, in this backend's context
         return out
 
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(Multiprecision, "expm", expm)
         yield
+
+
+def _matrices_128_digits(lr1, li1, rest, method, dec, k, be):
+    """The amplification matrices :func:`spectral_radius_mp` forms at 128 digits at ``TestModel(lr1, li1, *rest)``:
+    a batched macro step per set of points whose subsystems' exponentials get the same guard digits (a batch
+    gets those of its largest decay), so that each matrix is the point's own."""
+    c = TestModel(lr1, li1, *rest).coefficients()
+    decays = [np.broadcast_to(decay_rate(s, d), np.shape(lr1)) for s, d in ((c.k1, c.delta1), (c.k2, c.delta2))]
+    guards = [tuple(guard_digits(d[i]) for d in decays) for i in range(len(lr1))]
+    matrices = [None] * len(lr1)
+    for guard in set(guards):
+        at = [i for i, g in enumerate(guards) if g == guard]
+        model = TestModel(be.asarray(lr1[at]), be.asarray(li1[at]), *map(be.const, rest))
+        for i, M in zip(at, amplification_matrix(model, method, dec, k, backend=be)):
+            matrices[i] = M
+    return matrices
+
+
+def _hessenberg(M):
+    """An upper Hessenberg matrix similar to M: Gaussian elimination with row pivoting, each row operation
+    undone on the columns (real arithmetic, no transformation kept)."""
+    A = np.array(M, dtype=object)
+    for j in range(len(A) - 2):
+        p = j + 1 + int(np.argmax([abs(v) for v in A[j + 1 :, j]]))
+        A[[j + 1, p]] = A[[p, j + 1]]
+        A[:, [j + 1, p]] = A[:, [p, j + 1]]
+        if A[j + 1, j] != 0:
+            m = A[j + 2 :, j] / A[j + 1, j]
+            A[j + 2 :] -= np.outer(m, A[j + 1])
+            A[:, j + 1] += A[:, j + 2 :] @ m
+    return A
+
+
+def _schur_stable(M, one):
+    """rho(M) < 1 in M's own arithmetic, without eigenvalues: the Schur-Cohn test (all reflection
+    coefficients of det(zI - M) below 1 in modulus), the polynomial formed from a Hessenberg form of M."""
+    H = _hessenberg(M)
+    p = [[one]]  # p[i]: characteristic polynomial of the leading i x i block, highest power first
+    for i in range(len(H)):
+        q, below = [a - H[i, i] * b for a, b in zip(p[i] + [0], [0] + p[i])], one
+        for j in range(i - 1, -1, -1):
+            below *= H[j + 1, j]
+            q[i + 1 - j :] = [a - H[j, i] * below * b for a, b in zip(q[i + 1 - j :], p[j])]
+        p.append(q)
+    a = p[-1]
+    while len(a) > 1:
+        reflection = a[-1] / a[0]
+        if abs(reflection) >= 1:
+            return False
+        a = [x - reflection * y for x, y in zip(a[:-1], a[:0:-1])]
+    return True
 
 
 @pytest.mark.slow
@@ -364,12 +419,16 @@ def test_precision_policy_classifies_like_128_digits_at_the_extremes(method, dec
     model = TestModel(pts[:, 0], pts[:, 1], am21, 2.0, 0.5)
     res = spectral_radius(model, method, dec, k)
     assert np.all(np.isfinite(res.rho))
+    be = Multiprecision(128)
     with _exponentials_computed_once():
-        ref = [spectral_radius_mp(TestModel(p[0], p[1], am21, 2.0, 0.5), method, dec, k) for p in pts]
-    assert all(mpmath.isfinite(r) for r in ref)
+        ref = _matrices_128_digits(pts[:, 0], pts[:, 1], (am21, 2.0, 0.5), method, dec, k, be)
+    assert all(mpmath.isfinite(v) for M in ref for v in M.ravel())
     # every verdict agrees with 128 digits; "marginal" only where rho = 1 to those digits (no float64 guess there)
-    for verdict, r in zip(res.verdict, ref):
-        assert verdict == ("stable" if r < 1 else "unstable") or (verdict == "marginal" and abs(r - 1) < 1e-60)
+    for verdict, M in zip(res.verdict, ref):
+        if verdict == "marginal":
+            assert abs(np.max(np.abs(be.eigvals(M))) - 1) < 1e-60
+        else:
+            assert verdict == ("stable" if _schur_stable(M, be.const(1)) else "unstable")
 
 
 def test_float64_fails_outright_at_the_extremes_and_the_policy_catches_it():
@@ -420,24 +479,29 @@ def test_mp_backend_does_not_touch_global_mpmath_precision():
     ],
 )
 def test_trajectory_converges_to_exact_monolithic_solution(method, dec, k, order):
-    T, errors = 0.5, []
-    Hs = [2e-3, 1e-3, 5e-4]
-    dimensional = method
-    for H in Hs:
-        c = PhysicalModel(1.0, 2.0, 1000.0, 1000.0, 10.0, 10.0, H).coefficients()
-        if dimensional.name == "baumgarte" and dimensional.params["beta"]:
-            # beta, gamma given in s and s^2: the engine takes beta/H and gamma/H^2
-            p = dimensional.params
-            method = baumgarte(beta=p["beta"] / H, gamma=p["gamma"] / H**2)
-        prob = LinearCosimulation(c, dec, k)
-        sol = MonolithicSolution(c, 0.1, 0.0)
-        state, hist = consistent_start(prob, sol)
-        n = int(round(T / H))
-        traj = simulate(prob, method, state, hist, n)
+    T, Hs = 0.5, np.array([2e-3, 1e-3, 5e-4])
+    n = np.round(T / Hs).astype(int)
+
+    def model(H):
+        return PhysicalModel(1.0, 2.0, 1000.0, 1000.0, 10.0, 10.0, H)
+
+    solutions = [MonolithicSolution(model(H).coefficients(), 0.1, 0.0) for H in Hs]
+    if method.name == "baumgarte" and method.params["beta"]:
+        # beta, gamma given in s and s^2: the engine takes beta/H and gamma/H^2, a method per H
+        p = method.params
+        runs = [([i], baumgarte(beta=p["beta"] / H, gamma=p["gamma"] / H**2)) for i, H in enumerate(Hs)]
+    else:  # every H in one batch (a macro step costs about the same), each run as far as the finest H's
+        runs = [(list(range(len(Hs))), method)]
+    errors = [None] * len(Hs)
+    for at, run_method in runs:
+        prob = LinearCosimulation(model(Hs[at]).coefficients(), dec, k)
+        state, hist = (np.stack(s) for s in zip(*(consistent_start(prob, solutions[i]) for i in at)))
+        traj = simulate(prob, run_method, state, hist, max(n[at]))
         assert traj.diverged_at is None
         states = np.array(traj.states)
-        exact = sol.state(np.arange(n + 1))
-        errors.append(max(np.max(np.abs(states[:, i, 0] - exact[:, 0])) for i in range(2)))
+        for b, i in enumerate(at):
+            exact = solutions[i].state(np.arange(n[i] + 1))
+            errors[i] = max(np.max(np.abs(states[: n[i] + 1, b, j, 0] - exact[:, 0])) for j in range(2))
     errors = np.array(errors)
     assert np.all(np.diff(errors) < 0)
     observed = np.log2(errors[:-1] / errors[1:])
