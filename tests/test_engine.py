@@ -299,7 +299,7 @@ def test_float64_agrees_with_128_digits_where_trusted(method, dec):
         with _exponentials_computed_once():  # the schemes of a decomposition share them
             matrices = _matrices_128_digits(lr[at], li[at], (2.0, 2.0, 2.0), method, dec, k, be)
         for i, M in zip(at, matrices):
-            ref = float(np.max(np.abs(be.eigvals(M))))
+            ref = float(np.max(np.abs(be.eigvals(_less_structural_zeros(M)))))
             # the error estimate is honest and float64 is accurate here
             assert abs(rho[i] - ref) <= err[i]
             assert rho[i] == pytest.approx(ref, rel=1e-9)
@@ -374,6 +374,24 @@ def _matrices_128_digits(lr1, li1, rest, method, dec, k, be):
         for i, M in zip(at, amplification_matrix(model, method, dec, k, backend=be)):
             matrices[i] = M
     return matrices
+
+
+def _less_structural_zeros(M):
+    """M without eigenvalues 0 its structure shows exactly: a zero row or column (a coupling value no step
+    reads), or two equal rows i, j (projected states; e_i - e_j is a left null vector, so adding column i to
+    column j, then dropping row and column i, is a similarity that drops the 0)."""
+    while True:
+        n = len(M)
+        zero = [i for i in range(n) if not any(M[i]) or not any(M[:, i])]
+        equal = [(i, j) for i in range(n) for j in range(i + 1, n) if all(M[i] == M[j])]
+        if zero:
+            i = zero[0]
+        elif equal:
+            (i, j), M = equal[0], M.copy()
+            M[:, j] += M[:, i]
+        else:
+            return M
+        M = np.delete(np.delete(M, i, axis=0), i, axis=1)
 
 
 def _hessenberg(M):
