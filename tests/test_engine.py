@@ -412,7 +412,7 @@ def _hessenberg(M):
 def _schur_stable(M, one):
     """rho(M) < 1 in M's own arithmetic, without eigenvalues: the Schur-Cohn test (all reflection
     coefficients of det(zI - M) below 1 in modulus), the polynomial formed from a Hessenberg form of M."""
-    H = _hessenberg(M)
+    H = _hessenberg(_less_structural_zeros(M))  # the zeros dropped are inside the unit circle
     p = [[one]]  # p[i]: characteristic polynomial of the leading i x i block, highest power first
     for i in range(len(H)):
         q, below = [a - H[i, i] * b for a, b in zip(p[i] + [0], [0] + p[i])], one
