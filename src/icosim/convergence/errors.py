@@ -41,7 +41,7 @@ from ..engine.schemes import JACOBI
 from ..engine.spectral.certified import MAX_BITS, SpectralCertificate, certify_matrix
 from ..engine.spectral.matrix import amplification_matrix
 from .blocks import BlockErrors, ErrorSeries, error_recurrence, error_recurrences
-from .pointwise import PointwiseBall, pointwise_method, structure
+from .pointwise import PointwiseBall, pointwise_method, stacked, structure
 
 __all__ = [
     "ExactExtension",
@@ -225,7 +225,7 @@ def local_defects(
             with be.context():
                 parts = [_exact_parts(coefficients[i], decomposition, k, be) for i in members]
                 Ms = amplification_matrix(
-                    _stacked([p[0] for p in parts]), method, decomposition, k, backend=be, scheme=scheme
+                    stacked([p[0] for p in parts]), method, decomposition, k, backend=be, scheme=scheme
                 )
                 first = [_resolved_defect(M, p, be, max_bits, certify_bits) for M, p in zip(Ms, parts)]
             again = min(2 * be.bits, max_bits)  # the precision schedule of local_defect from its next step
@@ -234,16 +234,6 @@ def local_defects(
         for i, defect in zip(members, first):
             out[i] = defect or local_defect(coefficients[i], methods[i], decomposition, k, bits=again, **kw)
     return out
-
-
-def _stacked(points):
-    """Coefficients of single points (balls) as one set of coefficients with a leading axis of the points."""
-    columns = []
-    for f in fields(points[0]):
-        column = np.empty(len(points), dtype=object)
-        column[:] = [getattr(c, f.name) for c in points]
-        columns.append(column)
-    return type(points[0])(*columns)
 
 
 def propagate_errors(M, D, E, z_at, n_steps: int, *, block: int | None = None) -> ErrorSeries:
