@@ -9,6 +9,7 @@
   definitions filled in from the registry as the workflow does;
 * :func:`predict_all` and :func:`correct_all`: every subsystem of a problem predicted or
   corrected (the problems advance one subsystem at a time; the scheme lives in the macro step);
+* :func:`engine_schemes`: a scheme of every method at each decomposition it allows;
 * :func:`growth_rate`: the growth factor per macro step of plain time stepping (an
   independent route to the spectral radius).
 """
@@ -261,6 +262,21 @@ def correct_all(prob, state, history, e_new):
     """``(state, y)`` of every subsystem after the corrector with the interpolation polynomials through ``e_new``."""
     ends, ys = zip(*(prob.correct(i, state, history, e_new) for i in range(2)))
     return prob.join(list(ends)), prob.stack(list(ys))
+
+
+def engine_schemes():
+    """A coupling scheme of every method at each decomposition it allows: ``(method, decomposition)`` pairs."""
+    from icosim import baumgarte, projection, weighted_multiplier
+
+    return [
+        (baumgarte(mu=1, index=1), "ff"),
+        (baumgarte(mu=1, index=2), "fd"),
+        (weighted_multiplier(1, 1), "ff"),
+        (weighted_multiplier(0.5, 0.25), "fd"),
+        (projection(), "ff"),
+        (projection(), "fd"),
+        (projection(), "dd"),
+    ]
 
 
 def growth_rate(prob, method, n_chunks=30, chunk=20, seed=0, **step_kw):
