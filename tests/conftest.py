@@ -19,29 +19,32 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 # datasets, numba compilation) start at once on different workers and the many short ones fill in at the
 # end; xdist's own order (most tests first) started them last, leaving one worker alone with them.
 # (--dist loadgroup cannot be used: with pytest 9 its group names do not reach the node ids.)
-#: CPU seconds per file (pytest -n 0, the file's process and its children, rounded); a file not listed
-#: counts 0.05 s a test.  Only the order matters: a wrong number costs some balance, never a test.
+#: Seconds per file (its tests' times in a run of the whole suite from a fresh checkout, rounded); a file
+#: not listed counts 0.05 s a test.  Only the order matters: a wrong number costs some balance, never a test.
 FILE_SECONDS = {
-    "tests/test_workflow_faults.py": 38,  # a real run of one figure, then one per fault case
-    "tests/test_engine.py": 32,
-    "tests/test_pendulum_compiled.py": 30,  # numba compiles the kernels (cold in a fresh checkout), twice more in copies
-    "tests/test_stability_workflow.py": 21,  # some 25 Snakemake runs, one real
-    "tests/test_schemes.py": 15,
-    "tests/test_convergence_claims.py": 14,  # the CI convergence datasets (module fixture)
-    "tests/test_structure.py": 12,
-    "tests/test_fmi_linear.py": 10,
-    "tests/test_figures.py": 8,
-    "tests/test_limits.py": 8,
-    "tests/test_pendulum.py": 7,
-    "tests/test_panel_readers.py": 6,
-    "tests/test_convergence.py": 6,
-    "tests/test_report_browser.py": 5,  # where the workflow's report exists
+    "tests/test_workflow_faults.py": 34,  # a real run of one figure, then one per fault case
+    "tests/test_pendulum_compiled.py": 32,  # numba compiles the kernels (cold in a fresh checkout), twice more in copies
+    "tests/test_stability_workflow.py": 17,  # some 25 Snakemake runs, one real
+    "tests/test_engine.py": 9,
+    "tests/test_schemes.py": 9,
+    "tests/test_fmi_linear.py": 8,
+    "tests/test_figures.py": 7,
+    "tests/test_convergence_claims.py": 6,  # the CI convergence datasets (module fixture)
+    "tests/test_limits.py": 6,
     "tests/test_pendulum_claims.py": 5,
-    "tests/test_certified.py": 5,
-    "tests/test_convergence_errors.py": 5,
-    "tests/test_stability_sweep.py": 5,
-    "tests/test_schemes_workflow.py": 4,
-    "tests/test_fmi_workflow.py": 5,
+    "tests/test_engine_precision.py": 5,
+    "tests/test_convergence.py": 5,
+    "tests/test_report_browser.py": 5,  # where the workflow's report exists
+    "tests/test_pendulum.py": 4.5,
+    "tests/test_panel_readers.py": 4,
+    "tests/test_dataset_dict.py": 4,
+    "tests/test_stability_sweep.py": 4,
+    "tests/test_convergence_errors.py": 4,
+    "tests/test_fmi_workflow.py": 3.5,
+    "tests/test_certified.py": 3.3,
+    "tests/test_fmi_pythonfmu.py": 2.7,
+    "tests/test_schemes_workflow.py": 2.7,
+    "tests/test_structure.py": 2.5,
 }
 
 
