@@ -41,7 +41,7 @@ from ..engine.schemes import JACOBI
 from ..engine.spectral.certified import MAX_BITS, SpectralCertificate, certify_matrix
 from ..engine.spectral.matrix import amplification_matrix
 from .blocks import BlockErrors, ErrorSeries, error_recurrence, error_recurrences
-from .pointwise import PointwiseBall, pointwise_method, stacked, structure
+from .pointwise import pointwise_method, stacked, structure
 
 __all__ = [
     "ExactExtension",
@@ -218,9 +218,7 @@ def local_defects(
             i = members[0]
             out[i] = local_defect(coefficients[i], methods[i], decomposition, k, bits=bits, **kw)
             continue
-        batch = [methods[i] for i in members]
-        same = all(m == batch[0] for m in batch)
-        method, be = (batch[0], Ball(int(bits))) if same else (pointwise_method(batch), PointwiseBall(int(bits)))
+        method, be = pointwise_method([methods[i] for i in members]), Ball(int(bits))
         try:
             with be.context():
                 parts = [_exact_parts(coefficients[i], decomposition, k, be) for i in members]

@@ -3,22 +3,22 @@
 The ball macro step of one point costs mostly Python calls, not arithmetic, so the step sizes of a
 convergence curve have their ball matrices formed in one batched step (a leading axis of object
 arrays).  A dimensional method (Baumgarte's ``mu``) has other engine levels ``beta_bar = beta / H``,
-``gamma_bar = gamma / H^2`` at every step size: :func:`pointwise_method` stands for all of them, its
-levels :class:`PointLevels` that :class:`PointwiseBall` turns into one ball per point, multiplying
-each point's rows as that point's level does alone (the same ball products, hence the same balls).
-Anything else the batch would need makes it fail, and its points are formed one by one
-(:func:`icosim.convergence.errors.local_defects`).
+``gamma_bar = gamma / H^2`` at every step size: :func:`pointwise_method` stands for all of them, each
+level that differs a tuple of one level per point, which the engine multiplies into each point's rows
+as that point's level does alone (:class:`icosim.engine.methods.CouplingMethod`): the same ball
+products, hence the same balls.  Points whose levels are 0 or 1 at different levels form other
+products and go to different batches (:func:`structure`).
 
 >>> from icosim.convergence.experiment import Setup, dimensional_method
 >>> from icosim.engine.backends import Ball
 >>> from icosim.engine.spectral.matrix import amplification_matrix
 >>> H = (1e-3, 4e-3)
 >>> methods = [dimensional_method("baumgarte", h, index=1, mu=5e-3) for h in H]
->>> be = PointwiseBall(256)
+>>> be = Ball(256)
 >>> with be.context():
 ...     points = [Setup().model(h).coefficients().map(be.const) for h in H]
 ...     batch = amplification_matrix(stacked(points), pointwise_method(methods), "ff", 1, backend=be)
-...     alone = [amplification_matrix(p, m, "ff", 1, backend=Ball(256)) for p, m in zip(points, methods)]
+...     alone = [amplification_matrix(p, m, "ff", 1, backend=be) for p, m in zip(points, methods)]
 >>> all(a.mid() == b.mid() and a.rad() == b.rad() for M, A in zip(batch, alone) for a, b in zip(M.flat, A.flat))
 True
 """
@@ -29,47 +29,7 @@ import dataclasses
 
 import numpy as np
 
-from ..engine.backends import Ball
-
-__all__ = ["PointLevels", "PointwiseBall", "pointwise_method", "stacked", "structure"]
-
-
-class PointLevels:
-    """A constraint level with one exact value per point; ``== 0`` and ``== 1`` answer as every point does."""
-
-    __hash__ = None
-
-    def __init__(self, values):
-        self.values = tuple(values)
-        self._zero, self._one = self.values[0] == 0, self.values[0] == 1
-
-    def __eq__(self, other):
-        if isinstance(other, int) and not isinstance(other, bool) and other in (0, 1):
-            return self._one if other else self._zero
-        return NotImplemented
-
-
-class _Leading:
-    """One ball per point, multiplying an array whose leading axis holds the points (``level * rows``)."""
-
-    def __init__(self, balls):
-        self.balls = balls
-
-    def __mul__(self, other):
-        if not (isinstance(other, np.ndarray) and other.ndim >= 2 and other.shape[0] == self.balls.shape[0]):
-            raise TypeError("a per-point level multiplies arrays with the points on the leading axis only")
-        return self.balls.reshape(self.balls.shape + (1,) * (other.ndim - 1)) * other
-
-
-class PointwiseBall(Ball):
-    """:class:`~icosim.engine.backends.Ball` whose constants may be :class:`PointLevels` (one ball per point)."""
-
-    def const(self, q):
-        if isinstance(q, PointLevels):
-            balls = np.empty(len(q.values), dtype=object)
-            balls[:] = [super(PointwiseBall, self).const(v) for v in q.values]
-            return _Leading(balls)
-        return super().const(q)
+__all__ = ["pointwise_method", "stacked", "structure"]
 
 
 def structure(method):
@@ -81,12 +41,12 @@ def structure(method):
 
 def pointwise_method(methods):
     """The method standing for ``methods`` (one per point, the same :func:`structure`): their first, with
-    each level that differs between the points as :class:`PointLevels`."""
+    each level that differs between the points as the tuple of the points' levels."""
     first = methods[0]
     solves = []
     for s, (weight, _) in enumerate(first.solves):
         columns = zip(*(m.solves[s][1] for m in methods))
-        solves.append((weight, tuple(c[0] if len(set(c)) == 1 else PointLevels(c) for c in columns)))
+        solves.append((weight, tuple(c[0] if len(set(c)) == 1 else tuple(c) for c in columns)))
     return dataclasses.replace(first, solves=tuple(solves))
 
 

@@ -130,7 +130,7 @@ class CurveResult:
     diverged_at: np.ndarray  # first diverged step, -1 if none
     unstable: np.ndarray
     defect_bits: np.ndarray  # Arb precision that proved the defect (stepping "error"; 0 otherwise)
-    seconds: float = 0.0
+    seconds: float = 0.0  # wall time of the call that computed it (curves computed together share it)
     meta: dict = field(default_factory=dict)
 
 
@@ -240,7 +240,6 @@ class Study:
         out = []
         for params, methods, curve_runs in zip(rows, curves, runs):
             result = self._curve(methods, dec, k, stepping, scheme, curve_runs)
-            result.seconds = time.perf_counter() - t0  # with stepping "error": the curves before it included
             result.meta = {
                 "method": method,
                 "decomposition": dec.name,
@@ -250,6 +249,9 @@ class Study:
                 **params,
             }
             out.append(result)
+        seconds = time.perf_counter() - t0
+        for result in out:
+            result.seconds = seconds
         return out
 
     def _curve(self, methods, dec, k, stepping, scheme, runs) -> CurveResult:
