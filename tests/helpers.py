@@ -11,7 +11,9 @@
   corrected (the problems advance one subsystem at a time; the scheme lives in the macro step);
 * :func:`engine_schemes`: a scheme of every method at each decomposition it allows;
 * :func:`growth_rate`: the growth factor per macro step of plain time stepping (an
-  independent route to the spectral radius).
+  independent route to the spectral radius);
+* :func:`fmu_instance`: a test unit of ``fmus/`` built and instantiated through fmpy's low-level
+  API, its log messages collected.
 """
 
 import atexit
@@ -27,6 +29,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import typing
 from pathlib import Path
 
 import yaml
@@ -319,6 +322,59 @@ def skip_without_c_toolchain():
 
     if not c_toolchain_present():
         pytest.skip("building the FMU test units needs CMake and a C compiler", allow_module_level=True)
+
+
+#: Where the tests build the units of ``fmus/`` (once per content; ``build/`` is not tracked).
+FMU_CACHE = ROOT / "build" / "fmus"
+
+
+class LogMessage(typing.NamedTuple):
+    """A message a unit sent through its logger: the instance name (FMI 2.0; ``None`` for FMI 3.0), the status
+    (0 OK .. 4 fatal) and the text."""
+
+    instance: str | None
+    status: int
+    text: str
+
+
+def fmu_instance(unit, unzipdir, messages=None, name="unit"):
+    """The test unit ``fmus/<unit>`` built into :data:`FMU_CACHE`, unpacked into ``unzipdir`` and instantiated
+    through fmpy's low-level API (``FMU2Slave`` or ``FMU3Slave``, co-simulation), not yet initialised.  What it
+    logs is appended to the list ``messages`` as :class:`LogMessage`.  The caller frees the instance."""
+    from fmpy import extract, read_model_description
+
+    from icosim.fmi.build import build_unit
+
+    fmu = build_unit(ROOT / "fmus" / unit, FMU_CACHE)
+    md = read_model_description(str(fmu))
+    messages = [] if messages is None else messages
+    common = dict(
+        guid=md.guid,
+        unzipDirectory=extract(str(fmu), unzipdir=str(unzipdir)),
+        modelIdentifier=md.coSimulation.modelIdentifier,
+        instanceName=name,
+    )
+    if md.fmiVersion.startswith("3."):
+        from fmpy.fmi3 import FMU3Slave
+
+        def log3(env, status, category, message):
+            messages.append(LogMessage(None, status, message.decode()))
+
+        slave = FMU3Slave(**common)
+        slave.instantiate(logMessage=log3)
+        return slave
+    from fmpy.fmi2 import FMU2Slave, defaultCallbacks, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+
+    def log2(env, instance, status, category, message):
+        messages.append(LogMessage(instance.decode(), status, message.decode()))
+
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(log2)
+    callbacks.allocateMemory, callbacks.freeMemory = defaultCallbacks.allocateMemory, defaultCallbacks.freeMemory
+    slave = FMU2Slave(**common)
+    slave.instantiate(callbacks=callbacks)
+    slave.test_callbacks = callbacks  # alive as long as the instance
+    return slave
 
 
 def scheme_panel_spec(figure, scheme, row, k, n=5):
