@@ -102,13 +102,15 @@ class Trajectory:
     diverged_at: int | None = None
     failed_at: int | None = None
     reason: str | None = None
+    error: BaseException | None = None  # what a failed step raised
 
 
 def simulate(problem, method, state, history, n_steps: int, *, bound: float | None = None, check=None, **step_kw):
     """Run ``n_steps`` macro steps from ``state`` and the coupling history.
 
     A step diverges when its state is not finite, its magnitude exceeds
-    ``bound``, or ``check(state, history, y)`` returns a reason (a string);
+    ``bound``, or ``check(state, history, y)`` returns a reason (a string;
+    ``check`` is called after every step, so it can also show progress);
     a step fails when it raises :class:`StepFailure` or a singular linear
     system (:class:`numpy.linalg.LinAlgError`).  Either stops the run and
     is recorded: an unstable run is reported, never silently continued.
@@ -116,12 +118,12 @@ def simulate(problem, method, state, history, n_steps: int, *, bound: float | No
     """
     get_scheme(step_kw.get("scheme", JACOBI)).check_decomposition(problem.decomposition)
     states, coupling, outputs = [state], [history[..., 0, :]], [None]
-    diverged = failed = reason = None
+    diverged = failed = reason = error = None
     for n in range(1, n_steps + 1):
         try:
             state, history, y = macro_step(problem, method, state, history, **step_kw)
         except (StepFailure, np.linalg.LinAlgError) as exc:  # e.g. a singular coupling solve
-            failed, reason = n, str(exc) or type(exc).__name__
+            failed, reason, error = n, str(exc) or type(exc).__name__, exc
             break
         mag = np.max(np.abs(np.asarray(state, dtype=float)))
         if not np.isfinite(mag):
@@ -136,4 +138,4 @@ def simulate(problem, method, state, history, n_steps: int, *, bound: float | No
         states.append(state)
         coupling.append(history[..., 0, :])
         outputs.append(y)
-    return Trajectory(states, coupling, outputs, diverged, failed, reason)
+    return Trajectory(states, coupling, outputs, diverged, failed, reason, error)
