@@ -85,7 +85,7 @@ def test_dataset_contents(capsys, tmp_path):
 
 def test_a_diverging_scene_is_written_with_its_status(capsys, tmp_path):
     """Weighted multiplier, fd, k = 2, Gauss-Seidel 1->2 at H = 1 ms is violently unstable: the run stops where
-    the state is no longer finite and says so."""
+    the state passes the divergence bound, says at which step, exits with status 1, and the dataset says so."""
     data = yaml.safe_load((ROOT / "config" / "scenes" / "two_mass_fd.yaml").read_text())
     data["coupling"] = {"method": "weighted", "index": 1, "a": 1.0, "b": 1.0, "decomposition": "fd", "k": 2}
     data["coupling"] |= {"scheme": "gauss-seidel-12", "H": 1e-3, "perturbation": 1.0}
@@ -94,10 +94,13 @@ def test_a_diverging_scene_is_written_with_its_status(capsys, tmp_path):
     path = tmp_path / "diverging.yaml"
     path.write_text(yaml.safe_dump(data | {"t_end": 0.5}))
     out = tmp_path / "run.nc"
-    assert main(["cosim", str(path), "--out", str(out), "--json"]) == 0
+    assert main(["cosim", str(path), "--out", str(out), "--json"]) == 1
     summary = json.loads(capsys.readouterr().out)
-    assert summary["status"] == "diverged" and "not finite" in summary["reason"]
-    assert open_dataset(out).attrs["status"] == "diverged"
+    n = summary["diverged_at"]
+    assert summary["status"] == "diverged" and f"diverged at macro step {n} " in summary["reason"]
+    assert "|state| > 1.1e+10" in summary["reason"] and summary["macro_steps"] == n - 1
+    ds = open_dataset(out)
+    assert ds.attrs["status"] == "diverged" and ds.attrs["diverged_at"] == n and ds.sizes["time"] == n
 
 
 def test_fmpy_is_imported_only_when_a_scene_runs():

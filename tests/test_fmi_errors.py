@@ -121,7 +121,7 @@ def test_model_exchange_only_unit(capsys, tmp_path):
 
     fmu = edited_unit(tmp_path, to_me)
     path = scene(tmp_path, body1=body(1, fmu=fmu.name))
-    assert_refused(*cosim(capsys, path, tmp_path), "body1", "model-exchange unit only")
+    assert_refused(*cosim(capsys, path, tmp_path), "body1", "offers model exchange only")
 
 
 def test_variable_the_unit_lacks_lists_close_matches(capsys, tmp_path):

@@ -1,5 +1,5 @@
 """``icosim cosim --predict``: the units identified from probing steps (m, c, d of the linear test units to
-rounding) and the spectral radius of the scene's coupling for every scheme, as for the parameters typed in."""
+1e-10) and the spectral radius of the scene's coupling for every scheme, as for the parameters typed in."""
 
 import json
 
@@ -30,9 +30,11 @@ def test_prediction_matches_the_parameters_typed_in(name):
     answer = predict_scene(scene)
     starts = [sub["start"] for sub in scene.data["subsystems"].values()]
     for unit, start in zip(answer["units"].values(), starts):
+        # probing steps move a unit by about 1 % of its position scale: c and d come from those changes, which
+        # carry the rounding of the outputs two orders of magnitude up
         for key in ("m", "c", "d"):
-            assert unit[key] == pytest.approx(start[key], rel=1e-12)
-        assert unit["misfit"] < 1e-12
+            assert unit[key] == pytest.approx(start[key], rel=1e-10)
+        assert unit["misfit"] < 1e-11
     true = PhysicalModel(
         m1=starts[0]["m"], m2=starts[1]["m"], c1=starts[0]["c"], c2=starts[1]["c"], d1=starts[0]["d"],
         d2=starts[1]["d"], H=scene.coupling["H"],

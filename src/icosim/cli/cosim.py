@@ -1,11 +1,15 @@
 """``icosim cosim``: run an FMU scene (two co-simulation units, a coupling method) and write its trajectory.
 
 The scene (:mod:`icosim.fmi.scene`) is checked against its JSON schema, its units are opened and checked against
-what the scene names (co-simulation, saved states, variables and their causality) before the first macro step;
-bad input exits with status 2 and one line ``icosim cosim: error: <file or unit>: <key>: ...``.  A unit that
-refuses a step stops the run the same way, naming the unit, the macro step and the time; no dataset is written
-then.  The dataset (NetCDF, written atomically) holds ``position`` and ``velocity`` per subsystem and time,
-``multiplier`` and ``gap`` per time, the scene as JSON and each unit's provenance and counters (docs/fmi.md).
+what the scene names (co-simulation, saved states, variables, their causality, types and units of measure, start
+values) and then measured (:mod:`icosim.fmi.inspection`: rollback, feedthrough, direction) and the start made
+consistent before the first macro step; bad input exits with status 2 and one line
+``icosim cosim: error: <file or unit>: <key>: ...``.  ``--check`` runs only these checks and prints a table per
+unit.  A unit that refuses a step, returns a value that is not finite, outlasts the per-call time limit or
+crashes the process stops the run the same way, naming the unit, the call and the macro step; no dataset is
+written then.  A run that diverges ends with status 1 and says at which step; its dataset says so too.  The
+dataset (NetCDF, written atomically) holds ``position`` and ``velocity`` per subsystem and time, ``multiplier``
+and ``gap`` per time, the scene as JSON and each unit's provenance and counters (docs/fmi.md).
 """
 
 from __future__ import annotations
@@ -25,16 +29,23 @@ def add_parser(sub):
         description="Couple two FMI co-simulation units (a scene file, YAML) with a method of the paper "
         "(baumgarte, weighted, projection), any order k and scheme (Jacobi, Gauss-Seidel), and write the "
         "trajectory as NetCDF.",
-        epilog="Scene format and what each unit must offer: docs/fmi.md.  Units named by a source directory "
-        "(fmus/) are built on first use into $ICOSIM_FMU_CACHE (default ~/.cache/icosim/fmus).",
+        epilog="Scene format, what each unit must offer and how it is checked: docs/fmi.md.  Units named by a "
+        "source directory (fmus/) are built on first use into $ICOSIM_FMU_CACHE (default ~/.cache/icosim/fmus).",
     )
     p.add_argument("scene", metavar="SCENE.yaml", help="the scene file")
-    p.add_argument("--out", metavar="RUN.nc", help="the NetCDF file to write (required unless --predict)")
-    p.add_argument(
+    p.add_argument("--out", metavar="RUN.nc", help="the NetCDF file to write (required unless --predict or --check)")
+    what = p.add_mutually_exclusive_group()
+    what.add_argument(
         "--predict",
         action="store_true",
-        help="do not run: identify m, c, d of the (linear) units from a few probing steps and print the spectral "
+        help="do not run: identify m, c, d of the (linear) units from probing steps and print the spectral "
         "radius for the scene's scheme and every other one",
+    )
+    what.add_argument(
+        "--check",
+        action="store_true",
+        help="do not run: check every unit (types, units of measure, start values, rollback, feedthrough, "
+        "direction) and the start, and print a table per unit; exit 2 if one is refused",
     )
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
     p.set_defaults(subparser=p)
@@ -48,30 +59,52 @@ def _error(message: str) -> int:
 
 def run(args, parser) -> int:
     """``icosim cosim``: check the scene, the output and the units (exit 2 naming what is wrong), then run."""
-    from ..advise.output import Progress
-    from ..fmi.errors import SceneError, UnitStepError
-    from ..fmi.run import run_dataset, run_scene, run_summary
-    from ..fmi.scene import load_scene
-    from ..io.jsonio import dumps
-    from ..io.netcdf import write_netcdf
-
-    if args.predict:
-        return _predict(args)
-    if args.out is None:
-        return _error("argument --out is required (or --predict)")
-    out = Path(args.out)
-    if not out.parent.resolve().is_dir():
-        return _error(f"argument --out: directory {out.parent} does not exist")
-    if out.is_dir():
-        return _error(f"argument --out: {out} is a directory")
-    if not os.access(out.parent.resolve(), os.W_OK):
-        return _error(f"argument --out: directory {out.parent} is not writable")
+    if not (args.predict or args.check):
+        if args.out is None:
+            return _error("argument --out is required (or --predict, --check)")
+        out = Path(args.out)
+        if not out.parent.resolve().is_dir():
+            return _error(f"argument --out: directory {out.parent} does not exist")
+        if out.is_dir():
+            return _error(f"argument --out: {out} is a directory")
+        if not os.access(out.parent.resolve(), os.W_OK):
+            return _error(f"argument --out: directory {out.parent} is not writable")
     try:
         import fmpy  # noqa: F401
     except ImportError:
         return _error("running a scene needs fmpy: pip install 'icosim[fmi]'")
+    from ..fmi.errors import SceneError
+    from ..fmi.guard import CALL_SECONDS, supervised
+    from ..fmi.scene import load_scene
+
     try:
         scene = load_scene(args.scene)
+    except SceneError as exc:
+        return _error(str(exc))
+    limit = float(scene.data.get("limits", {}).get("call_seconds", CALL_SECONDS))
+    if args.predict:
+        target, leftovers = (lambda: _predict(scene, args)), ()
+    elif args.check:
+        target, leftovers = (lambda: _check(scene, args)), ()
+    else:
+        out = Path(args.out)
+        target = lambda: _run(scene, args, out)
+        leftovers = (out.parent / f".{out.name}.*.part", out.parent / f".{out.name}.sha256.*.part")
+    outcome = supervised(target, call_seconds=limit, leftovers=leftovers)
+    if outcome.message:
+        nothing = "" if args.predict or args.check else "; no dataset written"
+        return _error(f"{outcome.message}{nothing}")
+    return outcome.status
+
+
+def _run(scene, args, out) -> int:
+    from ..advise.output import Progress
+    from ..fmi.errors import SceneError, UnitStepError
+    from ..fmi.run import run_dataset, run_scene, run_summary
+    from ..io.jsonio import dumps
+    from ..io.netcdf import write_netcdf
+
+    try:
         bar = Progress(scene.n_steps, label="macro steps")
         try:
             result = run_scene(scene, progress=bar)
@@ -83,33 +116,54 @@ def run(args, parser) -> int:
         return _error(f"{exc}; no dataset written")
     write_netcdf(run_dataset(result, command=f"icosim cosim {args.scene} --out {args.out}"), out)
     summary = {**run_summary(result), "out": str(out)}
-    if args.json:
-        print(dumps(summary))
-    else:
-        print(_text(summary))
-    return 0
+    print(dumps(summary) if args.json else _text(summary))
+    return 0 if result.status == "completed" else 1
 
 
-def _predict(args) -> int:
+def _predict(scene, args) -> int:
     from ..fmi.errors import SceneError, UnitStepError
     from ..fmi.predict import predict_scene
-    from ..fmi.scene import load_scene
     from ..io.jsonio import dumps
 
     try:
-        answer = predict_scene(load_scene(args.scene))
+        answer = predict_scene(scene)
     except (SceneError, UnitStepError) as exc:
         return _error(str(exc))
     print(dumps(answer) if args.json else _prediction_text(answer))
     return 0
 
 
+def _check(scene, args) -> int:
+    from ..fmi.check import check_scene
+    from ..io.jsonio import dumps
+
+    report = check_scene(scene)
+    print(dumps(report) if args.json else _check_text(report))
+    return 2 if report["refused"] else 0
+
+
+def _check_text(report: dict) -> str:
+    lines = [f"scene {report['scene']}: {report['coupling']}"]
+    for unit in report["units"]:
+        lines.append(f"  {unit['name']}: {unit['unit']}")
+        for row in unit["findings"]:
+            fix = f" -- fix: {row['fix']}" if row.get("fix") else ""
+            lines.append(f"    {row['check']:<13} {row['verdict']:<8} {row['detail']}{fix}")
+    for row in report["scene_findings"]:
+        fix = f" -- fix: {row['fix']}" if row.get("fix") else ""
+        lines.append(f"  {row['check']:<15} {row['verdict']:<8} {row['detail']}{fix}")
+    lines.append("refused" if report["refused"] else "every check passed")
+    return "\n".join(lines)
+
+
 def _prediction_text(a: dict) -> str:
     lines = [f"scene {a['scene']}: {a['method']}, {a['decomposition']}, k = {a['k']}, H = {a['H']:g} s"]
     for name, u in a["units"].items():
+        preload = f", F0 = {u['F0']:.6g} N" if u["F0"] != 0 and abs(u["F0"]) > 1e-12 * abs(u["m"]) else ""
+        through = "" if u.get("feedthrough", True) else "; no direct feedthrough: identified through steps"
         lines.append(
-            f"  {name} identified: m = {u['m']:.6g} kg, c = {u['c']:.6g} N/m, d = {u['d']:.6g} N s/m "
-            f"(misfit of the linear model {u['misfit']:.1e}, {u['probe_do_step_calls']} probing doStep calls)"
+            f"  {name} identified: m = {u['m']:.6g} kg, c = {u['c']:.6g} N/m, d = {u['d']:.6g} N s/m{preload} "
+            f"(misfit of the linear model {u['misfit']:.1e}, {u['probe_do_step_calls']} probing doStep calls{through})"
         )
         if u["misfit"] > 1e-6:
             lines.append(
@@ -134,15 +188,22 @@ def _text(s: dict) -> str:
         f"scene {s['scene']}: {c['method']}, {c['decomposition']}, k = {c['k']}, {c['scheme']}, H = {c['H']:g} s",
     ]
     for name, u in s["units"].items():
+        warned = f", {u['warnings']} warnings (first: {u['first_warning']})" if u.get("warnings") else ""
         lines.append(
             f"  {name}: {u['model_name']} (FMI {u['fmi_version']}, {u['generation_tool'] or 'unknown tool'}), "
             f"inputs by {u['inputs']}: {u['do_step_calls']} doStep calls, {u['states_saved']} states saved, "
-            f"{u['states_restored']} restored"
+            f"{u['states_restored']} restored{warned}"
         )
+    start = s.get("initial") or {}
+    if start:
+        values = ", ".join(f"{v:.6g}" for v in start["coupling_values"])
+        gap = f", joint gap at start {start['position_gap']:.3g} m (as-is)" if start["mode"] == "as-is" else ""
+        lines.append(f"  initial coupling variables {values} ({start['coupling']}){gap}")
+    per_step = s["do_step_calls_per_macro_step"]
     lines.append(
         f"{s['status']}: {s['macro_steps']} macro steps to t = {s['t_end']:g} s "
-        f"({s['do_step_calls_per_macro_step']:g} doStep calls per macro step), max |gap| = {s['max_abs_gap']:.3g} m, "
-        f"{s['wall_time_s']:.2f} s"
+        + (f"({per_step:g} doStep calls per macro step), " if per_step is not None else "")
+        + f"max |gap| = {s['max_abs_gap']:.3g} m, {s['wall_time_s']:.2f} s"
     )
     if s["reason"]:
         lines.append(f"  {s['reason']}")

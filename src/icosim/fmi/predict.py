@@ -1,69 +1,102 @@
-"""Before a run: identify the scene's units as linear single-mass oscillators from a few probing steps, and
-predict the spectral radius of the coupling for the scene's scheme and every other one (``icosim cosim
---predict``), as ``icosim advise`` does for a two-mass system typed in.
+"""Before a run: identify the scene's units as linear single-mass oscillators from probing steps, and predict the
+spectral radius of the coupling for the scene's scheme and every other one (``icosim cosim --predict``), as
+``icosim advise`` does for a two-mass system typed in.
 
-A force-driven unit's acceleration is taken to be linear in its state and input, ``a = (-c x - d v + u)/m``:
-its value at the start state with two inputs gives ``1/m``; two probing steps from the restored start (a probing
-force one way and the other) give two more states, and the three states give ``c`` and ``d`` (least squares).
-A kinematically driven unit's reaction force ``F = m a + c x + d v`` is read the same way.  The fit's residual
-and one more evaluation check the linear model (``misfit``, relative): a unit that is not linear (or has a
-preload) is reported, and its prediction is only that of a linear fit about its start.
+A force-driven unit is taken to obey ``m a = -c x - d v + F + F_0`` in the physical coupling force ``F`` (the
+joint's multiplier acts with ``+lambda`` on the first unit and ``-lambda`` on the second; the unit's input is
+``force_sign`` times it), a kinematically driven one ``F = m a + c x + d v + F_0`` with ``F`` the force its drive
+exerts.  From its start the unit takes :data:`PROBES` steps of ``H`` with inputs held over each step; after each,
+its coupling output, position and velocity give one row of a least-squares fit of the output against input,
+position, velocity and a constant.  Steps, not a re-read of the output with another input, so a unit whose
+output follows its input only through a step is identified too.  The inputs are finite whatever the unit: a
+first step with a unit input measures how far the unit moves, and the probing input is scaled to move it by
+about 1 % of its position scale per step.  The fit's residual, and a last step predicted from the fit, give the
+``misfit`` of the linear model (relative): a unit that is not linear is reported, and its prediction is only that
+of a linear fit about its start.  One unit's identification may take at most ``limits.identify_seconds``.
 """
 
 from __future__ import annotations
+
+import time
 
 import numpy as np
 
 from ..engine.decompositions import get_decomposition
 from ..engine.model import PhysicalModel
 from ..engine.schemes import get_scheme, standard_schemes
-from .errors import SceneError
+from .errors import FmuError, SceneError
 from .run import open_units
 
-__all__ = ["identify", "predict_scene"]
+__all__ = ["identify", "predict_scene", "PROBES", "IDENTIFY_SECONDS"]
+
+#: Probing inputs per step, in units of the probing amplitude: no pattern, so that position, velocity and
+#: input vary independently (a symmetric sequence makes them collinear); the last step checks the fit.
+PROBES = (1.0, -0.3, -0.8, 0.6, 0.2, -1.0, 0.9, -0.4, 0.1)
+
+#: The default time limit of one unit's identification, in seconds.
+IDENTIFY_SECONDS = 60.0
 
 
-def identify(unit, coupling, H) -> dict:
-    """``m``, ``c``, ``d`` and the ``misfit`` of the linear model (relative) of one unit, from its start state;
-    the unit is left at its start state (restored)."""
-    start = unit.save()
+def identify(unit, coupling, H, *, physical=1, limit=IDENTIFY_SECONDS) -> dict:
+    """``m``, ``c``, ``d``, the constant ``F0`` and the ``misfit`` of the linear model (relative) of one unit, from
+    probing steps of ``H`` from its start state (left at its start, restored).  ``physical`` (+1 or -1) is the
+    sign of the physical force (or drive force) per unit of the unit's input (or coupling output)."""
+    kind = coupling.kind
     key = coupling.input_key
-    out = "acceleration" if coupling.kind == "force" else "reaction_force"
+    out = "acceleration" if kind == "force" else "reaction_force"
+    clock = time.perf_counter()
+    start = unit.save()
+    rows, values = [], []
     try:
-
-        def probe(u):
-            unit.set(key, u)
-            return unit.get(("position", "velocity", out))[:, 0]
-
-        x0, v0, q0 = probe(0.0)
-        q1 = probe(1.0)[2]
-        gain = q1 - q0  # 1/m (force driven) or m (kinematic)
-        rows, values = [[x0, v0]], [q0]
+        x0, v0 = unit.get(("position", "velocity"))[:, 0]
         scale = max(1.0, abs(x0))
-        # probing inputs that move the mass by about 1% of its scale over one step, one way and the other
-        amplitude = 2e-2 * scale / H**2 * (1 / gain if coupling.kind == "force" else 1.0)
-        for u in (amplitude, -amplitude):
+
+        def step(u):
+            if time.perf_counter() - clock > limit:
+                raise FmuError(
+                    f"{unit.label}: --predict: identifying the unit took longer than {limit:g} s "
+                    f"(after {len(rows)} probing steps); raise limits.identify_seconds in the scene"
+                )
+            unit.step(key, [u], unit.t, H, step_index=0)
+            x, v, q = unit.get(("position", "velocity", out))[:, 0]
+            return x, v, q
+
+        if kind == "force":
+            # a unit force over one step moves the unit by dv = H/m: it sizes the probing force
+            x1, v1, _ = step(1.0)
             unit.restore(start)
-            unit.step(key, [u], 0.0, H, step_index=0)
-            x, v, q = probe(0.0)
-            rows.append([x, v])
+            x_free, v_free, _ = step(0.0)
+            unit.restore(start)
+            moved = abs(v1 - v_free) * H + abs(x1 - x_free)
+            if not np.isfinite(moved) or moved == 0:
+                raise FmuError(f"{unit.label}: --predict: the unit does not move when its force input changes")
+            amplitude = 1e-2 * scale / moved
+        else:
+            amplitude = 2e-2 * scale / H**2
+        for p in PROBES:
+            u = p * amplitude
+            x, v, q = step(u)
+            rows.append([u, x, v, 1.0])
             values.append(q)
-        (alpha, beta), *_ = np.linalg.lstsq(np.array(rows), np.array(values), rcond=None)
-        # the affine model checked on all three states and at the last one with input 1
-        fitted = np.array(rows) @ [alpha, beta]
-        predicted = fitted[-1] + gain
-        measured = probe(1.0)[2]
-        spread = max(np.max(np.abs(values)), abs(gain), 1e-300)
-        misfit = max(np.max(np.abs(fitted - values)), abs(measured - predicted)) / spread
     finally:
         unit.restore(start)
         unit.free(start)
-    if coupling.kind == "force":
-        m = 1.0 / gain
-        c, d = -alpha * m, -beta * m
+    A, y = np.array(rows[:-1]), np.array(values[:-1])
+    norms = np.linalg.norm(A, axis=0)
+    norms[norms == 0] = 1.0
+    coef = np.linalg.lstsq(A / norms, y, rcond=None)[0] / norms
+    gain, alpha, beta, offset = coef
+    fitted = A @ coef
+    predicted = np.array(rows[-1]) @ coef
+    spread = max(float(np.max(np.abs(values))), abs(gain * amplitude), 1e-300)
+    misfit = max(float(np.max(np.abs(fitted - y))), abs(predicted - values[-1])) / spread
+    if kind == "force":
+        g = gain * physical  # acceleration per unit of physical force
+        m = 1.0 / g
+        c, d, f0 = -alpha * m, -beta * m, offset * m
     else:
-        m, c, d = gain, alpha, beta
-    return {"m": float(m), "c": float(c), "d": float(d), "misfit": float(misfit)}
+        m, c, d, f0 = gain * physical, alpha * physical, beta * physical, offset * physical
+    return {"m": float(m), "c": float(c), "d": float(d), "F0": float(f0), "misfit": float(misfit)}
 
 
 def predict_scene(scene) -> dict:
@@ -79,14 +112,22 @@ def predict_scene(scene) -> dict:
             f"{scene.path}: --predict identifies single-mass oscillators (one position per unit); this scene's "
             "joint has more components"
         )
+    limit = float(scene.data.get("limits", {}).get("identify_seconds", IDENTIFY_SECONDS))
     units, couplings = open_units(scene)
     try:
-        found = {u.label: identify(u, cp, H) for u, cp in zip(units, couplings)}
-        counters = {u.label: u.info() for u in units}
+        found = {}
+        for u, cp in zip(units, couplings):
+            before = u.do_steps
+            physical = np.sign(cp.gain)  # the joint acts with opposite signs on the two units (checked)
+            found[u.label] = identify(u, cp, H, physical=physical, limit=limit)
+            found[u.label] |= {"probe_do_step_calls": u.do_steps - before, "feedthrough": cp.feedthrough}
     finally:
         for unit in units:
             unit.close()
     p1, p2 = found.values()
+    for name, p in found.items():
+        if not (np.isfinite(p["m"]) and p["m"] > 0):
+            raise FmuError(f"{name}: --predict: the identified mass is {p['m']!r}; the unit is not a driven mass")
     model = PhysicalModel(m1=p1["m"], m2=p2["m"], c1=p1["c"], c2=p2["c"], d1=p1["d"], d2=p2["d"], H=H)
     dec = get_decomposition(c["decomposition"])
     names = list(dict.fromkeys([get_scheme(c["scheme"]).name, *standard_schemes()]))
@@ -99,13 +140,20 @@ def predict_scene(scene) -> dict:
         except (ParameterError, AttributeError) as exc:
             rows.append(row | {"rho": None, "verdict": "not defined", "reason": str(exc)})
             continue
+        lacking = [
+            units[i].label for i in scheme.leading if scheme.reevaluates_leading and not couplings[i].feedthrough
+        ]
+        if lacking:
+            why = f"it re-evaluates {lacking[0]} without a step, which has no direct feedthrough"
+            rows.append(row | {"rho": None, "verdict": "not defined", "reason": why})
+            continue
         rho, err = spectral_radius_float64(model.coefficients(), scene.method, dec, c["k"], scheme=scheme)
         rho, err = float(rho), float(err)
         verdict = "stable" if rho + err < 1 else "unstable" if rho - err > 1 else "undecided"
         rows.append(row | {"rho": rho, "rho_error": err, "verdict": verdict})
     return {
         "scene": str(scene.path),
-        "units": {name: {**found[name], "probe_do_step_calls": counters[name]["do_step_calls"]} for name in found},
+        "units": found,
         "H": H,
         "method": scene.method.name,
         "decomposition": dec.name,

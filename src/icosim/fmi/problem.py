@@ -25,16 +25,24 @@ import numpy as np
 from ..engine.lagrange import monomial_coefficients
 from ..engine.problem import CosimulationProblem
 from ..errors import StepFailure
+from .errors import UnitStepError
 
 __all__ = ["FmuCosimulation", "Coupling"]
+
+_FORCE_OUTPUTS = ("position", "velocity", "acceleration")
+_KINEMATIC_OUTPUTS = ("position", "velocity", "acceleration", "reaction_force")
 
 
 class Coupling:
     """How one unit is coupled: its kind (``"force"`` or ``"kinematic"``), the sign of the coupling force on it,
-    and its mass for the projection (None: the scene does not project)."""
+    its mass for the projection (None: the scene does not project), whether its coupling output follows its
+    input without a step, and how much (measured: :func:`icosim.fmi.inspection.inspect_unit`)."""
 
-    def __init__(self, kind, force_sign, mass=None):
+    def __init__(self, kind, force_sign, mass=None, feedthrough=True, gain=float("nan")):
         self.kind, self.force_sign, self.mass = kind, float(force_sign), mass
+        self.feedthrough = bool(feedthrough)
+        #: the coupling output's response to the unit's input (measured), whose sign is the unit's convention
+        self.gain = float(gain)
 
     @property
     def input_key(self):
@@ -71,7 +79,7 @@ class FmuCosimulation(CosimulationProblem):
     ):
         super().__init__(decomposition, k)
         self.units, self.couplings = tuple(units), tuple(couplings)
-        dims = {len(u.vr["position"]) for u in self.units}
+        dims = {len(u.elements["position"]) for u in self.units}
         if len(dims) != 1:
             raise ValueError("both units must name as many position components")
         #: components of the joint's position (1: a point on a line; 2: a joint in the plane)
@@ -116,6 +124,63 @@ class FmuCosimulation(CosimulationProblem):
         e0 = np.zeros(self.n_coupling) if e0 is None else np.asarray(e0, dtype=float)
         return np.tile(e0, (self.k + 1, 1))
 
+    def consistent_coupling(self, *, iterations: int = 4) -> np.ndarray:
+        """The coupling variables at ``T_0`` that meet the joint's condition on the acceleration level and the
+        balance of the drives' forces, from the units at their start (SI, ``(n_e,)``).
+
+        Newton steps on those conditions as functions of ``e``, with difference quotients as the corrector
+        takes them: a unit whose coupling output follows its input is read at once with the input set; one
+        whose output follows only through a step is stepped with the input held over ``H`` and ``2 H`` from
+        its start, and the two outputs are extrapolated to ``T_0`` (second order in ``H``).  Linear units need
+        one step.  The units are left at their start."""
+        e = np.zeros(self.n_coupling)
+        starts = [self._start_outputs(i) for i in range(2)]
+        for _ in range(iterations):
+            r0 = self._start_conditions(e, starts)
+            if not r0.size:
+                break
+            h = self.perturbation * np.maximum(1.0, np.abs(e))
+            J = np.empty((r0.size, self.n_coupling))
+            for j in range(self.n_coupling):
+                ep = e.copy()
+                ep[j] += h[j]
+                J[:, j] = (self._start_conditions(ep, starts) - r0) / h[j]
+            de = np.linalg.lstsq(J, -r0, rcond=None)[0]
+            e = e + de
+            if np.max(np.abs(de)) <= 1e-13 * max(1.0, np.max(np.abs(e))):
+                break
+        return e
+
+    def _start_outputs(self, i):
+        """Unit ``i``'s position and velocity at ``T_0``, ``(2, n_dim)``."""
+        self._to_start(i)
+        return self.units[i].get(("position", "velocity"))
+
+    def _start_conditions(self, e, starts):
+        """The acceleration-level constraint and the force balance at ``T_0`` with the coupling variables ``e``."""
+        ys = []
+        for i in range(2):
+            c, u = self.couplings[i], e[self._inputs(i)]
+            xv = starts[i]
+            if c.feedthrough:
+                self._to_start(i)
+                self.units[i].set(c.input_key, (c.force_sign if c.kind == "force" else 1.0) * u)
+                y = self._outputs(i, u)[1]
+            else:
+                y = 2 * self._held_step(i, u, self.H) - self._held_step(i, u, 2 * self.H)
+            y[:2] = xv  # the state at T_0 as it is
+            ys.append(y)
+        r = self.residuals(np.stack(ys))
+        return np.concatenate([r["acc"].ravel(), r["force"].ravel()])
+
+    def _held_step(self, i, u, h):
+        """Unit ``i``'s outputs after a step of ``h`` from its start with the input held at ``u``."""
+        self._to_start(i)
+        c = self.couplings[i]
+        self.units[i].step(c.input_key, [(c.force_sign if c.kind == "force" else 1.0) * u], self.time, h, step_index=0)
+        self._holds[i] = "scratch"
+        return self._outputs(i, u)[1]
+
     # -- one unit integrated --------------------------------------------------------------------------
     def _to_start(self, i):
         if self._holds[i] != "start":
@@ -141,15 +206,28 @@ class FmuCosimulation(CosimulationProblem):
         return self._outputs(i, coef.sum(axis=0))
 
     def _outputs(self, i, u1):
-        """Unit ``i``'s end ``(x, v)`` and outputs ``(x, v, a, f)`` as it stands, its input ``u1`` at ``T_N+1``."""
+        """Unit ``i``'s end ``(x, v)`` and outputs ``(x, v, a, f)`` as it stands, its input ``u1`` at ``T_N+1``.
+        A unit that returns a value that is not finite for finite inputs is at fault (:class:`UnitStepError`)."""
         c = self.couplings[i]
         if c.kind == "force":
-            x, v, a = self.units[i].get(("position", "velocity", "acceleration"))
+            x, v, a = values = self.units[i].get(_FORCE_OUTPUTS)
             f = np.broadcast_to(np.asarray(u1, dtype=float), x.shape)
         else:
-            x, v, a, r = self.units[i].get(("position", "velocity", "acceleration", "reaction_force"))
+            x, v, a, r = values = self.units[i].get(_KINEMATIC_OUTPUTS)
             f = c.force_sign * r
+        if not np.isfinite(values).all() and np.isfinite(u1).all():
+            self._not_finite(i, values)
         return np.concatenate([x, v]), np.stack([x, v, a, f])
+
+    def _not_finite(self, i, values):
+        unit = self.units[i]
+        keys = _FORCE_OUTPUTS if self.couplings[i].kind == "force" else _KINEMATIC_OUTPUTS
+        row, col = (int(j) for j in np.argwhere(~np.isfinite(values))[0])
+        name = unit.elements[keys[row]][col].name
+        raise UnitStepError(
+            f"unit {unit.label} returned {keys[row]} {name} = {values[row, col]!r} in macro step {self.step_index + 1} "
+            f"(t = {self.time:.12g} s) although its input was finite{unit.said()}"
+        )
 
     def _keep(self, i, end):
         """Save unit ``i``'s state as the one belonging to ``end`` (the macro step may finish with it)."""

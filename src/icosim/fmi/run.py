@@ -8,13 +8,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..engine.decompositions import get_decomposition
-from ..engine.macrostep import macro_step
+from ..engine.macrostep import simulate
+from ..engine.schemes import get_scheme, standard_schemes
 from .build import build_unit, is_source_dir
+from .errors import FmuError
+from .inspection import inspect_unit, joint_direction, refuse
 from .problem import Coupling, FmuCosimulation
 from .scene import Scene, load_scene
-from .units import ROLES, Unit, _variable
+from .units import ROLES, Unit
 
-__all__ = ["run_scene", "open_units", "SceneRun"]
+__all__ = ["run_scene", "open_units", "open_unit", "consistent_start", "SceneRun", "Start"]
 
 
 @dataclass
@@ -30,6 +33,8 @@ class SceneRun:
     status: str = "completed"
     reason: str = ""
     wall_time: float = 0.0
+    start: object = None  # the run's Start (consistent_start)
+    diverged_at: int | None = None
 
     @property
     def n_dim(self) -> int:
@@ -52,30 +57,61 @@ def fmu_file(path, cache=None):
     return build_unit(path, cache) if is_source_dir(path) else path
 
 
-def open_units(scene: Scene, *, cache=None):
-    """The scene's two units, opened with their start values at ``t_start``, and their couplings."""
-    c = scene.coupling
-    kinds = get_decomposition(c["decomposition"]).kinds
+def _needed(kind, projects):
+    keys = {"position", "velocity", "acceleration"}
+    keys |= {"force"} if kind == "force" else {"acceleration_input", "reaction_force"}
+    return keys | ({"set_position", "set_velocity"} if projects else set())
+
+
+def open_unit(scene: Scene, name: str, kind: str, *, cache=None) -> Unit:
+    """The scene's unit ``name`` (driven as ``kind``), opened with its start values at ``t_start``."""
+    c, sub = scene.coupling, scene.data["subsystems"][name]
+    projects = scene.method.projection or scene.data.get("initial") == "project"
+    names = {k: sub[k] for k in ROLES if k in sub and k in _needed(kind, projects)}
+    return Unit(
+        name,
+        fmu_file(scene.fmus[name], cache),
+        names,
+        sub.get("start", {}),
+        inputs=c["inputs"],
+        substeps=c["substeps"],
+        t0=float(scene.data.get("t_start", 0.0)),
+    )
+
+
+def open_units(scene: Scene, *, cache=None, inspect=True):
+    """The scene's two units, opened with their start values at ``t_start``, checked
+    (:func:`icosim.fmi.inspection.inspect_unit` per unit, :func:`~icosim.fmi.inspection.joint_direction` for the
+    joint, :func:`check_scheme`; a refusal raises :class:`~icosim.fmi.errors.FmuError`), and their couplings.
+    ``inspect=False`` skips the measured checks (every unit is taken to have feedthrough)."""
+    kinds = get_decomposition(scene.coupling["decomposition"]).kinds
     units, couplings = [], []
-    t0 = float(scene.data.get("t_start", 0.0))
     try:
         for (name, sub), kind in zip(scene.data["subsystems"].items(), kinds):
-            names = {k: sub[k] for k in ROLES if k in sub and k in _needed(kind, scene.method.projection)}
-            unit = Unit(
-                name,
-                fmu_file(scene.fmus[name], cache),
-                names,
-                sub.get("start", {}),
-                inputs=c["inputs"],
-                substeps=c["substeps"],
-                t0=t0,
-            )
+            unit = open_unit(scene, name, kind, cache=cache)
             units.append(unit)
             mass = sub.get("mass")
             if isinstance(mass, str):
-                _variable(name, "mass", mass, {v.name: v for v in unit.md.modelVariables})
                 mass = unit.get_named(mass)
-            couplings.append(Coupling(kind, sub["force_sign"], mass))
+            feedthrough, gain = True, float("nan")
+            if inspect:
+                found = inspect_unit(
+                    unit,
+                    kind=kind,
+                    force_sign=sub["force_sign"],
+                    H=float(scene.coupling["H"]),
+                    t0=unit.t,
+                    rollback_tolerance=float(sub.get("rollback_tolerance", 0.0)),
+                )
+                refuse(found)
+                feedthrough, gain = found.feedthrough, found.gain
+                unit.checked()
+            couplings.append(Coupling(kind, sub["force_sign"], mass, feedthrough, gain))
+        if inspect:
+            joint = joint_direction(scene.names, kinds, [c.force_sign for c in couplings], [c.gain for c in couplings])
+            if joint.verdict == "refused":
+                raise FmuError(f"{scene.path}: {joint.key}: {joint.detail}; {joint.fix}")
+        check_scheme(scene, units, couplings)
     except BaseException:
         for unit in units:
             unit.close()
@@ -83,21 +119,97 @@ def open_units(scene: Scene, *, cache=None):
     return units, couplings
 
 
-def _needed(kind, projects):
-    keys = {"position", "velocity", "acceleration"}
-    keys |= {"force"} if kind == "force" else {"acceleration_input", "reaction_force"}
-    return keys | ({"set_position", "set_velocity"} if projects else set())
+def check_scheme(scene: Scene, units, couplings):
+    """Refuse a scheme that re-evaluates a leading unit without a step where that unit's output follows its input
+    only through a step."""
+    scheme = get_scheme(scene.coupling["scheme"])
+    if not scheme.reevaluates_leading:
+        return
+    for i in scheme.leading:
+        if not couplings[i].feedthrough:
+            others = [n for n in standard_schemes() if i not in get_scheme(n).leading]
+            out = "acceleration" if couplings[i].kind == "force" else "drive's force"
+            raise FmuError(
+                f"{scene.path}: coupling.scheme: {scheme.name} re-evaluates the leading unit {units[i].label}'s "
+                f"{out} with the corrected coupling variables without a step, but {units[i].label} has no direct "
+                f"feedthrough (its {out} follows its input only through a step); use "
+                f"{', '.join(others)} or {scheme.name}-as-integrated"
+            )
+
+
+@dataclass
+class Start:
+    """How a run starts: the state and coupling history, where the coupling variables came from, and the gap of
+    the joint's positions and velocities at ``t_start`` (before a projection)."""
+
+    state: np.ndarray
+    history: np.ndarray
+    coupling_source: str  # "scene" or "computed"
+    position_gap: float
+    velocity_gap: float
+    initial: str  # "check", "project" or "as-is"
+
+
+def consistent_start(scene: Scene, problem: FmuCosimulation) -> Start:
+    """The run's start: the joint's positions (and velocities, where the method enforces them) consistent at
+    ``t_start`` (``initial: check`` refuses a gap beyond ``initial_tolerance``, ``project`` projects the units onto
+    the joint, ``as-is`` accepts it and reports it), and the coupling variables the scene gives or, by default,
+    those the units need at ``t_start`` (:meth:`FmuCosimulation.consistent_coupling`)."""
+    state = problem.initial_state()
+    n = problem.n_dim
+    gap_x, gap_v = state[0, :n] - state[1, :n], state[0, n:] - state[1, n:]
+    size_x = max(1.0, float(np.max(np.abs(state[:, :n]))))
+    size_v = max(1.0, float(np.max(np.abs(state[:, n:]))))
+    tol = float(scene.data.get("initial_tolerance", 1e-9))
+    mode = scene.data.get("initial", "check")
+    method = scene.method
+    velocity_level = method.projection or any(w != 0 and levels[1] != 0 for w, levels in method.solves)
+    checks = [("position", gap_x, size_x, "m")] + ([("velocity", gap_v, size_v, "m/s")] if velocity_level else [])
+    for what, gap, size, unit in checks:
+        worst = float(np.max(np.abs(gap)))
+        if mode == "check" and worst > tol * size:
+            a, b = scene.names
+            raise FmuError(
+                f"{scene.path}: initial: the joint's {what}s differ at t_start: {a} {_text(state[0], what, n)} "
+                f"{unit}, {b} {_text(state[1], what, n)} {unit} (gap {worst:.3g} {unit} > initial_tolerance "
+                f"{tol:g} x {size:g}); set consistent start values, or initial: project (units that can be set) "
+                "or initial: as-is (the gap is reported)"
+            )
+    position_gap, velocity_gap = float(np.max(np.abs(gap_x))), float(np.max(np.abs(gap_v)))
+    if mode == "project":
+        state = problem.project(state)
+    given = scene.data.get("initial_coupling")
+    if given is not None:
+        e0, source = np.asarray(given, dtype=float), "scene"
+    else:
+        e0, source = problem.consistent_coupling(), "computed"
+    return Start(state, problem.initial_history(e0), source, position_gap, velocity_gap, mode)
+
+
+def _text(row, what, n) -> str:
+    values = row[:n] if what == "position" else row[n:]
+    return f"{float(values[0]):.12g}" if n == 1 else "(" + ", ".join(f"{float(v):.12g}" for v in values) + ")"
+
+
+def divergence_bound(scene: Scene, state) -> float:
+    """The magnitude of the state (SI) beyond which a run has diverged: the scene's ``divergence_bound``, else
+    ``1e10 (1 + |state at t_start|)``."""
+    given = scene.data.get("divergence_bound")
+    return float(given) if given is not None else 1e10 * (1.0 + float(np.max(np.abs(state))))
 
 
 def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
     """Run a scene (a :class:`~icosim.fmi.scene.Scene` or a path) to ``t_end``.
 
-    A unit's refused step raises :class:`~icosim.fmi.errors.UnitStepError` (nothing is returned); a state that
-    is no longer finite ends the run with ``status = "diverged"``.  ``progress(n_done)`` is called after each step.
+    The units are opened and checked (:func:`open_units`), the start made consistent (:func:`consistent_start`),
+    then the engine's run loop (:func:`icosim.engine.macrostep.simulate`) takes the macro steps.  A unit's
+    refused step or an output that is not finite raises :class:`~icosim.fmi.errors.UnitStepError` (nothing is
+    returned); a state that is not finite or beyond :func:`divergence_bound` ends the run with
+    ``status = "diverged"`` and the step.  ``progress(n_done)`` is called after each step.
     """
     scene = scene if isinstance(scene, Scene) else load_scene(scene)
     c = scene.coupling
-    start = time.perf_counter()
+    clock = time.perf_counter()
     units, couplings = open_units(scene, cache=cache)
     problem = None
     try:
@@ -111,36 +223,51 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
             perturbation=c["perturbation"],
             sensitivities=c["sensitivities"],
         )
-        state = problem.initial_state()
-        history = problem.initial_history(scene.data.get("initial_coupling"))
-        states, coupling, outputs = [state], [history[0]], [np.full((2, 4, problem.n_dim), np.nan)]
-        status, reason = "completed", ""
-        for n in range(1, scene.n_steps + 1):
-            with np.errstate(over="ignore", invalid="ignore"):  # a diverging run is reported below
-                state, history, y = macro_step(
-                    problem, scene.method, state, history, scheme=c["scheme"], iterations=c["iterations"]
-                )
-            if not np.all(np.isfinite(state)):
-                status, reason = "diverged", f"state not finite at macro step {n} (t = {problem.time:.12g} s)"
-                break
-            states.append(state)
-            coupling.append(history[0])
-            outputs.append(y)
+        start = consistent_start(scene, problem)
+        done = [0]
+
+        def step_done(state, history, y):
+            done[0] += 1
             if progress is not None:
-                progress(n)
-        t0 = problem.t0
-        times = t0 + c["H"] * np.arange(len(states))
+                progress(done[0])
+
+        with np.errstate(over="ignore", invalid="ignore"):  # a diverging run is reported, not warned about
+            traj = simulate(
+                problem,
+                scene.method,
+                start.state,
+                start.history,
+                scene.n_steps,
+                scheme=c["scheme"],
+                iterations=c["iterations"],
+                bound=divergence_bound(scene, start.state),
+                check=step_done,
+            )
+        if traj.failed_at is not None:
+            raise traj.error
+        status, reason = "completed", ""
+        if traj.diverged_at is not None:
+            t_div = problem.t0 + traj.diverged_at * float(c["H"])
+            status = "diverged"
+            reason = f"diverged at macro step {traj.diverged_at} (t = {t_div:.12g} s): {traj.reason}"
+        nan_y = np.full((2, 4, problem.n_dim), np.nan)
+        outputs = [nan_y if y is None else y for y in traj.outputs]
+        times = problem.t0 + c["H"] * np.arange(len(traj.states))
         info = {u.label: u.info() for u in units}
+        for u, cp in zip(units, couplings):
+            info[u.label]["feedthrough"] = "yes" if cp.feedthrough else "through a step only"
         return SceneRun(
             scene,
             times,
-            np.array(states),
-            np.array(coupling),
+            np.array(traj.states),
+            np.array(traj.coupling),
             np.array(outputs),
             info,
             status,
             reason,
-            time.perf_counter() - start,
+            time.perf_counter() - clock,
+            start,
+            traj.diverged_at,
         )
     finally:
         if problem is not None:
@@ -211,6 +338,12 @@ def run_dataset_data(run: SceneRun, *, command: str = ""):
     attrs["scene_json"] = attrs["config_json"]
     attrs["status"] = run.status
     attrs["reason"] = run.reason
+    attrs["diverged_at"] = -1 if run.diverged_at is None else int(run.diverged_at)
+    if run.start is not None:
+        attrs["initial"] = run.start.initial
+        attrs["initial_position_gap"] = run.start.position_gap
+        attrs["initial_velocity_gap"] = run.start.velocity_gap
+        attrs["initial_coupling_source"] = run.start.coupling_source
     attrs["method_engine_parameters"] = json.dumps(scene.method.params, sort_keys=True)
     attrs["wall_time_s"] = run.wall_time
     for name, info in run.units.items():
@@ -242,5 +375,15 @@ def run_summary(run: SceneRun) -> dict:
             for name, p in zip(run.scene.names, run.positions[-1])
         },
         "max_abs_gap": float(np.max(np.abs(run.positions[:, 0] - run.positions[:, 1]))),  # largest component
+        "diverged_at": run.diverged_at,
+        "initial": None
+        if run.start is None
+        else {
+            "mode": run.start.initial,
+            "position_gap": run.start.position_gap,
+            "velocity_gap": run.start.velocity_gap,
+            "coupling": run.start.coupling_source,
+            "coupling_values": [float(v) for v in run.coupling[0]],
+        },
         "wall_time_s": run.wall_time,
     }

@@ -30,9 +30,10 @@ from ..engine.decompositions import get_decomposition
 from ..engine.methods import engine_method, get_spec
 from ..engine.schema import schema_defs
 from ..errors import ParameterError
+from .build import is_source_dir
 from .errors import SceneError
 
-__all__ = ["Scene", "load_scene", "scene_schema", "SUBSYSTEM_KEYS", "COUPLING_KEYS"]
+__all__ = ["Scene", "load_scene", "scene_schema", "SUBSYSTEM_KEYS", "COUPLING_KEYS", "SCENE_KEYS"]
 
 #: Keys of one subsystem and what they hold.
 SUBSYSTEM_KEYS = {
@@ -48,6 +49,22 @@ SUBSYSTEM_KEYS = {
     "mass": "the mass (a number, or the name of a unit variable holding it): the projection's weight",
     "set_position": "name of a tunable parameter or input that sets the position (projection)",
     "set_velocity": "name of a tunable parameter or input that sets the velocity (projection)",
+    "rollback_tolerance": "relative difference accepted when a restored step is repeated (default 0: bit for bit)",
+}
+
+#: Top-level keys of a scene and what they hold.
+SCENE_KEYS = {
+    "subsystems": "the units by name (two)",
+    "coupling": "the method, decomposition, k, scheme, H and their options",
+    "t_start": "the start time (s; default 0)",
+    "t_end": "the end time (s)",
+    "initial_coupling": "the coupling variables at t_start, every component (default: computed from the units)",
+    "initial": "check (default: refuse a joint whose positions or velocities differ at t_start), project (move "
+    "the units onto the joint) or as-is (run, and report the gap)",
+    "initial_tolerance": "the gap accepted at t_start, relative to max(1, the largest position or velocity)",
+    "divergence_bound": "a state (SI) beyond this ends the run as diverged (default 1e10 (1 + |state at t_start|))",
+    "limits": "call_seconds: the longest an FMI call of a unit may take; identify_seconds: the longest the "
+    "identification of one unit may take (--predict)",
 }
 
 #: Coupling keys besides the method's parameters, and their defaults.
@@ -65,6 +82,10 @@ COUPLING_KEYS = {
 }
 
 
+#: Subsystem keys that do not name unit variables.
+_NOT_NAMES = ("fmu", "start", "force_sign", "mass", "rollback_tolerance")
+
+
 def scene_schema() -> dict:
     """The JSON schema of a scene (the registries of methods, decompositions and schemes filled in)."""
     defs = schema_defs()
@@ -79,11 +100,13 @@ def scene_schema() -> dict:
             "fmu": name,
             "start": {
                 "type": "object",
-                "additionalProperties": {"type": ["number", "boolean"]},
+                # typed against the unit's model description when it is opened (icosim.fmi.variables)
+                "additionalProperties": {"type": ["number", "boolean", "string", "array", "object"]},
             },
-            **{k: names for k in SUBSYSTEM_KEYS if k not in ("fmu", "start", "force_sign", "mass")},
+            **{k: names for k in SUBSYSTEM_KEYS if k not in _NOT_NAMES},
             "force_sign": {"enum": [1, -1]},
             "mass": {"oneOf": [{"type": "number", "exclusiveMinimum": 0}, name]},
+            "rollback_tolerance": {"type": "number", "minimum": 0},
         },
     }
     params = defs["method_parameters"]["properties"]
@@ -121,6 +144,17 @@ def scene_schema() -> dict:
             "t_start": {"type": "number"},
             "t_end": {"type": "number"},
             "initial_coupling": {"type": "array", "items": {"type": "number"}},
+            "initial": {"enum": ["check", "project", "as-is"]},
+            "initial_tolerance": {"type": "number", "exclusiveMinimum": 0},
+            "divergence_bound": {"type": "number", "exclusiveMinimum": 0},
+            "limits": {
+                "type": "object",
+                "additionalProperties": False,
+                "properties": {
+                    "call_seconds": {"type": "number", "exclusiveMinimum": 0},
+                    "identify_seconds": {"type": "number", "exclusiveMinimum": 0},
+                },
+            },
         },
     }
 
@@ -195,7 +229,7 @@ def load_scene(path) -> Scene:
         f"{sname}.{key}": len(v) if isinstance(v, list) else 1
         for sname, sub in data["subsystems"].items()
         for key, v in sub.items()
-        if key in SUBSYSTEM_KEYS and key not in ("fmu", "start", "force_sign", "mass")
+        if key in SUBSYSTEM_KEYS and key not in _NOT_NAMES
     }
     if len(set(entries.values())) > 1:
         sizes = ", ".join(f"{key}: {n}" for key, n in entries.items())
@@ -214,7 +248,8 @@ def load_scene(path) -> Scene:
         )
     for (name, sub), kind in zip(data["subsystems"].items(), decomposition.kinds):
         need = ("force",) if kind == "force" else ("acceleration_input", "reaction_force")
-        if method.projection:
+        projects = method.projection or data.get("initial") == "project"
+        if projects:
             need += ("mass", "set_position", "set_velocity")
         for key in need:
             if key not in sub:
@@ -222,9 +257,11 @@ def load_scene(path) -> Scene:
                     f"{kind}-driven in decomposition {decomposition.name}"
                     if key in ("force", "acceleration_input", "reaction_force")
                     else f"method {spec.name} projects"
+                    if method.projection
+                    else "initial: project moves the units onto the joint"
                 )
                 _fail(path, f"subsystems.{name}.{key}", f"required: subsystem {name} is {why} ({SUBSYSTEM_KEYS[key]})")
-        if method.projection and isinstance(sub["position"], list) and len(sub["position"]) > 1:
+        if projects and isinstance(sub["position"], list) and len(sub["position"]) > 1:
             _fail(
                 path,
                 f"subsystems.{name}.position",
@@ -234,6 +271,13 @@ def load_scene(path) -> Scene:
         fmu = (path.parent / sub["fmu"]).resolve()
         if not fmu.exists():
             _fail(path, f"subsystems.{name}.fmu", f"{sub['fmu']} does not exist (resolved to {fmu})")
+        if fmu.is_dir() and not is_source_dir(fmu):
+            _fail(
+                path,
+                f"subsystems.{name}.fmu",
+                f"{sub['fmu']} is a directory but not a unit's source (it needs modelDescription.xml beside "
+                "sources/); name the .fmu file or a unit's source directory",
+            )
         fmus[name] = fmu
     return Scene(path, data, fmus, method, int(round(steps)))
 

@@ -27,7 +27,7 @@ import numpy as np
 from ..engine.decompositions import get_decomposition
 from ..engine.exact import MonolithicSolution, consistent_start
 from ..engine.linear_problem import LinearCosimulation
-from ..engine.macrostep import macro_step, simulate
+from ..engine.macrostep import simulate
 from ..engine.methods import engine_method, make_method
 from ..engine.model import PhysicalModel
 from ..io.dataset import DatasetDict
@@ -77,17 +77,17 @@ def _method_params(scene) -> dict:
     return {k: v for k, v in scene.data["coupling"].items() if k not in COUPLING_KEYS}
 
 
-def _history(scene, n_coupling) -> np.ndarray:
-    e0 = scene.data.get("initial_coupling")
-    e0 = np.zeros(n_coupling) if e0 is None else np.asarray(e0, dtype=float)
-    return np.tile(e0, (int(scene.coupling["k"]) + 1, 1))
+def _history(scene, e0) -> np.ndarray:
+    """The coupling history at ``T_0`` (SI): ``e0`` at every past node."""
+    return np.tile(np.asarray(e0, dtype=float), (int(scene.coupling["k"]) + 1, 1))
 
 
-def linear_builtin(scene):
+def linear_builtin(scene, e0):
     """The built-in linear model (:class:`~icosim.engine.linear_problem.LinearCosimulation`) at the scene's
     dimensionless point: masses, stiffnesses, dampings and start ``x0, v0`` from the units' start values, the
-    scene's method, ``k``, scheme and corrector passes, its initial coupling history.  Returns positions
-    and velocities (SI), each ``(n + 1, 2)``."""
+    scene's method, ``k``, scheme and corrector passes, the coupling variables ``e0`` at ``T_0`` (SI: a run's
+    first, :func:`icosim.fmi.run.consistent_start`).  Returns positions and velocities (SI), each
+    ``(n + 1, 2)``."""
     subs = list(scene.data["subsystems"].values())
     start = [s.get("start", {}) for s in subs]
     for name, st in zip(scene.names, start):
@@ -112,7 +112,7 @@ def linear_builtin(scene):
     state = np.array([[float(st.get("x0", 0.0)), float(st.get("v0", 0.0)) * H] for st in start])
     # SI -> dimensionless coupling variables: lambda_bar = lambda H^2 / m1, a_bar = a H^2
     scale = np.array([H**2 / model.m1 if name == "lambda_c" else H**2 for name in dec.variables])
-    history = _history(scene, dec.n_coupling) * scale
+    history = _history(scene, e0) * scale
     with np.errstate(over="ignore", invalid="ignore"):
         traj = simulate(
             problem, scene.method, state, history, scene.n_steps, scheme=c["scheme"], iterations=c["iterations"]
@@ -121,9 +121,10 @@ def linear_builtin(scene):
     return s[..., 0], s[..., 1] / H
 
 
-def pendulum_builtin(scene):
+def pendulum_builtin(scene, e0):
     """The built-in double pendulum (:class:`~icosim.pendulum.problem.PendulumCosimulation`, Radau IIA at
-    1e-10) from the links' start values, with the scene's method, ``k``, scheme and initial coupling history.
+    1e-10) from the links' start values, with the scene's method, ``k``, scheme and the coupling variables ``e0``
+    at ``T_0`` (SI).
     Returns the joint point of each link ``(n, 2, 2)`` and the coupling force on link 1 ``(n, 2)`` at
     ``T_1 ... T_n``."""
     from ..pendulum.model import PendulumParameters
@@ -138,7 +139,7 @@ def pendulum_builtin(scene):
     dec = get_decomposition(c["decomposition"])
     problem = PendulumCosimulation(p, dec.name, int(c["k"]), float(c["H"]), rtol=1e-10, atol=1e-10)
     method = make_method(c["method"], **_method_params(scene))
-    history = _history(scene, 2 * dec.n_coupling)
+    history = _history(scene, e0)
     traj = simulate(
         problem, method, p.initial_state(), history, scene.n_steps, scheme=c["scheme"], iterations=c["iterations"]
     )
@@ -182,8 +183,9 @@ def builtin_difference(scene, run, builtin) -> dict:
     relative to the largest value, as ``tests/test_fmi_linear.py`` measures; pendulum: largest joint point
     difference in m) and, for the pendulum, ``force_difference`` (relative to the largest joint force)."""
     nan = float("nan")
+    e0 = _array(run, "coupling")[0]
     if builtin == "linear":
-        x, v = linear_builtin(scene)
+        x, v = linear_builtin(scene, e0)
         n = min(len(x), run.sizes["time"])
         got_x, got_v = _array(run, "position").T[:n], _array(run, "velocity").T[:n]
         with np.errstate(over="ignore", invalid="ignore"):
@@ -191,7 +193,7 @@ def builtin_difference(scene, run, builtin) -> dict:
             dv = np.max(np.abs(got_v - v[:n])) / max(1.0, np.max(np.abs(v[:n])))
         return {"difference": float(max(dx, dv)), "force_difference": nan}
     if builtin == "pendulum":
-        joint, force = pendulum_builtin(scene)
+        joint, force = pendulum_builtin(scene, e0)
         n = min(len(joint), run.sizes["time"] - 1)
         got = np.moveaxis(_array(run, "position"), 0, 1)[1 : n + 1]  # (time, subsystem, component)
         dp = np.max(np.abs(got - joint[:n]))
@@ -318,28 +320,25 @@ def _order_scene(tmp: Path, units_dir: Path, model: dict, x0: float, case: dict,
         "subsystems": {"body1": unit(1, kinds[0]), "body2": unit(2, kinds[1])},
         "coupling": coupling | {"H": float(H), "perturbation": 1.0} | dict(case.get("params", {})),
         "t_end": float(t_end),
-    }
+    } | dict(case.get("scene", {}))
     path = tmp / f"order_{H:.6e}.yaml"
     path.write_text(yaml.safe_dump(scene))
     return path
 
 
 def _fmu_states(scene, history, *, cache=None) -> np.ndarray:
-    """The FMU run of ``scene`` from the given coupling history (SI): states ``(n + 1, 2, 2)``, SI."""
+    """The FMU run of ``scene`` from the given coupling history (SI): states ``(n + 1, 2, 2)``, SI, ending early
+    where the run diverges."""
     c = scene.coupling
     units, couplings = open_units(scene, cache=cache)
     problem = None
     try:
         problem = FmuCosimulation(units, couplings, c["decomposition"], c["k"], c["H"], perturbation=c["perturbation"])
-        state = problem.initial_state()
-        states = [state]
-        for _ in range(scene.n_steps):
-            with np.errstate(over="ignore", invalid="ignore"):
-                state, history, _ = macro_step(problem, scene.method, state, history, scheme=c["scheme"])
-            states.append(state)
-            if not np.all(np.isfinite(state)):
-                break
-        return np.array(states)
+        with np.errstate(over="ignore", invalid="ignore"):
+            traj = simulate(problem, scene.method, problem.initial_state(), history, scene.n_steps, scheme=c["scheme"])
+        if traj.failed_at is not None:
+            raise traj.error
+        return np.array(traj.states)
     finally:
         if problem is not None:
             problem.close()

@@ -1,0 +1,238 @@
+"""A unit that hangs or crashes the process is named: the run goes on in a child process that records, in memory
+shared with its parent, which unit is in which FMI call since when; the parent stops a call that outlasts its
+limit and reports a child that died, naming the unit, the call and the macro step.
+
+:func:`supervised` is what ``icosim cosim`` (and the workflow's FMU jobs) run under; without it the records are
+not kept and :func:`enter`/:func:`leave` cost a function call each.  The child's scratch files (the units
+unpacked) live in a directory the parent removes however the child ends, and a dataset is renamed into place
+only when complete (:func:`icosim.io.netcdf.write_netcdf`), so nothing half-written is left.
+
+Needs ``os.fork`` (Linux, macOS); elsewhere :func:`supervised` runs the target in the process itself.
+"""
+
+from __future__ import annotations
+
+import io
+import mmap
+import os
+import shutil
+import signal
+import sys
+import tempfile
+import threading
+import time
+import traceback
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["enter", "leave", "register", "unregister", "scratch_dir", "supervised", "Outcome", "CALL_SECONDS"]
+
+#: The default limit of one FMI call, in seconds: generous (a unit's doStep may integrate a stiff model).
+CALL_SECONDS = 600.0
+
+#: The FMI calls by the names the messages use (``fmi2``/``fmi3`` prefixed by the unit's version).
+CALLS = (
+    "",
+    "instantiate",
+    "Get",
+    "Set",
+    "GetFMUstate",
+    "SetFMUstate",
+    "DoStep",
+    "SetRealInputDerivatives",
+    "Terminate",
+)
+_CODE = {name: i for i, name in enumerate(CALLS)}
+_CODE.update(get=_CODE["Get"], set=_CODE["Set"], getFMUstate=_CODE["GetFMUstate"], setFMUstate=_CODE["SetFMUstate"])
+_CODE.update(doStep=_CODE["DoStep"], setRealInputDerivatives=_CODE["SetRealInputDerivatives"])
+
+_NAME_BYTES, _MAX_UNITS = 64, 64
+_HEADER = 8  # float64 slots: active, unit, call, t, macro step, since (monotonic), units registered, spare
+
+_record = None  # np.ndarray over the shared memory, in the supervised child only
+_shared = None
+_units = []  # registered units (labels and FMI versions), in this process
+_scratch = None
+
+
+def register(unit) -> int:
+    """A unit's index in the records (its label and FMI version written where the parent reads them)."""
+    _units.append(unit)
+    index = len(_units) - 1
+    if _shared is not None and index < _MAX_UNITS:
+        name = f"{'fmi3' if unit.fmi3 else 'fmi2'}:{unit.label}".encode()[: _NAME_BYTES - 1]
+        start = _HEADER * 8 + index * _NAME_BYTES
+        _shared[start : start + _NAME_BYTES] = name.ljust(_NAME_BYTES, b"\0")
+        _record[6] = index + 1
+    return index
+
+
+def unregister(unit):
+    """Nothing is recorded of ``unit`` any more (its index stays taken)."""
+    for i, u in enumerate(_units):
+        if u is unit:
+            _units[i] = None
+
+
+def enter(index: int, call: str, t: float, step: int = -1):
+    """Unit ``index`` starts the FMI call ``call`` at simulated time ``t`` (macro step ``step``)."""
+    if _record is not None:
+        r = _record
+        r[1], r[2], r[3], r[4], r[5] = index, _CODE[call], t, step, time.monotonic()
+        r[0] = 1.0
+
+
+def leave():
+    """The call returned."""
+    if _record is not None:
+        _record[0] = 0.0
+
+
+def scratch_dir():
+    """Where units are unpacked: the supervised run's scratch directory, else the system's (None)."""
+    return _scratch
+
+
+@dataclass
+class Outcome:
+    """How a supervised run ended: its exit ``status`` and, where the parent stopped it or it died, a ``message``
+    naming the unit and the call."""
+
+    status: int
+    message: str = ""
+
+
+def _describe(shared, record, *, limit=None, signum=None) -> str:
+    index, code, t, step = int(record[1]), int(record[2]), float(record[3]), int(record[4])
+    start = _HEADER * 8 + index * _NAME_BYTES
+    raw = bytes(shared[start : start + _NAME_BYTES]).split(b"\0")[0].decode(errors="replace")
+    version, _, label = raw.partition(":")
+    call = f"{version}{CALLS[code]}" if code and CALLS[code] != "instantiate" else "fmi2Instantiate"
+    if code == _CODE["instantiate"] and version == "fmi3":
+        call = "fmi3InstantiateCoSimulation"
+    where = f"macro step {step}, t = {t:.12g} s" if step >= 0 else f"t = {t:.12g} s"
+    if limit is not None:
+        return (
+            f"unit {label} did not return from {call} within {limit:g} s ({where}); the run was stopped "
+            "(limits.call_seconds in the scene sets the limit)"
+        )
+    name = signal.Signals(signum).name if signum in signal.Signals._value2member_map_ else f"signal {signum}"
+    return f"unit {label} crashed the process in {call} ({name}, {where})"
+
+
+def _has_fd(stream) -> bool:
+    try:
+        stream.fileno()
+    except (AttributeError, OSError, ValueError, io.UnsupportedOperation):
+        return False
+    return True
+
+
+def _drain(fd, chunks):
+    while True:
+        data = os.read(fd, 1 << 16)
+        if not data:
+            return
+        chunks.append(data)
+
+
+def supervised(target, *, call_seconds: float = CALL_SECONDS, leftovers=()) -> Outcome:
+    """Run ``target()`` (returning an exit status) in a child process under watch.
+
+    A call of a unit that outlasts ``call_seconds`` gets the child killed; a child that dies of a signal is
+    reported with the unit and call it was in.  Either way ``leftovers`` (paths or glob patterns of files the
+    target may have been writing, e.g. the ``.*.part`` temporaries of a dataset) and the scratch directory are
+    removed, and the outcome's status is 2 with the message.  Otherwise the child's own status is returned.
+    """
+    global _record, _shared, _scratch
+    if not hasattr(os, "fork") or _record is not None:
+        return Outcome(int(target() or 0))
+    size = _HEADER * 8 + _MAX_UNITS * _NAME_BYTES
+    shared = mmap.mmap(-1, size)
+    record = np.frombuffer(shared, dtype=np.float64, count=_HEADER)
+    scratch = tempfile.mkdtemp(prefix="icosim-run-")
+    streams = (sys.stdout, sys.stderr)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    read_end, write_end = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # the child: the run itself
+        os.close(read_end)
+        _shared, _record, _scratch = shared, record, scratch
+        # streams without a file descriptor of their own (captured in memory) are sent to the parent at the end
+        buffered = [not _has_fd(s) for s in streams]
+        if buffered[0]:
+            sys.stdout = io.StringIO()
+        if buffered[1]:
+            sys.stderr = io.StringIO()
+        status = 1
+        try:
+            status = int(target() or 0)
+        except SystemExit as exc:
+            status = exc.code if isinstance(exc.code, int) else 1
+        except BaseException:
+            traceback.print_exc()
+        finally:
+            texts = [sys.stdout.getvalue() if buffered[0] else "", sys.stderr.getvalue() if buffered[1] else ""]
+            sys.stdout.flush()
+            sys.stderr.flush()
+            payload = "\0".join(texts).encode()
+            view = memoryview(payload)
+            while view:
+                view = view[os.write(write_end, view) :]
+            os.close(write_end)
+        os._exit(status)
+    os.close(write_end)
+    chunks = []
+    reader = threading.Thread(target=_drain, args=(read_end, chunks), daemon=True)
+    reader.start()
+    message, status = "", None
+    try:
+        pause = 0.001
+        while True:
+            done, wait_status = os.waitpid(pid, os.WNOHANG)
+            if done:
+                if os.WIFSIGNALED(wait_status):
+                    signum = os.WTERMSIG(wait_status)
+                    if record[0] == 1.0:
+                        message = _describe(shared, record, signum=signum)
+                    else:
+                        message = f"the run process died of {signal.Signals(signum).name} outside any unit call"
+                    status = 2
+                else:
+                    status = os.WEXITSTATUS(wait_status)
+                break
+            if record[0] == 1.0 and time.monotonic() - record[5] > call_seconds:
+                described = _describe(shared, record, limit=call_seconds)
+                os.kill(pid, signal.SIGKILL)
+                os.waitpid(pid, 0)
+                message, status = described, 2
+                break
+            time.sleep(pause)
+            pause = min(2 * pause, 0.05, call_seconds / 20)
+    except BaseException:  # the parent interrupted (Ctrl-C): the child goes with it
+        try:
+            os.kill(pid, signal.SIGKILL)
+            os.waitpid(pid, 0)
+        except OSError:
+            pass
+        raise
+    finally:
+        reader.join()
+        os.close(read_end)
+        shutil.rmtree(scratch, ignore_errors=True)
+        del record
+        shared.close()
+    texts = b"".join(chunks).decode(errors="replace").split("\0")
+    for stream, text in zip(streams, texts + ["", ""]):
+        if text:
+            stream.write(text)
+            stream.flush()
+    if message:
+        for item in leftovers:
+            item = Path(item)
+            for path in item.parent.glob(item.name):
+                path.unlink(missing_ok=True)
+    return Outcome(status, message)
