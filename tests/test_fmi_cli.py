@@ -44,6 +44,9 @@ def test_the_examples_are_there():
 @pytest.mark.parametrize("scene", SCENES, ids=lambda p: p.stem)
 def test_example_scene_is_valid_and_runs(capsys, tmp_path, scene):
     load_scene(scene)  # the file as shipped (its relative paths) passes every check
+    assert main(["cosim", str(scene), "--check", "--json"]) == 0  # and every unit's
+    report = json.loads(capsys.readouterr().out)
+    assert not report["refused"] and len(report["units"]) == 2
     out = tmp_path / "run.nc"
     assert main(["cosim", str(shortened(scene, tmp_path)), "--out", str(out), "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)

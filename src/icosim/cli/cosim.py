@@ -159,7 +159,7 @@ def _check_text(report: dict) -> str:
 def _prediction_text(a: dict) -> str:
     lines = [f"scene {a['scene']}: {a['method']}, {a['decomposition']}, k = {a['k']}, H = {a['H']:g} s"]
     for name, u in a["units"].items():
-        preload = f", F0 = {u['F0']:.6g} N" if u["F0"] != 0 and abs(u["F0"]) > 1e-12 * abs(u["m"]) else ""
+        preload = f", F0 = {u['F0']:.6g} N" if u["F0"] else ""
         through = "" if u.get("feedthrough", True) else "; no direct feedthrough: identified through steps"
         lines.append(
             f"  {name} identified: m = {u['m']:.6g} kg, c = {u['c']:.6g} N/m, d = {u['d']:.6g} N s/m{preload} "

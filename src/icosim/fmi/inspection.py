@@ -123,6 +123,11 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=0.0) -
     found.findings.append(_direction(kind, found, force_sign, float(velocity_gain[c])))
     found.findings.append(_units(unit))
     found.findings.append(_starts(unit))
+    if unit.description_problems:
+        problems = "; ".join(unit.description_problems)
+        found.findings.append(
+            Finding("description", "note", f"fmpy's validation of its modelDescription.xml reports: {problems}")
+        )
     return found
 
 
@@ -208,14 +213,14 @@ def joint_direction(labels, kinds, force_signs, gains) -> Finding:
     wrong = 0 if acts[0] < 0 else 1  # (+, +): the second departs from -lambda; (-, -): the first from +lambda
     per = ["m/s^2 per N" if k == "force" else "N per m/s^2" for k in kinds]
     said = " and ".join(
-        f"{lab}'s {'acceleration' if k == 'force' else 'drive force'} by {g:+.4g} {p} of its input (force_sign {fs:+d})"
+        f"{lab}'s {'acceleration' if k == 'force' else 'drive force'} by {g:+.4g} {p} of its input (force_sign {int(fs):+d})"
         for lab, k, g, p, fs in zip(labels, kinds, gains, per, force_signs)
     )
     return Finding(
         "direction",
         "refused",
         f"the multiplier would move {said}: the joint would push both units the same way",
-        f"set subsystems.{labels[wrong]}.force_sign: {-int(force_signs[wrong])} (the multiplier then acts with "
+        f"set subsystems.{labels[wrong]}.force_sign: {-int(force_signs[wrong]):d} (the multiplier then acts with "
         "+lambda on the first unit and -lambda on the second)",
         f"subsystems.{labels[wrong]}.force_sign",
     )

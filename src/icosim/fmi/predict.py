@@ -94,8 +94,12 @@ def identify(unit, coupling, H, *, physical=1, limit=IDENTIFY_SECONDS) -> dict:
         g = gain * physical  # acceleration per unit of physical force
         m = 1.0 / g
         c, d, f0 = -alpha * m, -beta * m, offset * m
+        force_scale = abs(m) * spread
     else:
         m, c, d, f0 = gain * physical, alpha * physical, beta * physical, offset * physical
+        force_scale = spread
+    if abs(f0) <= 1e-9 * force_scale:  # a constant at the fit's rounding is none
+        f0 = 0.0
     return {"m": float(m), "c": float(c), "d": float(d), "F0": float(f0), "misfit": float(misfit)}
 
 

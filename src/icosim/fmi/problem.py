@@ -225,7 +225,7 @@ class FmuCosimulation(CosimulationProblem):
         row, col = (int(j) for j in np.argwhere(~np.isfinite(values))[0])
         name = unit.elements[keys[row]][col].name
         raise UnitStepError(
-            f"unit {unit.label} returned {keys[row]} {name} = {values[row, col]!r} in macro step {self.step_index + 1} "
+            f"unit {unit.label} returned {keys[row]} {name} = {float(values[row, col])!r} in macro step {self.step_index + 1} "
             f"(t = {self.time:.12g} s) although its input was finite{unit.said()}"
         )
 

@@ -254,13 +254,13 @@ def load_scene(path) -> Scene:
         for key in need:
             if key not in sub:
                 why = (
-                    f"{kind}-driven in decomposition {decomposition.name}"
+                    f"subsystem {name} is {kind}-driven in decomposition {decomposition.name}"
                     if key in ("force", "acceleration_input", "reaction_force")
                     else f"method {spec.name} projects"
                     if method.projection
                     else "initial: project moves the units onto the joint"
                 )
-                _fail(path, f"subsystems.{name}.{key}", f"required: subsystem {name} is {why} ({SUBSYSTEM_KEYS[key]})")
+                _fail(path, f"subsystems.{name}.{key}", f"required: {why} ({SUBSYSTEM_KEYS[key]})")
         if projects and isinstance(sub["position"], list) and len(sub["position"]) > 1:
             _fail(
                 path,

@@ -51,8 +51,11 @@ _STATUS = {0: "ok", 1: "warning", 2: "discard", 3: "error", 4: "fatal", 5: "pend
 
 
 def read_description(label: str, path: Path):
-    """The unit's model description (fmpy), or :class:`FmuError` naming ``label`` and the file."""
+    """The unit's model description (fmpy) and the problems fmpy's validation finds in it (a list; exporters get
+    details wrong that do not touch what a scene uses, e.g. an Integer output declared continuous), or
+    :class:`FmuError` naming ``label`` and the file when it cannot be read at all."""
     from fmpy import read_model_description
+    from fmpy.model_description import ValidationError
 
     path = Path(path)
     if path.is_dir():
@@ -65,10 +68,17 @@ def read_description(label: str, path: Path):
     if not zipfile.is_zipfile(path):
         raise FmuError(f"{label}: {path} is not an FMU (not a ZIP archive)")
     try:
-        return read_model_description(str(path), validate=True)
-    except Exception as exc:  # fmpy raises plain exceptions for unreadable or invalid descriptions
-        first = " ".join(str(exc).split()[:40]) or type(exc).__name__
-        raise FmuError(f"{label}: {path} has no valid modelDescription.xml ({first})") from None
+        return read_model_description(str(path), validate=True), []
+    except ValidationError as exc:
+        problems = [" ".join(str(p).split()) for p in exc.problems]
+    except Exception as exc:  # fmpy raises plain exceptions for unreadable descriptions
+        problems, first = None, " ".join(str(exc).split()[:40]) or type(exc).__name__
+    if problems is not None:
+        try:
+            return read_model_description(str(path), validate=False), problems
+        except Exception as exc:
+            first = " ".join(str(exc).split()[:40]) or type(exc).__name__
+    raise FmuError(f"{label}: {path} has no readable modelDescription.xml ({first})") from None
 
 
 def check_kind(label: str, path: Path, md):
@@ -112,7 +122,8 @@ class Unit:
 
     def __init__(self, label, path, names, start, *, inputs="auto", substeps=16, t0=0.0):
         self.label, self.path = label, Path(path)
-        self.md = md = read_description(label, self.path)
+        self.md, self.description_problems = read_description(label, self.path)
+        md = self.md
         check_kind(label, self.path, md)
         self.fmi3 = md.fmiVersion.startswith("3.")
         self.table = table = VariableTable(label, md, start)
@@ -206,14 +217,14 @@ class Unit:
         except FmuError:
             raise
         except Exception as exc:
-            raise FmuError(
-                f"{self.label}: {self.path.name} could not be {stage}: {_call_text(exc)}{self.said()}"
-            ) from None
+            raise FmuError(f"{self.label}: could not be {stage}: {_call_text(exc)}{self.said()}") from None
 
     def _apply(self, apply_start_values, s):
         try:
             apply_start_values(self.fmu, self.md, {s.name: s.value})
         except Exception as exc:
+            status = getattr(exc, "status", 0)
+            self.failed = status if status in (3, 4) else 0  # after error only freeing, after fatal nothing
             raise FmuError(
                 f"{self.label}: start: {s.name}: {s.setter} refused {s.text} ({s.variable.type}, set in state "
                 f"{s.state}): {_call_text(exc)}{self.said()}"
