@@ -182,7 +182,7 @@ def test_fmi_scene_and_validation(tmp_path, monkeypatch, scene, builtin):
 
 @pytest.mark.skipif(not _can_run_units(), reason="running scenes needs fmpy, CMake and a C compiler")
 def test_fmi_orders(tmp_path):
-    from icosim.fmi.validation import order_case_data
+    from icosim.fmi.orders import order_case_data
 
     model = dict(m1=1.0, m2=2.0, c1=1000.0, c2=1000.0, d1=10.0, d2=10.0)
     case = {"method": "projection", "decomposition": "ff", "k": 1}

@@ -102,7 +102,7 @@ def test_fmu_without_model_description(capsys, tmp_path):
     with zipfile.ZipFile(tmp_path / "empty.fmu", "w") as zf:
         zf.writestr("readme.txt", "nothing")
     path = scene(tmp_path, body1=body(1, fmu="empty.fmu"))
-    assert_refused(*cosim(capsys, path, tmp_path), "body1", "empty.fmu", "no valid modelDescription.xml")
+    assert_refused(*cosim(capsys, path, tmp_path), "body1", "empty.fmu", "no readable modelDescription.xml")
 
 
 def test_unit_without_saved_states(capsys, tmp_path):

@@ -16,9 +16,9 @@ from icosim.engine.macrostep import simulate  # noqa: E402
 from icosim.engine.methods import engine_method, make_method  # noqa: E402
 from icosim.engine.model import PhysicalModel  # noqa: E402
 from icosim.engine.spectral.radius import spectral_radius_float64  # noqa: E402
+from icosim.fmi.orders import order_scene  # noqa: E402
 from icosim.fmi.run import run_scene  # noqa: E402
 from icosim.fmi.scene import COUPLING_KEYS  # noqa: E402
-from icosim.fmi.validation import _order_scene  # noqa: E402
 
 P = dict(m1=1.0, m2=2.0, c1=1000.0, c2=500.0, d1=2.0, d2=1.0)
 PARAMS = {"baumgarte": {"index": 1, "mu": 1e-3}, "weighted": {"index": 1, "a": 1.0, "b": 1.0}, "projection": {}}
@@ -49,7 +49,7 @@ def write_scene(path, method, decomposition, k, scheme, H, n, **coupling):
     n_e = 2 if decomposition in ("fd", "df") else 1
     scene = {"initial_coupling": [0.0] * n_e, "divergence_bound": 1e300}
     case = {"method": method, "decomposition": decomposition, "k": k, "scheme": scheme, "params": params}
-    return _order_scene(path.parent, ROOT / "fmus", P, X0, case | {"scene": scene}, H, n * H)
+    return order_scene(path.parent, ROOT / "fmus", P, X0, case | {"scene": scene}, H, n * H)
 
 
 def builtin(method, decomposition, k, scheme, H, n):

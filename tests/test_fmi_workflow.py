@@ -194,7 +194,7 @@ def test_order_case_against_the_exact_solution():
     from icosim.engine.macrostep import simulate
     from icosim.engine.methods import engine_method, make_method
     from icosim.engine.model import PhysicalModel
-    from icosim.fmi.validation import order_case
+    from icosim.fmi.orders import order_case
 
     model = dict(m1=1.0, m2=2.0, c1=1000.0, c2=1000.0, d1=10.0, d2=10.0)
     H = [2.5e-3, 1.25e-3, 5.0e-4]

@@ -1,10 +1,10 @@
 """Snakemake job: one configuration of the linear convergence study on the FMU units over H, with the built-in
-model's errors and both orders (thin: icosim.fmi.validation.order_case_data)."""
+model's errors and both orders (thin: icosim.fmi.orders.order_case_data)."""
 
 import logging
 from pathlib import Path
 
-from icosim.fmi.validation import order_case_data
+from icosim.fmi.orders import order_case_data
 from icosim.io.netcdf import write_netcdf
 from icosim.job import start_job
 

@@ -53,32 +53,31 @@ _HEADER = 8  # float64 slots: active, unit, call, t, macro step, since (monotoni
 
 _record = None  # np.ndarray over the shared memory, in the supervised child only
 _shared = None
-_units = []  # registered units (labels and FMI versions), in this process
+_units = []  # the labels of the units registered in the supervised child
 _scratch = None
 
 
 def register(unit) -> int:
-    """A unit's index in the records (its label and FMI version written where the parent reads them)."""
-    _units.append(unit)
+    """A unit's index in the records (its label and FMI version written where the parent reads them); -1 when
+    the process is not supervised or the table is full (its calls are then not named)."""
+    if _shared is None or len(_units) >= _MAX_UNITS:
+        return -1
+    _units.append(unit.label)
     index = len(_units) - 1
-    if _shared is not None and index < _MAX_UNITS:
-        name = f"{'fmi3' if unit.fmi3 else 'fmi2'}:{unit.label}".encode()[: _NAME_BYTES - 1]
-        start = _HEADER * 8 + index * _NAME_BYTES
-        _shared[start : start + _NAME_BYTES] = name.ljust(_NAME_BYTES, b"\0")
-        _record[6] = index + 1
+    name = f"{'fmi3' if unit.fmi3 else 'fmi2'}:{unit.label}".encode()[: _NAME_BYTES - 1]
+    start = _HEADER * 8 + index * _NAME_BYTES
+    _shared[start : start + _NAME_BYTES] = name.ljust(_NAME_BYTES, b"\0")
+    _record[6] = index + 1
     return index
 
 
 def unregister(unit):
-    """Nothing is recorded of ``unit`` any more (its index stays taken)."""
-    for i, u in enumerate(_units):
-        if u is unit:
-            _units[i] = None
+    """Nothing more is recorded of ``unit`` (its index stays taken: the record may still name it)."""
 
 
 def enter(index: int, call: str, t: float, step: int = -1):
     """Unit ``index`` starts the FMI call ``call`` at simulated time ``t`` (macro step ``step``)."""
-    if _record is not None:
+    if _record is not None and index >= 0:
         r = _record
         r[1], r[2], r[3], r[4], r[5] = index, _CODE[call], t, step, time.monotonic()
         r[0] = 1.0
@@ -160,7 +159,7 @@ def supervised(target, *, call_seconds: float = CALL_SECONDS, leftovers=()) -> O
     pid = os.fork()
     if pid == 0:  # the child: the run itself
         os.close(read_end)
-        _shared, _record, _scratch = shared, record, scratch
+        _shared, _record, _scratch, _units[:] = shared, record, scratch, []
         # streams without a file descriptor of their own (captured in memory) are sent to the parent at the end
         buffered = [not _has_fd(s) for s in streams]
         if buffered[0]:

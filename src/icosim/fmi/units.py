@@ -25,7 +25,7 @@ import numpy as np
 from . import guard
 from .errors import FmuError, UnitStepError
 from .measures import measure
-from .variables import VariableTable, family
+from .variables import VariableTable, declared_start, family
 
 __all__ = ["Unit", "ROLES", "read_description", "check_kind", "STATE_REASON"]
 
@@ -337,7 +337,7 @@ class Unit:
                     continue
                 whole = self._arrays.get(el.variable.name)
                 if whole is None:
-                    whole = self._arrays[el.variable.name] = _declared_start(el.variable, el.size)
+                    whole = self._arrays[el.variable.name] = declared_start(el.variable, el.size)
                 whole[el.index] = v
                 self.fmu.setFloat64([el.value_reference], whole.tolist())
         elif self.fmi3:
@@ -436,13 +436,6 @@ def _check_role(label, key, var):
             f"{label}: {key}: variable {var.name!r} is {var.type}; a coupling variable must be Real (FMI 2.0) or "
             "Float64 (FMI 3.0)"
         )
-
-
-def _declared_start(variable, size) -> np.ndarray:
-    """An FMI 3.0 array's declared start values (zeros where it declares none)."""
-    text = variable.start
-    values = [float(v) for v in str(text).split()] if text not in (None, "") else []
-    return np.array(values if len(values) == size else [0.0] * size, dtype=float)
 
 
 def _call_text(exc) -> str:

@@ -6,10 +6,9 @@ Three checks, each a dataset that the claims (``config/claims/fmi.yaml``) and th
   dimensionless point (:func:`linear_builtin` for the two-mass units, :func:`pendulum_builtin` for the double
   pendulum's links), the spectral radius predicted before the run (:func:`icosim.fmi.predict.predict_scene`)
   and the growth per macro step measured on the run (:func:`measured_growth`);
-* :func:`order_case` -- one configuration of the linear convergence study (Sect. 3.7) on the FMU units over
-  a list of ``H``: the error against the exact monolithic solution, of the FMU run and of the built-in model,
-  from the exact start (the coupling history at ``T_0 ... T_-k`` too), and the asymptotic order of each
-  (:func:`icosim.order_fit.asymptotic_order`, the linear study's rule).
+* :func:`scene_job` -- the workflow's job of one scene: the run and its check written, under the supervisor.
+
+The orders of convergence on the units: :mod:`icosim.fmi.orders`.
 
 The scene's units are built into ``cache`` (:func:`icosim.fmi.build.build_unit`), as the scene runs are.
 """
@@ -18,24 +17,19 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
 from ..engine.decompositions import get_decomposition
-from ..engine.exact import MonolithicSolution, consistent_start
 from ..engine.linear_problem import LinearCosimulation
 from ..engine.macrostep import simulate
-from ..engine.methods import engine_method, make_method
+from ..engine.methods import make_method
 from ..engine.model import PhysicalModel
 from ..io.dataset import DatasetDict
-from ..order_fit import asymptotic_order
 from .config import case_label
 from .errors import SceneError
-from .problem import FmuCosimulation
-from .run import open_units
 from .scene import COUPLING_KEYS, load_scene
 
 __all__ = [
@@ -46,8 +40,7 @@ __all__ = [
     "builtin_difference",
     "scene_validation",
     "scene_validation_data",
-    "order_case",
-    "order_case_data",
+    "scene_job",
     "case_label",
 ]
 
@@ -285,130 +278,46 @@ def scene_validation_data(scene, run, *, name: str, builtin: str = "none", cache
     return ds
 
 
+def scene_job(scene, *, name: str, builtin: str, cache, run_path, validation_path, command: str = "") -> str:
+    """The workflow's job of one scene: its run written to ``run_path`` and its check to ``validation_path``, in a
+    child process under :func:`icosim.fmi.guard.supervised` (a unit that hangs or crashes is named).  Returns a
+    line for the job's log; raises :class:`SceneError` with the supervisor's message when the run was stopped,
+    and :class:`~icosim.fmi.errors.UnitStepError` when a unit refused a step."""
+    import logging
+
+    from ..io.netcdf import write_netcdf
+    from .guard import CALL_SECONDS, supervised
+    from .run import run_dataset, run_scene
+
+    def work():
+        run = run_scene(scene, cache=cache)
+        ds = run_dataset(run, command=command)
+        write_netcdf(ds, run_path)
+        checked = scene_validation(scene, ds, name=name, builtin=builtin, cache=cache)
+        write_netcdf(checked, validation_path)
+        logging.info(
+            "%s: %s after %d macro steps, %.2f s %s; predicted rho %s (%s), measured growth %s, difference to the "
+            "built-in model (%s) %s",
+            name, run.status, len(run.times) - 1, run.wall_time, run.reason, float(checked["predicted_rho"]),
+            checked.attrs["predicted_verdict"], float(checked["measured_growth"]), builtin,
+            float(checked["builtin_difference"]),
+        )  # fmt: skip
+
+    outputs = [Path(run_path), Path(validation_path)]
+    outcome = supervised(
+        work,
+        call_seconds=float(scene.data.get("limits", {}).get("call_seconds", CALL_SECONDS)),
+        leftovers=[p.parent / f".{p.name}*.part" for p in outputs],
+    )
+    if outcome.message:
+        raise SceneError(f"scene {name}: {outcome.message}")
+    if outcome.status:
+        raise SceneError(f"scene {name}: the run ended with status {outcome.status} (its log says why)")
+    return f"{name}: run and checked ({run_path}, {validation_path})"
+
+
 _DIFFERENCE_TEXT = {
     "linear": "largest position or velocity difference to the built-in linear model, relative to the largest value",
     "pendulum": "largest joint point difference to the built-in pendulum (m)",
     "none": "no built-in model",
 }
-
-
-# -- orders over H ----------------------------------------------------------------------------------------------
-
-
-def _order_scene(tmp: Path, units_dir: Path, model: dict, x0: float, case: dict, H: float, t_end: float) -> Path:
-    import yaml
-
-    kinds = get_decomposition(case["decomposition"]).kinds
-
-    def unit(i, kind):
-        sub = {
-            "start": {"m": model[f"m{i}"], "c": model[f"c{i}"], "d": model[f"d{i}"], "x0": x0},
-            "position": "x",
-            "velocity": "v",
-            "acceleration": "a",
-            "force_sign": 1 if i == 1 else -1,
-            "mass": "m",
-            "set_position": "x_set",
-            "set_velocity": "v_set",
-        }
-        if kind == "force":
-            return sub | {"fmu": str(units_dir / "msd"), "force": "lambda"}
-        return sub | {"fmu": str(units_dir / "msd_kinematic"), "acceleration_input": "a_in", "reaction_force": "F"}
-
-    coupling = {k: case[k] for k in ("method", "decomposition", "k")} | {"scheme": case.get("scheme", "jacobi")}
-    scene = {
-        "subsystems": {"body1": unit(1, kinds[0]), "body2": unit(2, kinds[1])},
-        "coupling": coupling | {"H": float(H), "perturbation": 1.0} | dict(case.get("params", {})),
-        "t_end": float(t_end),
-    } | dict(case.get("scene", {}))
-    path = tmp / f"order_{H:.6e}.yaml"
-    path.write_text(yaml.safe_dump(scene))
-    return path
-
-
-def _fmu_states(scene, history, *, cache=None) -> np.ndarray:
-    """The FMU run of ``scene`` from the given coupling history (SI): states ``(n + 1, 2, 2)``, SI, ending early
-    where the run diverges."""
-    c = scene.coupling
-    units, couplings = open_units(scene, cache=cache)
-    problem = None
-    try:
-        problem = FmuCosimulation(units, couplings, c["decomposition"], c["k"], c["H"], perturbation=c["perturbation"])
-        with np.errstate(over="ignore", invalid="ignore"):
-            traj = simulate(problem, scene.method, problem.initial_state(), history, scene.n_steps, scheme=c["scheme"])
-        if traj.failed_at is not None:
-            raise traj.error
-        return np.array(traj.states)
-    finally:
-        if problem is not None:
-            problem.close()
-        for unit in units:
-            unit.close()
-
-
-def order_case(case: dict, **kwargs):
-    """:func:`order_case_data` as an :class:`xarray.Dataset`."""
-    return order_case_data(case, **kwargs).to_xarray()
-
-
-def order_case_data(case: dict, *, H, t_end: float, model: dict, x0: float, units_dir, cache=None, fit=None):
-    """Errors over ``H`` of one configuration of the linear convergence study on the FMU units and on the
-    built-in model, both from the exact start, and the asymptotic order of each.
-
-    ``case``: ``method``, ``decomposition``, ``k``, ``scheme`` (default Jacobi), ``params`` (the method's,
-    dimensional).  The error is the largest position error of either body against the exact monolithic
-    solution over ``[0, t_end]`` (m).  ``fit``: :func:`~icosim.order_fit.asymptotic_order`'s options."""
-    from ..io.netcdf import provenance_attrs
-
-    fit = dict(fit or {})
-    H = np.asarray(sorted(float(h) for h in H), dtype=float)
-    err_fmu, err_builtin, diff = [], [], []
-    with tempfile.TemporaryDirectory(prefix="icosim-orders-") as tmp:
-        for h in H:
-            scene = load_scene(_order_scene(Path(tmp), Path(units_dir).resolve(), model, x0, case, h, t_end))
-            coeffs = PhysicalModel(H=h, **model).coefficients()
-            problem = LinearCosimulation(coeffs, case["decomposition"], case["k"])
-            solution = MonolithicSolution(coeffs, x0, 0.0)
-            state, history = consistent_start(problem, solution)
-            method = engine_method(make_method(case["method"], **case.get("params", {})), h)
-            traj = simulate(problem, method, state, history, scene.n_steps, scheme=scene.coupling["scheme"])
-            builtin = np.array(traj.states)[..., 0]  # (n + 1, 2)
-            dec = get_decomposition(case["decomposition"])
-            scale = np.array([model["m1"] / h**2 if v == "lambda_c" else 1 / h**2 for v in dec.variables])
-            fmu = _fmu_states(scene, np.asarray(history) * scale, cache=cache)[..., 0]
-            exact = solution.state(np.arange(scene.n_steps + 1, dtype=float))[:, :1]
-            with np.errstate(invalid="ignore", over="ignore"):
-                err_fmu.append(float(np.max(np.abs(fmu - exact[: len(fmu)]))) if len(fmu) == len(exact) else np.nan)
-                err_builtin.append(float(np.max(np.abs(builtin - exact))))
-                diff.append(float(np.max(np.abs(fmu - builtin[: len(fmu)])) / max(1.0, np.max(np.abs(builtin)))))
-    f_fmu, f_builtin = asymptotic_order(H, err_fmu, **fit), asymptotic_order(H, err_builtin, **fit)
-    ds = DatasetDict(
-        {
-            "error_fmu": (("H",), np.array(err_fmu), {"units": "m", "long_name": "largest position error, FMU run"}),
-            "error_builtin": (("H",), np.array(err_builtin), {"units": "m", "long_name": "the same, built-in model"}),
-            "difference": (("H",), np.array(diff), {"comment": "FMU minus built-in positions, relative"}),
-        },
-        coords={"H": ("H", H, {"units": "s"})},
-    )
-    attrs = provenance_attrs(
-        {"case": case, "H": H.tolist(), "t_end": t_end, "model": model, "x0": x0, "fit": fit},
-        title=f"FMU units: convergence order of {case_label(case)}",
-    )
-    params = {k: v for k, v in case.get("params", {}).items()}
-    attrs.update(
-        part="fmi",
-        dataset="orders",
-        case=case_label(case),
-        method=case["method"],
-        decomposition=case["decomposition"],
-        k=int(case["k"]),
-        scheme=case.get("scheme", "jacobi"),
-        **params,
-        t_end=float(t_end),
-        order_fmu=float(f_fmu.order),
-        order_builtin=float(f_builtin.order),
-        status_fmu=f_fmu.status,
-        status_builtin=f_builtin.status,
-    )
-    ds.attrs.update(attrs)
-    return ds

@@ -41,7 +41,8 @@ __all__ = [
     "family",
     "integer_range",
     "parse_element",
-    "SETTERS",
+    "declared_start",
+    "setter",
 ]
 
 #: The FMI types by family.
@@ -75,7 +76,7 @@ def integer_range(fmi_type: str) -> tuple[int, int]:
     """The values an integer type holds (FMI 2.0 ``Integer`` is 32 bits)."""
     if fmi_type == "Integer":
         return -(2**31), 2**31 - 1
-    bits = int(fmi_type.lstrip("UInt"))
+    bits = int(re.sub(r"\D", "", fmi_type))
     return (0, 2**bits - 1) if fmi_type.startswith("U") else (-(2 ** (bits - 1)), 2 ** (bits - 1) - 1)
 
 
@@ -85,8 +86,6 @@ def setter(md, variable) -> str:
         return "fmi3SetInt64" if variable.type == "Enumeration" else f"fmi3Set{variable.type}"
     return "fmi2SetInteger" if variable.type == "Enumeration" else f"fmi2Set{variable.type}"
 
-
-SETTERS = setter
 
 _ELEMENT = re.compile(r"^(?P<base>.+?)\[(?P<idx>\s*\d+\s*(?:,\s*\d+\s*)*)\]$")
 
@@ -302,6 +301,15 @@ class VariableTable:
         if unit != base and unit not in display:
             allowed = ", ".join([base, *display])
             raise FmuError(f"{where}: unit {unit!r} is not one the unit declares for {var.name}; allowed: {allowed}")
+
+
+def declared_start(variable, size: int):
+    """An FMI 3.0 Float64 array's declared start values (zeros where it declares none), as a float array."""
+    import numpy as np
+
+    text = variable.start
+    values = [float(v) for v in str(text).split()] if text not in (None, "") else []
+    return np.array(values if len(values) == size else [0.0] * size, dtype=float)
 
 
 def _flatten(value):
