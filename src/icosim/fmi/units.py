@@ -5,11 +5,16 @@ scene names (:data:`ROLES`).  Over a macro step the unit's coupling input is a p
 ``tau = (t - T_N)/H``; :meth:`Unit.step` hands it to the FMU either exactly, as its value and derivatives at
 ``T_N`` (``fmi2SetRealInputDerivatives``, units that declare ``canInterpolateInputs``), or as ``substeps``
 sub-steps each with the polynomial's value at its midpoint (every other unit; docs/fmi.md).
+
+A pythonfmu unit's library is released before the interpreter exits (:func:`_pythonfmu_release`): left to the
+process's exit, pythonfmu (0.6.4 to 0.7.0 at least) frees its interpreter state twice (docs/fmi.md).
 """
 
 from __future__ import annotations
 
+import atexit
 import difflib
+import itertools
 import math
 import shutil
 import tempfile
@@ -54,6 +59,42 @@ def read_description(label: str, path: Path):
     except Exception as exc:  # fmpy raises plain exceptions for unreadable or invalid descriptions
         first = " ".join(str(exc).split()[:40]) or type(exc).__name__
         raise FmuError(f"{label}: {path} has no valid modelDescription.xml ({first})") from None
+
+
+#: A unit's number -> the teardown of its pythonfmu library (:func:`_pythonfmu_release`), until it is closed.
+_RELEASES: dict = {}
+_NUMBERS = itertools.count()
+
+
+def _pythonfmu_release(md, dll):
+    """pythonfmu's own teardown of the library's interpreter state (``finalizePythonInterpreter``), or None for a
+    unit of another exporter (or of a pythonfmu without it).
+
+    pythonfmu keeps that state in a global ``std::shared_ptr`` of the library, freed on two paths: the global's
+    C++ destructor (an exit handler registered when the library is loaded) and the library's destructor
+    function, which calls ``finalizePythonInterpreter`` (it assigns ``nullptr``).  At ``dlclose`` they run in
+    that safe order, but the first pythonfmu library a process loads is never unloaded (it defines
+    ``STB_GNU_UNIQUE`` symbols of libstdc++, so glibc makes it NODELETE): at exit the C++ destructor frees the
+    shared_ptr's control block first, then ``finalizePythonInterpreter`` releases it again and writes into the
+    freed block (glibc aborts, "corrupted double-linked list", when that block sits in one of its bin lists).
+    Called while the library is loaded, it empties the global, and both exit paths find nothing to free.  With
+    the interpreter already running the state holds no Python object (pythonfmu then neither initialises nor
+    finalises Python), no instance uses it, and an instance created later in the library makes a new one.
+    """
+    if not (md.generationTool or "").startswith("PythonFMU"):
+        return None
+    release = getattr(dll, "finalizePythonInterpreter", None)
+    if release is not None:
+        release.argtypes, release.restype = [], None
+    return release
+
+
+@atexit.register
+def _release_pythonfmu_libraries():
+    """Units never closed: their pythonfmu libraries released before the interpreter finalises (still loaded, as
+    no unit closed them)."""
+    while _RELEASES:
+        _RELEASES.popitem()[1]()
 
 
 def check_unit(label: str, path: Path, md, names: dict, start: dict):
@@ -140,6 +181,7 @@ class Unit:
         #: (error) or nothing at all (fatal)
         self.failed = 0
         self.messages = []
+        self._number = next(_NUMBERS)  # its key in _RELEASES
         self._tmp = tempfile.mkdtemp(prefix=f"icosim-{label}-")
         try:
             self._open(variables, start, t0)
@@ -162,12 +204,14 @@ class Unit:
                 from fmpy.fmi3 import FMU3Slave
 
                 self.fmu = FMU3Slave(guid=md.guid, **common)  # fmpy keeps the instantiation token as guid
+                self._register_release()
                 self.fmu.instantiate(logMessage=self._log3)
                 self.fmu.enterInitializationMode(startTime=t0)
             else:
                 from fmpy.fmi2 import FMU2Slave, defaultCallbacks, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 
                 self.fmu = FMU2Slave(guid=md.guid, **common)
+                self._register_release()
                 cb = fmi2CallbackFunctions()
                 cb.logger = fmi2CallbackLoggerTYPE(self._log2)
                 cb.allocateMemory, cb.freeMemory = defaultCallbacks.allocateMemory, defaultCallbacks.freeMemory
@@ -183,6 +227,11 @@ class Unit:
         except Exception as exc:
             raise FmuError(f"{self.label}: {self.path.name} could not be instantiated and initialised: {exc}") from None
 
+    def _register_release(self):
+        release = _pythonfmu_release(self.md, self.fmu.dll)
+        if release is not None:
+            _RELEASES[self._number] = release
+
     def _log2(self, env, instance, status, category, message):
         self.messages.append(message.decode(errors="replace") if message else "")
 
@@ -190,16 +239,20 @@ class Unit:
         self.messages.append(message.decode(errors="replace") if message else "")
 
     def close(self):
-        """Terminate and free the instance, remove its unpacked files."""
+        """Terminate and free the instance, remove its unpacked files.  A pythonfmu unit's library is released
+        before fmpy closes it (:func:`_pythonfmu_release`), also after a fatal status, which leaves it loaded."""
         fmu, self.fmu = getattr(self, "fmu", None), None
-        if fmu is not None and self.failed < 4:
-            if not self.failed:
-                try:
-                    fmu.terminate()
-                except Exception:
-                    pass
+        release = _RELEASES.pop(getattr(self, "_number", None), None)
+        if fmu is not None and not self.failed:
             try:
-                fmu.freeInstance()
+                fmu.terminate()
+            except Exception:
+                pass
+        if release is not None:
+            release()  # while the library is loaded: fmpy's dlclose may unload it
+        if fmu is not None and self.failed < 4:
+            try:
+                fmu.freeInstance()  # fmi2FreeInstance, then dlclose
             except Exception:
                 pass
         shutil.rmtree(self._tmp, ignore_errors=True)
