@@ -10,7 +10,7 @@ from icosim.fmi.validation import scene_validation
 from icosim.io.netcdf import write_netcdf
 from icosim.job import start_job
 
-start_job(snakemake.log[0], freeze_at_exit=False)  # it loads FMUs: icosim.job
+start_job(snakemake.log[0])
 name = snakemake.wildcards.scene
 cache = Path(snakemake.input.units).parent
 scene = load_scene(snakemake.input.scene)
