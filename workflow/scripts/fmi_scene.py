@@ -17,8 +17,8 @@ scene = load_scene(snakemake.input.scene)
 run = run_scene(scene, cache=cache)
 logging.info("%s: %s after %d macro steps, %.2f s %s", name, run.status, len(run.times) - 1, run.wall_time, run.reason)
 # written through xarray, unlike the other writer jobs: without xarray loaded, a process that ran a
-# pythonfmu unit aborted at exit ("corrupted double-linked list", after its files were written) in 4 of
-# 16 runs of the two pythonfmu scenes; with it, in none of 16
+# pythonfmu unit aborted at exit ("corrupted double-linked list") in 4 of 16 runs; the cause was
+# pythonfmu's double free at exit, which icosim.fmi.units now prevents (docs/fmi.md)
 ds = run_dataset(run, command=f"snakemake rule {snakemake.rule}")
 write_netcdf(ds, snakemake.output.run)
 checked = scene_validation(scene, ds, name=name, builtin=snakemake.params.builtin, cache=cache)
