@@ -25,6 +25,7 @@ FILE_SECONDS = {
     "tests/test_workflow_faults.py": 34,  # a real run of one figure, then one per fault case
     "tests/test_pendulum_compiled.py": 32,  # numba compiles the kernels (cold in a fresh checkout), twice more in copies
     "tests/test_stability_workflow.py": 17,  # some 25 Snakemake runs, one real
+    "tests/test_fmi_pythonfmu.py": 12,  # a scene under valgrind (about 9 s)
     "tests/test_engine.py": 9,
     "tests/test_schemes.py": 9,
     "tests/test_fmi_linear.py": 8,
@@ -42,7 +43,6 @@ FILE_SECONDS = {
     "tests/test_convergence_errors.py": 4,
     "tests/test_fmi_workflow.py": 3.5,
     "tests/test_certified.py": 3.3,
-    "tests/test_fmi_pythonfmu.py": 2.7,
     "tests/test_schemes_workflow.py": 2.7,
     "tests/test_structure.py": 2.5,
 }

@@ -2,6 +2,13 @@
 with the C unit.  It cannot interpolate inputs, so it gets the coupling polynomial as sub-steps: the run follows
 the built-in model to second order in the sub-step."""
 
+import os
+import re
+import shutil
+import subprocess
+import sys
+import textwrap
+
 import numpy as np
 import pytest
 import yaml
@@ -105,3 +112,67 @@ def test_a_unit_that_fails_fatally_stops_the_run_cleanly(capsys, tmp_path):
     err = capsys.readouterr().err
     assert "unit body1 refused macro step" in err and "(doStep returned fatal)" in err
     assert not out.exists()
+
+
+# A workflow job's process with pythonfmu units: a scene run (its units opened and closed), then one unit left open.
+EXITING_JOB = textwrap.dedent(
+    """
+    import atexit, gc, sys
+    atexit.register(gc.freeze)  # a workflow job's last exit handler (icosim.job.start_job)
+    from icosim.fmi.run import run_scene
+    from icosim.fmi.units import Unit
+    run = run_scene(sys.argv[1])
+    Unit("left_open", run.units["body1"]["fmu"], {"position": "x"}, {})  # closed by no one
+    print(run.status)
+    """
+)
+
+
+def library_errors(log: str) -> list:
+    """valgrind's errors whose own stack (not where the block was allocated or freed) is in a unit's library."""
+    errors, block = [], []
+    for line in log.splitlines() + [""]:
+        text = re.sub(r"^==\d+== ?", "", line)
+        if text.strip():
+            block.append(text)
+            continue
+        own = []
+        for entry in block:
+            if entry.lstrip().startswith(("Address ", "Block was")):
+                break
+            own.append(entry)
+        if any("/binaries/linux64/" in entry for entry in own):
+            errors.append("\n".join(own[:4]))
+        block = []
+    return errors
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(shutil.which("valgrind") is None, reason="needs valgrind (memcheck)")
+def test_a_process_that_ran_pythonfmu_units_exits_without_touching_freed_memory(tmp_path):
+    """pythonfmu frees its library's interpreter state twice at exit, unless icosim released it before
+    (icosim.fmi.pythonfmu): the freed block written to, which glibc reported as "corrupted
+    double-linked list" in some runs (docs/fmi.md).  memcheck sees it in every run: the process exits cleanly and
+    the units' libraries read or write no freed memory, the unit left open included."""
+    from icosim.fmi.build import build_unit
+
+    for source in ("python/msd_python.py", "msd"):  # built here, not under memcheck
+        build_unit(ROOT / "fmus" / source)
+    data = yaml.safe_load(SCENE.read_text())
+    for sub in data["subsystems"].values():
+        sub["fmu"] = str((SCENE.parent / sub["fmu"]).resolve())
+    data["t_end"] = 0.01
+    scene = tmp_path / "short.yaml"
+    scene.write_text(yaml.safe_dump(data))
+    log = tmp_path / "memcheck.log"
+    proc = subprocess.run(
+        ["valgrind", "--undef-value-errors=no", "--num-callers=12", f"--log-file={log}"]
+        + [sys.executable, "-c", EXITING_JOB, str(scene)],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "PYTHONMALLOC": "malloc"},  # every object through malloc, where memcheck sees it
+        timeout=300,
+    )
+    assert proc.returncode == 0 and "corrupted" not in proc.stderr, proc.stderr[-2000:]
+    assert proc.stdout.split() == ["completed"]
+    assert library_errors(log.read_text()) == []

@@ -20,14 +20,9 @@ __all__ = ["start_job"]
 _HANDLERS: list = []
 
 
-def start_job(log_path: str, *, freeze_at_exit: bool = True) -> None:
-    """Log to ``log_path`` (INFO, time-stamped lines) and freeze the collector's objects at exit.
-
-    ``freeze_at_exit=False`` for a job that loads FMUs: a process that ran a pythonfmu unit aborted at
-    exit ("corrupted double-linked list", after writing its files) with the objects frozen, as it did
-    without xarray loaded (docs/workflow.md); such a job exits as Python does by itself.
-    """
+def start_job(log_path: str) -> None:
+    """Log to ``log_path`` (INFO, time-stamped lines) and freeze the collector's objects at exit."""
     logging.basicConfig(filename=log_path, level=logging.INFO, format="%(asctime)s %(message)s")
-    if freeze_at_exit and not _HANDLERS:
+    if not _HANDLERS:
         atexit.register(gc.freeze)
         _HANDLERS.append(gc.freeze)

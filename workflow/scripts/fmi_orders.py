@@ -8,7 +8,7 @@ from icosim.fmi.orders import order_case_data
 from icosim.io.netcdf import write_netcdf
 from icosim.job import start_job
 
-start_job(snakemake.log[0], freeze_at_exit=False)  # it loads FMUs: icosim.job
+start_job(snakemake.log[0])
 p = snakemake.params
 case = {key: value for key, value in p.case.items() if key != "H"}
 ds = order_case_data(

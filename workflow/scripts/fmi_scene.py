@@ -8,7 +8,7 @@ from icosim.fmi.scene import load_scene
 from icosim.fmi.validation import scene_job
 from icosim.job import start_job
 
-start_job(snakemake.log[0], freeze_at_exit=False)  # it loads FMUs: icosim.job
+start_job(snakemake.log[0])
 done = scene_job(
     load_scene(snakemake.input.scene),
     name=snakemake.wildcards.scene,

@@ -8,7 +8,7 @@ from icosim.fmi.build import build_unit
 from icosim.io.netcdf import atomic_path
 from icosim.job import start_job
 
-start_job(snakemake.log[0], freeze_at_exit=False)  # it loads FMUs: icosim.job
+start_job(snakemake.log[0])
 cache = Path(snakemake.output[0]).parent
 built = {}
 for source in snakemake.params.sources:

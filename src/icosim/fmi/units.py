@@ -9,6 +9,9 @@ unit's coupling input is a polynomial in the local time ``tau = (t - T_N)/H``; :
 FMU either exactly, as its value and derivatives at ``T_N`` (``fmi2SetRealInputDerivatives``, units that declare
 ``canInterpolateInputs``), or as ``substeps`` sub-steps each with the polynomial's value at its midpoint (every
 other unit; docs/fmi.md).  Every error about a unit carries what the unit logged.
+
+A pythonfmu unit's library is released before the interpreter exits (:mod:`icosim.fmi.pythonfmu`): left to the
+process's exit, pythonfmu (0.6.4 to 0.7.0 at least) frees its interpreter state twice (docs/fmi.md).
 """
 
 from __future__ import annotations
@@ -17,17 +20,19 @@ import collections
 import math
 import shutil
 import tempfile
-import zipfile
 from pathlib import Path
 
 import numpy as np
 
-from . import guard
+from . import guard, pythonfmu
+from .description import check_kind, read_description
 from .errors import FmuError, UnitStepError
 from .measures import measure
 from .variables import VariableTable, declared_start, family
 
-__all__ = ["Unit", "ROLES", "read_description", "check_kind", "STATE_REASON"]
+__all__ = ["Unit", "ROLES"]
+
+_STATUS = {0: "ok", 1: "warning", 2: "discard", 3: "error", 4: "fatal", 5: "pending"}
 
 #: Scene key -> (what it names, causalities it may have).
 ROLES = {
@@ -40,62 +45,6 @@ ROLES = {
     "set_position": ("a tunable parameter or input that sets the position (projection)", ("parameter", "input")),
     "set_velocity": ("a tunable parameter or input that sets the velocity (projection)", ("parameter", "input")),
 }
-
-#: Why a unit must save and restore its state: every scheme integrates a unit more than once over a macro step.
-STATE_REASON = (
-    "every coupling scheme integrates a unit more than once from the same macro-step start (predictor, the "
-    "perturbed steps of the sensitivities, corrector), which needs fmi2GetFMUstate/fmi2SetFMUstate"
-)
-
-_STATUS = {0: "ok", 1: "warning", 2: "discard", 3: "error", 4: "fatal", 5: "pending"}
-
-
-def read_description(label: str, path: Path):
-    """The unit's model description (fmpy) and the problems fmpy's validation finds in it (a list; exporters get
-    details wrong that do not touch what a scene uses, e.g. an Integer output declared continuous), or
-    :class:`FmuError` naming ``label`` and the file when it cannot be read at all."""
-    from fmpy import read_model_description
-    from fmpy.model_description import ValidationError
-
-    path = Path(path)
-    if path.is_dir():
-        raise FmuError(
-            f"{label}: {path} is a directory but not a unit's source (a modelDescription.xml beside sources/) "
-            "nor an unpacked FMU; name the .fmu file or the unit's source directory"
-        )
-    if not path.is_file():
-        raise FmuError(f"{label}: FMU file {path} does not exist")
-    if not zipfile.is_zipfile(path):
-        raise FmuError(f"{label}: {path} is not an FMU (not a ZIP archive)")
-    try:
-        return read_model_description(str(path), validate=True), []
-    except ValidationError as exc:
-        problems = [" ".join(str(p).split()) for p in exc.problems]
-    except Exception as exc:  # fmpy raises plain exceptions for unreadable descriptions
-        problems, first = None, " ".join(str(exc).split()[:40]) or type(exc).__name__
-    if problems is not None:
-        try:
-            return read_model_description(str(path), validate=False), problems
-        except Exception as exc:
-            first = " ".join(str(exc).split()[:40]) or type(exc).__name__
-    raise FmuError(f"{label}: {path} has no readable modelDescription.xml ({first})") from None
-
-
-def check_kind(label: str, path: Path, md):
-    """Refuse a unit that is not an FMI 2.0/3.0 co-simulation unit that saves and restores its state."""
-    if md.fmiVersion not in ("2.0",) and not md.fmiVersion.startswith("3."):
-        raise FmuError(f"{label}: {path} is FMI {md.fmiVersion}; FMI 2.0 or 3.0 co-simulation units are supported")
-    if md.coSimulation is None:
-        kinds = [k for k, present in (("model exchange", md.modelExchange), ("scheduled execution",
-                 getattr(md, "scheduledExecution", None))) if present is not None]  # fmt: skip
-        has = " and ".join(kinds) or "no interface"
-        raise FmuError(
-            f"{label}: {path} offers {has} only (no <CoSimulation> in its modelDescription.xml); a scene needs "
-            "co-simulation units, which bring their own solver"
-        )
-    if not md.coSimulation.canGetAndSetFMUstate:
-        flag = "canGetAndSetFMUState" if md.fmiVersion.startswith("3.") else "canGetAndSetFMUstate"
-        raise FmuError(f"{label}: {path} declares {flag}=false; {STATE_REASON}")
 
 
 def _listed(names) -> list:
@@ -182,11 +131,13 @@ class Unit:
                 from fmpy.fmi3 import FMU3Slave
 
                 self.fmu = FMU3Slave(guid=md.guid, **common)  # fmpy keeps the instantiation token as guid
+                self._register_release()
                 self.fmu.instantiate(logMessage=self._log3)
             else:
                 from fmpy.fmi2 import FMU2Slave, defaultCallbacks, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 
                 self.fmu = FMU2Slave(guid=md.guid, **common)
+                self._register_release()
                 cb = fmi2CallbackFunctions()
                 cb.logger = fmi2CallbackLoggerTYPE(self._log2)
                 cb.allocateMemory, cb.freeMemory = defaultCallbacks.allocateMemory, defaultCallbacks.freeMemory
@@ -218,6 +169,9 @@ class Unit:
             raise
         except Exception as exc:
             raise FmuError(f"{self.label}: could not be {stage}: {_call_text(exc)}{self.said()}") from None
+
+    def _register_release(self):
+        pythonfmu.register(self, self.md, self.fmu.dll)
 
     def _apply(self, apply_start_values, s):
         try:
@@ -253,16 +207,20 @@ class Unit:
         return f" (the unit said: {' | '.join(texts)})" if texts else ""
 
     def close(self):
-        """Terminate and free the instance, remove its unpacked files."""
+        """Terminate and free the instance, remove its unpacked files.  A pythonfmu unit's library is released
+        before fmpy closes it (:mod:`icosim.fmi.pythonfmu`), also after a fatal status, which leaves it loaded."""
         fmu, self.fmu = getattr(self, "fmu", None), None
-        if fmu is not None and self.failed < 4:
-            if not self.failed:
-                try:
-                    fmu.terminate()
-                except Exception:
-                    pass
+        release = pythonfmu.take(self)
+        if fmu is not None and not self.failed:
             try:
-                fmu.freeInstance()
+                fmu.terminate()
+            except Exception:
+                pass
+        if release is not None:
+            release()  # while the library is loaded: fmpy's dlclose may unload it
+        if fmu is not None and self.failed < 4:
+            try:
+                fmu.freeInstance()  # fmi2FreeInstance, then dlclose
             except Exception:
                 pass
         guard.unregister(self)
