@@ -9,7 +9,7 @@
      H = 1e-5 ... 1e-2 s), from a ``git worktree``.
    Prints wall and CPU seconds and the ratios new / float64-only and new / old (the target of the
    floor-free errors: at most 1.5x the old convergence part).
-2. Per-step costs of the co-simulation stepping: icosim.engine.macrostep.simulate against the linear-map
+2. Per-step costs of the co-simulation stepping: icosim.engine.run.simulate against the linear-map
    paths (float64 state stepping and the error recurrence), for a few schemes.
 
     python benchmarks/convergence.py [--old COMMIT] [--skip-workflow]

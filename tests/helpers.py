@@ -294,7 +294,7 @@ def growth_rate(prob, method, n_chunks=30, chunk=20, seed=0, **step_kw):
     """
     import numpy as np
 
-    from icosim.engine.macrostep import simulate
+    from icosim.engine.run import simulate
 
     rng = np.random.default_rng(seed)
     state = rng.standard_normal((2, 2))

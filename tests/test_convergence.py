@@ -71,7 +71,7 @@ def test_partial_nrmse_of_a_run_match_an_independent_computation():
         c = setup.model(H).coefficients()
         prob = icosim.LinearCosimulation(c, "fd", 1)
         sol = icosim.engine.exact.MonolithicSolution(c, setup.x0, setup.v0 * H)
-        traj = icosim.engine.macrostep.simulate(prob, m, *icosim.engine.exact.consistent_start(prob, sol), int(N))
+        traj = icosim.engine.run.simulate(prob, m, *icosim.engine.exact.consistent_start(prob, sol), int(N))
         states = np.array(traj.states[1:])  # (N, subsystem, (x, v_bar))
         lam = np.array(traj.coupling[1:])[:, 0]  # lambda_c is the first fd coupling variable
         exact = sol.state(np.arange(1, N + 1, dtype=float))

@@ -29,7 +29,7 @@ from icosim import (
 from icosim.engine.backends import Float64, Multiprecision
 from icosim.engine.exact import MonolithicSolution, consistent_start
 from icosim.engine.lagrange import corrector_nodes, predictor_nodes, weights_at
-from icosim.engine.macrostep import simulate
+from icosim.engine.run import simulate
 from icosim.engine.spectral import amplification_matrix
 from icosim.engine.subsystems import OscillatorSubsystem
 

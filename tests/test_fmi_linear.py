@@ -12,9 +12,9 @@ fmpy = pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)"
 skip_without_c_toolchain()
 
 from icosim.engine.linear_problem import LinearCosimulation  # noqa: E402
-from icosim.engine.macrostep import simulate  # noqa: E402
 from icosim.engine.methods import engine_method, make_method  # noqa: E402
 from icosim.engine.model import PhysicalModel  # noqa: E402
+from icosim.engine.run import simulate  # noqa: E402
 from icosim.engine.spectral.radius import spectral_radius_float64  # noqa: E402
 from icosim.fmi.orders import order_scene  # noqa: E402
 from icosim.fmi.run import run_scene  # noqa: E402

@@ -11,8 +11,9 @@ pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
 skip_without_c_toolchain()
 
 from icosim.cli import main  # noqa: E402
-from icosim.engine.macrostep import macro_step, simulate  # noqa: E402
+from icosim.engine.macrostep import macro_step  # noqa: E402
 from icosim.engine.methods import make_method  # noqa: E402
+from icosim.engine.run import simulate  # noqa: E402
 from icosim.fmi.problem import FmuCosimulation  # noqa: E402
 from icosim.fmi.run import open_units  # noqa: E402
 from icosim.fmi.scene import load_scene  # noqa: E402

@@ -19,9 +19,9 @@ pytest.importorskip("pythonfmu", reason="the Python unit is exported with python
 skip_without_c_toolchain()
 
 from icosim.engine.linear_problem import LinearCosimulation  # noqa: E402
-from icosim.engine.macrostep import simulate  # noqa: E402
 from icosim.engine.methods import engine_method, make_method  # noqa: E402
 from icosim.engine.model import PhysicalModel  # noqa: E402
+from icosim.engine.run import simulate  # noqa: E402
 from icosim.fmi.run import run_scene  # noqa: E402
 
 SCENE = ROOT / "config" / "scenes" / "two_mass_python.yaml"

@@ -156,9 +156,9 @@ def test_unstable_scene_against_the_engine(monkeypatch):
     """two_mass_unstable: the predicted rho is the engine's spectral radius for the typed-in parameters, the
     measured growth is that rho, and the built-in difference is that of an independent built-in run."""
     from icosim.engine.linear_problem import LinearCosimulation
-    from icosim.engine.macrostep import simulate
     from icosim.engine.methods import engine_method, make_method
     from icosim.engine.model import PhysicalModel
+    from icosim.engine.run import simulate
     from icosim.engine.spectral.radius import spectral_radius_float64
     from icosim.fmi.run import run_dataset, run_scene
     from icosim.fmi.scene import load_scene
@@ -191,9 +191,9 @@ def test_order_case_against_the_exact_solution():
     the exact solution, the FMU errors agree with them, and the order is about 3."""
     from icosim.engine.exact import MonolithicSolution, consistent_start
     from icosim.engine.linear_problem import LinearCosimulation
-    from icosim.engine.macrostep import simulate
     from icosim.engine.methods import engine_method, make_method
     from icosim.engine.model import PhysicalModel
+    from icosim.engine.run import simulate
     from icosim.fmi.orders import order_case
 
     model = dict(m1=1.0, m2=2.0, c1=1000.0, c2=1000.0, d1=10.0, d2=10.0)

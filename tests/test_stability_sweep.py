@@ -336,7 +336,7 @@ def test_force_displacement_instability_is_confirmed_by_time_stepping(method, lr
     exact start, plain time stepping grows by the panel's rho per macro step."""
     from icosim import LinearCosimulation
     from icosim.engine.exact import MonolithicSolution, consistent_start
-    from icosim.engine.macrostep import simulate
+    from icosim.engine.run import simulate
 
     s = spec(
         figure="13",

@@ -50,7 +50,7 @@ class PointTimeout(ArithmeticError):
 class StepFailure(RuntimeError):
     """A macro step could not be computed (e.g. a subsystem integration failed).
 
-    :func:`icosim.engine.macrostep.simulate` records it as a *failed* run, distinct from a diverged one:
+    :func:`icosim.engine.run.simulate` records it as a *failed* run, distinct from a diverged one:
     a failure says nothing about the stability of the coupling.
     """
 

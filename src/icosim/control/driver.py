@@ -19,7 +19,7 @@ estimate.
 **Acceptance.**  A step's error norm is the larger of the predictor-corrector
 estimate (:func:`~.controller.pc_estimate`) and the problem's own part
 ``extra_error(state)`` (e.g. the pendulum's joint drift over its tolerance); a step
-is accepted when it is at most 1.  A step that ``check`` calls diverged (it
+is accepted when it is at most 1.  A step that the observer calls diverged (it
 returns a reason) or that cannot be computed (a
 :class:`~icosim.errors.StepFailure` or a singular linear solve) counts as
 rejected (err = inf); at ``H_min`` the run stops (status ``diverged`` or
@@ -76,7 +76,7 @@ def adaptive_macro_steps(
     controller: StepController,
     tol: float,
     restart: Callable,
-    check: Callable | None = None,
+    observe: Callable | None = None,
     extra_error: Callable | None = None,
     on_accept: Callable | None = None,
     scheme=JACOBI,
@@ -88,8 +88,8 @@ def adaptive_macro_steps(
 
     ``state`` and ``history`` are the start (``history`` at the spacing ``H0``);
     ``restart(H)`` gives the starting history at spacing ``H``;
-    ``check(state, history, y)`` a reason why a step diverged, or None (as for
-    :func:`icosim.engine.macrostep.simulate`); ``extra_error(state)`` the problem's
+    ``observe(n, state, history, y)`` a reason why the candidate step ``n`` diverged, or None (the observer
+    of :func:`icosim.engine.run.simulate`); ``extra_error(state)`` the problem's
     part of the error norm at an accepted candidate (default: none);
     ``on_accept(state, history, y)`` is called after each accepted step (to store
     series).  ``tol`` scales the predictor-corrector estimate; ``iterations``,
@@ -115,7 +115,7 @@ def adaptive_macro_steps(
                 state_new, hist_new, y = macro_step(
                     problem, method, state, history, scheme=scheme, iterations=iterations, tol=corrector_tol
                 )
-                diverged = check(state_new, hist_new, y) if check is not None else None
+                diverged = observe(len(steps) + 1, state_new, hist_new, y) if observe is not None else None
             except (StepFailure, np.linalg.LinAlgError) as exc:
                 failure, diverged = str(exc) or type(exc).__name__, None
             if failure or diverged:

@@ -12,7 +12,7 @@ obtains the amplification matrix, from the very macro-step algorithm).
   its size, so there is no round-off floor (NRMSE down to 1e-22 and below).
 * ``stepping="matrix"`` iterates the float64 matrix on the state and subtracts
   the exact solution: a floor near NRMSE ~ 1e-11 (kept to show it).
-* ``stepping="simulate"`` runs :func:`icosim.engine.macrostep.simulate` (float64, the
+* ``stepping="simulate"`` runs :func:`icosim.engine.run.simulate` (float64, the
   same floor, ~100x slower).
 
 All three agree up to their round-off (tested, and the error path against
@@ -41,7 +41,7 @@ import numpy as np
 from ..engine import exact
 from ..engine.decompositions import get_decomposition
 from ..engine.linear_problem import LinearCosimulation
-from ..engine.macrostep import simulate
+from ..engine.run import simulate
 from ..engine.schemes import JACOBI, get_scheme
 from ..engine.spectral import amplification_matrix, spectral_radius
 from ..errors import ParameterError
@@ -63,7 +63,7 @@ def iterate_linear_map(M, w0, n_steps: int, *, bound: float | None = None, block
 
     Blocks of ``block`` steps are formed at once from the powers
     ``M^0 ... M^(block-1)`` (vectorised), the block start advances by
-    ``M^block``.  Divergence is judged like :func:`icosim.engine.macrostep.simulate`:
+    ``M^block``.  Divergence is judged like :func:`icosim.engine.run.simulate`:
     the first ``n`` whose first four entries (the subsystem states) are not
     finite or exceed ``bound`` in magnitude.
 

@@ -2,7 +2,7 @@
 
 Each configuration of ``convergence.work_precision.configurations`` (a method, its
 parameters, a decomposition and ``k``, with the paper's Jacobi scheme) is timed on the engine's
-own macro-step loop (:func:`icosim.engine.macrostep.simulate`) at every stable step
+own macro-step loop (:func:`icosim.engine.run.simulate`) at every stable step
 size; the error is read from the panel datasets, never recomputed.  The
 subsystems of the linear model are integrated exactly, so the counted work per
 macro step (:func:`step_cost`) is what transfers to numerically integrated
@@ -17,8 +17,9 @@ import numpy as np
 
 from ..engine import exact
 from ..engine.linear_problem import LinearCosimulation
-from ..engine.macrostep import macro_step, simulate
+from ..engine.macrostep import macro_step
 from ..engine.methods import get_spec, parameter_units, parameters
+from ..engine.run import simulate
 from ..errors import ParameterError
 from .experiment import Setup, dimensional_method, method_attrs, units_summary
 from .panels import effective_params, figure_panels
@@ -39,7 +40,7 @@ def time_macro_steps(
     repeats: int = 3,
     warmup_steps: int = 5,
 ) -> dict:
-    """CPU time of the co-simulation stepping (:func:`icosim.engine.macrostep.simulate`).
+    """CPU time of the co-simulation stepping (:func:`icosim.engine.run.simulate`).
 
     The problem is built once (its set-up, the subsystem propagators, is timed
     separately: it does not grow with the simulated time); after a warm-up of
@@ -208,7 +209,7 @@ def work_precision(entries, datasets: dict, setup: Setup, *, steps=20, repeats=3
                 ("configuration", "H"),
                 per_step,
                 {
-                    "long_name": "CPU time of one macro step of icosim.engine.macrostep.simulate (min of repeats)",
+                    "long_name": "CPU time of one macro step of icosim.engine.run.simulate (min of repeats)",
                     "units": "s",
                 },
             ),
@@ -270,7 +271,7 @@ def work_precision(entries, datasets: dict, setup: Setup, *, steps=20, repeats=3
         steps=steps,
         repeats=repeats,
         warmup_steps=warmup_steps,
-        timed="icosim.engine.macrostep.simulate: the engine's macro-step loop (predictor, corrector, "
+        timed="icosim.engine.run.simulate: the engine's macro-step loop (predictor, corrector, "
         "projection) of the linear test model; problem set-up excluded (setup_seconds)",
         cost_caveat="the subsystems of the linear test model are integrated exactly (matrix "
         "exponential blocks), so the timed cost is the coupling algorithm's Python overhead and nearly "

@@ -13,14 +13,11 @@ problem's :attr:`~icosim.engine.problem.CosimulationProblem.work`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from ..errors import StepFailure
 from .schemes import JACOBI, N_SUBSYSTEMS, get_scheme
 
-__all__ = ["macro_step", "simulate", "Trajectory"]
+__all__ = ["macro_step"]
 
 
 def macro_step(problem, method, state, history, *, scheme=JACOBI, iterations: int = 1, tol: float | None = None):
@@ -84,58 +81,3 @@ def macro_step(problem, method, state, history, *, scheme=JACOBI, iterations: in
 
 def _max_abs(values):
     return float(np.max(np.abs(np.asarray(values, dtype=float)))) if np.size(values) else 0.0
-
-
-@dataclass
-class Trajectory:
-    """States, coupling variables and outputs at ``T_0 ... T_n``.
-
-    ``states[n]``, ``coupling[n]`` and ``outputs[n]`` belong to ``T_n``
-    (``outputs[0]`` is None: no step has produced it).  The run ends early
-    when step ``n`` diverges (``diverged_at = n``) or fails (``failed_at = n``);
-    ``reason`` says why.  The lists then end at the last good step.
-    """
-
-    states: list
-    coupling: list
-    outputs: list
-    diverged_at: int | None = None
-    failed_at: int | None = None
-    reason: str | None = None
-    error: BaseException | None = None  # what a failed step raised
-
-
-def simulate(problem, method, state, history, n_steps: int, *, bound: float | None = None, check=None, **step_kw):
-    """Run ``n_steps`` macro steps from ``state`` and the coupling history.
-
-    A step diverges when its state is not finite, its magnitude exceeds
-    ``bound``, or ``check(state, history, y)`` returns a reason (a string;
-    ``check`` is called after every step, so it can also show progress);
-    a step fails when it raises :class:`StepFailure` or a singular linear
-    system (:class:`numpy.linalg.LinAlgError`).  Either stops the run and
-    is recorded: an unstable run is reported, never silently continued.
-    ``step_kw`` go to :func:`macro_step` (``scheme``, ``iterations``, ``tol``).
-    """
-    get_scheme(step_kw.get("scheme", JACOBI)).check_decomposition(problem.decomposition)
-    states, coupling, outputs = [state], [history[..., 0, :]], [None]
-    diverged = failed = reason = error = None
-    for n in range(1, n_steps + 1):
-        try:
-            state, history, y = macro_step(problem, method, state, history, **step_kw)
-        except (StepFailure, np.linalg.LinAlgError) as exc:  # e.g. a singular coupling solve
-            failed, reason, error = n, str(exc) or type(exc).__name__, exc
-            break
-        mag = np.max(np.abs(np.asarray(state, dtype=float)))
-        if not np.isfinite(mag):
-            diverged, reason = n, "state not finite"
-        elif bound is not None and mag > bound:
-            diverged, reason = n, f"|state| > {bound:g}"
-        elif check is not None:
-            reason = check(state, history, y)
-            diverged = n if reason else None
-        if diverged:
-            break
-        states.append(state)
-        coupling.append(history[..., 0, :])
-        outputs.append(y)
-    return Trajectory(states, coupling, outputs, diverged, failed, reason, error)

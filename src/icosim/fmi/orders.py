@@ -13,9 +13,9 @@ import numpy as np
 from ..engine.decompositions import get_decomposition
 from ..engine.exact import MonolithicSolution, consistent_start
 from ..engine.linear_problem import LinearCosimulation
-from ..engine.macrostep import simulate
 from ..engine.methods import engine_method, make_method
 from ..engine.model import PhysicalModel
+from ..engine.run import simulate
 from ..io.dataset import DatasetDict
 from ..order_fit import asymptotic_order
 from .config import case_label

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..engine.decompositions import get_decomposition
-from ..engine.macrostep import simulate
+from ..engine.run import simulate
 from ..engine.schemes import get_scheme, standard_schemes
 from .build import build_unit, is_source_dir
 from .errors import FmuError
@@ -202,7 +202,7 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
     """Run a scene (a :class:`~icosim.fmi.scene.Scene` or a path) to ``t_end``.
 
     The units are opened and checked (:func:`open_units`), the start made consistent (:func:`consistent_start`),
-    then the engine's run loop (:func:`icosim.engine.macrostep.simulate`) takes the macro steps.  A unit's
+    then the engine's run loop (:func:`icosim.engine.run.simulate`) takes the macro steps.  A unit's
     refused step or an output that is not finite raises :class:`~icosim.fmi.errors.UnitStepError` (nothing is
     returned); a state that is not finite or beyond :func:`divergence_bound` ends the run with
     ``status = "diverged"`` and the step.  ``progress(n_done)`` is called after each step.
@@ -224,12 +224,10 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
             sensitivities=c["sensitivities"],
         )
         start = consistent_start(scene, problem)
-        done = [0]
 
-        def step_done(state, history, y):
-            done[0] += 1
+        def step_done(n, state, history, y):
             if progress is not None:
-                progress(done[0])
+                progress(n)
 
         with np.errstate(over="ignore", invalid="ignore"):  # a diverging run is reported, not warned about
             traj = simulate(
@@ -241,7 +239,7 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
                 scheme=c["scheme"],
                 iterations=c["iterations"],
                 bound=divergence_bound(scene, start.state),
-                check=step_done,
+                observe=step_done,
             )
         if traj.failed_at is not None:
             raise traj.error

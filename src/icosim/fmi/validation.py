@@ -24,9 +24,9 @@ import numpy as np
 
 from ..engine.decompositions import get_decomposition
 from ..engine.linear_problem import LinearCosimulation
-from ..engine.macrostep import simulate
 from ..engine.methods import make_method
 from ..engine.model import PhysicalModel
+from ..engine.run import simulate
 from ..io.dataset import DatasetDict
 from .config import case_label
 from .errors import SceneError

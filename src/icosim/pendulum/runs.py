@@ -1,6 +1,6 @@
 """A whole co-simulation run of the pendulum: to the end time, or to divergence or failure.
 
-The run goes through :func:`icosim.engine.macrostep.simulate`; it *diverges* at the
+The run goes through :func:`icosim.engine.run.simulate`; it *diverges* at the
 first macro step beyond a bound (or not finite) and *fails* at the first step
 that cannot be computed (a :class:`~icosim.errors.StepFailure`: it says
 nothing about stability).  The stored series end at the step before.
@@ -27,8 +27,8 @@ import numpy as np
 from ..control.controller import StepController
 from ..control.driver import adaptive_macro_steps
 from ..engine.decompositions import get_decomposition
-from ..engine.macrostep import simulate
 from ..engine.methods import CouplingMethod
+from ..engine.run import simulate
 from ..engine.schemes import JACOBI, get_scheme
 from ..errors import ParameterError, StepFailure
 from .integrator.compiled_step import warm_up
@@ -169,7 +169,7 @@ def run_cosimulation(
     max_multiplier: float = 1e3,
     max_rate: float = 1e2,
 ) -> RunResult:
-    """Co-simulate from ``t = 0`` to ``t_end`` with macro step ``H`` (:func:`icosim.engine.macrostep.simulate`).
+    """Co-simulate from ``t = 0`` to ``t_end`` with macro step ``H`` (:func:`icosim.engine.run.simulate`).
 
     The run *diverges* at the first macro step whose state, coupling variables
     or outputs are not finite, whose joint constraint (after the step or after
@@ -203,8 +203,8 @@ def run_cosimulation(
 
     bounds = dict(max_constraint=max_constraint, max_multiplier=max_multiplier, max_rate=max_rate)
 
-    def check(state, history, y):
-        """Reason for divergence of a step, or None."""
+    def check(n, state, history, y):
+        """Reason for divergence of step ``n``, or None."""
         return divergence_reason(problem, state, history[0], y, **bounds)
 
     if problem.compiled:
@@ -218,7 +218,7 @@ def run_cosimulation(
             state,
             history,
             n_steps,
-            check=check,
+            observe=check,
             iterations=iterations,
             tol=tol,
             scheme=scheme,
@@ -322,7 +322,7 @@ def run_adaptive(
     g0 = joint_constraint(params, state)
     rows = [_series_row(params, state, g0, lam0)]
 
-    def check(state, history, y):
+    def check(n, state, history, y):
         return divergence_reason(problem, state, history[0], y, **bounds)
 
     def drift(state):
@@ -343,7 +343,7 @@ def run_adaptive(
         controller=ctl,
         tol=tol,
         restart=lambda H: consistent_history(params, dec, k, H),
-        check=check,
+        observe=check,
         extra_error=drift,
         on_accept=store,
         scheme=scheme,

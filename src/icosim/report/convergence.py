@@ -29,7 +29,7 @@ STEPPING_TEXT = {
     "so there is no round-off floor. Checked against 40-digit mpmath time stepping (tests).",
     "matrix": " — the float64 state is iterated with the amplification matrix and the exact solution subtracted "
     "(a round-off floor near NRMSE ~ 1e-11).",
-    "simulate": " — icosim.engine.macrostep.simulate in float64 (a round-off floor near NRMSE ~ 1e-11).",
+    "simulate": " — icosim.engine.run.simulate in float64 (a round-off floor near NRMSE ~ 1e-11).",
 }
 
 

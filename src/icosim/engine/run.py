@@ -1,0 +1,85 @@
+"""The run loop: macro steps one after another (:func:`icosim.engine.macrostep.macro_step`) until the end, a
+divergence or a failure, with an observer after each step.
+
+Every run of the package goes through :func:`simulate`: the linear model's, the pendulum's and the FMU scenes'.
+The observer sees each step (progress, a problem's own divergence test) and may stop the run; the loop records
+the states, coupling variables and outputs (or only the last, for long runs), and a step that fails or diverges
+ends the run, recorded, never silently continued.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import StepFailure
+from .macrostep import macro_step
+from .schemes import JACOBI, get_scheme
+
+__all__ = ["simulate", "Trajectory"]
+
+
+@dataclass
+class Trajectory:
+    """States, coupling variables and outputs at ``T_0 ... T_n``.
+
+    ``states[n]``, ``coupling[n]`` and ``outputs[n]`` belong to ``T_n``
+    (``outputs[0]`` is None: no step has produced it).  The run ends early
+    when step ``n`` diverges (``diverged_at = n``) or fails (``failed_at = n``);
+    ``reason`` says why and ``error`` holds what a failed step raised.  The
+    lists then end at the last good step.  A run that keeps only its last step
+    (``record=False``) has lists of length 2: the start and the last step.
+    """
+
+    states: list
+    coupling: list
+    outputs: list
+    diverged_at: int | None = None
+    failed_at: int | None = None
+    reason: str | None = None
+    error: BaseException | None = None  # what a failed step raised
+    steps: int = 0  # macro steps taken and kept
+
+
+def simulate(
+    problem, method, state, history, n_steps: int, *, bound: float | None = None, observe=None, record=True, **step_kw
+):
+    """Run ``n_steps`` macro steps from ``state`` and the coupling history.
+
+    A step diverges when its state is not finite, its magnitude exceeds
+    ``bound``, or the observer ``observe(n, state, history, y)`` -- called
+    after every step ``n``, so it can also show progress -- returns a reason
+    (a string); a step fails when it raises :class:`StepFailure` or a singular
+    linear system (:class:`numpy.linalg.LinAlgError`).  Either stops the run
+    and is recorded: an unstable run is reported, never silently continued.
+    ``record=False`` keeps only the start and the last step.  ``step_kw`` go to
+    :func:`~icosim.engine.macrostep.macro_step` (``scheme``, ``iterations``, ``tol``).
+    """
+    get_scheme(step_kw.get("scheme", JACOBI)).check_decomposition(problem.decomposition)
+    states, coupling, outputs = [state], [history[..., 0, :]], [None]
+    diverged = failed = reason = error = None
+    done = 0
+    for n in range(1, n_steps + 1):
+        try:
+            state, history, y = macro_step(problem, method, state, history, **step_kw)
+        except (StepFailure, np.linalg.LinAlgError) as exc:  # e.g. a singular coupling solve
+            failed, reason, error = n, str(exc) or type(exc).__name__, exc
+            break
+        mag = np.max(np.abs(np.asarray(state, dtype=float)))
+        if not np.isfinite(mag):
+            diverged, reason = n, "state not finite"
+        elif bound is not None and mag > bound:
+            diverged, reason = n, f"|state| > {bound:g}"
+        elif observe is not None:
+            reason = observe(n, state, history, y)
+            diverged = n if reason else None
+        if diverged:
+            break
+        if not record and len(states) > 1:
+            states.pop(), coupling.pop(), outputs.pop()
+        states.append(state)
+        coupling.append(history[..., 0, :])
+        outputs.append(y)
+        done = n
+    return Trajectory(states, coupling, outputs, diverged, failed, reason, error, done)
