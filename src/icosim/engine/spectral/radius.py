@@ -1,20 +1,30 @@
 """Spectral radius of the amplification matrix: float64 with an error estimate, and mpmath.
 
 float64 runs vectorised over the whole parameter grid.  Each float64 value
-comes with an error estimate obtained by re-running the same computation with
-the inputs disturbed at the size of their rounding errors: the exponential
-blocks of both subsystems (absolute error ~ u ||E||, the normwise accuracy of
-scaling-and-squaring) and the amplification matrix itself (backward error of
-the eigensolver, ~ u ||M||).  The spread of the disturbed spectral radii,
-times a safety factor, is the estimate.  A second disturbed run is made only
-where the first one's estimate, ``DOUBT`` times over, reaches ``|rho - 1|``
-(a fraction of a percent of a grid: the points near 1, which are certified
-anyway, and the ill-conditioned ones); elsewhere the verdict does not hang on
-it.  It needs no model of *why* float64
-fails: cancellation in the corrections (sensitivities that both decay like
-``exp(lr)``), underflow, or eigenvalues clustered at 1 near the origin all show
-up as a large spread.  The multiprecision path recomputes one point with every
-derived quantity formed at ``digits`` significant digits.
+comes with an error estimate of two parts.
+
+* A rounding floor: what rounding errors of size ``u nu ||M||_F`` move the
+  eigenvalue of largest modulus, to first order, at most: ``kappa`` times that,
+  ``kappa`` the eigenvalue's condition number.  Such errors are the
+  eigensolver's backward error (a small multiple of ``n u ||M||``) and the
+  rounding of ``M`` where it is normwise, inherited from the exponential blocks
+  ``E = exp(A)`` of the subsystems, which scaling and squaring computes to
+  about ``u ||A|| ||E||`` (its squarings grow with ``||A||``), hence
+  ``nu = max(1, ||A||_1)`` over the subsystems.
+* The spread of re-runs with the inputs disturbed at the size of their rounding
+  errors: the exponential blocks (absolute noise ``~ u ||E||``) and the
+  amplification matrix itself (``~ u ||M||``), times a safety factor.  It needs
+  no model of *why* float64 fails: cancellation in the corrections
+  (sensitivities that both decay like ``exp(lr)``), underflow, or eigenvalues
+  clustered at 1 near the origin all show up as a large spread.  A run's effect
+  on ``rho`` is a random draw, which can come out arbitrarily small; the floor
+  does not rest on it.
+
+A second disturbed run is made only where the first one's estimate, ``DOUBT``
+times over, reaches ``|rho - 1|`` (a fraction of a percent of a grid: the
+points near 1, which are certified anyway, and the ill-conditioned ones);
+elsewhere the verdict does not hang on it.  The multiprecision path recomputes
+one point with every derived quantity formed at ``digits`` significant digits.
 
 >>> from icosim import TestModel, make_method
 >>> m, point = make_method("weighted", a=1, b=1), TestModel(-0.05, 0.5)
@@ -35,9 +45,10 @@ from ..decompositions import get_decomposition
 from ..linear_problem import LinearCosimulation
 from ..model import TestModel
 from ..schemes import JACOBI, get_scheme
+from ..subsystems import FORCE
 from .matrix import _matrix_from_problem, _problem, as_coefficients
 
-__all__ = ["spectral_radius_float64", "spectral_radius_mp", "SAFETY", "DISTURBANCE", "DOUBT"]
+__all__ = ["spectral_radius_float64", "spectral_radius_mp", "SAFETY", "DISTURBANCE", "DOUBT", "FLOOR"]
 
 
 #: Safety factor on the measured spread of disturbed float64 results.
@@ -52,9 +63,49 @@ DISTURBANCE = 4.0
 DOUBT = 1000.0
 
 
+#: The rounding floor, in units of ``eps * max(kappa * nu * ||M||_F, 1)`` (module docstring): the backward
+#: error of the eigensolver and the rounding of ``M``, each a small multiple of ``u nu ||M||_F`` for the
+#: matrices of a few to a dozen rows here.
+FLOOR = 32.0
+
+
 def _spectral_radius_of(M, backend):
     ev = backend.eigvals(M)
     return np.max(np.abs(ev), axis=-1)
+
+
+def _radius_and_condition(M):
+    """Spectral radius of each float64 matrix and the condition number of the eigenvalue that attains it.
+
+    ``kappa = |x| |y| / |y^T x|`` (``M x = lambda x``, ``M^T y = lambda y``): a perturbation ``E`` moves that
+    eigenvalue by at most ``kappa ||E||_2`` to first order.  The eigenvalues are those ``eigvals`` returns
+    (LAPACK's ``geev`` runs the same Hessenberg QR with or without eigenvectors).  The left eigenvector is
+    taken from the eigenvectors of ``M^T`` (the eigenvalue nearest), not from the inverse of the right
+    ones: a defective eigenvalue elsewhere (the history's zeros) leaves those without an inverse.
+    ``kappa`` is capped at ``1/sqrt(eps)``: an eigenvalue that ill-conditioned is, at float64's rounding,
+    as good as defective, and a perturbation ``delta`` moves it by about ``sqrt(delta)`` (a 2 x 2 Jordan
+    block), which the cap gives; a larger Jordan block moves it further, which the disturbed runs see.
+    """
+    w, X = np.linalg.eig(M)
+    i = np.argmax(np.abs(w), axis=-1)[..., None]
+    lam = np.take_along_axis(w, i, axis=-1)
+    x = np.take_along_axis(X, i[..., None, :], axis=-1)[..., 0]
+    wt, Y = np.linalg.eig(np.swapaxes(M, -1, -2))
+    j = np.argmin(np.abs(wt - lam), axis=-1)[..., None]
+    y = np.take_along_axis(Y, j[..., None, :], axis=-1)[..., 0]
+    kappa = np.linalg.norm(x, axis=-1) * np.linalg.norm(y, axis=-1) / np.abs(np.sum(x * y, axis=-1))
+    return np.abs(lam[..., 0]), np.fmin(kappa, 1 / np.sqrt(np.finfo(float).eps))
+
+
+def _generator_norm(problem):
+    """``nu = max(1, ||A||_1)`` over the subsystems, ``A`` the matrix whose exponential a subsystem's blocks
+    are (per point; a kinematically driven subsystem's ``A`` has ones and zeros only)."""
+    nu = 1.0
+    for sub in problem.subsystems:
+        if sub.kind == FORCE:  # columns of A: k, 1 + delta, the gain, then the input's shift (ones)
+            nu = np.maximum(nu, np.maximum(np.abs(sub.stiffness), 1 + np.abs(sub.damping)))
+            nu = np.maximum(nu, np.abs(sub.gain))
+    return nu[..., 0] if np.ndim(nu) else nu  # without the axis the basis vectors ride on (length 1)
 
 
 def _disturbed(problem: LinearCosimulation, rng, rel):
@@ -110,15 +161,17 @@ def spectral_radius_float64(
         M = _matrix_from_problem(problem, method, scheme)
         finite = np.all(np.isfinite(M), axis=(-1, -2))
         M_safe = np.where(finite[..., None, None], M, 0.0)
-        rho = np.where(finite, _spectral_radius_of(M_safe, be), np.nan)
         if not error_estimate:
-            return rho, None
+            return np.where(finite, _spectral_radius_of(M_safe, be), np.nan), None
+        rho, kappa = _radius_and_condition(M_safe)
+        rho = np.where(finite, rho, np.nan)
         rng = np.random.default_rng(seed)
         rel = DISTURBANCE * be.eps
         spread = _disturbed_spread(problem, method, scheme, rho, rng, rel)
         # the second disturbed run only where the first one's estimate, ``doubt`` times over, reaches |rho - 1|:
         # elsewhere no second spread seen on the project's grids came near deciding (docs/engine.md)
-        floor = 2 * rel * np.maximum(rho, 1.0)
+        amplified = kappa * _generator_norm(problem) * np.linalg.norm(M_safe, axis=(-2, -1))  # kappa nu ||M||_F
+        floor = FLOOR * be.eps * np.maximum(amplified, 1.0)
         twice = np.isfinite(rho) & np.isfinite(spread) & ~(doubt * (SAFETY * spread + floor) < np.abs(rho - 1))
         if twice.any():
             points = coefficients.map(lambda a: np.broadcast_to(np.asarray(a, dtype=float), rho.shape)[twice])
