@@ -23,9 +23,9 @@ import time
 import numpy as np
 from _workflow import run_workflow, tree
 
-from icosim.convergence.experiment import Setup, dimensional_method
-from icosim.convergence.study import Study
-from icosim.convergence.work_precision import time_macro_steps
+from icosim.studies.convergence.experiment import Setup, dimensional_method
+from icosim.studies.convergence.study import Study
+from icosim.studies.convergence.work_precision import time_macro_steps
 
 SCHEMES = [
     ("baumgarte", {"index": 1, "mu": 5e-3}, "ff", 2),

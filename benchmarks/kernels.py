@@ -33,9 +33,9 @@ import numpy as np
 root, figure, out = sys.argv[1], sys.argv[2], sys.argv[3]
 import icosim
 assert icosim.__file__.startswith(sys.argv[4]), icosim.__file__
-from icosim.pendulum.replication.datasets import run_job
-from icosim.stability.datasets import stability_panel
-from icosim.stability.panels import figure_panels
+from icosim.studies.pendulum.datasets import run_job
+from icosim.studies.stability.datasets import stability_panel
+from icosim.studies.stability.panels import figure_panels
 P = yaml.safe_load(open(f"{root}/config/pendulum.yaml"))["pendulum"]
 S = yaml.safe_load(open(f"{root}/config/stability.yaml"))["stability"]
 times, results = {}, {}

@@ -3,7 +3,7 @@
     python benchmarks/netcdf_engines.py
 
 Three datasets typical of the results: a stability panel (101 x 101 grid, the
-float64 pass of :func:`icosim.stability.datasets.stability_panel`), a pendulum run
+float64 pass of :func:`icosim.studies.stability.datasets.stability_panel`), a pendulum run
 (3000 steps x 6 series) and a claims-like dataset of strings.  Each is written
 and read back ``REPEATS`` times per engine (best time kept), and read back with the
 other engine to show the files are interchangeable.
@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from icosim.stability.datasets import stability_panel
-from icosim.stability.panels import PanelSpec
+from icosim.studies.stability.datasets import stability_panel
+from icosim.studies.stability.panels import PanelSpec
 
 REPEATS = 5
 ENGINES = ("netcdf4", "h5netcdf")

@@ -3,11 +3,11 @@
 The co-simulation integrates each link per macro step for the predictor plus
 the finite-difference perturbations (one batched Radau call per link) and for
 the corrector (one more call per link), compiled with numba
-(icosim.pendulum.integrator.compiled); each run is also timed on the numpy reference path
-(``PendulumCosimulation.compiled = False``: icosim.pendulum.integrator.radau with the links'
+(icosim.problems.pendulum.integrator.compiled); each run is also timed on the numpy reference path
+(``PendulumCosimulation.compiled = False``: icosim.problems.pendulum.integrator.radau with the links'
 closures), side by side, for the compiled kernel's speed-up.  Its cost is set against the
 monolithic pendulum (minimal coordinates) solved with the *same integrator and
-tolerance* (``icosim.pendulum.integrator.radau``, Radau IIA, rtol = atol = 1e-6):
+tolerance* (``icosim.problems.pendulum.integrator.radau``, Radau IIA, rtol = atol = 1e-6):
 
 * ``monolithic, free steps``: one call over [0, T], the integrator picks its
   steps (what a monolithic simulation would cost);
@@ -35,12 +35,12 @@ from _timing import best_of  # noqa: E402  (benchmarks/ is on sys.path when run 
 from scipy.integrate import solve_ivp  # noqa: E402
 
 from icosim import make_method  # noqa: E402
-from icosim.pendulum.integrator.radau import radau_batch  # noqa: E402
-from icosim.pendulum.links import Link2  # noqa: E402
-from icosim.pendulum.model import PendulumParameters  # noqa: E402
-from icosim.pendulum.problem import PendulumCosimulation  # noqa: E402
-from icosim.pendulum.reference import Monolithic  # noqa: E402
-from icosim.pendulum.runs import run_cosimulation  # noqa: E402
+from icosim.problems.pendulum.integrator.radau import radau_batch  # noqa: E402
+from icosim.problems.pendulum.links import Link2  # noqa: E402
+from icosim.problems.pendulum.model import PendulumParameters  # noqa: E402
+from icosim.problems.pendulum.problem import PendulumCosimulation  # noqa: E402
+from icosim.problems.pendulum.reference import Monolithic  # noqa: E402
+from icosim.problems.pendulum.runs import run_cosimulation  # noqa: E402
 
 RUNS = [
     ("baumgarte", {"index": 1, "mu": 1e-3}, "ff", 1),
@@ -103,7 +103,7 @@ def main():
 
         t = best_of(cosim, max(1, args.repeat - 1))
         stats = cosim().stats
-        # the same run on the numpy reference path (icosim.pendulum.integrator.radau.radau_batch with the links' closures)
+        # the same run on the numpy reference path (icosim.problems.pendulum.integrator.radau.radau_batch with the links' closures)
         PendulumCosimulation.compiled = False
         try:
             t_numpy = best_of(cosim, max(1, args.repeat - 1))
@@ -131,7 +131,7 @@ def main():
     print(f"  monolithic, same integrator, macro grid : {results['monolithic_grid'] * 1e3:8.2f} ms")
     print(f"  monolithic, scipy solve_ivp Radau       : {results['scipy_radau_free'] * 1e3:8.2f} ms")
     print(
-        f"  one link over one macro step: scipy solve_ivp Radau {results['scipy_link_step'] * 1e6:.0f} us, icosim.pendulum.integrator.radau {results['icosim_link_step'] * 1e6:.0f} us"
+        f"  one link over one macro step: scipy solve_ivp Radau {results['scipy_link_step'] * 1e6:.0f} us, icosim.problems.pendulum.integrator.radau {results['icosim_link_step'] * 1e6:.0f} us"
     )
     print(
         f"{'co-simulation run':24s} {'time [s]':>9s} {'ms/step':>8s} {'numpy ms':>8s} {'speedup':>8s} "

@@ -343,7 +343,7 @@ def fmu_instance(unit, unzipdir, messages=None, name="unit"):
     logs is appended to the list ``messages`` as :class:`LogMessage`.  The caller frees the instance."""
     from fmpy import extract, read_model_description
 
-    from icosim.fmi.build import build_unit
+    from icosim.problems.fmu.build import build_unit
 
     fmu = build_unit(ROOT / "fmus" / unit, FMU_CACHE)
     md = read_model_description(str(fmu))
@@ -380,7 +380,7 @@ def fmu_instance(unit, unzipdir, messages=None, name="unit"):
 def scheme_panel_spec(figure, scheme, row, k, n=5):
     """A small stability panel of one coupling scheme (Baumgarte ff, float64 only; row 2 with am21 = 10),
     as the scheme comparison reads them."""
-    from icosim.stability.panels import PanelSpec
+    from icosim.studies.stability.panels import PanelSpec
 
     return PanelSpec.from_params(
         dict(

@@ -185,7 +185,7 @@ def test_outputs_as_integrated_away_from_the_origin(point, k, built, as_integrat
     50 digits (two arithmetics), and as the growth of plain time stepping (an independent route)."""
     from helpers import growth_rate
 
-    from icosim.engine.linear_problem import LinearCosimulation
+    from icosim.problems.linear.problem import LinearCosimulation
 
     model, method = TestModel(*point), make_method("projection")
     for scheme, want in ((GS12, built), ("gauss-seidel-12-as-integrated", as_integrated)):

@@ -1,8 +1,8 @@
 """``icosim advise``: every configuration for a physical two-mass system.
 
 Expected values come from an independent route: the Eq. (71) point worked out by hand from
-m, c, d and H (not through :class:`icosim.engine.model.PhysicalModel`), evaluated with
-:func:`icosim.engine.spectral.spectral_radius_float64` on a :class:`~icosim.engine.model.TestModel`.
+m, c, d and H (not through :class:`icosim.problems.linear.model.PhysicalModel`), evaluated with
+:func:`icosim.engine.spectral.spectral_radius_float64` on a :class:`~icosim.problems.linear.model.TestModel`.
 """
 
 import io
@@ -15,7 +15,7 @@ import pytest
 from icosim import TestModel, make_method, spectral_radius_float64
 from icosim.advise import Progress, TwoMassSystem, advice_records, advise, configurations
 from icosim.cli import main
-from icosim.engine.model import Coefficients
+from icosim.problems.linear.model import Coefficients
 
 SYSTEM = dict(m1=1.0, m2=2.0, c1=1e3, c2=2e3, d1=2.0, d2=4.0)
 ARGS = ["--m1", "1", "--m2", "2", "--c1", "1e3", "--c2", "2e3", "--d1", "2", "--d2", "4"]

@@ -1,4 +1,4 @@
-"""The claim machinery (icosim.claims.core) and the stability claims file.
+"""The claim machinery (icosim.verdicts) and the stability claims file.
 
 Synthetic panels with a known stable region test each check kind's pass /
 fail / undecided logic; one real coarse panel computed with the engine checks
@@ -12,13 +12,13 @@ import pytest
 import xarray as xr
 import yaml
 
-from icosim.claims.core import enforce_references, read_verdicts, reference_mismatches, select, write_verdicts
 from icosim.claims.registry import CHECKS, DEFAULTS, evaluate, evaluate_claim, load_claims, parse_claims
 from icosim.errors import ParameterError
 from icosim.report.claims import claims_table
-from icosim.stability.checks import grid_resolution, stable_share
-from icosim.stability.datasets import stability_panel
-from icosim.stability.panels import PanelSpec, figure_panels, figure_schemes
+from icosim.studies.stability.checks import grid_resolution, stable_share
+from icosim.studies.stability.datasets import stability_panel
+from icosim.studies.stability.panels import PanelSpec, figure_panels, figure_schemes
+from icosim.verdicts import enforce_references, read_verdicts, reference_mismatches, select, write_verdicts
 
 ROOT = Path(__file__).resolve().parents[1]
 CLAIMS_FILE = ROOT / "config" / "claims" / "stability.yaml"

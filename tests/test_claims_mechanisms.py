@@ -8,8 +8,8 @@ from a dataset.
 import pytest
 
 from icosim import TestModel, make_method
-from icosim.engine.model import PhysicalModel
 from icosim.engine.spectral import spectral_radius_mp
+from icosim.problems.linear.model import PhysicalModel
 
 BAUMGARTE_1 = make_method("baumgarte", index=1, mu=1)
 
@@ -56,8 +56,8 @@ def test_disagreements_with_the_paper_are_confirmed_by_time_stepping(method, dec
     import numpy as np
     from helpers import growth_rate
 
-    from icosim.engine.linear_problem import LinearCosimulation
     from icosim.engine.spectral import spectral_radius_float64
+    from icosim.problems.linear.problem import LinearCosimulation
 
     found = []  # (lr1, li1, rho_a)
     for lr1 in np.linspace(-1.9, -0.1, 7):
@@ -92,8 +92,8 @@ def test_pendulum_link2_is_the_heavier_at_the_joint_along_link1s_direction_of_mo
 
     from icosim.engine.methods import engine_method
     from icosim.engine.spectral import spectral_radius_float64
-    from icosim.pendulum.linearised import pendulum_test_model
-    from icosim.pendulum.model import PendulumParameters
+    from icosim.problems.pendulum.linearised import pendulum_test_model
+    from icosim.problems.pendulum.model import PendulumParameters
 
     p = PendulumParameters()
     n1 = np.array([-math.sin(p.phi1_0), math.cos(p.phi1_0)])
@@ -122,7 +122,7 @@ def test_gauss_seidel_coupling_systems_are_regular_over_the_plane(k):
     of Figs. 9-15 and with a ten times lighter subsystem 2: no solve of the Gauss-Seidel schemes is singular."""
     import numpy as np
 
-    from icosim.engine.linear_problem import LinearCosimulation
+    from icosim.problems.linear.problem import LinearCosimulation
 
     lr1, li1 = np.meshgrid(np.linspace(-2, 0, 41), np.linspace(0, 2, 41), indexing="ij")
     beta, gamma = 2.0, 1.0  # Baumgarte index 1, mu_bar = 1

@@ -1,4 +1,4 @@
-"""Unit tests of icosim.convergence: Eq. (72), the asymptotic order, stepping, unstable detection."""
+"""Unit tests of icosim.studies.convergence: Eq. (72), the asymptotic order, stepping, unstable detection."""
 
 from pathlib import Path
 
@@ -9,20 +9,26 @@ import yaml
 from helpers import validate_config
 
 import icosim
-import icosim.convergence.experiment
-import icosim.convergence.study
-import icosim.convergence.work_precision
+import icosim.studies.convergence.experiment
+import icosim.studies.convergence.study
+import icosim.studies.convergence.work_precision
 from icosim.claims.registry import load_claims, parse_claims
-from icosim.convergence.config import check_claims_against_config, study_from_config
-from icosim.convergence.curves import fastest_configurations
-from icosim.convergence.datasets import run_panel
-from icosim.convergence.experiment import Setup, dimensional_method, method_attrs, oscillation_summary, step_counts
-from icosim.convergence.metric import nrmse
-from icosim.convergence.panels import PanelSpec, figure_layout, figure_panels, figure_schemes
-from icosim.convergence.study import Study, iterate_linear_map
-from icosim.convergence.work_precision import resolve_configuration, step_cost, time_macro_steps
 from icosim.errors import ParameterError
 from icosim.order_fit import asymptotic_order, local_slopes
+from icosim.studies.convergence.config import check_claims_against_config, study_from_config
+from icosim.studies.convergence.curves import fastest_configurations
+from icosim.studies.convergence.datasets import run_panel
+from icosim.studies.convergence.experiment import (
+    Setup,
+    dimensional_method,
+    method_attrs,
+    oscillation_summary,
+    step_counts,
+)
+from icosim.studies.convergence.metric import nrmse
+from icosim.studies.convergence.panels import PanelSpec, figure_layout, figure_panels, figure_schemes
+from icosim.studies.convergence.study import Study, iterate_linear_map
+from icosim.studies.convergence.work_precision import resolve_configuration, step_cost, time_macro_steps
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -70,8 +76,8 @@ def test_partial_nrmse_of_a_run_match_an_independent_computation():
         m = dimensional_method("baumgarte", H, index=1, mu=5e-3)
         c = setup.model(H).coefficients()
         prob = icosim.LinearCosimulation(c, "fd", 1)
-        sol = icosim.engine.exact.MonolithicSolution(c, setup.x0, setup.v0 * H)
-        traj = icosim.engine.run.simulate(prob, m, *icosim.engine.exact.consistent_start(prob, sol), int(N))
+        sol = icosim.problems.linear.exact.MonolithicSolution(c, setup.x0, setup.v0 * H)
+        traj = icosim.engine.run.simulate(prob, m, *icosim.problems.linear.exact.consistent_start(prob, sol), int(N))
         states = np.array(traj.states[1:])  # (N, subsystem, (x, v_bar))
         lam = np.array(traj.coupling[1:])[:, 0]  # lambda_c is the first fd coupling variable
         exact = sol.state(np.arange(1, N + 1, dtype=float))
@@ -96,7 +102,7 @@ def test_partial_nrmse_of_a_run_match_an_independent_computation():
 def test_the_reference_in_pieces_is_the_exact_solution_at_once(monkeypatch):
     """Study.reference evaluates the exact solution a piece of times at a time (here pieces of 7, the last
     one short): bit for bit the exact solution at every T_N at once."""
-    monkeypatch.setattr(icosim.convergence.study, "REFERENCE_CHUNK", 7)
+    monkeypatch.setattr(icosim.studies.convergence.study, "REFERENCE_CHUNK", 7)
     setup = Setup(end_time=0.2)
     study = Study(setup, [100, 40])
     for i, (H, N) in enumerate(zip(study.H, study.n_steps)):
@@ -307,7 +313,7 @@ def test_panel_dataset_and_work_precision():
         {"23": {"method": "projection", "columns": [{}], "rows": [{}], "decompositions": ["ff"]}},
         [0, 1],
     )
-    wp = icosim.convergence.work_precision.work_precision(
+    wp = icosim.studies.convergence.work_precision.work_precision(
         entries, {(spec.scheme, "ff", "23", "all"): ds}, study.setup, steps=2, repeats=1, warmup_steps=1
     )
     cost = wp["cpu_seconds_per_simulated_second"].values
@@ -323,7 +329,7 @@ def test_panel_dataset_and_work_precision():
 def test_time_macro_steps_times_the_documented_runs(monkeypatch):
     """The timing runs what it says: one warm-up of `warmup_steps`, then `repeats` runs of `steps`
     macro steps of the engine's simulate, each from the exact consistent start."""
-    import icosim.convergence.work_precision as conv
+    import icosim.studies.convergence.work_precision as conv
 
     calls = []
     real = conv.simulate
@@ -551,7 +557,7 @@ def test_baumgarte_index1_k0_has_the_drift_mode_of_time_scale_mu(ratio):
     """
     mu = 1.0e-3
     H = ratio * mu
-    c = icosim.PhysicalModel(**icosim.convergence.experiment.PAPER_MODEL, H=H).coefficients()
+    c = icosim.PhysicalModel(**icosim.studies.convergence.experiment.PAPER_MODEL, H=H).coefficients()
     M = icosim.engine.spectral.amplification_matrix(
         c, icosim.make_method("baumgarte", beta=2 * mu / H, gamma=mu**2 / H**2), "ff", 0
     )

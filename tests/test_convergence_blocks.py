@@ -1,4 +1,4 @@
-"""The error recurrence in blocks (icosim.convergence.blocks) against every step formed one by one.
+"""The error recurrence in blocks (icosim.studies.convergence.blocks) against every step formed one by one.
 
 The block starts must be those of the plain block recurrence bit for bit (their rounding is compounded
 over the run, ~1e-9 of the NRMSE at 10^6 steps); the sums of squares and the growth check formed from
@@ -8,9 +8,9 @@ the block starts and a few matrices per run must be those of the steps themselve
 import numpy as np
 import pytest
 
-from icosim.convergence.blocks import QR_MAX_CANCELLATION, BlockErrors, error_recurrence, error_recurrences
-from icosim.convergence.experiment import Setup, dimensional_method
-from icosim.convergence.study import Study
+from icosim.studies.convergence.blocks import QR_MAX_CANCELLATION, BlockErrors, error_recurrence, error_recurrences
+from icosim.studies.convergence.experiment import Setup, dimensional_method
+from icosim.studies.convergence.study import Study
 
 
 def _recurrence(seed: int, rho: float, n: int = 7, cond: float = 0.3):

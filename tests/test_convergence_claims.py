@@ -24,10 +24,10 @@ from helpers import ROOT
 from snakemake.utils import update_config
 
 from icosim.claims.registry import evaluate, load_claims
-from icosim.convergence.config import study_from_config
-from icosim.convergence.curves import curve_label, curves
-from icosim.convergence.datasets import run_panel
-from icosim.convergence.panels import figure_panels
+from icosim.studies.convergence.config import study_from_config
+from icosim.studies.convergence.curves import curve_label, curves
+from icosim.studies.convergence.datasets import run_panel
+from icosim.studies.convergence.panels import figure_panels
 
 CLAIMS = load_claims(ROOT / "config" / "claims" / "convergence.yaml")
 CI_CLAIMS = [c for c in CLAIMS if c.ci]

@@ -1,4 +1,4 @@
-"""Floor-free errors (icosim.convergence.errors) against an independent 40-digit computation.
+"""Floor-free errors (icosim.studies.convergence.errors) against an independent 40-digit computation.
 
 The reference here is plain time stepping of the co-simulation in mpmath at 40
 significant digits (the engine's macro step with the Multiprecision backend,
@@ -12,14 +12,14 @@ import mpmath
 import numpy as np
 import pytest
 
-from icosim.convergence.errors import DEFECT_REL_ACCURACY, exact_extension, local_defect, propagate_errors
-from icosim.convergence.experiment import Setup, dimensional_method
-from icosim.convergence.study import Study
 from icosim.engine.backends import Ball, Multiprecision
 from icosim.engine.decompositions import get_decomposition
-from icosim.engine.linear_problem import LinearCosimulation
 from icosim.engine.macrostep import macro_step
 from icosim.engine.spectral import amplification_matrix
+from icosim.problems.linear.problem import LinearCosimulation
+from icosim.studies.convergence.errors import DEFECT_REL_ACCURACY, exact_extension, local_defect, propagate_errors
+from icosim.studies.convergence.experiment import Setup, dimensional_method
+from icosim.studies.convergence.study import Study
 
 #: Every method at every index of Figs. 21-23 (dimensional parameters), with the decompositions used.
 SCHEMES = [
@@ -143,7 +143,7 @@ def test_defect_is_proven_to_its_stated_accuracy(method, params, dec):
 def test_exact_extension_is_the_exact_solution_in_packed_variables():
     """w*_N = W z_N, stepped by E: the state rows are the exact state and the history rows the exact
     coupling variables at T_N, T_N-1, ... (from the closed-form monolithic solution, independently)."""
-    from icosim.engine.exact import MonolithicSolution
+    from icosim.problems.linear.exact import MonolithicSolution
 
     setup, H, k = Setup(), 2e-3, 2
     c = setup.model(H).coefficients()

@@ -8,10 +8,10 @@ import pytest
 import yaml
 from helpers import ROOT
 
-from icosim.convergence.config import study_from_config
-from icosim.convergence.experiment import dimensional_method
 from icosim.engine.spectral import amplification_matrix
 from icosim.order_fit import asymptotic_order, local_slopes
+from icosim.studies.convergence.config import study_from_config
+from icosim.studies.convergence.experiment import dimensional_method
 
 CFG = yaml.safe_load((ROOT / "config" / "convergence.yaml").read_text())["convergence"]
 FIT = CFG["fit"]

@@ -10,11 +10,11 @@ import pytest
 import yaml
 from helpers import copy_workflow, snakemake
 
-from icosim.convergence.datasets import run_panel
-from icosim.convergence.experiment import Setup, step_counts
-from icosim.convergence.panels import PanelSpec
-from icosim.convergence.study import Study
 from icosim.io.netcdf import write_netcdf
+from icosim.studies.convergence.datasets import run_panel
+from icosim.studies.convergence.experiment import Setup, step_counts
+from icosim.studies.convergence.panels import PanelSpec
+from icosim.studies.convergence.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -17,8 +17,8 @@ from icosim.io.netcdf import open_variables, provenance_attrs, write_netcdf
 
 
 def test_stability_panel(tmp_path):
-    from icosim.stability.datasets import stability_panel_data
-    from icosim.stability.panels import PanelSpec
+    from icosim.studies.stability.datasets import stability_panel_data
+    from icosim.studies.stability.panels import PanelSpec
 
     spec = PanelSpec(
         figure="9",
@@ -40,11 +40,11 @@ def test_stability_panel(tmp_path):
 
 
 def test_convergence_panel(tmp_path):
-    from icosim.convergence.curves import curve_label, curves
-    from icosim.convergence.datasets import curve_summaries, run_panel_data
-    from icosim.convergence.experiment import Setup, step_counts
-    from icosim.convergence.panels import PanelSpec
-    from icosim.convergence.study import Study
+    from icosim.studies.convergence.curves import curve_label, curves
+    from icosim.studies.convergence.datasets import curve_summaries, run_panel_data
+    from icosim.studies.convergence.experiment import Setup, step_counts
+    from icosim.studies.convergence.panels import PanelSpec
+    from icosim.studies.convergence.study import Study
 
     rows = ({"index": 1, "mu": 5e-3}, {"index": 2, "mu": 5e-3})
     spec = PanelSpec("21", "ff", "p", "baumgarte", {"mu": 5e-3}, rows, (0, 1))
@@ -63,8 +63,8 @@ SETTINGS = {
 
 
 def test_pendulum_run_and_reference(tmp_path):
-    from icosim.pendulum.model import PendulumParameters
-    from icosim.pendulum.replication.datasets import reference_dataset_data, run_job_data
+    from icosim.problems.pendulum.model import PendulumParameters
+    from icosim.studies.pendulum.datasets import reference_dataset_data, run_job_data
 
     for k, scheme in ((0, "jacobi"), (1, "gauss-seidel-12")):
         job = {
@@ -84,8 +84,8 @@ def test_pendulum_run_and_reference(tmp_path):
 
 
 def test_pendulum_trade_sweep_and_limits(tmp_path):
-    from icosim.pendulum.trade.stability_limit import limits_study_data
-    from icosim.pendulum.trade.sweep import sweep_group_data
+    from icosim.studies.trade.stability_limit import limits_study_data
+    from icosim.studies.trade.sweep import sweep_group_data
 
     ref = PENDULUM["trade"]["reference"]
     sweep = sweep_group_data(
@@ -98,9 +98,9 @@ def test_pendulum_trade_sweep_and_limits(tmp_path):
 
 
 def test_pendulum_trade_tolerance_and_baselines(tmp_path):
-    from icosim.pendulum.model import PendulumParameters
-    from icosim.pendulum.trade.baselines import linear_orders_dataset_data, monolithic_baselines_data
-    from icosim.pendulum.trade.tolerance import tolerance_study_data
+    from icosim.problems.pendulum.model import PendulumParameters
+    from icosim.studies.trade.baselines import linear_orders_dataset_data, monolithic_baselines_data
+    from icosim.studies.trade.tolerance import tolerance_study_data
 
     ref = PENDULUM["trade"]["reference"]
     configs = [{"method": "projection", "decomposition": "ff", "k": 1}]
@@ -118,7 +118,7 @@ def test_pendulum_trade_tolerance_and_baselines(tmp_path):
 
 
 def test_pendulum_adaptive(tmp_path):
-    from icosim.pendulum.trade.adaptive import adaptive_study_data
+    from icosim.studies.trade.adaptive import adaptive_study_data
 
     study = dict(
         PENDULUM["trade"]["adaptive"],
@@ -134,9 +134,9 @@ def test_pendulum_adaptive(tmp_path):
 
 
 def test_stability_scheme_shares(tmp_path):
-    from icosim.stability.checks import PANEL_VARIABLES
-    from icosim.stability.comparison import scheme_shares_data
-    from icosim.stability.datasets import stability_panel_data
+    from icosim.studies.stability.checks import PANEL_VARIABLES
+    from icosim.studies.stability.comparison import scheme_shares_data
+    from icosim.studies.stability.datasets import stability_panel_data
 
     def panel(figure, scheme, row, k):
         spec = scheme_panel_spec(figure, scheme, row, k, n=3)
@@ -163,9 +163,9 @@ def _can_run_units():
 @pytest.mark.skipif(not _can_run_units(), reason="running scenes needs fmpy, CMake and a C compiler")
 @pytest.mark.parametrize(("scene", "builtin"), [("two_mass_unstable", "linear"), ("double_pendulum_fd", "pendulum")])
 def test_fmi_scene_and_validation(tmp_path, monkeypatch, scene, builtin):
-    from icosim.fmi.run import run_dataset_data, run_scene
-    from icosim.fmi.scene import load_scene
-    from icosim.fmi.validation import scene_validation, scene_validation_data
+    from icosim.problems.fmu.run import run_dataset_data, run_scene
+    from icosim.problems.fmu.scene import load_scene
+    from icosim.studies.fmi.validation import scene_validation, scene_validation_data
 
     cache = ROOT / "build" / "fmus"
     monkeypatch.setenv("ICOSIM_FMU_CACHE", str(cache))
@@ -182,7 +182,7 @@ def test_fmi_scene_and_validation(tmp_path, monkeypatch, scene, builtin):
 
 @pytest.mark.skipif(not _can_run_units(), reason="running scenes needs fmpy, CMake and a C compiler")
 def test_fmi_orders(tmp_path):
-    from icosim.fmi.orders import order_case_data
+    from icosim.studies.fmi.orders import order_case_data
 
     model = dict(m1=1.0, m2=2.0, c1=1000.0, c2=1000.0, d1=10.0, d2=10.0)
     case = {"method": "projection", "decomposition": "ff", "k": 1}

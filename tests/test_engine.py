@@ -27,11 +27,11 @@ from icosim import (
     weighted_multiplier,
 )
 from icosim.engine.backends import Float64, Multiprecision
-from icosim.engine.exact import MonolithicSolution, consistent_start
 from icosim.engine.lagrange import corrector_nodes, predictor_nodes, weights_at
 from icosim.engine.run import simulate
 from icosim.engine.spectral import amplification_matrix
-from icosim.engine.subsystems import OscillatorSubsystem
+from icosim.problems.linear.exact import MonolithicSolution, consistent_start
+from icosim.problems.linear.subsystems import OscillatorSubsystem
 
 SCHEMES = engine_schemes()
 
@@ -345,7 +345,7 @@ def test_trajectory_converges_to_exact_monolithic_solution(method, dec, k, order
 def test_closed_form_2x2_exponential_matches_scipy(A):
     import scipy.linalg
 
-    from icosim.engine.exact import expm_2x2
+    from icosim.problems.linear.exact import expm_2x2
 
     A = np.array(A, dtype=float)
     ts = np.linspace(-3, 7, 23)

@@ -7,7 +7,7 @@ import pytest
 from icosim import TestModel, make_method
 from icosim.engine.spectral.policy import Certification
 from icosim.engine.spectral.radius import spectral_radius_float64, spectral_radius_mp
-from icosim.stability.panels import grid_axis
+from icosim.studies.stability.panels import grid_axis
 
 # the plane of Figs. 9-20 with its edges: the origin (a Jordan block at 1) and the undamped axis (rho = 1)
 LR, LI = np.meshgrid(np.linspace(-2, 0, 61), np.linspace(0, 2, 61), indexing="ij")

@@ -1,4 +1,4 @@
-"""Units checked before they are trusted (icosim.fmi.inspection, icosim.fmi.variables, icosim.fmi.measures): typed
+"""Units checked before they are trusted (icosim.problems.fmu.inspection, icosim.problems.fmu.variables, icosim.problems.fmu.measures): typed
 start values set with their own setters, a force input of the opposite sign, a unit without feedthrough, units of
 measure, FMI 3.0 array elements, an inconsistent start, the initial coupling, and every refusal as one line
 naming the unit, the key and the fix, exit status 2 and no dataset.
@@ -19,10 +19,10 @@ pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
 skip_without_c_toolchain()
 
 from icosim.cli import main  # noqa: E402
-from icosim.fmi.predict import predict_scene  # noqa: E402
-from icosim.fmi.run import run_scene  # noqa: E402
-from icosim.fmi.scene import load_scene  # noqa: E402
 from icosim.io.netcdf import open_dataset  # noqa: E402
+from icosim.problems.fmu.predict import predict_scene  # noqa: E402
+from icosim.problems.fmu.run import run_scene  # noqa: E402
+from icosim.problems.fmu.scene import load_scene  # noqa: E402
 
 FMUS = ROOT / "fmus"
 M_BODY, M_SPRING, C_SPRING, D_SPRING, G = 400.0, 100.0, 4.0e5, 200.0, 9.81

@@ -13,8 +13,8 @@ pytest.importorskip("jsonschema", reason="scene files are checked with jsonschem
 skip_without_c_toolchain()
 
 from icosim.cli import main  # noqa: E402
-from icosim.fmi.scene import load_scene  # noqa: E402
 from icosim.io.netcdf import open_dataset  # noqa: E402
+from icosim.problems.fmu.scene import load_scene  # noqa: E402
 
 SCENES = sorted((ROOT / "config" / "scenes").glob("*.yaml"))
 
@@ -111,7 +111,7 @@ def test_fmpy_is_imported_only_when_a_scene_runs():
     import sys
 
     code = (
-        "import sys, icosim.cli, icosim.fmi.scene, icosim.fmi.run, icosim.fmi.predict; "
+        "import sys, icosim.cli, icosim.problems.fmu.scene, icosim.problems.fmu.run, icosim.problems.fmu.predict; "
         "icosim.cli.build_parser(); print('fmpy' in sys.modules, 'pythonfmu' in sys.modules)"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)

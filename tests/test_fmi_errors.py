@@ -12,7 +12,7 @@ pytest.importorskip("jsonschema", reason="scene files are checked with jsonschem
 skip_without_c_toolchain()
 
 from icosim.cli import main  # noqa: E402
-from icosim.fmi.build import build_unit  # noqa: E402
+from icosim.problems.fmu.build import build_unit  # noqa: E402
 
 CACHE = ROOT / "build" / "fmus"
 

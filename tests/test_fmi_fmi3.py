@@ -11,7 +11,7 @@ pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
 skip_without_c_toolchain()
 
 from icosim.cli import main  # noqa: E402
-from icosim.fmi.run import run_scene  # noqa: E402
+from icosim.problems.fmu.run import run_scene  # noqa: E402
 
 SCENE = ROOT / "config" / "scenes" / "two_mass_fmi3.yaml"
 

@@ -23,10 +23,10 @@ pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
 skip_without_c_toolchain()
 
 from icosim.cli import main  # noqa: E402
-from icosim.fmi.build import build_unit  # noqa: E402
-from icosim.fmi.errors import FmuError  # noqa: E402
-from icosim.fmi.units import Unit  # noqa: E402
-from icosim.fmi.variables import VariableTable  # noqa: E402
+from icosim.problems.fmu.build import build_unit  # noqa: E402
+from icosim.problems.fmu.errors import FmuError  # noqa: E402
+from icosim.problems.fmu.units import Unit  # noqa: E402
+from icosim.problems.fmu.variables import VariableTable  # noqa: E402
 
 CACHE = ROOT / "build" / "fmus"
 EXTERNAL = ROOT / "build" / "external"

@@ -1,6 +1,6 @@
 """The double pendulum of Sect. 4 on two FMU units (fmus/pendulum_link1, fmus/pendulum_link2; the joint a point
 in the plane, two components per coupling variable): the same joint trajectory and joint force as the built-in
-pendulum (icosim.pendulum.problem, Radau IIA at tolerance 1e-10) through the same macro step."""
+pendulum (icosim.problems.pendulum.problem, Radau IIA at tolerance 1e-10) through the same macro step."""
 
 import numpy as np
 import pytest
@@ -14,12 +14,12 @@ from icosim.cli import main  # noqa: E402
 from icosim.engine.macrostep import macro_step  # noqa: E402
 from icosim.engine.methods import make_method  # noqa: E402
 from icosim.engine.run import simulate  # noqa: E402
-from icosim.fmi.problem import FmuCosimulation  # noqa: E402
-from icosim.fmi.run import open_units  # noqa: E402
-from icosim.fmi.scene import load_scene  # noqa: E402
-from icosim.pendulum.model import PendulumParameters  # noqa: E402
-from icosim.pendulum.problem import PendulumCosimulation  # noqa: E402
-from icosim.pendulum.reference import consistent_history  # noqa: E402
+from icosim.problems.fmu.problem import FmuCosimulation  # noqa: E402
+from icosim.problems.fmu.run import open_units  # noqa: E402
+from icosim.problems.fmu.scene import load_scene  # noqa: E402
+from icosim.problems.pendulum.model import PendulumParameters  # noqa: E402
+from icosim.problems.pendulum.problem import PendulumCosimulation  # noqa: E402
+from icosim.problems.pendulum.reference import consistent_history  # noqa: E402
 
 SCENE = ROOT / "config" / "scenes" / "double_pendulum_ff.yaml"
 SCENES = {"ff": SCENE, "fd": ROOT / "config" / "scenes" / "double_pendulum_fd.yaml"}

@@ -18,11 +18,11 @@ pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
 pytest.importorskip("pythonfmu", reason="the Python unit is exported with pythonfmu (the fmi extra)")
 skip_without_c_toolchain()
 
-from icosim.engine.linear_problem import LinearCosimulation  # noqa: E402
 from icosim.engine.methods import engine_method, make_method  # noqa: E402
-from icosim.engine.model import PhysicalModel  # noqa: E402
 from icosim.engine.run import simulate  # noqa: E402
-from icosim.fmi.run import run_scene  # noqa: E402
+from icosim.problems.fmu.run import run_scene  # noqa: E402
+from icosim.problems.linear.model import PhysicalModel  # noqa: E402
+from icosim.problems.linear.problem import LinearCosimulation  # noqa: E402
 
 SCENE = ROOT / "config" / "scenes" / "two_mass_python.yaml"
 
@@ -119,8 +119,8 @@ EXITING_JOB = textwrap.dedent(
     """
     import atexit, gc, sys
     atexit.register(gc.freeze)  # a workflow job's last exit handler (icosim.job.start_job)
-    from icosim.fmi.run import run_scene
-    from icosim.fmi.units import Unit
+    from icosim.problems.fmu.run import run_scene
+    from icosim.problems.fmu.units import Unit
     run = run_scene(sys.argv[1])
     Unit("left_open", run.units["body1"]["fmu"], {"position": "x"}, {})  # closed by no one
     print(run.status)
@@ -151,10 +151,10 @@ def library_errors(log: str) -> list:
 @pytest.mark.skipif(shutil.which("valgrind") is None, reason="needs valgrind (memcheck)")
 def test_a_process_that_ran_pythonfmu_units_exits_without_touching_freed_memory(tmp_path):
     """pythonfmu frees its library's interpreter state twice at exit, unless icosim released it before
-    (icosim.fmi.pythonfmu): the freed block written to, which glibc reported as "corrupted
+    (icosim.problems.fmu.pythonfmu): the freed block written to, which glibc reported as "corrupted
     double-linked list" in some runs (docs/fmi.md).  memcheck sees it in every run: the process exits cleanly and
     the units' libraries read or write no freed memory, the unit left open included."""
-    from icosim.fmi.build import build_unit
+    from icosim.problems.fmu.build import build_unit
 
     for source in ("python/msd_python.py", "msd"):  # built here, not under memcheck
         build_unit(ROOT / "fmus" / source)

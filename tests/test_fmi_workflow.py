@@ -1,5 +1,5 @@
 """The FMU part of the workflow (workflow/rules/fmi.smk): its jobs, its rerun triggers, the validation functions
-it calls (icosim.fmi.validation) against independent computations, its check kinds and its report section.
+it calls (icosim.studies.fmi.validation) against independent computations, its check kinds and its report section.
 
 The dry runs need neither fmpy nor a compiler; the runs build the test units (fmpy, CMake, a C compiler) and are
 skipped without them.
@@ -16,12 +16,12 @@ import xarray as xr
 import yaml
 from helpers import ROOT, c_toolchain_present, copy_workflow, scheduled_jobs, snakemake
 
-from icosim.claims.core import parse_claims
 from icosim.claims.registry import CHECKS, evaluate
-from icosim.fmi.checks import check_bound, check_orders
-from icosim.fmi.config import order_cases, scene_files
-from icosim.fmi.errors import SceneError
+from icosim.problems.fmu.errors import SceneError
 from icosim.report.fmi import fmi_section
+from icosim.studies.fmi.checks import check_bound, check_orders
+from icosim.studies.fmi.config import order_cases, scene_files
+from icosim.verdicts import parse_claims
 
 CI = ["config/ci/stability.yaml", "config/ci/convergence.yaml", "config/ci/pendulum.yaml", "config/ci/fmi.yaml"]
 CACHE = ROOT / "build" / "fmus"
@@ -135,7 +135,7 @@ def test_the_configuration_names_existing_scenes_and_whole_step_counts():
 
 def test_measured_growth_of_a_synthetic_mode():
     """A pure mode growing by r per step (the phase turning): the measure gives r."""
-    from icosim.fmi.validation import measured_growth
+    from icosim.studies.fmi.validation import measured_growth
 
     n, r, theta = 400, 1.05, 2.6
     steps = np.arange(n + 1)
@@ -155,14 +155,14 @@ def test_measured_growth_of_a_synthetic_mode():
 def test_unstable_scene_against_the_engine(monkeypatch):
     """two_mass_unstable: the predicted rho is the engine's spectral radius for the typed-in parameters, the
     measured growth is that rho, and the built-in difference is that of an independent built-in run."""
-    from icosim.engine.linear_problem import LinearCosimulation
     from icosim.engine.methods import engine_method, make_method
-    from icosim.engine.model import PhysicalModel
     from icosim.engine.run import simulate
     from icosim.engine.spectral.radius import spectral_radius_float64
-    from icosim.fmi.run import run_dataset, run_scene
-    from icosim.fmi.scene import load_scene
-    from icosim.fmi.validation import scene_validation
+    from icosim.problems.fmu.run import run_dataset, run_scene
+    from icosim.problems.fmu.scene import load_scene
+    from icosim.problems.linear.model import PhysicalModel
+    from icosim.problems.linear.problem import LinearCosimulation
+    from icosim.studies.fmi.validation import scene_validation
 
     monkeypatch.setenv("ICOSIM_FMU_CACHE", str(CACHE))
     scene = load_scene(ROOT / "config" / "scenes" / "two_mass_unstable.yaml")
@@ -189,12 +189,12 @@ def test_unstable_scene_against_the_engine(monkeypatch):
 def test_order_case_against_the_exact_solution():
     """Projection ff, k = 1 on three step sizes: the built-in errors are those of an independent run against
     the exact solution, the FMU errors agree with them, and the order is about 3."""
-    from icosim.engine.exact import MonolithicSolution, consistent_start
-    from icosim.engine.linear_problem import LinearCosimulation
     from icosim.engine.methods import engine_method, make_method
-    from icosim.engine.model import PhysicalModel
     from icosim.engine.run import simulate
-    from icosim.fmi.orders import order_case
+    from icosim.problems.linear.exact import MonolithicSolution, consistent_start
+    from icosim.problems.linear.model import PhysicalModel
+    from icosim.problems.linear.problem import LinearCosimulation
+    from icosim.studies.fmi.orders import order_case
 
     model = dict(m1=1.0, m2=2.0, c1=1000.0, c2=1000.0, d1=10.0, d2=10.0)
     H = [2.5e-3, 1.25e-3, 5.0e-4]

@@ -330,7 +330,7 @@ def test_a_wrong_stability_value_fails_validation_or_is_harmless(data):
     from snakemake.exceptions import WorkflowError
 
     from icosim.errors import ParameterError
-    from icosim.stability.panels import figure_panels
+    from icosim.studies.stability.panels import figure_panels
 
     cfg = copy.deepcopy(_stability_config())
     paths = [p for p in _paths(cfg) if p]
@@ -368,7 +368,7 @@ def test_a_huge_grid_is_refused_before_any_allocation(n):
 
     from icosim.engine.bounds import MAX_GRID_N
     from icosim.errors import ParameterError
-    from icosim.stability.panels import grid_axis
+    from icosim.studies.stability.panels import grid_axis
 
     cfg = copy.deepcopy(yaml.safe_load((ROOT / "config/stability.yaml").read_text())["stability"])
     cfg["grid"]["n"] = n

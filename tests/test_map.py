@@ -11,7 +11,7 @@ from icosim.cli import main
 from icosim.engine.schemes import SCHEMES, GaussSeidel
 from icosim.engine.spectral import certify_spectral_radius
 from icosim.io.netcdf import open_dataset
-from icosim.stability.datasets import stability_panel
+from icosim.studies.stability.datasets import stability_panel
 
 WM = ["map", "--method", "weighted", "--a", "1", "--b", "1", "--decomposition", "ff"]
 GRID = ["--lr1", "-2e-1", "-1e-2", "--li1", "0", "0.2", "--n", "11"]

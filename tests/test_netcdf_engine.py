@@ -5,8 +5,8 @@ import pytest
 import xarray as xr
 
 from icosim.io.netcdf import NETCDF_ENGINE, open_dataset, provenance_attrs, write_netcdf
-from icosim.stability.datasets import stability_panel
-from icosim.stability.panels import PanelSpec
+from icosim.studies.stability.datasets import stability_panel
+from icosim.studies.stability.panels import PanelSpec
 
 h5netcdf = pytest.importorskip("h5netcdf", reason="h5netcdf (test extra) writes the files of before the switch")
 

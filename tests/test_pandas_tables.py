@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from icosim.claims.core import write_verdicts
 from icosim.report.convergence import work_cost_table
 from icosim.report.html import table
 from icosim.report.stability import KEYS, cost_table
+from icosim.verdicts import write_verdicts
 
 
 class FakeVerdict:

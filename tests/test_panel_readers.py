@@ -1,5 +1,5 @@
 """What the claims and scheme-share jobs read of a panel: only the variables their checks name
-(icosim.stability.checks.PANEL_VARIABLES, read by icosim.io.netcdf.open_variables), with the verdicts and
+(icosim.studies.stability.checks.PANEL_VARIABLES, read by icosim.io.netcdf.open_variables), with the verdicts and
 shares that the whole datasets (icosim.io.netcdf.open_dataset) give."""
 
 import os
@@ -13,10 +13,10 @@ import yaml  # noqa: E402
 
 from icosim.claims.registry import evaluate, load_claims  # noqa: E402
 from icosim.io.netcdf import open_dataset, open_variables, write_netcdf  # noqa: E402
-from icosim.stability.checks import PANEL_VARIABLES  # noqa: E402
-from icosim.stability.comparison import scheme_shares  # noqa: E402
-from icosim.stability.datasets import stability_panel  # noqa: E402
-from icosim.stability.panels import figure_panels  # noqa: E402
+from icosim.studies.stability.checks import PANEL_VARIABLES  # noqa: E402
+from icosim.studies.stability.comparison import scheme_shares  # noqa: E402
+from icosim.studies.stability.datasets import stability_panel  # noqa: E402
+from icosim.studies.stability.panels import figure_panels  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 CFG = yaml.safe_load((ROOT / "config" / "stability.yaml").read_text())["stability"]

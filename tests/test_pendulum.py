@@ -18,14 +18,14 @@ from scipy.integrate import solve_ivp
 from icosim import ParameterError, make_method
 from icosim.engine.macrostep import macro_step
 from icosim.errors import StepFailure
-from icosim.pendulum.config import configured_runs
-from icosim.pendulum.integrator.radau import MU_REAL, IntegrationError, radau_batch
-from icosim.pendulum.links import Link1, Link2
-from icosim.pendulum.manifold import ProjectionError, _constraint_jacobian, project_state
-from icosim.pendulum.model import PendulumParameters, joint_constraint
-from icosim.pendulum.problem import PendulumCosimulation
-from icosim.pendulum.reference import Monolithic, consistent_history, reference_solution
-from icosim.pendulum.runs import run_cosimulation
+from icosim.problems.pendulum.config import configured_runs
+from icosim.problems.pendulum.integrator.radau import MU_REAL, IntegrationError, radau_batch
+from icosim.problems.pendulum.links import Link1, Link2
+from icosim.problems.pendulum.manifold import ProjectionError, _constraint_jacobian, project_state
+from icosim.problems.pendulum.model import PendulumParameters, joint_constraint
+from icosim.problems.pendulum.problem import PendulumCosimulation
+from icosim.problems.pendulum.reference import Monolithic, consistent_history, reference_solution
+from icosim.problems.pendulum.runs import run_cosimulation
 
 P = PendulumParameters()
 H = 1e-3
@@ -334,8 +334,8 @@ def test_bad_input_is_refused_with_the_name():
 def test_reference_dataset_keeps_the_naming_contract_after_a_netcdf_round_trip(tmp_path):
     """Other tools read phi1, phi2, g_cax, g_cay, lambda_cax, lambda_cay as data variables over t."""
     from icosim.io.netcdf import open_dataset, write_netcdf
-    from icosim.pendulum.model import PendulumParameters
-    from icosim.pendulum.replication.datasets import reference_dataset
+    from icosim.problems.pendulum.model import PendulumParameters
+    from icosim.studies.pendulum.datasets import reference_dataset
 
     ds = reference_dataset(PendulumParameters(), 1e-3, 0.01, {"title": "test"})
     write_netcdf(ds, tmp_path / "reference.nc")

@@ -17,18 +17,18 @@ import pytest
 import yaml
 from helpers import validate_config
 
-import icosim.pendulum.problem
+import icosim.problems.pendulum.problem
 from icosim import ParameterError, make_method
 from icosim.claims.registry import evaluate_claim, load_claims, parse_claims
 from icosim.engine.schemes import get_scheme
-from icosim.pendulum.config import configured_runs, configured_schemes
-from icosim.pendulum.integrator.radau import IntegrationError
-from icosim.pendulum.linearised import linear_test_model_rho, pendulum_test_model
-from icosim.pendulum.model import PendulumParameters
-from icosim.pendulum.replication.checks import expected_outcome
-from icosim.pendulum.replication.datasets import reference_dataset, run_dataset
-from icosim.pendulum.replication.summary import summarize
-from icosim.pendulum.runs import run_cosimulation
+from icosim.problems.pendulum.config import configured_runs, configured_schemes
+from icosim.problems.pendulum.integrator.radau import IntegrationError
+from icosim.problems.pendulum.linearised import linear_test_model_rho, pendulum_test_model
+from icosim.problems.pendulum.model import PendulumParameters
+from icosim.problems.pendulum.runs import run_cosimulation
+from icosim.studies.pendulum.checks import expected_outcome
+from icosim.studies.pendulum.datasets import reference_dataset, run_dataset
+from icosim.studies.pendulum.summary import summarize
 
 ROOT = Path(__file__).resolve().parents[1]
 CFG = yaml.safe_load((ROOT / "config" / "pendulum.yaml").read_text())["pendulum"]
@@ -160,8 +160,8 @@ def test_failed_integration_is_not_counted_as_unstable(monkeypatch):
     """A subsystem integration that fails is a failed run (not diverged): the claim gets no pass from it.
 
     weighted/ff/k = 2 is expected unstable, so counting a solver failure as a divergence would make it pass."""
-    # a link's compiled macro step (icosim.pendulum.integrator.compiled), as the problem calls it
-    real_step, calls = icosim.pendulum.problem._link_step, []
+    # a link's compiled macro step (icosim.problems.pendulum.integrator.compiled), as the problem calls it
+    real_step, calls = icosim.problems.pendulum.problem._link_step, []
     fail_at_step = 11  # four integrations per macro step (predictor+sensitivities and corrector, two links)
 
     def failing_step(*args, **kwargs):
@@ -170,7 +170,7 @@ def test_failed_integration_is_not_counted_as_unstable(monkeypatch):
             raise IntegrationError("injected failure")
         return real_step(*args, **kwargs)
 
-    monkeypatch.setattr(icosim.pendulum.problem, "_link_step", failing_step)
+    monkeypatch.setattr(icosim.problems.pendulum.problem, "_link_step", failing_step)
     t_end = 0.05
     res = _run("weighted", "ff", 2, t_end=t_end)
     assert res.status == "failed" and res.failed and not res.diverged

@@ -1,4 +1,4 @@
-"""The compiled links' integrator (icosim.pendulum.integrator.compiled) against the numpy reference (icosim.pendulum.integrator.radau).
+"""The compiled links' integrator (icosim.problems.pendulum.integrator.compiled) against the numpy reference (icosim.problems.pendulum.integrator.radau).
 
 The kernel is a transcription of ``radau_batch`` for the links' right-hand
 sides: the step sequence and the work counters must be the same, the numbers
@@ -13,14 +13,14 @@ import pytest
 import yaml
 
 from icosim import make_method
-from icosim.pendulum.integrator.compiled import CompiledLink
-from icosim.pendulum.integrator.compiled_algebra import all_finite, inverse, nan_maximum
-from icosim.pendulum.integrator.radau import IntegrationError, _fd_jacobian, radau_batch
-from icosim.pendulum.links import Link1, Link2
-from icosim.pendulum.model import PendulumParameters
-from icosim.pendulum.problem import PendulumCosimulation
-from icosim.pendulum.runs import run_cosimulation
-from icosim.pendulum.trade.measures import check_scheme
+from icosim.problems.pendulum.integrator.compiled import CompiledLink
+from icosim.problems.pendulum.integrator.compiled_algebra import all_finite, inverse, nan_maximum
+from icosim.problems.pendulum.integrator.radau import IntegrationError, _fd_jacobian, radau_batch
+from icosim.problems.pendulum.links import Link1, Link2
+from icosim.problems.pendulum.model import PendulumParameters
+from icosim.problems.pendulum.problem import PendulumCosimulation
+from icosim.problems.pendulum.runs import run_cosimulation
+from icosim.studies.trade.measures import check_scheme
 
 P = PendulumParameters()
 STATE = P.initial_state()
@@ -104,7 +104,7 @@ def test_a_link_at_rest_integrates_with_zero_error_estimates():
     exactly 0.  Both paths integrate it (before, 0.0 ** -0.25 raised ZeroDivisionError): the state stays
     0, the first step spans the interval (a zero derivative sets no scale), and the next step is
     MAX_FACTOR times longer, as scipy's Radau grows a step whose error is 0; counters and next step agree."""
-    from icosim.pendulum.integrator.radau import MAX_FACTOR
+    from icosim.problems.pendulum.integrator.radau import MAX_FACTOR
 
     link = Link1(P, "kinematic")
     coef, y0, H = np.zeros((1, 2, 2)), np.zeros((1, 2)), 1e-3
@@ -212,7 +212,7 @@ def test_nan_maximum_and_all_finite_are_numpys():
 def test_warm_up_compiles_the_signature_the_runs_use():
     """warm_up's arguments have the types the wrapper passes: a run after it compiles nothing more,
     so nothing of numba's compilation falls inside a run's timed region."""
-    from icosim.pendulum.integrator import compiled
+    from icosim.problems.pendulum.integrator import compiled
 
     compiled.warm_up()
     for L in (Link1, Link2):
@@ -232,12 +232,12 @@ def test_compile_record_lists_what_the_runs_use_in_strict_json():
     code = (
         "import json\n"
         "from icosim.io.jsonio import dumps\n"
-        "from icosim.pendulum.integrator.compiled_step import compile_kernels\n"
+        "from icosim.problems.pendulum.integrator.compiled_step import compile_kernels\n"
         "print(dumps(compile_kernels()))\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     record = json.loads(out.stdout)
-    from icosim.pendulum.integrator import compiled, compiled_step
+    from icosim.problems.pendulum.integrator import compiled, compiled_step
 
     compiled_step.warm_up()
     # a Gauss-Seidel run: every entry point (the leading link's outputs re-evaluated: _link_outputs)
@@ -295,12 +295,12 @@ def test_an_edited_source_the_kernels_inline_recompiles_them(tmp_path):
     import sys
     from pathlib import Path
 
-    from icosim.pendulum.integrator import compiled_step
+    from icosim.problems.pendulum.integrator import compiled_step
 
     compiled_step.warm_up()  # the checkout's cache holds the kernels (written now, or loaded as the tests above did)
     src = Path(__file__).resolve().parents[1] / "src"
     shutil.copytree(src, tmp_path / "src", ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
-    package = tmp_path / "src" / "icosim" / "pendulum" / "integrator"
+    package = tmp_path / "src" / "icosim" / "problems" / "pendulum" / "integrator"
     cache = Path(compiled_step.__file__).parent / "__pycache__"
     seed = [p for p in cache.iterdir() if p.suffix in (".nbi", ".nbc", ".sources")] if cache.is_dir() else []
     if all(list(cache.glob(f"{kernel}-*.nbi")) for kernel in ("compiled._radau", "compiled_step._link_step")):
@@ -309,7 +309,7 @@ def test_an_edited_source_the_kernels_inline_recompiles_them(tmp_path):
             shutil.copy2(path, package / "__pycache__" / path.name)
     else:
         seed = []
-    code = "import json\nfrom icosim.pendulum.integrator.compiled_step import compile_kernels\nprint(json.dumps(compile_kernels()))\n"
+    code = "import json\nfrom icosim.problems.pendulum.integrator.compiled_step import compile_kernels\nprint(json.dumps(compile_kernels()))\n"
     env = {**os.environ, "PYTHONPATH": str(tmp_path / "src"), "OPENBLAS_NUM_THREADS": "1"}
 
     def caches():

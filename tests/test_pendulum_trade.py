@@ -15,7 +15,7 @@ import yaml
 from helpers import ROOT, validate_config
 
 from icosim import ParameterError, make_method
-from icosim.control.controller import StepController, pc_estimate
+from icosim.engine.control.controller import StepController, pc_estimate
 from icosim.engine.lagrange import (
     corrector_nodes,
     lagrange_coefficients,
@@ -29,16 +29,16 @@ from icosim.engine.lagrange import (
 from icosim.engine.macrostep import macro_step
 from icosim.engine.schema import with_registries
 from icosim.engine.schemes import SCHEMES, standard_schemes
-from icosim.pendulum import runs as runs_module
-from icosim.pendulum.config import trade_plan
-from icosim.pendulum.model import PendulumParameters
-from icosim.pendulum.problem import PendulumCosimulation
-from icosim.pendulum.reference import consistent_history, reference_solution
-from icosim.pendulum.runs import run_adaptive, run_cosimulation
-from icosim.pendulum.trade.adaptive import fixed_at_error
-from icosim.pendulum.trade.measures import angle_errors, config_label
-from icosim.pendulum.trade.orders import decade_order, error_floor, pendulum_order
-from icosim.pendulum.trade.stability_limit import stability_limit
+from icosim.problems.pendulum import runs as runs_module
+from icosim.problems.pendulum.config import trade_plan
+from icosim.problems.pendulum.model import PendulumParameters
+from icosim.problems.pendulum.problem import PendulumCosimulation
+from icosim.problems.pendulum.reference import consistent_history, reference_solution
+from icosim.problems.pendulum.runs import run_adaptive, run_cosimulation
+from icosim.studies.trade.adaptive import fixed_at_error
+from icosim.studies.trade.measures import angle_errors, config_label
+from icosim.studies.trade.orders import decade_order, error_floor, pendulum_order
+from icosim.studies.trade.stability_limit import stability_limit
 
 P = PendulumParameters()
 CFG = yaml.safe_load((ROOT / "config" / "pendulum.yaml").read_text())["pendulum"]
@@ -295,7 +295,7 @@ def test_counts_are_what_they_say(monkeypatch):
 
     On the numpy path (the closures are what it calls); the compiled kernel's counters equal its
     counters (tests/test_pendulum_compiled.py)."""
-    from icosim.pendulum import links
+    from icosim.problems.pendulum import links
 
     monkeypatch.setattr(PendulumCosimulation, "compiled", False)
 
@@ -386,9 +386,9 @@ def test_stability_limit_search():
 def test_linear_prediction_is_the_policys_verdict(monkeypatch):
     """The predicted limit counts only a ``stable`` verdict as stable: a marginal or undecided step size
     (rho NaN, nothing known) is not, and the dataset records the verdict at the bracket's upper end."""
-    from icosim.pendulum.linearised import combined_verdict
-    from icosim.pendulum.trade import linear_study
-    from icosim.pendulum.trade import stability_limit as limits
+    from icosim.problems.pendulum.linearised import combined_verdict
+    from icosim.studies.trade import linear_study
+    from icosim.studies.trade import stability_limit as limits
 
     settings = {key: CFG[key] for key in ("model", "methods")}
     rho, verdict = linear_study.linear_stability(
@@ -465,12 +465,12 @@ def test_bad_trade_configuration_names_the_key():
 def small_studies(tmp_path_factory):
     """Every study on a tiny grid, written and read back as NetCDF (as the workflow does)."""
     from icosim.io.netcdf import open_dataset, write_netcdf
-    from icosim.pendulum.trade.adaptive import adaptive_study
-    from icosim.pendulum.trade.baselines import linear_orders_dataset, monolithic_baselines
-    from icosim.pendulum.trade.stability_limit import limits_study, merge_limits
-    from icosim.pendulum.trade.sweep import sweep_group
-    from icosim.pendulum.trade.tolerance import tolerance_study
-    from icosim.pendulum.trade.work_precision import work_precision_dataset
+    from icosim.studies.trade.adaptive import adaptive_study
+    from icosim.studies.trade.baselines import linear_orders_dataset, monolithic_baselines
+    from icosim.studies.trade.stability_limit import limits_study, merge_limits
+    from icosim.studies.trade.sweep import sweep_group
+    from icosim.studies.trade.tolerance import tolerance_study
+    from icosim.studies.trade.work_precision import work_precision_dataset
 
     trade = CFG["trade"]
     settings = {key: CFG[key] for key in ("model", "methods", "integrator", "sensitivities", "corrector", "divergence")}
@@ -569,8 +569,8 @@ def test_datasets_have_the_contract_names_and_dims(small_studies):
 
 def test_report_conclusions_are_the_datasets(small_studies):
     """The trade section's sentences are built from the same rows the tables show."""
-    from icosim.pendulum.trade.conclusions import adaptive_summary, order_rows, order_summary
     from icosim.report.pendulum_trade import trade_section
+    from icosim.studies.trade.conclusions import adaptive_summary, order_rows, order_summary
 
     s = small_studies
     html = trade_section(
@@ -591,7 +591,7 @@ def test_report_conclusions_are_the_datasets(small_studies):
 def test_figures_draw_every_scheme(small_studies):
     """Every trade figure is drawn from the datasets, Gauss-Seidel configurations in their own rows/panels."""
     from icosim.figures import pendulum_trade as figs
-    from icosim.pendulum.names import TRADE_FIGURE_DATASETS
+    from icosim.problems.pendulum.names import TRADE_FIGURE_DATASETS
 
     s = small_studies
     # the workflow's table: one job per figure, each given the datasets the table names

@@ -1,4 +1,4 @@
-"""The point-by-point check kind (icosim.stability.pointwise) on synthetic panels with known verdicts,
+"""The point-by-point check kind (icosim.studies.stability.pointwise) on synthetic panels with known verdicts,
 and the mechanism behind the Gauss-Seidel claims that use it, on engine grids."""
 
 import numpy as np

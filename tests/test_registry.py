@@ -6,13 +6,13 @@ import yaml
 from helpers import ROOT, validate_config
 
 from icosim.cli import build_parser
-from icosim.convergence.experiment import dimensional_method, units_description, units_summary
 from icosim.engine import methods
 from icosim.engine.decompositions import DECOMPOSITIONS
 from icosim.engine.methods import METHODS, engine_method, get_spec, make_method, parameter_units
 from icosim.engine.schema import PLACEHOLDERS, schema_defs, with_registries
 from icosim.errors import ParameterError
-from icosim.stability.panels import method_parameters_units, row_keys
+from icosim.studies.convergence.experiment import dimensional_method, units_description, units_summary
+from icosim.studies.stability.panels import method_parameters_units, row_keys
 
 SCHEMAS = ("stability", "convergence", "pendulum")
 

@@ -144,11 +144,11 @@ def test_stability_section_lists_every_overturned_float64_verdict():
 
 
 def _convergence_inputs(tmp_path):
-    from icosim.convergence.datasets import run_panel
-    from icosim.convergence.experiment import Setup, step_counts
-    from icosim.convergence.panels import PanelSpec
-    from icosim.convergence.study import Study
-    from icosim.convergence.work_precision import resolve_configuration, work_precision
+    from icosim.studies.convergence.datasets import run_panel
+    from icosim.studies.convergence.experiment import Setup, step_counts
+    from icosim.studies.convergence.panels import PanelSpec
+    from icosim.studies.convergence.study import Study
+    from icosim.studies.convergence.work_precision import resolve_configuration, work_precision
 
     setup = Setup(end_time=0.2)
     steps = {"H_min": 2e-4, "H_max": 2e-2, "num": 5}

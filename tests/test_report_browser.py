@@ -48,8 +48,8 @@ def small_report(tmp_path_factory):
     from icosim.figures.stability import stability_figure
     from icosim.report.page import report_page
     from icosim.report.stability import stability_section
-    from icosim.stability.datasets import stability_panel
-    from icosim.stability.panels import figure_panels
+    from icosim.studies.stability.datasets import stability_panel
+    from icosim.studies.stability.panels import figure_panels
 
     tmp = tmp_path_factory.mktemp("report")
     cfg = {

@@ -24,13 +24,13 @@ from icosim import (
     spectral_radius_mp,
     weighted_multiplier,
 )
-from icosim.convergence.experiment import Setup, step_counts
-from icosim.convergence.study import Study
 from icosim.engine.macrostep import macro_step
-from icosim.engine.model import Coefficients
 from icosim.engine.schemes import GS12, GS21, JACOBI, SCHEMES, GaussSeidel, Jacobi, get_scheme, standard_schemes
 from icosim.engine.spectral import amplification_matrix
 from icosim.order_fit import asymptotic_order
+from icosim.problems.linear.model import Coefficients
+from icosim.studies.convergence.experiment import Setup, step_counts
+from icosim.studies.convergence.study import Study
 
 CASES = [
     (baumgarte(mu=1, index=1), "ff"),

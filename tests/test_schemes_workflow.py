@@ -14,19 +14,19 @@ import yaml
 from helpers import copy_workflow, scheduled, scheme_panel_spec, snakemake, validate_config
 
 from icosim import ParameterError, make_method
-from icosim.convergence.config import configured_curves
-from icosim.convergence.panels import figure_panels as conv_figure_panels
 from icosim.engine.schemes import GS12, GS21
-from icosim.pendulum.config import configured_schemes
-from icosim.pendulum.model import PendulumParameters
-from icosim.pendulum.names import run_name
-from icosim.pendulum.problem import PendulumCosimulation
-from icosim.pendulum.reference import Monolithic, consistent_history
-from icosim.pendulum.runs import run_cosimulation
+from icosim.problems.pendulum.config import configured_schemes
+from icosim.problems.pendulum.model import PendulumParameters
+from icosim.problems.pendulum.names import run_name
+from icosim.problems.pendulum.problem import PendulumCosimulation
+from icosim.problems.pendulum.reference import Monolithic, consistent_history
+from icosim.problems.pendulum.runs import run_cosimulation
 from icosim.report.schemes import order_rows, pendulum_rows, share_cells, stability_schemes
-from icosim.stability.comparison import scheme_shares
-from icosim.stability.datasets import stability_panel
-from icosim.stability.panels import figure_panels
+from icosim.studies.convergence.config import configured_curves
+from icosim.studies.convergence.panels import figure_panels as conv_figure_panels
+from icosim.studies.stability.comparison import scheme_shares
+from icosim.studies.stability.datasets import stability_panel
+from icosim.studies.stability.panels import figure_panels
 
 ROOT = Path(__file__).resolve().parents[1]
 BOTH = ("jacobi", "gauss-seidel-12", "gauss-seidel-21")

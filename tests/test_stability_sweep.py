@@ -1,4 +1,4 @@
-"""Stability panels (icosim.stability.panels) and their figures (icosim.figures.stability).
+"""Stability panels (icosim.studies.stability.panels) and their figures (icosim.figures.stability).
 
 The dataset names are a contract other tools read (icosim map, the claims, the report); the numbers are
 checked against an independent route: the multiprecision spectral radius of
@@ -26,8 +26,8 @@ from icosim.figures.stability import (  # noqa: E402
     stability_figure,  # noqa: E402
 )
 from icosim.io.netcdf import open_dataset, open_variables, provenance_attrs, write_netcdf  # noqa: E402
-from icosim.stability.datasets import stability_panel  # noqa: E402
-from icosim.stability.panels import (  # noqa: E402
+from icosim.studies.stability.datasets import stability_panel  # noqa: E402
+from icosim.studies.stability.panels import (  # noqa: E402
     PanelSpec,
     figure_panels,
     figure_schemes,
@@ -220,7 +220,7 @@ def test_bad_grids_are_refused_naming_the_key(name, grid, message):
 
 def test_figure_and_report_label_rows_by_one_rule():
     """The figure's row labels come from the keys stored in the panels, chosen by
-    icosim.stability.panels.row_label_keys -- the rule of the report's row_label."""
+    icosim.studies.stability.panels.row_label_keys -- the rule of the report's row_label."""
     tiny = {**COARSE, "n": 2}
     for fig, fc in CFG["figures"].items():
         specs = [
@@ -335,8 +335,8 @@ def test_force_displacement_instability_is_confirmed_by_time_stepping(method, lr
     """Independent route for the reported disagreements (Figs. 13 and 14, k = 0): from an
     exact start, plain time stepping grows by the panel's rho per macro step."""
     from icosim import LinearCosimulation
-    from icosim.engine.exact import MonolithicSolution, consistent_start
     from icosim.engine.run import simulate
+    from icosim.problems.linear.exact import MonolithicSolution, consistent_start
 
     s = spec(
         figure="13",

@@ -19,7 +19,7 @@ import pytest
 import yaml
 from helpers import copy_workflow, scheduled, scheduled_jobs, snakemake
 
-from icosim.stability.panels import figure_panels, figure_schemes, panel_id
+from icosim.studies.stability.panels import figure_panels, figure_schemes, panel_id
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -210,7 +210,7 @@ def test_restyling_reruns_no_sweep_and_library_edits_rerun_their_users(tiny_run)
     edit_config(tiny_run, lambda st: st["plot"].update(style="field"))
 
     # Snakemake reruns on an input newer than the output *with different content*: edit the modules
-    figures, panels = tiny_run / "src/icosim/figures/stability.py", tiny_run / "src/icosim/stability/panels.py"
+    figures, panels = tiny_run / "src/icosim/figures/stability.py", tiny_run / "src/icosim/studies/stability/panels.py"
     texts = {path: path.read_text() for path in (figures, panels)}
     with open(figures, "a") as fh:
         fh.write("\n# edited by test_stability_workflow\n")
@@ -282,14 +282,14 @@ def test_library_digests_follow_the_real_imports(tiny_run):
     touching a module without changing it reruns nothing, editing the pendulum's problem reruns no
     stability job, editing a stability check reruns the claims."""
     snakemake(tiny_run, "results/stability/claims.json", *TINY_FIGURES, "-c1")  # up to date with the current config
-    os.utime(tiny_run / "src/icosim/stability/panels.py")  # newer than every dataset, the same text
+    os.utime(tiny_run / "src/icosim/studies/stability/panels.py")  # newer than every dataset, the same text
     proc = snakemake(tiny_run, "-n", "results/stability/claims.json", *TINY_FIGURES)
     assert not scheduled_jobs(proc, "stability_")
-    with open(tiny_run / "src/icosim/pendulum/problem.py", "a") as fh:
+    with open(tiny_run / "src/icosim/problems/pendulum/problem.py", "a") as fh:
         fh.write("\n# edited by test_stability_workflow\n")
     proc = snakemake(tiny_run, "-n", "results/stability/claims.json", *TINY_FIGURES)
     assert not scheduled_jobs(proc, "stability_")
-    with open(tiny_run / "src/icosim/stability/checks.py", "a") as fh:
+    with open(tiny_run / "src/icosim/studies/stability/checks.py", "a") as fh:
         fh.write("\n# edited by test_stability_workflow\n")
     proc = snakemake(tiny_run, "-n", "results/stability/claims.json", *TINY_FIGURES)
     assert set(scheduled_jobs(proc, "stability_")) == {"stability_claims"}

@@ -76,25 +76,25 @@ def test_no_import_cycle():
 
 
 #: The studies: each replicates (or extends) one part of the paper and writes its own datasets.
-STUDIES = ("icosim.stability", "icosim.convergence", "icosim.pendulum.replication", "icosim.pendulum.trade")
+STUDIES = ("icosim.studies.stability", "icosim.studies.convergence", "icosim.studies.pendulum", "icosim.studies.trade")
 #: What a study may rest on besides itself: the rooms below the studies.
 BELOW_STUDIES = (
     "icosim.errors",
     "icosim.engine",
-    "icosim.control",
+    "icosim.engine.control",
     "icosim.order_fit",
     "icosim.io",
-    "icosim.claims.core",
-    "icosim.pendulum",  # the pendulum's model, integrator, runs, names, configuration (not its two studies)
+    "icosim.verdicts",
+    "icosim.problems.pendulum",  # the pendulum's model, integrator, runs, names, configuration (not its two studies)
 )
 #: The studies' data contracts that the report and the figures may read: module -> what they take from it.
 #: Each reads datasets or configurations and imports no module of a study that computes.
 DATA_CONTRACTS = {
-    "icosim.stability.panels": "a panel's configuration: row labels, ratios, grid axes",
-    "icosim.convergence.experiment": "the convergence experiment's configuration: setup, step counts, the exact oscillation",
-    "icosim.convergence.curves": "panel and work-precision datasets read back as curves and rankings",
-    "icosim.pendulum.trade.conclusions": "the trade datasets read back as the report's rows and counts",
-    "icosim.pendulum.trade.orders": "the order fit above the pendulum's error floor (conclusions apply it)",
+    "icosim.studies.stability.panels": "a panel's configuration: row labels, ratios, grid axes",
+    "icosim.studies.convergence.experiment": "the convergence experiment's configuration: setup, step counts, the exact oscillation",
+    "icosim.studies.convergence.curves": "panel and work-precision datasets read back as curves and rankings",
+    "icosim.studies.trade.conclusions": "the trade datasets read back as the report's rows and counts",
+    "icosim.studies.trade.orders": "the order fit above the pendulum's error floor (conclusions apply it)",
 }
 
 
@@ -202,9 +202,9 @@ def test_library_inputs_cover_what_a_script_loads(script, import_server):
 
 def test_stability_claims_do_not_rest_on_the_pendulum_problem():
     files = {p.relative_to(SRC).as_posix() for p in script_closure(ROOT / "workflow/scripts/claims.py", SRC)}
-    assert "icosim/stability/checks.py" in files and "icosim/pendulum/replication/checks.py" in files
-    assert not {"icosim/pendulum/problem.py", "icosim/pendulum/runs.py", "icosim/convergence/study.py"} & files
-    assert "icosim/pendulum/integrator/radau.py" not in {
+    assert "icosim/studies/stability/checks.py" in files and "icosim/studies/pendulum/checks.py" in files
+    assert not {"icosim/problems/pendulum/problem.py", "icosim/problems/pendulum/runs.py", "icosim/studies/convergence/study.py"} & files
+    assert "icosim/problems/pendulum/integrator/radau.py" not in {
         p.relative_to(SRC).as_posix() for p in module_closure(["icosim.claims.registry"], SRC)
     }
 
@@ -320,9 +320,9 @@ def test_the_package_loads_its_public_names_lazily_and_lists_them_for_the_workfl
     assert set(icosim._LAZY) == set(icosim.__all__)
     assert all(getattr(icosim, name) is not None for name in icosim.__all__)
     engine = {
-        "icosim/engine/linear_problem.py",
+        "icosim/problems/linear/problem.py",
         "icosim/engine/spectral/__init__.py",
         "icosim/engine/methods/__init__.py",
     }
-    assert engine <= {p.relative_to(SRC).as_posix() for p in module_closure(["icosim.pendulum.names"], SRC)}
-    assert _loaded_after("import icosim.pendulum.trade.measures", {"scipy.linalg", "mpmath"}) == []
+    assert engine <= {p.relative_to(SRC).as_posix() for p in module_closure(["icosim.problems.pendulum.names"], SRC)}
+    assert _loaded_after("import icosim.studies.trade.measures", {"scipy.linalg", "mpmath"}) == []

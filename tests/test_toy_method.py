@@ -18,21 +18,21 @@ from helpers import ROOT, validate_config
 
 from icosim import TestModel
 from icosim.cli import main
-from icosim.convergence.datasets import run_panel
-from icosim.convergence.experiment import Setup, dimensional_method, step_counts
-from icosim.convergence.panels import figure_panels
-from icosim.convergence.study import Study
 from icosim.engine import methods
 from icosim.engine.methods import CouplingMethod, MethodSpec, Parameter, make_method
 from icosim.engine.methods.base import finite
 from icosim.engine.spectral import spectral_radius
 from icosim.errors import ParameterError
-from icosim.pendulum.config import configured_runs
-from icosim.pendulum.linearised import linear_test_model_rho
-from icosim.pendulum.model import PendulumParameters
-from icosim.pendulum.runs import run_cosimulation
-from icosim.stability.datasets import stability_panel
-from icosim.stability.panels import PanelSpec as StabilityPanel
+from icosim.problems.pendulum.config import configured_runs
+from icosim.problems.pendulum.linearised import linear_test_model_rho
+from icosim.problems.pendulum.model import PendulumParameters
+from icosim.problems.pendulum.runs import run_cosimulation
+from icosim.studies.convergence.datasets import run_panel
+from icosim.studies.convergence.experiment import Setup, dimensional_method, step_counts
+from icosim.studies.convergence.panels import figure_panels
+from icosim.studies.convergence.study import Study
+from icosim.studies.stability.datasets import stability_panel
+from icosim.studies.stability.panels import PanelSpec as StabilityPanel
 
 NAME = "toy_velocity"
 

@@ -9,7 +9,7 @@ C++ destructor (registered with ``__cxa_atexit`` when the library was loaded) fr
 releases the freed block once more (a write into freed memory, every run).  glibc reports it only when the freed
 block sits in one of its bin lists ("corrupted double-linked list", "free(): corrupted unsorted chunks");
 valgrind's memcheck reports it in every run.  ``--release`` calls ``finalizePythonInterpreter`` before freeing
-the instance (icosim's workaround, icosim.fmi.pythonfmu): both exit paths then find nothing to free.
+the instance (icosim's workaround, icosim.problems.fmu.pythonfmu): both exit paths then find nothing to free.
 
     python tools/pythonfmu_exit_repro.py [--runs N] [--valgrind] [--release]
 

@@ -17,30 +17,30 @@ with a coupling method of the registry :mod:`icosim.engine.methods`.
 from typing import TYPE_CHECKING
 
 # The public names are loaded on first use (PEP 562): a Snakemake job importing, say,
-# icosim.pendulum.trade.sweep starts without the linear model, scipy.linalg and mpmath.
+# icosim.studies.trade.sweep starts without the linear model, scipy.linalg and mpmath.
 # The imports below are never executed; they are what type checkers and icosim.sources
 # read (every job that imports icosim still lists the whole engine as its input).
 if TYPE_CHECKING:
-    from .engine.linear_problem import LinearCosimulation
     from .engine.methods import make_method
     from .engine.methods.baumgarte import baumgarte
     from .engine.methods.projection import projection
     from .engine.methods.weighted import weighted_multiplier
-    from .engine.model import Coefficients, PhysicalModel, TestModel
     from .engine.schemes import JACOBI, GaussSeidel, Jacobi, get_scheme
     from .engine.spectral import amplification_matrix, spectral_radius, spectral_radius_float64, spectral_radius_mp
     from .errors import ParameterError
+    from .problems.linear.model import Coefficients, PhysicalModel, TestModel
+    from .problems.linear.problem import LinearCosimulation
 
 _LAZY = {
-    "LinearCosimulation": ".engine.linear_problem",
+    "LinearCosimulation": ".problems.linear.problem",
     "make_method": ".engine.methods",
     "baumgarte": ".engine.methods.baumgarte",
     "projection": ".engine.methods.projection",
     "weighted_multiplier": ".engine.methods.weighted",
-    "Coefficients": ".engine.model",
+    "Coefficients": ".problems.linear.model",
     "ParameterError": ".errors",
-    "PhysicalModel": ".engine.model",
-    "TestModel": ".engine.model",
+    "PhysicalModel": ".problems.linear.model",
+    "TestModel": ".problems.linear.model",
     "JACOBI": ".engine.schemes",
     "GaussSeidel": ".engine.schemes",
     "Jacobi": ".engine.schemes",

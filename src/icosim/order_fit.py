@@ -1,11 +1,11 @@
 """Orders of convergence, decided only in the asymptotic range.
 
 Shared by the studies that fit orders: the convergence study of the linear model
-(:mod:`icosim.convergence.datasets`) and the pendulum's speed-accuracy study
-(:mod:`icosim.pendulum.trade.orders`, which adds its error floor), so neither imports the other.
+(:mod:`icosim.studies.convergence.datasets`) and the pendulum's speed-accuracy study
+(:mod:`icosim.studies.trade.orders`, which adds its error floor), so neither imports the other.
 
 An order of convergence is a statement about ``H -> 0``.  With floor-free
-errors (:mod:`icosim.convergence.errors`) the smallest step sizes are the best
+errors (:mod:`icosim.studies.convergence.errors`) the smallest step sizes are the best
 evidence, so the order is read off the **smallest-H decade** of a curve: the
 least-squares slope of ``log error`` over ``log H`` on ``[H_min, 10 H_min]``.
 It counts as *asymptotic* only if every local slope (between neighbouring step

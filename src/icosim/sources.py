@@ -11,8 +11,8 @@ module`` included, and the ``__init__.py`` of every package on the way.
 The pendulum's claims rest on its check kinds, not on its co-simulation:
 
 >>> root = Path(__file__).resolve().parents[1]
->>> files = [p.relative_to(root).as_posix() for p in module_closure(["icosim.pendulum.replication.checks"], root)]
->>> "icosim/pendulum/names.py" in files, "icosim/pendulum/problem.py" in files
+>>> files = [p.relative_to(root).as_posix() for p in module_closure(["icosim.studies.pendulum.checks"], root)]
+>>> "icosim/problems/pendulum/names.py" in files, "icosim/problems/pendulum/problem.py" in files
 (True, False)
 """
 

@@ -4,12 +4,12 @@
 # jobs are long: they run first), one job per figure draws it for every decomposition and scheme; the
 # work-precision timing and diagram, the claims of the part in one job, and the report section follow.
 from icosim.claims.registry import load_claims  # noqa: E402
-from icosim.convergence.config import (  # noqa: E402
+from icosim.studies.convergence.config import (  # noqa: E402
     check_claims_against_config,
     study_from_config,
 )
-from icosim.convergence.panels import figure_layout, figure_panels  # noqa: E402
-from icosim.convergence.work_precision import resolve_configuration  # noqa: E402
+from icosim.studies.convergence.panels import figure_layout, figure_panels  # noqa: E402
+from icosim.studies.convergence.work_precision import resolve_configuration  # noqa: E402
 
 validate_part(config["convergence"], "convergence.schema.yaml")
 
@@ -27,7 +27,7 @@ CONV_SETUP = {
 CONV_PANEL = "results/convergence/fig{figure}/{scheme}/{dec}_{panel}.nc"
 CONV_PLOT = "results/convergence/figures/fig{figure}_{dec}_{scheme}{kind}.{ext}"
 
-# (figure, scheme) -> its panels (icosim.convergence.panels.PanelSpec).  Built here so that a
+# (figure, scheme) -> its panels (icosim.studies.convergence.panels.PanelSpec).  Built here so that a
 # parameter a method does not take fails before any job runs, naming the figure.
 CONV_PANELS = {}
 for _fig, _cfg in CONVERGENCE["figures"].items():

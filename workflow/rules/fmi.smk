@@ -3,7 +3,7 @@
 # (results/fmi/validation/<scene>.nc), one job per order case (results/fmi/orders/<case>.nc), the claims
 # (config/claims/fmi.yaml) and the report section.
 from icosim.claims.registry import load_claims  # noqa: E402
-from icosim.fmi.config import order_cases, scene_files, unit_inputs, unit_sources  # noqa: E402
+from icosim.studies.fmi.config import order_cases, scene_files, unit_inputs, unit_sources  # noqa: E402
 
 validate_part(config["fmi"], "fmi.schema.yaml")
 

@@ -4,14 +4,14 @@
 # results/pendulum/summary.nc, the figures (one job per scheme draws every k), and the pendulum
 # section of the report.
 from icosim.claims.registry import load_claims  # noqa: E402
-from icosim.pendulum.config import (  # noqa: E402
+from icosim.problems.pendulum.config import (  # noqa: E402
     configured_runs,
     configured_schemes,
     run_settings,
     study_methods,
     trade_plan,
 )
-from icosim.pendulum.names import TRADE_FIGURE_DATASETS  # noqa: E402
+from icosim.problems.pendulum.names import TRADE_FIGURE_DATASETS  # noqa: E402
 
 validate_part(config["pendulum"], "pendulum.schema.yaml")
 

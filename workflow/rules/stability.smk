@@ -5,8 +5,8 @@
 # every scheme; the claims (the paper's and the project's) are checked in one job; the scheme
 # comparison and the report section follow.
 from icosim.claims.registry import load_claims  # noqa: E402
-from icosim.stability.checks import PANEL_VARIABLES  # noqa: E402
-from icosim.stability.panels import figure_panels, panel_id  # noqa: E402
+from icosim.studies.stability.checks import PANEL_VARIABLES  # noqa: E402
+from icosim.studies.stability.panels import figure_panels, panel_id  # noqa: E402
 
 validate_part(config["stability"], "stability.schema.yaml")
 
@@ -16,7 +16,7 @@ STABILITY["figures"] = {str(fig): cfg for fig, cfg in STABILITY["figures"].items
 STABILITY_PANEL = "results/stability/fig{figure}/{scheme}/{panel}.nc"
 STABILITY_PLOT = "results/stability/figures/fig{figure}_{scheme}.{ext}"
 
-# figure -> its panels (icosim.stability.panels.PanelSpec), every scheme.  Built here so that a
+# figure -> its panels (icosim.studies.stability.panels.PanelSpec), every scheme.  Built here so that a
 # parameter a method does not take fails before any job runs, naming the figure and row.
 STABILITY_PANELS = {
     fig: figure_panels(

@@ -9,10 +9,10 @@ full-resolution ``reference``: the reduced run no longer reproduces the full one
 
 import logging
 
-from icosim.claims.core import enforce_references, verdict_counts, write_verdicts
 from icosim.claims.registry import evaluate, load_claims
 from icosim.io.netcdf import open_dataset, open_variables
 from icosim.job import start_job
+from icosim.verdicts import enforce_references, verdict_counts, write_verdicts
 
 start_job(snakemake.log[0])
 claims = load_claims(snakemake.input.claims)

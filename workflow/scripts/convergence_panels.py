@@ -1,16 +1,16 @@
 """Snakemake job: the panels of one convergence figure and scheme (rows x k of each column) -> one NetCDF each
-(thin: icosim.convergence.datasets)."""
+(thin: icosim.studies.convergence.datasets)."""
 
 import json
 import logging
 
-from icosim.convergence.datasets import curve_summaries, run_panel_data
-from icosim.convergence.experiment import Setup, step_counts
-from icosim.convergence.panels import PanelSpec
-from icosim.convergence.study import Study
 from icosim.io.netcdf import provenance_attrs, write_netcdf
 from icosim.job import start_job
 from icosim.labels import figure_label
+from icosim.studies.convergence.datasets import curve_summaries, run_panel_data
+from icosim.studies.convergence.experiment import Setup, step_counts
+from icosim.studies.convergence.panels import PanelSpec
+from icosim.studies.convergence.study import Study
 
 start_job(snakemake.log[0])
 p = snakemake.params

@@ -2,12 +2,12 @@
 
 import logging
 
-from icosim.claims.core import read_verdicts
-from icosim.convergence.curves import curves
 from icosim.io.netcdf import atomic_path, open_dataset
 from icosim.job import start_job
 from icosim.report.convergence import convergence_section
 from icosim.report.schemes import convergence_schemes
+from icosim.studies.convergence.curves import curves
+from icosim.verdicts import read_verdicts
 
 start_job(snakemake.log[0])
 i, p = snakemake.input, snakemake.params

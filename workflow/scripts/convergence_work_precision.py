@@ -3,10 +3,10 @@
 import json
 import logging
 
-from icosim.convergence.experiment import Setup
-from icosim.convergence.work_precision import work_precision
 from icosim.io.netcdf import open_dataset, provenance_attrs, write_netcdf
 from icosim.job import start_job
+from icosim.studies.convergence.experiment import Setup
+from icosim.studies.convergence.work_precision import work_precision
 
 start_job(snakemake.log[0])
 p = snakemake.params

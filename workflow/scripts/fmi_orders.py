@@ -1,12 +1,12 @@
 """Snakemake job: one configuration of the linear convergence study on the FMU units over H, with the built-in
-model's errors and both orders (thin: icosim.fmi.orders.order_case_data)."""
+model's errors and both orders (thin: icosim.studies.fmi.orders.order_case_data)."""
 
 import logging
 from pathlib import Path
 
-from icosim.fmi.orders import order_case_data
 from icosim.io.netcdf import write_netcdf
 from icosim.job import start_job
+from icosim.studies.fmi.orders import order_case_data
 
 start_job(snakemake.log[0])
 p = snakemake.params

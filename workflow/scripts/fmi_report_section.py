@@ -2,10 +2,10 @@
 
 import logging
 
-from icosim.claims.core import read_verdicts
 from icosim.io.netcdf import atomic_path, open_dataset
 from icosim.job import start_job
 from icosim.report.fmi import fmi_section
+from icosim.verdicts import read_verdicts
 
 start_job(snakemake.log[0])
 i = snakemake.input

@@ -1,12 +1,12 @@
 """Snakemake job: one FMU scene run (its dataset) and checked (prediction, measured growth, built-in model),
-under the supervisor that names a unit that hangs or crashes (thin: icosim.fmi.validation.scene_job)."""
+under the supervisor that names a unit that hangs or crashes (thin: icosim.studies.fmi.validation.scene_job)."""
 
 import logging
 from pathlib import Path
 
-from icosim.fmi.scene import load_scene
-from icosim.fmi.validation import scene_job
 from icosim.job import start_job
+from icosim.problems.fmu.scene import load_scene
+from icosim.studies.fmi.validation import scene_job
 
 start_job(snakemake.log[0])
 done = scene_job(

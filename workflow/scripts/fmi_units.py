@@ -1,12 +1,12 @@
-"""Snakemake job: the test units built from source into the cache the scene jobs read (thin: icosim.fmi.build)."""
+"""Snakemake job: the test units built from source into the cache the scene jobs read (thin: icosim.problems.fmu.build)."""
 
 import json
 import logging
 from pathlib import Path
 
-from icosim.fmi.build import build_unit
 from icosim.io.netcdf import atomic_path
 from icosim.job import start_job
+from icosim.problems.fmu.build import build_unit
 
 start_job(snakemake.log[0])
 cache = Path(snakemake.output[0]).parent

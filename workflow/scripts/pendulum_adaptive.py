@@ -1,11 +1,11 @@
 """Snakemake job: adaptive macro steps against fixed H at equal error -> NetCDF
-(thin: icosim.pendulum.trade.adaptive)."""
+(thin: icosim.studies.trade.adaptive)."""
 
 import logging
 
 from icosim.io.netcdf import write_netcdf
 from icosim.job import start_job
-from icosim.pendulum.trade.adaptive import adaptive_study_data
+from icosim.studies.trade.adaptive import adaptive_study_data
 
 start_job(snakemake.log[0])
 p = snakemake.params

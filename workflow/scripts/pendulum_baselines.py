@@ -1,12 +1,12 @@
 """Snakemake job: the monolithic pendulum over tolerances (Radau IIA, DOP853) and the linear test model's
-errors for every configuration -> two NetCDF files (thin: icosim.pendulum.trade.baselines)."""
+errors for every configuration -> two NetCDF files (thin: icosim.studies.trade.baselines)."""
 
 import logging
 
 from icosim.io.netcdf import write_netcdf
 from icosim.job import start_job
-from icosim.pendulum.model import PendulumParameters
-from icosim.pendulum.trade.baselines import linear_orders_dataset_data, monolithic_baselines_data
+from icosim.problems.pendulum.model import PendulumParameters
+from icosim.studies.trade.baselines import linear_orders_dataset_data, monolithic_baselines_data
 
 start_job(snakemake.log[0])
 p = snakemake.params

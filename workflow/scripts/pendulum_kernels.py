@@ -6,7 +6,7 @@ import logging
 
 from icosim.io.integrity import atomic_path
 from icosim.job import start_job
-from icosim.pendulum.integrator.compiled_step import compile_kernels
+from icosim.problems.pendulum.integrator.compiled_step import compile_kernels
 
 start_job(snakemake.log[0])
 record = compile_kernels()

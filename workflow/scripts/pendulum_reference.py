@@ -5,8 +5,8 @@ import logging
 
 from icosim.io.netcdf import provenance_attrs, write_netcdf
 from icosim.job import start_job
-from icosim.pendulum.model import PendulumParameters
-from icosim.pendulum.replication.datasets import reference_dataset_data
+from icosim.problems.pendulum.model import PendulumParameters
+from icosim.studies.pendulum.datasets import reference_dataset_data
 
 start_job(snakemake.log[0])
 p = snakemake.params

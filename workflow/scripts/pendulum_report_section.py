@@ -3,11 +3,11 @@
 import logging
 from pathlib import Path
 
-from icosim.claims.core import read_verdicts
 from icosim.io.netcdf import atomic_path, open_dataset
 from icosim.job import start_job
 from icosim.report.pendulum import pendulum_section, trade_section
 from icosim.report.schemes import pendulum_schemes
+from icosim.verdicts import read_verdicts
 
 start_job(snakemake.log[0])
 i, p = snakemake.input, snakemake.params

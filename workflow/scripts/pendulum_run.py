@@ -1,12 +1,12 @@
 """Snakemake job: the co-simulation runs of one (method, decomposition), every scheme and k -> one NetCDF each
-(thin: icosim.pendulum.replication.datasets)."""
+(thin: icosim.studies.pendulum.datasets)."""
 
 import json
 import logging
 
 from icosim.io.netcdf import write_netcdf
 from icosim.job import start_job
-from icosim.pendulum.replication.datasets import run_job_data
+from icosim.studies.pendulum.datasets import run_job_data
 
 start_job(snakemake.log[0])
 w, p = snakemake.wildcards, snakemake.params

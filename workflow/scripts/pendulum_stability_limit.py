@@ -1,10 +1,10 @@
-"""Snakemake job: results/pendulum/stability_limit.nc from the groups' limits (thin: icosim.pendulum.trade.stability_limit)."""
+"""Snakemake job: results/pendulum/stability_limit.nc from the groups' limits (thin: icosim.studies.trade.stability_limit)."""
 
 import logging
 
 from icosim.io.netcdf import open_dataset, provenance_attrs, write_netcdf
 from icosim.job import start_job
-from icosim.pendulum.trade.stability_limit import merge_limits
+from icosim.studies.trade.stability_limit import merge_limits
 
 start_job(snakemake.log[0])
 ds = merge_limits([open_dataset(path) for path in snakemake.input.groups])

@@ -1,12 +1,12 @@
 """Snakemake job: errors against the reference, the claim of Sect. 4 and the linear test model's
-spectral radius at the pendulum's point (Sect. 3) per run -> NetCDF (thin: icosim.pendulum.replication.summary)."""
+spectral radius at the pendulum's point (Sect. 3) per run -> NetCDF (thin: icosim.studies.pendulum.summary)."""
 
 import logging
 
 from icosim.claims.registry import load_claims
 from icosim.io.netcdf import open_dataset, write_netcdf
 from icosim.job import start_job
-from icosim.pendulum.replication.summary import summary_dataset
+from icosim.studies.pendulum.summary import summary_dataset
 
 start_job(snakemake.log[0])
 p = snakemake.params

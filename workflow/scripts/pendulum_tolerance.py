@@ -1,10 +1,10 @@
-"""Snakemake job: error over the links' Radau tolerance at fixed H -> NetCDF (thin: icosim.pendulum.trade.tolerance)."""
+"""Snakemake job: error over the links' Radau tolerance at fixed H -> NetCDF (thin: icosim.studies.trade.tolerance)."""
 
 import logging
 
 from icosim.io.netcdf import write_netcdf
 from icosim.job import start_job
-from icosim.pendulum.trade.tolerance import tolerance_study_data
+from icosim.studies.trade.tolerance import tolerance_study_data
 
 start_job(snakemake.log[0])
 p = snakemake.params

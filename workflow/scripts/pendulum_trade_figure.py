@@ -7,7 +7,7 @@ from icosim.figures import save_figure
 from icosim.figures.pendulum_trade import TRADE_FIGURES
 from icosim.io.netcdf import open_dataset
 from icosim.job import start_job
-from icosim.pendulum.names import TRADE_FIGURE_DATASETS
+from icosim.problems.pendulum.names import TRADE_FIGURE_DATASETS
 
 start_job(snakemake.log[0])
 name = snakemake.wildcards.name

@@ -1,14 +1,14 @@
 """Snakemake job: the trade studies of one (method, decomposition), for every scheme (every k) -> one NetCDF per
-study and scheme: error over H (thin: icosim.pendulum.trade.sweep) and the largest stable H, measured and
-predicted by the linear test model (thin: icosim.pendulum.trade.stability_limit).  One process for both pays
+study and scheme: error over H (thin: icosim.studies.trade.sweep) and the largest stable H, measured and
+predicted by the linear test model (thin: icosim.studies.trade.stability_limit).  One process for both pays
 the start-up (interpreter, imports, the compiled integrator) once; each dataset is the one a job per study writes."""
 
 import logging
 
 from icosim.io.netcdf import write_netcdf
 from icosim.job import start_job
-from icosim.pendulum.trade.stability_limit import limits_study_data
-from icosim.pendulum.trade.sweep import sweep_group_data
+from icosim.studies.trade.stability_limit import limits_study_data
+from icosim.studies.trade.sweep import sweep_group_data
 
 start_job(snakemake.log[0])
 w, p, out = snakemake.wildcards, snakemake.params, snakemake.output

@@ -1,11 +1,11 @@
 """Snakemake job: results/pendulum/work_precision.nc from the sweep groups, the monolithic baselines and the
-linear test model's errors: orders, cheapest scheme per accuracy level (thin: icosim.pendulum.trade.work_precision)."""
+linear test model's errors: orders, cheapest scheme per accuracy level (thin: icosim.studies.trade.work_precision)."""
 
 import logging
 
 from icosim.io.netcdf import open_dataset, write_netcdf
 from icosim.job import start_job
-from icosim.pendulum.trade.work_precision import work_precision_dataset
+from icosim.studies.trade.work_precision import work_precision_dataset
 
 start_job(snakemake.log[0])
 p = snakemake.params

@@ -3,10 +3,10 @@
 import logging
 from pathlib import Path
 
-from icosim.claims.core import read_verdicts
 from icosim.io.netcdf import atomic_path
 from icosim.job import start_job
 from icosim.report.page import git_commit_text, report_page, utc_now
+from icosim.verdicts import read_verdicts
 
 start_job(snakemake.log[0])
 p = snakemake.params

@@ -1,4 +1,4 @@
-"""Snakemake job: every panel of one figure -> one NetCDF each (thin: the work is icosim.stability.datasets)."""
+"""Snakemake job: every panel of one figure -> one NetCDF each (thin: the work is icosim.studies.stability.datasets)."""
 
 import json
 import logging
@@ -6,8 +6,8 @@ import logging
 from icosim.io.netcdf import provenance_attrs, write_netcdf
 from icosim.job import start_job
 from icosim.labels import figure_label
-from icosim.stability.datasets import stability_panel_data
-from icosim.stability.panels import PanelSpec
+from icosim.studies.stability.datasets import stability_panel_data
+from icosim.studies.stability.panels import PanelSpec
 
 start_job(snakemake.log[0])
 for params, path in zip(snakemake.params.panels, snakemake.output, strict=True):

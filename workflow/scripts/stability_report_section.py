@@ -2,11 +2,11 @@
 
 import logging
 
-from icosim.claims.core import read_verdicts, verdict_counts
 from icosim.io.netcdf import atomic_path, open_attributes, open_dataset
 from icosim.job import start_job
 from icosim.report.schemes import stability_schemes
 from icosim.report.stability import stability_section
+from icosim.verdicts import read_verdicts, verdict_counts
 
 start_job(snakemake.log[0])
 i, p = snakemake.input, snakemake.params

@@ -1,11 +1,11 @@
-"""Snakemake job: stable shares per figure, row, k and scheme from the full panels (thin: icosim.stability.comparison)."""
+"""Snakemake job: stable shares per figure, row, k and scheme from the full panels (thin: icosim.studies.stability.comparison)."""
 
 import logging
 
 from icosim.io.netcdf import open_variables, provenance_attrs, write_netcdf
 from icosim.job import start_job
-from icosim.stability.checks import PANEL_VARIABLES
-from icosim.stability.comparison import scheme_shares_data
+from icosim.studies.stability.checks import PANEL_VARIABLES
+from icosim.studies.stability.comparison import scheme_shares_data
 
 start_job(snakemake.log[0])
 panels = [open_variables(path, PANEL_VARIABLES) for path in snakemake.input.panels]  # the shares read no others

@@ -14,10 +14,10 @@ import numpy as np
 
 from ..engine import methods as _methods
 from ..engine.bounds import check_k
-from ..engine.model import PhysicalModel
 from ..engine.schemes import get_scheme, standard_schemes
 from ..engine.spectral import spectral_radius
 from ..errors import ParameterError
+from ..problems.linear.model import PhysicalModel
 
 __all__ = [
     "TwoMassSystem",

@@ -1,8 +1,8 @@
 """Stability maps on demand: any method, parameters and grid, with the pipeline's own code.
 
 A map is a row of stability panels (one per ``k``) over a ``(lr1, li1)`` grid,
-computed by :func:`icosim.stability.datasets.stability_panel` from a
-:class:`~icosim.stability.panels.PanelSpec` and drawn by
+computed by :func:`icosim.studies.stability.datasets.stability_panel` from a
+:class:`~icosim.studies.stability.panels.PanelSpec` and drawn by
 :func:`icosim.figures.stability.stability_figure` -- the functions the
 workflow's sweep and figure rules call, so a map and a figure of the report
 agree point for point and look alike.  The datasets carry the pipeline's
@@ -30,8 +30,8 @@ import pandas as pd
 from ..engine.decompositions import DECOMPOSITIONS
 from ..engine.schemes import get_scheme
 from ..io.netcdf import provenance_attrs, write_netcdf
-from ..stability.datasets import stability_panel
-from ..stability.panels import RATIOS, PanelSpec, grid_axis
+from ..studies.stability.datasets import stability_panel
+from ..studies.stability.panels import RATIOS, PanelSpec, grid_axis
 
 __all__ = ["map_specs", "map_panels", "map_figure", "stable_extent", "boundary_extent", "write_map", "FIGURE_ID"]
 

@@ -2,16 +2,16 @@
 
 Each part defines its kinds in its own ``checks`` module; this registry imports
 them all (as scipy's ``solve_ivp`` keeps its ``METHODS`` table), so the generic
-machinery in :mod:`icosim.claims.core` needs to import no part and no part needs to
+machinery in :mod:`icosim.verdicts` needs to import no part and no part needs to
 register itself.
 
 =========================================  ==========================================================
 module                                     check kinds
 =========================================  ==========================================================
-:mod:`icosim.stability.checks`             ``stable_fraction``, ``compare``, ``trend``, ``pointwise``
-:mod:`icosim.convergence.checks`           ``convergence_order``
-:mod:`icosim.pendulum.replication.checks`  ``pendulum_stability``
-:mod:`icosim.fmi.checks`                   ``fmi_bound``, ``fmi_orders``
+:mod:`icosim.studies.stability.checks`             ``stable_fraction``, ``compare``, ``trend``, ``pointwise``
+:mod:`icosim.studies.convergence.checks`           ``convergence_order``
+:mod:`icosim.studies.pendulum.checks`  ``pendulum_stability``
+:mod:`icosim.studies.fmi.checks`                   ``fmi_bound``, ``fmi_orders``
 =========================================  ==========================================================
 
 >>> sorted(CHECKS)
@@ -20,16 +20,16 @@ module                                     check kinds
 
 from __future__ import annotations
 
-from ..convergence import checks as _convergence
-from ..fmi import checks as _fmi
-from ..pendulum.replication import checks as _pendulum
-from ..stability import checks as _stability
-from . import core as _claims
-from .core import Claim, Verdict
+from .. import verdicts as _claims
+from ..studies.convergence import checks as _convergence
+from ..studies.fmi import checks as _fmi
+from ..studies.pendulum import checks as _pendulum
+from ..studies.stability import checks as _stability
+from ..verdicts import Claim, Verdict
 
 __all__ = ["CHECKS", "DEFAULTS", "parse_claims", "load_claims", "evaluate_claim", "evaluate", "describe_claim"]
 
-#: check kind -> :class:`icosim.claims.core.CheckKind`, for every part.
+#: check kind -> :class:`icosim.verdicts.CheckKind`, for every part.
 CHECKS = {**_stability.CHECKS, **_convergence.CHECKS, **_pendulum.CHECKS, **_fmi.CHECKS}
 
 #: A claim is about the paper's coupling scheme, Jacobi, unless a selector names another.
@@ -37,12 +37,12 @@ DEFAULTS = {"scheme": "jacobi"}
 
 
 def parse_claims(items, *, where: str = "claims") -> list[Claim]:
-    """:func:`icosim.claims.core.parse_claims` with every part's check kinds."""
+    """:func:`icosim.verdicts.parse_claims` with every part's check kinds."""
     return _claims.parse_claims(items, CHECKS, where=where)
 
 
 def load_claims(path, key: str = "claims") -> list[Claim]:
-    """:func:`icosim.claims.core.load_claims` with every part's check kinds."""
+    """:func:`icosim.verdicts.load_claims` with every part's check kinds."""
     return _claims.load_claims(path, CHECKS, key=key)
 
 
@@ -51,10 +51,10 @@ def evaluate_claim(claim: Claim, datasets) -> Verdict:
 
 
 def evaluate(claims, datasets) -> list[Verdict]:
-    """One :class:`~icosim.claims.core.Verdict` per claim, with every part's check kinds and :data:`DEFAULTS`."""
+    """One :class:`~icosim.verdicts.Verdict` per claim, with every part's check kinds and :data:`DEFAULTS`."""
     return _claims.evaluate(claims, datasets, CHECKS, DEFAULTS)
 
 
 def describe_claim(claim: Claim) -> dict:
-    """:func:`icosim.claims.core.describe_claim` with every part's check kinds."""
+    """:func:`icosim.verdicts.describe_claim` with every part's check kinds."""
     return _claims.describe_claim(claim, CHECKS)

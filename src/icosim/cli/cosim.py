@@ -1,8 +1,8 @@
 """``icosim cosim``: run an FMU scene (two co-simulation units, a coupling method) and write its trajectory.
 
-The scene (:mod:`icosim.fmi.scene`) is checked against its JSON schema, its units are opened and checked against
+The scene (:mod:`icosim.problems.fmu.scene`) is checked against its JSON schema, its units are opened and checked against
 what the scene names (co-simulation, saved states, variables, their causality, types and units of measure, start
-values) and then measured (:mod:`icosim.fmi.inspection`: rollback, feedthrough, direction) and the start made
+values) and then measured (:mod:`icosim.problems.fmu.inspection`: rollback, feedthrough, direction) and the start made
 consistent before the first macro step; bad input exits with status 2 and one line
 ``icosim cosim: error: <file or unit>: <key>: ...``.  ``--check`` runs only these checks and prints a table per
 unit.  A unit that refuses a step, returns a value that is not finite, outlasts the per-call time limit or
@@ -73,9 +73,9 @@ def run(args, parser) -> int:
         import fmpy  # noqa: F401
     except ImportError:
         return _error("running a scene needs fmpy: pip install 'icosim[fmi]'")
-    from ..fmi.errors import SceneError
-    from ..fmi.guard import CALL_SECONDS, supervised
-    from ..fmi.scene import load_scene
+    from ..problems.fmu.errors import SceneError
+    from ..problems.fmu.guard import CALL_SECONDS, supervised
+    from ..problems.fmu.scene import load_scene
 
     try:
         scene = load_scene(args.scene)
@@ -99,10 +99,10 @@ def run(args, parser) -> int:
 
 def _run(scene, args, out) -> int:
     from ..advise.output import Progress
-    from ..fmi.errors import SceneError, UnitStepError
-    from ..fmi.run import run_dataset, run_scene, run_summary
     from ..io.jsonio import dumps
     from ..io.netcdf import write_netcdf
+    from ..problems.fmu.errors import SceneError, UnitStepError
+    from ..problems.fmu.run import run_dataset, run_scene, run_summary
 
     try:
         bar = Progress(scene.n_steps, label="macro steps")
@@ -121,9 +121,9 @@ def _run(scene, args, out) -> int:
 
 
 def _predict(scene, args) -> int:
-    from ..fmi.errors import SceneError, UnitStepError
-    from ..fmi.predict import predict_scene
     from ..io.jsonio import dumps
+    from ..problems.fmu.errors import SceneError, UnitStepError
+    from ..problems.fmu.predict import predict_scene
 
     try:
         answer = predict_scene(scene)
@@ -134,8 +134,8 @@ def _predict(scene, args) -> int:
 
 
 def _check(scene, args) -> int:
-    from ..fmi.check import check_scene
     from ..io.jsonio import dumps
+    from ..problems.fmu.check import check_scene
 
     report = check_scene(scene)
     print(dumps(report) if args.json else _check_text(report))

@@ -75,8 +75,8 @@ def run(args, parser) -> int:
         stable_extent,
         write_map,
     )
-    from ..engine.model import TestModel
-    from ..stability.panels import grid_axis
+    from ..problems.linear.model import TestModel
+    from ..studies.stability.panels import grid_axis
 
     given = {name: getattr(args, name) for name in methods.argument_names() if getattr(args, name) is not None}
     grid = dict(

@@ -102,7 +102,7 @@ def _method_from_args(args):
 
 def run(args, parser) -> int:
     """``icosim rho``: check the arguments (exit 2 naming the bad one), then answer."""
-    from ..engine.model import TestModel
+    from ..problems.linear.model import TestModel
 
     scheme = get_scheme(args.scheme)
     try:
@@ -159,7 +159,7 @@ DEFAULT_DIGITS = 17
 def rho_answer(model, method, decomposition, k, *, digits=None, max_bits=1024, timeout=None, scheme=JACOBI) -> dict:
     """The command's answer as a JSON-ready dict (strict: no NaN or infinity; ``None`` with ``reason``).
 
-    ``model`` is a :class:`~icosim.engine.model.TestModel` of one point (Fractions kept exact); ``scheme`` the
+    ``model`` is a :class:`~icosim.problems.linear.model.TestModel` of one point (Fractions kept exact); ``scheme`` the
     coupling scheme (:mod:`icosim.engine.schemes`), used by the proof and by float64 alike.
     """
     from ..engine.spectral import certify_spectral_radius

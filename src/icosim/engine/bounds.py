@@ -139,7 +139,7 @@ _DERIVED = (
 
 
 def check_derived(model) -> None:
-    """The subsystem coefficients of one :class:`~icosim.engine.model.TestModel` point must be finite in float64.
+    """The subsystem coefficients of one :class:`~icosim.problems.linear.model.TestModel` point must be finite in float64.
 
     Raises a :class:`ParameterError` that starts with the input responsible (the largest one the
     overflowing coefficient is formed from), e.g. ``ali21 = 1e+300 makes k2 = ... too large for float64``.

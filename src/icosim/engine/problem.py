@@ -6,8 +6,8 @@ the decomposition, the approximation order ``k``, the arithmetic, the
 extrapolation (Eq. 9/35/59) and shift of the coupling history, the samples the
 corrector's interpolation polynomial runs through (Eq. 11), and a count of the
 work done -- and states the contract a subclass meets.  The linear test model
-(:class:`icosim.engine.linear_problem.LinearCosimulation`) and the double pendulum
-(:class:`icosim.pendulum.problem.PendulumCosimulation`) are the two subclasses.
+(:class:`icosim.problems.linear.problem.LinearCosimulation`) and the double pendulum
+(:class:`icosim.problems.pendulum.problem.PendulumCosimulation`) are the two subclasses.
 """
 
 from __future__ import annotations

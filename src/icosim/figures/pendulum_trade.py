@@ -325,7 +325,7 @@ def adaptive_figure(adaptive, *, title=None):
     return fig
 
 
-#: figure name -> function; it takes the datasets icosim.pendulum.names.TRADE_FIGURE_DATASETS lists
+#: figure name -> function; it takes the datasets icosim.problems.pendulum.names.TRADE_FIGURE_DATASETS lists
 #: for the name.  One workflow job per figure.
 TRADE_FIGURES = {
     "work_precision": work_precision_figure,

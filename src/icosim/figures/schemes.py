@@ -1,6 +1,6 @@
 """The coupling schemes side by side: stable shares per method, decomposition and ``k`` (one panel per figure).
 
-Drawn from :func:`icosim.stability.comparison.scheme_shares`: per panel (one
+Drawn from :func:`icosim.studies.stability.comparison.scheme_shares`: per panel (one
 figure: a method and a decomposition) a group of bars per ``k``, one bar
 per scheme (the mean stable share over the figure's rows), with each row's
 share as a marker on its bar.

@@ -17,7 +17,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Rectangle
 
 from ..engine.methods import parameters
-from ..stability.panels import format_row_label
+from ..studies.stability.panels import format_row_label
 
 __all__ = ["stability_figure", "drawn_variables", "panel_layout", "row_labels", "STYLES"]
 
@@ -68,7 +68,7 @@ def panel_layout(panels):
 def row_labels(panels) -> dict:
     """Row number -> label, from the panels' ``row_label_keys`` attribute.
 
-    The keys are decided once, by :func:`icosim.stability.panels.row_label_keys` (the rule
+    The keys are decided once, by :func:`icosim.studies.stability.panels.row_label_keys` (the rule
     the report uses as well), and stored in every panel; here they are only
     typeset with the TeX symbols.
     """
@@ -78,7 +78,7 @@ def row_labels(panels) -> dict:
         if not keys:
             raise ValueError(
                 f"panel of figure {ds.attrs.get('figure')} row {ds.attrs.get('row')} has no row_label_keys "
-                "attribute (written by icosim.stability.panels.stability_panel): recompute it"
+                "attribute (written by icosim.studies.stability.panels.stability_panel): recompute it"
             )
         labels[int(ds.attrs["row"])] = format_row_label(keys.split(), ds.attrs, symbols())
     return labels
@@ -130,7 +130,7 @@ def stability_figure(
 
     Parameters
     ----------
-    panels : the panel datasets written by :func:`icosim.stability.panels.stability_panel`, each an
+    panels : the panel datasets written by :func:`icosim.studies.stability.panels.stability_panel`, each an
         :class:`xarray.Dataset` or its :func:`drawn_variables` as :func:`icosim.io.netcdf.open_variables` reads them.
     style : ``"field"`` (rho colour field and boundary) or ``"dots"`` (the
         paper's green dots at stable points, every ``dots_stride``-th grid point).

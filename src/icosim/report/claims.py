@@ -1,4 +1,4 @@
-"""The claims table of a report section, from the verdict records of :func:`icosim.claims.core.write_verdicts`."""
+"""The claims table of a report section, from the verdict records of :func:`icosim.verdicts.write_verdicts`."""
 
 from __future__ import annotations
 

@@ -11,9 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..claims.core import verdict_counts
-from ..convergence.curves import fastest_configurations
-from ..convergence.experiment import Setup, oscillation_summary, step_counts
+from ..studies.convergence.curves import fastest_configurations
+from ..studies.convergence.experiment import Setup, oscillation_summary, step_counts
+from ..verdicts import verdict_counts
 from . import html as rp
 from .claims import claims_table
 
@@ -25,7 +25,7 @@ esc = rp.escape
 STEPPING_TEXT = {
     "error": " — the co-simulation error itself is propagated, e_N+1 = M e_N + D z_N, with the one-step defect D "
     "of the macro step on the exact solution formed in Arb ball arithmetic (proven to 2^-40 relative per row) and "
-    "then rounded (icosim.convergence.errors): float64 carries the error, not the difference of two O(1) numbers, "
+    "then rounded (icosim.studies.convergence.errors): float64 carries the error, not the difference of two O(1) numbers, "
     "so there is no round-off floor. Checked against 40-digit mpmath time stepping (tests).",
     "matrix": " — the float64 state is iterated with the amplification matrix and the exact solution subtracted "
     "(a round-off floor near NRMSE ~ 1e-11).",
@@ -103,7 +103,7 @@ def convergence_section(
         f"consistent with the rigid link; end time T = {s['end_time']:g} s: {horizon} (every NRMSE denominator, the variance "
         "of the reference, must stay well away from zero).",
         "Coupling-variable history: the exact monolithic coupling variables (multiplier λ and/or acceleration) at "
-        "T_0, T_−1, …, T_−k (icosim.engine.exact.consistent_start); both subsystems start at the exact state.",
+        "T_0, T_−1, …, T_−k (icosim.problems.linear.exact.consistent_start); both subsystems start at the exact state.",
         f"Step sizes: {len(H)} sizes H = T/N_total from {H.min():.3g} s to {H.max():.3g} s "
         f"({np.log10(H.max() / H.min()):.1f} decades; N_total from {n_steps.min()} to {n_steps.max()}).",
         "Eq. (72), whose extraction is garbled (two brackets closed by ]^(1/2), one opened), is read as one square root of the "

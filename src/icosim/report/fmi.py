@@ -2,7 +2,7 @@
 model, the convergence orders over H on the units, and the part's claims.
 
 Everything shown comes from the datasets the workflow wrote (``results/fmi/validation/<scene>.nc``,
-``results/fmi/orders/<case>.nc``, :mod:`icosim.fmi.validation`) and the claim verdicts; nothing is computed
+``results/fmi/orders/<case>.nc``, :mod:`icosim.studies.fmi.validation`) and the claim verdicts; nothing is computed
 again here.
 """
 
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 
-from ..claims.core import verdict_counts
+from ..verdicts import verdict_counts
 from . import html as rp
 from .claims import claims_table
 

@@ -19,7 +19,7 @@ import subprocess
 from pathlib import Path
 
 from .. import __version__
-from ..claims.core import verdict_counts
+from ..verdicts import verdict_counts
 from .html import claim_anchor, fold, page, table, verdict_badge
 from .html import escape as esc
 
@@ -92,7 +92,7 @@ def _dataset_link(part, figure, datasets) -> str:
 def summary_section(claims: dict, sections_html, *, datasets=None) -> str:
     """The answer first: per part the claims reproduced / not reproduced / undecided, then each disagreement.
 
-    ``claims`` maps a part to its verdict records (:func:`icosim.claims.core.read_verdicts`), in page order;
+    ``claims`` maps a part to its verdict records (:func:`icosim.verdicts.read_verdicts`), in page order;
     only the paper's (scope ``paper``) are counted here, the others are in the parts' sections.
     """
     datasets = DATASET_PATHS if datasets is None else datasets

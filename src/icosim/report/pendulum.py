@@ -34,7 +34,7 @@ def pendulum_section(
 
     ``config`` is the configuration (``pendulum:``), ``paper_figure`` maps
     ``k`` to the paper's figure number, ``summary`` is the run summary
-    (:func:`icosim.pendulum.replication.summary.summarize`), ``claims`` the verdict
+    (:func:`icosim.studies.pendulum.summary.summarize`), ``claims`` the verdict
     records, ``figure_pngs`` the figures (``.../pendulum_k<k>_<scheme>.png``) and
     ``error_png`` the error figure; ``schemes_html`` (:func:`icosim.report.schemes.pendulum_schemes`)
     and ``trade_html`` (:func:`trade_section`) are appended.
@@ -85,7 +85,7 @@ dimensionless μ̄): {methods}.
 Corrector: {escape(mode)}.</p>
 <p><b>Subsystem integration</b>: Radau IIA (3 stages, order 5) with step-size control, rtol = {integ["rtol"]:g},
 atol = {integ["atol"]:g} (as in the paper), simplified Newton to {integ["newton_tol"]:g} of the error scale
-(<code>icosim.pendulum.integrator.radau</code>: scipy's Radau algorithm, batched over initial values and inputs with a shared step
+(<code>icosim.problems.pendulum.integrator.radau</code>: scipy's Radau algorithm, batched over initial values and inputs with a shared step
 sequence). <b>Sensitivities</b> of the outputs to the new coupling values e<sub>N+1</sub>: forward differences,
 re-integrating each subsystem with the interpolation polynomial through e<sub>N+1</sub> + h<sub>j</sub>
 (h<sub>j</sub> = {sens["fd_step"]:g}·max(1, |e<sub>j</sub>|)), predictor and perturbations in one batched call per

@@ -4,7 +4,7 @@ subsystem tolerance and adaptive macro steps, with conclusions computed from the
 Every number on the page is read from ``work_precision.nc``,
 ``stability_limit.nc``, ``tolerance.nc`` and ``adaptive.nc``; the rows and
 counts behind the sentences that draw conclusions come from
-:mod:`icosim.pendulum.trade.conclusions`, which the tests call on the same datasets.
+:mod:`icosim.studies.trade.conclusions`, which the tests call on the same datasets.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from ..pendulum.trade.conclusions import (
+from ..studies.trade.conclusions import (
     LIMIT_AGREEMENT,
     ORDER_AGREEMENT,
     accuracy_rows,

@@ -1,7 +1,7 @@
 """The coupling schemes compared, in each part's section of the report: from the data.
 
 Everything shown comes from generated files: the stable shares
-(:func:`icosim.stability.comparison.scheme_shares`), the convergence panels of
+(:func:`icosim.studies.stability.comparison.scheme_shares`), the convergence panels of
 every scheme, the pendulum summary of every run, the claims beyond the paper
 (scope ``beyond``) and the figures of the other schemes.  Each function returns
 the subsection of one part; a part computed with one scheme has none.
@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..claims.core import verdict_counts
 from ..engine.schemes import SCHEMES
 from ..labels import figure_label
+from ..verdicts import verdict_counts
 from .claims import claims_table
 from .html import escape, figure, table
 
@@ -169,10 +169,10 @@ def stability_schemes(*, shares, claims, comparison_png, figure_pngs, figures_cf
 def order_rows(curves) -> tuple:
     """``(schemes, rows)``: per curve of the paper's figures the fitted order under each scheme.
 
-    ``curves`` are records of :func:`icosim.convergence.curves.curves` of every scheme's panels.
+    ``curves`` are records of :func:`icosim.studies.convergence.curves.curves` of every scheme's panels.
     A row is ``(label, {scheme: order or "unstable" or None})``.
     """
-    from ..convergence.curves import curve_label
+    from ..studies.convergence.curves import curve_label
 
     table_, schemes = {}, []
     for rec in curves:

@@ -9,9 +9,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..claims.core import verdict_counts
 from ..labels import figure_label
-from ..stability.panels import RATIOS, row_label
+from ..studies.stability.panels import RATIOS, row_label
+from ..verdicts import verdict_counts
 from . import html as rp
 from .claims import claims_table
 
@@ -122,7 +122,7 @@ def stability_section(
     ``figures``, ``grid``, ``zoom_grid``, ``precision``, ``style`` and
     ``decisions`` are the configuration (``stability:``); ``panel_attrs`` the
     attributes of every panel dataset, ``claims`` the verdict records
-    (:func:`icosim.claims.core.read_verdicts`), ``figure_pngs`` the figures
+    (:func:`icosim.verdicts.read_verdicts`), ``figure_pngs`` the figures
     (``.../fig<figure>.png``), in the order shown.
     """
     # -- panel attributes: precision and cost, per figure (and all) ---------------------------------

@@ -38,7 +38,7 @@ class CouplingMethod:
 
     ``solves`` is a tuple of ``(weight, (w_pos, w_vel, w_acc))``.  A level may also be a tuple, one exact
     number per point of a batch (its leading axis), none of them 0 or 1: the batched step of points whose
-    levels differ (:func:`icosim.convergence.pointwise.pointwise_method`).
+    levels differ (:func:`icosim.studies.convergence.pointwise.pointwise_method`).
     ``params`` records the method parameters under their command-line names.
     ``requires_constraint``: the rule corrects on the constraint's levels, so
     it is defined only for decompositions whose conditions include the

@@ -12,7 +12,7 @@ module                      holds
                             cannot decide; the verdict of every point
 ==========================  ===================================================
 
-Every study asks this package for rho: the stability panels (:mod:`icosim.stability`), the
+Every study asks this package for rho: the stability panels (:mod:`icosim.studies.stability`), the
 convergence study's stability marks and floor-free errors, the pendulum's linearised point,
 ``icosim rho`` and ``icosim advise``.  Importing it loads no xarray and no matplotlib.
 """

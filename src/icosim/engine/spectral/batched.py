@@ -15,9 +15,9 @@ from fractions import Fraction
 
 import numpy as np
 
+from ...problems.linear.model import Coefficients
 from ..backends import Ball
 from ..bounds import MAX_GUARD_BITS, MAX_SECONDS, time_budget
-from ..model import Coefficients
 from .certified import (
     DEFAULT_BITS,
     MAX_BITS,

@@ -42,10 +42,10 @@ from fractions import Fraction
 
 import numpy as np
 
+from ...problems.linear.model import Coefficients, PhysicalModel, TestModel, eq71_coefficients
+from ...problems.linear.subsystems import decay_rate
 from ..backends import Ball
 from ..bounds import MAX_GUARD_BITS, check_finite
-from ..model import Coefficients, PhysicalModel, TestModel, eq71_coefficients
-from ..subsystems import decay_rate
 from .matrix import amplification_matrix, as_coefficients
 
 __all__ = [
@@ -316,7 +316,7 @@ def certify_spectral_radius(
 ) -> SpectralCertificate:
     """Prove ``rho < 1`` or ``rho > 1``, or report ``marginal``, for one parameter point.
 
-    ``model`` is a :class:`~icosim.engine.model.TestModel` (or ``PhysicalModel`` /
+    ``model`` is a :class:`~icosim.problems.linear.model.TestModel` (or ``PhysicalModel`` /
     ``Coefficients``) of one point whose attributes are taken exactly (floats,
     Fractions, decimal strings).  The working precision starts at ``bits``
     (plus :func:`guard_bits`); if that does not decide the verdict, it is

@@ -20,13 +20,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...problems.linear.model import Coefficients
+from ...problems.linear.problem import LinearCosimulation
 from .. import layout
 from ..backends import Float64
 from ..decompositions import get_decomposition
-from ..linear_problem import LinearCosimulation
 from ..macrostep import macro_step
 from ..methods import CouplingMethod
-from ..model import Coefficients
 from ..schemes import JACOBI, get_scheme
 
 __all__ = ["amplification_matrix", "as_coefficients"]
@@ -53,8 +53,8 @@ def _matrix_from_problem(problem: LinearCosimulation, method: CouplingMethod, sc
 def amplification_matrix(coefficients, method: CouplingMethod, decomposition, k: int, backend=None, *, scheme=JACOBI):
     """The matrix ``M`` with ``w_N+1 = M w_N`` (leading axes follow the coefficients).
 
-    ``coefficients`` is a :class:`~icosim.engine.model.Coefficients` or a
-    :class:`~icosim.engine.model.TestModel` / :class:`~icosim.engine.model.PhysicalModel`;
+    ``coefficients`` is a :class:`~icosim.problems.linear.model.Coefficients` or a
+    :class:`~icosim.problems.linear.model.TestModel` / :class:`~icosim.problems.linear.model.PhysicalModel`;
     ``scheme`` the coupling scheme (:mod:`icosim.engine.schemes`, default Jacobi).
     """
     scheme = get_scheme(scheme)
@@ -68,5 +68,5 @@ def amplification_matrix(coefficients, method: CouplingMethod, decomposition, k:
 
 
 def as_coefficients(c) -> Coefficients:
-    """:class:`~icosim.engine.model.Coefficients` of a test model, physical model or coefficients."""
+    """:class:`~icosim.problems.linear.model.Coefficients` of a test model, physical model or coefficients."""
     return c if isinstance(c, Coefficients) else c.coefficients()

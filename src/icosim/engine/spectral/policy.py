@@ -36,9 +36,9 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from ...errors import NotFiniteError, ParameterError, PointTimeout, PrecisionCapError
+from ...problems.linear.model import Coefficients, TestModel
 from ..backends import FLOAT64_DIGITS
 from ..bounds import MAX_BITS_LIMIT, MAX_SECONDS, time_budget
-from ..model import Coefficients, TestModel
 from ..schemes import JACOBI, get_scheme
 from .batched import certify_spectral_radii
 from .certified import DEFAULT_BITS, MAX_BITS
@@ -191,7 +191,7 @@ def spectral_radius(
     Parameters
     ----------
     model : :class:`TestModel` (Eq. 71; its attributes broadcast to the grid),
-        or :class:`~icosim.engine.model.PhysicalModel` / :class:`~icosim.engine.model.Coefficients`
+        or :class:`~icosim.problems.linear.model.PhysicalModel` / :class:`~icosim.problems.linear.model.Coefficients`
         (any damping, overdamped included).
     scheme : the coupling scheme (:mod:`icosim.engine.schemes`; default Jacobi), used by every arithmetic.
     policy : one of :data:`POLICIES` (module docstring).

@@ -40,12 +40,12 @@ import copy
 
 import numpy as np
 
+from ...problems.linear.model import TestModel
+from ...problems.linear.problem import LinearCosimulation
+from ...problems.linear.subsystems import FORCE
 from ..backends import Float64, Multiprecision
 from ..decompositions import get_decomposition
-from ..linear_problem import LinearCosimulation
-from ..model import TestModel
 from ..schemes import JACOBI, get_scheme
-from ..subsystems import FORCE
 from .matrix import _matrix_from_problem, _problem, as_coefficients
 
 __all__ = ["spectral_radius_float64", "spectral_radius_mp", "SAFETY", "DISTURBANCE", "DOUBT", "FLOOR"]

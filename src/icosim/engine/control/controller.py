@@ -1,0 +1,98 @@
+"""The error estimate and the PI step-size controller of adaptive macro steps.
+
+**Error estimate.**  The predictor extrapolates the coupling variables with a
+polynomial of degree ``k`` (Eq. 9); the corrector computes them from the
+coupling conditions.  Their difference ``e_c - e_p`` is the extrapolation
+error: for exact samples of a smooth ``e(t)`` on equidistant nodes it is
+``H^(k+1) e^(k+1)(T_N)`` to leading order (the Lagrange remainder at
+``tau = 1`` with nodes ``0, -1, ..., -k``: ``prod (1 + j) / (k+1)! = 1``), so the
+estimate scales like ``H^(k+1)`` (:func:`pc_estimate`, tested against that
+constant).  Its norm is ``max_j |e_c,j - e_p,j| / (tol (1 + |e_c,j|))`` (the
+coupling variables in the problem's units; SI for the pendulum: N and m/s^2).
+
+**Controller.**  A PI controller (:class:`StepController`; Gustafsson's
+controller as given by Hairer & Wanner, *Solving ODEs I*, Sect. IV.2, Eq. 2.43c)
+with step rejection: ``H_new = H * safety * err^(-beta1/p) * err_prev^(beta2/p)``
+with ``p = k + 1``, limited to ``[fac_min, fac_max] H`` and to
+``[H_min, H_max]``; no growth right after a rejection; a rejected step is
+retried with ``H * max(fac_min, safety * err^(-1/p))``.  How the two drive a
+run: :mod:`icosim.engine.control.driver`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...errors import ParameterError
+
+__all__ = ["StepController", "pc_estimate"]
+
+
+@dataclass(frozen=True)
+class StepController:
+    """PI step-size controller with rejection, for an error estimate that scales like ``H^order``.
+
+    >>> c = StepController(order=2, H_max=1.0)
+    >>> c.accepts(0.5), c.accepts(2.0), c.accepts(float("nan"))
+    (True, False, False)
+    >>> round(c.after_reject(0.1, 4.0), 15)  # 0.1 * 0.9 * 4^(-1/2)
+    0.045
+    >>> c.after_accept(0.1, 0.0, None)  # an error of zero: the largest growth
+    0.2
+    """
+
+    order: int
+    safety: float = 0.9
+    fac_min: float = 0.2
+    fac_max: float = 2.0
+    beta1: float = 0.7
+    beta2: float = 0.4
+    H_min: float = 1e-6
+    H_max: float = math.inf
+
+    def __post_init__(self):
+        if not (isinstance(self.order, int) and self.order >= 1):
+            raise ParameterError(f"controller order must be an integer >= 1, got {self.order!r}")
+        if not (0 < self.safety <= 1 and 0 < self.fac_min < 1 < self.fac_max):
+            raise ParameterError("controller needs 0 < safety <= 1 and 0 < fac_min < 1 < fac_max")
+        if not (self.beta1 > 0 and self.beta2 >= 0):
+            raise ParameterError("controller needs beta1 > 0 and beta2 >= 0")
+        if not (0 < self.H_min < self.H_max):
+            raise ParameterError(f"controller needs 0 < H_min < H_max, got {self.H_min!r}, {self.H_max!r}")
+
+    @staticmethod
+    def accepts(err: float) -> bool:
+        """A step is accepted when its error norm is at most 1 (never when it is not a number)."""
+        return bool(err <= 1.0)
+
+    def _clip(self, H):
+        return min(max(H, self.H_min), self.H_max)
+
+    def after_accept(self, H: float, err: float, err_prev: float | None, *, after_reject: bool = False) -> float:
+        """Size of the next step after an accepted one with error ``err`` (the step before: ``err_prev``)."""
+        p = self.order
+        if err <= 0:
+            fac = self.fac_max
+        else:
+            fac = self.safety * err ** (-self.beta1 / p)
+            if err_prev is not None and self.beta2 > 0:
+                fac *= max(err_prev, 1e-4) ** (self.beta2 / p)
+        fac = min(max(fac, self.fac_min), self.fac_max)
+        if after_reject:
+            fac = min(fac, 1.0)
+        return self._clip(H * fac)
+
+    def after_reject(self, H: float, err: float) -> float:
+        """Size of the retry after a rejected step with error ``err`` (inf or NaN: the largest cut)."""
+        fac = self.safety * err ** (-1.0 / self.order) if math.isfinite(err) else self.fac_min
+        return max(H * min(max(fac, self.fac_min), self.safety), self.H_min)
+
+
+def pc_estimate(e_corrected, e_predicted, tol: float) -> float:
+    """Norm of the predictor-corrector difference: ``max |e_c - e_p| / (tol (1 + |e_c|))``."""
+    e_c = np.asarray(e_corrected, float)
+    d = np.abs(e_c - np.asarray(e_predicted, float))
+    return float(np.max(d / (tol * (1.0 + np.abs(e_c)))))

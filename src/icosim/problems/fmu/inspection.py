@@ -1,0 +1,255 @@
+"""A unit checked before it is trusted: what the coupling needs of it, measured on the unit at its start.
+
+* **rollback** -- save the state, step, read the outputs, restore, step again: the outputs must agree (bit for
+  bit, or within ``rollback_tolerance``), and the restored unit must stand where it stood;
+* **feedthrough** -- does the coupling output (acceleration of a force-driven unit, the drive's force of a
+  kinematically driven one) follow the coupling input without a step, as the ``ModelStructure`` declares or
+  not; and does it respond at all, after a step.  The macro step and the identification use what the unit does;
+* **direction** -- the sign of that response: with the scene's ``force_sign``s, the joint's multiplier must act
+  on the two units with opposite signs (:func:`joint_direction`; a unit whose input acts against the physical
+  force needs the other ``force_sign``); a kinematically driven unit must move the way its prescribed
+  acceleration says;
+* units of measure and start values are checked when the unit is opened (:mod:`icosim.problems.fmu.measures`,
+  :mod:`icosim.problems.fmu.variables`); they appear in the report too.
+
+Each check is a :class:`Finding`; :func:`inspect_unit` returns them all, so ``icosim cosim --check`` can print
+a table, and :func:`refuse` raises the first refusal (a run starts only with units that pass).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import FmuError
+
+__all__ = ["Finding", "Inspection", "inspect_unit", "joint_direction", "refuse", "declared_feedthrough"]
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One check of one unit: ``verdict`` is ``pass``, ``refused`` or ``note``."""
+
+    check: str
+    verdict: str
+    detail: str
+    fix: str = ""
+    key: str = ""  # the scene key a refusal is about, where it is one
+
+
+@dataclass
+class Inspection:
+    """What was measured on a unit and what was found."""
+
+    label: str
+    kind: str
+    findings: list = field(default_factory=list)
+    feedthrough: bool = True
+    declared: bool | None = None
+    gain: float = float("nan")  # d output / d input: algebraic where the unit has feedthrough, else after a step
+
+    @property
+    def refused(self) -> list:
+        return [f for f in self.findings if f.verdict == "refused"]
+
+
+def declared_feedthrough(md, output_variable, input_variable):
+    """Does the ``ModelStructure`` declare that the output depends on the input? ``None``: it does not say (an
+    output without a ``dependencies`` list depends on everything, FMI 2.0 section 2.2.8)."""
+    for unknown in md.outputs:
+        if unknown.variable is output_variable:
+            if unknown.dependencies is None:
+                return None
+            return any(dep is input_variable for dep in unknown.dependencies)
+    return None
+
+
+def _probe_outputs(unit, kind):
+    """Position, velocity and the coupling output as the unit stands (SI), ``(3, components)``."""
+    out = "acceleration" if kind == "force" else "reaction_force"
+    return unit.get(("position", "velocity", out))
+
+
+def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=0.0) -> Inspection:
+    """Measure ``unit`` at its start state and check it (the unit is left at its start, its input at zero).
+
+    ``kind`` is ``"force"`` or ``"kinematic"``; ``force_sign`` the scene's.  Each component of a vector joint is
+    probed on its own; the component that responds most gives the unit's gain (its sign is the unit's own input
+    convention; :func:`joint_direction` checks the two units' together)."""
+    key = "force" if kind == "force" else "acceleration_input"
+    out = "acceleration" if kind == "force" else "reaction_force"
+    found = Inspection(unit.label, kind)
+    in_var, out_var = unit.elements[key][0].variable, unit.elements[out][0].variable
+    found.declared = declared_feedthrough(unit.md, out_var, in_var)
+    n = len(unit.elements[key])
+    zero = np.zeros(n)
+    unit_inputs = np.eye(n)  # 1 N or 1 m/s^2 on one component: finite whatever the unit's mass
+    start = unit.save()
+    algebraic, step_gain, velocity_gain = np.zeros(n), np.zeros(n), np.zeros(n)
+    try:
+        unit.set(key, zero)
+        base = _probe_outputs(unit, kind)
+        for c in range(n):
+            unit.set(key, unit_inputs[c])
+            algebraic[c] = _probe_outputs(unit, kind)[2, c] - base[2, c]
+        unit.set(key, zero)
+
+        def stepped(u):
+            unit.restore(start)
+            unit.step(key, [u], t0, H, step_index=0)
+            return _probe_outputs(unit, kind)
+
+        first = stepped(zero)
+        again = stepped(zero)
+        for c in range(n):
+            pushed = stepped(unit_inputs[c])
+            step_gain[c] = pushed[2, c] - first[2, c]
+            velocity_gain[c] = pushed[1, c] - first[1, c]
+        unit.restore(start)
+        unit.set(key, zero)
+        back = _probe_outputs(unit, kind)
+    finally:
+        unit.restore(start)
+        unit.free(start)
+    scale = np.maximum(np.abs(base[2]), 1e-300)
+    responds = np.isfinite(algebraic) & (np.abs(algebraic) > 1e-12 * scale)
+    found.feedthrough = bool(responds.any())
+    gains = np.where(responds, algebraic, step_gain) if found.feedthrough else step_gain
+    c = int(np.argmax(np.abs(np.nan_to_num(gains))))
+    found.gain = float(gains[c])
+    found.findings.append(_rollback(first, again, base, back, rollback_tolerance))
+    found.findings.append(_feedthrough(kind, found, float(step_gain[c]), float(velocity_gain[c])))
+    found.findings.append(_direction(kind, found, force_sign, float(velocity_gain[c])))
+    found.findings.append(_units(unit))
+    found.findings.append(_starts(unit))
+    if unit.description_problems:
+        problems = "; ".join(unit.description_problems)
+        found.findings.append(
+            Finding("description", "note", f"fmpy's validation of its modelDescription.xml reports: {problems}")
+        )
+    return found
+
+
+def _rollback(first, again, base, back, tol) -> Finding:
+    names = ("position", "velocity", "coupling output")
+    for what, a, b in (("after a repeated step", first, again), ("after restoring the saved state", base, back)):
+        a, b = np.asarray(a), np.asarray(b)
+        bad = np.argwhere(~(np.abs(a - b) <= tol * np.maximum(np.abs(a), np.abs(b))))
+        if bad.size:
+            row, col = (int(i) for i in bad[0])
+            return Finding(
+                "rollback",
+                "refused",
+                f"its {names[row]} (component {col + 1}) differs {what}: {a[row, col]!r} then {b[row, col]!r} "
+                "(the restored state is not the saved one)",
+                "the coupling repeats steps from saved states, so a unit whose fmi2SetFMUstate does not restore "
+                "everything cannot be coupled (rollback_tolerance in the subsystem accepts a relative difference)",
+            )
+    how = "bit for bit" if tol == 0 else f"within {tol:g} relative"
+    return Finding("rollback", "pass", f"a restored step repeats {how}")
+
+
+def _feedthrough(kind, found, step_gain, velocity_gain) -> Finding:
+    out = "acceleration" if kind == "force" else "drive's force"
+    inp = "force input" if kind == "force" else "acceleration input"
+    said = {True: "declares it", False: "declares none", None: "does not say"}[found.declared]
+    if found.feedthrough:
+        return Finding("feedthrough", "pass", f"its {out} follows its {inp} without a step (ModelStructure {said})")
+    responds = abs(step_gain) > 0 or abs(velocity_gain) > 0
+    if not responds:
+        return Finding(
+            "feedthrough",
+            "refused",
+            f"its {out} and velocity do not respond to its {inp}, neither at once nor after a step "
+            f"(ModelStructure {said}): the scene's input does not drive this unit",
+            f"name the input that drives the unit as {'force' if kind == 'force' else 'acceleration_input'}",
+        )
+    note = " (contrary to its ModelStructure)" if found.declared else ""
+    return Finding(
+        "feedthrough",
+        "note",
+        f"its {out} follows its {inp} only through a step{note}: the coupling and the identification step it",
+    )
+
+
+def _direction(kind, found, force_sign, velocity_gain) -> Finding:
+    gain = found.gain
+    per = "m/s^2 per N" if kind == "force" else "N per m/s^2"
+    if kind == "kinematic" and velocity_gain < 0:
+        return Finding(
+            "direction",
+            "refused",
+            f"a positive prescribed acceleration moves it backwards (velocity after a step {velocity_gain:+.3g} "
+            "m/s per m/s^2)",
+            "its acceleration input is not the acceleration of its coupling point: name the right input",
+        )
+    if kind == "force" and gain * velocity_gain < 0:
+        return Finding(
+            "direction",
+            "refused",
+            f"its acceleration responds to the force with {gain:+.3g} m/s^2 per N but its velocity with "
+            f"{velocity_gain:+.3g} m/s per N: the outputs contradict each other",
+        )
+    if not np.isfinite(gain) or gain == 0:
+        return Finding("direction", "refused", f"its coupling output does not respond to its input ({gain!r} {per})")
+    way = "with" if gain > 0 else "against"
+    return Finding(
+        "direction",
+        "pass",
+        f"{gain:+.4g} {per} of its input (the input acts {way} the physical "
+        f"{'force' if kind == 'force' else 'drive'}); with force_sign {force_sign:+d} the multiplier acts on it "
+        f"with {'+' if force_sign * gain > 0 else '-'}lambda",
+    )
+
+
+def joint_direction(labels, kinds, force_signs, gains) -> Finding:
+    """The joint's check over both units: the multiplier must act on them with opposite signs (Newton's third
+    law), i.e. ``force_sign_1 * gain_1`` and ``force_sign_2 * gain_2`` of opposite sign.  The refusal names the
+    unit whose sign departs from the paper's convention (``+lambda`` on the first unit, ``-lambda`` on the second)."""
+    acts = [np.sign(fs * g) for fs, g in zip(force_signs, gains)]
+    if acts[0] * acts[1] < 0:
+        return Finding("direction", "pass", "the multiplier acts on the two units with opposite signs")
+    wrong = 0 if acts[0] < 0 else 1  # (+, +): the second departs from -lambda; (-, -): the first from +lambda
+    per = ["m/s^2 per N" if k == "force" else "N per m/s^2" for k in kinds]
+    said = " and ".join(
+        f"{lab}'s {'acceleration' if k == 'force' else 'drive force'} by {g:+.4g} {p} of its input (force_sign {int(fs):+d})"
+        for lab, k, g, p, fs in zip(labels, kinds, gains, per, force_signs)
+    )
+    return Finding(
+        "direction",
+        "refused",
+        f"the multiplier would move {said}: the joint would push both units the same way",
+        f"set subsystems.{labels[wrong]}.force_sign: {-int(force_signs[wrong]):d} (the multiplier then acts with "
+        "+lambda on the first unit and -lambda on the second)",
+        f"subsystems.{labels[wrong]}.force_sign",
+    )
+
+
+def _units(unit) -> Finding:
+    parts = []
+    for key, measures in unit.measures.items():
+        for el, m in zip(unit.elements[key], measures):
+            if m.read_from == "not declared":
+                parts.append(f"{key} {el.name}: no unit (taken as SI)")
+            elif m.read_from == "not understood":
+                parts.append(f"{key} {el.name}: {m.unit} not read (taken as SI)")
+            else:
+                conv = "" if m.factor == 1 else f", x {m.factor:g} to SI"
+                parts.append(f"{key} {el.name}: {m.unit}{conv}")
+    verdict = "pass" if all(m.checked for ms in unit.measures.values() for m in ms) else "note"
+    return Finding("units", verdict, "; ".join(parts))
+
+
+def _starts(unit) -> Finding:
+    if not unit.start_values:
+        return Finding("start values", "pass", "none given")
+    text = ", ".join(f"{s.name} = {s.text} ({s.variable.type}, {s.setter}, {s.state})" for s in unit.start_values)
+    return Finding("start values", "pass", text)
+
+
+def refuse(inspection: Inspection):
+    """Raise :class:`FmuError` for the first refused check, naming the unit, what was measured and the fix."""
+    for f in inspection.refused:
+        fix = f"; {f.fix}" if f.fix else ""
+        raise FmuError(f"{inspection.label}: {f.check}: {f.detail}{fix}")

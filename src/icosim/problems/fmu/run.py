@@ -1,0 +1,387 @@
+"""A scene run: its units opened, the macro steps of :func:`icosim.engine.macrostep.macro_step`, the dataset."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...engine.decompositions import get_decomposition
+from ...engine.run import simulate
+from ...engine.schemes import get_scheme, standard_schemes
+from .build import build_unit, is_source_dir
+from .errors import FmuError
+from .inspection import inspect_unit, joint_direction, refuse
+from .problem import Coupling, FmuCosimulation
+from .scene import Scene, load_scene
+from .units import ROLES, Unit
+
+__all__ = ["run_scene", "open_units", "open_unit", "consistent_start", "SceneRun", "Start"]
+
+
+@dataclass
+class SceneRun:
+    """What a run produced: times, states, coupling variables and outputs at ``T_0 ... T_n``; the units' info."""
+
+    scene: Scene
+    times: np.ndarray
+    states: np.ndarray  # (n+1, 2, 2 n_dim): positions, then velocities
+    coupling: np.ndarray  # (n+1, n_e)
+    outputs: np.ndarray  # (n+1, 2, 4, n_dim); row 0 NaN (no step has produced it)
+    units: dict = field(default_factory=dict)  # name -> Unit.info()
+    status: str = "completed"
+    reason: str = ""
+    wall_time: float = 0.0
+    start: object = None  # the run's Start (consistent_start)
+    diverged_at: int | None = None
+
+    @property
+    def n_dim(self) -> int:
+        """Components of a joint point's position (1 on a line, 2 in the plane)."""
+        return self.outputs.shape[-1]
+
+    @property
+    def positions(self) -> np.ndarray:
+        """``(n+1, 2, n_dim)``."""
+        return self.states[..., : self.n_dim]
+
+    @property
+    def velocities(self) -> np.ndarray:
+        """``(n+1, 2, n_dim)``."""
+        return self.states[..., self.n_dim :]
+
+
+def fmu_file(path, cache=None):
+    """The ``.fmu`` of a scene's ``fmu`` entry: the file itself, or the unit built from a source directory."""
+    return build_unit(path, cache) if is_source_dir(path) else path
+
+
+def _needed(kind, projects):
+    keys = {"position", "velocity", "acceleration"}
+    keys |= {"force"} if kind == "force" else {"acceleration_input", "reaction_force"}
+    return keys | ({"set_position", "set_velocity"} if projects else set())
+
+
+def open_unit(scene: Scene, name: str, kind: str, *, cache=None) -> Unit:
+    """The scene's unit ``name`` (driven as ``kind``), opened with its start values at ``t_start``."""
+    c, sub = scene.coupling, scene.data["subsystems"][name]
+    projects = scene.method.projection or scene.data.get("initial") == "project"
+    names = {k: sub[k] for k in ROLES if k in sub and k in _needed(kind, projects)}
+    return Unit(
+        name,
+        fmu_file(scene.fmus[name], cache),
+        names,
+        sub.get("start", {}),
+        inputs=c["inputs"],
+        substeps=c["substeps"],
+        t0=float(scene.data.get("t_start", 0.0)),
+    )
+
+
+def open_units(scene: Scene, *, cache=None, inspect=True):
+    """The scene's two units, opened with their start values at ``t_start``, checked
+    (:func:`icosim.problems.fmu.inspection.inspect_unit` per unit, :func:`~icosim.problems.fmu.inspection.joint_direction` for the
+    joint, :func:`check_scheme`; a refusal raises :class:`~icosim.problems.fmu.errors.FmuError`), and their couplings.
+    ``inspect=False`` skips the measured checks (every unit is taken to have feedthrough)."""
+    kinds = get_decomposition(scene.coupling["decomposition"]).kinds
+    units, couplings = [], []
+    try:
+        for (name, sub), kind in zip(scene.data["subsystems"].items(), kinds):
+            unit = open_unit(scene, name, kind, cache=cache)
+            units.append(unit)
+            mass = sub.get("mass")
+            if isinstance(mass, str):
+                mass = unit.get_named(mass)
+            feedthrough, gain = True, float("nan")
+            if inspect:
+                found = inspect_unit(
+                    unit,
+                    kind=kind,
+                    force_sign=sub["force_sign"],
+                    H=float(scene.coupling["H"]),
+                    t0=unit.t,
+                    rollback_tolerance=float(sub.get("rollback_tolerance", 0.0)),
+                )
+                refuse(found)
+                feedthrough, gain = found.feedthrough, found.gain
+                unit.checked()
+            couplings.append(Coupling(kind, sub["force_sign"], mass, feedthrough, gain))
+        if inspect:
+            joint = joint_direction(scene.names, kinds, [c.force_sign for c in couplings], [c.gain for c in couplings])
+            if joint.verdict == "refused":
+                raise FmuError(f"{scene.path}: {joint.key}: {joint.detail}; {joint.fix}")
+        check_scheme(scene, units, couplings)
+    except BaseException:
+        for unit in units:
+            unit.close()
+        raise
+    return units, couplings
+
+
+def check_scheme(scene: Scene, units, couplings):
+    """Refuse a scheme that re-evaluates a leading unit without a step where that unit's output follows its input
+    only through a step."""
+    scheme = get_scheme(scene.coupling["scheme"])
+    if not scheme.reevaluates_leading:
+        return
+    for i in scheme.leading:
+        if not couplings[i].feedthrough:
+            others = [n for n in standard_schemes() if i not in get_scheme(n).leading]
+            out = "acceleration" if couplings[i].kind == "force" else "drive's force"
+            raise FmuError(
+                f"{scene.path}: coupling.scheme: {scheme.name} re-evaluates the leading unit {units[i].label}'s "
+                f"{out} with the corrected coupling variables without a step, but {units[i].label} has no direct "
+                f"feedthrough (its {out} follows its input only through a step); use "
+                f"{', '.join(others)} or {scheme.name}-as-integrated"
+            )
+
+
+@dataclass
+class Start:
+    """How a run starts: the state and coupling history, where the coupling variables came from, and the gap of
+    the joint's positions and velocities at ``t_start`` (before a projection)."""
+
+    state: np.ndarray
+    history: np.ndarray
+    coupling_source: str  # "scene" or "computed"
+    position_gap: float
+    velocity_gap: float
+    initial: str  # "check", "project" or "as-is"
+
+
+def consistent_start(scene: Scene, problem: FmuCosimulation) -> Start:
+    """The run's start: the joint's positions (and velocities, where the method enforces them) consistent at
+    ``t_start`` (``initial: check`` refuses a gap beyond ``initial_tolerance``, ``project`` projects the units onto
+    the joint, ``as-is`` accepts it and reports it), and the coupling variables the scene gives or, by default,
+    those the units need at ``t_start`` (:meth:`FmuCosimulation.consistent_coupling`)."""
+    state = problem.initial_state()
+    n = problem.n_dim
+    gap_x, gap_v = state[0, :n] - state[1, :n], state[0, n:] - state[1, n:]
+    size_x = max(1.0, float(np.max(np.abs(state[:, :n]))))
+    size_v = max(1.0, float(np.max(np.abs(state[:, n:]))))
+    tol = float(scene.data.get("initial_tolerance", 1e-9))
+    mode = scene.data.get("initial", "check")
+    method = scene.method
+    velocity_level = method.projection or any(w != 0 and levels[1] != 0 for w, levels in method.solves)
+    checks = [("position", gap_x, size_x, "m")] + ([("velocity", gap_v, size_v, "m/s")] if velocity_level else [])
+    for what, gap, size, unit in checks:
+        worst = float(np.max(np.abs(gap)))
+        if mode == "check" and worst > tol * size:
+            a, b = scene.names
+            raise FmuError(
+                f"{scene.path}: initial: the joint's {what}s differ at t_start: {a} {_text(state[0], what, n)} "
+                f"{unit}, {b} {_text(state[1], what, n)} {unit} (gap {worst:.3g} {unit} > initial_tolerance "
+                f"{tol:g} x {size:g}); set consistent start values, or initial: project (units that can be set) "
+                "or initial: as-is (the gap is reported)"
+            )
+    position_gap, velocity_gap = float(np.max(np.abs(gap_x))), float(np.max(np.abs(gap_v)))
+    if mode == "project":
+        state = problem.project(state)
+    given = scene.data.get("initial_coupling")
+    if given is not None:
+        e0, source = np.asarray(given, dtype=float), "scene"
+    else:
+        e0, source = problem.consistent_coupling(), "computed"
+    return Start(state, problem.initial_history(e0), source, position_gap, velocity_gap, mode)
+
+
+def _text(row, what, n) -> str:
+    values = row[:n] if what == "position" else row[n:]
+    return f"{float(values[0]):.12g}" if n == 1 else "(" + ", ".join(f"{float(v):.12g}" for v in values) + ")"
+
+
+def divergence_bound(scene: Scene, state) -> float:
+    """The magnitude of the state (SI) beyond which a run has diverged: the scene's ``divergence_bound``, else
+    ``1e10 (1 + |state at t_start|)``."""
+    given = scene.data.get("divergence_bound")
+    return float(given) if given is not None else 1e10 * (1.0 + float(np.max(np.abs(state))))
+
+
+def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
+    """Run a scene (a :class:`~icosim.problems.fmu.scene.Scene` or a path) to ``t_end``.
+
+    The units are opened and checked (:func:`open_units`), the start made consistent (:func:`consistent_start`),
+    then the engine's run loop (:func:`icosim.engine.run.simulate`) takes the macro steps.  A unit's
+    refused step or an output that is not finite raises :class:`~icosim.problems.fmu.errors.UnitStepError` (nothing is
+    returned); a state that is not finite or beyond :func:`divergence_bound` ends the run with
+    ``status = "diverged"`` and the step.  ``progress(n_done)`` is called after each step.
+    """
+    scene = scene if isinstance(scene, Scene) else load_scene(scene)
+    c = scene.coupling
+    clock = time.perf_counter()
+    units, couplings = open_units(scene, cache=cache)
+    problem = None
+    try:
+        problem = FmuCosimulation(
+            units,
+            couplings,
+            c["decomposition"],
+            c["k"],
+            c["H"],
+            t0=float(scene.data.get("t_start", 0.0)),
+            perturbation=c["perturbation"],
+            sensitivities=c["sensitivities"],
+        )
+        start = consistent_start(scene, problem)
+
+        def step_done(n, state, history, y):
+            if progress is not None:
+                progress(n)
+
+        with np.errstate(over="ignore", invalid="ignore"):  # a diverging run is reported, not warned about
+            traj = simulate(
+                problem,
+                scene.method,
+                start.state,
+                start.history,
+                scene.n_steps,
+                scheme=c["scheme"],
+                iterations=c["iterations"],
+                bound=divergence_bound(scene, start.state),
+                observe=step_done,
+            )
+        if traj.failed_at is not None:
+            raise traj.error
+        status, reason = "completed", ""
+        if traj.diverged_at is not None:
+            t_div = problem.t0 + traj.diverged_at * float(c["H"])
+            status = "diverged"
+            reason = f"diverged at macro step {traj.diverged_at} (t = {t_div:.12g} s): {traj.reason}"
+        nan_y = np.full((2, 4, problem.n_dim), np.nan)
+        outputs = [nan_y if y is None else y for y in traj.outputs]
+        times = problem.t0 + c["H"] * np.arange(len(traj.states))
+        info = {u.label: u.info() for u in units}
+        for u, cp in zip(units, couplings):
+            info[u.label]["feedthrough"] = "yes" if cp.feedthrough else "through a step only"
+        return SceneRun(
+            scene,
+            times,
+            np.array(traj.states),
+            np.array(traj.coupling),
+            np.array(outputs),
+            info,
+            status,
+            reason,
+            time.perf_counter() - clock,
+            start,
+            traj.diverged_at,
+        )
+    finally:
+        if problem is not None:
+            problem.close()
+        for unit in units:
+            unit.close()
+
+
+def run_dataset(run: SceneRun, *, command: str = ""):
+    """:func:`run_dataset_data` as an :class:`xarray.Dataset`."""
+    return run_dataset_data(run, command=command).to_xarray()
+
+
+def run_dataset_data(run: SceneRun, *, command: str = ""):
+    """The run as a :class:`~icosim.io.dataset.DatasetDict`: ``position``/``velocity``/``acceleration`` (subsystem, time),
+    ``multiplier`` and ``gap`` (time), the coupling variables, the scene and the units' provenance as attributes."""
+    import json
+
+    from ...io.dataset import DatasetDict
+    from ...io.netcdf import provenance_attrs
+
+    scene = run.scene
+    names = list(scene.names)
+    dec = get_decomposition(scene.coupling["decomposition"])
+    n = run.n_dim
+    # one component: (subsystem, time) as the scalar test model; more: a trailing component axis
+    comp = () if n == 1 else ("component",)
+    squeeze = (lambda a: a[..., 0]) if n == 1 else (lambda a: a)
+    sub_time = lambda a: squeeze(np.moveaxis(a, 0, 1))  # (time, subsystem, n) -> (subsystem, time[, n])
+    variables = list(dec.variables) if n == 1 else [f"{v}_{c}" for v in dec.variables for c in "xyz"[:n]]
+    ds = DatasetDict(
+        {
+            "position": (("subsystem", "time") + comp, sub_time(run.positions), {"units": "m"}),
+            "velocity": (("subsystem", "time") + comp, sub_time(run.velocities), {"units": "m s-1"}),
+            "acceleration": (
+                ("subsystem", "time") + comp,
+                sub_time(run.outputs[:, :, 2, :]),
+                {"units": "m s-2", "comment": "output at the end of each macro step; NaN at the start"},
+            ),
+            "multiplier": (
+                ("time",) + comp,
+                squeeze(run.outputs[:, 0, 3, :]),
+                {
+                    "units": "N",
+                    "long_name": "coupling force lambda_c on the first subsystem (force_sign 1)",
+                    "comment": "as the first subsystem sees it at the end of each macro step; NaN at the start",
+                },
+            ),
+            "gap": (
+                ("time",) + comp,
+                squeeze(run.positions[:, 0] - run.positions[:, 1]),
+                {"units": "m", "long_name": "position of the first subsystem minus the second's"},
+            ),
+            "coupling": (
+                ("time", "coupling_variable"),
+                run.coupling,
+                {"comment": "coupling variables e (N for lambda_c, m s-2 for a_tilde)"},
+            ),
+        },
+        coords={
+            "time": ("time", run.times, {"units": "s"}),
+            "subsystem": ("subsystem", names),
+            "coupling_variable": ("coupling_variable", variables),
+        }
+        | ({} if n == 1 else {"component": ("component", list("xyz"[:n]))}),
+    )
+    attrs = provenance_attrs(scene.data, title=f"FMU scene {scene.path.name}", command=command)
+    attrs["scene_json"] = attrs["config_json"]
+    attrs["status"] = run.status
+    attrs["reason"] = run.reason
+    attrs["diverged_at"] = -1 if run.diverged_at is None else int(run.diverged_at)
+    if run.start is not None:
+        attrs["initial"] = run.start.initial
+        attrs["initial_position_gap"] = run.start.position_gap
+        attrs["initial_velocity_gap"] = run.start.velocity_gap
+        attrs["initial_coupling_source"] = run.start.coupling_source
+    attrs["method_engine_parameters"] = json.dumps(scene.method.params, sort_keys=True)
+    attrs["wall_time_s"] = run.wall_time
+    for name, info in run.units.items():
+        for key, value in info.items():
+            attrs[f"{name}_{key}"] = value
+    attrs["do_step_calls"] = sum(i["do_step_calls"] for i in run.units.values())
+    attrs["states_saved"] = sum(i["states_saved"] for i in run.units.values())
+    attrs["states_restored"] = sum(i["states_restored"] for i in run.units.values())
+    ds.attrs.update(attrs)
+    return ds
+
+
+def run_summary(run: SceneRun) -> dict:
+    """A JSON-ready summary of a run: status, steps, counters, final positions and gap."""
+    steps = len(run.times) - 1
+    return {
+        "scene": str(run.scene.path),
+        "status": run.status,
+        "reason": run.reason or None,
+        "macro_steps": steps,
+        "t_end": float(run.times[-1]),
+        "coupling": {k: v for k, v in run.scene.coupling.items()},
+        "units": run.units,
+        "do_step_calls_per_macro_step": (sum(i["do_step_calls"] for i in run.units.values()) / steps)
+        if steps
+        else None,
+        "final_position": {
+            name: (float(p[0]) if run.n_dim == 1 else [float(v) for v in p])
+            for name, p in zip(run.scene.names, run.positions[-1])
+        },
+        "max_abs_gap": float(np.max(np.abs(run.positions[:, 0] - run.positions[:, 1]))),  # largest component
+        "diverged_at": run.diverged_at,
+        "initial": None
+        if run.start is None
+        else {
+            "mode": run.start.initial,
+            "position_gap": run.start.position_gap,
+            "velocity_gap": run.start.velocity_gap,
+            "coupling": run.start.coupling_source,
+            "coupling_values": [float(v) for v in run.coupling[0]],
+        },
+        "wall_time_s": run.wall_time,
+    }

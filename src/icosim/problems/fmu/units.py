@@ -1,0 +1,404 @@
+"""One FMU instance of a scene: checked against what the scene asks of it, opened the way the FMI standard says,
+stepped, saved and restored.
+
+Only fmpy talks to the FMU (imported when a unit is opened).  A unit reads and writes only the variables its
+scene names (:data:`ROLES`), each with the setter and getter of its own type, in SI (:mod:`icosim.problems.fmu.measures`
+converts declared units).  Start values are checked before any call and set with fmpy's
+``apply_start_values`` in the state the standard allows (:mod:`icosim.problems.fmu.variables`).  Over a macro step the
+unit's coupling input is a polynomial in the local time ``tau = (t - T_N)/H``; :meth:`Unit.step` hands it to the
+FMU either exactly, as its value and derivatives at ``T_N`` (``fmi2SetRealInputDerivatives``, units that declare
+``canInterpolateInputs``), or as ``substeps`` sub-steps each with the polynomial's value at its midpoint (every
+other unit; docs/fmi.md).  Every error about a unit carries what the unit logged.
+
+A pythonfmu unit's library is released before the interpreter exits (:mod:`icosim.problems.fmu.pythonfmu`): left to the
+process's exit, pythonfmu (0.6.4 to 0.7.0 at least) frees its interpreter state twice (docs/fmi.md).
+"""
+
+from __future__ import annotations
+
+import collections
+import math
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from . import guard, pythonfmu
+from .description import check_kind, read_description
+from .errors import FmuError, UnitStepError
+from .measures import measure
+from .variables import VariableTable, declared_start, family
+
+__all__ = ["Unit", "ROLES"]
+
+_STATUS = {0: "ok", 1: "warning", 2: "discard", 3: "error", 4: "fatal", 5: "pending"}
+
+#: Scene key -> (what it names, causalities it may have).
+ROLES = {
+    "position": ("the position output", ("output",)),
+    "velocity": ("the velocity output", ("output",)),
+    "acceleration": ("the acceleration output", ("output",)),
+    "force": ("the coupling-force input", ("input",)),
+    "acceleration_input": ("the prescribed-acceleration input", ("input",)),
+    "reaction_force": ("the output of the force the drive exerts", ("output",)),
+    "set_position": ("a tunable parameter or input that sets the position (projection)", ("parameter", "input")),
+    "set_velocity": ("a tunable parameter or input that sets the velocity (projection)", ("parameter", "input")),
+}
+
+
+def _listed(names) -> list:
+    """A scene entry naming one variable or a list of them (the components of a vector), as a list."""
+    return list(names) if isinstance(names, (list, tuple)) else [names]
+
+
+class Unit:
+    """One instance of an FMU, checked and opened with its start values at ``t0``.
+
+    Parameters
+    ----------
+    label : the subsystem's name in the scene (the instance name).
+    path : the ``.fmu`` file.
+    names : scene key (:data:`ROLES`) -> variable name, or list of names (the components of a vector quantity);
+        an FMI 3.0 array element is named ``y[2]``.
+    start : start values (variable name -> value), checked by :class:`~icosim.problems.fmu.variables.VariableTable`.
+    inputs : ``"auto"`` (derivatives where the unit can interpolate inputs, else sub-steps), ``"derivatives"``
+        or ``"substeps"``.
+    substeps : sub-steps per macro step where the input is sampled.
+
+    Counters: :attr:`do_steps`, :attr:`saved`, :attr:`restored`, :attr:`warnings`.
+    """
+
+    def __init__(self, label, path, names, start, *, inputs="auto", substeps=16, t0=0.0):
+        self.label, self.path = label, Path(path)
+        self.md, self.description_problems = read_description(label, self.path)
+        md = self.md
+        check_kind(label, self.path, md)
+        self.fmi3 = md.fmiVersion.startswith("3.")
+        self.table = table = VariableTable(label, md, start)
+        self.start_values = table.start_values(start)
+        self.elements, self.factors, self.measures = {}, {}, {}
+        for key, ns in names.items():
+            els = [table.element(key, n) for n in _listed(ns)]
+            for el in els:
+                _check_role(label, key, el.variable)
+            self.elements[key] = els
+            self.measures[key] = [measure(label, md, key, el.variable) for el in els]
+            self.factors[key] = np.array([m.factor for m in self.measures[key]])
+        self.interpolates = bool(getattr(md.coSimulation, "canInterpolateInputs", False)) and not self.fmi3
+        if inputs == "derivatives" and not self.interpolates:
+            raise FmuError(
+                f"{label}: coupling.inputs: derivatives needs a unit that declares canInterpolateInputs "
+                f"(FMI 2.0); {self.path.name} does not: use inputs auto or substeps"
+            )
+        self.exact_inputs = self.interpolates and inputs != "substeps"
+        self.substeps = int(substeps)
+        self.names = dict(names)
+        self._plans = {}
+        self._arrays = {}  # FMI 3.0 arrays written element-wise: their whole value, as last set
+        self.do_steps = self.saved = self.restored = self.warnings = self.check_steps = 0
+        #: the status of a refused call (3 error, 4 fatal): after it the standard allows only freeing the
+        #: instance (error) or nothing at all (fatal)
+        self.failed = 0
+        self.messages = collections.deque(maxlen=20)
+        self.first_warning = ""
+        self.t = float(t0)
+        self._tmp = tempfile.mkdtemp(prefix=f"icosim-{label}-", dir=guard.scratch_dir())
+        self.index = guard.register(self)
+        try:
+            self._open(t0)
+        except BaseException:
+            self.close()
+            raise
+
+    # -- lifecycle -------------------------------------------------------------------------
+    def _open(self, t0):
+        from fmpy import extract
+        from fmpy.simulation import apply_start_values
+
+        md = self.md
+        try:
+            unzipdir = extract(str(self.path), unzipdir=self._tmp)
+        except Exception as exc:
+            raise FmuError(f"{self.label}: cannot unpack {self.path}: {exc}") from None
+        for var in md.modelVariables:  # arrays sized by the scene's structural parameters (fmpy reads .shape)
+            var.shape = self.table.shapes[var.name]
+        common = dict(unzipDirectory=unzipdir, modelIdentifier=md.coSimulation.modelIdentifier, instanceName=self.label)
+        stage = "instantiated"
+        try:
+            guard.enter(self.index, "instantiate", self.t)
+            if self.fmi3:
+                from fmpy.fmi3 import FMU3Slave
+
+                self.fmu = FMU3Slave(guid=md.guid, **common)  # fmpy keeps the instantiation token as guid
+                self._register_release()
+                self.fmu.instantiate(logMessage=self._log3)
+            else:
+                from fmpy.fmi2 import FMU2Slave, defaultCallbacks, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+
+                self.fmu = FMU2Slave(guid=md.guid, **common)
+                self._register_release()
+                cb = fmi2CallbackFunctions()
+                cb.logger = fmi2CallbackLoggerTYPE(self._log2)
+                cb.allocateMemory, cb.freeMemory = defaultCallbacks.allocateMemory, defaultCallbacks.freeMemory
+                self._callbacks = cb  # kept alive as long as the instance
+                self.fmu.instantiate(callbacks=cb)
+                self.fmu.setupExperiment(startTime=t0)
+            structural = [s for s in self.start_values if s.state == "configuration"]
+            if structural:
+                stage = "configured"
+                self.fmu.enterConfigurationMode()
+                for s in structural:
+                    self._apply(apply_start_values, s)
+                self.fmu.exitConfigurationMode()
+            stage = "instantiated"
+            for s in self.start_values:
+                if s.state == "instantiated":
+                    self._apply(apply_start_values, s)
+            stage = "initialised"
+            if self.fmi3:
+                self.fmu.enterInitializationMode(startTime=t0)
+            else:
+                self.fmu.enterInitializationMode()
+            for s in self.start_values:
+                if s.state == "initialization":
+                    self._apply(apply_start_values, s)
+            self.fmu.exitInitializationMode()  # co-simulation: step mode follows (FMI 3.0 without event mode)
+            guard.leave()
+        except FmuError:
+            raise
+        except Exception as exc:
+            raise FmuError(f"{self.label}: could not be {stage}: {_call_text(exc)}{self.said()}") from None
+
+    def _register_release(self):
+        pythonfmu.register(self, self.md, self.fmu.dll)
+
+    def _apply(self, apply_start_values, s):
+        try:
+            apply_start_values(self.fmu, self.md, {s.name: s.value})
+        except Exception as exc:
+            status = getattr(exc, "status", 0)
+            self.failed = status if status in (3, 4) else 0  # after error only freeing, after fatal nothing
+            raise FmuError(
+                f"{self.label}: start: {s.name}: {s.setter} refused {s.text} ({s.variable.type}, set in state "
+                f"{s.state}): {_call_text(exc)}{self.said()}"
+            ) from None
+        if s.variable.shape:
+            self._arrays[s.variable.name] = (
+                np.asarray(s.value, dtype=float) if family(s.variable.type) == "real" else None
+            )
+
+    def _log2(self, env, instance, status, category, message):
+        self._logged(status, message)
+
+    def _log3(self, env, status, category, message):
+        self._logged(status, message)
+
+    def _logged(self, status, message):
+        text = message.decode(errors="replace") if message else ""
+        self.messages.append(text)
+        if status == 1:
+            self.warnings += 1
+            self.first_warning = self.first_warning or text
+
+    def said(self) -> str:
+        """What the unit logged lately, for an error message ('' if nothing)."""
+        texts = [m for m in self.messages if m]
+        return f" (the unit said: {' | '.join(texts)})" if texts else ""
+
+    def close(self):
+        """Terminate and free the instance, remove its unpacked files.  A pythonfmu unit's library is released
+        before fmpy closes it (:mod:`icosim.problems.fmu.pythonfmu`), also after a fatal status, which leaves it loaded."""
+        fmu, self.fmu = getattr(self, "fmu", None), None
+        release = pythonfmu.take(self)
+        if fmu is not None and not self.failed:
+            try:
+                fmu.terminate()
+            except Exception:
+                pass
+        if release is not None:
+            release()  # while the library is loaded: fmpy's dlclose may unload it
+        if fmu is not None and self.failed < 4:
+            try:
+                fmu.freeInstance()  # fmi2FreeInstance, then dlclose
+            except Exception:
+                pass
+        guard.unregister(self)
+        shutil.rmtree(self._tmp, ignore_errors=True)
+
+    def checked(self):
+        """The checks before the run are done: the counters start again (their steps are kept apart)."""
+        self.check_steps += self.do_steps
+        self.do_steps = self.saved = self.restored = 0
+
+    # -- information -------------------------------------------------------------------------
+    def info(self) -> dict:
+        """Model name, GUID or instantiation token, FMI version, generation tool, input route, counters."""
+        md = self.md
+        return {
+            "model_name": md.modelName,
+            "guid": md.guid,  # FMI 3.0: the instantiation token
+            "fmi_version": md.fmiVersion,
+            "generation_tool": md.generationTool or "",
+            "fmu": str(self.path),
+            "inputs": "derivatives" if self.exact_inputs else f"substeps ({self.substeps})",
+            "do_step_calls": self.do_steps,
+            "states_saved": self.saved,
+            "states_restored": self.restored,
+            "checks_do_step_calls": self.check_steps,
+            "warnings": self.warnings,
+            "first_warning": self.first_warning,
+        }
+
+    # -- values -------------------------------------------------------------------------------
+    def _plan(self, keys):
+        """How to read the elements under ``keys``: value references (each once), how many values they hold,
+        which of those are wanted, and their factors to SI."""
+        els = [el for k in keys for el in self.elements[k]]
+        refs, offsets, total = [], {}, 0
+        for el in els:
+            if el.value_reference not in offsets:
+                offsets[el.value_reference] = total
+                refs.append(el.value_reference)
+                total += el.size
+        pick = np.array([offsets[el.value_reference] + el.index for el in els])
+        factors = np.concatenate([self.factors[k] for k in keys])
+        plain = total == len(els) and np.array_equal(pick, np.arange(len(els)))
+        return refs, total, (None if plain else pick), (None if np.all(factors == 1.0) else factors)
+
+    def get(self, keys) -> np.ndarray:
+        """Values (SI) of the variables named under ``keys`` (scene keys), shape ``(len(keys), components)``."""
+        plan = self._plans.get(keys)
+        if plan is None:
+            plan = self._plans[keys] = self._plan(keys)
+        refs, total, pick, factors = plan
+        guard.enter(self.index, "get", self.t)
+        values = np.array(self.fmu.getFloat64(refs, total) if self.fmi3 else self.fmu.getReal(refs), dtype=float)
+        guard.leave()
+        if pick is not None:
+            values = values[pick]
+        if factors is not None:
+            values = values * factors
+        return values.reshape(len(keys), -1)
+
+    def set(self, key, value):
+        """Set the variable(s) named under the scene key ``key`` (a number per component, SI)."""
+        self._set_elements(key, np.atleast_1d(np.asarray(value, dtype=float)) / self.factors[key])
+
+    def _set_elements(self, key, values):
+        els = self.elements[key]
+        guard.enter(self.index, "set", self.t)
+        if self.fmi3 and any(el.size > 1 for el in els):
+            for el, v in zip(els, values):
+                if el.size == 1:
+                    self.fmu.setFloat64([el.value_reference], [float(v)])
+                    continue
+                whole = self._arrays.get(el.variable.name)
+                if whole is None:
+                    whole = self._arrays[el.variable.name] = declared_start(el.variable, el.size)
+                whole[el.index] = v
+                self.fmu.setFloat64([el.value_reference], whole.tolist())
+        elif self.fmi3:
+            self.fmu.setFloat64([el.value_reference for el in els], [float(v) for v in values])
+        else:
+            self.fmu.setReal([el.value_reference for el in els], [float(v) for v in values])
+        guard.leave()
+
+    def get_named(self, name) -> float:
+        """The value of a scalar Real/Float64 variable (or array element) named ``name``, as the unit holds it."""
+        el = self.table.element("mass", name)
+        guard.enter(self.index, "get", self.t)
+        ref = [el.value_reference]
+        values = self.fmu.getFloat64(ref, el.size) if self.fmi3 else self.fmu.getReal(ref)
+        guard.leave()
+        return float(values[el.index])
+
+    # -- states -------------------------------------------------------------------------------
+    def save(self):
+        self.saved += 1
+        guard.enter(self.index, "getFMUstate", self.t)
+        state = self.fmu.getFMUState() if self.fmi3 else self.fmu.getFMUstate()
+        guard.leave()
+        return (state, self.t)
+
+    def restore(self, state):
+        self.restored += 1
+        guard.enter(self.index, "setFMUstate", self.t)
+        (self.fmu.setFMUState if self.fmi3 else self.fmu.setFMUstate)(state[0])
+        guard.leave()
+        self.t = state[1]
+
+    def free(self, state):
+        if self.failed or self.fmu is None:
+            return  # a refused step leaves only freeing the instance allowed (fmi2Error) or nothing (fmi2Fatal)
+        (self.fmu.freeFMUState if self.fmi3 else self.fmu.freeFMUstate)(state[0])
+
+    # -- stepping -----------------------------------------------------------------------------
+    def step(self, key, coefficients, t, H, *, step_index):
+        """Advance ``[t, t + H]`` with the input(s) ``key`` following ``u(tau) = sum_m coefficients[m] tau^m``
+        (SI; ``coefficients`` ``(k + 1,)``, or ``(k + 1, components)``); afterwards the inputs hold ``u(1)`` (the
+        outputs that depend on them directly are those at ``t + H``)."""
+        c = np.asarray(coefficients, dtype=float).reshape(len(coefficients), -1) / self.factors[key]
+        if self.exact_inputs:
+            refs = [el.value_reference for el in self.elements[key]]
+            self._set_elements(key, c[0])
+            # every order up to k, zeros too: a unit may keep the derivatives of the step before
+            orders = [(q, m) for m in range(1, c.shape[0]) for q in range(len(refs))]
+            if orders:
+                values = [math.factorial(m) * float(c[m, q]) / H**m for q, m in orders]
+                guard.enter(self.index, "setRealInputDerivatives", t)
+                self.fmu.setRealInputDerivatives([refs[q] for q, _ in orders], [m for _, m in orders], values)
+                guard.leave()
+            self._do_step(t, H, step_index)
+        else:
+            n = self.substeps
+            for j in range(n):
+                tau = (j + 0.5) / n
+                self._set_elements(key, [float(np.polyval(c[::-1, q], tau)) for q in range(c.shape[1])])
+                self._do_step(t + j * H / n, H / n, step_index)
+        self._set_elements(key, c.sum(axis=0))
+        self.t = t + H
+
+    def _do_step(self, t, h, step_index):
+        self.do_steps += 1
+        self.messages.clear()
+        guard.enter(self.index, "doStep", t, step_index)
+        try:
+            result = self.fmu.doStep(t, h, noSetFMUStatePriorToCurrentPoint=False)
+        except Exception as exc:
+            guard.leave()
+            code = getattr(exc, "status", None)
+            status = _STATUS.get(code, "failure")
+            self.failed = code if code in (3, 4) else 0
+            raise UnitStepError(
+                f"unit {self.label} refused macro step {step_index} at t = {t:.12g} s (doStep returned {status})"
+                f"{self.said()}"
+            ) from None
+        guard.leave()
+        if self.fmi3 and (result[1] or result[2]):  # terminateSimulation, earlyReturn
+            what = "asked to terminate the simulation" if result[1] else f"returned early at t = {result[3]:.12g} s"
+            raise UnitStepError(f"unit {self.label} {what} in macro step {step_index} (from t = {t:.12g} s)")
+
+
+def _check_role(label, key, var):
+    what, causalities = ROLES[key]
+    if var.causality not in causalities:
+        raise FmuError(
+            f"{label}: {key}: variable {var.name!r} has causality {var.causality!r}, but {key} must name "
+            f"{what} (causality {' or '.join(causalities)})"
+        )
+    if var.causality == "parameter" and var.variability != "tunable":
+        raise FmuError(f"{label}: {key}: parameter {var.name!r} is {var.variability}, it must be tunable")
+    if var.type not in ("Real", "Float64"):
+        raise FmuError(
+            f"{label}: {key}: variable {var.name!r} is {var.type}; a coupling variable must be Real (FMI 2.0) or "
+            "Float64 (FMI 3.0)"
+        )
+
+
+def _call_text(exc) -> str:
+    """An fmpy exception as a sentence (its function and status where fmpy gives them)."""
+    function, status = getattr(exc, "function", None), getattr(exc, "status", None)
+    if function is not None and status is not None:
+        return f"{function} returned {_STATUS.get(status, status)}"
+    return str(exc) or type(exc).__name__

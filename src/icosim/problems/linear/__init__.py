@@ -1,0 +1,1 @@
+"""icosim.problems.linear"""

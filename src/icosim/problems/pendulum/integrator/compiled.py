@@ -1,0 +1,431 @@
+"""The links' integrator compiled with numba: a transcription of :mod:`icosim.problems.pendulum.integrator.radau` for the two links.
+
+Why: every macro step integrates each link about twice (predictor batch with
+the sensitivities, corrector) with :func:`icosim.problems.pendulum.integrator.radau.radau_batch`, on a batch
+of ``B <= 5`` systems of size 2 (link 1) or 6 (link 2).  On arrays that small
+numpy's per-call overhead is nearly all of the cost (about 1.6 ms per macro
+step).  This module is the *same algorithm* written as loops over scalars and
+compiled (``numba.njit(cache=True)``):
+
+* the right-hand sides of the links (:mod:`icosim.problems.pendulum.integrator.compiled_links`);
+* ``radau_batch`` with ``_collocation``, ``_fd_jacobian`` and
+  ``_predict_factor`` line by line: the same constants (imported from
+  :mod:`icosim.problems.pendulum.integrator.radau`), simplified Newton in lockstep over the batch, error
+  norm (largest RMS over the members), step-size controller, ``jac0``
+  handling, counters and error conditions (a status code here, raised as
+  :class:`~icosim.problems.pendulum.integrator.radau.IntegrationError` with the same message by the Python
+  wrapper).
+
+Results agree with the numpy path up to round-off, not bitwise: the matrix
+inverses are an LU solve written out (:mod:`~icosim.problems.pendulum.integrator.compiled_algebra`,
+where numpy calls LAPACK ``gesv``), ``cos``/``sin`` may come from another library, and
+sums over a state's components run in index order here while numpy's einsum
+sums contiguous axes in a CPU-dependent order.  Sums over the three stages are
+in index order in both.  A Newton matrix that is not finite (``MU / h`` overflows for a
+step near underflow) gets an all-NaN inverse, where numpy's LAPACK returns one
+with some NaNs: either way the Newton iterations fail and the step is halved.
+
+The co-simulation calls them through :mod:`.compiled_step` (one call per link integration).
+
+One specialisation per entry point (C-contiguous float64 arrays of fixed ndim,
+int64 ids), so a cold disk cache costs one compilation per process.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from ..links import Link1
+from .compiled_algebra import all_finite, inverse, matvec, nan_maximum
+from .compiled_links import FORCE, KINEMATIC, batch_rhs, link_parameters, member_rhs
+from .kernel_cache import compile_record, drop_stale_cache, gc_paused
+from .radau import (
+    EPS,
+    MAX_FACTOR,
+    MIN_FACTOR,
+    MU_COMPLEX,
+    MU_REAL,
+    NEWTON_MAXITER,
+    TI,
+    C,
+    E,
+    IntegrationError,
+    RadauResult,
+    T,
+)
+
+__all__ = ["CompiledLink", "warm_up", "compile_kernels", "link_failure"]
+
+drop_stale_cache()  # before the kernels are defined: numba loads their cache as it defines them
+
+# status codes of the kernel (0: integrated)
+_STEP_TOO_SMALL, _ERROR_NOT_FINITE, _SINGULAR, _TOO_MANY_STEPS, _DERIVATIVE_NOT_FINITE = range(1, 6)
+
+# numba sees module globals as compile-time constants: plain floats and arrays
+_MU_COMPLEX_RE, _MU_COMPLEX_IM = MU_COMPLEX.real, MU_COMPLEX.imag
+_TI_REAL, _TI_COMPLEX_RE, _TI_COMPLEX_IM = TI[0].copy(), TI[1].copy(), TI[2].copy()
+
+
+# -- icosim.problems.pendulum.integrator.radau, transcribed ---------------------------------------------------------
+@numba.njit(cache=True)
+def _fd_jacobian(link, kind, par, H, coef, t, y, f, J):
+    """``J[b] = d fun / d y`` at ``(t, y[b])`` by forward differences (radau._fd_jacobian)."""
+    B, n = y.shape
+    Y = np.empty(n)
+    F = np.empty(n)
+    sqrt_eps = np.sqrt(EPS)
+    for j in range(n):  # row j of radau's (n, B, n) batch perturbs component j
+        for b in range(B):
+            h = sqrt_eps * max(1.0, abs(y[b, j]))
+            for i in range(n):
+                Y[i] = y[b, i]
+            Y[j] += h
+            member_rhs(link, kind, par, H, t, Y, coef[b], F)
+            for i in range(n):
+                J[b, i, j] = (F[i] - f[b, i]) / h
+
+
+@numba.njit(cache=True)
+def _predict_factor(h_abs, h_abs_old, error_norm, error_norm_old, have_old):
+    if error_norm == 0:  # at rest: radau._predict_factor's +inf, capped at MAX_FACTOR by the caller
+        return np.inf
+    if not have_old or error_norm_old == 0:
+        multiplier = 1.0
+    else:
+        multiplier = h_abs / h_abs_old * (error_norm_old / error_norm) ** 0.25
+    return min(1.0, multiplier) * error_norm**-0.25
+
+
+@numba.njit(cache=True)
+def _rms_max(x, scale):
+    """Largest RMS norm over the batch of ``x / scale`` (radau._rms_max)."""
+    B, n = x.shape
+    largest = 0.0
+    for b in range(B):
+        s = 0.0
+        for j in range(n):
+            q = x[b, j] / scale[b, j]
+            s += q * q
+        largest = max(largest, s)
+    return np.sqrt(largest / n)
+
+
+@numba.njit(cache=True)
+def _collocation(link, kind, par, H, coef, t, y, h, scale, tol, inv_real, inv_complex, Z):
+    """Simplified Newton iterations for the stage increments ``Z`` (3, B, n), in lockstep.
+
+    Returns ``(converged, n_iter, fev)``; ``Z`` is filled (NaN after a non-finite right-hand side).
+    """
+    B, n = y.shape
+    W = np.zeros((3, B, n))
+    Z.fill(0.0)
+    F = np.empty((3, B, n))
+    Y = np.empty((B, n))
+    f_real, dW_real = np.empty(n), np.empty(n)
+    f_complex, dW_complex = np.empty(n, np.complex128), np.empty(n, np.complex128)
+    dW = np.empty((3, n))  # one member's (dW_real, dW_complex.real, dW_complex.imag)
+    mu_real = MU_REAL / h
+    mu_complex = complex(_MU_COMPLEX_RE / h, _MU_COMPLEX_IM / h)  # = MU_COMPLEX / h in Python
+    largest_y = abs(y[0, 0]) / scale[0, 0]  # np.max(np.abs(y) / scale): NaN if any is
+    for b in range(B):
+        for j in range(n):
+            largest_y = nan_maximum(largest_y, abs(y[b, j]) / scale[b, j])
+    floor = 10 * EPS * largest_y
+    dW_norm_old = rate = 0.0
+    have_old = have_rate = False  # radau's "is not None"
+    fev = 0
+    for it in range(NEWTON_MAXITER):
+        finite = True
+        for i in range(3):
+            for b in range(B):
+                for j in range(n):
+                    Y[b, j] = y[b, j] + Z[i, b, j]
+            finite &= batch_rhs(link, kind, par, H, t + h * C[i], Y, coef, F[i])
+        fev += 1
+        if not finite:
+            Z.fill(np.nan)
+            return False, it + 1, fev
+        largest = 0.0
+        for b in range(B):
+            for j in range(n):
+                f_real[j] = (_TI_REAL[0] * F[0, b, j] + _TI_REAL[1] * F[1, b, j] + _TI_REAL[2] * F[2, b, j]) - (
+                    mu_real * W[0, b, j]
+                )
+                re = _TI_COMPLEX_RE[0] * F[0, b, j] + _TI_COMPLEX_RE[1] * F[1, b, j] + _TI_COMPLEX_RE[2] * F[2, b, j]
+                im = _TI_COMPLEX_IM[0] * F[0, b, j] + _TI_COMPLEX_IM[1] * F[1, b, j] + _TI_COMPLEX_IM[2] * F[2, b, j]
+                f_complex[j] = complex(re, im) - mu_complex * complex(W[1, b, j], W[2, b, j])
+            matvec(inv_real[b], f_real, dW_real)
+            matvec(inv_complex[b], f_complex, dW_complex)
+            for j in range(n):
+                dW[0, j], dW[1, j], dW[2, j] = dW_real[j], dW_complex[j].real, dW_complex[j].imag
+            s = 0.0
+            for i in range(3):
+                for j in range(n):
+                    q = dW[i, j] / scale[b, j]
+                    s += q * q
+                    W[i, b, j] += dW[i, j]  # member b's dW depends on its own W only
+            largest = max(largest, s)
+        dW_norm = np.sqrt(largest / (3 * n))
+        if have_old:
+            rate = dW_norm / dW_norm_old
+            have_rate = True
+        for i in range(3):
+            for b in range(B):
+                for j in range(n):
+                    Z[i, b, j] = T[i, 0] * W[0, b, j] + T[i, 1] * W[1, b, j] + T[i, 2] * W[2, b, j]
+        if dW_norm <= floor or (have_rate and rate < 1 and rate / (1 - rate) * dW_norm < tol):
+            return True, it + 1, fev
+        if have_rate and rate >= 1:
+            return False, it + 1, fev
+        dW_norm_old, have_old = dW_norm, True
+    return False, NEWTON_MAXITER, fev
+
+
+@numba.njit(cache=True)
+def _radau(link, kind, par, H, coef, t0, t1, y0, jac0, rtol, atol, newton_tol, max_steps):
+    """radau.radau_batch for a link (``first_step`` the whole interval, forward differences).
+
+    ``jac0`` (n, n) or empty (0, 0) for none.  Returns ``(y, f, counts, h_next, status, t, h_abs)``:
+    ``counts = (n_steps, n_rejected, n_fev, n_jev)``; ``status`` 0 or an error code with the time
+    and step size for its message.
+    """
+    B, n = y0.shape
+    counts = np.zeros(4, np.int64)
+    direction = 1.0 if t1 >= t0 else -1.0
+    t = t0
+    span = abs(t1 - t0)
+    h_abs = span
+    h_abs_old = error_norm_old = 0.0
+    have_old = False
+    n_steps = n_rej = n_jev = 0
+    n_fev = 1
+    y = y0.copy()
+    f = np.empty((B, n))
+    batch_rhs(link, kind, par, H, t, y, coef, f)
+    if span == 0:
+        counts[2] = n_fev
+        return y, f, counts, h_abs, 0, t, h_abs
+    J = np.empty((B, n, n))
+    have_J = jac0.shape[0] > 0
+    if have_J:
+        for b in range(B):
+            for i in range(n):
+                for j in range(n):
+                    J[b, i, j] = jac0[i, j]
+    inv_real = np.empty((B, n, n))
+    inv_complex = np.empty((B, n, n), np.complex128)
+    M_real = np.empty((n, n))
+    M_complex = np.empty((n, n), np.complex128)
+    Z = np.empty((3, B, n))
+    y_new = np.empty((B, n))
+    scale = np.empty((B, n))
+    ZE = np.empty((B, n))
+    rhs = np.empty(n)
+    error = np.empty((B, n))
+    error_f = np.empty((B, n))
+    y_error = np.empty((B, n))
+    error_norm = safety = t_new = 0.0
+    while direction * (t1 - t) > 0:
+        if not have_J:
+            _fd_jacobian(link, kind, par, H, coef, t, y, f, J)
+            have_J = True
+            n_jev += 1
+            n_fev += 1
+        min_step = 10 * abs(np.nextafter(t, direction * np.inf) - t)
+        rejected = False
+        while True:
+            if h_abs < min_step:
+                return y, f, counts, h_abs, _STEP_TOO_SMALL, t, h_abs
+            h = h_abs * direction
+            t_new = t + h
+            if direction * (t_new - t1) > 0 or abs(t1 - t_new) < min_step:
+                t_new = t1
+            h = t_new - t
+            h_abs = abs(h)
+            for b in range(B):
+                for j in range(n):
+                    scale[b, j] = atol + abs(y[b, j]) * rtol
+            mu_real = MU_REAL / h
+            mu_complex = complex(_MU_COMPLEX_RE / h, _MU_COMPLEX_IM / h)
+            for b in range(B):
+                for i in range(n):  # mu * I - J[b]
+                    for j in range(n):
+                        M_real[i, j] = (mu_real if i == j else 0.0) - J[b, i, j]
+                        M_complex[i, j] = (mu_complex if i == j else 0j) - J[b, i, j]
+                if not (all_finite(M_real.ravel()) and all_finite(M_complex.ravel())):
+                    # e.g. MU / h = inf for h near underflow: numpy's LAPACK returns an inverse with NaNs, here
+                    # all NaN; either way the Newton iterations fail and the step is halved to round-off level
+                    inv_real[b].fill(np.nan)
+                    inv_complex[b].fill(np.nan)
+                    continue
+                if not (inverse(M_real, inv_real[b]) and inverse(M_complex, inv_complex[b])):
+                    return y, f, counts, h_abs, _SINGULAR, t, h_abs  # np.linalg.LinAlgError in radau_batch
+            converged, n_iter, fev = _collocation(
+                link, kind, par, H, coef, t, y, h, scale, newton_tol, inv_real, inv_complex, Z
+            )
+            n_fev += fev
+            if not converged:
+                if all_finite(Z.ravel()) and n_iter >= NEWTON_MAXITER:
+                    _fd_jacobian(link, kind, par, H, coef, t, y, f, J)
+                    n_jev += 1
+                    n_fev += 1
+                h_abs *= 0.5
+                n_rej += 1
+                rejected = True
+                continue
+            for b in range(B):
+                for j in range(n):
+                    y_new[b, j] = y[b, j] + Z[2, b, j]
+                    ZE[b, j] = (E[0] * Z[0, b, j] + E[1] * Z[1, b, j] + E[2] * Z[2, b, j]) / h
+                    rhs[j] = f[b, j] + ZE[b, j]
+                matvec(inv_real[b], rhs, error[b])
+                for j in range(n):
+                    scale[b, j] = atol + nan_maximum(abs(y[b, j]), abs(y_new[b, j])) * rtol
+            error_norm = _rms_max(error, scale)
+            safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + n_iter)
+            if rejected and error_norm > 1:
+                for b in range(B):
+                    for j in range(n):
+                        y_error[b, j] = y[b, j] + error[b, j]
+                batch_rhs(link, kind, par, H, t, y_error, coef, error_f)
+                for b in range(B):
+                    for j in range(n):
+                        rhs[j] = error_f[b, j] + ZE[b, j]
+                    matvec(inv_real[b], rhs, error[b])
+                n_fev += 1
+                error_norm = _rms_max(error, scale)
+            if not np.isfinite(error_norm):
+                return y, f, counts, h_abs, _ERROR_NOT_FINITE, t, h_abs
+            if error_norm > 1:
+                factor = _predict_factor(h_abs, h_abs_old, error_norm, error_norm_old, have_old)
+                h_abs *= max(MIN_FACTOR, safety * factor)
+                n_rej += 1
+                rejected = True
+                continue
+            break
+        factor = _predict_factor(h_abs, h_abs_old, error_norm, error_norm_old, have_old)
+        factor = min(MAX_FACTOR, safety * factor)
+        h_abs_old, error_norm_old, have_old = h_abs, error_norm, True
+        t = t_new
+        for b in range(B):
+            for j in range(n):
+                y[b, j] = y_new[b, j]
+        finite = batch_rhs(link, kind, par, H, t, y, coef, f)
+        n_fev += 1
+        n_steps += 1
+        if n_steps > max_steps:
+            return y, f, counts, h_abs, _TOO_MANY_STEPS, t, h_abs
+        if not finite:
+            return y, f, counts, h_abs, _DERIVATIVE_NOT_FINITE, t, h_abs
+        h_abs = h_abs * factor
+        have_J = False  # a fresh Jacobian per step: cheap for these small systems
+    counts[0], counts[1], counts[2], counts[3] = n_steps, n_rej, n_fev, n_jev
+    return y, f, counts, h_abs, 0, t, h_abs
+
+
+@numba.njit(cache=True)
+def _jacobian(link, kind, par, H, coef, t, y):
+    """``fun(t, y)`` once and its forward-difference Jacobian (B, n, n)."""
+    f = np.empty(y.shape)
+    batch_rhs(link, kind, par, H, t, y, coef, f)
+    J = np.empty((y.shape[0], y.shape[1], y.shape[1]))
+    _fd_jacobian(link, kind, par, H, coef, t, y, f, J)
+    return J
+
+
+# -- the Python side --------------------------------------------------------------
+def warm_up() -> None:
+    """Compile the kernels, or load them from numba's disk cache, now (about 10 s cold, 0.5 s warm).
+
+    A timed run calls this first, so that its CPU seconds are those of its macro steps alone.
+    """
+    y, coef, par = np.zeros((1, 2)), np.zeros((1, 1, 2)), np.ones(4)
+    with gc_paused():  # numba's compiler: no time in Python's collections
+        _jacobian(1, FORCE, par, 1.0, coef, 0.0, y)
+        _radau(1, FORCE, par, 1.0, coef, 0.0, 0.0, y, np.empty((0, 0)), 1e-6, 1e-6, 1e-8, 1)
+
+
+def compile_kernels() -> dict:
+    """:func:`warm_up` and its record (:func:`~icosim.problems.pendulum.integrator.kernel_cache.compile_record`)."""
+    return compile_record(warm_up, {"_jacobian": _jacobian, "_radau": _radau})
+
+
+def _float_array(x, ndim):
+    """A writable C-contiguous float64 copy: one numba specialisation for every caller."""
+    a = np.array(x, dtype=np.float64, order="C")
+    if a.ndim != ndim:
+        raise ValueError(f"expected {ndim} dimensions, got shape {a.shape}")
+    return a
+
+
+class CompiledLink:
+    """A link (:class:`~icosim.problems.pendulum.links.Link1` or ``Link2``) for the compiled kernels.
+
+    Its ids and parameter array stand for the closure ``link.rhs(coef, H)``:
+    ``coef`` (B, K, 2) are the monomial coefficients of the input in ``tau = t / H``.
+    """
+
+    def __init__(self, link):
+        self.link_id = 1 if isinstance(link, Link1) else 2
+        self.kind_id = FORCE if link.kind == "force" else KINEMATIC
+        self.n = link.n
+        self.par = link_parameters(link)
+
+    def fd_jacobian(self, coef, H: float, t: float, y) -> np.ndarray:
+        """``radau._fd_jacobian(fun, t, y, fun(t, y))`` for ``fun = link.rhs(coef, H)``: (B, n, n)."""
+        return _jacobian(
+            self.link_id, self.kind_id, self.par, float(H), _float_array(coef, 3), float(t), _float_array(y, 2)
+        )
+
+    def radau(
+        self,
+        coef,
+        H: float,
+        t0: float,
+        t1: float,
+        y0,
+        *,
+        rtol: float = 1e-6,
+        atol: float = 1e-6,
+        jac0=None,
+        newton_tol: float = 1e-8,
+        max_steps: int = 100000,
+    ) -> RadauResult:
+        """``radau.radau_batch(link.rhs(coef, H), t0, t1, y0, ...)`` compiled (``jac0`` an (n, n) matrix)."""
+        if not (np.isfinite(rtol) and np.isfinite(atol) and rtol > 0 and atol > 0):
+            raise ValueError(f"rtol and atol must be finite and > 0, got rtol={rtol!r}, atol={atol!r}")
+        jac0 = np.empty((0, 0)) if jac0 is None else _float_array(np.broadcast_to(jac0, (self.n, self.n)), 2)
+        y, f, counts, h_next, status, t, h_abs = _radau(
+            self.link_id,
+            self.kind_id,
+            self.par,
+            float(H),
+            _float_array(coef, 3),
+            float(t0),
+            float(t1),
+            _float_array(y0, 2),
+            jac0,
+            float(rtol),
+            float(atol),
+            float(newton_tol),
+            int(max_steps),
+        )
+        if status:
+            raise link_failure(status, t, h_abs, max_steps)
+        n_steps, n_rejected, n_fev, n_jev = counts.tolist()
+        return RadauResult(y, f, n_steps, n_rejected, n_fev, n_jev, float(h_next))
+
+
+def link_failure(status, t, h_abs, max_steps) -> IntegrationError:
+    """The exception radau_batch raises in the same situation."""
+    if status == _STEP_TOO_SMALL:
+        return IntegrationError(f"step size {h_abs:.3g} below round-off level at t = {t:.17g}")
+    if status == _ERROR_NOT_FINITE:
+        return IntegrationError(f"non-finite error estimate at t = {t:.17g}")
+    if status == _SINGULAR:  # np.linalg.LinAlgError's message in radau_batch
+        return IntegrationError(f"singular Newton matrix at t = {t:.17g}: Singular matrix")
+    if status == _TOO_MANY_STEPS:
+        return IntegrationError(f"more than {max_steps} steps")
+    assert status == _DERIVATIVE_NOT_FINITE, f"unknown status {status}"
+    return IntegrationError(f"non-finite derivative at t = {t:.17g}")

@@ -1,0 +1,123 @@
+"""The links' right-hand sides compiled with numba (:mod:`icosim.problems.pendulum.integrator.compiled` integrates them).
+
+The same expressions, in the same order, as :class:`~icosim.problems.pendulum.links.Link1`
+and :class:`~icosim.problems.pendulum.links.Link2` (force-driven or kinematically driven),
+for one batch member at a time; the input polynomial in ``tau = t / H`` is
+evaluated by Horner's scheme as ``links._poly``.  A link is an integer id
+(1 or 2), its kind :data:`FORCE` or :data:`KINEMATIC`, and its constants a
+float array (:func:`link_parameters`): no Python closures in compiled code.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from ..links import Link1
+
+__all__ = ["FORCE", "KINEMATIC", "link_parameters", "batch_rhs", "member_rhs", "member_outputs"]
+
+FORCE, KINEMATIC = 0, 1  # the link's kind (links.py: "force" or the kinematically driven one)
+
+
+@numba.njit(cache=True)
+def _input(coef_b, tau):
+    """Input ``(u_x, u_y)`` at ``tau`` of one member's polynomial ``coef_b`` (K, 2), as ``links._poly``."""
+    K = coef_b.shape[0]
+    ux, uy = coef_b[K - 1, 0], coef_b[K - 1, 1]
+    for m in range(K - 2, -1, -1):
+        ux = ux * tau + coef_b[m, 0]
+        uy = uy * tau + coef_b[m, 1]
+    return ux, uy
+
+
+@numba.njit(cache=True)
+def member_rhs(link, kind, par, H, t, y, coef_b, out):
+    """``out = y'`` of link 1 or 2 for one member (state ``y``, input polynomial ``coef_b``).
+
+    ``par``: link 1 ``(-m1 g l1/2, d l1^2/4, l1, J_O1)``, link 2 ``(l2/2, d, m2, g, J2, J2 + m2 l2^2/4)``
+    (:func:`link_parameters`); the expressions in the order of links.py.
+    """
+    ux, uy = _input(coef_b, t / H)
+    if link == 1:
+        phi, w = y[0], y[1]
+        c, s = np.cos(phi), np.sin(phi)
+        tangential = c * uy - s * ux  # n1 . u
+        if kind == FORCE:
+            torque_ext = par[0] * c - par[1] * w
+            alpha = (torque_ext - par[2] * tangential) / par[3]
+        else:
+            alpha = tangential / par[2]
+        out[0] = w
+        out[1] = alpha
+        return
+    l2h, d, m2, g, J2, inertia = par[0], par[1], par[2], par[3], par[4], par[5]
+    c, s = np.cos(y[2]), np.sin(y[2])
+    out[0], out[1], out[2] = y[3], y[4], y[5]
+    if kind == FORCE:
+        out[3] = (ux - d * y[3]) / m2
+        out[4] = (uy - d * y[4]) / m2 - g
+        out[5] = -l2h * (c * uy - s * ux) / J2
+        return
+    Fx = -d * y[3]
+    Fy = -m2 * g - d * y[4]
+    # (J + m l^2/4) phi2'' = (l/2) e2 x F - (m l/2) e2 x a_tilde
+    alpha = l2h * ((c * Fy - s * Fx) - m2 * (c * uy - s * ux)) / inertia
+    ww = y[5] * y[5]
+    # a_S = a_tilde + (l/2)(phi2'' n2 - omega2^2 e2)
+    out[3] = ux + l2h * (-alpha * s - ww * c)
+    out[4] = uy + l2h * (alpha * c - ww * s)
+    out[5] = alpha
+
+
+@numba.njit(cache=True)
+def batch_rhs(link, kind, par, H, t, Y, coef, out):
+    """The batch: ``out[b] = y'(t, Y[b])`` with member ``b``'s input; False if a value is not finite."""
+    finite = True
+    for b in range(Y.shape[0]):
+        member_rhs(link, kind, par, H, t, Y[b], coef[b], out[b])
+        for v in out[b]:
+            finite = finite and np.isfinite(v)
+    return finite
+
+
+@numba.njit(cache=True)
+def member_outputs(link, kind, par, y, f, ux, uy, out):
+    """``out`` (4, 2) = ``(P, P', P'', f)`` of the joint point for one member: ``Link1.outputs`` or
+    ``Link2.outputs`` at state ``y`` with ``f = y'`` and the input ``(ux, uy)``, the expressions in
+    the order of links.py (``par`` as for :func:`member_rhs`)."""
+    if link == 1:
+        l1 = par[2]
+        phi, w, alpha = y[0], y[1], f[1]
+        c, s = np.cos(phi), np.sin(phi)  # e = (c, s), its normal (-s, c)
+        out[0, 0], out[0, 1] = l1 * c, l1 * s
+        out[1, 0], out[1, 1] = (l1 * w) * -s, (l1 * w) * c
+        out[2, 0] = (l1 * alpha) * -s - (l1 * (w * w)) * c
+        out[2, 1] = (l1 * alpha) * c - (l1 * (w * w)) * s
+        if kind == FORCE:
+            out[3, 0], out[3, 1] = ux, uy
+        else:  # tangential joint force that realises l1 phi1'' = n1 . a_tilde
+            mu1 = ((par[0] * c - par[1] * w) - par[3] * alpha) / l1
+            out[3, 0], out[3, 1] = mu1 * -s, mu1 * c
+        return
+    l2h, d, m2, g = par[0], par[1], par[2], par[3]
+    phi, w, alpha = y[2], y[5], f[5]
+    c, s = np.cos(phi), np.sin(phi)
+    out[0, 0], out[0, 1] = y[0] - l2h * c, y[1] - l2h * s
+    out[1, 0], out[1, 1] = y[3] - (l2h * w) * -s, y[4] - (l2h * w) * c
+    out[2, 0] = f[3] - l2h * (alpha * -s - (w * w) * c)
+    out[2, 1] = f[4] - l2h * (alpha * c - (w * w) * s)
+    if kind == FORCE:
+        out[3, 0], out[3, 1] = ux, uy
+    else:  # m2 a_S - F_ext
+        out[3, 0] = m2 * f[3] - -d * y[3]
+        out[3, 1] = m2 * f[4] - (-m2 * g - d * y[4])
+
+
+def link_parameters(link) -> np.ndarray:
+    """The constants of a link's right-hand side, formed by the same expressions as in links.py."""
+    p = link.p
+    if isinstance(link, Link1):
+        return np.array([-p.m1 * p.g * p.l1 / 2, p.d * p.l1**2 / 4, p.l1, p.JO1])
+    l2h = p.l2 / 2
+    return np.array([l2h, p.d, p.m2, p.g, p.J2, p.J2 + p.m2 * l2h**2])

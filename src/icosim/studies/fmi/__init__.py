@@ -1,0 +1,1 @@
+"""icosim.studies.fmi"""
