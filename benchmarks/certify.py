@@ -31,7 +31,7 @@ import numpy as np  # noqa: E402
 
 from icosim import TestModel, make_method  # noqa: E402
 from icosim.engine.decompositions import DECOMPOSITIONS  # noqa: E402
-from icosim.engine.spectral import certify_spectral_radius, spectral_radius_float64, spectral_radius_mp  # noqa: E402
+from icosim.problems.linear.spectral import certify_spectral_radius, spectral_radius_float64, spectral_radius_mp  # noqa: E402
 
 GOAL = 5.0
 METHODS = [("baumgarte", {"mu": 1.0, "index": 1}), ("weighted", {"a": 1.0, "b": 1.0}), ("projection", {})]

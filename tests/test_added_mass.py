@@ -19,8 +19,7 @@ import pytest
 
 from icosim import TestModel, make_method
 from icosim.engine.backends import Ball
-from icosim.engine.spectral import spectral_radius_mp
-from icosim.engine.spectral.matrix import amplification_matrix
+from icosim.problems.linear.spectral import amplification_matrix, spectral_radius_mp
 
 GS12, GS21 = "gauss-seidel-12", "gauss-seidel-21"
 RATIOS = [Fraction(1, 10), Fraction(1, 2), Fraction(2), Fraction(10)]

@@ -2,7 +2,7 @@
 
 Expected values come from an independent route: the Eq. (71) point worked out by hand from
 m, c, d and H (not through :class:`icosim.problems.linear.model.PhysicalModel`), evaluated with
-:func:`icosim.engine.spectral.spectral_radius_float64` on a :class:`~icosim.problems.linear.model.TestModel`.
+:func:`icosim.problems.linear.spectral.spectral_radius_float64` on a :class:`~icosim.problems.linear.model.TestModel`.
 """
 
 import io

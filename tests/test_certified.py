@@ -17,15 +17,15 @@ from flint import arb
 
 from icosim import TestModel, make_method
 from icosim.cli import main
-from icosim.engine.spectral import (
-    Certification,
+from icosim.engine.spectral import Certification
+from icosim.engine.spectral.certified import roots_inside
+from icosim.problems.linear.spectral import (
     amplification_matrix,
     certify_spectral_radius,
     spectral_radius,
     spectral_radius_float64,
+    spectral_radius_mp,
 )
-from icosim.engine.spectral.certified import roots_inside
-from icosim.engine.spectral.radius import spectral_radius_mp
 
 SCHEMES = [
     (make_method("baumgarte", index=1, mu=1.0), "ff", 2),
@@ -238,7 +238,7 @@ def test_no_scheme_is_stable_at_the_origin(method, dec, k):
     x0 + v t, so 1 is an eigenvalue of the recurrence (to 160 digits, up to the square root of the precision a
     Jordan block allows): rho >= 1, and the proof can only say marginal (rho = 1) or unstable, never stable."""
     from icosim.engine.backends import Multiprecision
-    from icosim.engine.spectral.matrix import amplification_matrix
+    from icosim.problems.linear.spectral import amplification_matrix
 
     for ratios in ((1.0, 1.0, 1.0), (0.5, 2.0, 3.0)):
         point = TestModel(0.0, 0.0, *ratios)
@@ -259,7 +259,7 @@ def test_batched_certificates_are_those_of_each_point_alone():
     guard bits (heavy damping), one beyond the guard cap; twice, the second time from the cache of ball
     exponentials."""
     from icosim.engine import backends
-    from icosim.engine.spectral.batched import certify_spectral_radii
+    from icosim.problems.linear.spectral import certify_spectral_radii
 
     points = [
         TestModel(-0.05, 0.5),

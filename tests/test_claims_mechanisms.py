@@ -8,8 +8,8 @@ from a dataset.
 import pytest
 
 from icosim import TestModel, make_method
-from icosim.engine.spectral import spectral_radius_mp
 from icosim.problems.linear.model import PhysicalModel
+from icosim.problems.linear.spectral import spectral_radius_mp
 
 BAUMGARTE_1 = make_method("baumgarte", index=1, mu=1)
 
@@ -56,8 +56,8 @@ def test_disagreements_with_the_paper_are_confirmed_by_time_stepping(method, dec
     import numpy as np
     from helpers import growth_rate
 
-    from icosim.engine.spectral import spectral_radius_float64
     from icosim.problems.linear.problem import LinearCosimulation
+    from icosim.problems.linear.spectral import spectral_radius_float64
 
     found = []  # (lr1, li1, rho_a)
     for lr1 in np.linspace(-1.9, -0.1, 7):
@@ -91,7 +91,7 @@ def test_pendulum_link2_is_the_heavier_at_the_joint_along_link1s_direction_of_mo
     import numpy as np
 
     from icosim.engine.methods import engine_method
-    from icosim.engine.spectral import spectral_radius_float64
+    from icosim.problems.linear.spectral import spectral_radius_float64
     from icosim.problems.pendulum.linearised import pendulum_test_model
     from icosim.problems.pendulum.model import PendulumParameters
 

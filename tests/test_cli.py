@@ -164,7 +164,7 @@ def test_digits_take_the_decimals_as_typed_and_print_n_digits(capsys):
     import mpmath
 
     from icosim import weighted_multiplier
-    from icosim.engine.spectral import spectral_radius_mp
+    from icosim.problems.linear.spectral import spectral_radius_mp
 
     argv = ["rho", "--lr1", "-0.3", "--li1", "0.05", "--am21", "1.1", "--alr21", "0.7", "--ali21", "1.3"]
     argv += ["--method", "weighted", "--a", "0.1", "--b", "0.7", "--decomposition", "ff", "--k", "2"]
@@ -197,7 +197,7 @@ def test_rho_at_128_and_160_digits_agree_to_120_digits():
     import mpmath
 
     from icosim import make_method
-    from icosim.engine.spectral import spectral_radius_mp
+    from icosim.problems.linear.spectral import spectral_radius_mp
 
     cases = [
         ("baumgarte", {"index": 1, "mu": "1"}, "ff", 2),

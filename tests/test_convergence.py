@@ -9,6 +9,7 @@ import yaml
 from helpers import validate_config
 
 import icosim
+import icosim.problems.linear.spectral
 import icosim.studies.convergence.experiment
 import icosim.studies.convergence.study
 import icosim.studies.convergence.work_precision
@@ -558,7 +559,7 @@ def test_baumgarte_index1_k0_has_the_drift_mode_of_time_scale_mu(ratio):
     mu = 1.0e-3
     H = ratio * mu
     c = icosim.PhysicalModel(**icosim.studies.convergence.experiment.PAPER_MODEL, H=H).coefficients()
-    M = icosim.engine.spectral.amplification_matrix(
+    M = icosim.problems.linear.spectral.amplification_matrix(
         c, icosim.make_method("baumgarte", beta=2 * mu / H, gamma=mu**2 / H**2), "ff", 0
     )
     ev = np.linalg.eigvals(M)

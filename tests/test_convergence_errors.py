@@ -15,8 +15,8 @@ import pytest
 from icosim.engine.backends import Ball, Multiprecision
 from icosim.engine.decompositions import get_decomposition
 from icosim.engine.macrostep import macro_step
-from icosim.engine.spectral import amplification_matrix
 from icosim.problems.linear.problem import LinearCosimulation
+from icosim.problems.linear.spectral import amplification_matrix
 from icosim.studies.convergence.errors import DEFECT_REL_ACCURACY, exact_extension, local_defect, propagate_errors
 from icosim.studies.convergence.experiment import Setup, dimensional_method
 from icosim.studies.convergence.study import Study

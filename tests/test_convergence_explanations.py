@@ -8,8 +8,8 @@ import pytest
 import yaml
 from helpers import ROOT
 
-from icosim.engine.spectral import amplification_matrix
 from icosim.order_fit import asymptotic_order, local_slopes
+from icosim.problems.linear.spectral import amplification_matrix
 from icosim.studies.convergence.config import study_from_config
 from icosim.studies.convergence.experiment import dimensional_method
 

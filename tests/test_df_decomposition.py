@@ -21,8 +21,8 @@ from icosim import make_method
 from icosim.cli import main
 from icosim.engine.decompositions import DECOMPOSITIONS, get_decomposition
 from icosim.engine.schemes import GS12, GS21, JACOBI
-from icosim.engine.spectral import spectral_radius_float64
 from icosim.problems.linear.model import TestModel
+from icosim.problems.linear.spectral import spectral_radius_float64
 
 METHODS = [
     ("baumgarte", {"index": 1, "mu": 1.0}),

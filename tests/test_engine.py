@@ -29,8 +29,8 @@ from icosim import (
 from icosim.engine.backends import Float64, Multiprecision
 from icosim.engine.lagrange import corrector_nodes, predictor_nodes, weights_at
 from icosim.engine.run import simulate
-from icosim.engine.spectral import amplification_matrix
 from icosim.problems.linear.exact import MonolithicSolution, consistent_start
+from icosim.problems.linear.spectral import amplification_matrix
 from icosim.problems.linear.subsystems import OscillatorSubsystem
 
 SCHEMES = engine_schemes()
@@ -464,23 +464,22 @@ def test_policy_accepts_physical_models_including_overdamped():
 
 
 def test_policy_survives_a_point_no_precision_can_decide(monkeypatch):
-    import icosim.engine.spectral.batched as batched
-    import icosim.engine.spectral.certified as cert
     import icosim.engine.spectral.policy as st
+    from icosim.problems.linear.family import TwoMass
 
-    original = cert._exact_coefficients
+    original = TwoMass.coefficients
 
-    def fails_at_origin(point, *args, **kwargs):
-        if float(point.lr1) == 0 and float(point.li1) == 0:
+    def fails_at_origin(family, backend=None):
+        m = family.model
+        if backend is not None and not family.converted and float(m.lr1) == 0 and float(m.li1) == 0:
             raise ZeroDivisionError("no result here")
-        return original(point, *args, **kwargs)
+        return original(family, backend)
 
     # the batch of certified points fails as a whole, then each point is certified alone: only the origin fails
-    monkeypatch.setattr(cert, "_exact_coefficients", fails_at_origin)
-    monkeypatch.setattr(batched, "_exact_coefficients", fails_at_origin)
+    monkeypatch.setattr(TwoMass, "coefficients", fails_at_origin)
     # identical undamped subsystems: rho = 1 exactly at (0, 0.3) (tests/test_certified.py checks it to 80 digits)
     model = TestModel(np.array([0.0, 0.0, -0.5]), np.array([0.0, 0.3, 0.5]), 1.0, 1.0, 1.0)
-    res = st.spectral_radius(model, baumgarte(mu=1, index=1), "ff", 2)
+    res = st.spectral_radius(TwoMass(model, "ff", 2), baumgarte(mu=1, index=1))
     assert res.n_failed == 1 and res.verdict[0] == "undecided" and not res.stable[0]
     assert res.reason[0] == "ZeroDivisionError: no result here" and res.digits[0] == -1
     assert res.verdict[1] == "marginal" and res.verdict[2] in ("stable", "unstable")

@@ -24,7 +24,7 @@ from icosim import (
 )
 from icosim.engine.backends import Multiprecision
 from icosim.engine.bounds import guard_digits
-from icosim.engine.spectral import amplification_matrix
+from icosim.problems.linear.spectral import amplification_matrix
 from icosim.problems.linear.subsystems import decay_rate
 
 SCHEMES = engine_schemes()

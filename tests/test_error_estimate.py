@@ -6,7 +6,7 @@ import pytest
 
 from icosim import TestModel, make_method
 from icosim.engine.spectral.policy import Certification
-from icosim.engine.spectral.radius import spectral_radius_float64, spectral_radius_mp
+from icosim.problems.linear.spectral import spectral_radius_float64, spectral_radius_mp
 from icosim.studies.stability.panels import grid_axis
 
 # the plane of Figs. 9-20 with its edges: the origin (a Jordan block at 1) and the undamped axis (rho = 1)

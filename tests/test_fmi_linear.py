@@ -13,11 +13,11 @@ skip_without_c_toolchain()
 
 from icosim.engine.methods import engine_method, make_method  # noqa: E402
 from icosim.engine.run import simulate  # noqa: E402
-from icosim.engine.spectral.radius import spectral_radius_float64  # noqa: E402
 from icosim.problems.fmu.run import run_scene  # noqa: E402
 from icosim.problems.fmu.scene import COUPLING_KEYS  # noqa: E402
 from icosim.problems.linear.model import PhysicalModel  # noqa: E402
 from icosim.problems.linear.problem import LinearCosimulation  # noqa: E402
+from icosim.problems.linear.spectral import spectral_radius_float64  # noqa: E402
 from icosim.studies.fmi.orders import order_scene  # noqa: E402
 
 P = dict(m1=1.0, m2=2.0, c1=1000.0, c2=500.0, d1=2.0, d2=1.0)

@@ -11,10 +11,10 @@ pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
 skip_without_c_toolchain()
 
 from icosim.cli import main  # noqa: E402
-from icosim.engine.spectral.radius import spectral_radius_float64  # noqa: E402
 from icosim.problems.fmu.predict import predict_scene  # noqa: E402
 from icosim.problems.fmu.scene import load_scene  # noqa: E402
 from icosim.problems.linear.model import PhysicalModel  # noqa: E402
+from icosim.problems.linear.spectral import spectral_radius_float64  # noqa: E402
 
 SCENES = ROOT / "config" / "scenes"
 

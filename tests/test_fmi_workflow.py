@@ -157,11 +157,11 @@ def test_unstable_scene_against_the_engine(monkeypatch):
     measured growth is that rho, and the built-in difference is that of an independent built-in run."""
     from icosim.engine.methods import engine_method, make_method
     from icosim.engine.run import simulate
-    from icosim.engine.spectral.radius import spectral_radius_float64
     from icosim.problems.fmu.run import run_dataset, run_scene
     from icosim.problems.fmu.scene import load_scene
     from icosim.problems.linear.model import PhysicalModel
     from icosim.problems.linear.problem import LinearCosimulation
+    from icosim.problems.linear.spectral import spectral_radius_float64
     from icosim.studies.fmi.validation import scene_validation
 
     monkeypatch.setenv("ICOSIM_FMU_CACHE", str(CACHE))

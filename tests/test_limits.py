@@ -28,9 +28,9 @@ from hypothesis import strategies as st
 from icosim import TestModel, make_method
 from icosim.cli import main
 from icosim.engine.bounds import MAX_DIGITS, MAX_K, time_budget
-from icosim.engine.spectral import spectral_radius, spectral_radius_mp
 from icosim.errors import PointTimeout
 from icosim.io.integrity import quarantine_corrupt, remove_stale_parts, sidecar, verify
+from icosim.problems.linear.spectral import spectral_radius, spectral_radius_mp
 
 WEIGHTED = ["--method", "weighted", "--a", "1", "--b", "1", "--decomposition", "ff", "--k", "2"]
 ONES = ["--am21", "1", "--alr21", "1", "--ali21", "1"]

@@ -9,8 +9,8 @@ from icosim import TestModel, make_method, spectral_radius_float64
 from icosim.advise.maps import boundary_extent, map_specs, marginal_extent, stable_extent
 from icosim.cli import main
 from icosim.engine.schemes import SCHEMES, GaussSeidel
-from icosim.engine.spectral import certify_spectral_radius
 from icosim.io.netcdf import open_dataset
+from icosim.problems.linear.spectral import certify_spectral_radius
 from icosim.studies.stability.datasets import stability_panel
 
 WM = ["map", "--method", "weighted", "--a", "1", "--b", "1", "--decomposition", "ff"]

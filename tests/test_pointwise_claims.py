@@ -7,9 +7,9 @@ import xarray as xr
 
 from icosim import TestModel, make_method
 from icosim.claims.registry import evaluate_claim, parse_claims
-from icosim.engine.spectral.matrix import amplification_matrix
 from icosim.engine.spectral.policy import VERDICTS
 from icosim.errors import ParameterError
+from icosim.problems.linear.spectral import amplification_matrix
 
 S, U, M, X = (VERDICTS.index(v) for v in ("stable", "unstable", "marginal", "undecided"))
 

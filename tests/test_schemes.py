@@ -26,9 +26,9 @@ from icosim import (
 )
 from icosim.engine.macrostep import macro_step
 from icosim.engine.schemes import GS12, GS21, JACOBI, SCHEMES, GaussSeidel, Jacobi, get_scheme, standard_schemes
-from icosim.engine.spectral import amplification_matrix
 from icosim.order_fit import asymptotic_order
 from icosim.problems.linear.model import Coefficients
+from icosim.problems.linear.spectral import amplification_matrix
 from icosim.studies.convergence.experiment import Setup, step_counts
 from icosim.studies.convergence.study import Study
 

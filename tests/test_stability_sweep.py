@@ -16,7 +16,6 @@ import pytest  # noqa: E402
 import yaml  # noqa: E402
 
 from icosim import TestModel, make_method  # noqa: E402
-from icosim.engine.spectral import spectral_radius_mp  # noqa: E402
 from icosim.errors import ParameterError  # noqa: E402
 from icosim.figures import save_figure  # noqa: E402
 from icosim.figures.stability import (  # noqa: E402
@@ -26,6 +25,7 @@ from icosim.figures.stability import (  # noqa: E402
     stability_figure,  # noqa: E402
 )
 from icosim.io.netcdf import open_dataset, open_variables, provenance_attrs, write_netcdf  # noqa: E402
+from icosim.problems.linear.spectral import spectral_radius_mp  # noqa: E402
 from icosim.studies.stability.datasets import stability_panel  # noqa: E402
 from icosim.studies.stability.panels import (  # noqa: E402
     PanelSpec,

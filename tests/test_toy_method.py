@@ -21,8 +21,8 @@ from icosim.cli import main
 from icosim.engine import methods
 from icosim.engine.methods import CouplingMethod, MethodSpec, Parameter, make_method
 from icosim.engine.methods.base import finite
-from icosim.engine.spectral import spectral_radius
 from icosim.errors import ParameterError
+from icosim.problems.linear.spectral import spectral_radius
 from icosim.problems.pendulum.config import configured_runs
 from icosim.problems.pendulum.linearised import linear_test_model_rho
 from icosim.problems.pendulum.model import PendulumParameters

@@ -26,10 +26,15 @@ if TYPE_CHECKING:
     from .engine.methods.projection import projection
     from .engine.methods.weighted import weighted_multiplier
     from .engine.schemes import JACOBI, GaussSeidel, Jacobi, get_scheme
-    from .engine.spectral import amplification_matrix, spectral_radius, spectral_radius_float64, spectral_radius_mp
     from .errors import ParameterError
     from .problems.linear.model import Coefficients, PhysicalModel, TestModel
     from .problems.linear.problem import LinearCosimulation
+    from .problems.linear.spectral import (
+        amplification_matrix,
+        spectral_radius,
+        spectral_radius_float64,
+        spectral_radius_mp,
+    )
 
 _LAZY = {
     "LinearCosimulation": ".problems.linear.problem",
@@ -45,10 +50,10 @@ _LAZY = {
     "GaussSeidel": ".engine.schemes",
     "Jacobi": ".engine.schemes",
     "get_scheme": ".engine.schemes",
-    "amplification_matrix": ".engine.spectral",
-    "spectral_radius": ".engine.spectral",
-    "spectral_radius_float64": ".engine.spectral",
-    "spectral_radius_mp": ".engine.spectral",
+    "amplification_matrix": ".problems.linear.spectral",
+    "spectral_radius": ".problems.linear.spectral",
+    "spectral_radius_float64": ".problems.linear.spectral",
+    "spectral_radius_mp": ".problems.linear.spectral",
 }
 
 

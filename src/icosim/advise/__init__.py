@@ -9,7 +9,7 @@ order ``k`` and each coupling scheme (:data:`icosim.engine.schemes.SCHEMES`: Jac
 Gauss-Seidel with subsystem 1 or subsystem 2 first; the variants when asked for):
 
 * at one ``H``: the spectral radius ``rho`` of the co-simulation recurrence
-  (the precision policy of :func:`icosim.engine.spectral.spectral_radius`: float64,
+  (the precision policy of :func:`icosim.problems.linear.spectral.spectral_radius`: float64,
   certified in ball arithmetic where float64 cannot decide) and the verdict;
 * over a range ``[H_lo, H_hi]``: where the configuration is stable.  Stability need
   not be monotone in ``H`` (the weighted multiplier at ``k = 2`` is unstable

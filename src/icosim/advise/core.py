@@ -15,9 +15,9 @@ import numpy as np
 from ..engine import methods as _methods
 from ..engine.bounds import check_k
 from ..engine.schemes import get_scheme, standard_schemes
-from ..engine.spectral import spectral_radius
 from ..errors import ParameterError
 from ..problems.linear.model import PhysicalModel
+from ..problems.linear.spectral import spectral_radius
 
 __all__ = [
     "TwoMassSystem",
@@ -33,7 +33,7 @@ __all__ = [
 #: Approximation orders scanned unless others are asked for.
 DEFAULT_K = (0, 1, 2)
 
-#: Coupling orders: name -> keyword arguments of :func:`icosim.engine.spectral.spectral_radius`: the Jacobi
+#: Coupling orders: name -> keyword arguments of :func:`icosim.problems.linear.spectral.spectral_radius`: the Jacobi
 #: (parallel) scheme of the paper and Gauss-Seidel (sequential) with subsystem 1 or subsystem 2 first
 #: (:mod:`icosim.engine.schemes`); the variants are ranked when asked for.
 
@@ -272,7 +272,7 @@ def evaluate(system: TwoMassSystem, configuration: Configuration, H, *, policy="
     """``rho`` of ``configuration`` at every macro step in ``H``: one batched call, or one per H where the engine's
     parameters change with it (a Baumgarte ``mu`` in s).
 
-    The verdict is the precision policy's (:func:`icosim.engine.spectral.spectral_radius`): ``stable``,
+    The verdict is the precision policy's (:func:`icosim.problems.linear.spectral.spectral_radius`): ``stable``,
     ``unstable`` (float64 trusted, or proven in ball arithmetic), ``marginal`` (the proven enclosure
     contains 1), or ``undecided``: nothing could compute the point, or (policy ``float64``) float64
     could not decide it.

@@ -1,7 +1,7 @@
 """``icosim rho``: the spectral radius of one parameter point, its verdict proven.
 
 Every answer of the command rests on ball arithmetic
-(:func:`icosim.engine.spectral.certify_spectral_radius`): the parameters are taken
+(:func:`icosim.problems.linear.spectral.certify_spectral_radius`): the parameters are taken
 exactly as typed (``--lr1 -0.3`` is -3/10, not the nearest double), the verdict is proven (stable,
 unstable, or marginal: the enclosure still contains 1 at ``--max-bits``), and
 the value printed is the midpoint of the proven enclosure narrowed to the
@@ -162,7 +162,7 @@ def rho_answer(model, method, decomposition, k, *, digits=None, max_bits=1024, t
     ``model`` is a :class:`~icosim.problems.linear.model.TestModel` of one point (Fractions kept exact); ``scheme`` the
     coupling scheme (:mod:`icosim.engine.schemes`), used by the proof and by float64 alike.
     """
-    from ..engine.spectral import certify_spectral_radius
+    from ..problems.linear.spectral import certify_spectral_radius
 
     scheme = get_scheme(scheme)
 
@@ -237,7 +237,7 @@ def rho_text(answer: dict, *, show_enclosure: bool = False, scheme=JACOBI) -> st
 
 def _float64(model, method, decomposition, k, scheme=JACOBI):
     """float64's value and error estimate for comparison (None where float64 gives nothing finite)."""
-    from ..engine.spectral import spectral_radius_float64
+    from ..problems.linear.spectral import spectral_radius_float64
 
     try:
         with np.errstate(all="ignore"):

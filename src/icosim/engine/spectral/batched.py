@@ -13,30 +13,17 @@ from __future__ import annotations
 
 from fractions import Fraction
 
-import numpy as np
-
-from ...problems.linear.model import Coefficients
 from ..backends import Ball
 from ..bounds import MAX_GUARD_BITS, MAX_SECONDS, time_budget
-from .certified import (
-    DEFAULT_BITS,
-    MAX_BITS,
-    SpectralCertificate,
-    _exact_coefficients,
-    certify_matrix,
-    certify_spectral_radius,
-    guard_bits,
-)
+from .certified import DEFAULT_BITS, MAX_BITS, SpectralCertificate, certify_matrix, certify_spectral_radius
 from .matrix import amplification_matrix
 
 __all__ = ["certify_spectral_radii"]
 
 
 def certify_spectral_radii(
-    models,
+    points,
     method,
-    decomposition,
-    k,
     *,
     bits: int = DEFAULT_BITS,
     max_bits: int = MAX_BITS,
@@ -45,6 +32,8 @@ def certify_spectral_radii(
     **matrix_kw,
 ) -> list:
     """:func:`~icosim.engine.spectral.certified.certify_spectral_radius` of many points of one panel, each as alone.
+
+    ``points`` are single-point families (:meth:`~icosim.engine.spectral.family.LinearFamily.point`) of one kind.
 
     Returns one entry per point: its :class:`SpectralCertificate`, or the exception that left it
     undecided.  The points that share a working precision (the same guard bits, the same pass of the
@@ -56,12 +45,12 @@ def certify_spectral_radii(
     A batch that fails or runs past ``point_seconds`` per point falls back to the points one by one,
     each within its own budget, exactly as :func:`certify_spectral_radius`.
     """
-    out: list = [None] * len(models)
+    out: list = [None] * len(points)
     b0, cap = int(bits), max(int(max_bits), int(bits))
     groups: dict = {}  # guard bits -> indices of the points
-    for i, model in enumerate(models):
+    for i, point in enumerate(points):
         try:
-            guard = guard_bits(model)
+            guard = point.guard_bits()
         except Exception as exc:  # noqa: BLE001 -- one point's failure must not abort the others
             out[i] = exc
             continue
@@ -75,10 +64,8 @@ def certify_spectral_radii(
         try:
             with time_budget(point_seconds):
                 out[i] = certify_spectral_radius(
-                    models[i],
+                    points[i],
                     method,
-                    decomposition,
-                    k,
                     bits=bits,
                     max_bits=max_bits,
                     max_guard_bits=max_guard_bits,
@@ -94,7 +81,8 @@ def certify_spectral_radii(
             try:
                 budget = min(point_seconds * len(todo), MAX_SECONDS) if point_seconds else 0
                 with time_budget(budget), be.context():
-                    Ms = _matrices([models[i] for i in todo], method, decomposition, k, be, matrix_kw)
+                    batch = type(points[todo[0]]).stack([points[i] for i in todo], be)
+                    Ms = amplification_matrix(batch, method, backend=be, exact=True, **matrix_kw)
             except Exception:  # noqa: BLE001 -- the batch cannot tell which point failed: each alone
                 for i in todo:
                     alone(i)
@@ -114,15 +102,3 @@ def certify_spectral_radii(
             # the points undecided at ``bits`` go straight to the cap, as in certify_spectral_radius
             todo, b = undecided, cap
     return out
-
-
-def _matrices(models, method, decomposition, k, be, matrix_kw):
-    """The ball amplification matrices of ``models`` (one point each) in one batched macro step."""
-    coeffs = [_exact_coefficients(m, be) for m in models]
-    names = ("k1", "delta1", "k2", "delta2", "am21")
-    stacked = []
-    for f in names:
-        column = np.empty(len(coeffs), dtype=object)
-        column[:] = [getattr(c, f) for c in coeffs]
-        stacked.append(column)
-    return amplification_matrix(Coefficients(*stacked), method, decomposition, k, backend=be, **matrix_kw)

@@ -42,11 +42,9 @@ from fractions import Fraction
 
 import numpy as np
 
-from ...problems.linear.model import Coefficients, PhysicalModel, TestModel, eq71_coefficients
-from ...problems.linear.subsystems import decay_rate
 from ..backends import Ball
-from ..bounds import MAX_GUARD_BITS, check_finite
-from .matrix import amplification_matrix, as_coefficients
+from ..bounds import MAX_GUARD_BITS
+from .matrix import amplification_matrix
 
 __all__ = [
     "certify_spectral_radius",
@@ -57,13 +55,12 @@ __all__ = [
     "DEFAULT_BITS",
     "MAX_BITS",
     "MAX_GUARD_BITS",
-    "guard_bits",
 ]
 
 #: The verdicts a certificate can give (``undecided``: the ball arithmetic lost every digit at the cap).
 VERDICTS = ("stable", "unstable", "marginal", "undecided")
 #: Working precision of the first attempt and the default cap (bits), the only second attempt; both on top of
-#: the guard bits a heavily damped subsystem needs (:func:`guard_bits`), themselves capped.
+#: the guard bits a heavily damped subsystem needs (the family's ``guard_bits``), themselves capped.
 DEFAULT_BITS, MAX_BITS = 128, 1024
 
 
@@ -283,30 +280,9 @@ def certify_matrix(M, bits: int, *, final: bool = True, digits: int | None = Non
     return SpectralCertificate(verdict, lower, upper, bits)
 
 
-def guard_bits(model) -> int:
-    """Extra bits for entries as small as ``exp(-decay)`` (a heavily damped subsystem over one macro step).
-
-    The propagators hold entries of size ``exp(-decay)`` next to O(1) ones;
-    their differences need ``decay / ln 2`` more bits for the same relative
-    accuracy (the ball radii would otherwise swallow them, honestly but
-    uselessly).  ``decay`` is the largest ``-Re`` of a subsystem eigenvalue,
-    in macro steps.
-    """
-    c = as_coefficients(model)
-    decay = 0.0
-    for name, k, d in (("1", c.k1, c.delta1), ("2", c.k2, c.delta2)):
-        check_finite(f"k{name}", k)
-        check_finite(f"delta{name}", d)
-        decay = max(decay, float(decay_rate(float(k), float(d))))
-    bits = decay / math.log(2)
-    return int(math.ceil(bits)) if bits < 2**62 else 2**62  # beyond any cap (inf for a decay past a double)
-
-
 def certify_spectral_radius(
-    model,
+    family,
     method,
-    decomposition,
-    k,
     *,
     bits: int = DEFAULT_BITS,
     max_bits: int = MAX_BITS,
@@ -314,12 +290,11 @@ def certify_spectral_radius(
     digits: int | None = None,
     **matrix_kw,
 ) -> SpectralCertificate:
-    """Prove ``rho < 1`` or ``rho > 1``, or report ``marginal``, for one parameter point.
+    """Prove ``rho < 1`` or ``rho > 1``, or report ``marginal``, for the one point of ``family``.
 
-    ``model`` is a :class:`~icosim.problems.linear.model.TestModel` (or ``PhysicalModel`` /
-    ``Coefficients``) of one point whose attributes are taken exactly (floats,
-    Fractions, decimal strings).  The working precision starts at ``bits``
-    (plus :func:`guard_bits`); if that does not decide the verdict, it is
+    The point's parameters are taken exactly (floats, Fractions, decimal strings:
+    :meth:`~icosim.engine.spectral.family.LinearFamily.problem`).  The working precision starts at ``bits``
+    (plus the family's :meth:`~icosim.engine.spectral.family.LinearFamily.guard_bits`); if that does not decide the verdict, it is
     computed once more at ``max_bits`` (plus the same guard); a point needing more than
     ``max_guard_bits`` guard bits is ``undecided`` at once, with the reason.
     ``digits``: narrow a proven (stable or unstable) enclosure to that many
@@ -330,23 +305,20 @@ def certify_spectral_radius(
     enclosure is kept as decided there.  ``matrix_kw`` go to :func:`~icosim.engine.spectral.matrix.amplification_matrix`.
 
     >>> from icosim import TestModel, make_method
-    >>> c = certify_spectral_radius(TestModel(-0.05, 0.5), make_method("weighted", a=1, b=1), "ff", 2)
+    >>> from icosim.problems.linear.family import TwoMass
+    >>> c = certify_spectral_radius(TwoMass(TestModel(-0.05, 0.5), "ff", 2), make_method("weighted", a=1, b=1))
     >>> c.verdict, c.lower(6), c.upper(6)
     ('unstable', '1.02323', '1.02324')
-    >>> certify_spectral_radius(TestModel(0.0, 0.3), make_method("projection"), "ff", 1).verdict  # undamped
+    >>> certify_spectral_radius(TwoMass(TestModel(0.0, 0.3), "ff", 1), make_method("projection")).verdict  # undamped
     'marginal'
     """
-    guard = guard_bits(model)
+    guard = family.guard_bits()
     if guard > max_guard_bits:
         why = f"needs {guard} guard bits for exp(-decay) entries, more than the cap of {max_guard_bits}"
         return SpectralCertificate("undecided", Fraction(0), None, 0, reason=why, cause="precision_cap")
 
     def matrix(b):
-        be = Ball(b + guard)
-        with be.context():
-            return amplification_matrix(
-                _exact_coefficients(model, be), method, decomposition, k, backend=be, **matrix_kw
-            )
+        return amplification_matrix(family, method, backend=Ball(b + guard), exact=True, **matrix_kw)
 
     # the verdict comes from the same schedule whatever the digits asked for: ``bits``, then the cap
     b, max_bits = int(bits), max(int(max_bits), int(bits))
@@ -373,12 +345,3 @@ def certify_spectral_radius(
         coeffs = flint.arb_mat(M.tolist()).charpoly().coeffs()
         lower, upper = _refine(coeffs, M.shape[-1], cert.rho_lower, cert.rho_upper, digits, b_digits + guard)
     return SpectralCertificate(cert.verdict, lower, upper, b_digits + guard if b_digits > b else cert.bits)
-
-
-def _exact_coefficients(model, be):
-    if isinstance(model, TestModel):  # checked when it was made: its values as balls need no second check
-        values = (getattr(model, f) for f in ("lr1", "li1", "am21", "alr21", "ali21"))
-        return eq71_coefficients(*(be.const(v) for v in values))
-    if isinstance(model, PhysicalModel):
-        model = model.coefficients()
-    return Coefficients(*(be.const(getattr(model, f)) for f in ("k1", "delta1", "k2", "delta2", "am21")))

@@ -23,7 +23,8 @@ arithmetic decided it.
 The origin of the parameter plane (a free mass: a Jordan block at 1) is marginal:
 
 >>> from icosim import TestModel, make_method
->>> res = spectral_radius(TestModel(0.0, 0.0), make_method("projection"), "ff", k=0)
+>>> from icosim.problems.linear.family import TwoMass
+>>> res = spectral_radius(TwoMass(TestModel(0.0, 0.0), "ff", k=0), make_method("projection"))
 >>> str(res.verdict), str(res.arithmetic), bool(res.certified), res.n_high_precision
 ('marginal', 'ball', True, 1)
 """
@@ -36,13 +37,11 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from ...errors import NotFiniteError, ParameterError, PointTimeout, PrecisionCapError
-from ...problems.linear.model import Coefficients, TestModel
 from ..backends import FLOAT64_DIGITS
 from ..bounds import MAX_BITS_LIMIT, MAX_SECONDS, time_budget
 from ..schemes import JACOBI, get_scheme
 from .batched import certify_spectral_radii
 from .certified import DEFAULT_BITS, MAX_BITS
-from .matrix import as_coefficients
 from .radius import spectral_radius_float64, spectral_radius_mp
 
 __all__ = [
@@ -176,23 +175,20 @@ class StabilityResult:
 
 
 def spectral_radius(
-    model,
+    family,
     method,
-    decomposition,
-    k,
     *,
     digits: int = 128,
     policy: str = "auto",
     certification: Certification | dict | None = None,
     scheme=JACOBI,
 ):
-    """Spectral radius and stability verdict over arrays of parameter points with the precision policy.
+    """Spectral radius and stability verdict at every point of ``family`` with the precision policy.
 
     Parameters
     ----------
-    model : :class:`TestModel` (Eq. 71; its attributes broadcast to the grid),
-        or :class:`~icosim.problems.linear.model.PhysicalModel` / :class:`~icosim.problems.linear.model.Coefficients`
-        (any damping, overdamped included).
+    family : the points (:class:`~icosim.engine.spectral.family.LinearFamily`; the two-mass model's:
+        :func:`icosim.problems.linear.spectral.spectral_radius` takes its parameters).
     scheme : the coupling scheme (:mod:`icosim.engine.schemes`; default Jacobi), used by every arithmetic.
     policy : one of :data:`POLICIES` (module docstring).
     digits : mpmath digits of the ``mp`` policy.
@@ -207,24 +203,18 @@ def spectral_radius(
     cert_settings = (
         certification if isinstance(certification, Certification) else Certification.from_dict(certification)
     )
-    if isinstance(model, TestModel):
-        names, point_type = ("lr1", "li1", "am21", "alr21", "ali21"), TestModel
-    else:  # exact conversion happens per point
-        model = as_coefficients(model)
-        names, point_type = ("k1", "delta1", "k2", "delta2", "am21"), Coefficients
-    arrays = np.broadcast_arrays(*(np.asarray(getattr(model, n), dtype=float) for n in names))
-    shape = arrays[0].shape
+    shape = family.shape
     out = _empty(shape)
     t0, c0 = time.perf_counter(), time.process_time()
     # derived quantities (k = lr^2 + li^2, ...) that overflow float64: undecided, nothing is computed there
-    overflow = _overflowing(point_type(*arrays) if point_type is TestModel else model, shape)
-    out["reason"][overflow] = "overflow: a derived coefficient (k1, delta1, k2, delta2) is not finite in float64"
+    overflow = family.overflowing()
+    out["reason"][overflow] = family.overflow_reason
     out["reason_code"][overflow] = "overflow"
     if policy == "mp":
         todo_ball = np.zeros(shape, dtype=bool)
         todo_mp = ~overflow
     else:
-        rho, err = _float64_isolated(point_type, arrays, overflow, method, decomposition, k, out, scheme)
+        rho, err = _float64_isolated(family, overflow, method, out, scheme)
         out["rho"], out["err"] = rho, err
         trusted = np.isfinite(rho) & (np.abs(rho - 1) > err)
         if policy == "float64":  # no recheck: float64's verdict on every finite point
@@ -249,14 +239,11 @@ def spectral_radius(
             todo_ball = (~trusted | near | audit) & ~overflow
     t1, c1 = time.perf_counter(), time.process_time()
     todo = [idx for idx in np.ndindex(shape) if todo_ball[idx]]
-    # a double is exact: no rounding here; the points are certified together (batched ball arithmetic, every
-    # certificate as if alone), one point's failure leaves only that point undecided
-    points = [point_type(*(float(a[idx]) for a in arrays)) for idx in todo]
+    # the points are certified together (batched ball arithmetic, every certificate as if alone), one point's
+    # failure leaves only that point undecided
     certificates = certify_spectral_radii(
-        points,
+        [family.point(idx) for idx in todo],
         method,
-        decomposition,
-        k,
         bits=cert_settings.bits,
         max_bits=cert_settings.max_bits,
         point_seconds=cert_settings.point_seconds,
@@ -271,10 +258,9 @@ def spectral_radius(
     for idx in np.ndindex(shape):
         if not todo_mp[idx]:
             continue
-        point = point_type(*(float(a[idx]) for a in arrays))
         try:
             with time_budget(cert_settings.point_seconds):
-                r = spectral_radius_mp(point, method, decomposition, k, digits, scheme=scheme)
+                r = spectral_radius_mp(family.point(idx), method, digits, scheme=scheme)
         except Exception as exc:  # one point's failure must not abort a grid
             _undecided(out, idx, exc)
             continue
@@ -290,22 +276,11 @@ def spectral_radius(
     )
 
 
-def _overflowing(model, shape) -> np.ndarray:
-    """Points whose subsystem coefficients are not finite in float64 (e.g. ``k2 = li2^2`` with ``ali21 = 1e300``)."""
-    with np.errstate(all="ignore"):
-        c = as_coefficients(model)
-        bad = np.zeros(shape, dtype=bool)
-        for name in ("k1", "delta1", "k2", "delta2"):
-            bad |= ~np.isfinite(np.broadcast_to(np.asarray(getattr(c, name), dtype=float), shape))
-    return bad
-
-
-def _float64_isolated(point_type, arrays, overflow, method, decomposition, k, out, scheme=JACOBI):
+def _float64_isolated(family, overflow, method, out, scheme=JACOBI):
     """The float64 pass over the grid in one call; if it raises, point by point, each failure undecided alone."""
-    shape = arrays[0].shape
-    safe = [np.where(overflow, 0.0, a) if a.dtype.kind == "f" else a for a in arrays]  # no overflow inside
+    shape = family.shape
     try:
-        rho, err = spectral_radius_float64(point_type(*safe), method, decomposition, k, scheme=scheme)
+        rho, err = spectral_radius_float64(family.safe(overflow), method, scheme=scheme)  # no overflow inside
         return np.where(overflow, np.nan, rho), np.where(overflow, np.inf, err)
     except Exception:  # noqa: BLE001 -- find the point(s) responsible; the others keep their values
         rho, err = np.full(shape, np.nan), np.full(shape, np.inf)
@@ -313,9 +288,7 @@ def _float64_isolated(point_type, arrays, overflow, method, decomposition, k, ou
             if overflow[idx]:
                 continue
             try:
-                r, e = spectral_radius_float64(
-                    point_type(*(a[idx] for a in safe)), method, decomposition, k, scheme=scheme
-                )
+                r, e = spectral_radius_float64(family.point(idx), method, scheme=scheme)
                 rho[idx], err[idx] = float(r), float(e)
             except Exception as exc:  # noqa: BLE001
                 _undecided(out, idx, exc)

@@ -27,26 +27,21 @@ elsewhere the verdict does not hang on it.  The multiprecision path recomputes
 one point with every derived quantity formed at ``digits`` significant digits.
 
 >>> from icosim import TestModel, make_method
->>> m, point = make_method("weighted", a=1, b=1), TestModel(-0.05, 0.5)
->>> rho, err = spectral_radius_float64(point, m, "ff", k=2)
->>> rho_mp = spectral_radius_mp(point, m, "ff", k=2, digits=40)
+>>> from icosim.problems.linear.family import TwoMass
+>>> m, point = make_method("weighted", a=1, b=1), TwoMass(TestModel(-0.05, 0.5), "ff", k=2)
+>>> rho, err = spectral_radius_float64(point, m)
+>>> rho_mp = spectral_radius_mp(point, m, digits=40)
 >>> bool(abs(float(rho) - float(rho_mp)) <= err), bool(rho > 1)
 (True, True)
 """
 
 from __future__ import annotations
 
-import copy
-
 import numpy as np
 
-from ...problems.linear.model import TestModel
-from ...problems.linear.problem import LinearCosimulation
-from ...problems.linear.subsystems import FORCE
 from ..backends import Float64, Multiprecision
-from ..decompositions import get_decomposition
 from ..schemes import JACOBI, get_scheme
-from .matrix import _matrix_from_problem, _problem, as_coefficients
+from .matrix import matrix_of
 
 __all__ = ["spectral_radius_float64", "spectral_radius_mp", "SAFETY", "DISTURBANCE", "DOUBT", "FLOOR"]
 
@@ -97,39 +92,11 @@ def _radius_and_condition(M):
     return np.abs(lam[..., 0]), np.fmin(kappa, 1 / np.sqrt(np.finfo(float).eps))
 
 
-def _generator_norm(problem):
-    """``nu = max(1, ||A||_1)`` over the subsystems, ``A`` the matrix whose exponential a subsystem's blocks
-    are (per point; a kinematically driven subsystem's ``A`` has ones and zeros only)."""
-    nu = 1.0
-    for sub in problem.subsystems:
-        if sub.kind == FORCE:  # columns of A: k, 1 + delta, the gain, then the input's shift (ones)
-            nu = np.maximum(nu, np.maximum(np.abs(sub.stiffness), 1 + np.abs(sub.damping)))
-            nu = np.maximum(nu, np.abs(sub.gain))
-    return nu[..., 0] if np.ndim(nu) else nu  # without the axis the basis vectors ride on (length 1)
-
-
-def _disturbed(problem: LinearCosimulation, rng, rel):
-    """A copy whose exponential blocks carry absolute noise ``rel * max|E|``."""
-    p = copy.copy(problem)
-    subs = []
-    for sub in problem.subsystems:
-        s = copy.copy(sub)
-        s.__dict__.pop("_node_cache", None)
-        E = sub.blocks
-        scale = rel * np.max(np.abs(E), axis=(-1, -2), keepdims=True)
-        s.set_blocks(E + scale * rng.standard_normal(E.shape))
-        subs.append(s)
-    p.subsystems = tuple(subs)
-    if hasattr(p, "_jac"):
-        del p._jac
-    return p
-
-
 def _disturbed_spread(problem, method, scheme, rho, rng, rel):
     """``|rho_d - rho|`` of one disturbed run (exponential blocks and amplification matrix; inf where the
     disturbed matrix is not finite)."""
     be = problem.backend
-    Md = _matrix_from_problem(_disturbed(problem, rng, rel), method, scheme)
+    Md = matrix_of(problem.disturbed(rng, rel), method, scheme)
     ok = np.all(np.isfinite(Md), axis=(-1, -2))
     Md = np.where(ok[..., None, None], Md, 0.0)
     norm = np.max(np.abs(Md), axis=(-1, -2), keepdims=True)
@@ -140,10 +107,8 @@ def _disturbed_spread(problem, method, scheme, rho, rng, rel):
     return np.where(ok, np.abs(rho_d - rho), np.inf)
 
 
-def spectral_radius_float64(
-    coefficients, method, decomposition, k, *, error_estimate=True, seed=0, scheme=JACOBI, doubt=DOUBT
-):
-    """Spectral radius in float64 over arrays of parameter points.
+def spectral_radius_float64(family, method, *, error_estimate=True, seed=0, scheme=JACOBI, doubt=DOUBT):
+    """Spectral radius in float64 at every point of ``family`` (:mod:`icosim.engine.spectral.family`).
 
     Returns ``(rho, err)``; ``err`` is the error estimate described in the
     module docstring (``None`` if not requested; ``doubt=np.inf`` makes the
@@ -152,13 +117,10 @@ def spectral_radius_float64(
     """
     be = Float64()
     scheme = get_scheme(scheme)
-    decomposition = get_decomposition(decomposition)
-    method.check_decomposition(decomposition)
-    scheme.check_decomposition(decomposition)
-    coefficients = as_coefficients(coefficients)
+    family.check(method, scheme)
     with np.errstate(all="ignore"):
-        problem = _problem(coefficients, decomposition, k, be)
-        M = _matrix_from_problem(problem, method, scheme)
+        problem = family.problem(be)
+        M = matrix_of(problem, method, scheme)
         finite = np.all(np.isfinite(M), axis=(-1, -2))
         M_safe = np.where(finite[..., None, None], M, 0.0)
         if not error_estimate:
@@ -170,12 +132,11 @@ def spectral_radius_float64(
         spread = _disturbed_spread(problem, method, scheme, rho, rng, rel)
         # the second disturbed run only where the first one's estimate, ``doubt`` times over, reaches |rho - 1|:
         # elsewhere no second spread seen on the project's grids came near deciding (docs/engine.md)
-        amplified = kappa * _generator_norm(problem) * np.linalg.norm(M_safe, axis=(-2, -1))  # kappa nu ||M||_F
+        amplified = kappa * problem.generator_norm() * np.linalg.norm(M_safe, axis=(-2, -1))  # kappa nu ||M||_F
         floor = FLOOR * be.eps * np.maximum(amplified, 1.0)
         twice = np.isfinite(rho) & np.isfinite(spread) & ~(doubt * (SAFETY * spread + floor) < np.abs(rho - 1))
         if twice.any():
-            points = coefficients.map(lambda a: np.broadcast_to(np.asarray(a, dtype=float), rho.shape)[twice])
-            again = _disturbed_spread(_problem(points, decomposition, k, be), method, scheme, rho[twice], rng, rel)
+            again = _disturbed_spread(family.subset(twice).problem(be), method, scheme, rho[twice], rng, rel)
             spread[twice] = np.fmax(spread[twice], again)
             spread[twice] = np.where(np.isfinite(again), spread[twice], np.inf)
         err = SAFETY * spread + floor
@@ -183,8 +144,8 @@ def spectral_radius_float64(
     return rho, err
 
 
-def spectral_radius_mp(coefficients, method, decomposition, k, digits: int = 128, *, scheme=JACOBI):
-    """Spectral radius of one parameter point at ``digits`` significant digits.
+def spectral_radius_mp(family, method, digits: int = 128, *, scheme=JACOBI):
+    """Spectral radius of the one point of ``family`` at ``digits`` significant digits.
 
     The parameters are taken exactly as given -- a float as the binary number
     it is, a :class:`~fractions.Fraction` or decimal string as the decimal
@@ -193,14 +154,7 @@ def spectral_radius_mp(coefficients, method, decomposition, k, digits: int = 128
     parameters.  Returns an ``mpf`` with ``digits`` significant digits.
     """
     be = Multiprecision(digits)
-    decomposition = get_decomposition(decomposition)
-    method.check_decomposition(decomposition)
-    get_scheme(scheme).check_decomposition(decomposition)
-    if isinstance(coefficients, TestModel):
-        coefficients = TestModel(
-            *(be.const(getattr(coefficients, f)) for f in ("lr1", "li1", "am21", "alr21", "ali21"))
-        ).coefficients()
-    else:
-        coefficients = as_coefficients(coefficients).map(be.const)
-    M = _matrix_from_problem(_problem(coefficients, decomposition, k, be), method, get_scheme(scheme))
+    scheme = get_scheme(scheme)
+    family.check(method, scheme)
+    M = matrix_of(family.problem(be, exact=True), method, scheme)
     return _spectral_radius_of(M, be)

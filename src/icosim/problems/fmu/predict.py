@@ -105,9 +105,9 @@ def identify(unit, coupling, H, *, physical=1, limit=IDENTIFY_SECONDS) -> dict:
 
 def predict_scene(scene) -> dict:
     """The identified units and the spectral radius of the scene's coupling for every standard scheme
-    (float64 with its error estimate, :func:`icosim.engine.spectral.radius.spectral_radius_float64`)."""
-    from ...engine.spectral.radius import spectral_radius_float64
+    (float64 with its error estimate, :func:`icosim.problems.linear.spectral.spectral_radius_float64`)."""
     from ...errors import ParameterError
+    from ..linear.spectral import spectral_radius_float64
 
     c = scene.coupling
     H = float(c["H"])

@@ -14,12 +14,14 @@ matrices of a whole parameter grid in one pass.
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from ...engine import layout
 from ...engine.problem import CosimulationProblem
 from .model import Coefficients
-from .subsystems import OscillatorSubsystem
+from .subsystems import FORCE, OscillatorSubsystem
 
 __all__ = ["LinearCosimulation"]
 
@@ -89,6 +91,33 @@ class LinearCosimulation(CosimulationProblem):
     def unpack(self, w):
         lead = w.shape[:-1]
         return w[..., :4].reshape(lead + (2, 2)), w[..., 4:].reshape(lead + (self.k + 1, self.n_coupling))
+
+    # -- what the float64 error estimate asks (icosim.engine.spectral.radius) ------
+    def disturbed(self, rng, rel):
+        """A copy whose exponential blocks carry absolute noise ``rel * max|E|`` (the size of their rounding)."""
+        p = copy.copy(self)
+        subs = []
+        for sub in self.subsystems:
+            s = copy.copy(sub)
+            s.__dict__.pop("_node_cache", None)
+            E = sub.blocks
+            scale = rel * np.max(np.abs(E), axis=(-1, -2), keepdims=True)
+            s.set_blocks(E + scale * rng.standard_normal(E.shape))
+            subs.append(s)
+        p.subsystems = tuple(subs)
+        if hasattr(p, "_jac"):
+            del p._jac
+        return p
+
+    def generator_norm(self):
+        """``nu = max(1, ||A||_1)`` over the subsystems, ``A`` the matrix whose exponential a subsystem's blocks
+        are (per point; a kinematically driven subsystem's ``A`` has ones and zeros only)."""
+        nu = 1.0
+        for sub in self.subsystems:
+            if sub.kind == FORCE:  # columns of A: k, 1 + delta, the gain, then the input's shift (ones)
+                nu = np.maximum(nu, np.maximum(np.abs(sub.stiffness), 1 + np.abs(sub.damping)))
+                nu = np.maximum(nu, np.abs(sub.gain))
+        return nu[..., 0] if np.ndim(nu) else nu  # without the axis the basis vectors ride on (length 1)
 
     # -- the problem interface used by icosim.engine.macrostep ----------------------
     def _integrate(self, i, state, samples, nodes):

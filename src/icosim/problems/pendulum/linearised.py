@@ -12,8 +12,8 @@ import math
 import numpy as np
 
 from ...engine.methods import CouplingMethod, engine_method
-from ...engine.spectral import spectral_radius
 from ..linear.model import TestModel
+from ..linear.spectral import spectral_radius
 from .model import PendulumParameters
 from .reference import Monolithic
 
@@ -65,7 +65,7 @@ def linear_test_model_stability(
     ``gamma_bar = gamma/H^2``; the weighted multiplier's ``a``, ``b`` are
     dimensionless already).  ``scheme``: the coupling scheme (link 1 is
     subsystem 1).  The verdict is the precision policy's
-    (:func:`icosim.engine.spectral.spectral_radius`) over both points
+    (:func:`icosim.problems.linear.spectral.spectral_radius`) over both points
     (:func:`combined_verdict`); ``rho`` is the larger one, NaN if a point is
     undecided (nothing is known there) unless the other is unstable.  Returns
     ``(rho, verdict, model)``.

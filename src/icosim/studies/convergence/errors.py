@@ -38,8 +38,8 @@ from ...engine.backends import Ball
 from ...engine.decompositions import get_decomposition
 from ...engine.schemes import JACOBI
 from ...engine.spectral.certified import MAX_BITS, SpectralCertificate, certify_matrix
-from ...engine.spectral.matrix import amplification_matrix
 from ...problems.linear.exact import exact_coupling, monolithic_matrix
+from ...problems.linear.spectral import amplification_matrix
 from .blocks import BlockErrors, ErrorSeries, error_recurrence, error_recurrences
 from .pointwise import pointwise_method, stacked, structure
 

@@ -24,7 +24,7 @@ Unstable runs
 A run counts as unstable when (a) its state stops being finite or grows beyond
 ``growth_bound`` times the initial amplitude (the run is stopped there), or (b)
 the spectral radius of the recurrence at that ``H`` exceeds 1, decided with the
-engine's precision policy (:func:`icosim.engine.spectral.spectral_radius`, float64
+engine's precision policy (:func:`icosim.problems.linear.spectral.spectral_radius`, float64
 with mpmath rechecks).  (b) catches runs that grow too slowly to blow up within
 the end time: their error would otherwise look small.  The NRMSE of an
 unstable run is never reported as an error (``nrmse`` is NaN there; the value
@@ -41,10 +41,10 @@ import numpy as np
 from ...engine.decompositions import get_decomposition
 from ...engine.run import simulate
 from ...engine.schemes import JACOBI, get_scheme
-from ...engine.spectral import amplification_matrix, spectral_radius
 from ...errors import ParameterError
 from ...problems.linear import exact
 from ...problems.linear.problem import LinearCosimulation
+from ...problems.linear.spectral import amplification_matrix, spectral_radius
 from .errors import ErrorSeries, error_recurrences, local_defects
 from .experiment import Setup, dimensional_method
 from .metric import ratio_root, variances

@@ -22,10 +22,11 @@ import numpy as np
 from ...engine.backends import FLOAT64_DIGITS
 from ...engine.decompositions import DECOMPOSITIONS
 from ...engine.schemes import get_scheme
-from ...engine.spectral.policy import ARITHMETICS, REASONS, VERDICTS, Certification, spectral_radius
+from ...engine.spectral.policy import ARITHMETICS, REASONS, VERDICTS, Certification
 from ...io.dataset import DatasetDict
 from ...io.jsonio import dumps
 from ...problems.linear.model import TestModel
+from ...problems.linear.spectral import spectral_radius
 from .panels import PanelSpec, format_row_label, grid_axis, method_parameters_units
 
 __all__ = ["stability_panel", "stability_panel_data", "LONG_NAMES"]

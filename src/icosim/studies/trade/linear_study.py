@@ -9,7 +9,7 @@ Two comparisons, two linear models:
   step sizes, its error ``max |x_i - x| / x0`` over the macro nodes against
   the exact solution (:class:`icosim.problems.linear.exact.MonolithicSolution`), stepped with
   the engine's own amplification matrix
-  (:func:`icosim.engine.spectral.amplification_matrix`).  A step size whose spectral
+  (:func:`icosim.problems.linear.spectral.amplification_matrix`).  A step size whose spectral
   radius exceeds 1 is unstable, as in the linear study.  The pendulum's own
   point in the test model cannot serve here: its ratios ``am21 = alr21 =
   ali21 = 1`` make the two subsystems identical, so with force/force coupling
@@ -31,10 +31,10 @@ import math
 import numpy as np
 
 from ...engine.methods import CouplingMethod, engine_method
-from ...engine.spectral import amplification_matrix, spectral_radius
 from ...problems.linear import exact
 from ...problems.linear.model import PhysicalModel
 from ...problems.linear.problem import LinearCosimulation
+from ...problems.linear.spectral import amplification_matrix, spectral_radius
 from ...problems.pendulum.linearised import linear_test_model_stability
 from ...problems.pendulum.model import PendulumParameters
 
@@ -76,7 +76,7 @@ def linear_errors(
 
     Returns ``(error, unstable, rho)`` over ``H_values`` (module docstring);
     ``error`` is NaN where the step is unstable: the verdict of the precision
-    policy (:func:`icosim.engine.spectral.spectral_radius`) is not ``stable`` --
+    policy (:func:`icosim.problems.linear.spectral.spectral_radius`) is not ``stable`` --
     ``unstable``, or ``marginal`` / ``undecided``, where no bound on the growth
     is known -- or the run is not finite.  ``rho`` is NaN where undecided.
     """
