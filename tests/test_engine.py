@@ -195,27 +195,6 @@ def test_index3_baumgarte_and_weighted_multiplier_are_identical(dec, k):
     np.testing.assert_array_equal(Mb, Mb2)
 
 
-@pytest.mark.parametrize("dec", ["ff", "fd"])
-def test_levels_per_point_give_each_point_its_own_matrix(dec):
-    """A level given per point of a batch (a tuple) forms the matrix each point's own method forms alone,
-    bit for bit; a per-point level that is 0 or 1 somewhere is refused (those points form other products)."""
-    import dataclasses
-
-    lr, li = np.array([-0.3, -0.8, -1.5]), np.array([0.4, 1.2, 0.1])
-    methods = [baumgarte(beta=b, gamma=g) for b, g in ((0.5, 2.0), (3.0, 0.25), (1.5, 7.0))]
-    (weight, _), levels = methods[0].solves[0], zip(*(m.solves[0][1] for m in methods))
-    levels = tuple(c[0] if len(set(c)) == 1 else tuple(c) for c in levels)
-    batched = dataclasses.replace(methods[0], solves=((weight, levels),))
-    M = amplification_matrix(TestModel(lr, li, 2.0, 2.0, 2.0), batched, dec, 2)
-    for i, method in enumerate(methods):
-        np.testing.assert_array_equal(
-            M[i], amplification_matrix(TestModel(lr[i], li[i], 2.0, 2.0, 2.0), method, dec, 2)
-        )
-    refused = dataclasses.replace(batched, solves=((weight, (levels[0], (0.5, 1, 1.5), levels[2])),))
-    with pytest.raises(ValueError, match="neither 0 nor 1"):
-        amplification_matrix(TestModel(lr, li, 2.0, 2.0, 2.0), refused, dec, 2)
-
-
 def test_weighted_multiplier_is_the_weighted_sum_of_level_corrections():
     """Eq. (24): lambda = (lambda_pos + a lambda_vel + b lambda_acc)/(1 + a + b)."""
     model = TestModel(-0.4, 1.1, 2.0, 0.5, 1.5)

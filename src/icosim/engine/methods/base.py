@@ -36,9 +36,7 @@ __all__ = ["CouplingMethod", "MethodSpec", "Parameter", "solve_small", "finite",
 class CouplingMethod:
     """A rule for the corrected coupling variables (plus optional projection).
 
-    ``solves`` is a tuple of ``(weight, (w_pos, w_vel, w_acc))``.  A level may also be a tuple, one exact
-    number per point of a batch (its leading axis), none of them 0 or 1: the batched step of points whose
-    levels differ (:func:`icosim.studies.convergence.pointwise.pointwise_method`).
+    ``solves`` is a tuple of ``(weight, (w_pos, w_vel, w_acc))``.
     ``params`` records the method parameters under their command-line names.
     ``requires_constraint``: the rule corrects on the constraint's levels, so
     it is defined only for decompositions whose conditions include the
@@ -273,26 +271,12 @@ def _conditions(levels, parts, axis, const=float):
         for w, key in zip(levels, ("pos", "vel", "acc")):
             if w == 0:
                 continue
-            term = parts[key] if w == 1 else _level_times(w, parts[key], const)
+            term = parts[key] if w == 1 else const(w) * parts[key]
             combined = term if combined is None else combined + term
         rows.append(combined)
     if parts["force"].shape[axis]:
         rows.append(parts["force"])
     return rows[0] if len(rows) == 1 else layout.concatenate(rows, axis=axis)
-
-
-def _level_times(w, part, const):
-    """``w * part`` in ``const``'s arithmetic; a tuple ``w`` multiplies each point of the leading axis by its own
-    level, the products each point forms alone."""
-    if not isinstance(w, tuple):
-        return const(w) * part
-    if any(v == 0 or v == 1 for v in w):  # those points would skip the product or form another one
-        raise ValueError("a level per point must be neither 0 nor 1 at any point")
-    per_point = np.empty(len(w), dtype=object)
-    per_point[:] = [const(v) for v in w]
-    if all(isinstance(v, float) for v in per_point):
-        per_point = per_point.astype(float)
-    return per_point.reshape((-1,) + (1,) * (np.ndim(part) - 1)) * part
 
 
 def solve_small(J, b):

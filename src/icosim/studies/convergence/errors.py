@@ -30,6 +30,7 @@ the error, not to the state.  The recurrence is stepped in blocks (:mod:`icosim.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -41,7 +42,6 @@ from ...engine.spectral.certified import MAX_BITS, SpectralCertificate, certify_
 from ...problems.linear.exact import exact_coupling, monolithic_matrix
 from ...problems.linear.spectral import amplification_matrix
 from .blocks import BlockErrors, ErrorSeries, error_recurrence, error_recurrences
-from .pointwise import pointwise_method, stacked, structure
 
 __all__ = [
     "ExactExtension",
@@ -201,29 +201,29 @@ def local_defects(
     """:func:`local_defect` of several parameter points (``coefficients[i]`` with ``methods[i]``), each the
     very one it gets alone.
 
-    The ball macro step costs mostly Python calls, not arithmetic: the points whose methods differ at
-    most in the values of their levels (:mod:`icosim.studies.convergence.pointwise`) have their ball matrices at
-    ``bits`` formed in one batched macro step (a leading axis of object arrays: the same ball operations
-    on every point as alone, hence the same balls, as
+    The ball macro step costs mostly Python calls, not arithmetic: the points with the same method (the
+    same levels: a method whose parameters scale with ``H`` has other levels at every step size) have
+    their ball matrices at ``bits`` formed in one batched macro step (a leading axis of object arrays: the
+    same ball operations on every point as alone, hence the same balls, as
     :func:`icosim.engine.spectral.batched.certify_spectral_radii`).  A point this precision leaves
     unresolved, and every point of a batch that fails, continues alone.
     """
     out: list = [None] * len(methods)
-    groups: dict = {}  # structure -> indices of its points
+    groups: dict = {}  # the method -> indices of its points
     for i, m in enumerate(methods):
-        groups.setdefault(structure(m), []).append(i)
+        groups.setdefault((type(m), m.name, m.projection, m.solves), []).append(i)
     kw = {"max_bits": max_bits, "certify_bits": certify_bits, "scheme": scheme}
     for members in groups.values():
         if len(members) == 1:
             i = members[0]
             out[i] = local_defect(coefficients[i], methods[i], decomposition, k, bits=bits, **kw)
             continue
-        method, be = pointwise_method([methods[i] for i in members]), Ball(int(bits))
+        method, be = methods[members[0]], Ball(int(bits))
         try:
             with be.context():
                 parts = [_exact_parts(coefficients[i], decomposition, k, be) for i in members]
                 Ms = amplification_matrix(
-                    stacked([p[0] for p in parts]), method, decomposition, k, backend=be, scheme=scheme
+                    _stacked([p[0] for p in parts]), method, decomposition, k, backend=be, scheme=scheme
                 )
                 first = [_resolved_defect(M, p, be, max_bits, certify_bits) for M, p in zip(Ms, parts)]
             again = min(2 * be.bits, max_bits)  # the precision schedule of local_defect from its next step
@@ -232,6 +232,16 @@ def local_defects(
         for i, defect in zip(members, first):
             out[i] = defect or local_defect(coefficients[i], methods[i], decomposition, k, bits=again, **kw)
     return out
+
+
+def _stacked(points):
+    """Coefficients of single points (balls) as one set of coefficients with a leading axis of the points."""
+    columns = []
+    for f in dataclasses.fields(points[0]):
+        column = np.empty(len(points), dtype=object)
+        column[:] = [getattr(c, f.name) for c in points]
+        columns.append(column)
+    return type(points[0])(*columns)
 
 
 def propagate_errors(M, D, E, z_at, n_steps: int, *, block: int | None = None) -> ErrorSeries:
