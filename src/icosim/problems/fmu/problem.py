@@ -24,6 +24,7 @@ import numpy as np
 
 from ...engine.lagrange import monomial_coefficients
 from ...engine.problem import CosimulationProblem
+from ...engine.residuals import coupling_conditions
 from ...errors import StepFailure
 from .errors import UnitStepError
 
@@ -278,14 +279,9 @@ class FmuCosimulation(CosimulationProblem):
         return np.stack(ys)
 
     def residuals(self, y):
-        """Joint constraint on three levels (``g``, ``H g'``, ``H^2 g''``, unit 1 minus unit 2) and force balance."""
-        d = y[..., 0, :, :] - y[..., 1, :, :]  # (..., 4, n_dim)
-        empty = d[..., 0, :0]
-        out = {"pos": empty, "vel": empty, "acc": empty}
-        if self.decomposition.has_constraint_condition:
-            out = {"pos": d[..., 0, :], "vel": self.H * d[..., 1, :], "acc": self.H**2 * d[..., 2, :]}
-        out["force"] = d[..., 3, :] if self.decomposition.has_force_balance else empty
-        return out
+        """Joint constraint on three levels (``g``, ``H g'``, ``H^2 g''``) and force balance, unit 1 minus unit 2
+        (:func:`icosim.engine.residuals.coupling_conditions`)."""
+        return coupling_conditions(y, self.decomposition, scale=(1.0, self.H, self.H**2))
 
     def jacobians(self, state, history, e, y, fixed=(None, None), algebraic=True):
         """``d residuals / d e_N+1`` by difference quotients: a unit that is corrected repeats its corrector step

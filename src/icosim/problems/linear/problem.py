@@ -20,6 +20,7 @@ import numpy as np
 
 from ...engine import layout
 from ...engine.problem import CosimulationProblem
+from ...engine.residuals import coupling_conditions
 from .model import Coefficients
 from .subsystems import FORCE, OscillatorSubsystem
 
@@ -148,15 +149,9 @@ class LinearCosimulation(CosimulationProblem):
         return _stack(ys)
 
     def residuals(self, y):
-        """Constraint on three levels (if a condition here) and force balance."""
-        d = y[..., 1, :] - y[..., 0, :]  # subsystem 2 minus subsystem 1
-        empty = d[..., :0]
-        if self.decomposition.has_constraint_condition:
-            out = {"pos": d[..., 0:1], "vel": d[..., 1:2], "acc": d[..., 2:3]}
-        else:
-            out = {"pos": empty, "vel": empty, "acc": empty}
-        out["force"] = d[..., 3:4] if self.decomposition.has_force_balance else empty
-        return out
+        """Constraint on three levels (if a condition here) and force balance
+        (:func:`icosim.engine.residuals.coupling_conditions`; the joint has one component)."""
+        return coupling_conditions(y[..., None], self.decomposition)
 
     def output_sensitivities(self, response=("full", "full")):
         """``dy/de_N+1``, shape ``(..., n_e, 2, 4)``: exact, the model is linear.
