@@ -59,13 +59,9 @@ _LAZY = {
 
 def __getattr__(name):
     if name == "__version__":
-        from importlib.metadata import PackageNotFoundError, version
+        from .version import package_version
 
-        try:
-            value = version("icosim")
-        except PackageNotFoundError:  # running from a source tree
-            value = "0+unknown"
-        globals()["__version__"] = value
+        globals()["__version__"] = value = package_version()
         return value
     if name in _LAZY:
         import importlib

@@ -34,13 +34,13 @@ COMMANDS = {"rho": rho, "advise": advise, "map": map_, "cosim": cosim}
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .. import __version__
+    from ..version import package_version
 
     parser = argparse.ArgumentParser(
         prog="icosim",
         description="Implicit co-simulation methods with algebraic constraints (Schweizer et al.).",
     )
-    parser.add_argument("--version", action="version", version=f"icosim {__version__}")
+    parser.add_argument("--version", action="version", version=f"icosim {package_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     parser.set_defaults(subparser=None)

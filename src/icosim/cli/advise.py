@@ -13,7 +13,7 @@ from ..engine.decompositions import DECOMPOSITIONS
 from ..engine.schemes import SCHEMES
 from ..errors import ParameterError
 from ..io.jsonio import dumps
-from . import arguments as arg
+from .arguments import NEGATIVE_NUMBER, fail, number, order, positive_int
 
 __all__ = ["add_parser", "run", "advise_parameters"]
 
@@ -44,7 +44,7 @@ def add_parser(sub):
         "stable/unstable transition is bracketed to a relative width --rtol; stability need not be monotone in "
         "H, and the output says where it is not.",
     )
-    adv._negative_number_matcher = arg.NEGATIVE_NUMBER
+    adv._negative_number_matcher = NEGATIVE_NUMBER
     g = adv.add_argument_group("the two subsystems (SI units; overdamped subsystems accepted)")
     for name, text in (
         ("m1", "mass of subsystem 1 in kg (> 0)"),
@@ -54,14 +54,14 @@ def add_parser(sub):
         ("d1", "damping of subsystem 1 in N s/m (>= 0)"),
         ("d2", "damping of subsystem 2 in N s/m (>= 0)"),
     ):
-        g.add_argument(f"--{name}", required=True, type=arg.number, help=text)
+        g.add_argument(f"--{name}", required=True, type=number, help=text)
     g.add_argument(
-        "--H", required=True, type=arg.number, nargs="+", metavar="H", help="macro step in s, or a range: H_LO H_HI"
+        "--H", required=True, type=number, nargs="+", metavar="H", help="macro step in s, or a range: H_LO H_HI"
     )
     g = adv.add_argument_group("schemes")
     g.add_argument("--methods", nargs="+", choices=tuple(methods.METHODS), help="default: every method")
     g.add_argument("--decompositions", nargs="+", choices=tuple(DECOMPOSITIONS), help="default: every one")
-    g.add_argument("--k", nargs="+", type=arg.order, help="approximation orders (default: 0 1 2)")
+    g.add_argument("--k", nargs="+", type=order, help="approximation orders (default: 0 1 2)")
     g.add_argument(
         "--schemes",
         nargs="+",
@@ -73,12 +73,12 @@ def add_parser(sub):
     for name, p in advise_parameters().items():
         g.add_argument(
             f"--{name}",
-            type=arg.number,
+            type=number,
             help=f"{p.help} ({units[p.unit]}; default: {name}_bar = 1)" if p.scaling else f"{p.help} (default: 1)",
         )
     g = adv.add_argument_group("precision and output")
-    g.add_argument("--scan", type=arg.positive_int, help="H grid points of the first scan over a range (default: 32)")
-    g.add_argument("--rtol", type=arg.number, help="relative width of a refined transition (default: 1e-6)")
+    g.add_argument("--scan", type=positive_int, help="H grid points of the first scan over a range (default: 32)")
+    g.add_argument("--rtol", type=number, help="relative width of a refined transition (default: 1e-6)")
     g.add_argument(
         "--policy",
         choices=("auto", "float64"),
@@ -122,7 +122,7 @@ def run(args, parser) -> int:
             schemes=args.schemes,
         )
     except ParameterError as exc:
-        arg.fail(parser, str(exc))
+        fail(parser, str(exc))
     if not configuration_list:
         parser.error("argument --decompositions: none of the methods asked for is defined for these decompositions")
     bar = Progress(len(configuration_list))

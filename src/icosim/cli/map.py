@@ -14,7 +14,7 @@ from ..engine.schemes import get_scheme
 from ..engine.spectral.policy import POLICIES
 from ..errors import ParameterError
 from ..io.jsonio import dumps
-from . import arguments as arg
+from .arguments import NEGATIVE_NUMBER, add_scheme_arguments, digits, fail, number, order, positive_int
 
 __all__ = ["add_parser", "run"]
 
@@ -28,22 +28,22 @@ def add_parser(sub):
         "computation and figure style, written as PNG and PDF and one NetCDF file per k with the pipeline's "
         "variable names; prints where the stable region ends.",
     )
-    mp._negative_number_matcher = arg.NEGATIVE_NUMBER
+    mp._negative_number_matcher = NEGATIVE_NUMBER
     g = mp.add_argument_group("method and layout")
     g.add_argument("--method", required=True, choices=tuple(methods.METHODS))
     g.add_argument("--decomposition", required=True, choices=tuple(DECOMPOSITIONS))
-    g.add_argument("--k", required=True, nargs="+", type=arg.order, help="approximation orders, one panel each")
+    g.add_argument("--k", required=True, nargs="+", type=order, help="approximation orders, one panel each")
     g.add_argument("--index", type=int, choices=methods.indices(), help="index of the formulation")
-    arg.add_scheme_arguments(g)
+    add_scheme_arguments(g)
     for name, p in methods.parameters().items():
-        g.add_argument(f"--{name}", type=arg.number, help=f"{p.help} (dimensionless, as in the paper's figures)")
+        g.add_argument(f"--{name}", type=number, help=f"{p.help} (dimensionless, as in the paper's figures)")
     g = mp.add_argument_group("test-model parameters (Eq. 71) and grid")
-    g.add_argument("--am21", type=arg.number, default=1.0, help="mass ratio m2/m1 (> 0; default 1)")
-    g.add_argument("--alr21", type=arg.number, default=1.0, help="damping ratio lr2/lr1 (>= 0; default 1)")
-    g.add_argument("--ali21", type=arg.number, default=1.0, help="frequency ratio li2/li1 (>= 0; default 1)")
-    g.add_argument("--lr1", nargs=2, type=arg.number, default=[-2.0, 0.0], metavar=("LO", "HI"), help="default -2 0")
-    g.add_argument("--li1", nargs=2, type=arg.number, default=[0.0, 2.0], metavar=("LO", "HI"), help="default 0 2")
-    g.add_argument("--n", type=arg.positive_int, default=101, help="grid points per axis (default 101)")
+    g.add_argument("--am21", type=number, default=1.0, help="mass ratio m2/m1 (> 0; default 1)")
+    g.add_argument("--alr21", type=number, default=1.0, help="damping ratio lr2/lr1 (>= 0; default 1)")
+    g.add_argument("--ali21", type=number, default=1.0, help="frequency ratio li2/li1 (>= 0; default 1)")
+    g.add_argument("--lr1", nargs=2, type=number, default=[-2.0, 0.0], metavar=("LO", "HI"), help="default -2 0")
+    g.add_argument("--li1", nargs=2, type=number, default=[0.0, 2.0], metavar=("LO", "HI"), help="default 0 2")
+    g.add_argument("--n", type=positive_int, default=101, help="grid points per axis (default 101)")
     g = mp.add_argument_group("precision and output")
     g.add_argument(
         "--policy",
@@ -52,7 +52,7 @@ def add_parser(sub):
         help="precision policy: auto (float64, certified where it cannot decide; default), float64, certify (every "
         "point proven), mp (every point with mpmath at --digits)",
     )
-    g.add_argument("--digits", type=arg.digits, default=128, help="digits of --policy mp (default: 128)")
+    g.add_argument("--digits", type=digits, default=128, help="digits of --policy mp (default: 128)")
     g.add_argument("--out", default="icosim_map", help="output prefix: PREFIX.png, PREFIX.pdf, PREFIX_k<k>.nc")
     g.add_argument("--style", choices=("field", "dots"), default="field", help="figure style (as the report's)")
     g.add_argument("--title", default=None, help="figure title (default: method, parameters, ratios)")
@@ -109,7 +109,7 @@ def run(args, parser) -> int:
         TestModel(max(args.lr1), min(args.li1), args.am21, args.alr21, args.ali21)
         TestModel(min(args.lr1), max(args.li1), args.am21, args.alr21, args.ali21)
     except ParameterError as exc:
-        arg.fail(parser, str(exc))
+        fail(parser, str(exc))
     bar = Progress(len(args.k), label="panels")
     try:
         panels = map_panels(args.method, given, args.decomposition, args.k, command="icosim map", progress=bar, **grid)

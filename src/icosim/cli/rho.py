@@ -32,7 +32,7 @@ from ..engine.schemes import JACOBI, get_scheme
 from ..engine.spectral.policy import reason_code
 from ..errors import ParameterError, PointTimeout
 from ..io.jsonio import dumps
-from . import arguments as arg
+from .arguments import add_scheme_arguments, bits, decimal, digits, order, seconds
 
 __all__ = ["add_parser", "run", "rho_answer", "rho_text"]
 
@@ -47,19 +47,19 @@ def add_parser(sub):
     g = rho.add_argument_group("method and layout")
     g.add_argument("--method", required=True, choices=tuple(methods.METHODS))
     g.add_argument("--decomposition", required=True, choices=tuple(DECOMPOSITIONS))
-    g.add_argument("--k", required=True, type=arg.order, help=f"approximation order (integer 0..{MAX_K})")
-    arg.add_scheme_arguments(g)
+    g.add_argument("--k", required=True, type=order, help=f"approximation order (integer 0..{MAX_K})")
+    add_scheme_arguments(g)
     g = rho.add_argument_group("method parameters")
     with_index = ", ".join(spec.label for spec in methods.METHODS.values() if spec.takes_index)
     g.add_argument("--index", type=int, choices=methods.indices(), help=f"index of the formulation ({with_index})")
     for name, p in methods.parameters().items():  # every registered method's parameters
-        g.add_argument(f"--{name}", type=arg.decimal, help=p.help)
+        g.add_argument(f"--{name}", type=decimal, help=p.help)
     g = rho.add_argument_group("test-model parameters (Eq. 71)")
-    g.add_argument("--lr1", required=True, type=arg.decimal, help="real part of subsystem 1's eigenvalue (<= 0)")
-    g.add_argument("--li1", required=True, type=arg.decimal, help="imaginary part of subsystem 1's eigenvalue (>= 0)")
-    g.add_argument("--am21", required=True, type=arg.decimal, help="mass ratio m2/m1 (> 0)")
-    g.add_argument("--alr21", required=True, type=arg.decimal, help="damping ratio lr2/lr1 (>= 0)")
-    g.add_argument("--ali21", required=True, type=arg.decimal, help="frequency ratio li2/li1 (>= 0)")
+    g.add_argument("--lr1", required=True, type=decimal, help="real part of subsystem 1's eigenvalue (<= 0)")
+    g.add_argument("--li1", required=True, type=decimal, help="imaginary part of subsystem 1's eigenvalue (>= 0)")
+    g.add_argument("--am21", required=True, type=decimal, help="mass ratio m2/m1 (> 0)")
+    g.add_argument("--alr21", required=True, type=decimal, help="damping ratio lr2/lr1 (>= 0)")
+    g.add_argument("--ali21", required=True, type=decimal, help="frequency ratio li2/li1 (>= 0)")
     g = rho.add_argument_group(
         "precision and output",
         "The verdict is always proven in ball arithmetic (python-flint Arb) from the decimals as typed: stable "
@@ -69,19 +69,19 @@ def add_parser(sub):
     )
     g.add_argument(
         "--digits",
-        type=arg.digits,
+        type=digits,
         help="print rho with this many significant digits, all proven (the enclosure narrowed to them; default 17)",
     )
     g.add_argument("--certify", action="store_true", help="also print the proven enclosure of rho in the text output")
     g.add_argument(
         "--max-bits",
-        type=arg.bits,
+        type=bits,
         default=1024,
         help=f"largest working precision of the ball arithmetic, in bits (default 1024, at most {MAX_BITS_LIMIT})",
     )
     g.add_argument(
         "--timeout",
-        type=arg.seconds,
+        type=seconds,
         help="give up after this many seconds of wall time: the verdict is then 'undecided' (reason timeout)",
     )
     g.add_argument("--json", action="store_true", help="print one JSON object")

@@ -261,10 +261,10 @@ def _encoding(fmt):
 
 
 def _metadata(fmt):
-    from .. import __version__
+    from ..version import package_version
 
     if fmt == "pdf":  # no creation date: identical inputs give identical files
-        return {"Creator": f"icosim {__version__}", "CreationDate": None}
+        return {"Creator": f"icosim {package_version()}", "CreationDate": None}
     if fmt == "png":
-        return {"Software": f"icosim {__version__}"}
+        return {"Software": f"icosim {package_version()}"}
     return None

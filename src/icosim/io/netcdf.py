@@ -51,15 +51,15 @@ def _jsonable(o):
 
 def provenance_attrs(config, *, title: str, command: str = "") -> dict:
     """Global attributes: CF conventions, history, source, config JSON and SHA-256."""
-    from .. import __version__
+    from ..version import package_version
 
     cfg = config_json(config)
     now = _dt.datetime.now(_dt.UTC).replace(microsecond=0).isoformat()
     return {
         "title": title,
         "Conventions": CONVENTIONS,
-        "history": f"{now} created by icosim {__version__}" + (f": {command}" if command else ""),
-        "source": f"icosim {__version__} (Python {platform.python_version()}, numpy {np.__version__})",
+        "history": f"{now} created by icosim {package_version()}" + (f": {command}" if command else ""),
+        "source": f"icosim {package_version()} (Python {platform.python_version()}, numpy {np.__version__})",
         "references": "Schweizer et al., Implicit co-simulation methods: stability and convergence "
         "analysis for solver coupling approaches with algebraic constraints",
         "config_json": cfg,

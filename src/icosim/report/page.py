@@ -18,8 +18,8 @@ import re
 import subprocess
 from pathlib import Path
 
-from .. import __version__
 from ..verdicts import verdict_counts
+from ..version import package_version
 from .html import claim_anchor, fold, page, table, verdict_badge
 from .html import escape as esc
 
@@ -190,7 +190,7 @@ def report_page(
     prec = precision
     provenance = (
         '<section id="provenance"><h2>Provenance</h2><ul>'
-        f"<li>icosim {esc(__version__)} (Python {esc(platform.python_version())})</li>"
+        f"<li>icosim {esc(package_version())} (Python {esc(platform.python_version())})</li>"
         f"<li>git commit: <code>{esc(commit_text)}</code></li>"
         f"<li>generated: {esc(generated)}</li>"
         f"<li>precision policy: '{esc(prec['policy'])}': float64, with every point float64 cannot decide "
