@@ -35,7 +35,7 @@ printed); CPU seconds much less.  Never a timed assertion: a measurement to quot
     python benchmarks/replication.py [--old COMMIT] [--new COMMIT] [--by-part] [--same-work] [--ci] [--cores 2] [--json FILE] [--keep DIR]
 
 ``--keep DIR`` keeps each run's ``results/`` and ``reports/`` under ``DIR/<run>/`` (for
-``tools/compare_results.py --layout ... --tolerances``).
+``tools/compare_results.py --tolerances``).
 
 ``--ci`` uses the reduced CI configuration (each tree's config/ci/*.yaml) for both trees: a quick check
 of the benchmark itself, not the number to quote.

@@ -102,117 +102,67 @@ def test_allow_added_forgives_only_what_new_adds(tmp_path):
     assert any("scheme" in p for p in compare_results.compare(old2, new2, ["scheme"])[0])
 
 
-# -- --layout 897a1b5 and --tolerances ----------------------------------------------------------------------
-layouts = compare_results.get_layout("897a1b5")
+# -- --tolerances ------------------------------------------------------------------------------------------------
 
 
-def test_layout_897a1b5_maps_paths_and_spellings():
-    path = layouts.path
-    assert path("stability/fig9/r1_k0_full.nc") == "stability/fig9/jacobi/r1_k0_full.nc"
-    assert path("stability/fig9gs12/r2_k1_zoom.nc") == "stability/fig9/gauss-seidel-12/r2_k1_zoom.nc"
-    assert path("stability/figures/fig10gs21.pdf") == "stability/figures/fig10_gauss-seidel-21.pdf"
-    assert path("convergence/fd/fig22gs12_c2.nc") == "convergence/fig22/gauss-seidel-12/fd_c2.nc"
-    assert path("convergence/figures/fig21_dd_slopes.png") == "convergence/figures/fig21_dd_jacobi_slopes.png"
-    assert path("pendulum/projection_ff_k0_gs12.nc") == "pendulum/runs/gauss-seidel-12/projection_ff_k0.nc"
-    assert path("pendulum/weighted_fd_k2.nc") == "pendulum/runs/jacobi/weighted_fd_k2.nc"
-    assert path("pendulum/figures/pendulum_k1_gs21.png") == "pendulum/figures/pendulum_k1_gauss-seidel-21.png"
-    assert (
-        path("pendulum/trade/sweep/gauss-seidel-12_projection_ff.nc")
-        == "pendulum/trade/sweep/gauss-seidel-12/projection_ff.nc"
-    )
-    assert path("stability/claims_gauss_seidel.tsv") == "stability/claims.tsv"
-    assert path("pendulum/summary_gauss_seidel.nc") == "pendulum/summary.nc"
-    assert path("pendulum/reference.nc") == "pendulum/reference.nc"  # unchanged
-    assert "section" in path("report/gauss_seidel.html").reason  # dropped by design
-    assert layouts.text('{"figure":"10gs21","k":1}') == '{"figure":"10","k":1}'
-    assert layouts.value(["projection_ff_k0_gs12", "weighted_fd_k2"]) == [
-        "projection_ff_k0_gauss-seidel-12",
-        "weighted_fd_k2",
-    ]
-
-
-def _layout_tree(
-    root, *, old, rho=1.0, verdict=1, claim="pass", nrmse=1e-3, phi=0.5, status="bounded", extra=False, split="pass"
-):
-    """A small run in 897a1b5's layout (``old``) or in this tree's: a Jacobi and a Gauss-Seidel stability
-    panel, a convergence panel, a pendulum run, the claims (two files per part in 897a1b5's layout)."""
+def _run_tree(root, *, rho=1.0, verdict=1, claim="pass", nrmse=1e-3, phi=0.5, status="bounded", extra=False):
+    """A small run: a Jacobi and a Gauss-Seidel stability panel, a convergence panel, a pendulum run, the claims."""
     res = root / "results"
-    for scheme, gs in (("jacobi", ""), ("gauss-seidel-12", "gs12")):
+    for scheme in ("jacobi", "gauss-seidel-12"):
         grid = {"lr1": [-1.0, 0.0], "li1": [0.0, 1.0]}
         ds = xr.Dataset(
             {
                 "rho": (("lr1", "li1"), np.array([[0.5, rho], [np.nan, 2.0]])),
-                "rho_upper": (("lr1", "li1"), np.array([[0.5, rho], [np.nan, 2.0]]) * (1 + 1e-9 * (not old))),
+                "rho_upper": (("lr1", "li1"), np.array([[0.5, rho], [np.nan, 2.0]]) * (1 + 1e-9 * (rho != 1.0))),
                 "verdict": (("lr1", "li1"), np.array([[1, verdict], [3, 2]], dtype=np.int8)),
             },
             coords=grid,
         )
-        ds.attrs.update(figure="9" + gs if old else "9", scheme=scheme, n_stable=2, seconds_total=1.0)
-        write_netcdf(
-            ds, res / ("stability/fig9" + gs + "/r1_k0_full.nc" if old else f"stability/fig9/{scheme}/r1_k0_full.nc")
-        )
+        ds.attrs.update(figure="9", scheme=scheme, n_stable=2, seconds_total=1.0)
+        write_netcdf(ds, res / f"stability/fig9/{scheme}/r1_k0_full.nc")
     conv = xr.Dataset(
         {"nrmse": (("k", "H"), np.array([[nrmse, np.nan]])), "order": ("k", [2.0])}, coords={"k": [0], "H": [0.1, 0.2]}
     )
-    write_netcdf(conv, res / ("convergence/ff/fig21_c1.nc" if old else "convergence/fig21/jacobi/ff_c1.nc"))
+    write_netcdf(conv, res / "convergence/fig21/jacobi/ff_c1.nc")
     run = xr.Dataset({"phi1": ("t", [0.1, phi]), "phi2": ("t", [0.2, 0.3])}, coords={"t": [0.0, 0.01]})
-    run.attrs.update(status=status, run="projection_ff_k0_" + ("gs12" if old else "gauss-seidel-12"))
-    write_netcdf(
-        run, res / ("pendulum/projection_ff_k0_gs12.nc" if old else "pendulum/runs/gauss-seidel-12/projection_ff_k0.nc")
-    )
-    paper = [{"id": "fig9_stable", "verdict": claim, "measured": "0.5 (1.2 s)"}]
-    gauss_seidel = [{"id": "gs_fig9_same", "verdict": "pass", "measured": "x"}]
-    if old:
-        gauss_seidel.append({"id": "gs_added_mass_weighted", "verdict": "pass"})  # split in two since
-        (res / "stability/claims.json").write_text(json.dumps({"claims": paper}))
-        (res / "stability/claims_gauss_seidel.json").write_text(json.dumps({"claims": gauss_seidel}))
-    else:
-        gauss_seidel += [
-            {"id": "gs_added_mass_weighted_gs12_no_stable_point", "verdict": "pass", "measured": "x"},
-            {"id": "gs_added_mass_weighted_gs21_most_stable", "verdict": split, "measured": "x"},
-        ]
-        paper[0]["measured"] = "0.5 (0.3 s)"  # timing numbers in the measured text: a note
-        (res / "stability/claims.json").write_text(json.dumps({"claims": paper + gauss_seidel}))
-    if extra:  # a figure this tree adds
+    run.attrs.update(status=status, run="projection_ff_k0_gauss-seidel-12")
+    write_netcdf(run, res / "pendulum/runs/gauss-seidel-12/projection_ff_k0.nc")
+    claims = [{"id": "fig9_stable", "verdict": claim, "measured": "0.5 (1.2 s)"},
+              {"id": "gs_fig9_same", "verdict": "pass", "measured": "x"}]  # fmt: skip
+    if rho != 1.0:
+        claims[0]["measured"] = "0.5 (0.3 s)"  # timing numbers in the measured text: a note
+    (res / "stability/claims.json").write_text(json.dumps({"claims": claims}))
+    if extra:  # a figure NEW adds
         write_netcdf(ds, res / "stability/figdf-baumgarte/jacobi/r1_k0_full.nc")
     return root
 
 
 def _tolerances(old, new, **kw):
     stats = compare_results.tol.new_stats()
-    problems, notes = compare_results.compare(old, new, layout="897a1b5", tolerances=True, stats=stats, **kw)
+    problems, notes = compare_results.compare(old, new, tolerances=True, stats=stats, **kw)
     return problems, notes, stats
 
 
-def test_tolerances_find_mapped_files_and_pass_within_them(tmp_path):
-    old = _layout_tree(tmp_path / "old", old=True)
-    new = _layout_tree(
-        tmp_path / "new", old=False, rho=1.0 + 1e-13, nrmse=1e-3 * (1 + 1e-10), phi=0.5 + 1e-10, extra=True
-    )
+def test_tolerances_pass_within_them(tmp_path):
+    old = _run_tree(tmp_path / "old")
+    new = _run_tree(tmp_path / "new", rho=1.0 + 1e-13, nrmse=1e-3 * (1 + 1e-10), phi=0.5 + 1e-10, extra=True)
     problems, notes, stats = _tolerances(old, new, allow_new_files=True)
     assert problems == []
     text = "\n".join(notes)
     assert "stability/figdf-baumgarte/jacobi/r1_k0_full.nc: only in NEW (added)" in text
-    assert "2 OLD file(s) found at stability/fig{fig}/{scheme}/{panel}" in text
-    assert "1 OLD file(s) found at {part}/claims.{ext}" in text  # claims_gauss_seidel.json merged
-    assert "OLD's spelling mapped (897a1b5) in figure" in text  # '9gs12' -> '9'
     assert "rho_upper" in text  # another variable: a note
     assert "field 'measured' differs in 1 claim(s): fig9_stable" in text
-    assert (
-        "claim gs_added_mass_weighted (pass) replaced by gs_added_mass_weighted_gs12_no_stable_point (pass), " in text
-    )
     assert 0 < stats["stability"]["rho"] < 1e-12 and stats["stability"]["datasets"] == 2
     assert 0 < stats["convergence"]["nrmse"] < 1e-9 and 0 < stats["pendulum"]["angle"] < 1e-9
     assert stats["claims"]["ids"] == {("stability", "fig9_stable"), ("stability", "gs_fig9_same")}
     assert not stats["claims"]["changed"]
-    # without the flag, the added figure is a difference; without the layout, nothing is found
+    # without the flag, the added figure is a difference
     assert _tolerances(old, new)[0] == ["stability/figdf-baumgarte/jacobi/r1_k0_full.nc: only in NEW"]
-    assert any("only in OLD" in p for p in compare_results.compare(old, new, tolerances=True)[0])
 
 
 def test_tolerances_catch_what_exceeds_them(tmp_path):
-    old = _layout_tree(tmp_path / "old", old=True)
-    new = _layout_tree(tmp_path / "new", old=False, rho=1.0 + 1e-11, nrmse=1e-3 * (1 + 1e-8), phi=0.5 + 1e-8)
+    old = _run_tree(tmp_path / "old")
+    new = _run_tree(tmp_path / "new", rho=1.0 + 1e-11, nrmse=1e-3 * (1 + 1e-8), phi=0.5 + 1e-8)
     problems, _, stats = _tolerances(old, new)
     text = "\n".join(problems)
     assert (
@@ -229,54 +179,45 @@ def test_tolerances_catch_what_exceeds_them(tmp_path):
 
 
 def test_tolerances_catch_changed_verdicts(tmp_path):
-    old = _layout_tree(tmp_path / "old", old=True)
-    new = _layout_tree(tmp_path / "new", old=False, verdict=2, claim="fail", split="fail")
+    old = _run_tree(tmp_path / "old")
+    new = _run_tree(tmp_path / "new", verdict=2, claim="fail")
     problems, _, stats = _tolerances(old, new)
     text = "\n".join(problems)
-    assert (
-        "stability/fig9gs12/r1_k0_full.nc -> stability/fig9/gauss-seidel-12/r1_k0_full.nc:verdict: 1 value(s) changed (lr1=-1.0, li1=1.0): 1->2"
-        in text
-    )
+    assert "stability/fig9/gauss-seidel-12/r1_k0_full.nc:verdict: 1 value(s) changed (lr1=-1.0, li1=1.0): 1->2" in text
     assert "stability/claims.json: claim fig9_stable: verdict pass -> fail (the same claim)" in text
-    assert "gs_added_mass_weighted_gs21_most_stable (fail): verdict changed" in text  # a claim split in two
-    changed = {("stability", "fig9_stable"), ("stability", "gs_added_mass_weighted")}
-    assert stats["stability"]["verdicts"] == 2 and stats["claims"]["changed"] == changed
+    assert stats["stability"]["verdicts"] == 2 and stats["claims"]["changed"] == {("stability", "fig9_stable")}
     # a changed status attribute, or a NaN where OLD had a number, fails too
-    new2 = _layout_tree(tmp_path / "new2", old=False, rho=np.nan, status="diverged")
+    new2 = _run_tree(tmp_path / "new2", rho=np.nan, status="diverged")
     text = "\n".join(_tolerances(old, new2)[0])
     assert "rho: NaN in one run only at 1 points" in text
     assert "projection_ff_k0.nc: global attribute 'status': 'bounded' != 'diverged'" in text
 
 
 def test_tolerances_command_line_prints_the_table(tmp_path, capsys):
-    old = _layout_tree(tmp_path / "old", old=True)
-    new = _layout_tree(tmp_path / "new", old=False, rho=1.0 + 1e-13)
-    assert compare_results.main([str(old), str(new), "--layout", "897a1b5", "--tolerances"]) == 0
+    old = _run_tree(tmp_path / "old")
+    new = _run_tree(tmp_path / "new", rho=1.0 + 1e-13)
+    assert compare_results.main([str(old), str(new), "--tolerances"]) == 0
     out = capsys.readouterr().out
     assert "max rel rho" in out and "equal within the tolerances" in out
-    assert compare_results.main([str(old), str(new), "--layout", "897a1b5"]) == 1  # bitwise: rho differs
+    assert compare_results.main([str(old), str(new)]) == 1  # bitwise: rho differs
 
 
-def test_merged_summaries_are_compared_at_old_runs(tmp_path):
-    """897a1b5's two pendulum summaries (Jacobi runs; every run, run names ending _gs12) against the one of now."""
+def test_a_summary_with_more_runs_is_compared_at_old_runs(tmp_path):
+    """NEW's pendulum summary holds more runs than OLD's: compared at OLD's runs, a changed status found."""
 
     def summary(path, runs, status):
         ds = xr.Dataset({"status": ("run", np.array(status, dtype=object)), "err_phi1": ("run", np.ones(len(runs)))})
         write_netcdf(ds.assign_coords(run=("run", np.array(runs, dtype=object))), path)
 
     old, new = tmp_path / "old/results/pendulum", tmp_path / "new/results/pendulum"
-    summary(old / "summary.nc", ["projection_ff_k0"], ["bounded"])
-    summary(old / "summary_gauss_seidel.nc", ["projection_ff_k0", "projection_ff_k0_gs12"], ["bounded", "diverged"])
+    summary(old / "summary.nc", ["projection_ff_k0", "projection_ff_k0_gauss-seidel-12"], ["bounded", "diverged"])
     runs = ["projection_ff_k0", "projection_ff_k0_gauss-seidel-12", "projection_ff_k0_gauss-seidel-21"]
     summary(new / "summary.nc", runs, ["bounded", "diverged", "bounded"])
     problems, notes, stats = _tolerances(tmp_path / "old", tmp_path / "new")
-    assert problems == [] and stats["pendulum"]["datasets"] == 2
-    text = "\n".join(notes)
-    assert "pendulum/summary.nc: NEW has 2 more run labels than OLD: compared at OLD's 1" in text
-    assert "pendulum/summary_gauss_seidel.nc -> pendulum/summary.nc: OLD's spelling mapped (897a1b5) in run" in text
+    assert problems == [] and stats["pendulum"]["datasets"] == 1
+    assert "pendulum/summary.nc: NEW has 1 more run labels than OLD: compared at OLD's 2" in "\n".join(notes)
     summary(new / "summary.nc", runs, ["bounded", "bounded", "bounded"])
     problems = _tolerances(tmp_path / "old", tmp_path / "new")[0]
     assert problems == [
-        "pendulum/summary_gauss_seidel.nc -> pendulum/summary.nc:status: 1 value(s) changed "
-        "(run='projection_ff_k0_gauss-seidel-12'): 'diverged'->'bounded'"
+        "pendulum/summary.nc:status: 1 value(s) changed (run='projection_ff_k0_gauss-seidel-12'): 'diverged'->'bounded'"
     ]

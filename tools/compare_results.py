@@ -1,7 +1,7 @@
 """Compare two runs of the workflow: are their results the same?
 
     python tools/compare_results.py OLD NEW [--rerender [--configfile FILE ...]] [--allow-added NAME ...]
-        [--layout COMMIT] [--tolerances] [--allow-new-files]
+        [--tolerances] [--allow-new-files]
 
 OLD and NEW are checkouts (or copies) that each hold ``results/`` and ``reports/`` of a run.
 Every file under ``results/`` must exist in both and be equal:
@@ -28,17 +28,14 @@ variable attribute, or a variable (coordinate), present in NEW only; the name in
 depth; ``config_sha256`` is then checked against NEW's own ``config_json`` instead).  Used to show
 that adding the ``scheme`` attribute (the Gauss-Seidel scheme) left every Jacobi result as it was.
 
-``--layout COMMIT`` reads OLD as written by that older commit (``tools/compare_layouts.py``): each OLD path
-is mapped to NEW's (several OLD files may merge into one NEW file: the claims, the pendulum summary; a file
-dropped by design is a note), OLD's figure ids and run names are spelled as NEW spells them (a note says
-where), and every OLD file without a NEW counterpart and every NEW file without an OLD one is listed.
+Every OLD file without a NEW counterpart and every NEW file without an OLD one is listed;
 ``--allow-new-files``: what NEW adds (files, claim ids) is listed as added, not as a difference.
 
 ``--tolerances`` compares within the replication speed target's tolerances instead of bitwise
 (``tools/compare_tolerances.py``: rho, NRMSE, pendulum angles; verdicts, statuses and claims' verdicts
 equal; other differences, figures and HTML are notes) and ends with a table per part.
 
-    python tools/compare_results.py OLD NEW --layout 897a1b5 --tolerances --allow-new-files
+    python tools/compare_results.py OLD NEW --tolerances --allow-new-files
 """
 
 from __future__ import annotations
@@ -59,7 +56,6 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import compare_tolerances as tol  # noqa: E402
-from compare_layouts import get_layout, pair_files  # noqa: E402
 
 #: Global attributes that record time and cost of a job, never its result.
 VOLATILE_ATTRS = {
@@ -125,28 +121,21 @@ def _drop_added(a, b, names):
     return b
 
 
-def _nc(old: Path, new: Path, rel: str, problems: list, allow_added=(), notes=None, layout=None):
+def _nc(old: Path, new: Path, rel: str, problems: list, allow_added=(), notes=None):
     import h5py
 
-    vol_vars = VOLATILE_VARIABLES.get(rel.split(" -> ")[-1], set())  # rel: NEW's path, or 'OLD's -> NEW's'
+    vol_vars = VOLATILE_VARIABLES.get(rel, set())
     allow_added = set(allow_added)
-    layout, mapped = layout or get_layout(None), set()
     with h5py.File(old, "r") as a, h5py.File(new, "r") as b:
 
-        def attrs(obj, spell=lambda k, v: v):
+        def attrs(obj):
             # netCDF4 writes text attributes as fixed-length strings, which h5py reads as bytes: compare them as text
             return {
-                k: spell(k, v.tolist() if isinstance(v, np.ndarray) else v.decode() if isinstance(v, bytes) else v)
+                k: v.tolist() if isinstance(v, np.ndarray) else v.decode() if isinstance(v, bytes) else v
                 for k, v in obj.attrs.items()
             }
 
-        def spell(key, value):  # OLD's figure ids and run names as NEW spells them (--layout)
-            new_value = layout.value(value)
-            if new_value is not value and new_value != value:  # (a NaN is not != itself)
-                mapped.add(key)
-            return new_value
-
-        ga, gb = attrs(a, spell), attrs(b)
+        ga, gb = attrs(a), attrs(b)
         if allow_added and "config_json" in ga and "config_json" in gb and ga["config_json"] != gb["config_json"]:
             ja, jb = json.loads(ga["config_json"]), json.loads(gb["config_json"])
             if ja == _drop_added(ja, jb, allow_added):
@@ -168,7 +157,7 @@ def _nc(old: Path, new: Path, rel: str, problems: list, allow_added=(), notes=No
             if va.shape != vb.shape or va.dtype != vb.dtype:
                 problems.append(f"{rel}:{name}: shape/dtype {va.shape} {va.dtype} != {vb.shape} {vb.dtype}")
                 continue
-            aa, ab = attrs(va, spell), attrs(vb)
+            aa, ab = attrs(va), attrs(vb)
             aa.pop("DIMENSION_LIST", None), ab.pop("DIMENSION_LIST", None)
             aa.pop("REFERENCE_LIST", None), ab.pop("REFERENCE_LIST", None)
             for key in [k for k in ab if k in allow_added and k not in aa]:
@@ -184,13 +173,11 @@ def _nc(old: Path, new: Path, rel: str, problems: list, allow_added=(), notes=No
             xa, xb = np.asarray(va[()]), np.asarray(vb[()])
             if xa.dtype == object:  # variable-length strings: compare the strings, not the pointers
                 text = lambda v: v.decode() if isinstance(v, bytes) else v  # noqa: E731
-                same = [spell(name, text(v)) for v in xa.ravel().tolist()] == [text(v) for v in xb.ravel().tolist()]
+                same = [text(v) for v in xa.ravel().tolist()] == [text(v) for v in xb.ravel().tolist()]
             else:  # bitwise: NaNs, infinities and the sign of zero included
                 same = xa.tobytes() == xb.tobytes()
             if not same:
                 problems.append(f"{rel}:{name}: values differ")
-    if mapped and notes is not None:
-        notes.append(f"{rel}: OLD's spelling mapped ({layout.name}) in {', '.join(sorted(mapped))}")
 
 
 def _same(a, b) -> bool:
@@ -276,12 +263,11 @@ def _html(old: Path, new: Path, rel: str, problems: list, notes: list, old_root:
 
 
 def compare(
-    old_root: Path, new_root: Path, allow_added=(), *, layout=None, tolerances=False, allow_new_files=False, stats=None
+    old_root: Path, new_root: Path, allow_added=(), *, tolerances=False, allow_new_files=False, stats=None
 ) -> tuple[list, list]:
     """(differences, notes) between OLD's and NEW's results; ``stats`` (:func:`compare_tolerances.new_stats`)
     collects the largest differences per part with ``tolerances``."""
     problems, notes = [], []
-    layout = get_layout(layout)
     stats = tol.new_stats() if stats is None else stats
     old_res, new_res = old_root / "results", new_root / "results"
     for side, res in (("OLD", old_res), ("NEW", new_res)):
@@ -294,37 +280,32 @@ def compare(
     # a dataset's checksum sidecar (icosim.io.integrity) follows its bytes, timings included: the dataset is compared
     files_a = {f for f in files_a if not f.endswith(".nc.sha256")}
     files_b = {f for f in files_b if not f.endswith(".nc.sha256")}
-    pairs = pair_files(files_a, files_b, layout, problems, notes, allow_new_files)
+    for rel in sorted(files_a - files_b):
+        problems.append(f"{rel}: only in OLD")
+    for rel in sorted(files_b - files_a):
+        (notes if allow_new_files else problems).append(f"{rel}: only in NEW" + (" (added)" if allow_new_files else ""))
     counts = {}
-    for rel, olds in sorted(pairs.items()):
-        b, suffix = new_res / rel, Path(rel).suffix
-        counts[suffix] = counts.get(suffix, 0) + len(olds)
+    for rel in sorted(files_a & files_b):
+        a, b, suffix = old_res / rel, new_res / rel, Path(rel).suffix
+        counts[suffix] = counts.get(suffix, 0) + 1
         if Path(rel).name.startswith("claims") and suffix in (".json", ".tsv"):  # claims: verdict per claim id
-            olds_paths = [old_res / o for o in olds]
             strict = not tolerances
-            tol.compare_claims(
-                olds_paths, b, rel, layout, problems, notes, stats, strict=strict, allow_new=allow_new_files
-            )
-            a = olds_paths[0]
-            if (
-                strict
-                and olds == [rel]
-                and (json.loads(a.read_text()) if suffix == ".json" else a.read_bytes())
-                != (json.loads(b.read_text()) if suffix == ".json" else b.read_bytes())
+            tol.compare_claims(a, b, rel, problems, notes, stats, strict=strict, allow_new=allow_new_files)
+            if strict and (json.loads(a.read_text()) if suffix == ".json" else a.read_bytes()) != (
+                json.loads(b.read_text()) if suffix == ".json" else b.read_bytes()
             ):
                 problems.append(f"{rel}: {suffix[1:].upper()} differs")
             continue
         # with --tolerances only datasets can differ: figures, HTML and other files are notes
         found = notes if tolerances and suffix != ".nc" else problems
-        for old in olds:
-            a, label = old_res / old, rel if old == rel else f"{old} -> {rel}"
+        for label in (rel,):
             if rel in VOLATILE_FIGURES:
                 notes.append(f"{rel}: drawn from timings (checked by --rerender)")
             elif suffix == ".nc" and tolerances:
                 volatile = VOLATILE_VARIABLES.get(rel, set())
-                tol.compare_dataset(a, b, label, layout, problems, notes, stats, VOLATILE_ATTRS, volatile)
+                tol.compare_dataset(a, b, label, problems, notes, stats, VOLATILE_ATTRS, volatile)
             elif suffix == ".nc":
-                _nc(a, b, label, problems, allow_added, notes, layout)
+                _nc(a, b, label, problems, allow_added, notes)
             elif suffix == ".json":
                 if json.loads(a.read_text()) != json.loads(b.read_text()):
                     found.append(f"{label}: JSON differs")
@@ -408,16 +389,11 @@ def main(argv=None) -> int:
         metavar="NAME",
         help="forgive an attribute, coordinate or config_json key of this name that only NEW has (repeatable)",
     )
-    parser.add_argument(
-        "--layout", metavar="COMMIT", help="OLD was written by this older commit: map its paths and spellings"
-    )
     parser.add_argument("--tolerances", action="store_true", help="the speed target's tolerances instead of bitwise")
     parser.add_argument("--allow-new-files", action="store_true", help="list what NEW adds (files, claims) as added")
     args = parser.parse_args(argv)
-    if args.rerender and args.layout:
-        parser.error("--rerender needs OLD in NEW's layout (not with --layout)")
     stats = tol.new_stats()
-    kwargs = dict(layout=args.layout, tolerances=args.tolerances, allow_new_files=args.allow_new_files, stats=stats)
+    kwargs = dict(tolerances=args.tolerances, allow_new_files=args.allow_new_files, stats=stats)
     problems, notes = compare(args.old, args.new, args.allow_added, **kwargs)
     if args.rerender:
         problems += rerender(args.old, args.new, ["--configfile", *args.configfile] if args.configfile else [])

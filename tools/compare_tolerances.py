@@ -75,26 +75,6 @@ def _where(da, mask, n=4) -> str:
     return " ".join(parts) + (" ..." if int(np.sum(mask)) > n else "")
 
 
-def _map_strings(ds, layout, changed: set):
-    """OLD's string variables, labels and attributes spelled as NEW spells them."""
-    for name in list(ds.variables):
-        var = ds[name]
-        if _text(var) and var.ndim:
-            mapped = np.vectorize(lambda s: layout.value(s), otypes=[object])(var.values)
-            if not np.array_equal(mapped.astype(str), var.values.astype(str)):
-                changed.add(f"{name} (values)")
-                ds = (
-                    ds.assign_coords({name: (var.dims, mapped)})
-                    if name in ds.coords
-                    else ds.assign({name: (var.dims, mapped, var.attrs)})
-                )
-    for key, value in list(ds.attrs.items()):
-        if not _same(layout.value(value), value):
-            ds.attrs[key] = layout.value(value)
-            changed.add(key)
-    return ds
-
-
 def _align(a, b, rel, problems, notes):
     """NEW at OLD's labels where NEW holds more along a labelled dimension (the merged summaries)."""
     for dim in set(a.dims) & set(b.dims):
@@ -113,19 +93,11 @@ def _align(a, b, rel, problems, notes):
     return b
 
 
-def compare_dataset(
-    old: Path, new: Path, rel: str, layout, problems, notes, stats, volatile_attrs=(), volatile_vars=()
-):
-    """``rel``: NEW's path under results/, or ``"OLD's -> NEW's"``."""
-    part, path = part_of(rel), rel.split(" -> ")[-1]
+def compare_dataset(old: Path, new: Path, rel: str, problems, notes, stats, volatile_attrs=(), volatile_vars=()):
+    """``rel``: the path under results/."""
+    part, path = part_of(rel), rel
     rules = next((r for pattern, r in TOLERANCES.values() if re.fullmatch(pattern, path)), {})
-    changed, renames = set(), layout.renames.get(path, {})
-    a, b = _map_strings(_load(old), layout, changed), _load(new)
-    if renames:
-        a = a.rename({k: v for k, v in renames.items() if k in a.variables or k in a.dims})
-        changed.update(f"{k} -> {v} (name)" for k, v in renames.items())
-    if changed:
-        notes.append(f"{rel}: OLD's spelling mapped ({layout.name}) in {', '.join(sorted(changed))}")
+    a, b = _load(old), _load(new)
     b = _align(a, b, rel, problems, notes)
     if part in stats:
         stats[part]["datasets"] += 1
@@ -228,30 +200,15 @@ def read_claims(path: Path) -> dict:
     return {r["id"]: r for r in records}
 
 
-def compare_claims(olds, new: Path, rel, layout, problems, notes, stats, *, strict=False, allow_new=False):
-    """Every claim id's verdict in OLD's files (merged) against NEW's; ``strict``: every other field too."""
-    a = {}
-    for path in olds:
-        a.update({cid: {k: layout.value(v) for k, v in r.items()} for cid, r in read_claims(path).items()})
-    b = read_claims(new)
+def compare_claims(old: Path, new: Path, rel, problems, notes, stats, *, strict=False, allow_new=False):
+    """Every claim id's verdict in OLD's file against NEW's; ``strict``: every other field too."""
+    a, b = read_claims(old), read_claims(new)
     part = rel.split("/")[0]
     compared, changed = stats["claims"].setdefault("ids", set()), stats["claims"].setdefault("changed", set())
     compared.update((part, cid) for cid in set(a) & set(b))
     for cid in sorted(set(a) - set(b)):
-        successors = [s for s in layout.claims.get(cid, ()) if s in b]
-        if not successors:
-            problems.append(f"{rel}: claim {cid} ({a[cid]['verdict']}) only in OLD")
-            continue
-        differ = [s for s in successors if b[s]["verdict"] != a[cid]["verdict"]]
-        now = ", ".join(f"{s} ({b[s]['verdict']})" for s in successors)
-        line = f"{rel}: claim {cid} ({a[cid]['verdict']}) replaced by {now}"
-        if differ:
-            changed.add((part, cid))
-            problems.append(line + ": verdict changed")
-        else:
-            notes.append(line + ": same verdict")
-    successors = {s for ids in layout.claims.values() for s in ids}
-    for cid in sorted(set(b) - set(a) - successors):
+        problems.append(f"{rel}: claim {cid} ({a[cid]['verdict']}) only in OLD")
+    for cid in sorted(set(b) - set(a)):
         (notes if allow_new else problems).append(f"{rel}: claim {cid} ({b[cid]['verdict']}) only in NEW (added)")
     fields = {}
     for cid in sorted(set(a) & set(b)):
