@@ -13,9 +13,9 @@ import pytest
 import yaml
 
 from icosim import make_method
-from icosim.pendulum.integrator.compiled import CompiledLink
 from icosim.pendulum.integrator.compiled_algebra import all_finite, inverse, nan_maximum
 from icosim.pendulum.integrator.radau import IntegrationError, _fd_jacobian, radau_batch
+from icosim.pendulum.integrator.systems import CompiledLink
 from icosim.pendulum.links import Link1, Link2
 from icosim.pendulum.model import PendulumParameters
 from icosim.pendulum.problem import PendulumCosimulation

@@ -26,9 +26,9 @@ from ..engine.lagrange import (
 from ..engine.problem import CosimulationProblem
 from ..errors import ParameterError
 from .conditions import CONDITIONS, check_decomposition
-from .integrator.compiled import CompiledLink, link_failure
 from .integrator.compiled_step import STATS, _link_outputs, _link_step
 from .integrator.radau import _fd_jacobian, radau_batch
+from .integrator.systems import CompiledLink, link_failure
 from .links import Link1, Link2
 from .manifold import project_state
 from .model import PendulumParameters, joint_constraint

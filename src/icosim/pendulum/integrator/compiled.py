@@ -13,8 +13,8 @@ compiled (``numba.njit(cache=True)``):
   :mod:`icosim.pendulum.integrator.radau`), simplified Newton in lockstep over the batch, error
   norm (largest RMS over the members), step-size controller, ``jac0``
   handling, counters and error conditions (a status code here, raised as
-  :class:`~icosim.pendulum.integrator.radau.IntegrationError` with the same message by the Python
-  wrapper).
+  :class:`~icosim.pendulum.integrator.systems.IntegrationError` with the same message by the Python
+  side, :mod:`.systems`).
 
 Results agree with the numpy path up to round-off, not bitwise: the matrix
 inverses are an LU solve written out (:mod:`~icosim.pendulum.integrator.compiled_algebra`,
@@ -36,26 +36,13 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..links import Link1
 from .compiled_algebra import all_finite, inverse, matvec, nan_maximum
-from .compiled_links import FORCE, KINEMATIC, batch_rhs, link_parameters, member_rhs
+from .compiled_links import FORCE, batch_rhs, member_rhs
 from .kernel_cache import compile_record, drop_stale_cache, gc_paused
-from .radau import (
-    EPS,
-    MAX_FACTOR,
-    MIN_FACTOR,
-    MU_COMPLEX,
-    MU_REAL,
-    NEWTON_MAXITER,
-    TI,
-    C,
-    E,
-    IntegrationError,
-    RadauResult,
-    T,
-)
+from .tableau import EPS, MAX_FACTOR, MIN_FACTOR, MU_COMPLEX, MU_REAL, NEWTON_MAXITER, TI, C, E, T
 
-__all__ = ["CompiledLink", "warm_up", "compile_kernels", "link_failure"]
+__all__ = ["warm_up", "compile_kernels"]
+
 
 drop_stale_cache()  # before the kernels are defined: numba loads their cache as it defines them
 
@@ -349,83 +336,3 @@ def warm_up() -> None:
 def compile_kernels() -> dict:
     """:func:`warm_up` and its record (:func:`~icosim.pendulum.integrator.kernel_cache.compile_record`)."""
     return compile_record(warm_up, {"_jacobian": _jacobian, "_radau": _radau})
-
-
-def _float_array(x, ndim):
-    """A writable C-contiguous float64 copy: one numba specialisation for every caller."""
-    a = np.array(x, dtype=np.float64, order="C")
-    if a.ndim != ndim:
-        raise ValueError(f"expected {ndim} dimensions, got shape {a.shape}")
-    return a
-
-
-class CompiledLink:
-    """A link (:class:`~icosim.pendulum.links.Link1` or ``Link2``) for the compiled kernels.
-
-    Its ids and parameter array stand for the closure ``link.rhs(coef, H)``:
-    ``coef`` (B, K, 2) are the monomial coefficients of the input in ``tau = t / H``.
-    """
-
-    def __init__(self, link):
-        self.link_id = 1 if isinstance(link, Link1) else 2
-        self.kind_id = FORCE if link.kind == "force" else KINEMATIC
-        self.n = link.n
-        self.par = link_parameters(link)
-
-    def fd_jacobian(self, coef, H: float, t: float, y) -> np.ndarray:
-        """``radau._fd_jacobian(fun, t, y, fun(t, y))`` for ``fun = link.rhs(coef, H)``: (B, n, n)."""
-        return _jacobian(
-            self.link_id, self.kind_id, self.par, float(H), _float_array(coef, 3), float(t), _float_array(y, 2)
-        )
-
-    def radau(
-        self,
-        coef,
-        H: float,
-        t0: float,
-        t1: float,
-        y0,
-        *,
-        rtol: float = 1e-6,
-        atol: float = 1e-6,
-        jac0=None,
-        newton_tol: float = 1e-8,
-        max_steps: int = 100000,
-    ) -> RadauResult:
-        """``radau.radau_batch(link.rhs(coef, H), t0, t1, y0, ...)`` compiled (``jac0`` an (n, n) matrix)."""
-        if not (np.isfinite(rtol) and np.isfinite(atol) and rtol > 0 and atol > 0):
-            raise ValueError(f"rtol and atol must be finite and > 0, got rtol={rtol!r}, atol={atol!r}")
-        jac0 = np.empty((0, 0)) if jac0 is None else _float_array(np.broadcast_to(jac0, (self.n, self.n)), 2)
-        y, f, counts, h_next, status, t, h_abs = _radau(
-            self.link_id,
-            self.kind_id,
-            self.par,
-            float(H),
-            _float_array(coef, 3),
-            float(t0),
-            float(t1),
-            _float_array(y0, 2),
-            jac0,
-            float(rtol),
-            float(atol),
-            float(newton_tol),
-            int(max_steps),
-        )
-        if status:
-            raise link_failure(status, t, h_abs, max_steps)
-        n_steps, n_rejected, n_fev, n_jev = counts.tolist()
-        return RadauResult(y, f, n_steps, n_rejected, n_fev, n_jev, float(h_next))
-
-
-def link_failure(status, t, h_abs, max_steps) -> IntegrationError:
-    """The exception radau_batch raises in the same situation."""
-    if status == _STEP_TOO_SMALL:
-        return IntegrationError(f"step size {h_abs:.3g} below round-off level at t = {t:.17g}")
-    if status == _ERROR_NOT_FINITE:
-        return IntegrationError(f"non-finite error estimate at t = {t:.17g}")
-    if status == _SINGULAR:  # np.linalg.LinAlgError's message in radau_batch
-        return IntegrationError(f"singular Newton matrix at t = {t:.17g}: Singular matrix")
-    if status == _TOO_MANY_STEPS:
-        return IntegrationError(f"more than {max_steps} steps")
-    assert status == _DERIVATIVE_NOT_FINITE, f"unknown status {status}"
-    return IntegrationError(f"non-finite derivative at t = {t:.17g}")

@@ -38,75 +38,16 @@ given.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-from ...errors import StepFailure
+from .systems import IntegrationError, RadauResult
+from .tableau import EPS, MAX_FACTOR, MIN_FACTOR, MU_COMPLEX, MU_REAL, NEWTON_MAXITER, TI, C, E, T
 
 __all__ = ["radau_batch", "RadauResult", "IntegrationError"]
 
-S6 = 6**0.5
-#: Collocation nodes of Radau IIA (order 5).
-C = np.array([(4 - S6) / 10, (4 + S6) / 10, 1.0])
-#: Weights of the embedded error estimate (scipy's ``E``).
-E = np.array([-13 - 7 * S6, -13 + 7 * S6, -1]) / 3
-#: Eigenvalues of the inverse Butcher matrix: one real, one complex pair.
-MU_REAL = 3 + 3 ** (2 / 3) - 3 ** (1 / 3)
-MU_COMPLEX = 3 + 0.5 * (3 ** (1 / 3) - 3 ** (2 / 3)) - 0.5j * (3 ** (5 / 6) + 3 ** (7 / 6))
-#: Transformation ``A = T diag(...) T^-1`` of the Butcher matrix (scipy's values).
-T = np.array(
-    [
-        [0.09443876248897524, -0.14125529502095421, 0.03002919410514742],
-        [0.25021312296533332, 0.20412935229379994, -0.38294211275726192],
-        [1, 1, 0],
-    ]
-)
-TI = np.array(
-    [
-        [4.17871859155190428, 0.32768282076106237, 0.52337644549944951],
-        [-4.17871859155190428, -0.32768282076106237, 0.47662355450055044],
-        [0.50287263494578682, -2.57192694985560522, 0.59603920482822492],
-    ]
-)
 TI_REAL = TI[0]
 TI_COMPLEX = TI[1] + 1j * TI[2]
-
-NEWTON_MAXITER = 8
-MIN_FACTOR = 0.2
-MAX_FACTOR = 10.0
-EPS = float(np.finfo(float).eps)
-
-
-class IntegrationError(StepFailure):
-    """The step size fell below round-off level, the solution stopped being finite or a
-    Newton matrix was singular.
-
-    A :class:`~icosim.errors.StepFailure`: a co-simulation run records it as
-    *failed*, not as diverged (a solver failure says nothing about stability).
-    """
-
-
-@dataclass
-class RadauResult:
-    """End of a batched integration.
-
-    ``y`` and ``f = fun(t1, y)`` have shape ``(B, n)``; ``n_steps`` accepted
-    and ``n_rejected`` rejected step attempts, ``n_fev`` batched right-hand
-    side evaluations, ``n_jev`` Jacobians.  With ``record_steps``, ``t_steps``
-    ``(n_steps + 1,)`` and ``y_steps`` ``(n_steps + 1, B, n)`` hold the start
-    and every accepted step.
-    """
-
-    y: np.ndarray
-    f: np.ndarray
-    n_steps: int
-    n_rejected: int
-    n_fev: int
-    n_jev: int
-    h_next: float
-    t_steps: np.ndarray | None = None
-    y_steps: np.ndarray | None = None
 
 
 def _rms_max(x):
