@@ -116,6 +116,33 @@ def test_a_link_at_rest_integrates_with_zero_error_estimates():
     assert got.h_next == ref.h_next == MAX_FACTOR * H
 
 
+@pytest.mark.parametrize("tol", [1e-4, 1e-8, 1e-12])
+def test_the_monolithic_pendulum_matches_radau_batch(tol):
+    """The monolithic baseline (the whole pendulum through the links' kernel, every accepted step recorded)
+    against radau_batch on Monolithic.rhs over 1 s: the right-hand side bitwise (the same expressions in the
+    same order), the same counters, end states within 1e-13 and step times within 1e-8 s (the step-size
+    controller feeds on an error estimate that round-off moves in its last digits)."""
+    from icosim.pendulum.integrator.compiled_links import MONOLITHIC, member_rhs, monolithic_parameters
+    from icosim.pendulum.integrator.systems import monolithic_radau
+    from icosim.pendulum.reference import Monolithic
+
+    mono = Monolithic(P)
+    y0 = mono.initial_state()
+    par, out = monolithic_parameters(P), np.empty(4)
+    for y in np.random.default_rng(0).standard_normal((20, 4)):
+        member_rhs(MONOLITHIC, 0, par, 1.0, 0.0, y, np.zeros((1, 2)), out)
+        np.testing.assert_array_equal(out, mono.rhs(0.0, y))
+    ref = radau_batch(mono.rhs, 0.0, 1.0, y0, rtol=tol, atol=tol, record_steps=True)
+    got = monolithic_radau(P, 0.0, 1.0, y0, rtol=tol, atol=tol, record_steps=True)
+    assert _counters(got) == _counters(ref)
+    assert got.t_steps.shape == ref.t_steps.shape and got.y_steps.shape == ref.y_steps.shape
+    assert got.t_steps[0] == 0.0 and got.t_steps[-1] == 1.0
+    np.testing.assert_array_equal(got.y_steps[-1], got.y)
+    np.testing.assert_allclose(got.y, ref.y, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(got.t_steps, ref.t_steps, rtol=0, atol=1e-8)
+    assert monolithic_radau(P, 0.0, 1.0, y0, rtol=tol, atol=tol).t_steps is None
+
+
 def _both_paths(monkeypatch, method, kw, dec, k, t_end, scheme="jacobi"):
     runs = {}
     for compiled in (False, True):
@@ -261,7 +288,8 @@ def test_every_job_that_runs_the_integrator_waits_for_the_one_compile_job(tmp_pa
 
     # pendulum_run runs every scheme of pendulum.schemes (Jacobi and Gauss-Seidel) of its (method, decomposition);
     # an FMU scene checked against the built-in pendulum (config/fmi.yaml) runs it too
-    runners = {"pendulum_run", "pendulum_trade_group", "pendulum_tolerance", "pendulum_adaptive"}
+    # pendulum_baselines integrates the monolithic pendulum with it
+    runners = {"pendulum_run", "pendulum_trade_group", "pendulum_tolerance", "pendulum_adaptive", "pendulum_baselines"}
     fmi = yaml.safe_load((ROOT / "config" / "fmi.yaml").read_text())["fmi"]["scenes"]
     pendulum_scenes = {name for name, scene in fmi.items() if scene["builtin"] == "pendulum"}
     assert pendulum_scenes and len(pendulum_scenes) < len(fmi)

@@ -46,6 +46,9 @@ __all__ = ["warm_up", "compile_kernels"]
 
 drop_stale_cache()  # before the kernels are defined: numba loads their cache as it defines them
 
+#: ``t_rec`` and ``y_rec`` of :func:`_radau` that record nothing.
+NOT_RECORDED = (np.empty(0), np.empty((0, 0, 0)))
+
 # status codes of the kernel (0: integrated)
 _STEP_TOO_SMALL, _ERROR_NOT_FINITE, _SINGULAR, _TOO_MANY_STEPS, _DERIVATIVE_NOT_FINITE = range(1, 6)
 
@@ -170,10 +173,12 @@ def _collocation(link, kind, par, H, coef, t, y, h, scale, tol, inv_real, inv_co
 
 
 @numba.njit(cache=True)
-def _radau(link, kind, par, H, coef, t0, t1, y0, jac0, rtol, atol, newton_tol, max_steps):
+def _radau(link, kind, par, H, coef, t0, t1, y0, jac0, rtol, atol, newton_tol, max_steps, t_rec, y_rec):
     """radau.radau_batch for a link (``first_step`` the whole interval, forward differences).
 
-    ``jac0`` (n, n) or empty (0, 0) for none.  Returns ``(y, f, counts, h_next, status, t, h_abs)``:
+    ``jac0`` (n, n) or empty (0, 0) for none.  ``t_rec`` (m,) and ``y_rec`` (m, B, n) with
+    ``m > max_steps`` receive the start and every accepted step (``record_steps``); with ``m = 0``
+    nothing is recorded.  Returns ``(y, f, counts, h_next, status, t, h_abs)``:
     ``counts = (n_steps, n_rejected, n_fev, n_jev)``; ``status`` 0 or an error code with the time
     and step size for its message.
     """
@@ -190,6 +195,9 @@ def _radau(link, kind, par, H, coef, t0, t1, y0, jac0, rtol, atol, newton_tol, m
     y = y0.copy()
     f = np.empty((B, n))
     batch_rhs(link, kind, par, H, t, y, coef, f)
+    record = t_rec.shape[0] > 0
+    if record:
+        _record(t_rec, y_rec, 0, t, y)
     if span == 0:
         counts[2] = n_fev
         return y, f, counts, h_abs, 0, t, h_abs
@@ -305,10 +313,21 @@ def _radau(link, kind, par, H, coef, t0, t1, y0, jac0, rtol, atol, newton_tol, m
             return y, f, counts, h_abs, _TOO_MANY_STEPS, t, h_abs
         if not finite:
             return y, f, counts, h_abs, _DERIVATIVE_NOT_FINITE, t, h_abs
+        if record:
+            _record(t_rec, y_rec, n_steps, t, y)
         h_abs = h_abs * factor
         have_J = False  # a fresh Jacobian per step: cheap for these small systems
     counts[0], counts[1], counts[2], counts[3] = n_steps, n_rej, n_fev, n_jev
     return y, f, counts, h_abs, 0, t, h_abs
+
+
+@numba.njit(cache=True)
+def _record(t_rec, y_rec, i, t, y):
+    """Row ``i`` of the recorded steps: ``t`` and ``y`` (B, n)."""
+    t_rec[i] = t
+    for b in range(y.shape[0]):
+        for j in range(y.shape[1]):
+            y_rec[i, b, j] = y[b, j]
 
 
 @numba.njit(cache=True)
@@ -330,7 +349,7 @@ def warm_up() -> None:
     y, coef, par = np.zeros((1, 2)), np.zeros((1, 1, 2)), np.ones(4)
     with gc_paused():  # numba's compiler: no time in Python's collections
         _jacobian(1, FORCE, par, 1.0, coef, 0.0, y)
-        _radau(1, FORCE, par, 1.0, coef, 0.0, 0.0, y, np.empty((0, 0)), 1e-6, 1e-6, 1e-8, 1)
+        _radau(1, FORCE, par, 1.0, coef, 0.0, 0.0, y, np.empty((0, 0)), 1e-6, 1e-6, 1e-8, 1, *NOT_RECORDED)
 
 
 def compile_kernels() -> dict:

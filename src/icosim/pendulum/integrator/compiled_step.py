@@ -89,7 +89,7 @@ def _link_step(
         stats[5] += 1
         stats[6] += 2
     y, f, counts, h_next, status, t, h_abs = _radau(
-        link, kind, par, H, coef, 0.0, H, y0, jac0, tol[0], tol[1], tol[2], max_steps
+        link, kind, par, H, coef, 0.0, H, y0, jac0, tol[0], tol[1], tol[2], max_steps, np.empty(0), np.empty((0, 0, 0))
     )
     out = np.empty((B, 4, 2))
     if status:

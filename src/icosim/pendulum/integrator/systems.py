@@ -2,6 +2,8 @@
 
 * :class:`CompiledLink` -- a link of the pendulum for the kernels (its ids and constants), with the
   forward-difference Jacobian and an integration over an interval;
+* :func:`monolithic_radau` -- the whole pendulum in minimal coordinates integrated by the same
+  kernel (the monolithic baseline of the speed-accuracy study);
 * :class:`RadauResult` -- the end of an integration, :class:`IntegrationError` -- its failure
   (:func:`link_failure` turns a kernel's status code into it).
 """
@@ -23,9 +25,9 @@ from .compiled import (
     _jacobian,
     _radau,
 )
-from .compiled_links import FORCE, KINEMATIC, link_parameters
+from .compiled_links import FORCE, KINEMATIC, MONOLITHIC, link_parameters, monolithic_parameters
 
-__all__ = ["CompiledLink", "RadauResult", "IntegrationError", "link_failure"]
+__all__ = ["CompiledLink", "monolithic_radau", "RadauResult", "IntegrationError", "link_failure"]
 
 
 class IntegrationError(StepFailure):
@@ -86,43 +88,77 @@ class CompiledLink:
             self.link_id, self.kind_id, self.par, float(H), _float_array(coef, 3), float(t), _float_array(y, 2)
         )
 
-    def radau(
-        self,
-        coef,
-        H: float,
-        t0: float,
-        t1: float,
+    def radau(self, coef, H: float, t0: float, t1: float, y0, **options) -> RadauResult:
+        """``radau.radau_batch(link.rhs(coef, H), t0, t1, y0, ...)`` compiled (``jac0`` an (n, n) matrix;
+        the options of :func:`_integrate`)."""
+        return _integrate(self.link_id, self.kind_id, self.par, coef, H, t0, t1, y0, **options)
+
+
+def monolithic_radau(params, t0: float, t1: float, y0, **options) -> RadauResult:
+    """The whole pendulum in minimal coordinates (:class:`~icosim.pendulum.reference.Monolithic`, state
+    ``(phi1, phi2, w1, w2)``, ``y0`` (n,) or (B, n)) from ``t0`` to ``t1`` by the links' Radau IIA (the
+    options of :func:`_integrate`)."""
+    y0 = np.atleast_2d(np.asarray(y0, dtype=np.float64))
+    coef = np.zeros((y0.shape[0], 1, 2))  # no input
+    return _integrate(MONOLITHIC, FORCE, monolithic_parameters(params), coef, 1.0, t0, t1, y0, **options)
+
+
+def _integrate(
+    link_id,
+    kind_id,
+    par,
+    coef,
+    H,
+    t0,
+    t1,
+    y0,
+    *,
+    rtol: float = 1e-6,
+    atol: float = 1e-6,
+    jac0=None,
+    newton_tol: float = 1e-8,
+    max_steps: int = 100000,
+    record_steps: bool = False,
+) -> RadauResult:
+    """:func:`~.compiled._radau` on a system, with ``rtol``, ``atol`` and ``newton_tol`` (relative to the
+    error scale ``atol + rtol |y|``) as in scipy, ``jac0`` the Newton matrix's Jacobian for the first
+    step (forward differences otherwise), and with ``record_steps`` the start and every accepted step
+    (:attr:`RadauResult.t_steps`, :attr:`RadauResult.y_steps`).
+
+    Raises :class:`IntegrationError` if the step size falls below round-off level, values stop being
+    finite or a Newton matrix is singular.
+    """
+    if not (np.isfinite(rtol) and np.isfinite(atol) and rtol > 0 and atol > 0):
+        raise ValueError(f"rtol and atol must be finite and > 0, got rtol={rtol!r}, atol={atol!r}")
+    y0 = _float_array(y0, 2)
+    n = y0.shape[1]
+    jac0 = np.empty((0, 0)) if jac0 is None else _float_array(np.broadcast_to(jac0, (n, n)), 2)
+    m = int(max_steps) + 1 if record_steps else 0
+    t_rec, y_rec = np.empty(m), np.empty((m,) + y0.shape)
+    y, f, counts, h_next, status, t, h_abs = _radau(
+        link_id,
+        kind_id,
+        par,
+        float(H),
+        _float_array(coef, 3),
+        float(t0),
+        float(t1),
         y0,
-        *,
-        rtol: float = 1e-6,
-        atol: float = 1e-6,
-        jac0=None,
-        newton_tol: float = 1e-8,
-        max_steps: int = 100000,
-    ) -> RadauResult:
-        """``radau.radau_batch(link.rhs(coef, H), t0, t1, y0, ...)`` compiled (``jac0`` an (n, n) matrix)."""
-        if not (np.isfinite(rtol) and np.isfinite(atol) and rtol > 0 and atol > 0):
-            raise ValueError(f"rtol and atol must be finite and > 0, got rtol={rtol!r}, atol={atol!r}")
-        jac0 = np.empty((0, 0)) if jac0 is None else _float_array(np.broadcast_to(jac0, (self.n, self.n)), 2)
-        y, f, counts, h_next, status, t, h_abs = _radau(
-            self.link_id,
-            self.kind_id,
-            self.par,
-            float(H),
-            _float_array(coef, 3),
-            float(t0),
-            float(t1),
-            _float_array(y0, 2),
-            jac0,
-            float(rtol),
-            float(atol),
-            float(newton_tol),
-            int(max_steps),
-        )
-        if status:
-            raise link_failure(status, t, h_abs, max_steps)
-        n_steps, n_rejected, n_fev, n_jev = counts.tolist()
-        return RadauResult(y, f, n_steps, n_rejected, n_fev, n_jev, float(h_next))
+        jac0,
+        float(rtol),
+        float(atol),
+        float(newton_tol),
+        int(max_steps),
+        t_rec,
+        y_rec,
+    )
+    if status:
+        raise link_failure(status, t, h_abs, max_steps)
+    n_steps, n_rejected, n_fev, n_jev = counts.tolist()
+    result = RadauResult(y, f, n_steps, n_rejected, n_fev, n_jev, float(h_next))
+    if record_steps:
+        result.t_steps, result.y_steps = t_rec[: n_steps + 1].copy(), y_rec[: n_steps + 1].copy()
+    return result
 
 
 def link_failure(status, t, h_abs, max_steps) -> IntegrationError:
