@@ -22,7 +22,7 @@ from icosim import ParameterError, make_method
 from icosim.claims.registry import evaluate_claim, load_claims, parse_claims
 from icosim.engine.schemes import get_scheme
 from icosim.pendulum.config import configured_runs, configured_schemes
-from icosim.pendulum.integrator.radau import IntegrationError
+from icosim.pendulum.integrator.systems import IntegrationError
 from icosim.pendulum.linearised import linear_test_model_rho, pendulum_test_model
 from icosim.pendulum.model import PendulumParameters
 from icosim.pendulum.replication.checks import expected_outcome

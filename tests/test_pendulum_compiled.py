@@ -1,7 +1,7 @@
-"""The compiled links' integrator (icosim.pendulum.integrator.compiled) against the numpy reference (icosim.pendulum.integrator.radau).
+"""The compiled links' integrator (icosim.pendulum.integrator.compiled) against the numpy reference (tests/reference_radau.py).
 
-The kernel is a transcription of ``radau_batch`` for the links' right-hand
-sides: the step sequence and the work counters must be the same, the numbers
+The kernel and ``radau_batch`` are the same algorithm (scipy's Radau, batched) for the links'
+right-hand sides: the step sequence and the work counters must be the same, the numbers
 equal up to round-off (matrix inverses, sin/cos and the order of the sums
 over a state's components may differ in the last bits).
 """
@@ -11,14 +11,14 @@ import json
 import numpy as np
 import pytest
 import yaml
+from reference_radau import NumpyPendulum, fd_jacobian, radau_batch
 
 from icosim import make_method
+from icosim.pendulum import runs
 from icosim.pendulum.integrator.compiled_algebra import all_finite, inverse, nan_maximum
-from icosim.pendulum.integrator.radau import IntegrationError, _fd_jacobian, radau_batch
-from icosim.pendulum.integrator.systems import CompiledLink
+from icosim.pendulum.integrator.systems import CompiledLink, IntegrationError
 from icosim.pendulum.links import Link1, Link2
 from icosim.pendulum.model import PendulumParameters
-from icosim.pendulum.problem import PendulumCosimulation
 from icosim.pendulum.runs import run_cosimulation
 from icosim.pendulum.trade.measures import check_scheme
 
@@ -50,7 +50,7 @@ def test_one_macro_step_matches_radau_batch(L, kind, B, K):
     link, y0, coef = _problem(L, kind, B, K, seed=K)
     H = 1e-3
     fun = link.rhs(coef, H)
-    jac0 = _fd_jacobian(fun, 0.0, y0[:1], fun(0.0, y0[:1]))[0]
+    jac0 = fd_jacobian(fun, 0.0, y0[:1], fun(0.0, y0[:1]))[0]
     kernel = CompiledLink(link)
     jac0_compiled = kernel.fd_jacobian(coef[:1], H, 0.0, y0[:1])[0]
     # forward differences divide a round-off difference of sin/cos by sqrt(eps): a few 1e-8 relative at worst
@@ -104,7 +104,7 @@ def test_a_link_at_rest_integrates_with_zero_error_estimates():
     exactly 0.  Both paths integrate it (before, 0.0 ** -0.25 raised ZeroDivisionError): the state stays
     0, the first step spans the interval (a zero derivative sets no scale), and the next step is
     MAX_FACTOR times longer, as scipy's Radau grows a step whose error is 0; counters and next step agree."""
-    from icosim.pendulum.integrator.radau import MAX_FACTOR
+    from icosim.pendulum.integrator.tableau import MAX_FACTOR
 
     link = Link1(P, "kinematic")
     coef, y0, H = np.zeros((1, 2, 2)), np.zeros((1, 2)), 1e-3
@@ -144,13 +144,15 @@ def test_the_monolithic_pendulum_matches_radau_batch(tol):
 
 
 def _both_paths(monkeypatch, method, kw, dec, k, t_end, scheme="jacobi"):
-    runs = {}
-    for compiled in (False, True):
-        monkeypatch.setattr(PendulumCosimulation, "compiled", compiled)
-        runs[compiled] = run_cosimulation(
-            P, make_method(method, **kw), dec, k, H=1e-3, t_end=t_end, scheme=check_scheme(scheme)
-        )
-    return runs[False], runs[True]
+    """The run on the numpy reference (NumpyPendulum) and on the package's compiled problem."""
+    results = []
+    for problem in (NumpyPendulum, runs.PendulumCosimulation):
+        with monkeypatch.context() as m:
+            m.setattr(runs, "PendulumCosimulation", problem)
+            results.append(
+                run_cosimulation(P, make_method(method, **kw), dec, k, H=1e-3, t_end=t_end, scheme=check_scheme(scheme))
+            )
+    return tuple(results)
 
 
 BAUMGARTE = dict(index=1, mu=1e-3)

@@ -204,7 +204,7 @@ def test_stability_claims_do_not_rest_on_the_pendulum_problem():
     files = {p.relative_to(SRC).as_posix() for p in script_closure(ROOT / "workflow/scripts/claims.py", SRC)}
     assert "icosim/stability/checks.py" in files and "icosim/pendulum/replication/checks.py" in files
     assert not {"icosim/pendulum/problem.py", "icosim/pendulum/runs.py", "icosim/convergence/study.py"} & files
-    assert "icosim/pendulum/integrator/radau.py" not in {
+    assert "icosim/pendulum/integrator/compiled.py" not in {
         p.relative_to(SRC).as_posix() for p in module_closure(["icosim.claims.registry"], SRC)
     }
 

@@ -15,7 +15,7 @@ error                            raised when
                                  was written
 ===============================  ==============================================================
 
-Failures of one integrator (:class:`icosim.pendulum.integrator.radau.IntegrationError`, the
+Failures of one integrator (:class:`icosim.pendulum.integrator.systems.IntegrationError`, the
 pendulum's projection) are :class:`StepFailure` subclasses kept beside the code that raises them.
 """
 

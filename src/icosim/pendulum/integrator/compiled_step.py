@@ -5,8 +5,7 @@ integration: the samples of the link's input (with the forward-difference member
 coefficients of its polynomial, the shared first-step Jacobian, :func:`~.compiled._radau` and the
 link's outputs (:func:`~.compiled_links.member_outputs`, the expressions of
 :mod:`icosim.pendulum.links`), where the numpy calls around a call of the integrator cost several
-times the integration itself.  The sums are in numpy's order (einsum's and ``np.add.reduce``'s over
-three terms or fewer: index order), so the runs are bitwise those with the links' outputs in numpy.
+times the integration itself.
 
 The kernels inline those of :mod:`.compiled`: their disk cache is dropped when it, or a source it
 inlines, changes (:func:`~.kernel_cache.drop_stale_cache`).

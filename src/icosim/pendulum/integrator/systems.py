@@ -83,14 +83,14 @@ class CompiledLink:
         self.par = link_parameters(link)
 
     def fd_jacobian(self, coef, H: float, t: float, y) -> np.ndarray:
-        """``radau._fd_jacobian(fun, t, y, fun(t, y))`` for ``fun = link.rhs(coef, H)``: (B, n, n)."""
+        """The forward-difference Jacobian (B, n, n) of ``link.rhs(coef, H)`` at ``(t, y[b])``."""
         return _jacobian(
             self.link_id, self.kind_id, self.par, float(H), _float_array(coef, 3), float(t), _float_array(y, 2)
         )
 
     def radau(self, coef, H: float, t0: float, t1: float, y0, **options) -> RadauResult:
-        """``radau.radau_batch(link.rhs(coef, H), t0, t1, y0, ...)`` compiled (``jac0`` an (n, n) matrix;
-        the options of :func:`_integrate`)."""
+        """Integrate ``link.rhs(coef, H)`` from ``t0`` to ``t1`` for the initial values ``y0`` (B, n)
+        (``jac0`` an (n, n) matrix; the options of :func:`_integrate`)."""
         return _integrate(self.link_id, self.kind_id, self.par, coef, H, t0, t1, y0, **options)
 
 
@@ -162,12 +162,13 @@ def _integrate(
 
 
 def link_failure(status, t, h_abs, max_steps) -> IntegrationError:
-    """The exception radau_batch raises in the same situation."""
+    """The :class:`IntegrationError` for a status code of :func:`~.compiled._radau` (its time, step size and
+    ``max_steps``)."""
     if status == _STEP_TOO_SMALL:
         return IntegrationError(f"step size {h_abs:.3g} below round-off level at t = {t:.17g}")
     if status == _ERROR_NOT_FINITE:
         return IntegrationError(f"non-finite error estimate at t = {t:.17g}")
-    if status == _SINGULAR:  # np.linalg.LinAlgError's message in radau_batch
+    if status == _SINGULAR:  # with the message of numpy's LinAlgError for a singular matrix
         return IntegrationError(f"singular Newton matrix at t = {t:.17g}: Singular matrix")
     if status == _TOO_MANY_STEPS:
         return IntegrationError(f"more than {max_steps} steps")
