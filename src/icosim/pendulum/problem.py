@@ -78,7 +78,6 @@ class PendulumCosimulation(CosimulationProblem):
         # monomial coefficients of the interpolation polynomial (Eq. 11) in tau = (t - T_N)/H
         self.C_corr = np.array(monomial_coefficients(self.corr_nodes), dtype=float)
         self._cache = None
-        self._extrapolated = (None, None)  # (history, e_p): macro_step and both predictors ask for it
         # the Newton matrix of the first Radau step, per link: the state it belongs to and the matrix
         self._jac0 = [None, None]
         self._jac0_matrix = tuple(np.zeros((link.n, link.n)) for link in self.links)
@@ -201,18 +200,6 @@ class PendulumCosimulation(CosimulationProblem):
         return Y[0], jac
 
     # -- the problem interface ------------------------------------------------
-    def extrapolate(self, history):
-        # The base class's sum, formed as one BLAS dot product: equal up to rounding, and kept so
-        # that the pendulum's results stay bitwise those computed before the base class existed.
-        # Formed once per history (macro_step and each link's predictor ask for it).
-        if self._extrapolated[0] is not history:
-            if history.ndim == 2:  # tensordot's own dot product, (1, k+1) @ (k+1, n_e), without its reshaping
-                e_p = np.dot(self.w_pred[None, :], history).reshape(history.shape[1])
-            else:
-                e_p = np.tensordot(self.w_pred, history, axes=(0, 0))
-            self._extrapolated = (history, e_p)
-        return self._extrapolated[1]
-
     def predict(self, i, state, history, *, final=False):
         """Link ``i`` with the extrapolation polynomial, i.e. the interpolation polynomial through ``e_p``.
 
@@ -286,7 +273,6 @@ class PendulumCosimulation(CosimulationProblem):
         self.w_pred = np.array([float(w) for w in lagrange_weights(pred, 1)], dtype=float)
         self.C_corr = np.array(lagrange_coefficients(corr), dtype=float)
         self._cache = None  # the predictor's responses (kept for the Jacobians) belong to the old nodes
-        self._extrapolated = (None, None)  # and so does e_p
 
 
 def _floats(a):
