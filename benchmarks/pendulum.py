@@ -3,11 +3,11 @@
 The co-simulation integrates each link per macro step for the predictor plus
 the finite-difference perturbations (one batched Radau call per link) and for
 the corrector (one more call per link), compiled with numba
-(icosim.problems.pendulum.integrator.compiled); each run is also timed on the numpy reference path
-(``PendulumCosimulation.compiled = False``: icosim.problems.pendulum.integrator.radau with the links'
+(icosim.problems.pendulum.integrator.compiled); each run is also timed on the tests' numpy reference
+(tests/reference_radau.py: ``NumpyPendulum``, the same algorithm in numpy on the links'
 closures), side by side, for the compiled kernel's speed-up.  Its cost is set against the
 monolithic pendulum (minimal coordinates) solved with the *same integrator and
-tolerance* (``icosim.problems.pendulum.integrator.radau``, Radau IIA, rtol = atol = 1e-6):
+tolerance* (``icosim.problems.pendulum.integrator.systems.monolithic_radau``, Radau IIA, rtol = atol = 1e-6):
 
 * ``monolithic, free steps``: one call over [0, T], the integrator picks its
   steps (what a monolithic simulation would cost);
@@ -16,7 +16,7 @@ tolerance* (``icosim.problems.pendulum.integrator.radau``, Radau IIA, rtol = ato
 * scipy ``solve_ivp(method='Radau')`` over [0, T] for comparison, and the cost
   of one ``solve_ivp`` call over one macro step on a link subsystem (what every
   one of the co-simulation's 4 integrations per macro step would cost with
-  scipy instead of the batched integrator).
+  scipy instead of the compiled integrator).
 
 Minimum of ``--repeat`` runs after a warm-up, one core (thread variables set).
 Run: ``python benchmarks/pendulum.py [--t-end 0.5] [--json FILE]``.
@@ -29,18 +29,23 @@ for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 import json  # noqa: E402
+import sys  # noqa: E402
+from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 from _timing import best_of  # noqa: E402  (benchmarks/ is on sys.path when run as a script)
 from scipy.integrate import solve_ivp  # noqa: E402
 
 from icosim import make_method  # noqa: E402
-from icosim.problems.pendulum.integrator.radau import radau_batch  # noqa: E402
+from icosim.problems.pendulum import runs  # noqa: E402
+from icosim.problems.pendulum.integrator.systems import CompiledLink, monolithic_radau  # noqa: E402
 from icosim.problems.pendulum.links import Link2  # noqa: E402
 from icosim.problems.pendulum.model import PendulumParameters  # noqa: E402
-from icosim.problems.pendulum.problem import PendulumCosimulation  # noqa: E402
 from icosim.problems.pendulum.reference import Monolithic  # noqa: E402
 from icosim.problems.pendulum.runs import run_cosimulation  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from reference_radau import NumpyPendulum  # noqa: E402
 
 RUNS = [
     ("baumgarte", {"index": 1, "mu": 1e-3}, "ff", 1),
@@ -66,26 +71,28 @@ def main():
     y0 = mono.initial_state()
 
     def mono_free():
-        return radau_batch(mono.rhs, 0.0, T, y0, rtol=tol, atol=tol)
+        return monolithic_radau(p, 0.0, T, y0, rtol=tol, atol=tol)
 
     def mono_grid():
         y = y0[None, :]
         for i in range(n):
-            y = radau_batch(mono.rhs, i * H, (i + 1) * H, y, rtol=tol, atol=tol).y
+            y = monolithic_radau(p, i * H, (i + 1) * H, y, rtol=tol, atol=tol).y
         return y
 
     def scipy_free():
         return solve_ivp(mono.rhs, (0.0, T), y0, method="Radau", rtol=tol, atol=tol)
 
     link = Link2(p, "force")
-    fun = link.rhs(np.array([[[1.0, 9.0]]]), H)
+    coef = np.array([[[1.0, 9.0]]])
+    fun = link.rhs(coef, H)
+    kernel = CompiledLink(link)
     s2 = p.initial_state()[2:]
 
     def scipy_link_step():
         return solve_ivp(lambda t, y: fun(t, y[None, :])[0], (0.0, H), s2, method="Radau", rtol=tol, atol=tol)
 
     def ours_link_step():
-        return radau_batch(fun, 0.0, H, s2, rtol=tol, atol=tol)
+        return kernel.radau(coef, H, 0.0, H, s2[None, :], rtol=tol, atol=tol)
 
     results = {"t_end": T, "H": H, "tol": tol, "macro_steps": n}
     results["monolithic_free"] = best_of(mono_free, args.repeat)
@@ -103,12 +110,12 @@ def main():
 
         t = best_of(cosim, max(1, args.repeat - 1))
         stats = cosim().stats
-        # the same run on the numpy reference path (icosim.problems.pendulum.integrator.radau.radau_batch with the links' closures)
-        PendulumCosimulation.compiled = False
+        # the same run on the tests' numpy reference (radau_batch with the links' closures)
+        compiled_problem, runs.PendulumCosimulation = runs.PendulumCosimulation, NumpyPendulum
         try:
             t_numpy = best_of(cosim, max(1, args.repeat - 1))
         finally:
-            PendulumCosimulation.compiled = True
+            runs.PendulumCosimulation = compiled_problem
         rows.append(
             {
                 "run": f"{name} {dec} k={k}",
@@ -131,7 +138,7 @@ def main():
     print(f"  monolithic, same integrator, macro grid : {results['monolithic_grid'] * 1e3:8.2f} ms")
     print(f"  monolithic, scipy solve_ivp Radau       : {results['scipy_radau_free'] * 1e3:8.2f} ms")
     print(
-        f"  one link over one macro step: scipy solve_ivp Radau {results['scipy_link_step'] * 1e6:.0f} us, icosim.problems.pendulum.integrator.radau {results['icosim_link_step'] * 1e6:.0f} us"
+        f"  one link over one macro step: scipy solve_ivp Radau {results['scipy_link_step'] * 1e6:.0f} us, icosim.problems.pendulum.integrator.compiled {results['icosim_link_step'] * 1e6:.0f} us"
     )
     print(
         f"{'co-simulation run':24s} {'time [s]':>9s} {'ms/step':>8s} {'numpy ms':>8s} {'speedup':>8s} "

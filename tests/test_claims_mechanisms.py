@@ -118,7 +118,8 @@ def test_pendulum_link2_is_the_heavier_at_the_joint_along_link1s_direction_of_mo
 @pytest.mark.parametrize("k", [0, 1, 2])
 def test_gauss_seidel_coupling_systems_are_regular_over_the_plane(k):
     """docs/gauss_seidel.md, Sect. 2: the fd Baumgarte system (mu_bar = 1) has a positive determinant and
-    the dd condition a negative derivative in both orders, at every point of the plotted plane in every row
+    the dd condition a derivative of one sign in both orders (positive as the engine forms the condition,
+    first subsystem minus second: negative in the paper's second minus first), at every point of the plotted plane in every row
     of Figs. 9-15 and with a ten times lighter subsystem 2: no solve of the Gauss-Seidel schemes is singular."""
     import numpy as np
 
@@ -133,4 +134,4 @@ def test_gauss_seidel_coupling_systems_are_regular_over_the_plane(k):
             J = fd.jacobians(None, None, None, None, fixed)
             A = np.concatenate([J["pos"] + beta * J["vel"] + gamma * J["acc"], J["force"]], axis=-2)
             assert np.linalg.det(A).min() > 0.5
-            assert dd.jacobians(None, None, None, None, fixed)["force"].max() < -1
+            assert dd.jacobians(None, None, None, None, fixed)["force"].min() > 1

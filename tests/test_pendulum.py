@@ -13,13 +13,15 @@ import math
 import numpy as np
 import pytest
 from helpers import correct_all, predict_all
+from reference_radau import radau_batch
 from scipy.integrate import solve_ivp
 
 from icosim import ParameterError, make_method
 from icosim.engine.macrostep import macro_step
 from icosim.errors import StepFailure
 from icosim.problems.pendulum.config import configured_runs
-from icosim.problems.pendulum.integrator.radau import MU_REAL, IntegrationError, radau_batch
+from icosim.problems.pendulum.integrator.systems import IntegrationError
+from icosim.problems.pendulum.integrator.tableau import MU_REAL
 from icosim.problems.pendulum.links import Link1, Link2
 from icosim.problems.pendulum.manifold import ProjectionError, _constraint_jacobian, project_state
 from icosim.problems.pendulum.model import PendulumParameters, joint_constraint

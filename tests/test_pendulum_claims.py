@@ -22,7 +22,7 @@ from icosim import ParameterError, make_method
 from icosim.claims.registry import evaluate_claim, load_claims, parse_claims
 from icosim.engine.schemes import get_scheme
 from icosim.problems.pendulum.config import configured_runs, configured_schemes
-from icosim.problems.pendulum.integrator.radau import IntegrationError
+from icosim.problems.pendulum.integrator.systems import IntegrationError
 from icosim.problems.pendulum.linearised import linear_test_model_rho, pendulum_test_model
 from icosim.problems.pendulum.model import PendulumParameters
 from icosim.problems.pendulum.runs import run_cosimulation

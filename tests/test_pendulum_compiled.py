@@ -1,7 +1,7 @@
-"""The compiled links' integrator (icosim.problems.pendulum.integrator.compiled) against the numpy reference (icosim.problems.pendulum.integrator.radau).
+"""The compiled links' integrator (icosim.problems.pendulum.integrator.compiled) against the numpy reference (tests/reference_radau.py).
 
-The kernel is a transcription of ``radau_batch`` for the links' right-hand
-sides: the step sequence and the work counters must be the same, the numbers
+The kernel and ``radau_batch`` are the same algorithm (scipy's Radau, batched) for the links'
+right-hand sides: the step sequence and the work counters must be the same, the numbers
 equal up to round-off (matrix inverses, sin/cos and the order of the sums
 over a state's components may differ in the last bits).
 """
@@ -11,14 +11,14 @@ import json
 import numpy as np
 import pytest
 import yaml
+from reference_radau import NumpyPendulum, fd_jacobian, radau_batch
 
 from icosim import make_method
-from icosim.problems.pendulum.integrator.compiled import CompiledLink
+from icosim.problems.pendulum import runs
 from icosim.problems.pendulum.integrator.compiled_algebra import all_finite, inverse, nan_maximum
-from icosim.problems.pendulum.integrator.radau import IntegrationError, _fd_jacobian, radau_batch
+from icosim.problems.pendulum.integrator.systems import CompiledLink, IntegrationError
 from icosim.problems.pendulum.links import Link1, Link2
 from icosim.problems.pendulum.model import PendulumParameters
-from icosim.problems.pendulum.problem import PendulumCosimulation
 from icosim.problems.pendulum.runs import run_cosimulation
 from icosim.studies.trade.measures import check_scheme
 
@@ -50,7 +50,7 @@ def test_one_macro_step_matches_radau_batch(L, kind, B, K):
     link, y0, coef = _problem(L, kind, B, K, seed=K)
     H = 1e-3
     fun = link.rhs(coef, H)
-    jac0 = _fd_jacobian(fun, 0.0, y0[:1], fun(0.0, y0[:1]))[0]
+    jac0 = fd_jacobian(fun, 0.0, y0[:1], fun(0.0, y0[:1]))[0]
     kernel = CompiledLink(link)
     jac0_compiled = kernel.fd_jacobian(coef[:1], H, 0.0, y0[:1])[0]
     # forward differences divide a round-off difference of sin/cos by sqrt(eps): a few 1e-8 relative at worst
@@ -104,7 +104,7 @@ def test_a_link_at_rest_integrates_with_zero_error_estimates():
     exactly 0.  Both paths integrate it (before, 0.0 ** -0.25 raised ZeroDivisionError): the state stays
     0, the first step spans the interval (a zero derivative sets no scale), and the next step is
     MAX_FACTOR times longer, as scipy's Radau grows a step whose error is 0; counters and next step agree."""
-    from icosim.problems.pendulum.integrator.radau import MAX_FACTOR
+    from icosim.problems.pendulum.integrator.tableau import MAX_FACTOR
 
     link = Link1(P, "kinematic")
     coef, y0, H = np.zeros((1, 2, 2)), np.zeros((1, 2)), 1e-3
@@ -116,14 +116,43 @@ def test_a_link_at_rest_integrates_with_zero_error_estimates():
     assert got.h_next == ref.h_next == MAX_FACTOR * H
 
 
+@pytest.mark.parametrize("tol", [1e-4, 1e-8, 1e-12])
+def test_the_monolithic_pendulum_matches_radau_batch(tol):
+    """The monolithic baseline (the whole pendulum through the links' kernel, every accepted step recorded)
+    against radau_batch on Monolithic.rhs over 1 s: the right-hand side bitwise (the same expressions in the
+    same order), the same counters, end states within 1e-13 and step times within 1e-8 s (the step-size
+    controller feeds on an error estimate that round-off moves in its last digits)."""
+    from icosim.problems.pendulum.integrator.compiled_links import MONOLITHIC, member_rhs, monolithic_parameters
+    from icosim.problems.pendulum.integrator.systems import monolithic_radau
+    from icosim.problems.pendulum.reference import Monolithic
+
+    mono = Monolithic(P)
+    y0 = mono.initial_state()
+    par, out = monolithic_parameters(P), np.empty(4)
+    for y in np.random.default_rng(0).standard_normal((20, 4)):
+        member_rhs(MONOLITHIC, 0, par, 1.0, 0.0, y, np.zeros((1, 2)), out)
+        np.testing.assert_array_equal(out, mono.rhs(0.0, y))
+    ref = radau_batch(mono.rhs, 0.0, 1.0, y0, rtol=tol, atol=tol, record_steps=True)
+    got = monolithic_radau(P, 0.0, 1.0, y0, rtol=tol, atol=tol, record_steps=True)
+    assert _counters(got) == _counters(ref)
+    assert got.t_steps.shape == ref.t_steps.shape and got.y_steps.shape == ref.y_steps.shape
+    assert got.t_steps[0] == 0.0 and got.t_steps[-1] == 1.0
+    np.testing.assert_array_equal(got.y_steps[-1], got.y)
+    np.testing.assert_allclose(got.y, ref.y, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(got.t_steps, ref.t_steps, rtol=0, atol=1e-8)
+    assert monolithic_radau(P, 0.0, 1.0, y0, rtol=tol, atol=tol).t_steps is None
+
+
 def _both_paths(monkeypatch, method, kw, dec, k, t_end, scheme="jacobi"):
-    runs = {}
-    for compiled in (False, True):
-        monkeypatch.setattr(PendulumCosimulation, "compiled", compiled)
-        runs[compiled] = run_cosimulation(
-            P, make_method(method, **kw), dec, k, H=1e-3, t_end=t_end, scheme=check_scheme(scheme)
-        )
-    return runs[False], runs[True]
+    """The run on the numpy reference (NumpyPendulum) and on the package's compiled problem."""
+    results = []
+    for problem in (NumpyPendulum, runs.PendulumCosimulation):
+        with monkeypatch.context() as m:
+            m.setattr(runs, "PendulumCosimulation", problem)
+            results.append(
+                run_cosimulation(P, make_method(method, **kw), dec, k, H=1e-3, t_end=t_end, scheme=check_scheme(scheme))
+            )
+    return tuple(results)
 
 
 BAUMGARTE = dict(index=1, mu=1e-3)
@@ -261,7 +290,8 @@ def test_every_job_that_runs_the_integrator_waits_for_the_one_compile_job(tmp_pa
 
     # pendulum_run runs every scheme of pendulum.schemes (Jacobi and Gauss-Seidel) of its (method, decomposition);
     # an FMU scene checked against the built-in pendulum (config/fmi.yaml) runs it too
-    runners = {"pendulum_run", "pendulum_trade_group", "pendulum_tolerance", "pendulum_adaptive"}
+    # pendulum_baselines integrates the monolithic pendulum with it
+    runners = {"pendulum_run", "pendulum_trade_group", "pendulum_tolerance", "pendulum_adaptive", "pendulum_baselines"}
     fmi = yaml.safe_load((ROOT / "config" / "fmi.yaml").read_text())["fmi"]["scenes"]
     pendulum_scenes = {name for name, scene in fmi.items() if scene["builtin"] == "pendulum"}
     assert pendulum_scenes and len(pendulum_scenes) < len(fmi)

@@ -293,11 +293,13 @@ def test_counts_are_what_they_say(monkeypatch):
     """Right-hand side evaluations, Jacobians and Radau steps counted by wrappers around the links'
     right-hand sides (independent of the integrator's own counts); macro steps = T/H.
 
-    On the numpy path (the closures are what it calls); the compiled kernel's counters equal its
-    counters (tests/test_pendulum_compiled.py)."""
+    On the numpy reference path (tests/reference_radau.py: the closures are what it calls); the compiled
+    kernel's counters equal its counters (tests/test_pendulum_compiled.py)."""
+    from reference_radau import NumpyPendulum
+
     from icosim.problems.pendulum import links
 
-    monkeypatch.setattr(PendulumCosimulation, "compiled", False)
+    monkeypatch.setattr(runs_module, "PendulumCosimulation", NumpyPendulum)
 
     calls = {"rhs": 0, "jac": 0, "step_end": 0}
 

@@ -15,7 +15,7 @@ error                            raised when
                                  was written
 ===============================  ==============================================================
 
-Failures of one integrator (:class:`icosim.problems.pendulum.integrator.radau.IntegrationError`, the
+Failures of one integrator (:class:`icosim.problems.pendulum.integrator.systems.IntegrationError`, the
 pendulum's projection) are :class:`StepFailure` subclasses kept beside the code that raises them.
 """
 
@@ -50,7 +50,7 @@ class PointTimeout(ArithmeticError):
 class StepFailure(RuntimeError):
     """A macro step could not be computed (e.g. a subsystem integration failed).
 
-    :func:`icosim.engine.run.simulate` records it as a *failed* run, distinct from a diverged one:
+    :func:`icosim.engine.macrostep.simulate` records it as a *failed* run, distinct from a diverged one:
     a failure says nothing about the stability of the coupling.
     """
 

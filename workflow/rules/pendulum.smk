@@ -325,7 +325,10 @@ rule pendulum_trade_group:
 
 
 rule pendulum_baselines:
-    """Monolithic pendulum over tolerances (Radau IIA, DOP853) and the linear test model's errors."""
+    """Monolithic pendulum over tolerances (the links' compiled Radau IIA, DOP853) and the linear test
+    model's errors."""
+    input:
+        kernels=ancient(PENDULUM_KERNELS),
     output:
         monolithic=f"{TRADE_DIR}/monolithic.nc",
         linear=f"{TRADE_DIR}/linear_orders.nc",

@@ -85,8 +85,8 @@ dimensionless μ̄): {methods}.
 Corrector: {escape(mode)}.</p>
 <p><b>Subsystem integration</b>: Radau IIA (3 stages, order 5) with step-size control, rtol = {integ["rtol"]:g},
 atol = {integ["atol"]:g} (as in the paper), simplified Newton to {integ["newton_tol"]:g} of the error scale
-(<code>icosim.problems.pendulum.integrator.radau</code>: scipy's Radau algorithm, batched over initial values and inputs with a shared step
-sequence). <b>Sensitivities</b> of the outputs to the new coupling values e<sub>N+1</sub>: forward differences,
+(<code>icosim.problems.pendulum.integrator.compiled</code>: scipy's Radau algorithm, batched over initial values and inputs with a shared step
+sequence, compiled with numba). <b>Sensitivities</b> of the outputs to the new coupling values e<sub>N+1</sub>: forward differences,
 re-integrating each subsystem with the interpolation polynomial through e<sub>N+1</sub> + h<sub>j</sub>
 (h<sub>j</sub> = {sens["fd_step"]:g}·max(1, |e<sub>j</sub>|)), predictor and perturbations in one batched call per
 subsystem. <b>Reference</b>: the monolithic pendulum in minimal coordinates (φ1, φ2), scipy {escape(ref["method"])},

@@ -2,8 +2,13 @@
 
 The outputs of the two links at ``T_N+1`` are the joint point's position,
 velocity and acceleration and the joint force each link sees; ``d`` is link 1's
-minus link 2's.  Which rows close the system depends on how each link is driven
-(a decomposition's ``kinds``, :mod:`icosim.engine.decompositions`).  Link 1 is
+minus link 2's.  Every residual here is *link 1 minus link 2*: the joint
+constraint ``g_c = P_1 - P_2`` on each level and the force balance ``f_1 - f_2``
+(the paper writes Eq. 57c the other way round, ``mu_2 - mu_1 = 0``: the same
+condition; the sign of a residual and of its Jacobian rows together does not
+change the corrected coupling variables).  Which rows close the system depends
+on how each link is driven (a decomposition's ``kinds``,
+:mod:`icosim.engine.decompositions`).  Link 1 is
 pinned to the ground, so it can move its joint point only along its normal
 ``n1``: where it is kinematically driven, the conditions are taken along ``e1``
 and ``n1``.  A kinematically driven link 1 with a force-driven link 2 (df) has
@@ -28,8 +33,8 @@ def _both_force(y, d):  # ff: the joint constraint on each level, no force balan
     return {"pos": d[..., 0, :], "vel": d[..., 1, :], "acc": d[..., 2, :], "force": d[..., 3, :0]}
 
 
-def _force_kinematic(y, d):  # fd: the constraint, and link 2's multiplier balancing lambda_c
-    return {"pos": d[..., 0, :], "vel": d[..., 1, :], "acc": d[..., 2, :], "force": -d[..., 3, :]}
+def _force_kinematic(y, d):  # fd: the constraint, and link 2's multiplier balancing lambda_c: lambda_c - mu_2
+    return {"pos": d[..., 0, :], "vel": d[..., 1, :], "acc": d[..., 2, :], "force": d[..., 3, :]}
 
 
 def _both_kinematic(y, d):  # dd: link 1 moves its joint only along n1; the normal component balances
@@ -44,8 +49,8 @@ def _both_kinematic(y, d):  # dd: link 1 moves its joint only along n1; the norm
         "pos": along_e1(d[..., 0, :]),
         "vel": along_e1(d[..., 1, :]),
         "acc": along_e1(d[..., 2, :]),
-        # n1 . mu_2 - mu_1 (f_1 = mu_1 n1), n1 = (-e1y, e1x)
-        "force": -((-e1y) * d[..., 3, 0] + e1x * d[..., 3, 1])[..., None],
+        # n1 . (f_1 - mu_2) = mu_1 - n1 . mu_2 (f_1 = mu_1 n1), n1 = (-e1y, e1x)
+        "force": ((-e1y) * d[..., 3, 0] + e1x * d[..., 3, 1])[..., None],
     }
 
 

@@ -1,9 +1,9 @@
 """The double pendulum split into link 1 and link 2, as the macro step sees it (docs/pendulum.md).
 
-Each link is integrated over a macro step by Radau IIA (:mod:`icosim.problems.pendulum.integrator.radau`,
-compiled for the links in :mod:`icosim.problems.pendulum.integrator.compiled`); the sensitivities
-of the coupling conditions are forward differences, integrated in one batch
-with the predictor.
+Each link is integrated over a macro step by Radau IIA, compiled with numba
+(:mod:`icosim.problems.pendulum.integrator.compiled`, one call per link integration through
+:mod:`icosim.problems.pendulum.integrator.compiled_step`); the sensitivities of the coupling conditions are
+forward differences, integrated in one batch with the predictor.
 """
 
 from __future__ import annotations
@@ -26,9 +26,8 @@ from ...engine.lagrange import (
 from ...engine.problem import CosimulationProblem
 from ...errors import ParameterError
 from .conditions import CONDITIONS, check_decomposition
-from .integrator.compiled import CompiledLink, link_failure
 from .integrator.compiled_step import STATS, _link_outputs, _link_step
-from .integrator.radau import _fd_jacobian, radau_batch
+from .integrator.systems import CompiledLink, link_failure
 from .links import Link1, Link2
 from .manifold import project_state
 from .model import PendulumParameters, joint_constraint
@@ -48,11 +47,6 @@ class PendulumCosimulation(CosimulationProblem):
     seen by link ``i``: the input ``lambda_c`` for a force-driven link, the
     multiplier for a kinematically driven one).
     """
-
-    #: Integrate the links with the compiled transcription of icosim.problems.pendulum.integrator.radau (:mod:`.integrator.compiled`):
-    #: one call per link integration forms its input polynomial, integrates and evaluates its outputs;
-    #: False: with :func:`icosim.problems.pendulum.integrator.radau.radau_batch` on the links' closures (the reference, for comparisons).
-    compiled = True
 
     def __init__(
         self,
@@ -84,7 +78,6 @@ class PendulumCosimulation(CosimulationProblem):
         # monomial coefficients of the interpolation polynomial (Eq. 11) in tau = (t - T_N)/H
         self.C_corr = np.array(monomial_coefficients(self.corr_nodes), dtype=float)
         self._cache = None
-        self._extrapolated = (None, None)  # (history, e_p): macro_step and both predictors ask for it
         # the Newton matrix of the first Radau step, per link: the state it belongs to and the matrix
         self._jac0 = [None, None]
         self._jac0_matrix = tuple(np.zeros((link.n, link.n)) for link in self.links)
@@ -120,45 +113,11 @@ class PendulumCosimulation(CosimulationProblem):
     def _split(self, state):
         return state[:2], state[2:]
 
-    def _integrate(self, i, state, samples):
-        """Integrate link ``i`` over one macro step for a batch of input samples, with
-        :func:`~.integrator.radau.radau_batch` on the link's closures (the path without :attr:`compiled`;
-        :meth:`_step_link` is the compiled one).
-
-        ``samples`` (B, k+1, n_u) at the corrector nodes ``1, 0, ..., -k+1``.
-        Returns end states (B, n) and outputs (B, 4, 2).
-        """
-        link = self.links[i]
-        coef = np.einsum("mj,bju->bmu", self.C_corr, samples)
-        y0 = np.broadcast_to(self._split(state)[i], (samples.shape[0], link.n))
-        options = dict(rtol=self.rtol, atol=self.atol, newton_tol=self.newton_tol)
-        fun = link.rhs(coef, self.H)
-        jacobian = lambda: _fd_jacobian(fun, 0.0, y0[:1], fun(0.0, y0[:1]))[0]
-        integrate = lambda jac0: radau_batch(fun, 0.0, self.H, y0, jac0=jac0, **options)
-        # The Newton matrix of the first Radau step is shared by all integrations
-        # of this link from this state (predictor, sensitivities, corrector).
-        counts = self._counts
-        if self._jac0[i] is not state:
-            self._jac0[i] = state
-            self._jac0_matrix[i][...] = jacobian()
-            counts[5] += 1
-            counts[6] += 2
-        r = integrate(self._jac0_matrix[i])
-        self.work.subsystem_integrations += 1
-        counts[0] += 1
-        counts[1] += r.n_steps
-        counts[2] += r.n_rejected
-        counts[3] += r.n_fev
-        counts[4] += r.n_steps > 1 or r.n_rejected > 0
-        counts[5] += r.n_jev
-        u1 = np.add.reduce(coef, axis=1)  # input at tau = 1
-        return r.y, link.outputs(r.y, r.f, u1)
-
     def _step_link(self, i, state, e, history, perturb):
         """Link ``i`` over one macro step from ``state`` in one compiled call (:func:`~.integrator.compiled_step._link_step`):
-        the samples ``e``, ``history[0..k-1]`` of its input (with ``perturb``, two more members whose
-        ``e`` is moved by the forward-difference steps), as :meth:`_integrate` does with
-        :meth:`corrector_samples` (and :meth:`_respond`'s batch).  Returns end states (B, n) and outputs (B, 4, 2)."""
+        the samples ``e``, ``history[0..k-1]`` of its input (:meth:`corrector_samples`; with ``perturb``, two
+        more members whose ``e`` is moved by the forward-difference steps ``fd_step * max(1, |e|)``).
+        Returns end states (B, n) and outputs (B, 4, 2)."""
         if history.shape[0] < self.k:
             raise ValueError(f"need {self.k} past samples of the coupling variables, got {history.shape[0]}")
         link = self.compiled_links[i]
@@ -198,31 +157,21 @@ class PendulumCosimulation(CosimulationProblem):
         there (algebraic gradients of a leading link, no integration).
         Returns ``(end_i, y_i, {j: y_i(e + h_j)})`` (``end_i`` the end state of the base member).
         """
-        sl = self.inputs[i]
-        if self.compiled:
-            col = self._cols[i]
-            if fixed is None:
-                ends, y = self._step_link(i, state, e, history, True)
-                end = ends[0]
-            else:
-                link = self.compiled_links[i]
-                end = fixed
-                y = _link_outputs(
-                    link.link_id, link.kind_id, link.par, self.H, _floats(fixed), _floats(e), col, True, self.fd_step
-                )
-            return end, y[0], {col: y[1], col + 1: y[2]}
-        base = self.corrector_samples(history, e)
-        n_e = self.n_coupling
-        h = self.fd_step * np.maximum(1.0, np.abs(e))
-        idx = np.arange(n_e)[sl]
-        batch = np.broadcast_to(base, (1 + idx.size,) + base.shape).copy()
-        batch[1 + np.arange(idx.size), 0, idx] += h[idx]
+        col = self._cols[i]
         if fixed is None:
-            ends, y = self._integrate(i, state, batch[:, :, sl])
+            ends, y = self._step_link(i, state, e, history, True)
             end = ends[0]
         else:
-            end, y = fixed, self._outputs_at(i, fixed, batch[:, 0, sl])
-        return end, y[0], dict(zip(idx.tolist(), y[1:]))
+            end, y = fixed, self._end_outputs(i, fixed, e, True)
+        return end, y[0], {col: y[1], col + 1: y[2]}
+
+    def _end_outputs(self, i, end, e, perturb):
+        """Outputs (B, 4, 2) of link ``i`` at its end state ``end`` for its input ``e`` held at ``T_N+1``
+        (:func:`~.integrator.compiled_step._link_outputs`; with ``perturb`` also for the two perturbed inputs)."""
+        link = self.compiled_links[i]
+        return _link_outputs(
+            link.link_id, link.kind_id, link.par, self.H, _floats(end), _floats(e), self._cols[i], perturb, self.fd_step
+        )
 
     def _linearise(self, state, history, e, fixed=(None, None), responses=None):
         """Outputs at ``e`` and ``d residuals / d e`` by forward differences.
@@ -250,26 +199,7 @@ class PendulumCosimulation(CosimulationProblem):
         jac = {key: ((val[1:] - val[0]) / h[:, None]).T for key, val in r.items()}
         return Y[0], jac
 
-    def _outputs_at(self, i, end, u1):
-        """Outputs of link ``i`` at its end state ``end`` for inputs ``u1`` (B, n_u) at ``T_N+1``."""
-        link = self.links[i]
-        Y = np.broadcast_to(end, (u1.shape[0], link.n))
-        f = link.rhs(u1[:, None, :], self.H)(self.H, Y)  # constant polynomial: u(tau) = u1
-        return link.outputs(Y, f, u1)
-
     # -- the problem interface ------------------------------------------------
-    def extrapolate(self, history):
-        # The base class's sum, formed as one BLAS dot product: equal up to rounding, and kept so
-        # that the pendulum's results stay bitwise those computed before the base class existed.
-        # Formed once per history (macro_step and each link's predictor ask for it).
-        if self._extrapolated[0] is not history:
-            if history.ndim == 2:  # tensordot's own dot product, (1, k+1) @ (k+1, n_e), without its reshaping
-                e_p = np.dot(self.w_pred[None, :], history).reshape(history.shape[1])
-            else:
-                e_p = np.tensordot(self.w_pred, history, axes=(0, 0))
-            self._extrapolated = (history, e_p)
-        return self._extrapolated[1]
-
     def predict(self, i, state, history, *, final=False):
         """Link ``i`` with the extrapolation polynomial, i.e. the interpolation polynomial through ``e_p``.
 
@@ -278,10 +208,7 @@ class PendulumCosimulation(CosimulationProblem):
         """
         e_p = self.extrapolate(history)
         if final:
-            if self.compiled:
-                end, y = self._step_link(i, state, e_p, history, False)
-            else:
-                end, y = self._integrate(i, state, self.corrector_samples(history, e_p)[None][:, :, self.inputs[i]])
+            end, y = self._step_link(i, state, e_p, history, False)
             return end[0], y[0]
         if self._cache is None or self._cache[0] is not state or self._cache[1] is not history:
             self._cache = (state, history, e_p, [None, None])
@@ -298,21 +225,12 @@ class PendulumCosimulation(CosimulationProblem):
         return self._linearise(state, history, e, fixed, responses)[1]
 
     def correct(self, i, state, history, e_new):
-        if self.compiled:
-            end, y = self._step_link(i, state, e_new, history, False)
-            return end[0], y[0]
-        samples = self.corrector_samples(history, e_new)[None]
-        end, y = self._integrate(i, state, samples[:, :, self.inputs[i]])
+        end, y = self._step_link(i, state, e_new, history, False)
         return end[0], y[0]
 
     def reevaluate(self, i, end, y, e_old, e_new):
         """Link ``i``'s outputs at its fixed end state with the input ``e_new`` at ``T_N+1`` (exact)."""
-        if self.compiled:
-            link = self.compiled_links[i]
-            return _link_outputs(
-                link.link_id, link.kind_id, link.par, self.H, _floats(end), _floats(e_new), self._cols[i], False, 0.0
-            )[0]
-        return self._outputs_at(i, end, np.asarray(e_new)[None, self.inputs[i]])[0]
+        return self._end_outputs(i, end, e_new, False)[0]
 
     def join(self, ends):
         return np.concatenate(ends)
@@ -355,7 +273,6 @@ class PendulumCosimulation(CosimulationProblem):
         self.w_pred = np.array([float(w) for w in lagrange_weights(pred, 1)], dtype=float)
         self.C_corr = np.array(lagrange_coefficients(corr), dtype=float)
         self._cache = None  # the predictor's responses (kept for the Jacobians) belong to the old nodes
-        self._extrapolated = (None, None)  # and so does e_p
 
 
 def _floats(a):

@@ -207,8 +207,7 @@ def run_cosimulation(
         """Reason for divergence of step ``n``, or None."""
         return divergence_reason(problem, state, history[0], y, **bounds)
 
-    if problem.compiled:
-        warm_up()  # the first run of a process would otherwise time numba's compilation or cache load
+    warm_up()  # the first run of a process would otherwise time numba's compilation or cache load
     t0 = time.perf_counter()
     c0 = time.process_time()
     with np.errstate(all="ignore"):
@@ -331,8 +330,7 @@ def run_adaptive(
     def store(state, history, y):
         rows.append(_series_row(params, state, y[0, 0] - y[1, 0], joint_force(dec, history[0], y)))
 
-    if problem.compiled:
-        warm_up()  # not timed: numba's compilation or cache load
+    warm_up()  # not timed: numba's compilation or cache load
     steps = adaptive_macro_steps(
         problem,
         _SingularSolveAsFailure(method),

@@ -179,7 +179,7 @@ def run_job_data(job: dict, *, command: str = "") -> tuple[RunResult, DatasetDic
     settings = {
         "H": job["H"],
         "t_end": job["t_end"],
-        "integrator": "Radau IIA (3 stages, order 5), icosim.problems.pendulum.integrator.radau, batched",
+        "integrator": "Radau IIA (3 stages, order 5), icosim.problems.pendulum.integrator.compiled, batched",
         "rtol": integ["rtol"],
         "atol": integ["atol"],
         "newton_tol": integ["newton_tol"],

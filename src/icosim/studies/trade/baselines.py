@@ -3,8 +3,8 @@ test model's errors over H for every configuration (for the orders).
 
 * :func:`monolithic_baselines` -- the monolithic pendulum (minimal
   coordinates, :class:`~.reference.Monolithic`) over tolerances with the
-  links' integrator (Radau IIA, :func:`icosim.problems.pendulum.integrator.radau.radau_batch`, one call
-  over ``[0, T]``) and with scipy's DOP853; error at the integrator's own
+  links' integrator (Radau IIA, :func:`icosim.problems.pendulum.integrator.systems.monolithic_radau`, one
+  call over ``[0, T]``) and with scipy's DOP853; error at the integrator's own
   accepted steps (as a co-simulation's at its macro nodes), CPU seconds the
   least of ``repeats`` runs after a warm-up.
 * :func:`linear_orders_dataset` -- :func:`.linear_study.linear_errors` for
@@ -20,7 +20,7 @@ import numpy as np
 
 from ...io.dataset import DatasetDict
 from ...io.netcdf import provenance_attrs
-from ...problems.pendulum.integrator.radau import radau_batch
+from ...problems.pendulum.integrator.systems import monolithic_radau
 from ...problems.pendulum.model import PendulumParameters
 from ...problems.pendulum.reference import Monolithic, reference_solution
 from .measures import angle_errors
@@ -68,7 +68,7 @@ def monolithic_run(params: PendulumParameters, integrator: str, tol: float, t_en
     mono = Monolithic(params)
     y0 = mono.initial_state()
     if integrator == "Radau":
-        r = radau_batch(mono.rhs, 0.0, t_end, y0, rtol=tol, atol=tol, record_steps=True)
+        r = monolithic_radau(params, 0.0, t_end, y0, rtol=tol, atol=tol, record_steps=True)
         Y = r.y_steps[:, 0, :]
         return dict(
             t=r.t_steps,
@@ -141,7 +141,7 @@ def monolithic_baselines_data(
     attrs = provenance_attrs(job, title="Double pendulum: monolithic baselines", command=command)
     attrs.update(
         t_end=float(t_end),
-        radau="icosim.problems.pendulum.integrator.radau.radau_batch (the links' integrator)",
+        radau="icosim.problems.pendulum.integrator.systems.monolithic_radau (the links' integrator)",
         dop853="scipy solve_ivp",
         reference_method=reference["method"],
         reference_rtol=float(reference["rtol"]),

@@ -1,31 +1,42 @@
-"""The links' integrator compiled with numba: a transcription of :mod:`icosim.problems.pendulum.integrator.radau` for the two links.
+"""The links' integrator: Radau IIA (3 stages, order 5) with step-size control, batched, compiled with numba.
 
-Why: every macro step integrates each link about twice (predictor batch with
-the sensitivities, corrector) with :func:`icosim.problems.pendulum.integrator.radau.radau_batch`, on a batch
-of ``B <= 5`` systems of size 2 (link 1) or 6 (link 2).  On arrays that small
-numpy's per-call overhead is nearly all of the cost (about 1.6 ms per macro
-step).  This module is the *same algorithm* written as loops over scalars and
-compiled (``numba.njit(cache=True)``):
+The pendulum's subsystems are integrated numerically, as in the paper (Sect. 4: an implicit
+Runge-Kutta method with ``rtol = atol = 1e-6``).  Every macro step integrates each link about twice
+(predictor batch with the sensitivities, corrector), on a batch of ``B <= 5`` systems of size 2
+(link 1) or 6 (link 2); scipy's ``solve_ivp`` (``method='Radau'``) costs about a millisecond per
+call in Python overhead alone, and numpy on arrays that small is nearly all per-call overhead too.
+So this module is scipy's Radau algorithm (Hairer & Wanner, *Solving ODEs II*, Sect. IV.8; scipy's
+``integrate/_ivp/radau.py``, its constants in :mod:`.tableau`) written as loops over scalars and
+compiled (``numba.njit(cache=True)``), for a **batch** of systems of the same size that share one
+step sequence:
 
-* the right-hand sides of the links (:mod:`icosim.problems.pendulum.integrator.compiled_links`);
-* ``radau_batch`` with ``_collocation``, ``_fd_jacobian`` and
-  ``_predict_factor`` line by line: the same constants (imported from
-  :mod:`icosim.problems.pendulum.integrator.radau`), simplified Newton in lockstep over the batch, error
-  norm (largest RMS over the members), step-size controller, ``jac0``
-  handling, counters and error conditions (a status code here, raised as
-  :class:`~icosim.problems.pendulum.integrator.radau.IntegrationError` with the same message by the Python
-  wrapper).
+* the collocation equations are solved by simplified Newton iterations in the transformed
+  variables (one real and one complex ``n x n`` system per batch member, inverted once per step
+  attempt), in lockstep until the slowest member has converged; the Newton tolerance
+  (``newton_tol``, relative to the error scale) is tighter than scipy's default, so the stage
+  equations are solved to near round-off;
+* the error estimate is scipy's (the embedded formula with the real eigenvalue), scaled by
+  ``atol + rtol * max(|y|, |y_new|)``; the error norm of a step is the largest RMS norm over the
+  members;
+* the first trial step is the whole interval (for a macro step usually accepted at once), then
+  scipy's predictive (Gustafsson) controller with the same safety factor and bounds ``[0.2, 10]``;
+  an error estimate of exactly 0 (a system at rest) grows the step by the largest factor, as scipy's
+  does; rejected Newton iterations halve the step after a fresh Jacobian; the Jacobian is by
+  forward differences, fresh every step, the first one optionally given (``jac0``);
+* failures are a status code here, raised as :class:`~.systems.IntegrationError` by the Python side
+  (:mod:`.systems`).
 
-Results agree with the numpy path up to round-off, not bitwise: the matrix
-inverses are an LU solve written out (:mod:`~icosim.problems.pendulum.integrator.compiled_algebra`,
-where numpy calls LAPACK ``gesv``), ``cos``/``sin`` may come from another library, and
-sums over a state's components run in index order here while numpy's einsum
-sums contiguous axes in a CPU-dependent order.  Sums over the three stages are
-in index order in both.  A Newton matrix that is not finite (``MU / h`` overflows for a
-step near underflow) gets an all-NaN inverse, where numpy's LAPACK returns one
-with some NaNs: either way the Newton iterations fail and the step is halved.
+Sharing the steps makes the end state a *smooth* function of each member's initial value and
+input: finite differences between members (the co-simulation's sensitivities) see the derivative
+of one fixed discrete map, not the noise of different step sequences.
 
-The co-simulation calls them through :mod:`.compiled_step` (one call per link integration).
+The systems are the links' right-hand sides (:mod:`icosim.problems.pendulum.integrator.compiled_links`),
+which the co-simulation integrates through :mod:`.compiled_step` (one call per link integration),
+and the whole pendulum in minimal coordinates (:func:`~.systems.monolithic_radau`, the monolithic
+baseline of the speed-accuracy study).  The matrix inverses are an LU solve written out
+(:mod:`~icosim.problems.pendulum.integrator.compiled_algebra`).  tests/reference_radau.py is the same
+algorithm in numpy, the reference the tests compare this module with (the same step sequence and
+counters, the numbers up to round-off).
 
 One specialisation per entry point (C-contiguous float64 arrays of fixed ndim,
 int64 ids), so a cold disk cache costs one compilation per process.
@@ -36,28 +47,18 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..links import Link1
 from .compiled_algebra import all_finite, inverse, matvec, nan_maximum
-from .compiled_links import FORCE, KINEMATIC, batch_rhs, link_parameters, member_rhs
+from .compiled_links import FORCE, batch_rhs, member_rhs
 from .kernel_cache import compile_record, drop_stale_cache, gc_paused
-from .radau import (
-    EPS,
-    MAX_FACTOR,
-    MIN_FACTOR,
-    MU_COMPLEX,
-    MU_REAL,
-    NEWTON_MAXITER,
-    TI,
-    C,
-    E,
-    IntegrationError,
-    RadauResult,
-    T,
-)
+from .tableau import EPS, MAX_FACTOR, MIN_FACTOR, MU_COMPLEX, MU_REAL, NEWTON_MAXITER, TI, C, E, T
 
-__all__ = ["CompiledLink", "warm_up", "compile_kernels", "link_failure"]
+__all__ = ["warm_up", "compile_kernels"]
+
 
 drop_stale_cache()  # before the kernels are defined: numba loads their cache as it defines them
+
+#: ``t_rec`` and ``y_rec`` of :func:`_radau` that record nothing.
+NOT_RECORDED = (np.empty(0), np.empty((0, 0, 0)))
 
 # status codes of the kernel (0: integrated)
 _STEP_TOO_SMALL, _ERROR_NOT_FINITE, _SINGULAR, _TOO_MANY_STEPS, _DERIVATIVE_NOT_FINITE = range(1, 6)
@@ -67,15 +68,15 @@ _MU_COMPLEX_RE, _MU_COMPLEX_IM = MU_COMPLEX.real, MU_COMPLEX.imag
 _TI_REAL, _TI_COMPLEX_RE, _TI_COMPLEX_IM = TI[0].copy(), TI[1].copy(), TI[2].copy()
 
 
-# -- icosim.problems.pendulum.integrator.radau, transcribed ---------------------------------------------------------
+# -- the integrator ------------------------------------------------------------------------------------
 @numba.njit(cache=True)
 def _fd_jacobian(link, kind, par, H, coef, t, y, f, J):
-    """``J[b] = d fun / d y`` at ``(t, y[b])`` by forward differences (radau._fd_jacobian)."""
+    """``J[b] = d fun / d y`` at ``(t, y[b])`` by forward differences, step ``sqrt(eps) max(1, |y_j|)``."""
     B, n = y.shape
     Y = np.empty(n)
     F = np.empty(n)
     sqrt_eps = np.sqrt(EPS)
-    for j in range(n):  # row j of radau's (n, B, n) batch perturbs component j
+    for j in range(n):  # perturb component j
         for b in range(B):
             h = sqrt_eps * max(1.0, abs(y[b, j]))
             for i in range(n):
@@ -88,7 +89,7 @@ def _fd_jacobian(link, kind, par, H, coef, t, y, f, J):
 
 @numba.njit(cache=True)
 def _predict_factor(h_abs, h_abs_old, error_norm, error_norm_old, have_old):
-    if error_norm == 0:  # at rest: radau._predict_factor's +inf, capped at MAX_FACTOR by the caller
+    if error_norm == 0:  # at rest: +inf, capped at MAX_FACTOR by the caller (as scipy's numpy float is)
         return np.inf
     if not have_old or error_norm_old == 0:
         multiplier = 1.0
@@ -99,7 +100,7 @@ def _predict_factor(h_abs, h_abs_old, error_norm, error_norm_old, have_old):
 
 @numba.njit(cache=True)
 def _rms_max(x, scale):
-    """Largest RMS norm over the batch of ``x / scale`` (radau._rms_max)."""
+    """Largest RMS norm over the batch of ``x / scale``."""
     B, n = x.shape
     largest = 0.0
     for b in range(B):
@@ -133,7 +134,7 @@ def _collocation(link, kind, par, H, coef, t, y, h, scale, tol, inv_real, inv_co
             largest_y = nan_maximum(largest_y, abs(y[b, j]) / scale[b, j])
     floor = 10 * EPS * largest_y
     dW_norm_old = rate = 0.0
-    have_old = have_rate = False  # radau's "is not None"
+    have_old = have_rate = False  # an old norm and a rate exist
     fev = 0
     for it in range(NEWTON_MAXITER):
         finite = True
@@ -183,10 +184,13 @@ def _collocation(link, kind, par, H, coef, t, y, h, scale, tol, inv_real, inv_co
 
 
 @numba.njit(cache=True)
-def _radau(link, kind, par, H, coef, t0, t1, y0, jac0, rtol, atol, newton_tol, max_steps):
-    """radau.radau_batch for a link (``first_step`` the whole interval, forward differences).
+def _radau(link, kind, par, H, coef, t0, t1, y0, jac0, rtol, atol, newton_tol, max_steps, t_rec, y_rec):
+    """Integrate system ``link`` (of ``kind``, constants ``par``, input ``coef`` (B, K, 2) in ``t / H``)
+    from ``t0`` to ``t1`` for the batch of initial values ``y0`` (B, n).
 
-    ``jac0`` (n, n) or empty (0, 0) for none.  Returns ``(y, f, counts, h_next, status, t, h_abs)``:
+    ``jac0`` (n, n) or empty (0, 0) for none.  ``t_rec`` (m,) and ``y_rec`` (m, B, n) with
+    ``m > max_steps`` receive the start and every accepted step (``record_steps``); with ``m = 0``
+    nothing is recorded.  Returns ``(y, f, counts, h_next, status, t, h_abs)``:
     ``counts = (n_steps, n_rejected, n_fev, n_jev)``; ``status`` 0 or an error code with the time
     and step size for its message.
     """
@@ -203,6 +207,9 @@ def _radau(link, kind, par, H, coef, t0, t1, y0, jac0, rtol, atol, newton_tol, m
     y = y0.copy()
     f = np.empty((B, n))
     batch_rhs(link, kind, par, H, t, y, coef, f)
+    record = t_rec.shape[0] > 0
+    if record:
+        _record(t_rec, y_rec, 0, t, y)
     if span == 0:
         counts[2] = n_fev
         return y, f, counts, h_abs, 0, t, h_abs
@@ -254,13 +261,13 @@ def _radau(link, kind, par, H, coef, t0, t1, y0, jac0, rtol, atol, newton_tol, m
                         M_real[i, j] = (mu_real if i == j else 0.0) - J[b, i, j]
                         M_complex[i, j] = (mu_complex if i == j else 0j) - J[b, i, j]
                 if not (all_finite(M_real.ravel()) and all_finite(M_complex.ravel())):
-                    # e.g. MU / h = inf for h near underflow: numpy's LAPACK returns an inverse with NaNs, here
-                    # all NaN; either way the Newton iterations fail and the step is halved to round-off level
+                    # e.g. MU / h = inf for h near underflow: an all-NaN inverse, so the Newton iterations fail
+                    # and the step is halved to round-off level
                     inv_real[b].fill(np.nan)
                     inv_complex[b].fill(np.nan)
                     continue
                 if not (inverse(M_real, inv_real[b]) and inverse(M_complex, inv_complex[b])):
-                    return y, f, counts, h_abs, _SINGULAR, t, h_abs  # np.linalg.LinAlgError in radau_batch
+                    return y, f, counts, h_abs, _SINGULAR, t, h_abs  # a zero pivot
             converged, n_iter, fev = _collocation(
                 link, kind, par, H, coef, t, y, h, scale, newton_tol, inv_real, inv_complex, Z
             )
@@ -318,10 +325,21 @@ def _radau(link, kind, par, H, coef, t0, t1, y0, jac0, rtol, atol, newton_tol, m
             return y, f, counts, h_abs, _TOO_MANY_STEPS, t, h_abs
         if not finite:
             return y, f, counts, h_abs, _DERIVATIVE_NOT_FINITE, t, h_abs
+        if record:
+            _record(t_rec, y_rec, n_steps, t, y)
         h_abs = h_abs * factor
         have_J = False  # a fresh Jacobian per step: cheap for these small systems
     counts[0], counts[1], counts[2], counts[3] = n_steps, n_rej, n_fev, n_jev
     return y, f, counts, h_abs, 0, t, h_abs
+
+
+@numba.njit(cache=True)
+def _record(t_rec, y_rec, i, t, y):
+    """Row ``i`` of the recorded steps: ``t`` and ``y`` (B, n)."""
+    t_rec[i] = t
+    for b in range(y.shape[0]):
+        for j in range(y.shape[1]):
+            y_rec[i, b, j] = y[b, j]
 
 
 @numba.njit(cache=True)
@@ -343,89 +361,9 @@ def warm_up() -> None:
     y, coef, par = np.zeros((1, 2)), np.zeros((1, 1, 2)), np.ones(4)
     with gc_paused():  # numba's compiler: no time in Python's collections
         _jacobian(1, FORCE, par, 1.0, coef, 0.0, y)
-        _radau(1, FORCE, par, 1.0, coef, 0.0, 0.0, y, np.empty((0, 0)), 1e-6, 1e-6, 1e-8, 1)
+        _radau(1, FORCE, par, 1.0, coef, 0.0, 0.0, y, np.empty((0, 0)), 1e-6, 1e-6, 1e-8, 1, *NOT_RECORDED)
 
 
 def compile_kernels() -> dict:
     """:func:`warm_up` and its record (:func:`~icosim.problems.pendulum.integrator.kernel_cache.compile_record`)."""
     return compile_record(warm_up, {"_jacobian": _jacobian, "_radau": _radau})
-
-
-def _float_array(x, ndim):
-    """A writable C-contiguous float64 copy: one numba specialisation for every caller."""
-    a = np.array(x, dtype=np.float64, order="C")
-    if a.ndim != ndim:
-        raise ValueError(f"expected {ndim} dimensions, got shape {a.shape}")
-    return a
-
-
-class CompiledLink:
-    """A link (:class:`~icosim.problems.pendulum.links.Link1` or ``Link2``) for the compiled kernels.
-
-    Its ids and parameter array stand for the closure ``link.rhs(coef, H)``:
-    ``coef`` (B, K, 2) are the monomial coefficients of the input in ``tau = t / H``.
-    """
-
-    def __init__(self, link):
-        self.link_id = 1 if isinstance(link, Link1) else 2
-        self.kind_id = FORCE if link.kind == "force" else KINEMATIC
-        self.n = link.n
-        self.par = link_parameters(link)
-
-    def fd_jacobian(self, coef, H: float, t: float, y) -> np.ndarray:
-        """``radau._fd_jacobian(fun, t, y, fun(t, y))`` for ``fun = link.rhs(coef, H)``: (B, n, n)."""
-        return _jacobian(
-            self.link_id, self.kind_id, self.par, float(H), _float_array(coef, 3), float(t), _float_array(y, 2)
-        )
-
-    def radau(
-        self,
-        coef,
-        H: float,
-        t0: float,
-        t1: float,
-        y0,
-        *,
-        rtol: float = 1e-6,
-        atol: float = 1e-6,
-        jac0=None,
-        newton_tol: float = 1e-8,
-        max_steps: int = 100000,
-    ) -> RadauResult:
-        """``radau.radau_batch(link.rhs(coef, H), t0, t1, y0, ...)`` compiled (``jac0`` an (n, n) matrix)."""
-        if not (np.isfinite(rtol) and np.isfinite(atol) and rtol > 0 and atol > 0):
-            raise ValueError(f"rtol and atol must be finite and > 0, got rtol={rtol!r}, atol={atol!r}")
-        jac0 = np.empty((0, 0)) if jac0 is None else _float_array(np.broadcast_to(jac0, (self.n, self.n)), 2)
-        y, f, counts, h_next, status, t, h_abs = _radau(
-            self.link_id,
-            self.kind_id,
-            self.par,
-            float(H),
-            _float_array(coef, 3),
-            float(t0),
-            float(t1),
-            _float_array(y0, 2),
-            jac0,
-            float(rtol),
-            float(atol),
-            float(newton_tol),
-            int(max_steps),
-        )
-        if status:
-            raise link_failure(status, t, h_abs, max_steps)
-        n_steps, n_rejected, n_fev, n_jev = counts.tolist()
-        return RadauResult(y, f, n_steps, n_rejected, n_fev, n_jev, float(h_next))
-
-
-def link_failure(status, t, h_abs, max_steps) -> IntegrationError:
-    """The exception radau_batch raises in the same situation."""
-    if status == _STEP_TOO_SMALL:
-        return IntegrationError(f"step size {h_abs:.3g} below round-off level at t = {t:.17g}")
-    if status == _ERROR_NOT_FINITE:
-        return IntegrationError(f"non-finite error estimate at t = {t:.17g}")
-    if status == _SINGULAR:  # np.linalg.LinAlgError's message in radau_batch
-        return IntegrationError(f"singular Newton matrix at t = {t:.17g}: Singular matrix")
-    if status == _TOO_MANY_STEPS:
-        return IntegrationError(f"more than {max_steps} steps")
-    assert status == _DERIVATIVE_NOT_FINITE, f"unknown status {status}"
-    return IntegrationError(f"non-finite derivative at t = {t:.17g}")

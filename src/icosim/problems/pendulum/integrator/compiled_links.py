@@ -6,6 +6,10 @@ for one batch member at a time; the input polynomial in ``tau = t / H`` is
 evaluated by Horner's scheme as ``links._poly``.  A link is an integer id
 (1 or 2), its kind :data:`FORCE` or :data:`KINEMATIC`, and its constants a
 float array (:func:`link_parameters`): no Python closures in compiled code.
+
+Id :data:`MONOLITHIC` (0) is the whole pendulum in minimal coordinates, the expressions of
+:meth:`icosim.problems.pendulum.reference.Monolithic.rhs` (constants :func:`monolithic_parameters`, no
+input): the monolithic baseline of the speed-accuracy study integrates it with the links' Radau IIA.
 """
 
 from __future__ import annotations
@@ -15,9 +19,19 @@ import numpy as np
 
 from ..links import Link1
 
-__all__ = ["FORCE", "KINEMATIC", "link_parameters", "batch_rhs", "member_rhs", "member_outputs"]
+__all__ = [
+    "FORCE",
+    "KINEMATIC",
+    "MONOLITHIC",
+    "link_parameters",
+    "monolithic_parameters",
+    "batch_rhs",
+    "member_rhs",
+    "member_outputs",
+]
 
 FORCE, KINEMATIC = 0, 1  # the link's kind (links.py: "force" or the kinematically driven one)
+MONOLITHIC = 0  # the id of the whole pendulum (links are 1 and 2)
 
 
 @numba.njit(cache=True)
@@ -36,8 +50,12 @@ def member_rhs(link, kind, par, H, t, y, coef_b, out):
     """``out = y'`` of link 1 or 2 for one member (state ``y``, input polynomial ``coef_b``).
 
     ``par``: link 1 ``(-m1 g l1/2, d l1^2/4, l1, J_O1)``, link 2 ``(l2/2, d, m2, g, J2, J2 + m2 l2^2/4)``
-    (:func:`link_parameters`); the expressions in the order of links.py.
+    (:func:`link_parameters`); the expressions in the order of links.py.  The whole pendulum
+    (``link`` :data:`MONOLITHIC`) ignores ``kind``, ``H``, ``t`` and ``coef_b``.
     """
+    if link == MONOLITHIC:
+        _monolithic_rhs(par, y, out)
+        return
     ux, uy = _input(coef_b, t / H)
     if link == 1:
         phi, w = y[0], y[1]
@@ -68,6 +86,39 @@ def member_rhs(link, kind, par, H, t, y, coef_b, out):
     out[3] = ux + l2h * (-alpha * s - ww * c)
     out[4] = uy + l2h * (alpha * c - ww * s)
     out[5] = alpha
+
+
+@numba.njit(cache=True)
+def _monolithic_rhs(par, y, out):
+    """``out = y'`` of the whole pendulum, state ``(phi1, phi2, w1, w2)``: ``Monolithic.rhs``'s Lagrange
+    equations in its order (``par`` from :func:`monolithic_parameters`)."""
+    l1, l2, m1, m2, g, d, J1, J2 = par[0], par[1], par[2], par[3], par[4], par[5], par[6], par[7]
+    w1, w2 = y[2], y[3]
+    e1x, e1y = np.cos(y[0]), np.sin(y[0])
+    e2x, e2y = np.cos(y[1]), np.sin(y[1])
+    n1x, n1y, n2x, n2y = -e1y, e1x, -e2y, e2x
+    v1x, v1y = l1 / 2 * w1 * n1x, l1 / 2 * w1 * n1y
+    v2x = l1 * w1 * n1x + l2 / 2 * w2 * n2x
+    v2y = l1 * w1 * n1y + l2 / 2 * w2 * n2y
+    c1x, c1y = -l1 / 2 * w1**2 * e1x, -l1 / 2 * w1**2 * e1y  # convective accelerations of S1, S2
+    c2x = -l1 * w1**2 * e1x - l2 / 2 * w2**2 * e2x
+    c2y = -l1 * w1**2 * e1y - l2 / 2 * w2**2 * e2y
+    # columns of the Jacobians of S1, S2 w.r.t. (phi1, phi2) (S1's second is 0)
+    a1x, a1y = l1 / 2 * n1x, l1 / 2 * n1y
+    a2x, a2y = l1 * n1x, l1 * n1y
+    b2x, b2y = l2 / 2 * n2x, l2 / 2 * n2y
+    F1x, F1y = -d * v1x, -m1 * g - d * v1y
+    F2x, F2y = -d * v2x, -m2 * g - d * v2y
+    M11 = m1 * (a1x * a1x + a1y * a1y) + m2 * (a2x * a2x + a2y * a2y) + J1
+    M12 = m2 * (a2x * b2x + a2y * b2y)
+    M22 = m2 * (b2x * b2x + b2y * b2y) + J2
+    G2x, G2y = F2x - m2 * c2x, F2y - m2 * c2y
+    Q1 = (a1x * (F1x - m1 * c1x) + a1y * (F1y - m1 * c1y)) + (a2x * G2x + a2y * G2y)
+    Q2 = b2x * G2x + b2y * G2y
+    det = M11 * M22 - M12 * M12
+    out[0], out[1] = w1, w2
+    out[2] = (M22 * Q1 - M12 * Q2) / det
+    out[3] = (M11 * Q2 - M12 * Q1) / det
 
 
 @numba.njit(cache=True)
@@ -121,3 +172,9 @@ def link_parameters(link) -> np.ndarray:
         return np.array([-p.m1 * p.g * p.l1 / 2, p.d * p.l1**2 / 4, p.l1, p.JO1])
     l2h = p.l2 / 2
     return np.array([l2h, p.d, p.m2, p.g, p.J2, p.J2 + p.m2 * l2h**2])
+
+
+def monolithic_parameters(p) -> np.ndarray:
+    """The constants of the whole pendulum's right-hand side (:data:`MONOLITHIC`) for
+    :class:`~icosim.problems.pendulum.model.PendulumParameters` ``p``."""
+    return np.array([p.l1, p.l2, p.m1, p.m2, p.g, p.d, p.J1, p.J2], dtype=float)

@@ -5,8 +5,7 @@ integration: the samples of the link's input (with the forward-difference member
 coefficients of its polynomial, the shared first-step Jacobian, :func:`~.compiled._radau` and the
 link's outputs (:func:`~.compiled_links.member_outputs`, the expressions of
 :mod:`icosim.problems.pendulum.links`), where the numpy calls around a call of the integrator cost several
-times the integration itself.  The sums are in numpy's order (einsum's and ``np.add.reduce``'s over
-three terms or fewer: index order), so the runs are bitwise those with the links' outputs in numpy.
+times the integration itself.
 
 The kernels inline those of :mod:`.compiled`: their disk cache is dropped when it, or a source it
 inlines, changes (:func:`~.kernel_cache.drop_stale_cache`).
@@ -89,7 +88,7 @@ def _link_step(
         stats[5] += 1
         stats[6] += 2
     y, f, counts, h_next, status, t, h_abs = _radau(
-        link, kind, par, H, coef, 0.0, H, y0, jac0, tol[0], tol[1], tol[2], max_steps
+        link, kind, par, H, coef, 0.0, H, y0, jac0, tol[0], tol[1], tol[2], max_steps, np.empty(0), np.empty((0, 0, 0))
     )
     out = np.empty((B, 4, 2))
     if status:

@@ -2,7 +2,7 @@
 
 * numba keys a cached kernel on the time stamp of the file that defines it only, so after an edit of
   a file the kernels inline (``compiled_links.py``, ``compiled_algebra.py``) or take constants from
-  (``radau.py``) it would load the kernels compiled from the old code.  :func:`drop_stale_cache`
+  (``tableau.py``) it would load the kernels compiled from the old code.  :func:`drop_stale_cache`
   keeps a digest of those files beside the cache (``compiled.sources``) and, when it differs, removes
   the cache files of ``compiled.*``; ``compiled`` calls it before it defines its kernels, and
   ``compiled_step`` likewise for its own (which inline ``compiled.py`` too).
@@ -29,7 +29,7 @@ __all__ = ["KERNEL_SOURCES", "drop_stale_cache", "gc_paused", "compile_record"]
 
 #: Sources compiled into the kernels of ``compiled.py`` besides itself, relative to its package
 #: (:mod:`icosim.problems.pendulum.integrator`).
-KERNEL_SOURCES = ("compiled_links.py", "compiled_algebra.py", "radau.py")
+KERNEL_SOURCES = ("compiled_links.py", "compiled_algebra.py", "tableau.py")
 
 
 def drop_stale_cache(module: str = "compiled", sources: tuple = KERNEL_SOURCES) -> bool:

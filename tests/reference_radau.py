@@ -1,15 +1,14 @@
-"""Radau IIA (3 stages, order 5) with step-size control, batched over initial values.
+"""The independent reference of the links' compiled integrator: Radau IIA in numpy, batched over initial values.
 
-The pendulum's subsystems are integrated numerically, as in the paper (Sect. 4:
-an implicit Runge-Kutta method with ``rtol = atol = 1e-6``).  Per macro step
-every subsystem is integrated for the predictor, once more per coupling
-variable for the finite-difference sensitivities, and for the corrector.
-:func:`scipy.integrate.solve_ivp` (``method='Radau'``) costs about a
-millisecond per call in Python overhead alone, which for tens of thousands of
-such calls is far too slow.  This module is the same method as scipy's
-``Radau`` (Hairer & Wanner, *Solving ODEs II*, Sect. IV.8; scipy's
-``integrate/_ivp/radau.py``), written for a **batch** of ``B`` systems of the
-same small size ``n`` that share one step sequence:
+The package integrates the links with :mod:`icosim.problems.pendulum.integrator.compiled` (numba).  This
+module is the same algorithm written with numpy arrays, and :class:`NumpyPendulum` is the
+co-simulation problem with its links integrated by it on their numpy right-hand sides
+(:class:`~icosim.problems.pendulum.links.Link1`, ``Link2``); tests compare the compiled integrator and whole
+runs against them (tests/test_pendulum_compiled.py) and them against scipy (tests/test_pendulum.py).
+
+The method is scipy's ``Radau`` (Hairer & Wanner, *Solving ODEs II*, Sect. IV.8; scipy's
+``integrate/_ivp/radau.py``; constants in :mod:`icosim.problems.pendulum.integrator.tableau`), written for a
+**batch** of ``B`` systems of the same small size ``n`` that share one step sequence:
 
 * the collocation equations are solved by simplified Newton iterations in the
   transformed variables (one real and one complex ``n x n`` system per batch
@@ -38,75 +37,28 @@ given.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-from ....errors import StepFailure
-
-__all__ = ["radau_batch", "RadauResult", "IntegrationError"]
-
-S6 = 6**0.5
-#: Collocation nodes of Radau IIA (order 5).
-C = np.array([(4 - S6) / 10, (4 + S6) / 10, 1.0])
-#: Weights of the embedded error estimate (scipy's ``E``).
-E = np.array([-13 - 7 * S6, -13 + 7 * S6, -1]) / 3
-#: Eigenvalues of the inverse Butcher matrix: one real, one complex pair.
-MU_REAL = 3 + 3 ** (2 / 3) - 3 ** (1 / 3)
-MU_COMPLEX = 3 + 0.5 * (3 ** (1 / 3) - 3 ** (2 / 3)) - 0.5j * (3 ** (5 / 6) + 3 ** (7 / 6))
-#: Transformation ``A = T diag(...) T^-1`` of the Butcher matrix (scipy's values).
-T = np.array(
-    [
-        [0.09443876248897524, -0.14125529502095421, 0.03002919410514742],
-        [0.25021312296533332, 0.20412935229379994, -0.38294211275726192],
-        [1, 1, 0],
-    ]
+from icosim.problems.pendulum.integrator.systems import IntegrationError, RadauResult
+from icosim.problems.pendulum.integrator.tableau import (
+    EPS,
+    MAX_FACTOR,
+    MIN_FACTOR,
+    MU_COMPLEX,
+    MU_REAL,
+    NEWTON_MAXITER,
+    TI,
+    C,
+    E,
+    T,
 )
-TI = np.array(
-    [
-        [4.17871859155190428, 0.32768282076106237, 0.52337644549944951],
-        [-4.17871859155190428, -0.32768282076106237, 0.47662355450055044],
-        [0.50287263494578682, -2.57192694985560522, 0.59603920482822492],
-    ]
-)
+from icosim.problems.pendulum.problem import PendulumCosimulation
+
+__all__ = ["radau_batch", "fd_jacobian", "NumpyPendulum"]
+
 TI_REAL = TI[0]
 TI_COMPLEX = TI[1] + 1j * TI[2]
-
-NEWTON_MAXITER = 8
-MIN_FACTOR = 0.2
-MAX_FACTOR = 10.0
-EPS = float(np.finfo(float).eps)
-
-
-class IntegrationError(StepFailure):
-    """The step size fell below round-off level, the solution stopped being finite or a
-    Newton matrix was singular.
-
-    A :class:`~icosim.errors.StepFailure`: a co-simulation run records it as
-    *failed*, not as diverged (a solver failure says nothing about stability).
-    """
-
-
-@dataclass
-class RadauResult:
-    """End of a batched integration.
-
-    ``y`` and ``f = fun(t1, y)`` have shape ``(B, n)``; ``n_steps`` accepted
-    and ``n_rejected`` rejected step attempts, ``n_fev`` batched right-hand
-    side evaluations, ``n_jev`` Jacobians.  With ``record_steps``, ``t_steps``
-    ``(n_steps + 1,)`` and ``y_steps`` ``(n_steps + 1, B, n)`` hold the start
-    and every accepted step.
-    """
-
-    y: np.ndarray
-    f: np.ndarray
-    n_steps: int
-    n_rejected: int
-    n_fev: int
-    n_jev: int
-    h_next: float
-    t_steps: np.ndarray | None = None
-    y_steps: np.ndarray | None = None
 
 
 def _rms_max(x):
@@ -114,7 +66,7 @@ def _rms_max(x):
     return float(np.sqrt(np.max(np.einsum("bn,bn->b", x, x)) / x.shape[-1]))
 
 
-def _fd_jacobian(fun, t, y, f):
+def fd_jacobian(fun, t, y, f):
     """``J[b] = d fun / d y`` at ``(t, y[b])`` by forward differences, shape ``(B, n, n)``."""
     n = y.shape[-1]
     h = np.sqrt(EPS) * np.maximum(1.0, np.abs(y))  # (B, n)
@@ -200,7 +152,7 @@ def radau_batch(
     if span == 0:
         return RadauResult(y, f, 0, 0, n_fev, 0, h_abs, *_recorded(steps))
     jacobian = (
-        (lambda tt, yy, ff: jac(tt, yy)) if jac is not None else (lambda tt, yy, ff: _fd_jacobian(fun, tt, yy, ff))
+        (lambda tt, yy, ff: jac(tt, yy)) if jac is not None else (lambda tt, yy, ff: fd_jacobian(fun, tt, yy, ff))
     )
     J = None if jac0 is None else np.broadcast_to(jac0, (B, n, n))
     while direction * (t1 - t) > 0:
@@ -311,3 +263,70 @@ def _collocation(fun, t, y, h, scale, tol, inv_real, inv_complex):
             return False, it + 1, Z, fev
         dW_norm_old = dW_norm
     return False, NEWTON_MAXITER, Z, fev
+
+
+# -- the co-simulation problem on this integrator ---------------------------------------------------
+class NumpyPendulum(PendulumCosimulation):
+    """:class:`~icosim.problems.pendulum.problem.PendulumCosimulation` with every link integration done by
+    :func:`radau_batch` on the link's numpy closure ``link.rhs(coef, H)`` and its outputs by
+    ``link.outputs``: what the compiled kernels (:mod:`icosim.problems.pendulum.integrator.compiled_step`)
+    compute, by another route.  The counters (``stats``, ``jacobian_stats``) count the same events."""
+
+    def _step_link(self, i, state, e, history, perturb):
+        """The samples ``e``, ``history[0..k-1]`` of link ``i``'s input (with ``perturb``, two more members
+        whose ``e`` is moved by the forward-difference steps), integrated in one batch."""
+        if history.shape[0] < self.k:
+            raise ValueError(f"need {self.k} past samples of the coupling variables, got {history.shape[0]}")
+        sl = self.inputs[i]
+        base = self.corrector_samples(history, e)
+        if perturb:
+            h = self.fd_step * np.maximum(1.0, np.abs(e))
+            idx = np.arange(self.n_coupling)[sl]
+            batch = np.broadcast_to(base, (1 + idx.size,) + base.shape).copy()
+            batch[1 + np.arange(idx.size), 0, idx] += h[idx]
+        else:
+            batch = base[None]
+        return self._integrate(i, state, batch[:, :, sl])
+
+    def _integrate(self, i, state, samples):
+        """Integrate link ``i`` over one macro step for a batch of input samples (B, k+1, n_u) at the
+        corrector nodes ``1, 0, ..., -k+1``.  Returns end states (B, n) and outputs (B, 4, 2)."""
+        link = self.links[i]
+        coef = np.einsum("mj,bju->bmu", self.C_corr, samples)
+        y0 = np.broadcast_to(self._split(state)[i], (samples.shape[0], link.n))
+        fun = link.rhs(coef, self.H)
+        # The Newton matrix of the first Radau step is shared by all integrations
+        # of this link from this state (predictor, sensitivities, corrector).
+        counts = self._counts
+        if self._jac0[i] is not state:
+            self._jac0[i] = state
+            self._jac0_matrix[i][...] = fd_jacobian(fun, 0.0, y0[:1], fun(0.0, y0[:1]))[0]
+            counts[5] += 1
+            counts[6] += 2
+        r = radau_batch(
+            fun, 0.0, self.H, y0, jac0=self._jac0_matrix[i], rtol=self.rtol, atol=self.atol, newton_tol=self.newton_tol
+        )
+        self.work.subsystem_integrations += 1
+        counts[0] += 1
+        counts[1] += r.n_steps
+        counts[2] += r.n_rejected
+        counts[3] += r.n_fev
+        counts[4] += r.n_steps > 1 or r.n_rejected > 0
+        counts[5] += r.n_jev
+        u1 = np.add.reduce(coef, axis=1)  # input at tau = 1
+        return r.y, link.outputs(r.y, r.f, u1)
+
+    def _end_outputs(self, i, end, e, perturb):
+        """Outputs of link ``i`` at its end state ``end`` for the input ``e`` held at ``T_N+1`` (with
+        ``perturb`` also for the two perturbed inputs)."""
+        sl = self.inputs[i]
+        u1 = np.array(e, dtype=float)[None, sl]
+        if perturb:
+            h = self.fd_step * np.maximum(1.0, np.abs(u1[0]))
+            u1 = np.repeat(u1, 3, axis=0)
+            u1[1, 0] += h[0]
+            u1[2, 1] += h[1]
+        link = self.links[i]
+        Y = np.broadcast_to(end, (u1.shape[0], link.n))
+        f = link.rhs(u1[:, None, :], self.H)(self.H, Y)  # constant polynomial: u(tau) = u1
+        return link.outputs(Y, f, u1)
