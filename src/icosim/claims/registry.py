@@ -5,14 +5,14 @@ them all (as scipy's ``solve_ivp`` keeps its ``METHODS`` table), so the generic
 machinery in :mod:`icosim.verdicts` needs to import no part and no part needs to
 register itself.
 
-=========================================  ==========================================================
-module                                     check kinds
-=========================================  ==========================================================
-:mod:`icosim.studies.stability.checks`             ``stable_fraction``, ``compare``, ``trend``, ``pointwise``
-:mod:`icosim.studies.convergence.checks`           ``convergence_order``
-:mod:`icosim.studies.pendulum.checks`  ``pendulum_stability``
-:mod:`icosim.studies.fmi.checks`                   ``fmi_bound``, ``fmi_orders``
-=========================================  ==========================================================
+===========================================  ==========================================================
+module                                       check kinds
+===========================================  ==========================================================
+:mod:`icosim.studies.stability.checks`       ``stable_fraction``, ``compare``, ``trend``, ``pointwise``
+:mod:`icosim.studies.convergence.checks`     ``convergence_order``
+:mod:`icosim.studies.pendulum.checks`        ``pendulum_stability``
+:mod:`icosim.studies.fmi.checks`             ``fmi_bound``, ``fmi_orders``
+===========================================  ==========================================================
 
 >>> sorted(CHECKS)
 ['compare', 'convergence_order', 'fmi_bound', 'fmi_orders', 'pendulum_stability', 'pointwise', 'stable_fraction', 'trend']

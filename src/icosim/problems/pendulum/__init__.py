@@ -13,7 +13,7 @@ module                      holds
 :mod:`.links`               the two links as subsystems (force or kinematically driven)
 :mod:`.problem`             :class:`~.problem.PendulumCosimulation`, the problem
 :mod:`.manifold`            the mass-weighted projection onto the constraint (step 4)
-:mod:`.integrator`          the links' integrator: batched Radau IIA, compiled with numba
+:mod:`.integrator`          the links' integrator: Radau IIA compiled with numba
 :mod:`.reference`           the monolithic model, reference solution, consistent history
 :mod:`.linearised`          the pendulum's point in the linear test model (Sect. 3)
 :mod:`.runs`                a whole run (fixed or adaptive macro steps) up to the end
@@ -22,14 +22,8 @@ module                      holds
 :mod:`.config`              a ``pendulum:`` configuration, checked before any job
 ==========================  =====================================================
 
-Two studies rest on these modules and import nothing of each other:
-
-==========================  =====================================================
-package                     holds
-==========================  =====================================================
-:mod:`.replication`         Figs. 6-8: run datasets, summary, ``pendulum_stability`` claims
-:mod:`.trade`               the speed-accuracy trade (beyond the paper)
-==========================  =====================================================
+Two studies rest on these modules and import nothing of each other: the replication of Figs. 6-8
+(:mod:`icosim.studies.pendulum`) and the speed-accuracy trade (:mod:`icosim.studies.trade`).
 
 The package imports none of its modules: import the one you need, e.g.
 ``from icosim.problems.pendulum.runs import run_cosimulation``.
