@@ -112,6 +112,7 @@ class CosimulationProblem:
         #: Lagrange weights of the extrapolation (Eq. 9) at ``T_N+1``, in the backend's arithmetic
         self.w_pred = np.array([be.const(w) for w in weights_at(self.pred_nodes, 1)], dtype=be.dtype)
         self.work = Work()
+        self._extrapolated = (None, None, None)  # (history, weights, e_p) of the last extrapolation
 
     @classmethod
     def check_decomposition(cls, decomposition):
@@ -124,8 +125,14 @@ class CosimulationProblem:
         return self.decomposition.n_coupling
 
     def extrapolate(self, history):
-        """Predicted coupling variables ``e_p`` at ``T_N+1`` (Eq. 9/35/59)."""
-        return sum(self.w_pred[j] * history[..., j, :] for j in range(self.k + 1))
+        """Predicted coupling variables ``e_p`` at ``T_N+1`` (Eq. 9/35/59).  A macro step asks for it once and
+        every predictor again: the last one is kept (for the same history and weights)."""
+        last_history, last_weights, e_p = self._extrapolated
+        if last_history is history and last_weights is self.w_pred:
+            return e_p
+        e_p = sum(self.w_pred[j] * history[..., j, :] for j in range(self.k + 1))
+        self._extrapolated = (history, self.w_pred, e_p)
+        return e_p
 
     def corrector_samples(self, history, e_new):
         """Samples of the interpolation polynomial (Eq. 11): ``e_new`` at ``T_N+1``, then ``e_N ... e_N-k+1``."""
