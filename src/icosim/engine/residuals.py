@@ -18,17 +18,22 @@ the engine's dimensionless time scales them (``scale``: ``g``, ``H g'``, ``H^2 g
 
 from __future__ import annotations
 
-__all__ = ["coupling_conditions"]
+__all__ = ["coupling_conditions", "differences"]
 
 #: The rows of a subsystem's outputs.
 POSITION, VELOCITY, ACCELERATION, FORCE = range(4)
+
+
+def differences(y):
+    """The outputs of the first subsystem minus the second's: ``y[..., 0, :, :] - y[..., 1, :, :]``."""
+    return y[..., 0, :, :] - y[..., 1, :, :]
 
 
 def coupling_conditions(y, decomposition, *, scale=None) -> dict:
     """``{pos, vel, acc, force}`` from the outputs ``y[..., i, q, c]`` (subsystem ``i`` = 0, 1; output ``q`` as
     :data:`POSITION` ...; component ``c`` of the joint), first minus second.  Levels a decomposition lacks are
     empty (no rows); ``scale`` multiplies the position, velocity and acceleration levels."""
-    d = y[..., 0, :, :] - y[..., 1, :, :]
+    d = differences(y)
     empty = d[..., 0, :0]
     out = {"pos": empty, "vel": empty, "acc": empty}
     if decomposition.has_constraint_condition:

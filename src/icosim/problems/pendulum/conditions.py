@@ -1,8 +1,9 @@
 """The double pendulum's coupling conditions, by the kinds of its two links (docs/pendulum.md).
 
 The outputs of the two links at ``T_N+1`` are the joint point's position,
-velocity and acceleration and the joint force each link sees; ``d`` is link 1's
-minus link 2's.  Every residual here is *link 1 minus link 2*: the joint
+velocity and acceleration and the joint force each link sees.  Every residual
+here is *link 1 minus link 2*, as the engine forms them
+(:mod:`icosim.engine.residuals`; ff and fd are the engine's conditions as they are): the joint
 constraint ``g_c = P_1 - P_2`` on each level and the force balance ``f_1 - f_2``
 (the paper writes Eq. 57c the other way round, ``mu_2 - mu_1 = 0``: the same
 condition; the sign of a residual and of its Jacobian rows together does not
@@ -24,20 +25,21 @@ from __future__ import annotations
 import numpy as np
 
 from ...engine.decompositions import DECOMPOSITIONS, get_decomposition
+from ...engine.residuals import coupling_conditions, differences
 from ...errors import ParameterError
 
 __all__ = ["CONDITIONS", "check_decomposition"]
 
 
-def _both_force(y, d):  # ff: the joint constraint on each level, no force balance
-    return {"pos": d[..., 0, :], "vel": d[..., 1, :], "acc": d[..., 2, :], "force": d[..., 3, :0]}
+def _engine_conditions(kinds):
+    """ff (the joint constraint on each level) and fd (the constraint, and link 2's multiplier balancing
+    ``lambda_c``): the engine's conditions as they are (:func:`icosim.engine.residuals.coupling_conditions`)."""
+    decomposition = next(d for d in DECOMPOSITIONS.values() if d.kinds == kinds)
+    return lambda y: coupling_conditions(y, decomposition)
 
 
-def _force_kinematic(y, d):  # fd: the constraint, and link 2's multiplier balancing lambda_c: lambda_c - mu_2
-    return {"pos": d[..., 0, :], "vel": d[..., 1, :], "acc": d[..., 2, :], "force": d[..., 3, :]}
-
-
-def _both_kinematic(y, d):  # dd: link 1 moves its joint only along n1; the normal component balances
+def _both_kinematic(y):  # dd: link 1 moves its joint only along n1; the normal component balances
+    d = differences(y)
     P1x, P1y = y[..., 0, 0, 0], y[..., 0, 0, 1]
     length = np.sqrt(P1x * P1x + P1y * P1y)  # np.linalg.norm's sum of squares, in its order
     e1x, e1y = P1x / length, P1y / length
@@ -54,10 +56,10 @@ def _both_kinematic(y, d):  # dd: link 1 moves its joint only along n1; the norm
     }
 
 
-#: ``residuals(y, d) -> {pos, vel, acc, force}`` by the kinds of (link 1, link 2).
+#: ``residuals(y) -> {pos, vel, acc, force}`` by the kinds of (link 1, link 2).
 CONDITIONS = {
-    ("force", "force"): _both_force,
-    ("force", "kinematic"): _force_kinematic,
+    ("force", "force"): _engine_conditions(("force", "force")),
+    ("force", "kinematic"): _engine_conditions(("force", "kinematic")),
     ("kinematic", "kinematic"): _both_kinematic,
 }
 

@@ -239,10 +239,9 @@ class PendulumCosimulation(CosimulationProblem):
         return np.array(ys)
 
     def residuals(self, y):
-        """Joint constraint on each level (2 rows; both links kinematic: its normal component) and force balance
-        (:data:`~icosim.problems.pendulum.conditions.CONDITIONS`, by the kinds of the two links)."""
-        d = y[..., 0, :, :] - y[..., 1, :, :]  # link 1 minus link 2: g_c, g_c', g_c'', f1 - f2
-        return CONDITIONS[self.decomposition.kinds](y, d)
+        """Joint constraint on each level (2 rows; both links kinematic: its normal component) and force balance,
+        link 1 minus link 2 (:data:`~icosim.problems.pendulum.conditions.CONDITIONS`, by the kinds of the links)."""
+        return CONDITIONS[self.decomposition.kinds](y)
 
     def project(self, state):
         return project_state(self.params, state)
