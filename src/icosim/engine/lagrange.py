@@ -98,7 +98,7 @@ def weights_at(nodes: tuple[int, ...], tau) -> tuple[Fraction, ...]:
 @cache
 def _weights_at(nodes: tuple[int, ...], tau: Fraction) -> tuple[Fraction, ...]:
     C = monomial_coefficients(nodes)
-    return tuple(sum(C[m][j] * tau**m for m in range(len(nodes))) for j in range(len(nodes)))
+    return tuple(sum((C[m][j] * tau**m for m in range(len(nodes))), Fraction(0)) for j in range(len(nodes)))
 
 
 # -- variable step sizes: arbitrary nodes -------------------------------------------------

@@ -97,6 +97,11 @@ def adaptive_macro_steps(
     """
     k = problem.k
     past = [float(H0)] * k
+    times: list[float]
+    steps: list[float]
+    estimates: list[float]
+    extras: list[float]
+    rejected_H: list[float]
     times, steps, estimates, extras, rejected_H = [0.0], [], [], [], []
     t, H, err_prev, after_reject = 0.0, float(H0), None, False
     status, reason = "stable", ""

@@ -85,7 +85,7 @@ def engine_method(method: CouplingMethod, H) -> CouplingMethod:
 
 def parameters() -> dict[str, Parameter]:
     """Every registered parameter by name (first definition wins), in registry order."""
-    out = {}
+    out: dict[str, Parameter] = {}
     for spec in METHODS.values():
         for p in spec.parameters:
             out.setdefault(p.name, p)
