@@ -89,7 +89,7 @@ class CouplingMethod:
             r = _conditions(levels, residuals, axis=-1, const=backend.const)
             J = _conditions(levels, jacobians, axis=-2, const=backend.const)
             de = solve_small(J, -r)
-            term = de if weight == 1 else backend.const(weight) * de
+            term: np.ndarray = de if weight == 1 else backend.const(weight) * de
             total = term if total is None else total + term
         return e_pred + total
 
