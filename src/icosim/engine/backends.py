@@ -16,8 +16,10 @@ backends need nothing).
 from __future__ import annotations
 
 import math
-from contextlib import contextmanager, nullcontext
+from collections.abc import Callable, Iterator
+from contextlib import AbstractContextManager, contextmanager, nullcontext
 from fractions import Fraction
+from typing import Any, TypeAlias
 
 import numpy as np
 
@@ -37,26 +39,26 @@ class Float64:
     dtype = np.float64
     eps = float(np.finfo(float).eps)
 
-    def context(self):
+    def context(self) -> AbstractContextManager[Float64]:
         return nullcontext(self)
 
-    def asarray(self, x):
+    def asarray(self, x: Any) -> np.ndarray:
         return np.asarray(x, dtype=float)
 
-    def const(self, q):
+    def const(self, q: float | Fraction) -> float:
         """A constant (int, Fraction, float) in this arithmetic."""
         return float(q)
 
-    def expm(self, M, decay=0.0):
+    def expm(self, M: np.ndarray, decay: float = 0.0) -> np.ndarray:
         # scipy's expm accepts stacks (..., n, n): one call for a whole grid.
         # ``decay`` is ignored: float64 cannot add guard digits (the precision
         # policy detects the points where that matters).
         return _expm_float64(np.ascontiguousarray(M, dtype=float))
 
-    def eigvals(self, M):
+    def eigvals(self, M: np.ndarray) -> np.ndarray:
         return np.linalg.eigvals(M)
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return "Float64()"
 
 
@@ -68,7 +70,7 @@ _EXPM_CACHE: dict = {}
 _EXPM_CACHE_SIZE = 64
 
 
-def _expm_float64(M):
+def _expm_float64(M: np.ndarray) -> np.ndarray:
     import hashlib
 
     import scipy.linalg  # here, not at the top: jobs that never form expm start faster
@@ -94,7 +96,7 @@ class Multiprecision:
     #: :meth:`expm` adds guard digits for the decay of a damped subsystem
     uses_decay = True
 
-    def __init__(self, digits: int = 128):
+    def __init__(self, digits: int = 128) -> None:
         self.digits = check_digits(digits)  # 16 .. icosim.engine.bounds.MAX_DIGITS
         import mpmath  # here, not at the top: float64-only jobs start faster
 
@@ -102,10 +104,10 @@ class Multiprecision:
         self.ctx.dps = self.digits
         self.eps = self.ctx.eps
 
-    def context(self):
+    def context(self) -> AbstractContextManager[Multiprecision]:
         return nullcontext(self)  # a private MPContext: nothing global to set
 
-    def _mpf(self, v):
+    def _mpf(self, v: Any) -> Any:
         """Exact for int, float, Fraction and mpf (then rounded to ``digits``); a decimal string is read
         at the working precision (correctly rounded), so ``"0.3"`` means 3/10."""
         if isinstance(v, np.ndarray | np.generic):
@@ -116,17 +118,17 @@ class Multiprecision:
             return self.ctx.mpc(v)
         return self.ctx.mpf(v)
 
-    def asarray(self, x):
+    def asarray(self, x: Any) -> np.ndarray:
         a = np.asarray(x, dtype=object)
         out = np.empty(a.shape, dtype=object)
         for idx in np.ndindex(a.shape):
             out[idx] = self._mpf(a[idx])
         return out
 
-    def const(self, q):
+    def const(self, q: Any) -> Any:
         return self._mpf(q)
 
-    def _each_matrix(self, M, fn, out_shape):
+    def _each_matrix(self, M: Any, fn: Callable[[Any], np.ndarray], out_shape: tuple[int, ...]) -> np.ndarray:
         M = np.asarray(M, dtype=object)
         batch = M.shape[:-2]
         out = np.empty(batch + out_shape, dtype=object)
@@ -134,7 +136,7 @@ class Multiprecision:
             out[idx] = fn(self.ctx.matrix(M[idx].tolist()))
         return out
 
-    def expm(self, M, decay=0.0):
+    def expm(self, M: Any, decay: float = 0.0) -> np.ndarray:
         """Matrix exponential with ``digits`` significant digits in *every* entry.
 
         Scaling and squaring is accurate relative to the norm of the result,
@@ -145,22 +147,22 @@ class Multiprecision:
         n = np.shape(M)[-1]
         guard = guard_digits(decay)  # PrecisionCapError beyond icosim.engine.bounds.MAX_GUARD_DIGITS
 
-        def one(m):
+        def one(m: Any) -> np.ndarray:
             with self.ctx.extradps(guard):
                 e = self.ctx.expm(m)
             return np.array([[+v for v in row] for row in e.tolist()], dtype=object)
 
         return self._each_matrix(M, one, (n, n))
 
-    def eigvals(self, M):
+    def eigvals(self, M: Any) -> np.ndarray:
         n = np.shape(M)[-1]
 
-        def one(m):
+        def one(m: Any) -> np.ndarray:
             return np.array(self.ctx.eig(m, left=False, right=False), dtype=object)
 
         return self._each_matrix(M, one, (n,))
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return f"Multiprecision(digits={self.digits})"
 
 
@@ -185,7 +187,7 @@ class Ball:
     name = "ball"
     dtype = object
 
-    def __init__(self, bits: int = 128):
+    def __init__(self, bits: int = 128) -> None:
         if isinstance(bits, bool) or int(bits) != bits or bits < 53:
             raise ValueError(f"bits must be an integer >= 53, got {bits!r}")
         import flint
@@ -195,7 +197,7 @@ class Ball:
         self.digits = int(self.bits * math.log10(2))
 
     @contextmanager
-    def context(self):
+    def context(self) -> Iterator[Ball]:
         """Set Arb's working precision to ``bits`` for the arithmetic inside."""
         ctx = self._flint.ctx
         old = ctx.prec
@@ -205,7 +207,7 @@ class Ball:
         finally:
             ctx.prec = old
 
-    def const(self, q):
+    def const(self, q: Any) -> Any:
         """``q`` as a ball: exact for int, float, Fraction and mpf; a decimal string is enclosed."""
         arb = self._flint.arb
         if isinstance(q, arb):
@@ -225,14 +227,14 @@ class Ball:
             return arb(self._flint.fmpz(int(man))) * arb(2) ** int(exp)
         raise TypeError(f"cannot make a ball of {type(q).__name__}")
 
-    def asarray(self, x):
+    def asarray(self, x: Any) -> np.ndarray:
         a = np.asarray(x, dtype=object)
         out = np.empty(a.shape, dtype=object)
         for idx in np.ndindex(a.shape):
             out[idx] = self.const(a[idx])
         return out
 
-    def expm(self, M, decay=0.0, keys=None):
+    def expm(self, M: Any, decay: float = 0.0, keys: np.ndarray | None = None) -> np.ndarray:
         """Matrix exponential with a rigorous error bound (Arb's ``arb_mat_exp``).
 
         ``decay`` is not needed: a lost digit widens the balls, it is never hidden.  ``keys`` (optional, an
@@ -257,20 +259,25 @@ class Ball:
             out[idx] = E
         return out
 
-    def identity(self, x):
+    def identity(self, x: Any) -> tuple[Any, Any] | None:
         """A hashable value that determines the ball ``x`` exactly (midpoint and radius), or None (not finite)."""
         try:
             return (x.mid().man_exp(), x.rad().man_exp())
         except Exception:  # noqa: BLE001 -- an infinite or NaN ball has no exact mantissa: not cached
             return None
 
-    def mid(self, x):
+    def mid(self, x: Any) -> np.ndarray:
         """Midpoints as float64 (the ball's centre, rounded to nearest)."""
         return np.vectorize(lambda v: float(v.mid()), otypes=[float])(np.asarray(x, dtype=object))
 
-    def rad(self, x):
+    def rad(self, x: Any) -> np.ndarray:
         """Radii as float64, rounded up."""
         return np.vectorize(lambda v: float(v.rad()) * (1 + 2**-52), otypes=[float])(np.asarray(x, dtype=object))
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return f"Ball(bits={self.bits})"
+
+
+#: An arithmetic of the engine (for type checkers): what a problem computes in and the coupling methods
+#: convert their exact constants with (``const``).
+Backend: TypeAlias = Float64 | Multiprecision | Ball

@@ -25,6 +25,9 @@ import contextlib
 import math
 import signal
 import threading
+from collections.abc import Iterator
+from types import FrameType
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -59,7 +62,7 @@ MAX_BITS_LIMIT = 8192
 MAX_SECONDS = 86400.0
 
 
-def check_k(k, name: str = "k") -> int:
+def check_k(k: Any, name: str = "k") -> int:
     """``k`` as an int in ``0 .. MAX_K``, or a :class:`ParameterError` naming ``name`` and the limit."""
     try:
         integral = not isinstance(k, bool) and int(k) == k
@@ -73,14 +76,14 @@ def check_k(k, name: str = "k") -> int:
     return int(k)
 
 
-def check_digits(digits, name: str = "digits", smallest: int = 16) -> int:
+def check_digits(digits: Any, name: str = "digits", smallest: int = 16) -> int:
     """``digits`` as an int in ``smallest .. MAX_DIGITS``, or a :class:`ParameterError` naming ``name``."""
     if isinstance(digits, bool) or not isinstance(digits, (int, np.integer)) or not smallest <= digits <= MAX_DIGITS:
         raise ParameterError(f"{name} must be an integer in {smallest}..{MAX_DIGITS} (icosim's limit), got {digits!r}")
     return int(digits)
 
 
-def check_finite(name: str, value, source: str = "") -> None:
+def check_finite(name: str, value: Any, source: str = "") -> None:
     """A derived quantity must be a finite float64 (so it is representable at every precision the engine uses)."""
     with np.errstate(over="ignore", invalid="ignore"):
         try:
@@ -104,7 +107,7 @@ def guard_digits(decay: float) -> int:
 
 
 @contextlib.contextmanager
-def time_budget(seconds: float | None):
+def time_budget(seconds: float | None) -> Iterator[None]:
     """Raise :class:`PointTimeout` in the block after ``seconds`` of wall time (None or 0: no budget).
 
     Uses ``SIGALRM``, so it works in the main thread only (the command line and the workflow's jobs); elsewhere
@@ -114,7 +117,7 @@ def time_budget(seconds: float | None):
         yield
         return
 
-    def expired(signum, frame):
+    def expired(signum: int, frame: FrameType | None) -> NoReturn:
         raise PointTimeout(f"timeout: more than {seconds:g} s")
 
     if signal.getitimer(signal.ITIMER_REAL)[0]:  # an enclosing budget is running: it stays the only one
@@ -138,7 +141,7 @@ _DERIVED = (
 )
 
 
-def check_derived(model) -> None:
+def check_derived(model: Any) -> None:
     """The subsystem coefficients of one :class:`~icosim.problems.linear.model.TestModel` point must be finite in float64.
 
     Raises a :class:`ParameterError` that starts with the input responsible (the largest one the

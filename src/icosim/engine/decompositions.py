@@ -66,7 +66,7 @@ class Decomposition:
     variables: tuple[str, ...]  # names of the coupling variables e
     long_name: str
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if len(self.kinds) != 2 or not set(self.kinds) <= set(KINDS):
             raise ValueError(f"decomposition {self.name}: kinds must be two of {KINDS}, got {self.kinds}")
         if len(self.inputs) != 2 or not all(0 <= j < len(self.variables) for j in self.inputs):
@@ -138,7 +138,7 @@ NEEDS_CONSTRAINT_CONDITION = (
 )
 
 
-def get_decomposition(name) -> Decomposition:
+def get_decomposition(name: str | Decomposition) -> Decomposition:
     """The :class:`Decomposition` called ``name`` (a Decomposition is returned as it is)."""
     if isinstance(name, Decomposition):
         return name

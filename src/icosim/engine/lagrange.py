@@ -35,8 +35,10 @@ True
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
 from fractions import Fraction
 from functools import cache
+from typing import Any
 
 __all__ = [
     "predictor_nodes",
@@ -90,7 +92,7 @@ def monomial_coefficients(nodes: tuple[int, ...]) -> tuple[tuple[Fraction, ...],
     return tuple(tuple(cols[j][m] for j in range(n)) for m in range(n))
 
 
-def weights_at(nodes: tuple[int, ...], tau) -> tuple[Fraction, ...]:
+def weights_at(nodes: tuple[int, ...], tau: float | Fraction) -> tuple[Fraction, ...]:
     """Lagrange weights ``l_j(tau)``; with exact ``tau`` the result is exact."""
     return _weights_at(tuple(nodes), Fraction(tau))
 
@@ -98,11 +100,11 @@ def weights_at(nodes: tuple[int, ...], tau) -> tuple[Fraction, ...]:
 @cache
 def _weights_at(nodes: tuple[int, ...], tau: Fraction) -> tuple[Fraction, ...]:
     C = monomial_coefficients(nodes)
-    return tuple(sum(C[m][j] * tau**m for m in range(len(nodes))) for j in range(len(nodes)))
+    return tuple(sum((C[m][j] * tau**m for m in range(len(nodes))), Fraction(0)) for j in range(len(nodes)))
 
 
 # -- variable step sizes: arbitrary nodes -------------------------------------------------
-def variable_predictor_nodes(H, past_steps) -> tuple:
+def variable_predictor_nodes(H: Any, past_steps: Sequence[Any]) -> tuple[Any, ...]:
     """Extrapolation nodes ``0, -H_N-1/H_N, -(H_N-1 + H_N-2)/H_N, ...`` in ``tau = (t - T_N)/H_N``.
 
     ``H`` is the size ``H_N`` of the step to be taken, ``past_steps`` the sizes
@@ -118,7 +120,7 @@ def variable_predictor_nodes(H, past_steps) -> tuple:
     return tuple(nodes)
 
 
-def variable_corrector_nodes(H, past_steps) -> tuple:
+def variable_corrector_nodes(H: Any, past_steps: Sequence[Any]) -> tuple[Any, ...]:
     """Interpolation nodes ``1, 0, -H_N-1/H_N, ...``: ``tau = 1`` and the first ``k`` extrapolation nodes.
 
     ``past_steps`` are the same ``k`` previous step sizes as for
@@ -128,7 +130,7 @@ def variable_corrector_nodes(H, past_steps) -> tuple:
     return (H / H,) + variable_predictor_nodes(H, past_steps)[:k]
 
 
-def lagrange_coefficients(nodes) -> tuple:
+def lagrange_coefficients(nodes: Iterable[Any]) -> tuple[tuple[Any, ...], ...]:
     """:func:`monomial_coefficients` for arbitrary nodes (not cached): ``C[m][j]`` is the
     coefficient of ``tau^m`` of the Lagrange basis polynomial ``l_j``.
 
@@ -154,7 +156,7 @@ def lagrange_coefficients(nodes) -> tuple:
     return tuple(tuple(cols[j][m] for j in range(n)) for m in range(n))
 
 
-def lagrange_weights(nodes, tau) -> tuple:
+def lagrange_weights(nodes: Iterable[Any], tau: Any) -> tuple[Any, ...]:
     """Lagrange weights ``l_j(tau)`` for arbitrary distinct nodes (barycentric-free product form).
 
     ``l_j(tau) = prod_{i != j} (tau - t_i)/(t_j - t_i)``; exact for

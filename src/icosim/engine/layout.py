@@ -28,6 +28,9 @@ True
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+from typing import Any
+
 import numpy as np
 
 __all__ = ["stack", "concatenate", "batched", "BATCH_SIZE"]
@@ -36,16 +39,16 @@ __all__ = ["stack", "concatenate", "batched", "BATCH_SIZE"]
 BATCH_SIZE = 4096
 
 
-def _is_batch(a) -> bool:
+def _is_batch(a: np.ndarray) -> bool:
     return a.dtype.kind == "f" and a.ndim >= 3 and a.size >= BATCH_SIZE
 
 
-def batched(a):
+def batched(a: Any) -> Any:
     """``a`` with the batch (leading) axes fastest if it is a large float array, else ``a`` itself."""
     return np.asfortranarray(a) if isinstance(a, np.ndarray) and _is_batch(a) and not a.flags.f_contiguous else a
 
 
-def stack(arrays, axis: int = 0):
+def stack(arrays: Iterable[Any], axis: int = 0) -> np.ndarray:
     """:func:`numpy.stack` (the same values), the result laid out with the batch axes fastest if large."""
     arrays = [np.asarray(a) for a in arrays]
     first = arrays[0]
@@ -59,7 +62,7 @@ def stack(arrays, axis: int = 0):
     return np.stack(arrays, axis=axis, out=out)
 
 
-def concatenate(arrays, axis: int = 0):
+def concatenate(arrays: Iterable[Any], axis: int = 0) -> np.ndarray:
     """:func:`numpy.concatenate` (the same values), the result laid out with the batch axes fastest if large."""
     arrays = [np.asarray(a) for a in arrays]
     first = arrays[0]

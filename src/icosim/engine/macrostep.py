@@ -13,14 +13,49 @@ problem's :attr:`~icosim.engine.problem.CosimulationProblem.work`.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any, Protocol
+
 import numpy as np
 
-from .schemes import JACOBI, N_SUBSYSTEMS, get_scheme
+from .schemes import JACOBI, N_SUBSYSTEMS, Scheme, get_scheme
+
+if TYPE_CHECKING:
+    from .backends import Backend
+    from .problem import CosimulationProblem
 
 __all__ = ["macro_step"]
 
 
-def macro_step(problem, method, state, history, *, scheme=JACOBI, iterations: int = 1, tol: float | None = None):
+class CouplingRule(Protocol):
+    """What :func:`macro_step` reads of its ``method`` (for type checkers): a
+    :class:`~icosim.engine.methods.base.CouplingMethod`, or an object that wraps one."""
+
+    @property
+    def projection(self) -> bool: ...
+
+    @property
+    def n_solves(self) -> int: ...
+
+    def corrected_coupling(
+        self,
+        e_pred: np.ndarray,
+        residuals: Mapping[str, np.ndarray],
+        jacobians: Mapping[str, np.ndarray],
+        backend: Backend,
+    ) -> np.ndarray: ...
+
+
+def macro_step(
+    problem: CosimulationProblem,
+    method: CouplingRule,
+    state: np.ndarray,
+    history: np.ndarray,
+    *,
+    scheme: str | Scheme = JACOBI,
+    iterations: int = 1,
+    tol: float | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Advance one macro step ``T_N -> T_N+1``.
 
     Parameters
@@ -79,5 +114,5 @@ def macro_step(problem, method, state, history, *, scheme=JACOBI, iterations: in
     return state_new, problem.shift(history, e), y
 
 
-def _max_abs(values):
+def _max_abs(values: Any) -> float:
     return float(np.max(np.abs(np.asarray(values, dtype=float)))) if np.size(values) else 0.0

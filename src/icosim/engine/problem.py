@@ -12,14 +12,15 @@ work done -- and states the contract a subclass meets.  The linear test model
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
 from . import layout
-from .backends import Float64
+from .backends import Backend, Float64
 from .bounds import check_k
-from .decompositions import get_decomposition
+from .decompositions import Decomposition, get_decomposition
 from .lagrange import corrector_nodes, predictor_nodes, weights_at
 
 __all__ = ["CosimulationProblem", "Work"]
@@ -40,7 +41,7 @@ class Work:
     coupling_solves: int = 0
     projections: int = 0
 
-    def reset(self):
+    def reset(self) -> None:
         self.subsystem_integrations = self.coupling_solves = self.projections = 0
 
     def as_dict(self) -> dict:
@@ -102,7 +103,7 @@ class CosimulationProblem:
     :attr:`backend`.
     """
 
-    def __init__(self, decomposition, k: int, backend=None):
+    def __init__(self, decomposition: str | Decomposition, k: int, backend: Backend | None = None) -> None:
         k = check_k(k)  # 0 .. icosim.engine.bounds.MAX_K
         self.backend = be = backend or Float64()
         self.decomposition = get_decomposition(decomposition)
@@ -112,10 +113,10 @@ class CosimulationProblem:
         #: Lagrange weights of the extrapolation (Eq. 9) at ``T_N+1``, in the backend's arithmetic
         self.w_pred = np.array([be.const(w) for w in weights_at(self.pred_nodes, 1)], dtype=be.dtype)
         self.work = Work()
-        self._extrapolated = (None, None, None)  # (history, weights, e_p) of the last extrapolation
+        self._extrapolated: tuple = (None, None, None)  # (history, weights, e_p) of the last extrapolation
 
     @classmethod
-    def check_decomposition(cls, decomposition):
+    def check_decomposition(cls, decomposition: str | Decomposition) -> None:
         """Refuse (:class:`~icosim.errors.ParameterError`) a decomposition whose coupling conditions this
         problem cannot form; the linear test model forms them for every registered one."""
 
@@ -124,7 +125,7 @@ class CosimulationProblem:
         """Number of coupling variables ``e`` (per time point)."""
         return self.decomposition.n_coupling
 
-    def extrapolate(self, history):
+    def extrapolate(self, history: np.ndarray) -> np.ndarray:
         """Predicted coupling variables ``e_p`` at ``T_N+1`` (Eq. 9/35/59).  A macro step asks for it once and
         every predictor again: the last one is kept (for the same history and weights)."""
         last_history, last_weights, e_p = self._extrapolated
@@ -134,41 +135,55 @@ class CosimulationProblem:
         self._extrapolated = (history, self.w_pred, e_p)
         return e_p
 
-    def corrector_samples(self, history, e_new):
+    def corrector_samples(self, history: np.ndarray, e_new: np.ndarray) -> np.ndarray:
         """Samples of the interpolation polynomial (Eq. 11): ``e_new`` at ``T_N+1``, then ``e_N ... e_N-k+1``."""
         return _prepend(e_new, history[..., : self.k, :])
 
-    def shift(self, history, e_new):
+    def shift(self, history: np.ndarray, e_new: np.ndarray) -> np.ndarray:
         """The history one macro step later: ``e_new`` prepended, the oldest sample dropped."""
         return _prepend(e_new, history[..., :-1, :])
 
     # -- to be implemented by a subclass ------------------------------------------
-    def predict(self, i, state, history, *, final=False):  # pragma: no cover - contract
+    def predict(  # pragma: no cover - contract
+        self, i: int, state: np.ndarray, history: np.ndarray, *, final: bool = False
+    ) -> tuple[np.ndarray, np.ndarray]:
         raise NotImplementedError
 
-    def correct(self, i, state, history, e_new):  # pragma: no cover - contract
+    def correct(  # pragma: no cover - contract
+        self, i: int, state: np.ndarray, history: np.ndarray, e_new: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         raise NotImplementedError
 
-    def reevaluate(self, i, end, y, e_old, e_new):  # pragma: no cover - contract
+    def reevaluate(  # pragma: no cover - contract
+        self, i: int, end: np.ndarray, y: np.ndarray, e_old: np.ndarray, e_new: np.ndarray
+    ) -> np.ndarray:
         raise NotImplementedError
 
-    def join(self, ends):  # pragma: no cover - contract
+    def join(self, ends: Sequence[np.ndarray]) -> np.ndarray:  # pragma: no cover - contract
         raise NotImplementedError
 
-    def stack(self, ys):  # pragma: no cover - contract
+    def stack(self, ys: Sequence[np.ndarray]) -> np.ndarray:  # pragma: no cover - contract
         raise NotImplementedError
 
-    def residuals(self, y):  # pragma: no cover - contract
+    def residuals(self, y: np.ndarray) -> dict[str, np.ndarray]:  # pragma: no cover - contract
         raise NotImplementedError
 
-    def jacobians(self, state, history, e, y, fixed=(None, None), algebraic=True):  # pragma: no cover - contract
+    def jacobians(  # pragma: no cover - contract
+        self,
+        state: np.ndarray,
+        history: np.ndarray,
+        e: np.ndarray,
+        y: np.ndarray,
+        fixed: Sequence[np.ndarray | None] = (None, None),
+        algebraic: bool = True,
+    ) -> dict[str, np.ndarray]:
         raise NotImplementedError
 
-    def project(self, state):  # pragma: no cover - contract
+    def project(self, state: np.ndarray) -> np.ndarray:  # pragma: no cover - contract
         raise NotImplementedError(f"{type(self).__name__} has no projection step")
 
 
-def _prepend(e_new, older):
+def _prepend(e_new: np.ndarray, older: np.ndarray) -> np.ndarray:
     """Stack ``e_new`` in front of older samples (leading axes broadcast)."""
     if e_new.ndim == 1 and older.ndim == 2:  # one point (the pendulum's every macro step): no broadcasting
         return np.concatenate([e_new[None, :], older])

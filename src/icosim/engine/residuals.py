@@ -18,18 +18,28 @@ the engine's dimensionless time scales them (``scale``: ``g``, ``H g'``, ``H^2 g
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from .decompositions import Decomposition
+
 __all__ = ["coupling_conditions", "differences"]
 
 #: The rows of a subsystem's outputs.
 POSITION, VELOCITY, ACCELERATION, FORCE = range(4)
 
 
-def differences(y):
+def differences(y: np.ndarray) -> np.ndarray:
     """The outputs of the first subsystem minus the second's: ``y[..., 0, :, :] - y[..., 1, :, :]``."""
     return y[..., 0, :, :] - y[..., 1, :, :]
 
 
-def coupling_conditions(y, decomposition, *, scale=None) -> dict:
+def coupling_conditions(
+    y: np.ndarray, decomposition: Decomposition, *, scale: Sequence[Any] | None = None
+) -> dict[str, np.ndarray]:
     """``{pos, vel, acc, force}`` from the outputs ``y[..., i, q, c]`` (subsystem ``i`` = 0, 1; output ``q`` as
     :data:`POSITION` ...; component ``c`` of the joint), first minus second.  Levels a decomposition lacks are
     empty (no rows); ``scale`` multiplies the position, velocity and acceleration levels."""

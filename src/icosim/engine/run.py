@@ -9,13 +9,18 @@ ends the run, recorded, never silently continued.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..errors import StepFailure
-from .macrostep import macro_step
+from .macrostep import CouplingRule, macro_step
 from .schemes import JACOBI, get_scheme
+
+if TYPE_CHECKING:
+    from .problem import CosimulationProblem
 
 __all__ = ["simulate", "Trajectory"]
 
@@ -43,8 +48,17 @@ class Trajectory:
 
 
 def simulate(
-    problem, method, state, history, n_steps: int, *, bound: float | None = None, observe=None, record=True, **step_kw
-):
+    problem: CosimulationProblem,
+    method: CouplingRule,
+    state: np.ndarray,
+    history: np.ndarray,
+    n_steps: int,
+    *,
+    bound: float | None = None,
+    observe: Callable[[int, np.ndarray, np.ndarray, np.ndarray], str | None] | None = None,
+    record: bool = True,
+    **step_kw: Any,
+) -> Trajectory:
     """Run ``n_steps`` macro steps from ``state`` and the coupling history.
 
     A step diverges when its state is not finite, its magnitude exceeds
@@ -57,6 +71,7 @@ def simulate(
     :func:`~icosim.engine.macrostep.macro_step` (``scheme``, ``iterations``, ``tol``).
     """
     get_scheme(step_kw.get("scheme", JACOBI)).check_decomposition(problem.decomposition)
+    outputs: list[np.ndarray | None]  # outputs[0]: none yet
     states, coupling, outputs = [state], [history[..., 0, :]], [None]
     diverged = failed = reason = error = None
     done = 0

@@ -40,10 +40,12 @@ False
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from ..errors import ParameterError
-from .decompositions import DECOMPOSITIONS, get_decomposition
+from .decompositions import DECOMPOSITIONS, Decomposition, get_decomposition
 
 __all__ = [
     "Scheme",
@@ -96,7 +98,7 @@ class Scheme:
     def corrected(self) -> tuple:
         return tuple(i for i in range(N_SUBSYSTEMS) if i not in self.leading)
 
-    def fixed(self, ends) -> tuple:
+    def fixed(self, ends: Sequence[Any]) -> tuple:
         """Per subsystem: its final end state if it leads, else ``None`` (what the problems' Jacobians take)."""
         return tuple(ends[i] if i in self.leading else None for i in range(N_SUBSYSTEMS))
 
@@ -109,7 +111,7 @@ class Scheme:
     def label(self) -> str:  # pragma: no cover - defined by the subclasses
         raise NotImplementedError
 
-    def check_decomposition(self, decomposition):
+    def check_decomposition(self, decomposition: str | Decomposition) -> None:
         """Refuse (:class:`~icosim.errors.ParameterError`) a decomposition the scheme cannot couple.
 
         A leading subsystem whose outputs stay as integrated does not respond to
@@ -132,11 +134,11 @@ class Scheme:
             f"Allowed decompositions: {', '.join(allowed)}"
         )
 
-    def couples(self, decomposition) -> bool:
+    def couples(self, decomposition: str | Decomposition) -> bool:
         """Can the scheme couple ``decomposition`` (see :meth:`check_decomposition`)?"""
         return self._lone_input(get_decomposition(decomposition)) is None
 
-    def _lone_input(self, decomposition):
+    def _lone_input(self, decomposition: Decomposition) -> tuple[int, int] | None:
         """``(i, j)``: a leading subsystem ``i`` that does not respond and is the only one driven by ``e_j``."""
         if self.reevaluates_leading:
             return None
@@ -186,7 +188,7 @@ class GaussSeidel(Scheme):
     first: int = 1
     leading_outputs: str = "reevaluated"
 
-    def __init__(self, first: int = 1, leading_outputs: str = "reevaluated"):
+    def __init__(self, first: int = 1, leading_outputs: str = "reevaluated") -> None:
         if isinstance(first, bool) or first not in (1, 2):
             raise ParameterError(f"first must be 1 or 2 (the subsystem that advances first), got {first!r}")
         if leading_outputs not in LEADING_OUTPUTS:
@@ -249,7 +251,7 @@ def standard_schemes() -> tuple[str, ...]:
     return tuple(name for name, s in SCHEMES.items() if not s.variant)
 
 
-def get_scheme(scheme=None) -> Scheme:
+def get_scheme(scheme: str | Scheme | None = None) -> Scheme:
     """The registered scheme named ``scheme`` (``None``: Jacobi; a :class:`Scheme` is returned as it is)."""
     if isinstance(scheme, Scheme):
         return scheme

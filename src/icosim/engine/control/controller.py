@@ -23,10 +23,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...errors import ParameterError
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 __all__ = ["StepController", "pc_estimate"]
 
@@ -53,7 +57,7 @@ class StepController:
     H_min: float = 1e-6
     H_max: float = math.inf
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if not (isinstance(self.order, int) and self.order >= 1):
             raise ParameterError(f"controller order must be an integer >= 1, got {self.order!r}")
         if not (0 < self.safety <= 1 and 0 < self.fac_min < 1 < self.fac_max):
@@ -68,7 +72,7 @@ class StepController:
         """A step is accepted when its error norm is at most 1 (never when it is not a number)."""
         return bool(err <= 1.0)
 
-    def _clip(self, H):
+    def _clip(self, H: float) -> float:
         return min(max(H, self.H_min), self.H_max)
 
     def after_accept(self, H: float, err: float, err_prev: float | None, *, after_reject: bool = False) -> float:
@@ -91,7 +95,7 @@ class StepController:
         return max(H * min(max(fac, self.fac_min), self.safety), self.H_min)
 
 
-def pc_estimate(e_corrected, e_predicted, tol: float) -> float:
+def pc_estimate(e_corrected: npt.ArrayLike, e_predicted: npt.ArrayLike, tol: float) -> float:
     """Norm of the predictor-corrector difference: ``max |e_c - e_p| / (tol (1 + |e_c|))``."""
     e_c = np.asarray(e_corrected, float)
     d = np.abs(e_c - np.asarray(e_predicted, float))

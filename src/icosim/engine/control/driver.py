@@ -32,12 +32,13 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from ...errors import StepFailure
-from ..macrostep import macro_step
-from ..schemes import JACOBI
+from ..macrostep import CouplingRule, macro_step
+from ..schemes import JACOBI, Scheme
 from .controller import StepController, pc_estimate
 
 __all__ = ["AdaptiveSteps", "adaptive_macro_steps"]
@@ -66,10 +67,10 @@ class AdaptiveSteps:
 
 
 def adaptive_macro_steps(
-    problem,
-    method,
-    state,
-    history,
+    problem: Any,  # a CosimulationProblem that has set_macro_step (module docstring)
+    method: CouplingRule,
+    state: np.ndarray,
+    history: np.ndarray,
     *,
     t_end: float,
     H0: float,
@@ -79,7 +80,7 @@ def adaptive_macro_steps(
     observe: Callable | None = None,
     extra_error: Callable | None = None,
     on_accept: Callable | None = None,
-    scheme=JACOBI,
+    scheme: str | Scheme = JACOBI,
     iterations: int = 1,
     corrector_tol: float | None = None,
     max_steps: int = 200000,
@@ -97,6 +98,11 @@ def adaptive_macro_steps(
     """
     k = problem.k
     past = [float(H0)] * k
+    times: list[float]
+    steps: list[float]
+    estimates: list[float]
+    extras: list[float]
+    rejected_H: list[float]
     times, steps, estimates, extras, rejected_H = [0.0], [], [], [], []
     t, H, err_prev, after_reject = 0.0, float(H0), None, False
     status, reason = "stable", ""

@@ -25,6 +25,8 @@ module                    rule                                           paramet
 
 from __future__ import annotations
 
+from typing import Any
+
 from ...errors import ParameterError
 from . import baumgarte, projection, weighted
 from .base import UNIT_TEXT, CouplingMethod, MethodSpec, Parameter, solve_small
@@ -70,12 +72,12 @@ def get_spec(name: str) -> MethodSpec:
         raise ParameterError(f"method must be one of {', '.join(METHODS)}, got {name!r}") from None
 
 
-def make_method(name: str, **params) -> CouplingMethod:
+def make_method(name: str, **params: Any) -> CouplingMethod:
     """Build a method by name; ``params`` as its factory takes them (None = not given)."""
     return get_spec(name).make(**params)
 
 
-def engine_method(method: CouplingMethod, H) -> CouplingMethod:
+def engine_method(method: CouplingMethod, H: float) -> CouplingMethod:
     """The method with dimensional parameters (``beta`` in s, ``gamma`` in s^2, ...) at macro step ``H``
     rebuilt with the engine's dimensionless ones (``beta_bar = beta/H``, ``gamma_bar = gamma/H^2``)."""
     spec = get_spec(method.name)
@@ -85,7 +87,7 @@ def engine_method(method: CouplingMethod, H) -> CouplingMethod:
 
 def parameters() -> dict[str, Parameter]:
     """Every registered parameter by name (first definition wins), in registry order."""
-    out = {}
+    out: dict[str, Parameter] = {}
     for spec in METHODS.values():
         for p in spec.parameters:
             out.setdefault(p.name, p)

@@ -19,15 +19,19 @@ defined for.  The entries live next to their rules (``baumgarte.py``,
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ...errors import ParameterError
 from .. import layout
 from ..decompositions import DECOMPOSITIONS, Decomposition
+
+if TYPE_CHECKING:
+    from ..backends import Backend
 
 __all__ = ["CouplingMethod", "MethodSpec", "Parameter", "solve_small", "finite", "exact"]
 
@@ -60,12 +64,18 @@ class CouplingMethod:
         """The registered decompositions the rule is defined for."""
         return supported_decompositions(self.requires_constraint)
 
-    def check_decomposition(self, decomposition: Decomposition):
+    def check_decomposition(self, decomposition: Decomposition) -> None:
         if self.requires_constraint and not decomposition.has_constraint_condition:
             why = self.refusal or f"it is defined for {', '.join(self.decompositions)}"
             raise ParameterError(f"method {self.name!r} is not defined for decomposition {decomposition.name!r}: {why}")
 
-    def corrected_coupling(self, e_pred, residuals, jacobians, backend):
+    def corrected_coupling(
+        self,
+        e_pred: np.ndarray,
+        residuals: Mapping[str, np.ndarray],
+        jacobians: Mapping[str, np.ndarray],
+        backend: Backend,
+    ) -> np.ndarray:
         """``e_p + sum_s w_s delta_e_s`` from the linearised coupling conditions.
 
         ``residuals[level]`` has shape ``(..., n_level)`` and ``jacobians[level]``
@@ -79,11 +89,11 @@ class CouplingMethod:
             r = _conditions(levels, residuals, axis=-1, const=backend.const)
             J = _conditions(levels, jacobians, axis=-2, const=backend.const)
             de = solve_small(J, -r)
-            term = de if weight == 1 else backend.const(weight) * de
+            term: np.ndarray = de if weight == 1 else backend.const(weight) * de
             total = term if total is None else total + term
         return e_pred + total
 
-    def condition_residuals(self, residuals):
+    def condition_residuals(self, residuals: Mapping[str, np.ndarray]) -> np.ndarray:
         """The conditions of every solve of this method, concatenated.
 
         After a converged corrector they vanish for Baumgarte (``g + beta g' +
@@ -123,13 +133,13 @@ class Parameter:
     exclusive_minimum: bool = False
     shorthand: bool = False
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.unit not in UNIT_TEXT:
             raise ValueError(f"parameter {self.name}: unit must be one of {list(UNIT_TEXT)}, got {self.unit!r}")
         if (self.unit == "1") != (self.scaling == 0):
             raise ValueError(f"parameter {self.name}: a dimensionless parameter has scaling 0, and only it")
 
-    def engine_value(self, value, H):
+    def engine_value(self, value: float, H: float) -> float:
         """The engine's dimensionless value of a dimensional ``value`` at macro step ``H``."""
         return value / H**self.scaling if self.scaling else value
 
@@ -174,7 +184,7 @@ class MethodSpec:
     requires_constraint: bool = False
     label_parameters: tuple[str, ...] = ()
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         names = [p.name for p in self.parameters]
         if len(set(names)) != len(names) or "index" in names:
             raise ValueError(f"method {self.name}: parameter names must be distinct and not 'index', got {names}")
@@ -208,10 +218,10 @@ class MethodSpec:
     def parameter(self, name: str) -> Parameter:
         return next(p for p in self.parameters if p.name == name)
 
-    def unused(self, index) -> tuple[str, ...]:
+    def unused(self, index: int) -> tuple[str, ...]:
         return tuple(self.unused_at_index.get(index, ()))
 
-    def make(self, **params) -> CouplingMethod:
+    def make(self, **params: Any) -> CouplingMethod:
         """The method with these parameters (``None`` = not given); unknown ones are refused."""
         params = {k: v for k, v in params.items() if v is not None}
         allowed = set(self.arguments)
@@ -223,7 +233,7 @@ class MethodSpec:
             )
         return self.build(**params)
 
-    def engine_params(self, params: dict, H) -> dict:
+    def engine_params(self, params: dict, H: float) -> dict:
         """Dimensional parameters (``mu``, ``beta`` in s, ``gamma`` in s^2, ...) -> the engine's at step ``H``."""
         scale = {p.name: p for p in self.parameters}
         return {k: (scale[k].engine_value(v, H) if k in scale else v) for k, v in params.items() if v is not None}
@@ -234,7 +244,7 @@ def supported_decompositions(requires_constraint: bool) -> tuple[str, ...]:
     return tuple(name for name, d in DECOMPOSITIONS.items() if d.has_constraint_condition or not requires_constraint)
 
 
-def finite(name, value) -> float:
+def finite(name: str, value: Any) -> float:
     """``value`` as a finite float; the error names the parameter."""
     try:
         v = float(value)
@@ -245,7 +255,7 @@ def finite(name, value) -> float:
     return v
 
 
-def exact(name, value) -> Fraction:
+def exact(name: str, value: Any) -> Fraction:
     """``value`` as an exact rational: a float as the binary number it is, a decimal string or
     :class:`~fractions.Fraction` as the decimal number typed (so ``"0.1"`` is 1/10, not the double
     nearest to it).  The error names the parameter."""
@@ -256,7 +266,12 @@ def exact(name, value) -> Fraction:
         return Fraction(float(value))
 
 
-def _conditions(levels, parts, axis, const=float):
+def _conditions(
+    levels: Sequence[int | Fraction],
+    parts: Mapping[str, np.ndarray],
+    axis: int,
+    const: Callable[[Any], Any] = float,
+) -> np.ndarray:
     """Stack the constraint-level combination and the force-balance rows.
 
     ``parts`` maps ``pos``/``vel``/``acc``/``force`` to residuals (rows on the
@@ -276,10 +291,11 @@ def _conditions(levels, parts, axis, const=float):
         rows.append(combined)
     if parts["force"].shape[axis]:
         rows.append(parts["force"])
-    return rows[0] if len(rows) == 1 else layout.concatenate(rows, axis=axis)
+    # levels all 0 would leave combined None (no registered method has them): mypy sees it, nothing checks it
+    return rows[0] if len(rows) == 1 else layout.concatenate(rows, axis=axis)  # type: ignore[return-value]
 
 
-def solve_small(J, b):
+def solve_small(J: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Solve ``J x = b`` for stacks of small systems, float64 or mpmath objects.
 
     Sizes 1 and 2 use closed forms, so a singular point yields inf/nan for that
@@ -308,7 +324,7 @@ def solve_small(J, b):
     return out
 
 
-def _gauss(A, y):
+def _gauss(A: list[list[Any]], y: list[Any]) -> list[Any]:
     """Gaussian elimination with partial pivoting in the numbers' own arithmetic
     (so mpmath values keep their context's precision and Arb balls their bounds).
 

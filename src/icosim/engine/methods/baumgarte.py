@@ -27,7 +27,13 @@ _FLOAT_MAX = Fraction(sys.float_info.max)
 __all__ = ["baumgarte", "SPEC"]
 
 
-def baumgarte(beta: float = None, gamma: float = None, *, mu: float = None, index: int = None):
+def baumgarte(
+    beta: float | Fraction | None = None,
+    gamma: float | Fraction | None = None,
+    *,
+    mu: float | Fraction | None = None,
+    index: int | None = None,
+) -> CouplingMethod:
     """Baumgarte stabilisation (Eq. 7c) with dimensionless ``beta``, ``gamma``.
 
     Give either ``beta`` and ``gamma``, or ``index`` (1, 2, 3) with ``mu`` for

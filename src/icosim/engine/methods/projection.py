@@ -15,7 +15,7 @@ from .base import CouplingMethod, MethodSpec
 __all__ = ["projection", "SPEC"]
 
 
-def projection():
+def projection() -> CouplingMethod:
     """Acceleration-level correction followed by the mass-weighted projection."""
     return CouplingMethod("projection", ((1, (0, 0, 1)),), projection=True, params={"index": 1})
 

@@ -12,6 +12,8 @@ for term.  ``a`` and ``b`` are dimensionless in every setting.
 
 from __future__ import annotations
 
+from fractions import Fraction
+
 from ...errors import ParameterError
 from ..decompositions import NEEDS_CONSTRAINT_CONDITION
 from .base import CouplingMethod, MethodSpec, Parameter, exact
@@ -19,7 +21,9 @@ from .base import CouplingMethod, MethodSpec, Parameter, exact
 __all__ = ["weighted_multiplier", "SPEC"]
 
 
-def weighted_multiplier(a: float = None, b: float = None, *, index: int = None):
+def weighted_multiplier(
+    a: float | Fraction | None = None, b: float | Fraction | None = None, *, index: int | None = None
+) -> CouplingMethod:
     """Weighted multiplier approach (Eq. 24/53) with weights ``a``, ``b`` >= 0.
 
     ``index=2`` sets ``b = 0`` (``a`` required), ``index=3`` sets ``a = b = 0``.

@@ -11,25 +11,31 @@ and the same certificates.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from fractions import Fraction
+from typing import TYPE_CHECKING, Any
 
 from ..backends import Ball
 from ..bounds import MAX_GUARD_BITS, MAX_SECONDS, time_budget
 from .certified import DEFAULT_BITS, MAX_BITS, SpectralCertificate, certify_matrix, certify_spectral_radius
 from .matrix import amplification_matrix
 
+if TYPE_CHECKING:
+    from ..methods.base import CouplingMethod
+    from .family import LinearFamily
+
 __all__ = ["certify_spectral_radii"]
 
 
 def certify_spectral_radii(
-    points,
-    method,
+    points: Sequence[LinearFamily],
+    method: CouplingMethod,
     *,
     bits: int = DEFAULT_BITS,
     max_bits: int = MAX_BITS,
     max_guard_bits: int = MAX_GUARD_BITS,
     point_seconds: float = 0.0,
-    **matrix_kw,
+    **matrix_kw: Any,
 ) -> list:
     """:func:`~icosim.engine.spectral.certified.certify_spectral_radius` of many points of one panel, each as alone.
 
@@ -60,7 +66,7 @@ def certify_spectral_radii(
             continue
         groups.setdefault(guard, []).append(i)
 
-    def alone(i):
+    def alone(i: int) -> None:
         try:
             with time_budget(point_seconds):
                 out[i] = certify_spectral_radius(

@@ -36,15 +36,23 @@ outside.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from decimal import ROUND_CEILING, ROUND_FLOOR, Decimal, localcontext
 from fractions import Fraction
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..backends import Ball
 from ..bounds import MAX_GUARD_BITS
 from .matrix import amplification_matrix
+
+if TYPE_CHECKING:
+    from flint import arb
+
+    from ..methods.base import CouplingMethod
+    from .family import LinearFamily
 
 __all__ = [
     "certify_spectral_radius",
@@ -64,7 +72,7 @@ VERDICTS = ("stable", "unstable", "marginal", "undecided")
 DEFAULT_BITS, MAX_BITS = 128, 1024
 
 
-def roots_inside(coeffs, r=1):
+def roots_inside(coeffs: Sequence[arb], r: arb | int = 1) -> int | None:
     """Number of roots of ``sum a_k z^k`` (real balls, ``a_n`` certainly nonzero) in ``|z| < r``,
     or ``None`` if the ball arithmetic cannot decide it (a ``delta_j`` contains 0).
 
@@ -102,7 +110,7 @@ def _dyadic(x: Fraction, bits: int, up: bool) -> Fraction:
     return Fraction(m, 2**bits)
 
 
-def _arb_exact(q: Fraction):
+def _arb_exact(q: Fraction) -> arb:
     from flint import arb
 
     # denominator is a power of two: exact at any working precision that holds the numerator
@@ -155,7 +163,7 @@ class SpectralCertificate:
         return self.verdict in ("stable", "unstable")
 
 
-def _enclosure(coeffs, n, rho_approx: float, bits: int):
+def _enclosure(coeffs: Sequence[arb], n: int, rho_approx: float, bits: int) -> tuple[Fraction, Fraction | None]:
     """``(lower, upper)`` proven bounds on the largest root modulus, tightest found near ``rho_approx``.
 
     Radii just above and below the approximation are tried, moving away by
@@ -183,7 +191,9 @@ def _enclosure(coeffs, n, rho_approx: float, bits: int):
     return lower, upper
 
 
-def _refine(coeffs, n, lower: Fraction, upper: Fraction, digits: int, bits: int):
+def _refine(
+    coeffs: Sequence[arb], n: int, lower: Fraction, upper: Fraction, digits: int, bits: int
+) -> tuple[Fraction, Fraction]:
     """Narrow ``[lower, upper]`` (a proven enclosure) to a relative width of ``10**-digits`` by bisection, or
     until no count inside it is decided (a cluster of roots, or the working precision's limit).
 
@@ -207,7 +217,7 @@ def _refine(coeffs, n, lower: Fraction, upper: Fraction, digits: int, bits: int)
     return lower, upper
 
 
-def _approximate_rho(coeffs) -> float:
+def _approximate_rho(coeffs: Sequence[arb]) -> float:
     """Largest root modulus of the polynomial's midpoints (float64 roots; only a starting point for the proof).
 
     The coefficients are scaled by the largest one first, so huge ones do not overflow float64."""
@@ -225,7 +235,7 @@ def _approximate_rho(coeffs) -> float:
     return _fujiwara_bound(coeffs)
 
 
-def _fujiwara_bound(coeffs) -> float:
+def _fujiwara_bound(coeffs: Sequence[arb]) -> float:
     """Fujiwara's bound ``2 max |c_(n-i)/c_n|^(1/i)`` on the root moduli, in ball arithmetic (no overflow),
     as a float64 capped at 1e300 (a starting radius, not a proof)."""
     n = len(coeffs) - 1
@@ -240,7 +250,9 @@ def _fujiwara_bound(coeffs) -> float:
     return float(min(2 * math.exp(min(max(exps), 690.0)), 1e300))
 
 
-def certify_matrix(M, bits: int, *, final: bool = True, digits: int | None = None) -> SpectralCertificate | None:
+def certify_matrix(
+    M: np.ndarray, bits: int, *, final: bool = True, digits: int | None = None
+) -> SpectralCertificate | None:
     """The certificate of a ball amplification matrix ``M`` computed at ``bits`` (inside that context).
 
     Returns None if the verdict is undecided at this precision and ``final``
@@ -281,14 +293,14 @@ def certify_matrix(M, bits: int, *, final: bool = True, digits: int | None = Non
 
 
 def certify_spectral_radius(
-    family,
-    method,
+    family: LinearFamily,
+    method: CouplingMethod,
     *,
     bits: int = DEFAULT_BITS,
     max_bits: int = MAX_BITS,
     max_guard_bits: int = MAX_GUARD_BITS,
     digits: int | None = None,
-    **matrix_kw,
+    **matrix_kw: Any,
 ) -> SpectralCertificate:
     """Prove ``rho < 1`` or ``rho > 1``, or report ``marginal``, for the one point of ``family``.
 
@@ -317,7 +329,7 @@ def certify_spectral_radius(
         why = f"needs {guard} guard bits for exp(-decay) entries, more than the cap of {max_guard_bits}"
         return SpectralCertificate("undecided", Fraction(0), None, 0, reason=why, cause="precision_cap")
 
-    def matrix(b):
+    def matrix(b: int) -> np.ndarray:
         return amplification_matrix(family, method, backend=Ball(b + guard), exact=True, **matrix_kw)
 
     # the verdict comes from the same schedule whatever the digits asked for: ``bits``, then the cap

@@ -18,6 +18,17 @@ inputs' rounding grows: the float64 error estimate of :mod:`icosim.engine.spectr
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    import numpy as np
+
+    from ..backends import Backend
+    from ..decompositions import Decomposition
+    from ..methods.base import CouplingMethod
+    from ..schemes import Scheme
 
 __all__ = ["LinearFamily"]
 
@@ -27,7 +38,7 @@ class LinearFamily(ABC):
     analysis asks for them.  Points are addressed by index tuples of :attr:`shape`."""
 
     #: the decomposition (a registered :class:`~icosim.engine.decompositions.Decomposition`) and the order k
-    decomposition = None
+    decomposition: Decomposition = None  # type: ignore[assignment]  # a placeholder: every family sets its own
     k: int = 0
     #: why a point whose derived quantities overflow float64 is undecided
     overflow_reason = "overflow: a derived quantity of the model is not finite in float64"
@@ -38,26 +49,26 @@ class LinearFamily(ABC):
         """The shape of the grid of points."""
 
     @abstractmethod
-    def problem(self, backend, *, exact: bool = False):
+    def problem(self, backend: Backend, *, exact: bool = False) -> Any:
         """The problem over every point in ``backend``'s arithmetic, with a trailing axis of length one for the
         basis vectors the macro step is applied to.  ``exact``: the point's parameters taken as the exact
         numbers they are (a float as its binary value, a decimal string as the decimal) and every derived
         quantity formed in the backend (multiprecision, balls); else float64 arrays."""
 
     @abstractmethod
-    def point(self, index) -> LinearFamily:
+    def point(self, index: tuple[int, ...]) -> LinearFamily:
         """The family of the one point at ``index`` (its parameters as given, for an exact recomputation)."""
 
     @abstractmethod
-    def subset(self, mask) -> LinearFamily:
+    def subset(self, mask: np.ndarray) -> LinearFamily:
         """The points where the boolean array ``mask`` (of :attr:`shape`) holds, as a flat grid."""
 
     @abstractmethod
-    def overflowing(self):
+    def overflowing(self) -> np.ndarray:
         """A boolean array of :attr:`shape`: points whose derived quantities are not finite in float64."""
 
     @abstractmethod
-    def safe(self, mask) -> LinearFamily:
+    def safe(self, mask: np.ndarray) -> LinearFamily:
         """The grid with the points where ``mask`` holds replaced by harmless ones (computed, then discarded)."""
 
     @abstractmethod
@@ -67,11 +78,11 @@ class LinearFamily(ABC):
 
     @classmethod
     @abstractmethod
-    def stack(cls, points, backend) -> LinearFamily:
+    def stack(cls, points: Sequence[LinearFamily], backend: Backend) -> LinearFamily:
         """Single points (their exact parameters in ``backend``) as one grid: a leading axis of object arrays,
         on which the backend does for every point what it does for that point alone."""
 
-    def check(self, method, scheme):
+    def check(self, method: CouplingMethod, scheme: Scheme) -> None:
         """Refuse (:class:`~icosim.errors.ParameterError`) a method or scheme the decomposition cannot take."""
         method.check_decomposition(self.decomposition)
         scheme.check_decomposition(self.decomposition)

@@ -11,16 +11,23 @@ two-mass model's parameters.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
 from ..backends import Float64
-from ..macrostep import macro_step
-from ..schemes import JACOBI, get_scheme
+from ..macrostep import CouplingRule, macro_step
+from ..schemes import JACOBI, Scheme, get_scheme
+
+if TYPE_CHECKING:
+    from ..backends import Backend
+    from ..methods.base import CouplingMethod
+    from .family import LinearFamily
 
 __all__ = ["amplification_matrix", "matrix_of"]
 
 
-def matrix_of(problem, method, scheme=JACOBI):
+def matrix_of(problem: Any, method: CouplingRule, scheme: str | Scheme = JACOBI) -> np.ndarray:
     """``M`` of ``problem`` (a linear problem with a trailing axis for the basis vectors): the macro step of every
     unit vector of its packed state, the images as columns."""
     be = problem.backend
@@ -34,7 +41,14 @@ def matrix_of(problem, method, scheme=JACOBI):
     return np.swapaxes(rows, -1, -2)
 
 
-def amplification_matrix(family, method, *, backend=None, scheme=JACOBI, exact=None):
+def amplification_matrix(
+    family: LinearFamily,
+    method: CouplingMethod,
+    *,
+    backend: Backend | None = None,
+    scheme: str | Scheme = JACOBI,
+    exact: bool | None = None,
+) -> np.ndarray:
     """The matrix ``M`` with ``w_N+1 = M w_N`` at every point of ``family`` (leading axes: the grid's).
 
     ``backend`` the arithmetic (float64 by default); ``exact`` (default: whenever the backend is not float64)

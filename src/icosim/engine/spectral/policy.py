@@ -33,16 +33,21 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field, fields
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...errors import NotFiniteError, ParameterError, PointTimeout, PrecisionCapError
 from ..backends import FLOAT64_DIGITS
 from ..bounds import MAX_BITS_LIMIT, MAX_SECONDS, time_budget
-from ..schemes import JACOBI, get_scheme
+from ..schemes import JACOBI, Scheme, get_scheme
 from .batched import certify_spectral_radii
-from .certified import DEFAULT_BITS, MAX_BITS
+from .certified import DEFAULT_BITS, MAX_BITS, SpectralCertificate
 from .radius import spectral_radius_float64, spectral_radius_mp
+
+if TYPE_CHECKING:
+    from ..methods.base import CouplingMethod
+    from .family import LinearFamily
 
 __all__ = [
     "spectral_radius",
@@ -86,7 +91,7 @@ class Certification:
     max_bits: int = MAX_BITS
     point_seconds: float = 60.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for f in fields(self):
             value = getattr(self, f.name)
             if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
@@ -175,14 +180,14 @@ class StabilityResult:
 
 
 def spectral_radius(
-    family,
-    method,
+    family: LinearFamily,
+    method: CouplingMethod,
     *,
     digits: int = 128,
     policy: str = "auto",
     certification: Certification | dict | None = None,
-    scheme=JACOBI,
-):
+    scheme: str | Scheme = JACOBI,
+) -> StabilityResult:
     """Spectral radius and stability verdict at every point of ``family`` with the precision policy.
 
     Parameters
@@ -276,7 +281,9 @@ def spectral_radius(
     )
 
 
-def _float64_isolated(family, overflow, method, out, scheme=JACOBI):
+def _float64_isolated(
+    family: LinearFamily, overflow: np.ndarray, method: CouplingMethod, out: dict, scheme: str | Scheme = JACOBI
+) -> tuple[np.ndarray, np.ndarray]:
     """The float64 pass over the grid in one call; if it raises, point by point, each failure undecided alone."""
     shape = family.shape
     try:
@@ -304,14 +311,14 @@ def reason_code(exc: BaseException) -> str:
     return "overflow" if isinstance(exc, (OverflowError, NotFiniteError)) else "error"
 
 
-def _undecided(out: dict, idx, exc: BaseException):
+def _undecided(out: dict, idx: tuple[int, ...], exc: BaseException) -> None:
     """One point undecided by ``exc``: nothing of an earlier pass stands (an audited float64 value included)."""
     out["verdict"][idx], out["reason"][idx] = "undecided", f"{type(exc).__name__}: {exc}"
     out["reason_code"][idx] = reason_code(exc)
     out["rho"][idx], out["digits"][idx], out["arithmetic"][idx] = np.nan, -1, "none"
 
 
-def _empty(shape) -> dict:
+def _empty(shape: tuple[int, ...]) -> dict:
     return {
         "rho": np.full(shape, np.nan),
         "err": np.full(shape, np.inf),
@@ -328,7 +335,7 @@ def _empty(shape) -> dict:
     }
 
 
-def _store(out: dict, idx, c):
+def _store(out: dict, idx: tuple[int, ...], c: SpectralCertificate) -> None:
     """One certificate into the result arrays (bounds rounded outward to float64)."""
     if c.verdict == "undecided":  # the ball arithmetic lost every digit at the cap: nothing is known
         out["verdict"][idx], out["rho"][idx], out["digits"][idx] = "undecided", np.nan, -1

@@ -37,11 +37,17 @@ one point with every derived quantity formed at ``digits`` significant digits.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any, Literal, overload
+
 import numpy as np
 
 from ..backends import Float64, Multiprecision
-from ..schemes import JACOBI, get_scheme
+from ..schemes import JACOBI, Scheme, get_scheme
 from .matrix import matrix_of
+
+if TYPE_CHECKING:
+    from ..methods.base import CouplingMethod
+    from .family import LinearFamily
 
 __all__ = ["spectral_radius_float64", "spectral_radius_mp", "SAFETY", "DISTURBANCE", "DOUBT", "FLOOR"]
 
@@ -64,12 +70,12 @@ DOUBT = 1000.0
 FLOOR = 32.0
 
 
-def _spectral_radius_of(M, backend):
+def _spectral_radius_of(M: np.ndarray, backend: Float64 | Multiprecision) -> Any:
     ev = backend.eigvals(M)
     return np.max(np.abs(ev), axis=-1)
 
 
-def _radius_and_condition(M):
+def _radius_and_condition(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Spectral radius of each float64 matrix and the condition number of the eigenvalue that attains it.
 
     ``kappa = |x| |y| / |y^T x|`` (``M x = lambda x``, ``M^T y = lambda y``): a perturbation ``E`` moves that
@@ -92,7 +98,9 @@ def _radius_and_condition(M):
     return np.abs(lam[..., 0]), np.fmin(kappa, 1 / np.sqrt(np.finfo(float).eps))
 
 
-def _disturbed_spread(problem, method, scheme, rho, rng, rel):
+def _disturbed_spread(
+    problem: Any, method: CouplingMethod, scheme: Scheme, rho: np.ndarray, rng: np.random.Generator, rel: float
+) -> np.ndarray:
     """``|rho_d - rho|`` of one disturbed run (exponential blocks and amplification matrix; inf where the
     disturbed matrix is not finite)."""
     be = problem.backend
@@ -107,7 +115,39 @@ def _disturbed_spread(problem, method, scheme, rho, rng, rel):
     return np.where(ok, np.abs(rho_d - rho), np.inf)
 
 
-def spectral_radius_float64(family, method, *, error_estimate=True, seed=0, scheme=JACOBI, doubt=DOUBT):
+@overload
+def spectral_radius_float64(
+    family: LinearFamily,
+    method: CouplingMethod,
+    *,
+    error_estimate: Literal[True] = ...,
+    seed: int = ...,
+    scheme: str | Scheme = ...,
+    doubt: float = ...,
+) -> tuple[np.ndarray, np.ndarray]: ...
+
+
+@overload
+def spectral_radius_float64(
+    family: LinearFamily,
+    method: CouplingMethod,
+    *,
+    error_estimate: bool,
+    seed: int = ...,
+    scheme: str | Scheme = ...,
+    doubt: float = ...,
+) -> tuple[np.ndarray, np.ndarray | None]: ...
+
+
+def spectral_radius_float64(
+    family: LinearFamily,
+    method: CouplingMethod,
+    *,
+    error_estimate: bool = True,
+    seed: int = 0,
+    scheme: str | Scheme = JACOBI,
+    doubt: float = DOUBT,
+) -> tuple[np.ndarray, np.ndarray | None]:
     """Spectral radius in float64 at every point of ``family`` (:mod:`icosim.engine.spectral.family`).
 
     Returns ``(rho, err)``; ``err`` is the error estimate described in the
@@ -144,7 +184,9 @@ def spectral_radius_float64(family, method, *, error_estimate=True, seed=0, sche
     return rho, err
 
 
-def spectral_radius_mp(family, method, digits: int = 128, *, scheme=JACOBI):
+def spectral_radius_mp(
+    family: LinearFamily, method: CouplingMethod, digits: int = 128, *, scheme: str | Scheme = JACOBI
+) -> Any:
     """Spectral radius of the one point of ``family`` at ``digits`` significant digits.
 
     The parameters are taken exactly as given -- a float as the binary number
