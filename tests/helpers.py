@@ -258,13 +258,29 @@ def _schema_file(part: str, text: str) -> Path:
 
 def predict_all(prob, state, history):
     """Outputs ``y`` of every subsystem after the predictor (extrapolation polynomials)."""
-    return prob.stack([prob.predict(i, state, history)[1] for i in range(2)])
+    return prob.stack([prob.predict(i, state, history)[1] for i in range(prob.graph.n_subsystems)])
 
 
 def correct_all(prob, state, history, e_new):
     """``(state, y)`` of every subsystem after the corrector with the interpolation polynomials through ``e_new``."""
-    ends, ys = zip(*(prob.correct(i, state, history, e_new) for i in range(2)))
+    ends, ys = zip(*(prob.correct(i, state, history, e_new) for i in range(prob.graph.n_subsystems)))
     return prob.join(list(ends)), prob.stack(list(ys))
+
+
+def pair_jacobians(prob, state, history, e, y, fixed=(None, None), algebraic=True):
+    """``d residuals / d e`` of a two-subsystem problem's joint, the subsystems responding as ``fixed`` says
+    (``None``: through the corrector; an end state: finished, algebraically, or with ``algebraic=False`` not
+    at all): the one stage that closes the joint (:mod:`icosim.engine.stages`), built directly, so that a
+    pattern a scheme refuses can be looked at too."""
+    from icosim.engine.residuals import Conditions
+    from icosim.engine.stages import Stage
+
+    corrected = tuple(i for i in range(2) if fixed[i] is None)
+    finished = tuple(i for i in range(2) if fixed[i] is not None)
+    held = () if algebraic else finished  # a finished subsystem that does not respond saw the prediction
+    stage = Stage(1, corrected, (0,), corrected, finished, Conditions(prob.graph, (0,), (0, 1), held))
+    ys = [None, None] if y is None else [y[..., i : i + 1, :, :] for i in range(2)]
+    return prob.jacobians(state, history, e, ys, list(fixed), stage, algebraic)
 
 
 def engine_schemes():

@@ -108,7 +108,7 @@ def test_missing_parameter_and_real_process_exit_status():
     [
         ("gauss-seidel-12", GS12, "fd"),
         ("gauss-seidel-21", GS21, "fd"),
-        ("gauss-seidel-21-as-integrated", GaussSeidel(2, "as-integrated"), "ff"),
+        ("gauss-seidel-21-as-integrated", GaussSeidel(first=2, leading_outputs="as-integrated"), "ff"),
     ],
 )
 def test_gauss_seidel_scheme_matches_library(capsys, name, scheme, dec):

@@ -143,7 +143,7 @@ def test_map_with_a_gauss_seidel_scheme(tmp_path, capsys, first, name):
     assert ds.attrs["scheme"] == name
     lr1, li1 = ds["lr1"].values[3], ds["li1"].values[5]
     method = make_method("weighted", a=1, b=1)
-    rho, _ = spectral_radius_float64(TestModel(lr1, li1), method, "ff", 0, scheme=GaussSeidel(first))
+    rho, _ = spectral_radius_float64(TestModel(lr1, li1), method, "ff", 0, scheme=GaussSeidel(first=first))
     assert ds["rho"].values[3, 5] == pytest.approx(float(rho), rel=1e-12)
 
 

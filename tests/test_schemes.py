@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 import scipy.linalg
-from helpers import growth_rate, predict_all
+from helpers import growth_rate, pair_jacobians, predict_all
 
 from icosim import (
     LinearCosimulation,
@@ -24,8 +24,10 @@ from icosim import (
     spectral_radius_mp,
     weighted_multiplier,
 )
+from icosim.engine.graph import CouplingGraph
 from icosim.engine.macrostep import macro_step
 from icosim.engine.schemes import GS12, GS21, JACOBI, SCHEMES, GaussSeidel, Jacobi, get_scheme, standard_schemes
+from icosim.engine.stages import couples, plan
 from icosim.order_fit import asymptotic_order
 from icosim.problems.linear.model import Coefficients
 from icosim.problems.linear.spectral import amplification_matrix
@@ -64,13 +66,19 @@ def _expm_blocks(k_, d_, g_):
 def test_scheme_names_and_roles():
     assert (JACOBI.name, GS12.name, GS21.name) == ("jacobi", "gauss-seidel-12", "gauss-seidel-21")
     assert get_scheme(None) is JACOBI and get_scheme("jacobi") == Jacobi()
-    assert get_scheme("gauss-seidel-12") == GS12 == GaussSeidel(1)
-    assert get_scheme("gauss-seidel-21") == GS21 == GaussSeidel(2)
+    assert get_scheme("gauss-seidel-12") == GS12 == GaussSeidel(first=1) == GaussSeidel((1, 2))
+    assert get_scheme("gauss-seidel-21") == GS21 == GaussSeidel(first=2) == GaussSeidel((2, 1))
     assert get_scheme(GS21) is GS21  # a scheme is returned as it is
-    assert (GS12.leading, GS12.corrected, GS21.leading, GS21.corrected) == ((0,), (1,), (1,), (0,))
-    assert (JACOBI.integrations_per_step, GS12.integrations_per_step) == (4, 3)
+    assert (JACOBI.stages(2), GS12.stages(2), GS21.stages(2)) == (((0, 1),), ((0,), (1,)), ((1,), (0,)))
+    pair = CouplingGraph.pair("ff")
+    assert (plan(JACOBI, pair).integrations, plan(GS12, pair).integrations) == (4, 3)
+    # any order of any number of subsystems is spelled by its numbers (dots from ten subsystems on)
+    assert get_scheme("gauss-seidel-312") == GaussSeidel((3, 1, 2))
+    assert GaussSeidel(tuple(range(10, 0, -1))).name == "gauss-seidel-10.9.8.7.6.5.4.3.2.1"
+    assert get_scheme("gauss-seidel-10.9.8.7.6.5.4.3.2.1") == GaussSeidel(tuple(range(10, 0, -1)))
     # the name is the one spelling (files, attributes): the variants' names, and only the variants are variants
-    as_integrated = (GaussSeidel(1, "as-integrated"), GaussSeidel(2, "as-integrated"))
+    as_integrated = (GaussSeidel(first=1, leading_outputs="as-integrated"),
+                     GaussSeidel(first=2, leading_outputs="as-integrated"))  # fmt: skip
     assert [s.name for s in as_integrated] == ["gauss-seidel-12-as-integrated", "gauss-seidel-21-as-integrated"]
     assert [get_scheme(s.name) for s in as_integrated] == list(as_integrated)
     assert [s.variant for s in (JACOBI, GS12, GS21, *as_integrated)] == [False, False, False, True, True]
@@ -78,22 +86,41 @@ def test_scheme_names_and_roles():
     assert standard_schemes() == ("jacobi", "gauss-seidel-12", "gauss-seidel-21")
 
 
-ALLOWED = "jacobi, gauss-seidel-12, gauss-seidel-21, gauss-seidel-12-as-integrated, gauss-seidel-21-as-integrated"
+ALLOWED = (
+    "jacobi, gauss-seidel-12, gauss-seidel-21, gauss-seidel-12-as-integrated, gauss-seidel-21-as-integrated "
+    r"or gauss-seidel-<order> \(e.g. gauss-seidel-312\)"
+)
 
 
 @pytest.mark.parametrize(
     "make,match",
     [
         (lambda: get_scheme("gauss"), f"scheme must be one of {ALLOWED}, got 'gauss'"),
-        (lambda: GaussSeidel(3), "first must be 1 or 2"),
-        (lambda: GaussSeidel(True), "first must be 1 or 2"),
+        (lambda: GaussSeidel(first=3), "first must be 1 or 2"),
+        (lambda: GaussSeidel(first=True), "first must be 1 or 2"),
+        (lambda: GaussSeidel((1, 3)), "order must name each of the subsystems 1 ... N once"),
+        (lambda: get_scheme("gauss-seidel-1223"), "scheme 'gauss-seidel-1223': order must name each of the subsystems"),
+        (lambda: get_scheme("gauss-seidel-1.2"), f"scheme must be one of {ALLOWED}, got 'gauss-seidel-1.2'"),
         # the old spelling (a generic name with first=...) is gone: the generic name is refused ...
         (lambda: get_scheme("gauss-seidel"), f"scheme must be one of {ALLOWED}, got 'gauss-seidel'"),
         # ... and a name that is not a string is refused naming the argument
         (lambda: get_scheme(2), f"scheme must be one of {ALLOWED}, got 2"),
-        (lambda: GaussSeidel(1, "as-computed"), "leading_outputs must be one of reevaluated, as-integrated"),
+        (
+            lambda: GaussSeidel(first=1, leading_outputs="as-computed"),
+            "leading_outputs must be one of reevaluated, as-integrated",
+        ),
     ],
-    ids=["unknown-name", "first-3", "first-bool", "generic-name", "not-a-name", "leading-outputs"],
+    ids=[
+        "unknown-name",
+        "first-3",
+        "first-bool",
+        "order-repeats",
+        "order-repeats-by-name",
+        "order-spelled-twice",
+        "generic-name",
+        "not-a-name",
+        "leading-outputs",
+    ],
 )
 def test_bad_scheme_is_refused_naming_the_argument(make, match):
     with pytest.raises(ParameterError, match=match):
@@ -114,7 +141,7 @@ def test_step_counts_three_integrations_for_gauss_seidel():
     for scheme, n in ((JACOBI, 4), (GS12, 3), (GS21, 3)):
         prob.work.reset()
         macro_step(prob, baumgarte(mu=1, index=1), state, hist, scheme=scheme)
-        assert prob.work.subsystem_integrations == n == scheme.integrations_per_step
+        assert prob.work.subsystem_integrations == n == plan(scheme, prob.graph).integrations
 
 
 # -- spectral radius against the growth rate of time stepping -------------------
@@ -162,7 +189,7 @@ def _ff_index3_k0_gs(model, first):
 @pytest.mark.parametrize("first", [1, 2])
 def test_ff_index3_k0_gauss_seidel_matches_hand_derivation(first):
     for model in _random_models(21 + first, 25):
-        M = amplification_matrix(model, baumgarte(index=3), "ff", 0, scheme=GaussSeidel(first))
+        M = amplification_matrix(model, baumgarte(index=3), "ff", 0, scheme=GaussSeidel(first=first))
         np.testing.assert_allclose(M, _ff_index3_k0_gs(model, first), rtol=1e-10, atol=1e-12)
 
 
@@ -221,7 +248,7 @@ def _fd_baumgarte_k0_gs(model, beta, gamma, first):
 @pytest.mark.parametrize("beta,gamma", [(2.0, 1.0), (0.5, 0.0), (0.0, 0.0)])
 def test_fd_baumgarte_k0_gauss_seidel_matches_hand_derivation(first, beta, gamma):
     for model in _random_models(31 + first, 20):
-        M = amplification_matrix(model, baumgarte(beta=beta, gamma=gamma), "fd", 0, scheme=GaussSeidel(first))
+        M = amplification_matrix(model, baumgarte(beta=beta, gamma=gamma), "fd", 0, scheme=GaussSeidel(first=first))
         np.testing.assert_allclose(M, _fd_baumgarte_k0_gs(model, beta, gamma, first), rtol=1e-9, atol=1e-11)
 
 
@@ -287,7 +314,8 @@ def _correct_both_sequentially(prob, method, state, hist, first):
     A = first - 1
     e_p = prob.extrapolate(hist)
     y_p = predict_all(prob, state, hist)
-    e = method.corrected_coupling(e_p, prob.residuals(y_p), prob.jacobians(state, hist, e_p, y_p), prob.backend)
+    e = method.corrected_coupling(e_p, prob.residuals(y_p, e_p), pair_jacobians(prob, state, hist, e_p, y_p),
+                                  prob.backend)  # fmt: skip
     end_A, y_A = prob.correct(A, state, hist, e)
     ys = [prob.predict(i, state, hist)[1] for i in range(2)]
     ys[A] = prob.reevaluate(A, end_A, y_A, e, e_p)  # A's finished outputs, at the linearisation point e_p
@@ -295,7 +323,7 @@ def _correct_both_sequentially(prob, method, state, hist, first):
     fixed[A] = end_A
     y = prob.stack(ys)
     e2 = method.corrected_coupling(
-        e_p, prob.residuals(y), prob.jacobians(state, hist, e_p, y, tuple(fixed)), prob.backend
+        e_p, prob.residuals(y, e_p), pair_jacobians(prob, state, hist, e_p, y, tuple(fixed)), prob.backend
     )
     return e, e2
 
@@ -331,7 +359,8 @@ def test_jacobi_macro_step_is_the_papers_loop_to_the_last_bit(method, dec):
         state, hist = rng.standard_normal((2, 2)), rng.standard_normal((k + 1, prob.n_coupling))
         e_p = prob.extrapolate(hist)
         y = predict_all(prob, state, hist)
-        e = method.corrected_coupling(e_p, prob.residuals(y), prob.jacobians(state, hist, e_p, y), prob.backend)
+        e = method.corrected_coupling(e_p, prob.residuals(y, e_p), pair_jacobians(prob, state, hist, e_p, y),
+                                      prob.backend)  # fmt: skip
         ends = [prob.correct(i, state, hist, e)[0] for i in range(2)]
         expected = prob.join(ends)
         if method.projection:
@@ -457,12 +486,13 @@ def test_a_scheme_refuses_exactly_the_decompositions_whose_corrector_system_is_s
     ends = [problem.predict(i, state, history)[0] for i in range(2)]
     e = problem.extrapolate(history)
     y = problem.stack([problem.predict(i, state, history)[1] for i in range(2)])
-    J = problem.jacobians(state, history, e, y, scheme.fixed(ends), algebraic=scheme.reevaluates_leading)
+    fixed = [ends[i] if (i,) == scheme.stages(2)[0] and name != "jacobi" else None for i in range(2)]
+    J = pair_jacobians(problem, state, history, e, y, fixed, algebraic=scheme.reevaluates_leading)
     method = make_method("projection")
     levels = [lv for w, lv in method.solves if w != 0][0]
     A = _conditions(levels, J, axis=-2, const=float)
     singular = np.linalg.matrix_rank(A) < problem.n_coupling
-    assert np.all(singular == (not scheme.couples(dec)))
-    if not scheme.couples(dec):
+    assert np.all(singular == (not couples(scheme, dec)))
+    if not couples(scheme, dec):
         with pytest.raises(ParameterError, match=rf"scheme {name} cannot couple decomposition {dec}.*Allowed"):
             amplification_matrix(c, method, dec, 1, scheme=scheme)

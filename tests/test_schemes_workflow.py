@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import xarray as xr
 import yaml
-from helpers import copy_workflow, scheduled, scheme_panel_spec, snakemake, validate_config
+from helpers import copy_workflow, pair_jacobians, scheduled, scheme_panel_spec, snakemake, validate_config
 
 from icosim import ParameterError, make_method
 from icosim.engine.schemes import GS12, GS21
@@ -274,7 +274,10 @@ def test_pendulum_gauss_seidel_jacobians_match_central_differences(decomposition
     end, y_lead = prob.predict(lead, state, hist, final=True)
     fixed = [None, None]
     fixed[lead] = end
-    jac = prob.jacobians(state, hist, e, None, tuple(fixed))
+    ys = [None, None]
+    ys[lead] = y_lead
+    ys[1 - lead] = prob.predict(1 - lead, state, hist)[1]
+    jac = pair_jacobians(prob, state, hist, e, prob.stack(ys), tuple(fixed))
 
     def residuals(ee):
         ys = [None, None]
@@ -306,7 +309,8 @@ def test_pendulum_link2_first_leaves_position_level_singular(decomposition):
     def scaled_condition(lead, level):
         fixed = [None, None]
         fixed[lead] = prob.predict(lead, state, hist, final=True)[0]
-        jac = prob.jacobians(state, hist, e, None, tuple(fixed))
+        ys = [prob.predict(i, state, hist, final=fixed[i] is not None)[1] for i in range(2)]
+        jac = pair_jacobians(prob, state, hist, e, prob.stack(ys), tuple(fixed))
         A = np.concatenate([jac[level], jac["force"]])
         return np.linalg.cond(A / np.max(np.abs(A), axis=1, keepdims=True))
 

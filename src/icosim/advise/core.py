@@ -15,6 +15,7 @@ import numpy as np
 from ..engine import methods as _methods
 from ..engine.bounds import check_k
 from ..engine.schemes import get_scheme, standard_schemes
+from ..engine.stages import couples
 from ..errors import ParameterError
 from ..problems.linear.model import PhysicalModel
 from ..problems.linear.spectral import spectral_radius
@@ -245,7 +246,7 @@ def configurations(
             p = index_parameters(spec, index, params)
             for dec in decs:
                 for kk in ks:
-                    for scheme in (name for name in schemes if get_scheme(name).couples(dec)):
+                    for scheme in (name for name in schemes if couples(get_scheme(name), dec)):
                         s = Configuration(name, index, p, dec, kk, scheme)
                         s.engine_method(1.0)  # refuses bad values now (e.g. weighted index 1 with b = 0)
                         out.append(s)

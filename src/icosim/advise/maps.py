@@ -29,6 +29,7 @@ import pandas as pd
 
 from ..engine.decompositions import DECOMPOSITIONS
 from ..engine.schemes import get_scheme
+from ..engine.stages import check
 from ..io.netcdf import provenance_attrs, write_netcdf
 from ..studies.stability.datasets import stability_panel
 from ..studies.stability.panels import RATIOS, PanelSpec, grid_axis
@@ -74,7 +75,7 @@ def map_panels(method, method_params, decomposition, ks, *, command: str = "", p
     specs = map_specs(method, method_params, decomposition, ks, **grid)
     for spec in specs:  # every panel checked (method, decomposition, grid) before the first is computed
         spec.coupling_method().check_decomposition(DECOMPOSITIONS[spec.decomposition])
-        get_scheme(spec.scheme).check_decomposition(spec.decomposition)
+        check(get_scheme(spec.scheme), spec.decomposition)
         grid_axis(spec.lr1, spec.n)
         grid_axis(spec.li1, spec.n)
     out = []

@@ -12,6 +12,7 @@ from ..engine import methods
 from ..engine.decompositions import DECOMPOSITIONS
 from ..engine.schemes import get_scheme
 from ..engine.spectral.policy import POLICIES
+from ..engine.stages import check
 from ..errors import ParameterError
 from ..io.jsonio import dumps
 from .arguments import NEGATIVE_NUMBER, add_scheme_arguments, digits, fail, number, order, positive_int
@@ -99,7 +100,7 @@ def run(args, parser) -> int:
         specs = map_specs(args.method, given, args.decomposition, args.k, **grid)
         for s in specs:
             s.coupling_method().check_decomposition(DECOMPOSITIONS[s.decomposition])
-            get_scheme(s.scheme).check_decomposition(s.decomposition)
+            check(get_scheme(s.scheme), s.decomposition)
         for name in ("lr1", "li1"):
             try:
                 grid_axis(getattr(args, name), args.n)

@@ -30,6 +30,7 @@ from ..engine.bounds import MAX_BITS_LIMIT, MAX_DIGITS, MAX_GUARD_BITS, MAX_K, c
 from ..engine.decompositions import DECOMPOSITIONS, get_decomposition
 from ..engine.schemes import JACOBI, get_scheme
 from ..engine.spectral.policy import reason_code
+from ..engine.stages import check
 from ..errors import ParameterError, PointTimeout
 from ..io.jsonio import dumps
 from .arguments import add_scheme_arguments, bits, decimal, digits, order, seconds
@@ -109,7 +110,7 @@ def run(args, parser) -> int:
         method = _method_from_args(args)
         decomposition = get_decomposition(args.decomposition)
         method.check_decomposition(decomposition)
-        scheme.check_decomposition(decomposition)
+        check(scheme, decomposition)
         model = TestModel(args.lr1, args.li1, args.am21, args.alr21, args.ali21)
         check_derived(model)  # k = lr^2 + li^2, ... finite in float64
     except ParameterError as exc:

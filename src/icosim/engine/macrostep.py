@@ -1,14 +1,14 @@
-"""The one macro-step algorithm (Sect. 2): predictor, corrected coupling
-variables, corrector, projection.  It serves every method, decomposition,
-approximation order and coupling scheme (Jacobi, Gauss-Seidel:
-:mod:`icosim.engine.schemes`), the linear test model and the nonlinear pendulum alike.
+"""The one macro-step algorithm (Sect. 2): predictor, corrected coupling variables, corrector, projection.
+It serves every method, decomposition, approximation order, coupling scheme (Jacobi, Gauss-Seidel in any
+order: :mod:`icosim.engine.schemes`) and number of subsystems and joints (:mod:`icosim.engine.graph`), the
+linear models, the nonlinear pendulum and FMU units alike.
 
-A *problem* (:class:`icosim.engine.problem.CosimulationProblem`, whose docstring
-states the contract) supplies the subsystems, the coupling conditions and their
-sensitivities; the *method* (:class:`icosim.engine.methods.CouplingMethod`) only
-decides how the corrected coupling variables are formed from ``e_p``, residuals
-and Jacobians.  The step counts its coupling solves and projections in the
-problem's :attr:`~icosim.engine.problem.CosimulationProblem.work`.
+A *problem* (:class:`icosim.engine.problem.CosimulationProblem`, whose docstring states the contract)
+supplies the subsystems, the coupling conditions and their sensitivities; the *method*
+(:class:`icosim.engine.methods.CouplingMethod`) only decides how the corrected coupling variables are formed
+from ``e_p``, residuals and Jacobians; the scheme's *stages* (:mod:`icosim.engine.stages`) say which
+subsystems advance, which joints close and who responds how.  The step counts its coupling solves and
+projections in the problem's :attr:`~icosim.engine.problem.CosimulationProblem.work`.
 """
 
 from __future__ import annotations
@@ -18,7 +18,8 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
-from .schemes import JACOBI, N_SUBSYSTEMS, Scheme, get_scheme
+from .schemes import JACOBI, Scheme, get_scheme
+from .stages import plan
 
 if TYPE_CHECKING:
     from .backends import Backend
@@ -60,14 +61,15 @@ def macro_step(
 
     Parameters
     ----------
-    scheme : :class:`icosim.engine.schemes.Scheme` (or its name): the order of the
-        subsystems.  Jacobi (default, the paper's): every subsystem is predicted
-        and corrected.  Gauss-Seidel: the leading subsystem advances once with
-        the extrapolation polynomials, its end state is final, and it enters
-        the corrected coupling variables with its algebraic gradients and its
-        finished outputs; only the other subsystem is corrected.  A scheme whose
-        leading outputs stay as integrated (``reevaluates_leading`` False) skips
-        the re-evaluation, and the leading subsystem does not respond at all.
+    scheme : :class:`icosim.engine.schemes.Scheme` (or its name): the order of the subsystems, as stages
+        (:mod:`icosim.engine.stages`).  At each stage its subsystems are predicted with the extrapolation
+        polynomials; the joints it closes get corrected coupling variables, from the stage's subsystems'
+        full gradients and the finished subsystems' algebraic ones (their outputs re-evaluated with the
+        corrected variables; a scheme whose earlier outputs stay as integrated skips that and they do not
+        respond); the stage's subsystems in a closed joint are corrected with the interpolation polynomials
+        through them.  A joint not yet closed drives its subsystems with its extrapolated variables: the
+        interpolation polynomial through ``e_p`` at ``T_N+1`` and the past samples is the extrapolation
+        polynomial.  Jacobi (default, the paper's) is one stage: every subsystem, every joint.
     iterations : number of corrector steps.  The paper's scheme is one
         (semi-implicit; exact for the linear model because the sensitivities
         are constant).  More steps re-linearise about the latest coupling
@@ -84,34 +86,51 @@ def macro_step(
     state_new, history_new, y_new
     """
     scheme = get_scheme(scheme)
-    subsystems = range(N_SUBSYSTEMS)
+    graph = problem.graph
+    stages = plan(scheme, graph).stages
     e = problem.extrapolate(history)
-    # step 1: every subsystem with the extrapolation polynomials; a leading one is then final
-    ends, ys = map(list, zip(*(problem.predict(i, state, history, final=i in scheme.leading) for i in subsystems)))
-    fixed = scheme.fixed(ends)
-    y = problem.stack(ys)
-    for it in range(max(1, iterations)):
-        # step 2: corrected coupling variables (leading subsystems: finished outputs, algebraic gradients)
-        r = problem.residuals(y)
-        J = problem.jacobians(state, history, e, y, fixed, algebraic=scheme.reevaluates_leading)
-        e_new = method.corrected_coupling(e, r, J, problem.backend)
-        problem.work.coupling_solves += method.n_solves
-        if it > 0 and tol is not None and _max_abs(e_new - e) <= tol:
-            break  # converged: the corrector already ran with (nearly) e_new
-        e_old, e = e, e_new
-        # step 3: corrector of the corrected subsystems; the leading ones' outputs follow e algebraically
-        for i in subsystems:
-            if i in scheme.leading:
-                if scheme.reevaluates_leading:
-                    ys[i] = problem.reevaluate(i, ends[i], ys[i], e_old, e)
-            else:
+    ends: list[Any] = [None] * graph.n_subsystems
+    ys: list[Any] = [None] * graph.n_subsystems
+    for stage in stages:
+        # step 1: the stage's subsystems with the extrapolation polynomials; those in no closed joint are final
+        for i in stage.units:
+            ends[i], ys[i] = problem.predict(i, state, history, final=i not in stage.corrected)
+        if stage.conditions is None:
+            continue
+        cols = stage.columns
+        every = len(cols) == graph.n_coupling  # the stage closes every joint: e itself, in its order
+        e_held = e if every else e[..., cols]  # as the stage's predictors and the finished subsystems saw it
+        for it in range(max(1, iterations)):
+            # step 2: corrected coupling variables of the closed joints
+            e_s = e if every else e[..., cols]
+            y_s = problem.stack([ys[i] for i in stage.responders])
+            r = problem.residuals(y_s, e_s, stage.conditions, e_held)
+            J = problem.jacobians(state, history, e, ys, ends, stage, algebraic=scheme.reevaluates_leading)
+            e_new = method.corrected_coupling(e_s, r, J, problem.backend)
+            problem.work.coupling_solves += method.n_solves
+            if it > 0 and tol is not None and _max_abs(e_new - e_s) <= tol:
+                break  # converged: the corrector already ran with (nearly) e_new
+            e_old, e = e, e_new if every else _with_columns(e, cols, e_new)
+            # step 3: corrector of the stage's subsystems; the finished ones' outputs follow e algebraically
+            for i in stage.corrected:
                 ends[i], ys[i] = problem.correct(i, state, history, e)
-        y = problem.stack(ys)
+            if scheme.reevaluates_leading:
+                for i in stage.finished:
+                    ys[i] = problem.reevaluate(i, ends[i], ys[i], e_old, e)
+    y = problem.stack(ys)
     state_new = problem.join(ends)
     if method.projection:  # step 4
         state_new = problem.project(state_new)
         problem.work.projections += 1
     return state_new, problem.shift(history, e), y
+
+
+def _with_columns(e: Any, cols: tuple[int, ...], values: Any) -> Any:
+    """``e`` with the entries ``cols`` of its last axis replaced by ``values`` (leading axes broadcast)."""
+    lead = np.broadcast_shapes(e.shape[:-1], values.shape[:-1])
+    out = np.array(np.broadcast_to(e, lead + e.shape[-1:]), copy=True)
+    out[..., list(cols)] = values
+    return out
 
 
 def _max_abs(values: Any) -> float:

@@ -1,27 +1,33 @@
 """The co-simulation problem: what :func:`icosim.engine.macrostep.macro_step` needs of it.
 
-A problem couples two subsystems through the coupling variables ``e`` of its
-decomposition.  :class:`CosimulationProblem` holds what every problem shares --
-the decomposition, the approximation order ``k``, the arithmetic, the
-extrapolation (Eq. 9/35/59) and shift of the coupling history, the samples the
-corrector's interpolation polynomial runs through (Eq. 11), and a count of the
-work done -- and states the contract a subclass meets.  The linear test model
-(:class:`icosim.problems.linear.problem.LinearCosimulation`) and the double pendulum
-(:class:`icosim.problems.pendulum.problem.PendulumCosimulation`) are the two subclasses.
+A problem couples ``N`` subsystems by the joints of its coupling graph (:mod:`icosim.engine.graph`) through
+the coupling variables ``e`` of the joints' decompositions.  :class:`CosimulationProblem` holds what every
+problem shares -- the graph, the approximation order ``k``, the arithmetic, the extrapolation (Eq. 9/35/59)
+and shift of the coupling history, the samples the corrector's interpolation polynomial runs through
+(Eq. 11), the coupling conditions and their Jacobians assembled from each subsystem's sensitivities, and a
+count of the work done -- and states the contract a subclass meets.  The linear models
+(:mod:`icosim.problems.linear`), the double pendulum (:mod:`icosim.problems.pendulum`) and FMU units
+(:mod:`icosim.problems.fmu`) are its subclasses.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from . import layout
 from .backends import Backend, Float64
 from .bounds import check_k
-from .decompositions import Decomposition, get_decomposition
+from .decompositions import Decomposition
+from .graph import CouplingGraph
 from .lagrange import corrector_nodes, predictor_nodes, weights_at
+
+if TYPE_CHECKING:
+    from .residuals import Conditions
+    from .stages import Stage
 
 __all__ = ["CosimulationProblem", "Work"]
 
@@ -49,64 +55,60 @@ class Work:
 
 
 class CosimulationProblem:
-    """Base class of co-simulation problems (two subsystems, any coupling scheme).
+    """Base class of co-simulation problems (any number of subsystems and joints, any coupling scheme).
 
-    Arrays: the state ``s`` is the subsystems' states at ``T_N`` (layout set by
-    the subclass); the coupling history ``h[..., j, :] = e_N-j``, ``j = 0..k``;
-    the outputs ``y`` at ``T_N+1`` are what the coupling conditions are formed
-    from.  Leading batch axes are allowed wherever the subclass allows them.
+    Arrays: the state ``s`` is the subsystems' states at ``T_N`` (layout set by the subclass); the coupling
+    history ``h[..., j, :] = e_N-j``, ``j = 0..k``; the outputs of subsystem ``i`` at ``T_N+1``,
+    ``y_i[..., p, q, c]``, are port ``p``'s position, velocity, acceleration and force (``q``, as
+    :data:`icosim.engine.graph.POSITION` ...), component ``c``.  Leading batch axes are allowed wherever the
+    subclass allows them.
 
     The problem knows nothing of the order in which its subsystems advance:
-    :func:`icosim.engine.macrostep.macro_step` drives each subsystem ``i`` (0 or 1)
-    separately, as the scheme (:mod:`icosim.engine.schemes`: Jacobi, Gauss-Seidel)
-    says.  A subclass calls ``super().__init__(decomposition, k, backend)`` and
-    implements, per subsystem ``i``:
+    :func:`icosim.engine.macrostep.macro_step` drives each subsystem ``i`` separately, as the scheme's stages
+    (:mod:`icosim.engine.stages`) say.  A subclass calls ``super().__init__(graph, k, backend)`` (a
+    decomposition for ``graph``: the paper's pair) and implements, per subsystem ``i``:
 
     ``predict(i, state, history, *, final=False) -> (end_i, y_i)``
-        subsystem ``i`` integrated over the macro step with the extrapolation
-        polynomials through the history (Eq. 9/35/59): its state ``end_i`` at
-        ``T_N+1`` and its outputs ``y_i``.  ``final=True`` says the subsystem
-        leads a sequential scheme: ``end_i`` is final and no gradient through
-        its integration will be asked for (a problem that computes gradients
-        in the same pass may skip them).
-    ``correct(i, state, history, e_new) -> (end_i, y_i)``
-        subsystem ``i`` integrated with the interpolation polynomials through
-        :meth:`corrector_samples` (Eq. 11).
+        subsystem ``i`` integrated over the macro step with the extrapolation polynomials through the
+        history (Eq. 9/35/59): its state ``end_i`` at ``T_N+1`` and its outputs ``y_i``.  ``final=True``
+        says ``end_i`` is final and no gradient through its integration will be asked for (a problem that
+        computes gradients in the same pass may skip them).
+    ``correct(i, state, history, e) -> (end_i, y_i)``
+        subsystem ``i`` integrated with the interpolation polynomials through :meth:`corrector_samples`
+        (Eq. 11).
     ``reevaluate(i, end_i, y_i, e_old, e_new) -> y_i``
-        the outputs of subsystem ``i`` at its fixed end state ``end_i``,
-        re-evaluated with the coupling variables ``e_new`` at ``T_N+1``
-        instead of ``e_old`` (only the outputs its equations of motion tie
-        algebraically to the input at ``T_N+1`` change: acceleration, coupling
-        force, multiplier).
+        the outputs of subsystem ``i`` at its fixed end state ``end_i``, re-evaluated with the coupling
+        variables ``e_new`` at ``T_N+1`` instead of ``e_old`` (only the outputs its equations of motion tie
+        algebraically to the input at ``T_N+1`` change: acceleration, coupling force, multiplier).
+    ``sensitivity(i, state, history, e, end=None, y=None) -> dy_i/du_i``
+        shape ``(..., n_inputs_i) + y_i.shape[-3:]``: how the outputs follow subsystem ``i``'s inputs
+        (:meth:`inputs`) at ``T_N+1``.  ``end is None``: through its corrector integration (full gradients,
+        Eq. 13/39/63); otherwise ``end`` is its final end state and it responds only algebraically (as
+        :meth:`reevaluate`).  ``y``: its outputs at ``e`` as they stand (a difference quotient's base).
 
-    and, for the coupled pair,
+    and, for the whole,
 
-    ``join(ends) -> state`` and ``stack(ys) -> y``
-        the subsystems' end states and outputs as one state and one output array.
-    ``residuals(y) -> dict``
-        the coupling conditions at ``T_N+1``: ``pos``, ``vel``, ``acc`` (the
-        constraint on each level, shape ``(..., n_c)``) and ``force`` (balance
-        of the multipliers of kinematically driven subsystems, ``(..., n_f)``).
-    ``jacobians(state, history, e, y, fixed=(None, None), algebraic=True) -> dict``
-        ``d residuals / d e_N+1`` at ``e`` for the same levels, shape
-        ``(..., n, n_e)``.  ``fixed[i] is None``: subsystem ``i`` responds
-        through its corrector integration (full gradients, Eq. 13/39/63);
-        otherwise ``fixed[i]`` is its final end state and it responds only
-        algebraically (as :meth:`reevaluate`), or, with ``algebraic=False``,
-        not at all (its outputs stay as integrated).
+    ``join(ends) -> state``
+        the subsystems' end states as one state.
     ``project(state) -> state``
         the projection step (needed by methods that project).
 
-    and counts each subsystem integration in :attr:`work`.  The base class
-    provides :meth:`extrapolate`, :meth:`shift` and :meth:`corrector_samples`;
-    :func:`icosim.engine.macrostep.macro_step` only calls these members plus
-    :attr:`backend`.
+    and counts each subsystem integration in :attr:`work`.  The base class provides :meth:`extrapolate`,
+    :meth:`shift`, :meth:`corrector_samples`, :meth:`inputs`, :meth:`stack`, :meth:`residuals` (the engine's
+    coupling conditions, :mod:`icosim.engine.residuals`, scaled by :attr:`condition_scale`) and
+    :meth:`jacobians` (assembled from the sensitivities; kept when :attr:`constant_sensitivities`); a problem
+    with conditions of its own overrides the last two.
     """
 
-    def __init__(self, decomposition: str | Decomposition, k: int, backend: Backend | None = None) -> None:
+    #: the sensitivities do not change from step to step (a linear problem): the Jacobians are formed once
+    constant_sensitivities: bool = False
+    #: factors of the constraint's position, velocity and acceleration levels (None: the engine's time)
+    condition_scale: Sequence[Any] | None = None
+
+    def __init__(self, graph: CouplingGraph | str | Decomposition, k: int, backend: Backend | None = None) -> None:
         k = check_k(k)  # 0 .. icosim.engine.bounds.MAX_K
         self.backend = be = backend or Float64()
-        self.decomposition = get_decomposition(decomposition)
+        self.graph = graph if isinstance(graph, CouplingGraph) else CouplingGraph.pair(graph)
         self.k = k
         self.pred_nodes = predictor_nodes(k)
         self.corr_nodes = corrector_nodes(k)
@@ -114,16 +116,24 @@ class CosimulationProblem:
         self.w_pred = np.array([be.const(w) for w in weights_at(self.pred_nodes, 1)], dtype=be.dtype)
         self.work = Work()
         self._extrapolated: tuple = (None, None, None)  # (history, weights, e_p) of the last extrapolation
+        self._jacobians: dict = {}
+
+    @property
+    def decomposition(self) -> Decomposition:
+        """The decomposition of a problem with one joint (the paper's pair)."""
+        if self.graph.n_joints != 1:
+            raise AttributeError(f"a problem with {self.graph.n_joints} joints has a decomposition per joint")
+        return self.graph.joints[0].decomposition
 
     @classmethod
     def check_decomposition(cls, decomposition: str | Decomposition) -> None:
         """Refuse (:class:`~icosim.errors.ParameterError`) a decomposition whose coupling conditions this
-        problem cannot form; the linear test model forms them for every registered one."""
+        problem cannot form; the engine's conditions exist for every registered one."""
 
     @property
     def n_coupling(self) -> int:
         """Number of coupling variables ``e`` (per time point)."""
-        return self.decomposition.n_coupling
+        return self.graph.n_coupling
 
     def extrapolate(self, history: np.ndarray) -> np.ndarray:
         """Predicted coupling variables ``e_p`` at ``T_N+1`` (Eq. 9/35/59).  A macro step asks for it once and
@@ -143,43 +153,90 @@ class CosimulationProblem:
         """The history one macro step later: ``e_new`` prepended, the oldest sample dropped."""
         return _prepend(e_new, history[..., :-1, :])
 
-    # -- to be implemented by a subclass ------------------------------------------
-    def predict(  # pragma: no cover - contract
-        self, i: int, state: np.ndarray, history: np.ndarray, *, final: bool = False
-    ) -> tuple[np.ndarray, np.ndarray]:
-        raise NotImplementedError
+    def inputs(self, i: int, e: Any) -> Any:
+        """Subsystem ``i``'s inputs from coupling variables on the last axis (:meth:`CouplingGraph.inputs`):
+        samples ``(..., nodes, n_e)`` give ``(..., nodes, n_inputs_i)``."""
+        return self.graph.inputs(i, e)
 
-    def correct(  # pragma: no cover - contract
-        self, i: int, state: np.ndarray, history: np.ndarray, e_new: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray]:
-        raise NotImplementedError
+    def stack(self, ys: Sequence[Any]) -> Any:
+        """Outputs of several subsystems, port after port: ``(..., ports, 4, n_c)``."""
+        if len(ys) == 1:
+            return ys[0]
+        return layout.concatenate(np.broadcast_arrays(*ys), axis=-3)
 
-    def reevaluate(  # pragma: no cover - contract
-        self, i: int, end: np.ndarray, y: np.ndarray, e_old: np.ndarray, e_new: np.ndarray
-    ) -> np.ndarray:
-        raise NotImplementedError
+    def residuals(self, y: Any, e: Any, conditions: Conditions | None = None, e_held: Any = None) -> dict[str, Any]:
+        """The coupling conditions at ``T_N+1`` (:class:`icosim.engine.residuals.Conditions`): ``pos``, ``vel``,
+        ``acc`` (the constraint on each level) and ``force`` (the balance of forces), rows on the last axis,
+        from the outputs ``y`` of ``conditions.units`` and their joints' coupling variables ``e`` (default:
+        every joint, from every subsystem's outputs and all of ``e``); ``e_held``: the variables as the
+        conditions' held subsystems saw them."""
+        if conditions is None:
+            conditions = self.every_condition
+        return conditions(y, e, scale=self.condition_scale, e_held=e_held)
 
-    def join(self, ends: Sequence[np.ndarray]) -> np.ndarray:  # pragma: no cover - contract
-        raise NotImplementedError
+    @property
+    def every_condition(self) -> Conditions:
+        """The conditions of every joint, from every subsystem's outputs (:meth:`stack` of all)."""
+        from .residuals import Conditions
 
-    def stack(self, ys: Sequence[np.ndarray]) -> np.ndarray:  # pragma: no cover - contract
-        raise NotImplementedError
+        graph = self.graph
+        return Conditions(graph, range(graph.n_joints), range(graph.n_subsystems))
 
-    def residuals(self, y: np.ndarray) -> dict[str, np.ndarray]:  # pragma: no cover - contract
-        raise NotImplementedError
-
-    def jacobians(  # pragma: no cover - contract
-        self,
-        state: np.ndarray,
-        history: np.ndarray,
-        e: np.ndarray,
-        y: np.ndarray,
-        fixed: Sequence[np.ndarray | None] = (None, None),
+    def jacobians(
+        self, state: Any, history: Any, e: Any, ys: Sequence[Any], ends: Sequence[Any], stage: Stage,
         algebraic: bool = True,
-    ) -> dict[str, np.ndarray]:
+    ) -> dict[str, Any]:  # fmt: skip
+        """``d residuals / d e`` of ``stage``'s closed joints by their coupling variables, ``(..., rows, cols)``.
+
+        The subsystems the stage corrects respond through their corrector integration, the finished ones
+        algebraically at their end states ``ends[i]`` (``algebraic=False``: not at all).  Each subsystem's
+        :meth:`sensitivity` is carried to the coupling variables by the graph's input map and through the
+        conditions, which are linear in outputs and coupling variables together."""
+        key = (stage, algebraic)
+        if self.constant_sensitivities and key in self._jacobians:
+            return self._jacobians[key]
+        cols = stage.columns
+        blocks = []
+        for i in stage.responders:
+            if i in stage.corrected:
+                S = self.sensitivity(i, state, history, e, None, ys[i])
+            elif algebraic:
+                S = self.sensitivity(i, state, history, e, ends[i], ys[i])
+            else:
+                S = 0 * self.sensitivity(i, state, history, e, ends[i], ys[i])
+            B = self.graph.input_matrix(i, cols)
+            if S.dtype == object:
+                B = np.array([[self.backend.const(b) for b in row] for row in B], dtype=object)
+            # (..., inputs, ports, 4, n_c) x (inputs, cols) -> (..., cols, ports, 4, n_c)
+            blocks.append(np.moveaxis(np.tensordot(S, B, axes=([-4], [0])), -1, -4))
+        dY = self.stack(blocks)
+        be = self.backend
+        dE = np.full((len(cols), len(cols)), be.const(0), dtype=be.dtype)
+        for c in range(len(cols)):
+            dE[c, c] = be.const(1)
+        res = self.residuals(dY, dE, stage.conditions, 0 * dE)  # a held multiplier does not follow e
+        jac = {key_: np.swapaxes(val, -1, -2) for key_, val in res.items()}
+        if self.constant_sensitivities:
+            self._jacobians[key] = jac
+        return jac
+
+    # -- to be implemented by a subclass ------------------------------------------
+    def predict(self, i: int, state: Any, history: Any, *, final: bool = False) -> Any:  # pragma: no cover
         raise NotImplementedError
 
-    def project(self, state: np.ndarray) -> np.ndarray:  # pragma: no cover - contract
+    def correct(self, i: int, state: Any, history: Any, e: Any) -> Any:  # pragma: no cover - contract
+        raise NotImplementedError
+
+    def reevaluate(self, i: int, end: Any, y: Any, e_old: Any, e_new: Any) -> Any:  # pragma: no cover
+        raise NotImplementedError
+
+    def sensitivity(self, i: int, state: Any, history: Any, e: Any, end: Any = None, y: Any = None) -> Any:
+        raise NotImplementedError  # pragma: no cover - contract
+
+    def join(self, ends: Sequence[Any]) -> Any:  # pragma: no cover - contract
+        raise NotImplementedError
+
+    def project(self, state: Any) -> Any:  # pragma: no cover - contract
         raise NotImplementedError(f"{type(self).__name__} has no projection step")
 
 

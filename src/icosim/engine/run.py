@@ -18,6 +18,7 @@ import numpy as np
 from ..errors import StepFailure
 from .macrostep import CouplingRule, macro_step
 from .schemes import JACOBI, get_scheme
+from .stages import plan
 
 if TYPE_CHECKING:
     from .problem import CosimulationProblem
@@ -70,7 +71,8 @@ def simulate(
     ``record=False`` keeps only the start and the last step.  ``step_kw`` go to
     :func:`~icosim.engine.macrostep.macro_step` (``scheme``, ``iterations``, ``tol``).
     """
-    get_scheme(step_kw.get("scheme", JACOBI)).check_decomposition(problem.decomposition)
+    # refuses what the scheme cannot serve (a wrapper of a method reads as the method)
+    plan(get_scheme(step_kw.get("scheme", JACOBI)), problem.graph, method)  # type: ignore[arg-type]
     outputs: list[np.ndarray | None]  # outputs[0]: none yet
     states, coupling, outputs = [state], [history[..., 0, :]], [None]
     diverged = failed = reason = error = None

@@ -2,7 +2,8 @@
 
 The engine knows no model.  A model whose macro step is linear in the state and the coupling history (the
 linear two-mass model, a linear chain: :mod:`icosim.problems.linear`) offers its points as a
-:class:`LinearFamily`: a grid of points, each point one configuration of one decomposition and order ``k``.
+:class:`LinearFamily`: a grid of points, each point one configuration of one coupling graph (its subsystems, joints and
+their decompositions) and order ``k``.
 The engine forms the amplification matrix from the macro step by linearity
 (:func:`icosim.engine.spectral.matrix.amplification_matrix`), its spectral radius in float64 with an error
 estimate, at any precision, and certified in ball arithmetic, and applies the precision policy -- asking the
@@ -26,7 +27,7 @@ if TYPE_CHECKING:
     import numpy as np
 
     from ..backends import Backend
-    from ..decompositions import Decomposition
+    from ..graph import CouplingGraph
     from ..methods.base import CouplingMethod
     from ..schemes import Scheme
 
@@ -34,11 +35,11 @@ __all__ = ["LinearFamily"]
 
 
 class LinearFamily(ABC):
-    """Parameter points of one linear co-simulation problem (one decomposition, one ``k``), as the spectral
+    """Parameter points of one linear co-simulation problem (one coupling graph, one ``k``), as the spectral
     analysis asks for them.  Points are addressed by index tuples of :attr:`shape`."""
 
-    #: the decomposition (a registered :class:`~icosim.engine.decompositions.Decomposition`) and the order k
-    decomposition: Decomposition = None  # type: ignore[assignment]  # a placeholder: every family sets its own
+    #: the coupling graph (:class:`~icosim.engine.graph.CouplingGraph`) and the order k
+    graph: CouplingGraph = None  # type: ignore[assignment]  # a placeholder: every family sets its own
     k: int = 0
     #: why a point whose derived quantities overflow float64 is undecided
     overflow_reason = "overflow: a derived quantity of the model is not finite in float64"
@@ -83,6 +84,7 @@ class LinearFamily(ABC):
         on which the backend does for every point what it does for that point alone."""
 
     def check(self, method: CouplingMethod, scheme: Scheme) -> None:
-        """Refuse (:class:`~icosim.errors.ParameterError`) a method or scheme the decomposition cannot take."""
-        method.check_decomposition(self.decomposition)
-        scheme.check_decomposition(self.decomposition)
+        """Refuse (:class:`~icosim.errors.ParameterError`) a method or scheme the graph cannot take."""
+        from ..stages import plan
+
+        plan(scheme, self.graph, method)

@@ -27,6 +27,7 @@ def check_scene(scene, *, cache=None) -> dict:
     ``units`` (name, what the unit is, its findings), ``scene_findings`` and ``refused`` (any refusal)."""
     c = scene.coupling
     kinds = get_decomposition(c["decomposition"]).kinds
+    signs = scene.graph_signs()
     units, couplings, rows = [], [], []
     try:
         for (name, sub), kind in zip(scene.data["subsystems"].items(), kinds):
@@ -52,14 +53,20 @@ def check_scene(scene, *, cache=None) -> dict:
             row["findings"].extend(asdict(f) for f in found.findings)
             mass = sub.get("mass")
             mass = unit.get_named(mass) if isinstance(mass, str) else mass
-            couplings.append(Coupling(kind, sub["force_sign"], mass, found.feedthrough, found.gain))
+            couplings.append(Coupling(kind, signs[len(couplings)], mass, found.feedthrough, found.gain))
         scene_rows = []
         if len(units) == 2:
-            joint = joint_direction(scene.names, kinds, [c.force_sign for c in couplings], [c.gain for c in couplings])
+            joint = joint_direction(
+                scene.names, kinds, signs, [c.gain for c in couplings],
+                [-int(sub["force_sign"]) for sub in scene.data["subsystems"].values()],
+            )  # fmt: skip
             scene_rows.append(asdict(joint))
-            scene_rows.append(_guarded("scheme", lambda: check_scheme(scene, units, couplings), f"{c['scheme']}"))
+            graph = scene.graph(len(units[0].elements["position"]))
+            scene_rows.append(
+                _guarded("scheme", lambda: check_scheme(scene, units, couplings, graph), f"{c['scheme']}")
+            )
             problem = FmuCosimulation(
-                units, couplings, c["decomposition"], c["k"], c["H"], t0=units[0].t, perturbation=c["perturbation"]
+                units, couplings, graph, c["k"], c["H"], t0=units[0].t, perturbation=c["perturbation"]
             )
             try:
                 scene_rows.append(_start_row(scene, problem))

@@ -5,9 +5,9 @@
 * **feedthrough** -- does the coupling output (acceleration of a force-driven unit, the drive's force of a
   kinematically driven one) follow the coupling input without a step, as the ``ModelStructure`` declares or
   not; and does it respond at all, after a step.  The macro step and the identification use what the unit does;
-* **direction** -- the sign of that response: with the scene's ``force_sign``s, the joint's multiplier must act
-  on the two units with opposite signs (:func:`joint_direction`; a unit whose input acts against the physical
-  force needs the other ``force_sign``); a kinematically driven unit must move the way its prescribed
+* **direction** -- the sign of that response: with the scene's ``force_sign``s, every joint's multiplier must
+  act on its two units with opposite signs (:func:`joint_direction`; a unit whose input acts against the
+  physical force needs the other ``force_sign``); a kinematically driven unit must move the way its prescribed
   acceleration says;
 * units of measure and start values are checked when the unit is opened (:mod:`icosim.problems.fmu.measures`,
   :mod:`icosim.problems.fmu.variables`); they appear in the report too.
@@ -203,26 +203,34 @@ def _direction(kind, found, force_sign, velocity_gain) -> Finding:
     )
 
 
-def joint_direction(labels, kinds, force_signs, gains) -> Finding:
-    """The joint's check over both units: the multiplier must act on them with opposite signs (Newton's third
-    law), i.e. ``force_sign_1 * gain_1`` and ``force_sign_2 * gain_2`` of opposite sign.  The refusal names the
-    unit whose sign departs from the paper's convention (``+lambda`` on the first unit, ``-lambda`` on the second)."""
-    acts = [np.sign(fs * g) for fs, g in zip(force_signs, gains)]
-    if acts[0] * acts[1] < 0:
-        return Finding("direction", "pass", "the multiplier acts on the two units with opposite signs")
-    wrong = 0 if acts[0] < 0 else 1  # (+, +): the second departs from -lambda; (-, -): the first from +lambda
+def joint_direction(labels, kinds, signs, gains, fixes=None) -> Finding:
+    """The joints' check over all units: each joint's multiplier must act on its two units with opposite signs
+    (Newton's third law).  ``signs[i]`` is the sign with which the graph's coupling force reaches unit ``i``'s
+    input (its ``force_sign`` in the graph's sense: ``+lambda_j`` on a joint's first unit, ``-lambda_j`` on its
+    second), ``gains[i]`` the unit's measured response; so ``signs[i] * gains[i]`` must have one sign over the
+    connected units (positive in the graph's convention; all negative only turns every multiplier around).
+    The refusal names the units whose sign departs from the rest (ties: from the positive convention);
+    ``fixes[i]`` is the scene's ``force_sign`` that repairs unit ``i``."""
+    acts = [float(np.sign(s * g)) for s, g in zip(signs, gains)]
+    if len(set(acts)) == 1 and acts[0] != 0:
+        return Finding("direction", "pass", "every joint's multiplier acts on its two units with opposite signs")
+    expected = -1.0 if acts.count(-1.0) > acts.count(1.0) else 1.0
+    wrong = [i for i, a in enumerate(acts) if a != expected]
     per = ["m/s^2 per N" if k == "force" else "N per m/s^2" for k in kinds]
     said = " and ".join(
-        f"{lab}'s {'acceleration' if k == 'force' else 'drive force'} by {g:+.4g} {p} of its input (force_sign {int(fs):+d})"
-        for lab, k, g, p, fs in zip(labels, kinds, gains, per, force_signs)
+        f"{labels[i]}'s {'acceleration' if kinds[i] == 'force' else 'drive force'} by {gains[i]:+.4g} {per[i]} of "
+        f"its input"
+        for i in wrong
     )
+    fixes = fixes if fixes is not None else [-int(signs[i]) for i in range(len(signs))]
     return Finding(
         "direction",
         "refused",
-        f"the multiplier would move {said}: the joint would push both units the same way",
-        f"set subsystems.{labels[wrong]}.force_sign: {-int(force_signs[wrong]):d} (the multiplier then acts with "
-        "+lambda on the first unit and -lambda on the second)",
-        f"subsystems.{labels[wrong]}.force_sign",
+        f"the multiplier would move {said}, in the direction it moves the unit(s) at the other end of the joint: "
+        "the joint would push both units the same way",
+        "; ".join(f"set subsystems.{labels[i]}.force_sign: {fixes[i]:d}" for i in wrong)
+        + " (each multiplier then acts with +lambda on its first unit and -lambda on its second)",
+        f"subsystems.{labels[wrong[0]]}.force_sign",
     )
 
 

@@ -22,7 +22,9 @@ import time
 import numpy as np
 
 from ...engine.decompositions import get_decomposition
+from ...engine.graph import CouplingGraph
 from ...engine.schemes import get_scheme, standard_schemes
+from ...engine.stages import check, plan
 from ..linear.model import PhysicalModel
 from .errors import FmuError, SceneError
 from .run import open_units
@@ -140,13 +142,12 @@ def predict_scene(scene) -> dict:
         scheme = get_scheme(name)
         row = {"scheme": name, "scene": name == get_scheme(c["scheme"]).name}
         try:
-            scheme.check_decomposition(dec)
+            check(scheme, dec)
         except (ParameterError, AttributeError) as exc:
             rows.append(row | {"rho": None, "verdict": "not defined", "reason": str(exc)})
             continue
-        lacking = [
-            units[i].label for i in scheme.leading if scheme.reevaluates_leading and not couplings[i].feedthrough
-        ]
+        lacking = [units[i].label for i in plan(scheme, CouplingGraph.pair(dec)).reevaluated
+                   if not couplings[i].feedthrough]  # fmt: skip
         if lacking:
             why = f"it re-evaluates {lacking[0]} without a step, which has no direct feedthrough"
             rows.append(row | {"rho": None, "verdict": "not defined", "reason": why})

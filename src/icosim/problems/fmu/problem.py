@@ -1,30 +1,35 @@
-"""Two FMU units as a co-simulation problem: what :func:`icosim.engine.macrostep.macro_step` needs of them.
+"""FMU units joined by rigid joints as a co-simulation problem: what :func:`icosim.engine.macrostep.macro_step`
+needs of them.
 
-The problem holds no method-, order- or scheme-specific code: every method, ``k`` and scheme runs through the
-one macro step unchanged.  Each subsystem is a :class:`~icosim.problems.fmu.units.Unit`; its state at a communication
-point lives inside the FMU, saved with ``fmi2GetFMUstate`` and restored before every integration that starts
-there (docs/fmi.md).  The arrays the macro step sees are the observable part of it:
+The problem holds no method-, order- or scheme-specific code: every method, ``k``, scheme and graph runs
+through the one macro step unchanged.  Each subsystem is a :class:`~icosim.problems.fmu.units.Unit` with one
+port (its joint point); its state at a communication point lives inside the FMU, saved with
+``fmi2GetFMUstate`` and restored before every integration that starts there (docs/fmi.md).  The arrays the
+macro step sees are the observable part of it:
 
 * state ``s[i] = (x_i, v_i)`` (position and velocity of unit ``i``'s joint point, SI units; with ``n_d``
   components each -- one for a point on a line, two for a joint in the plane -- ``s[i]`` has ``2 n_d``
   entries, the positions first);
-* coupling variables ``e``: those of the decomposition in SI units (``lambda_c`` in N, ``a_tilde`` in m/s^2),
-  ``n_d`` components each;
-* outputs ``y[i] = (x_i, v_i, a_i, f_i)`` at ``T_N+1``, shape ``(4, n_d)``, with ``f_i`` the coupling force as
-  seen by unit ``i`` in the units of ``lambda_c``: the input for a force-driven unit,
+* coupling variables ``e``: those of the joints' decompositions in SI units (``lambda`` in N, ``a_tilde``
+  in m/s^2), ``n_d`` components each (:mod:`icosim.engine.graph`);
+* outputs ``y[i] = (x_i, v_i, a_i, f_i)`` at ``T_N+1``, shape ``(1, 4, n_d)``, with ``f_i`` the coupling
+  force on unit ``i`` in the graph's sense: the sum of its joints' ``+-lambda`` for a force-driven unit,
   ``force_sign * reaction_force`` for a kinematically driven one.
 
-The constraint residuals are those of the engine's dimensionless setting (``g``, ``H g'``, ``H^2 g''``), so the
-method parameters mean what they mean for the built-in models (:func:`icosim.engine.methods.engine_method`).
+A unit's input is ``force_sign`` times the force the graph gives it (:class:`Coupling`).  The constraint
+residuals are those of the engine's dimensionless setting (``g``, ``H g'``, ``H^2 g''``), so the method
+parameters mean what they mean for the built-in models (:func:`icosim.engine.methods.engine_method`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ...engine.graph import CouplingGraph
 from ...engine.lagrange import monomial_coefficients
 from ...engine.problem import CosimulationProblem
-from ...engine.residuals import coupling_conditions
+from ...engine.projection import mass_weighted_projection
+from ...engine.residuals import Conditions
 from ...errors import StepFailure
 from .errors import UnitStepError
 
@@ -35,8 +40,9 @@ _KINEMATIC_OUTPUTS = ("position", "velocity", "acceleration", "reaction_force")
 
 
 class Coupling:
-    """How one unit is coupled: its kind (``"force"`` or ``"kinematic"``), the sign of the coupling force on it,
-    its mass for the projection (None: the scene does not project), whether its coupling output follows its
+    """How one unit is coupled: its kind (``"force"`` or ``"kinematic"``), the sign of its force input and
+    reaction output relative to the coupling force the graph gives it (``+lambda_j`` on a joint's first
+    subsystem, ``-lambda_j`` on its second), its mass for the projection (None: the scene does not project), whether its coupling output follows its
     input without a step, and how much (measured: :func:`icosim.problems.fmu.inspection.inspect_unit`)."""
 
     def __init__(self, kind, force_sign, mass=None, feedthrough=True, gain=float("nan")):
@@ -51,16 +57,18 @@ class Coupling:
 
 
 class FmuCosimulation(CosimulationProblem):
-    """Two FMU units coupled by a rigid joint (decompositions ff, fd, df, dd).
+    """FMU units joined by rigid joints (decompositions ff, fd, df, dd per joint).
 
     Parameters
     ----------
-    units : two :class:`~icosim.problems.fmu.units.Unit`, opened at ``t0``.
-    couplings : two :class:`Coupling`, the kinds matching the decomposition's.
-    decomposition, k : as for every problem.
+    units : the :class:`~icosim.problems.fmu.units.Unit` s, opened at ``t0``.
+    couplings : a :class:`Coupling` per unit, the kinds matching the graph's.
+    graph : the :class:`~icosim.engine.graph.CouplingGraph` (one port per unit), or a decomposition: the
+        paper's two units joined by one joint.
+    k : as for every problem.
     H : macro-step size in s.
     t0 : start time.
-    perturbation : the sensitivities are difference quotients with the step ``perturbation * max(1, |e_j|)``
+    perturbation : the sensitivities are difference quotients with the step ``perturbation * max(1, |u|)``
         (exact up to rounding for linear units).
     sensitivities : ``"each-step"`` (recomputed every macro step) or ``"first-step"`` (computed once and kept:
         exact for linear units, whose sensitivities are constant).
@@ -70,7 +78,7 @@ class FmuCosimulation(CosimulationProblem):
         self,
         units,
         couplings,
-        decomposition,
+        graph,
         k,
         H,
         *,
@@ -78,36 +86,35 @@ class FmuCosimulation(CosimulationProblem):
         perturbation=1e-3,
         sensitivities="each-step",
     ):
-        super().__init__(decomposition, k)
         self.units, self.couplings = tuple(units), tuple(couplings)
         dims = {len(u.elements["position"]) for u in self.units}
         if len(dims) != 1:
-            raise ValueError("both units must name as many position components")
+            raise ValueError("every unit must name as many position components")
         #: components of the joint's position (1: a point on a line; 2: a joint in the plane)
         self.n_dim = dims.pop()
-        for i, (c, kind) in enumerate(zip(self.couplings, self.decomposition.kinds)):
-            if c.kind != kind:
-                raise ValueError(f"unit {self.units[i].label} is {c.kind}-driven, decomposition needs {kind}")
+        if not isinstance(graph, CouplingGraph):
+            graph = CouplingGraph.pair(graph, self.n_dim)
+        if graph.n_subsystems != len(self.units) or graph.n_components != self.n_dim or set(graph.ports) != {1}:
+            raise ValueError(f"the graph must join {len(self.units)} units of one port, {self.n_dim} components")
+        super().__init__(graph, k)
+        for i, c in enumerate(self.couplings):
+            if c.kind != graph.port_kind(i, 0):
+                raise ValueError(
+                    f"unit {self.units[i].label} is {c.kind}-driven, the graph needs {graph.port_kind(i, 0)}"
+                )
+        n = len(self.units)
         self.H, self.t0 = float(H), float(t0)
+        self.condition_scale = (1.0, self.H, self.H**2)
         self.perturbation, self.sensitivities = float(perturbation), sensitivities
+        self.constant_sensitivities = sensitivities == "first-step"
         self.step_index = 0  # macro steps completed
         self.C_pred = np.array(monomial_coefficients(self.pred_nodes), dtype=float)
         self.C_corr = np.array(monomial_coefficients(self.corr_nodes), dtype=float)
+        self._scale = [c.force_sign if c.kind == "force" else 1.0 for c in self.couplings]
         self._start = [u.save() for u in self.units]  # the FMU states at T_N
-        self._holds = ["start", "start"]  # what each unit holds now: "start", id of an end array, or "scratch"
-        self._ends = [{}, {}]  # id(end) -> (end, FMU state) of this macro step's integrations
-        self._jac = {}
+        self._holds = ["start"] * n  # what each unit holds now: "start", id of an end array, or "scratch"
+        self._ends = [{} for _ in range(n)]  # id(end) -> (end, FMU state) of this macro step's integrations
         self._committed = None
-
-    @property
-    def n_coupling(self) -> int:
-        """Coupling variables per time point: the decomposition's, ``n_dim`` components each."""
-        return self.decomposition.n_coupling * self.n_dim
-
-    def _inputs(self, i):
-        """The components of ``e`` that drive unit ``i``."""
-        j = self.decomposition.inputs[i]
-        return slice(j * self.n_dim, (j + 1) * self.n_dim)
 
     # -- time and the initial point -----------------------------------------------------------------
     @property
@@ -126,7 +133,7 @@ class FmuCosimulation(CosimulationProblem):
         return np.tile(e0, (self.k + 1, 1))
 
     def consistent_coupling(self, *, iterations: int = 4) -> np.ndarray:
-        """The coupling variables at ``T_0`` that meet the joint's condition on the acceleration level and the
+        """The coupling variables at ``T_0`` that meet the joints' conditions on the acceleration level and the
         balance of the drives' forces, from the units at their start (SI, ``(n_e,)``).
 
         Newton steps on those conditions as functions of ``e``, with difference quotients as the corrector
@@ -135,9 +142,10 @@ class FmuCosimulation(CosimulationProblem):
         its start, and the two outputs are extrapolated to ``T_0`` (second order in ``H``).  Linear units need
         one step.  The units are left at their start."""
         e = np.zeros(self.n_coupling)
-        starts = [self._start_outputs(i) for i in range(2)]
+        starts = [self._start_outputs(i) for i in range(len(self.units))]
+        conditions = Conditions(self.graph, range(self.graph.n_joints), range(len(self.units)))
         for _ in range(iterations):
-            r0 = self._start_conditions(e, starts)
+            r0 = self._start_conditions(e, starts, conditions)
             if not r0.size:
                 break
             h = self.perturbation * np.maximum(1.0, np.abs(e))
@@ -145,7 +153,7 @@ class FmuCosimulation(CosimulationProblem):
             for j in range(self.n_coupling):
                 ep = e.copy()
                 ep[j] += h[j]
-                J[:, j] = (self._start_conditions(ep, starts) - r0) / h[j]
+                J[:, j] = (self._start_conditions(ep, starts, conditions) - r0) / h[j]
             de = np.linalg.lstsq(J, -r0, rcond=None)[0]
             e = e + de
             if np.max(np.abs(de)) <= 1e-13 * max(1.0, np.max(np.abs(e))):
@@ -157,28 +165,26 @@ class FmuCosimulation(CosimulationProblem):
         self._to_start(i)
         return self.units[i].get(("position", "velocity"))
 
-    def _start_conditions(self, e, starts):
-        """The acceleration-level constraint and the force balance at ``T_0`` with the coupling variables ``e``."""
+    def _start_conditions(self, e, starts, conditions):
+        """The acceleration-level constraints and the force balances at ``T_0`` with the coupling variables ``e``."""
         ys = []
-        for i in range(2):
-            c, u = self.couplings[i], e[self._inputs(i)]
-            xv = starts[i]
+        for i, c in enumerate(self.couplings):
+            u = self.inputs(i, e)
             if c.feedthrough:
                 self._to_start(i)
-                self.units[i].set(c.input_key, (c.force_sign if c.kind == "force" else 1.0) * u)
+                self.units[i].set(c.input_key, self._scale[i] * u)
                 y = self._outputs(i, u)[1]
             else:
                 y = 2 * self._held_step(i, u, self.H) - self._held_step(i, u, 2 * self.H)
-            y[:2] = xv  # the state at T_0 as it is
+            y[0, :2] = starts[i]  # the state at T_0 as it is
             ys.append(y)
-        r = self.residuals(np.stack(ys))
+        r = self.residuals(self.stack(ys), e, conditions)
         return np.concatenate([r["acc"].ravel(), r["force"].ravel()])
 
     def _held_step(self, i, u, h):
         """Unit ``i``'s outputs after a step of ``h`` from its start with the input held at ``u``."""
         self._to_start(i)
-        c = self.couplings[i]
-        self.units[i].step(c.input_key, [(c.force_sign if c.kind == "force" else 1.0) * u], self.time, h, step_index=0)
+        self.units[i].step(self.couplings[i].input_key, [self._scale[i] * u], self.time, h, step_index=0)
         self._holds[i] = "scratch"
         return self._outputs(i, u)[1]
 
@@ -194,21 +200,22 @@ class FmuCosimulation(CosimulationProblem):
                 "an FMU problem advances only from the state it last returned (its units' states live in the FMUs)"
             )
 
-    def _integrate(self, i, samples, C):
-        """Unit ``i`` over ``[T_N, T_N+1]`` from its start, the input through ``samples`` (``(k+1, n_e)``) with
-        the monomial coefficients ``C``; returns its end ``(x, v)`` and outputs ``(x, v, a, f)``."""
+    def _integrate(self, i, U, C):
+        """Unit ``i`` over ``[T_N, T_N+1]`` from its start, its input through the samples ``U`` (``(k+1, n_dim)``)
+        with the monomial coefficients ``C``; returns its end ``(x, v)`` and outputs ``(1, 4, n_dim)``."""
         self._to_start(i)
-        unit, c = self.units[i], self.couplings[i]
-        coef = C @ samples[:, self._inputs(i)]  # (k + 1, n_dim)
-        scale = c.force_sign if c.kind == "force" else 1.0
-        unit.step(c.input_key, scale * coef, self.time, self.H, step_index=self.step_index + 1)
+        coef = C @ U  # (k + 1, n_dim)
+        self.units[i].step(
+            self.couplings[i].input_key, self._scale[i] * coef, self.time, self.H, step_index=self.step_index + 1
+        )
         self.work.subsystem_integrations += 1
         self._holds[i] = "scratch"
         return self._outputs(i, coef.sum(axis=0))
 
     def _outputs(self, i, u1):
-        """Unit ``i``'s end ``(x, v)`` and outputs ``(x, v, a, f)`` as it stands, its input ``u1`` at ``T_N+1``.
-        A unit that returns a value that is not finite for finite inputs is at fault (:class:`UnitStepError`)."""
+        """Unit ``i``'s end ``(x, v)`` and outputs ``(1, 4, n_dim)`` as it stands, its input ``u1`` at
+        ``T_N+1``.  A unit that returns a value that is not finite for finite inputs is at fault
+        (:class:`UnitStepError`)."""
         c = self.couplings[i]
         if c.kind == "force":
             x, v, a = values = self.units[i].get(_FORCE_OUTPUTS)
@@ -218,7 +225,7 @@ class FmuCosimulation(CosimulationProblem):
             f = c.force_sign * r
         if not np.isfinite(values).all() and np.isfinite(u1).all():
             self._not_finite(i, values)
-        return np.concatenate([x, v]), np.stack([x, v, a, f])
+        return np.concatenate([x, v]), np.stack([x, v, a, f])[None]
 
     def _not_finite(self, i, values):
         unit = self.units[i]
@@ -240,26 +247,25 @@ class FmuCosimulation(CosimulationProblem):
         if self._holds[i] != id(end):
             self.units[i].restore(self._ends[i][id(end)][1])
             self._holds[i] = id(end)
-        c = self.couplings[i]
-        self.units[i].set(c.input_key, (c.force_sign if c.kind == "force" else 1.0) * u1)
+        self.units[i].set(self.couplings[i].input_key, self._scale[i] * u1)
         return self._outputs(i, u1)[1]
 
     # -- the problem interface -------------------------------------------------------------------------
     def predict(self, i, state, history, *, final=False):
         self._check_state(state)
-        end, y = self._integrate(i, history, self.C_pred)
+        end, y = self._integrate(i, self.inputs(i, history), self.C_pred)
         self._keep(i, end)
         return end, y
 
     def correct(self, i, state, history, e_new):
         self._check_state(state)
-        end, y = self._integrate(i, self.corrector_samples(history, e_new), self.C_corr)
+        end, y = self._integrate(i, self.inputs(i, self.corrector_samples(history, e_new)), self.C_corr)
         self._keep(i, end)
         return end, y
 
     def reevaluate(self, i, end, y, e_old, e_new):
-        """Outputs at the fixed end state with the input at ``T_N+1`` set to ``e_new`` (``fmi2SetReal``, no step)."""
-        return self._at_end(i, end, np.asarray(e_new, dtype=float)[self._inputs(i)])
+        """Outputs at the fixed end state with the input at ``T_N+1`` set from ``e_new`` (``fmi2SetReal``, no step)."""
+        return self._at_end(i, end, self.inputs(i, np.asarray(e_new, dtype=float)))
 
     def join(self, ends):
         """The macro step's end: each unit's FMU state of ``ends[i]`` becomes the next start; the rest are freed."""
@@ -275,53 +281,43 @@ class FmuCosimulation(CosimulationProblem):
         self._committed = np.stack(ends)
         return self._committed
 
-    def stack(self, ys):
-        return np.stack(ys)
-
-    def residuals(self, y):
-        """Joint constraint on three levels (``g``, ``H g'``, ``H^2 g''``) and force balance, unit 1 minus unit 2
-        (:func:`icosim.engine.residuals.coupling_conditions`)."""
-        return coupling_conditions(y, self.decomposition, scale=(1.0, self.H, self.H**2))
-
-    def jacobians(self, state, history, e, y, fixed=(None, None), algebraic=True):
-        """``d residuals / d e_N+1`` by difference quotients: a unit that is corrected repeats its corrector step
-        with the perturbed input (restored start state, one ``doStep`` per coupling variable driving it); a
-        finished (leading) unit is re-evaluated at its end state with the perturbed input (no step)."""
-        key = tuple("full" if f is None else "algebraic" if algebraic else "none" for f in fixed)
-        if self.sensitivities == "first-step" and key in self._jac:
-            return self._jac[key]
+    def sensitivity(self, i, state, history, e, end=None, y=None):
+        """``dy_i/du_i`` by difference quotients from the outputs ``y`` at ``e``, ``(n_dim, 1, 4, n_dim)``: unit
+        ``i`` repeats its corrector step with each input component perturbed at ``T_N+1`` (restored start state,
+        one ``doStep`` each) or, at its fixed end state, is re-evaluated with it (no step)."""
         e = np.asarray(e, dtype=float)
-        h = self.perturbation * np.maximum(1.0, np.abs(e))
-        r0 = self.residuals(y)
-        jac = {name: np.zeros(val.shape + (self.n_coupling,)) for name, val in r0.items()}
-        for j in range(self.n_coupling):
-            yj = np.array(y, dtype=float, copy=True)
-            for i in range(2):
-                if j not in range(self.n_coupling)[self._inputs(i)] or key[i] == "none":
-                    continue
-                ep = e.copy()
-                ep[j] += h[j]
-                if key[i] == "full":
-                    yj[i] = self._integrate(i, self.corrector_samples(history, ep), self.C_corr)[1]
-                else:
-                    yj[i] = self._at_end(i, fixed[i], ep[self._inputs(i)])
-            for name, val in self.residuals(yj).items():
-                jac[name][..., j] = (val - r0[name]) / h[j]
-        self._jac[key] = jac
-        return jac
+        samples = self.inputs(i, self.corrector_samples(history, e))  # (k + 1, n_dim); row 0 at T_N+1
+        u1 = samples[0]
+        h = self.perturbation * np.maximum(1.0, np.abs(u1))
+        if y is not None:
+            base = y
+        else:
+            base = self._at_end(i, end, u1) if end is not None else self._integrate(i, samples, self.C_corr)[1]
+        out = np.empty((self.n_dim,) + base.shape)
+        for c in range(self.n_dim):
+            if end is not None:
+                up = u1.copy()
+                up[c] += h[c]
+                yp = self._at_end(i, end, up)
+            else:
+                Up = samples.copy()
+                Up[0, c] += h[c]
+                yp = self._integrate(i, Up, self.C_corr)[1]
+            out[c] = (yp - base) / h[c]
+        return out
 
     def project(self, state):
         """Mass-weighted projection of positions and velocities (Eq. 30), written into the units."""
         m = np.array([c.mass for c in self.couplings], dtype=float)
-        xv = (m[0] * state[0] + m[1] * state[1]) / m.sum()
+        projected = mass_weighted_projection(self.graph, m, np.asarray(state, dtype=float))
         n = self.n_dim
         for i, unit in enumerate(self.units):
             self._to_start(i)
-            unit.set("set_position", xv[:n])
-            unit.set("set_velocity", xv[n:])
+            unit.set("set_position", projected[i, :n])
+            unit.set("set_velocity", projected[i, n:])
             unit.free(self._start[i])
             self._start[i] = unit.save()
-        self._committed = np.stack([xv, xv])
+        self._committed = projected
         return self._committed
 
     def close(self):

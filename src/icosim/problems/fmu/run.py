@@ -10,6 +10,7 @@ import numpy as np
 from ...engine.decompositions import get_decomposition
 from ...engine.run import simulate
 from ...engine.schemes import get_scheme, standard_schemes
+from ...engine.stages import plan
 from .build import build_unit, is_source_dir
 from .errors import FmuError
 from .inspection import inspect_unit, joint_direction, refuse
@@ -85,6 +86,7 @@ def open_units(scene: Scene, *, cache=None, inspect=True):
     joint, :func:`check_scheme`; a refusal raises :class:`~icosim.problems.fmu.errors.FmuError`), and their couplings.
     ``inspect=False`` skips the measured checks (every unit is taken to have feedthrough)."""
     kinds = get_decomposition(scene.coupling["decomposition"]).kinds
+    signs = scene.graph_signs()
     units, couplings = [], []
     try:
         for (name, sub), kind in zip(scene.data["subsystems"].items(), kinds):
@@ -106,12 +108,15 @@ def open_units(scene: Scene, *, cache=None, inspect=True):
                 refuse(found)
                 feedthrough, gain = found.feedthrough, found.gain
                 unit.checked()
-            couplings.append(Coupling(kind, sub["force_sign"], mass, feedthrough, gain))
+            couplings.append(Coupling(kind, signs[len(couplings)], mass, feedthrough, gain))
         if inspect:
-            joint = joint_direction(scene.names, kinds, [c.force_sign for c in couplings], [c.gain for c in couplings])
+            joint = joint_direction(
+                scene.names, kinds, signs, [c.gain for c in couplings],
+                [-int(sub["force_sign"]) for sub in scene.data["subsystems"].values()],
+            )  # fmt: skip
             if joint.verdict == "refused":
                 raise FmuError(f"{scene.path}: {joint.key}: {joint.detail}; {joint.fix}")
-        check_scheme(scene, units, couplings)
+        check_scheme(scene, units, couplings, scene.graph(len(units[0].elements["position"])))
     except BaseException:
         for unit in units:
             unit.close()
@@ -119,15 +124,13 @@ def open_units(scene: Scene, *, cache=None, inspect=True):
     return units, couplings
 
 
-def check_scheme(scene: Scene, units, couplings):
-    """Refuse a scheme that re-evaluates a leading unit without a step where that unit's output follows its input
+def check_scheme(scene: Scene, units, couplings, graph):
+    """Refuse a scheme that re-evaluates a finished unit without a step where that unit's output follows its input
     only through a step."""
     scheme = get_scheme(scene.coupling["scheme"])
-    if not scheme.reevaluates_leading:
-        return
-    for i in scheme.leading:
+    for i in plan(scheme, graph).reevaluated:
         if not couplings[i].feedthrough:
-            others = [n for n in standard_schemes() if i not in get_scheme(n).leading]
+            others = [n for n in standard_schemes() if i not in plan(get_scheme(n), graph).reevaluated]
             out = "acceleration" if couplings[i].kind == "force" else "drive's force"
             raise FmuError(
                 f"{scene.path}: coupling.scheme: {scheme.name} re-evaluates the leading unit {units[i].label}'s "
@@ -216,7 +219,7 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
         problem = FmuCosimulation(
             units,
             couplings,
-            c["decomposition"],
+            scene.graph(len(units[0].elements["position"])),
             c["k"],
             c["H"],
             t0=float(scene.data.get("t_start", 0.0)),

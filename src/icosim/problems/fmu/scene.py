@@ -27,6 +27,7 @@ from pathlib import Path
 
 from ...engine.bounds import MAX_K
 from ...engine.decompositions import get_decomposition
+from ...engine.graph import CouplingGraph, Joint
 from ...engine.methods import engine_method, get_spec
 from ...engine.schema import schema_defs
 from ...errors import ParameterError
@@ -176,6 +177,18 @@ class Scene:
     @property
     def coupling(self) -> dict:
         return {**COUPLING_KEYS, **self.data["coupling"]}
+
+    def graph(self, n_components: int = 1) -> CouplingGraph:
+        """The units and joints (:mod:`icosim.engine.graph`): the two units joined by the coupling's
+        decomposition."""
+        return CouplingGraph(2, (Joint(0, 1, self.coupling["decomposition"]),), n_components, names=self.names)
+
+    def graph_signs(self) -> list[int]:
+        """Per unit, the sign with which the graph's coupling force reaches its input: the scene gives the sign
+        of ``lambda`` on each unit, the graph acts with ``-lambda`` on the second."""
+        return [
+            int(sub["force_sign"]) * (1 if i == 0 else -1) for i, sub in enumerate(self.data["subsystems"].values())
+        ]
 
 
 def _fail(path, where, message):

@@ -23,6 +23,7 @@ import numpy as np
 from ...engine import layout
 from ...engine.bounds import check_finite
 from ...engine.decompositions import get_decomposition
+from ...engine.graph import CouplingGraph
 from ...engine.spectral.family import LinearFamily
 from .model import Coefficients, PhysicalModel, TestModel, eq71_coefficients
 from .problem import LinearCosimulation
@@ -55,6 +56,11 @@ class TwoMass(LinearFamily):
             model = model.coefficients()
         object.__setattr__(self, "model", model)
         object.__setattr__(self, "decomposition", get_decomposition(self.decomposition))
+
+    @property
+    def graph(self) -> CouplingGraph:
+        """The paper's two subsystems joined by the decomposition's joint."""
+        return CouplingGraph.pair(self.decomposition)
 
     @property
     def _names(self):

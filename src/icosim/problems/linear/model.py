@@ -54,8 +54,8 @@ def _check(name: str, value, *, positive=False, nonnegative=False, nonpositive=F
 class Coefficients:
     """Dimensionless subsystem coefficients, the engine's internal form.
 
-    Subsystem i obeys ``v_i' = -k_i x_i - delta_i v_i + g_i lambda`` with
-    ``g_1 = 1`` and ``g_2 = -1/am21`` (Eq. 7).
+    Subsystem i obeys ``v_i' = -k_i x_i - delta_i v_i + g_i f_i`` with the inverse masses ``g_1 = 1`` and
+    ``g_2 = 1/am21`` and the coupling forces ``f_1 = lambda``, ``f_2 = -lambda`` (Eq. 7).
 
     Attributes
     ----------
@@ -74,14 +74,6 @@ class Coefficients:
     def map(self, fn) -> Coefficients:
         """Apply ``fn`` to every attribute (e.g. to add a broadcasting axis)."""
         return Coefficients(*(fn(getattr(self, f.name)) for f in fields(self)))
-
-    @property
-    def gain1(self):
-        return 1
-
-    @property
-    def gain2(self):
-        return -1 / self.am21
 
 
 @dataclass(frozen=True)

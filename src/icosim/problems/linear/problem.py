@@ -3,9 +3,9 @@
 State: ``s[..., i, :] = (x_i, v_i)`` for subsystems ``i = 0, 1`` (the paper's
 ``z_N``).  Coupling history: ``h[..., j, :] = e_N-j`` for ``j = 0..k`` (the
 paper's ``lambda_c,N ... lambda_c,N-k`` and/or ``a_tilde``).  Outputs at
-``T_N+1``: ``y[..., i, :] = (x_i, v_i, a_i, f_i)`` with ``f_i`` the coupling
-force acting on subsystem ``i`` (``lambda_c`` for a force-driven one, the
-multiplier ``mu_i`` for a kinematically driven one).
+``T_N+1``: ``y[..., i, 0, :, 0] = (x_i, v_i, a_i, f_i)`` (one port, one component) with ``f_i`` the
+coupling force acting on subsystem ``i``: its input for a force-driven one, the force its drive exerts for
+a kinematically driven one (:mod:`icosim.engine.graph`).
 
 All arrays may carry leading batch axes; the coefficients broadcast against
 them.  This is what lets :mod:`icosim.studies.stability` build the amplification
@@ -20,7 +20,7 @@ import numpy as np
 
 from ...engine import layout
 from ...engine.problem import CosimulationProblem
-from ...engine.residuals import coupling_conditions
+from ...engine.projection import mass_weighted_projection
 from .model import Coefficients
 from .subsystems import FORCE, OscillatorSubsystem
 
@@ -63,14 +63,15 @@ class LinearCosimulation(CosimulationProblem):
         decomposition = self.decomposition
         c = coefficients.map(be.asarray)
         self.coefficients = c
+        # the multiplier acts with +lambda on subsystem 1 and -lambda on 2 (the graph's inputs): the gains are
+        # the inverse masses, 1 and 1/am21
         self.subsystems = tuple(
-            OscillatorSubsystem(kind, kk, dd, g, inp, k, be)
-            for kind, kk, dd, g, inp in zip(
+            OscillatorSubsystem(kind, kk, dd, g, 0, k, be)
+            for kind, kk, dd, g in zip(
                 decomposition.kinds,
                 (c.k1, c.k2),
                 (c.delta1, c.delta2),
-                (be.const(1) + 0 * c.am21, -be.const(1) / c.am21),
-                decomposition.inputs,
+                (be.const(1) + 0 * c.am21, be.const(1) / c.am21),
             )
         )
 
@@ -106,8 +107,7 @@ class LinearCosimulation(CosimulationProblem):
             s.set_blocks(E + scale * rng.standard_normal(E.shape))
             subs.append(s)
         p.subsystems = tuple(subs)
-        if hasattr(p, "_jac"):
-            del p._jac
+        p._jacobians = {}
         return p
 
     def generator_norm(self):
@@ -123,8 +123,8 @@ class LinearCosimulation(CosimulationProblem):
     # -- the problem interface used by icosim.engine.macrostep ----------------------
     def _integrate(self, i, state, samples, nodes):
         self.work.subsystem_integrations += 1
-        sub = self.subsystems[i]
-        return sub.step(state[..., i, :], samples[..., :, sub.input], nodes)
+        end, y = self.subsystems[i].step(state[..., i, :], self.inputs(i, samples)[..., 0], nodes)
+        return end, y[..., None, :, None]
 
     def predict(self, i, state, history, *, final=False):
         return self._integrate(i, state, history, self.pred_nodes)
@@ -138,55 +138,30 @@ class LinearCosimulation(CosimulationProblem):
         The increment form keeps the propagated acceleration (no cancellation
         in ``-k x - delta v + g u`` when the acceleration is exponentially small).
         """
-        sub = self.subsystems[i]
-        du = e_new[..., sub.input] - e_old[..., sub.input]
-        return y + sub.algebraic_sensitivity() * du[..., None]
+        du = self.inputs(i, e_new)[..., 0] - self.inputs(i, e_old)[..., 0]
+        dy = self.subsystems[i].algebraic_sensitivity() * du[..., None]
+        return y + dy[..., None, :, None]
 
     def join(self, ends):
         return _stack(ends)
 
-    def stack(self, ys):
-        return _stack(ys)
+    #: exact and constant (Eq. 13): the Jacobians are formed once per stage, not counted as work
+    constant_sensitivities = True
 
-    def residuals(self, y):
-        """Constraint on three levels (if a condition here) and force balance
-        (:func:`icosim.engine.residuals.coupling_conditions`; the joint has one component)."""
-        return coupling_conditions(y[..., None], self.decomposition)
-
-    def output_sensitivities(self, response=("full", "full")):
-        """``dy/de_N+1``, shape ``(..., n_e, 2, 4)``: exact, the model is linear.
-
-        ``response[i]``: ``"full"`` -- through the interpolation polynomial of
-        subsystem ``i``'s corrector (Eq. 13); ``"algebraic"`` -- it has finished
-        its macro step (it leads a Gauss-Seidel scheme) and responds only
-        algebraically (:meth:`~icosim.problems.linear.subsystems.OscillatorSubsystem.algebraic_sensitivity`);
-        ``"none"`` -- its outputs stay as integrated.
-        """
-        cols = []
-        for j in range(self.n_coupling):
-            per_sub = []
-            for sub, how in zip(self.subsystems, response):
-                dy = sub.algebraic_sensitivity() if how != "full" else sub.step_sensitivity(self.corr_nodes)
-                per_sub.append(dy if sub.input == j and how != "none" else 0 * dy)
-            cols.append(layout.stack(np.broadcast_arrays(*per_sub), axis=-2))
-        return layout.stack(cols, axis=-3)
-
-    def jacobians(self, state, history, e, y, fixed=(None, None), algebraic=True):
-        """Constant (Eq. 13): built once per scheme from the exact output sensitivities, not counted as work."""
-        response = tuple("full" if f is None else "algebraic" if algebraic else "none" for f in fixed)
-        cache = self.__dict__.setdefault("_jac", {})
-        if response not in cache:
-            S = self.output_sensitivities(response)
-            res = self.residuals(S)  # linear and homogeneous: maps sensitivities
-            cache[response] = {key: np.swapaxes(val, -1, -2) for key, val in res.items()}
-        return cache[response]
+    def sensitivity(self, i, state, history, e, end=None, y=None):
+        """``dy_i/du_i``, shape ``(..., 1, 1, 4, 1)``: through the interpolation polynomial of the corrector
+        (Eq. 13) or, at a fixed end state, algebraically
+        (:meth:`~icosim.problems.linear.subsystems.OscillatorSubsystem.algebraic_sensitivity`)."""
+        sub = self.subsystems[i]
+        dy = sub.step_sensitivity(self.corr_nodes) if end is None else sub.algebraic_sensitivity()
+        return dy[..., None, None, :, None]
 
     def project(self, state):
-        """Mass-weighted projection of positions and velocities (Eq. 30)."""
+        """Mass-weighted projection of positions and velocities (Eq. 30,
+        :func:`icosim.engine.projection.mass_weighted_projection`)."""
         am = self.coefficients.am21
-        am = am[..., None] if np.ndim(am) else am
-        xv = (state[..., 0, :] + am * state[..., 1, :]) / (1 + am)
-        return layout.stack([xv, xv], axis=-2)
+        masses = layout.stack(np.broadcast_arrays(1 + 0 * am, am), axis=-1)
+        return mass_weighted_projection(self.graph, masses, state)
 
 
 def _stack(arrays):

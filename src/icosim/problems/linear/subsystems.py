@@ -3,11 +3,11 @@
 A subsystem has the state ``s = (x, v)`` and one scalar coupling input ``u``:
 
 * **force-driven** (Eqs. 7a, 7b): ``x' = v``, ``v' = -k x - delta v + g u`` with
-  ``u = lambda`` the coupling force and ``g`` its gain (``1`` or ``-1/am21``);
+  ``u`` the coupling force on it and ``g`` its gain, the inverse mass (``1`` or ``1/am21``);
 * **kinematically driven** on acceleration level, index 1 (Eqs. 33b, 57):
-  ``v' = u`` with ``u = a_tilde`` the prescribed acceleration; the multiplier
-  that realises the rheonomic constraint follows from the equation of motion,
-  ``mu = (u + k x + delta v) / g``.
+  ``v' = u`` with ``u = a_tilde`` the prescribed acceleration; the force
+  its drive exerts to realise the rheonomic constraint follows from the equation of motion,
+  ``R = (u + k x + delta v) / g``.
 
 Because the model is linear and the input over one macro step is a polynomial,
 the solution at the end of the step is exact:
@@ -86,7 +86,7 @@ class OscillatorSubsystem:
         shape = np.broadcast_shapes(kk.shape, dd.shape) if self.kind == FORCE else ()
         zero, one = be.const(0), be.const(1)
         # A kinematic subsystem's state is a double integrator of its input:
-        # its own dynamics only enter the multiplier (an output).
+        # its own dynamics only enter the force of its drive (an output).
         M = np.full(shape + (2 + n, 2 + n), zero, dtype=be.dtype)
         M[..., 0, 1] = one
         if self.kind == FORCE:
@@ -201,7 +201,7 @@ class OscillatorSubsystem:
 
         Force-driven: ``a = -k x - delta v + g u`` and ``f = u`` give
         ``(0, 0, g, 1)``; kinematically driven: ``a = u`` and
-        ``mu = (u + k x + delta v) / g`` give ``(0, 0, 1, 1/g)``.  This is
+        ``R = (u + k x + delta v) / g`` give ``(0, 0, 1, 1/g)``.  This is
         what a subsystem that has already finished its macro step contributes
         to the corrected coupling variables of a Gauss-Seidel scheme.
         """

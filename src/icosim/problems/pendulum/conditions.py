@@ -1,19 +1,17 @@
 """The double pendulum's coupling conditions, by the kinds of its two links (docs/pendulum.md).
 
-The outputs of the two links at ``T_N+1`` are the joint point's position,
-velocity and acceleration and the joint force each link sees.  Every residual
-here is *link 1 minus link 2*, as the engine forms them
-(:mod:`icosim.engine.residuals`; ff and fd are the engine's conditions as they are): the joint
-constraint ``g_c = P_1 - P_2`` on each level and the force balance ``f_1 - f_2``
-(the paper writes Eq. 57c the other way round, ``mu_2 - mu_1 = 0``: the same
-condition; the sign of a residual and of its Jacobian rows together does not
-change the corrected coupling variables).  Which rows close the system depends
-on how each link is driven (a decomposition's ``kinds``,
-:mod:`icosim.engine.decompositions`).  Link 1 is
-pinned to the ground, so it can move its joint point only along its normal
-``n1``: where it is kinematically driven, the conditions are taken along ``e1``
-and ``n1``.  A kinematically driven link 1 with a force-driven link 2 (df) has
-no conditions here: the pinned link cannot follow a prescribed joint
+The outputs of the two links at ``T_N+1`` are the joint point's position, velocity and acceleration and the
+joint force each link sees.  The pendulum's coupling variable ``lambda_c`` is the joint force *on link 2*
+(link 1 feels ``-lambda_c``), and a kinematically driven link's force output is that of its drive in the
+same sense; so its conditions are its own, not the engine's (:mod:`icosim.engine.residuals`, whose
+multiplier acts with ``+lambda`` on the first side).  Every residual here is *link 1 minus link 2*: the
+joint constraint ``g_c = P_1 - P_2`` on each level and the force balance ``f_1 - f_2`` (the paper writes
+Eq. 57c the other way round, ``mu_2 - mu_1 = 0``: the same condition; the sign of a residual and of its
+Jacobian rows together does not change the corrected coupling variables).  Which rows close the system
+depends on how each link is driven (a decomposition's ``kinds``, :mod:`icosim.engine.decompositions`).
+Link 1 is pinned to the ground, so it can move its joint point only along its normal ``n1``: where it is
+kinematically driven, the conditions are taken along ``e1`` and ``n1``.  A kinematically driven link 1
+with a force-driven link 2 (df) has no conditions here: the pinned link cannot follow a prescribed joint
 acceleration in two directions, and none is derived.
 
 >>> sorted(kinds for kinds in CONDITIONS)
@@ -25,17 +23,21 @@ from __future__ import annotations
 import numpy as np
 
 from ...engine.decompositions import DECOMPOSITIONS, get_decomposition
-from ...engine.residuals import coupling_conditions, differences
 from ...errors import ParameterError
 
 __all__ = ["CONDITIONS", "check_decomposition"]
 
 
-def _engine_conditions(kinds):
-    """ff (the joint constraint on each level) and fd (the constraint, and link 2's multiplier balancing
-    ``lambda_c``): the engine's conditions as they are (:func:`icosim.engine.residuals.coupling_conditions`)."""
-    decomposition = next(d for d in DECOMPOSITIONS.values() if d.kinds == kinds)
-    return lambda y: coupling_conditions(y, decomposition)
+def differences(y):
+    """Link 1's outputs minus link 2's, ``(..., 4, 2)``."""
+    return y[..., 0, :, :] - y[..., 1, :, :]
+
+
+def _constraint(y, balance):
+    """ff and fd: the joint constraint on each level; fd also link 2's drive balancing ``lambda_c``."""
+    d = differences(y)
+    empty = d[..., 0, :0]
+    return {"pos": d[..., 0, :], "vel": d[..., 1, :], "acc": d[..., 2, :], "force": d[..., 3, :] if balance else empty}
 
 
 def _both_kinematic(y):  # dd: link 1 moves its joint only along n1; the normal component balances
@@ -58,8 +60,8 @@ def _both_kinematic(y):  # dd: link 1 moves its joint only along n1; the normal 
 
 #: ``residuals(y) -> {pos, vel, acc, force}`` by the kinds of (link 1, link 2).
 CONDITIONS = {
-    ("force", "force"): _engine_conditions(("force", "force")),
-    ("force", "kinematic"): _engine_conditions(("force", "kinematic")),
+    ("force", "force"): lambda y: _constraint(y, False),
+    ("force", "kinematic"): lambda y: _constraint(y, True),
     ("kinematic", "kinematic"): _both_kinematic,
 }
 

@@ -209,13 +209,18 @@ class PendulumCosimulation(CosimulationProblem):
         e_p = self.extrapolate(history)
         if final:
             end, y = self._step_link(i, state, e_p, history, False)
-            return end[0], y[0]
+            return end[0], y[:1]
         if self._cache is None or self._cache[0] is not state or self._cache[1] is not history:
             self._cache = (state, history, e_p, [None, None])
         end, y_i, _ = self._cache[3][i] = self._respond(i, state, history, e_p)
-        return end, y_i
+        return end, y_i[None]
 
-    def jacobians(self, state, history, e, y, fixed=(None, None), algebraic=True):
+    def jacobians(self, state, history, e, ys, ends, stage, algebraic=True):
+        """``d residuals / d e`` by forward differences of the links' outputs through its own conditions
+        (:meth:`_linearise`); the links the stage corrects respond through their integration, a finished
+        one at its end state."""
+        fixed = tuple(ends[i] if i in stage.finished else None for i in range(2))
+        y = self.stack(ys)
         c = self._cache
         responses = [None, None]
         if c is not None and c[0] is state and c[1] is history and np.array_equal(c[2], e):
@@ -226,21 +231,22 @@ class PendulumCosimulation(CosimulationProblem):
 
     def correct(self, i, state, history, e_new):
         end, y = self._step_link(i, state, e_new, history, False)
-        return end[0], y[0]
+        return end[0], y[:1]
 
     def reevaluate(self, i, end, y, e_old, e_new):
         """Link ``i``'s outputs at its fixed end state with the input ``e_new`` at ``T_N+1`` (exact)."""
-        return self._end_outputs(i, end, e_new, False)[0]
+        return self._end_outputs(i, end, e_new, False)[:1]
 
     def join(self, ends):
         return np.concatenate(ends)
 
     def stack(self, ys):
-        return np.array(ys)
+        return np.concatenate(ys) if len(ys) > 1 else ys[0]
 
-    def residuals(self, y):
+    def residuals(self, y, e=None, conditions=None, e_held=None):
         """Joint constraint on each level (2 rows; both links kinematic: its normal component) and force balance,
-        link 1 minus link 2 (:data:`~icosim.problems.pendulum.conditions.CONDITIONS`, by the kinds of the links)."""
+        link 1 minus link 2 (:data:`~icosim.problems.pendulum.conditions.CONDITIONS`, by the kinds of the links;
+        the pendulum's own, in its sense of ``lambda_c``)."""
         return CONDITIONS[self.decomposition.kinds](y)
 
     def project(self, state):

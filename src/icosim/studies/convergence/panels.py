@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from ...engine.decompositions import get_decomposition
 from ...engine.methods import METHODS, get_spec
 from ...engine.schemes import get_scheme
+from ...engine.stages import check
 from ...errors import ParameterError
 from .experiment import dimensional_method
 
@@ -124,7 +125,7 @@ def figure_panels(figure: str, fig_cfg: dict, k) -> list:
         for dec in fig_cfg["decompositions"]:
             try:
                 dimensional_method(method, 1.0, **cells[0][0]).check_decomposition(get_decomposition(dec))
-                get_scheme(scheme).check_decomposition(dec)
+                check(get_scheme(scheme), dec)
             except ParameterError as exc:
                 raise ParameterError(f"{where}, decomposition {dec!r}: {exc}") from None
             for i, c in enumerate(columns):

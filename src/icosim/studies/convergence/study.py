@@ -41,6 +41,7 @@ import numpy as np
 from ...engine.decompositions import get_decomposition
 from ...engine.run import simulate
 from ...engine.schemes import JACOBI, get_scheme
+from ...engine.stages import check
 from ...errors import ParameterError
 from ...problems.linear import exact
 from ...problems.linear.problem import LinearCosimulation
@@ -231,7 +232,7 @@ class Study:
             methods = [dimensional_method(method, H, **params) for H in self.H]
             methods[0].check_decomposition(dec)
             curves.append(methods)
-        scheme.check_decomposition(dec)
+        check(scheme, dec)
         nH = self.H.size
         if stepping == "error":  # every curve's and step size's recurrence stepped together
             runs = self._floor_free_curves(curves, dec.name, k, range(nH), scheme)

@@ -23,6 +23,7 @@ from ...engine.backends import FLOAT64_DIGITS
 from ...engine.decompositions import DECOMPOSITIONS
 from ...engine.schemes import get_scheme
 from ...engine.spectral.policy import ARITHMETICS, REASONS, VERDICTS, Certification
+from ...engine.stages import check
 from ...io.dataset import DatasetDict
 from ...io.jsonio import dumps
 from ...problems.linear.model import TestModel
@@ -77,7 +78,7 @@ def stability_panel_data(spec: PanelSpec, *, provenance: dict | None = None) -> 
     """Compute one panel as a :class:`~icosim.io.dataset.DatasetDict` (written without xarray)."""
     method = spec.coupling_method()
     method.check_decomposition(DECOMPOSITIONS[spec.decomposition])
-    get_scheme(spec.scheme).check_decomposition(spec.decomposition)
+    check(get_scheme(spec.scheme), spec.decomposition)
     lr1 = grid_axis(spec.lr1, spec.n)
     li1 = grid_axis(spec.li1, spec.n)
     LR, LI = np.meshgrid(lr1, li1, indexing="ij")

@@ -22,6 +22,7 @@ from ...engine.decompositions import DECOMPOSITIONS, get_decomposition
 from ...engine.methods import make_method
 from ...engine.schemes import get_scheme
 from ...engine.spectral.policy import POLICIES, Certification
+from ...engine.stages import check
 from ...errors import ParameterError
 
 __all__ = [
@@ -283,7 +284,7 @@ def figure_panels(figure: str, figure_cfg: dict, *, grid: dict, zoom_grid: dict,
             method_params = {key: values[key] for key in method_param_names() if key in values}
             try:
                 make_method(figure_cfg["method"], **method_params).check_decomposition(decomposition)
-                get_scheme(scheme).check_decomposition(decomposition)
+                check(get_scheme(scheme), decomposition)
             except ParameterError as err:
                 raise ParameterError(f"{where}, row {row}: {err}") from None
             for k in figure_cfg["k"]:
