@@ -122,7 +122,6 @@ def test_gauss_seidel_coupling_systems_are_regular_over_the_plane(k):
     first subsystem minus second: negative in the paper's second minus first), at every point of the plotted plane in every row
     of Figs. 9-15 and with a ten times lighter subsystem 2: no solve of the Gauss-Seidel schemes is singular."""
     import numpy as np
-
     from helpers import pair_jacobians
 
     from icosim.problems.linear.problem import LinearCosimulation
