@@ -17,11 +17,9 @@ from pathlib import Path
 
 import pytest
 import yaml
-from helpers import copy_workflow, scheduled, scheduled_jobs, snakemake
+from helpers import ROOT, copy_workflow, scheduled, scheduled_jobs, snakemake
 
 from icosim.studies.stability.panels import figure_panels, figure_schemes, panel_id
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")

@@ -10,12 +10,10 @@ stable runs stay orders of magnitude inside the bounds (checked here too, so tha
 is not a near miss).
 """
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 import yaml
-from helpers import validate_config
+from helpers import ROOT, validate_config
 
 import icosim.problems.pendulum.problem
 from icosim import ParameterError, make_method
@@ -30,7 +28,6 @@ from icosim.studies.pendulum.checks import expected_outcome
 from icosim.studies.pendulum.datasets import reference_dataset, run_dataset
 from icosim.studies.pendulum.summary import summarize
 
-ROOT = Path(__file__).resolve().parents[1]
 CFG = yaml.safe_load((ROOT / "config" / "pendulum.yaml").read_text())["pendulum"]
 CLAIMS = load_claims(ROOT / CFG["claims"]["file"])
 RUNS = configured_runs(CFG)

@@ -1,12 +1,10 @@
 """Unit tests of icosim.studies.convergence: Eq. (72), the asymptotic order, stepping, unstable detection."""
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 import xarray as xr
 import yaml
-from helpers import validate_config
+from helpers import ROOT, validate_config
 
 import icosim
 import icosim.problems.linear.spectral
@@ -30,8 +28,6 @@ from icosim.studies.convergence.metric import nrmse
 from icosim.studies.convergence.panels import PanelSpec, figure_layout, figure_panels, figure_schemes
 from icosim.studies.convergence.study import Study, iterate_linear_map
 from icosim.studies.convergence.work_precision import resolve_configuration, step_cost, time_macro_steps
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 # ------------------------------------------------------------------ Eq. (72)

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import xarray as xr
 import yaml
-from helpers import copy_workflow, scheduled, scheme_panel_spec, snakemake, validate_config
+from helpers import ROOT, copy_workflow, scheduled, scheme_panel_spec, snakemake, validate_config
 
 from icosim import ParameterError, make_method
 from icosim.engine.schemes import GS12, GS21
@@ -28,7 +28,6 @@ from icosim.studies.stability.comparison import scheme_shares
 from icosim.studies.stability.datasets import stability_panel
 from icosim.studies.stability.panels import figure_panels
 
-ROOT = Path(__file__).resolve().parents[1]
 BOTH = ("jacobi", "gauss-seidel-12", "gauss-seidel-21")
 
 

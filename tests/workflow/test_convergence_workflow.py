@@ -3,20 +3,17 @@ workflow is parsed (dry runs on a copy of the workflow), and the claims job rais
 writes anything."""
 
 import runpy
-from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
 import yaml
-from helpers import copy_workflow, snakemake
+from helpers import ROOT, copy_workflow, snakemake
 
 from icosim.io.netcdf import write_netcdf
 from icosim.studies.convergence.datasets import run_panel
 from icosim.studies.convergence.experiment import Setup, step_counts
 from icosim.studies.convergence.panels import PanelSpec
 from icosim.studies.convergence.study import Study
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")

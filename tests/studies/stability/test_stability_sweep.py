@@ -9,11 +9,10 @@ import os
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from pathlib import Path  # noqa: E402
-
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 import yaml  # noqa: E402
+from helpers import ROOT  # noqa: E402
 
 from icosim import TestModel, make_method  # noqa: E402
 from icosim.errors import ParameterError  # noqa: E402
@@ -37,7 +36,6 @@ from icosim.studies.stability.panels import (  # noqa: E402
     row_label_keys,
 )
 
-ROOT = Path(__file__).resolve().parents[1]
 CFG = yaml.safe_load((ROOT / "config" / "stability.yaml").read_text())["stability"]
 COARSE = {"lr1": [-2.0, 0.0], "li1": [0.0, 2.0], "n": 5}
 ZOOM = {"lr1": [-0.2, 0.0], "li1": [0.0, 0.2], "n": 3}

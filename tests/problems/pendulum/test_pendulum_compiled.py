@@ -325,10 +325,12 @@ def test_an_edited_source_the_kernels_inline_recompiles_them(tmp_path):
     import sys
     from pathlib import Path
 
+    from helpers import ROOT
+
     from icosim.problems.pendulum.integrator import compiled_step
 
     compiled_step.warm_up()  # the checkout's cache holds the kernels (written now, or loaded as the tests above did)
-    src = Path(__file__).resolve().parents[1] / "src"
+    src = ROOT / "src"
     shutil.copytree(src, tmp_path / "src", ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
     package = tmp_path / "src" / "icosim" / "problems" / "pendulum" / "integrator"
     cache = Path(compiled_step.__file__).parent / "__pycache__"

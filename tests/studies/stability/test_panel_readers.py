@@ -6,10 +6,9 @@ import os
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from pathlib import Path  # noqa: E402
-
 import pytest  # noqa: E402
 import yaml  # noqa: E402
+from helpers import ROOT  # noqa: E402
 
 from icosim.claims.registry import evaluate, load_claims  # noqa: E402
 from icosim.io.netcdf import open_dataset, open_variables, write_netcdf  # noqa: E402
@@ -18,7 +17,6 @@ from icosim.studies.stability.comparison import scheme_shares  # noqa: E402
 from icosim.studies.stability.datasets import stability_panel  # noqa: E402
 from icosim.studies.stability.panels import figure_panels  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
 CFG = yaml.safe_load((ROOT / "config" / "stability.yaml").read_text())["stability"]
 COARSE = {"lr1": [-2.0, 0.0], "li1": [0.0, 2.0], "n": 9}
 ZOOM = {"lr1": [-0.2, 0.0], "li1": [0.0, 0.2], "n": 11}  # every claim's region holds points

@@ -5,12 +5,11 @@ fail / undecided logic; one real coarse panel computed with the engine checks
 a claim end to end.
 """
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 import xarray as xr
 import yaml
+from helpers import ROOT
 
 from icosim.claims.registry import CHECKS, DEFAULTS, evaluate, evaluate_claim, load_claims, parse_claims
 from icosim.errors import ParameterError
@@ -20,7 +19,6 @@ from icosim.studies.stability.datasets import stability_panel
 from icosim.studies.stability.panels import PanelSpec, figure_panels, figure_schemes
 from icosim.verdicts import enforce_references, read_verdicts, reference_mismatches, select, write_verdicts
 
-ROOT = Path(__file__).resolve().parents[1]
 CLAIMS_FILE = ROOT / "config" / "claims" / "stability.yaml"
 CONFIG_FILE = ROOT / "config" / "stability.yaml"
 
