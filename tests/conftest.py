@@ -11,6 +11,9 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 os.environ.setdefault("MPLBACKEND", "Agg")
 
+# the toolchain markers (fmu, slurm, browser): skipped without their toolchain, enforced in CI
+pytest_plugins = ["toolchains"]
+
 
 # -- distribution over the xdist workers -------------------------------------------------------------
 # pyproject's addopts run the suite with `--dist loadfile --no-loadscope-reorder`: every test file is one

@@ -6,17 +6,21 @@ import json
 import numpy as np
 import pytest
 import yaml
-from helpers import ROOT, skip_without_c_toolchain
+from helpers import ROOT
 
-pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
-pytest.importorskip("jsonschema", reason="scene files are checked with jsonschema (the fmi extra)")
-skip_without_c_toolchain()
+from icosim.cli import main
+from icosim.io.netcdf import open_dataset
+from icosim.problems.fmu.scene import load_scene
 
-from icosim.cli import main  # noqa: E402
-from icosim.io.netcdf import open_dataset  # noqa: E402
-from icosim.problems.fmu.scene import load_scene  # noqa: E402
+pytestmark = pytest.mark.fmu
 
 SCENES = sorted((ROOT / "config" / "scenes").glob("*.yaml"))
+
+
+@pytest.fixture(autouse=True, scope="module")
+def scene_schema_checker():
+    """Scene files are checked with jsonschema (the fmi extra)."""
+    return pytest.importorskip("jsonschema", reason="scene files are checked with jsonschema (the fmi extra)")
 
 
 @pytest.fixture(autouse=True)

@@ -150,17 +150,7 @@ def test_stability_scheme_shares(tmp_path):
     assert_written_as_xarray_writes(scheme_shares_data(panels), tmp_path)
 
 
-def _can_run_units():
-    try:
-        import fmpy  # noqa: F401
-    except ImportError:
-        return False
-    from helpers import c_toolchain_present
-
-    return c_toolchain_present()
-
-
-@pytest.mark.skipif(not _can_run_units(), reason="running scenes needs fmpy, CMake and a C compiler")
+@pytest.mark.fmu  # runs scenes on the test units
 @pytest.mark.parametrize(("scene", "builtin"), [("two_mass_unstable", "linear"), ("double_pendulum_fd", "pendulum")])
 def test_fmi_scene_and_validation(tmp_path, monkeypatch, scene, builtin):
     from icosim.problems.fmu.run import run_dataset_data, run_scene
@@ -180,7 +170,7 @@ def test_fmi_scene_and_validation(tmp_path, monkeypatch, scene, builtin):
         np.testing.assert_array_equal(again[name].values, checked.array(name))
 
 
-@pytest.mark.skipif(not _can_run_units(), reason="running scenes needs fmpy, CMake and a C compiler")
+@pytest.mark.fmu  # runs scenes on the test units
 def test_fmi_orders(tmp_path):
     from icosim.studies.fmi.orders import order_case_data
 

@@ -6,29 +6,23 @@
   and load time go to ``results/report_check.json``;
 * a broken page, to show the check finds console errors, undecodable images and dead links.
 
-Without Chromium the tests are skipped with the reason, except in CI (``CI=true``), where a
-missing browser fails them: ``.ci/run`` installs it.
+The tests are marked ``browser``: without Chromium they are skipped (tests/toolchains.py; CI installs it and
+requires it).
 """
 
 import json
-import os
 
 import pytest
 from helpers import ROOT
 
 from icosim.report import browser
 
-CHROMIUM = browser.find_chromium()
-IN_CI = os.environ.get("CI", "").lower() in ("1", "true", "yes")
+pytestmark = pytest.mark.browser
 
 
 @pytest.fixture(scope="module")
 def chromium():
-    if CHROMIUM is None:
-        if IN_CI:
-            pytest.fail("CI=true but no Chromium on PATH: .ci/run installs Debian's chromium package")
-        pytest.skip("no Chromium on PATH (Debian: apt-get install chromium); the browser checks need it")
-    return CHROMIUM
+    return browser.find_chromium()
 
 
 def assert_clean(result):

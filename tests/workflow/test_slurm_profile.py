@@ -1,14 +1,13 @@
 """The SLURM profile (workflow/profiles/slurm): what run.py makes of a cluster's answers.
 
-The cluster is faked (scontrol and sinfo outputs); the one test that asks a real cluster skips
-when none answers.  The profile on a real one-node cluster is workflow/profiles/slurm/ci_check.sh
-(CI's SLURM step).
+The cluster is faked (scontrol and sinfo outputs); the one test that asks a real cluster is marked
+``slurm`` (skipped where none answers).  The profile on a real one-node cluster is
+workflow/profiles/slurm/ci_check.sh (CI's SLURM step).
 """
 
 from __future__ import annotations
 
 import importlib.util
-import shutil
 import subprocess
 import sys
 
@@ -133,16 +132,7 @@ def test_main_reports_a_cluster_error_without_traceback(monkeypatch, capsys):
     assert "requires an account" in capsys.readouterr().err
 
 
-def _cluster_answers() -> bool:
-    if not shutil.which("sinfo"):
-        return False
-    try:
-        return subprocess.run(["sinfo", "-h"], capture_output=True, timeout=10).returncode == 0
-    except (OSError, subprocess.TimeoutExpired):
-        return False
-
-
-@pytest.mark.skipif(not _cluster_answers(), reason="no SLURM cluster answers (sinfo)")
+@pytest.mark.slurm
 def test_check_on_the_live_cluster():
     out = subprocess.run(
         [sys.executable, str(PROFILE / "run.py"), "--check"], capture_output=True, text=True, timeout=120

@@ -5,20 +5,14 @@ route, and coupled with the FMI 2.0 unit it follows the built-in model to second
 import numpy as np
 import pytest
 import yaml
-from helpers import ROOT, skip_without_c_toolchain
+from helpers import ROOT
 
-pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
-skip_without_c_toolchain()
+from icosim.cli import main
+from icosim.problems.fmu.run import run_scene
 
-from icosim.cli import main  # noqa: E402
-from icosim.problems.fmu.run import run_scene  # noqa: E402
+pytestmark = pytest.mark.fmu
 
 SCENE = ROOT / "config" / "scenes" / "two_mass_fmi3.yaml"
-
-
-@pytest.fixture(autouse=True)
-def fmu_cache(monkeypatch):
-    monkeypatch.setenv("ICOSIM_FMU_CACHE", str(ROOT / "build" / "fmus"))
 
 
 def write(tmp_path, name, edit=None, steps=40):

@@ -6,36 +6,23 @@ The test units are built from fmus/ with fmpy (CMake and a C compiler); without 
 
 import numpy as np
 import pytest
-from helpers import ROOT, skip_without_c_toolchain
+from helpers import ROOT
 
-fmpy = pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
-skip_without_c_toolchain()
+from icosim.engine.methods import engine_method, make_method
+from icosim.engine.run import simulate
+from icosim.problems.fmu.run import run_scene
+from icosim.problems.fmu.scene import COUPLING_KEYS
+from icosim.problems.linear.model import PhysicalModel
+from icosim.problems.linear.problem import LinearCosimulation
+from icosim.problems.linear.spectral import spectral_radius_float64
+from icosim.studies.fmi.orders import order_scene
 
-from icosim.engine.methods import engine_method, make_method  # noqa: E402
-from icosim.engine.run import simulate  # noqa: E402
-from icosim.problems.fmu.run import run_scene  # noqa: E402
-from icosim.problems.fmu.scene import COUPLING_KEYS  # noqa: E402
-from icosim.problems.linear.model import PhysicalModel  # noqa: E402
-from icosim.problems.linear.problem import LinearCosimulation  # noqa: E402
-from icosim.problems.linear.spectral import spectral_radius_float64  # noqa: E402
-from icosim.studies.fmi.orders import order_scene  # noqa: E402
+pytestmark = pytest.mark.fmu
 
 P = dict(m1=1.0, m2=2.0, c1=1000.0, c2=500.0, d1=2.0, d2=1.0)
 PARAMS = {"baumgarte": {"index": 1, "mu": 1e-3}, "weighted": {"index": 1, "a": 1.0, "b": 1.0}, "projection": {}}
 SCHEMES = ("jacobi", "gauss-seidel-12", "gauss-seidel-21")
 X0 = 0.1
-
-
-@pytest.fixture(scope="module", autouse=True)
-def fmu_cache(monkeypatch_module):
-    monkeypatch_module.setenv("ICOSIM_FMU_CACHE", str(ROOT / "build" / "fmus"))
-
-
-@pytest.fixture(scope="module")
-def monkeypatch_module():
-    mp = pytest.MonkeyPatch()
-    yield mp
-    mp.undo()
 
 
 def write_scene(path, method, decomposition, k, scheme, H, n, **coupling):

@@ -17,16 +17,15 @@ from pathlib import Path
 
 import pytest
 import yaml
-from helpers import ROOT, skip_without_c_toolchain
+from helpers import ROOT
 
-pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
-skip_without_c_toolchain()
+from icosim.cli import main
+from icosim.problems.fmu.build import build_unit
+from icosim.problems.fmu.errors import FmuError
+from icosim.problems.fmu.units import Unit
+from icosim.problems.fmu.variables import VariableTable
 
-from icosim.cli import main  # noqa: E402
-from icosim.problems.fmu.build import build_unit  # noqa: E402
-from icosim.problems.fmu.errors import FmuError  # noqa: E402
-from icosim.problems.fmu.units import Unit  # noqa: E402
-from icosim.problems.fmu.variables import VariableTable  # noqa: E402
+pytestmark = pytest.mark.fmu
 
 CACHE = ROOT / "build" / "fmus"
 EXTERNAL = ROOT / "build" / "external"

@@ -5,30 +5,24 @@ pendulum (icosim.problems.pendulum.problem, Radau IIA at tolerance 1e-10) throug
 import numpy as np
 import pytest
 import yaml
-from helpers import ROOT, skip_without_c_toolchain
+from helpers import ROOT
 
-pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
-skip_without_c_toolchain()
+from icosim.cli import main
+from icosim.engine.macrostep import macro_step
+from icosim.engine.methods import make_method
+from icosim.engine.run import simulate
+from icosim.problems.fmu.problem import FmuCosimulation
+from icosim.problems.fmu.run import open_units
+from icosim.problems.fmu.scene import load_scene
+from icosim.problems.pendulum.model import PendulumParameters
+from icosim.problems.pendulum.problem import PendulumCosimulation
+from icosim.problems.pendulum.reference import consistent_history
 
-from icosim.cli import main  # noqa: E402
-from icosim.engine.macrostep import macro_step  # noqa: E402
-from icosim.engine.methods import make_method  # noqa: E402
-from icosim.engine.run import simulate  # noqa: E402
-from icosim.problems.fmu.problem import FmuCosimulation  # noqa: E402
-from icosim.problems.fmu.run import open_units  # noqa: E402
-from icosim.problems.fmu.scene import load_scene  # noqa: E402
-from icosim.problems.pendulum.model import PendulumParameters  # noqa: E402
-from icosim.problems.pendulum.problem import PendulumCosimulation  # noqa: E402
-from icosim.problems.pendulum.reference import consistent_history  # noqa: E402
+pytestmark = pytest.mark.fmu
 
 SCENE = ROOT / "config" / "scenes" / "double_pendulum_ff.yaml"
 SCENES = {"ff": SCENE, "fd": ROOT / "config" / "scenes" / "double_pendulum_fd.yaml"}
 PARAMS = {"baumgarte": {"index": 1, "mu": 2e-3}, "weighted": {"index": 1, "a": 1.0, "b": 1.0}}
-
-
-@pytest.fixture(autouse=True)
-def fmu_cache(monkeypatch):
-    monkeypatch.setenv("ICOSIM_FMU_CACHE", str(ROOT / "build" / "fmus"))
 
 
 def write(tmp_path, decomposition="ff", **coupling):

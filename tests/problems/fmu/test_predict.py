@@ -5,23 +5,17 @@ import json
 
 import pytest
 import yaml
-from helpers import ROOT, skip_without_c_toolchain
+from helpers import ROOT
 
-pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
-skip_without_c_toolchain()
+from icosim.cli import main
+from icosim.problems.fmu.predict import predict_scene
+from icosim.problems.fmu.scene import load_scene
+from icosim.problems.linear.model import PhysicalModel
+from icosim.problems.linear.spectral import spectral_radius_float64
 
-from icosim.cli import main  # noqa: E402
-from icosim.problems.fmu.predict import predict_scene  # noqa: E402
-from icosim.problems.fmu.scene import load_scene  # noqa: E402
-from icosim.problems.linear.model import PhysicalModel  # noqa: E402
-from icosim.problems.linear.spectral import spectral_radius_float64  # noqa: E402
+pytestmark = pytest.mark.fmu
 
 SCENES = ROOT / "config" / "scenes"
-
-
-@pytest.fixture(autouse=True)
-def fmu_cache(monkeypatch):
-    monkeypatch.setenv("ICOSIM_FMU_CACHE", str(ROOT / "build" / "fmus"))
 
 
 @pytest.mark.parametrize("name", ["two_mass_ff", "two_mass_fd", "two_mass_dd", "two_mass_python", "two_mass_fmi3"])

@@ -12,24 +12,23 @@ import textwrap
 import numpy as np
 import pytest
 import yaml
-from helpers import ROOT, skip_without_c_toolchain
+from helpers import ROOT
 
-pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
-pytest.importorskip("pythonfmu", reason="the Python unit is exported with pythonfmu (the fmi extra)")
-skip_without_c_toolchain()
+from icosim.engine.methods import engine_method, make_method
+from icosim.engine.run import simulate
+from icosim.problems.fmu.run import run_scene
+from icosim.problems.linear.model import PhysicalModel
+from icosim.problems.linear.problem import LinearCosimulation
 
-from icosim.engine.methods import engine_method, make_method  # noqa: E402
-from icosim.engine.run import simulate  # noqa: E402
-from icosim.problems.fmu.run import run_scene  # noqa: E402
-from icosim.problems.linear.model import PhysicalModel  # noqa: E402
-from icosim.problems.linear.problem import LinearCosimulation  # noqa: E402
+pytestmark = pytest.mark.fmu
 
 SCENE = ROOT / "config" / "scenes" / "two_mass_python.yaml"
 
 
-@pytest.fixture(autouse=True)
-def fmu_cache(monkeypatch):
-    monkeypatch.setenv("ICOSIM_FMU_CACHE", str(ROOT / "build" / "fmus"))
+@pytest.fixture(autouse=True, scope="module")
+def pythonfmu():
+    """The Python unit is exported with pythonfmu (the fmi extra)."""
+    return pytest.importorskip("pythonfmu", reason="the Python unit is exported with pythonfmu (the fmi extra)")
 
 
 def builtin(data, e0):

@@ -5,16 +5,20 @@ import zipfile
 
 import pytest
 import yaml
-from helpers import ROOT, skip_without_c_toolchain
+from helpers import ROOT
 
-pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
-pytest.importorskip("jsonschema", reason="scene files are checked with jsonschema (the fmi extra)")
-skip_without_c_toolchain()
+from icosim.cli import main
+from icosim.problems.fmu.build import build_unit
 
-from icosim.cli import main  # noqa: E402
-from icosim.problems.fmu.build import build_unit  # noqa: E402
+pytestmark = pytest.mark.fmu
 
 CACHE = ROOT / "build" / "fmus"
+
+
+@pytest.fixture(autouse=True, scope="module")
+def scene_schema_checker():
+    """Scene files are checked with jsonschema (the fmi extra)."""
+    return pytest.importorskip("jsonschema", reason="scene files are checked with jsonschema (the fmi extra)")
 
 
 def body(i, **over):
@@ -44,11 +48,6 @@ def scene(tmp_path, body1=None, body2=None, **top):
     path = tmp_path / "scene.yaml"
     path.write_text(yaml.safe_dump(data))
     return path
-
-
-@pytest.fixture(autouse=True)
-def fmu_cache(monkeypatch):
-    monkeypatch.setenv("ICOSIM_FMU_CACHE", str(CACHE))
 
 
 def cosim(capsys, path, tmp_path):

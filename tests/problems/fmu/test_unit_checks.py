@@ -13,24 +13,18 @@ import numpy as np
 import pytest
 import scipy.linalg
 import yaml
-from helpers import ROOT, skip_without_c_toolchain
+from helpers import ROOT
 
-pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
-skip_without_c_toolchain()
+from icosim.cli import main
+from icosim.io.netcdf import open_dataset
+from icosim.problems.fmu.predict import predict_scene
+from icosim.problems.fmu.run import run_scene
+from icosim.problems.fmu.scene import load_scene
 
-from icosim.cli import main  # noqa: E402
-from icosim.io.netcdf import open_dataset  # noqa: E402
-from icosim.problems.fmu.predict import predict_scene  # noqa: E402
-from icosim.problems.fmu.run import run_scene  # noqa: E402
-from icosim.problems.fmu.scene import load_scene  # noqa: E402
+pytestmark = pytest.mark.fmu
 
 FMUS = ROOT / "fmus"
 M_BODY, M_SPRING, C_SPRING, D_SPRING, G = 400.0, 100.0, 4.0e5, 200.0, 9.81
-
-
-@pytest.fixture(autouse=True)
-def fmu_cache(monkeypatch):
-    monkeypatch.setenv("ICOSIM_FMU_CACHE", str(ROOT / "build" / "fmus"))
 
 
 def body(**start):

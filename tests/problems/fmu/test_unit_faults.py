@@ -7,21 +7,13 @@ import os
 
 import pytest
 import yaml
-from helpers import ROOT, skip_without_c_toolchain
+from helpers import ROOT
 
-pytest.importorskip("fmpy", reason="FMU scenes need fmpy (the fmi extra)")
-skip_without_c_toolchain()
-
-from icosim.cli import main  # noqa: E402
-from icosim.io.netcdf import open_dataset  # noqa: E402
+from icosim.cli import main
+from icosim.io.netcdf import open_dataset
 
 FMUS = ROOT / "fmus"
-pytestmark = pytest.mark.skipif(not hasattr(os, "fork"), reason="the supervised run needs os.fork")
-
-
-@pytest.fixture(autouse=True)
-def fmu_cache(monkeypatch):
-    monkeypatch.setenv("ICOSIM_FMU_CACHE", str(ROOT / "build" / "fmus"))
+pytestmark = [pytest.mark.fmu, pytest.mark.skipif(not hasattr(os, "fork"), reason="the supervised run needs os.fork")]
 
 
 def scene(tmp_path, fault, fault_time=0.005, **top):

@@ -2,7 +2,7 @@
 computations, its check kinds, its claims file and its report section.  The workflow's side (its jobs and rerun
 triggers): tests/workflow/test_fmi_workflow.py.
 
-The runs build the test units (fmpy, CMake, a C compiler) and are skipped without them.
+The runs build the test units: they are marked ``fmu`` (fmpy, CMake, a C compiler).
 """
 
 import json
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import xarray as xr
 import yaml
-from helpers import ROOT, c_toolchain_present
+from helpers import ROOT
 
 from icosim.claims.registry import CHECKS, evaluate
 from icosim.report.fmi import fmi_section
@@ -19,17 +19,6 @@ from icosim.studies.fmi.checks import check_bound, check_orders
 from icosim.verdicts import parse_claims
 
 CACHE = ROOT / "build" / "fmus"
-
-
-def can_build():
-    try:
-        import fmpy  # noqa: F401
-    except ImportError:
-        return False
-    return c_toolchain_present()
-
-
-needs_units = pytest.mark.skipif(not can_build(), reason="running scenes needs fmpy, CMake and a C compiler")
 
 
 # -- the validation functions against independent computations -----------------------------------------------
@@ -53,7 +42,7 @@ def test_measured_growth_of_a_synthetic_mode():
     assert measured_growth(ds) == pytest.approx(r, rel=1e-12)
 
 
-@needs_units
+@pytest.mark.fmu  # the run builds the test units
 def test_unstable_scene_against_the_engine(monkeypatch):
     """two_mass_unstable: the predicted rho is the engine's spectral radius for the typed-in parameters, the
     measured growth is that rho, and the built-in difference is that of an independent built-in run."""
@@ -87,7 +76,7 @@ def test_unstable_scene_against_the_engine(monkeypatch):
     assert float(checked["builtin_difference"]) < 1e-9
 
 
-@needs_units
+@pytest.mark.fmu  # the run builds the test units
 def test_order_case_against_the_exact_solution():
     """Projection ff, k = 1 on three step sizes: the built-in errors are those of an independent run against
     the exact solution, the FMU errors agree with them, and the order is about 3."""

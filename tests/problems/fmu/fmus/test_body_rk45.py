@@ -5,12 +5,10 @@ changes only at a step, a bad solverType is refused with a message, and a restor
 
 import numpy as np
 import pytest
-from helpers import fmu_instance, skip_without_c_toolchain
+from helpers import fmu_instance
 
-pytest.importorskip("fmpy", reason="FMU units need fmpy (the fmi extra)")
-skip_without_c_toolchain()
+pytestmark = pytest.mark.fmu
 
-from fmpy import read_model_description  # noqa: E402
 
 # value references, per type
 M, G, F, X, V, A, TOL = range(7)  # Real
@@ -56,6 +54,8 @@ def test_constant_force_gives_the_parabola(tmp_path, solver, gravity):
 def test_typed_start_values_round_trip_without_aliasing(tmp_path):
     """The defaults are the model description's start values; each type's setter changes only its own variable,
     though Real, Boolean, Integer and String all have a variable with value reference 0."""
+    from fmpy import read_model_description
+
     body = fmu_instance("body_rk45", tmp_path / "unit")
     md = read_model_description(body.unzipDirectory)
     start = {v.name: v.start for v in md.modelVariables}

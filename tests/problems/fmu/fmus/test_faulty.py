@@ -10,10 +10,9 @@ import sys
 import time
 
 import pytest
-from helpers import fmu_instance, skip_without_c_toolchain
+from helpers import fmu_instance
 
-pytest.importorskip("fmpy", reason="FMU units need fmpy (the fmi extra)")
-skip_without_c_toolchain()
+pytestmark = pytest.mark.fmu
 
 M, C, D, X0, V0, LAMBDA, X, V, A, XSET, VSET, FAIL_TIME, FAULT_TIME = range(13)  # Real
 FAULT = 0  # Integer

@@ -4,12 +4,9 @@ outputs converted back to SI are msd's to a few units of rounding."""
 
 import numpy as np
 import pytest
-from helpers import fmu_instance, skip_without_c_toolchain
+from helpers import fmu_instance
 
-pytest.importorskip("fmpy", reason="FMU units need fmpy (the fmi extra)")
-skip_without_c_toolchain()
-
-from fmpy import read_model_description  # noqa: E402
+pytestmark = pytest.mark.fmu
 
 NAMES = ["m", "c", "d", "x0", "v0", "lambda", "x", "v", "a", "x_set", "v_set", "fail_time"]  # by value reference
 SI = {"m": 2.0, "c": 1500.0, "d": 3.0, "x0": 0.012, "v0": -0.3}
@@ -19,6 +16,8 @@ H = 1e-3
 def si_factors(fmu):
     """Variable name -> the factor of its unit's BaseUnit (SI value = factor * value; 1 where the unit has no
     BaseUnit: msd's are SI) and the unit's name."""
+    from fmpy import read_model_description
+
     md = read_model_description(fmu.unzipDirectory)
     base = {u.name: u.baseUnit.factor if u.baseUnit else 1.0 for u in md.unitDefinitions}
     return {v.name: (base[v.unit], v.unit) for v in md.modelVariables}
@@ -55,6 +54,8 @@ def run(tmp_path, unit):
 
 
 def test_the_units_are_engineering_units(tmp_path):
+    from fmpy import read_model_description
+
     fmu = fmu_instance("msd_mm", tmp_path / "unit")
     md = read_model_description(fmu.unzipDirectory)
     fmu.freeInstance()

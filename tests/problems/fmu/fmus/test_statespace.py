@@ -5,13 +5,10 @@ a step, configuration mode resizes it to a scalar system, and what the standard 
 
 import numpy as np
 import pytest
-from helpers import fmu_instance, skip_without_c_toolchain
+from helpers import fmu_instance
+from scipy.linalg import expm
 
-pytest.importorskip("fmpy", reason="FMU units need fmpy (the fmi extra)")
-skip_without_c_toolchain()
-
-from fmpy import read_model_description  # noqa: E402
-from scipy.linalg import expm  # noqa: E402
+pytestmark = pytest.mark.fmu
 
 TIME, M, N, R, A, B, C, D, X0, U, Y = range(11)
 
@@ -25,6 +22,8 @@ def exact_step(a, b, x, u, h):
 
 
 def test_defaults_are_the_mass_spring_damper(tmp_path):
+    from fmpy import read_model_description
+
     fmu = fmu_instance("statespace_fmi3", tmp_path / "unit")
     md = read_model_description(fmu.unzipDirectory)
     start = {v.name: [float(s) for s in v.start.split()] for v in md.modelVariables if v.start is not None}
