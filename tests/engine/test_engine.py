@@ -370,7 +370,7 @@ def test_policy_survives_a_point_no_precision_can_decide(monkeypatch):
 
     # the batch of certified points fails as a whole, then each point is certified alone: only the origin fails
     monkeypatch.setattr(TwoMass, "coefficients", fails_at_origin)
-    # identical undamped subsystems: rho = 1 exactly at (0, 0.3) (tests/test_certified.py checks it to 80 digits)
+    # identical undamped subsystems: rho = 1 exactly at (0, 0.3) (tests/engine/test_certified.py checks it to 80 digits)
     model = TestModel(np.array([0.0, 0.0, -0.5]), np.array([0.0, 0.3, 0.5]), 1.0, 1.0, 1.0)
     res = st.spectral_radius(TwoMass(model, "ff", 2), baumgarte(mu=1, index=1))
     assert res.n_failed == 1 and res.verdict[0] == "undecided" and not res.stable[0]

@@ -276,7 +276,7 @@ def test_bad_attributes_are_refused_by_name(tmp_path):
 
 
 def test_a_full_disk_is_a_clear_error_and_leaves_no_dataset(tmp_path):
-    """As for an xarray.Dataset (tests/test_workflow_faults.py): a 200 kB tmpfs, where it can be mounted."""
+    """As for an xarray.Dataset (tests/workflow/test_workflow_faults.py): a 200 kB tmpfs, where it can be mounted."""
     import subprocess
 
     mnt = tmp_path / "small"

@@ -49,7 +49,8 @@ def test_fmi3_unit_equals_the_fmi2_unit_on_the_sub_step_route(tmp_path):
 
 
 def test_fmi3_unit_with_the_fmi2_unit_converges_with_the_sub_steps(tmp_path):
-    """Against the FMI 2.0 pair with exact inputs (the built-in model to 1e-13, tests/test_fmi_linear.py)."""
+    """Against the FMI 2.0 pair with exact inputs (the built-in model to 1e-13,
+    tests/problems/fmu/test_linear_scenes.py)."""
 
     def exact(data):
         data["subsystems"]["body1"]["fmu"] = str(ROOT / "fmus" / "msd")

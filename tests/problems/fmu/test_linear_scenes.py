@@ -31,7 +31,7 @@ def write_scene(path, method, decomposition, k, scheme, H, n, **coupling):
     default unless given.  The coupling variables start at zero and no bound stops a growing run: an unstable
     configuration's unstable mode then starts at the size of the start's inconsistency, not of rounding, so the
     two implementations stay within rounding of each other relative to the largest value (from a consistent
-    start, tests/test_fmi_checks.py)."""
+    start, tests/problems/fmu/test_unit_checks.py)."""
     params = {"perturbation": COUPLING_KEYS["perturbation"]} | PARAMS[method] | coupling
     n_e = 2 if decomposition in ("fd", "df") else 1
     scene = {"initial_coupling": [0.0] * n_e, "divergence_bound": 1e300}

@@ -13,8 +13,8 @@ pre-asymptotic.
 
 The comparisons with `reference` and `observed` are *regression checks*: they pin what this
 code found on the full run, so a change in behaviour is noticed.  They are not evidence that
-the findings are right; that rests on the independent computations (tests/test_convergence_errors.py:
-40-digit time stepping) and the explanation tests (tests/test_convergence_explanations.py).
+the findings are right; that rests on the independent computations (tests/studies/convergence/test_convergence_errors.py:
+40-digit time stepping) and the explanation tests (tests/studies/convergence/test_convergence_explanations.py).
 """
 
 import numpy as np

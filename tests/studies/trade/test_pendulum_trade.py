@@ -294,7 +294,7 @@ def test_counts_are_what_they_say(monkeypatch):
     right-hand sides (independent of the integrator's own counts); macro steps = T/H.
 
     On the numpy reference path (tests/reference_radau.py: the closures are what it calls); the compiled
-    kernel's counters equal its counters (tests/test_pendulum_compiled.py)."""
+    kernel's counters equal its counters (tests/problems/pendulum/test_pendulum_compiled.py)."""
     from reference_radau import NumpyPendulum
 
     from icosim.problems.pendulum import links
