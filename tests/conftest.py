@@ -29,6 +29,7 @@ FILE_SECONDS = {
     "tests/problems/pendulum/test_pendulum_compiled.py": 32,  # numba compiles the kernels (cold in a fresh checkout), twice more in copies
     "tests/workflow/test_stability_workflow.py": 17,  # some 25 Snakemake runs, one real
     "tests/problems/fmu/test_pythonfmu.py": 12,  # a scene under valgrind (about 9 s)
+    "tests/architecture/test_toolchain_markers.py": 11,  # pytest sessions of their own, two under xdist
     "tests/engine/test_engine.py": 9,
     "tests/engine/test_schemes.py": 9,
     "tests/problems/fmu/test_linear_scenes.py": 8,
@@ -44,7 +45,7 @@ FILE_SECONDS = {
     "tests/io/test_dataset_dict.py": 4,
     "tests/studies/stability/test_stability_sweep.py": 4,
     "tests/studies/convergence/test_convergence_errors.py": 4,
-    "tests/studies/fmi/test_fmi_validation.py": 3.5,
+    "tests/workflow/test_fmi_workflow.py": 3.5,
     "tests/engine/test_certified.py": 3.3,
     "tests/workflow/test_schemes_workflow.py": 2.7,
     "tests/architecture/test_structure.py": 2.5,
