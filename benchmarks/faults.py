@@ -1,4 +1,4 @@
-"""Fault injection on the workflow (the long cases; the fast ones are in tests/test_workflow_faults.py).
+"""Fault injection on the workflow (the long cases; the fast ones are in tests/workflow/test_workflow_faults.py).
 
 On a clean copy of this tree and the CI configuration's stability part (or ``--part``), each case is
 compared with a clean run of the same configuration:

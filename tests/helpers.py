@@ -327,19 +327,6 @@ def growth_rate(prob, method, n_chunks=30, chunk=20, seed=0, **step_kw):
     return float(rate) if np.ndim(rate) == 0 else rate
 
 
-def c_toolchain_present() -> bool:
-    """CMake and a C compiler: what building the FMU test units from their C sources needs."""
-    return shutil.which("cmake") is not None and (shutil.which("cc") or shutil.which("gcc")) is not None
-
-
-def skip_without_c_toolchain():
-    """Skip the calling test module where the FMU test units cannot be built (no CMake or C compiler)."""
-    import pytest
-
-    if not c_toolchain_present():
-        pytest.skip("building the FMU test units needs CMake and a C compiler", allow_module_level=True)
-
-
 #: Where the tests build the units of ``fmus/`` (once per content; ``build/`` is not tracked).
 FMU_CACHE = ROOT / "build" / "fmus"
 

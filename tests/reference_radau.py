@@ -4,7 +4,8 @@ The package integrates the links with :mod:`icosim.problems.pendulum.integrator.
 module is the same algorithm written with numpy arrays, and :class:`NumpyPendulum` is the
 co-simulation problem with its links integrated by it on their numpy right-hand sides
 (:class:`~icosim.problems.pendulum.links.Link1`, ``Link2``); tests compare the compiled integrator and whole
-runs against them (tests/test_pendulum_compiled.py) and them against scipy (tests/test_pendulum.py).
+runs against them (tests/problems/pendulum/test_pendulum_compiled.py) and them against scipy
+(tests/problems/pendulum/test_pendulum.py).
 
 The method is scipy's ``Radau`` (Hairer & Wanner, *Solving ODEs II*, Sect. IV.8; scipy's
 ``integrate/_ivp/radau.py``; constants in :mod:`icosim.problems.pendulum.integrator.tableau`), written for a

@@ -4,7 +4,7 @@
     python tools/claims_table.py --check    # exit 1 if docs/claims.md is not what the claims say
 
 The table is generated from the claims themselves (icosim.claims.registry.describe_claim), so it cannot
-say more or less than the checks do; tests/test_claims_docs.py keeps the committed file current.
+say more or less than the checks do; tests/tools/test_claims_docs.py keeps the committed file current.
 """
 
 from __future__ import annotations

@@ -32,7 +32,7 @@ def save_figure(fig, *paths, dpi: int = 110):
     once per state (:func:`_ticks_once`), texts are measured once per process (:func:`_shared_text_metrics`),
     and mathematical text (log-scale tick labels, symbols in
     labels) is typeset once per process, not once per file (:func:`_share_mathtext`).  The files
-    show what matplotlib draws without these shortcuts (``tests/test_figures.py``); a PNG's pixels are
+    show what matplotlib draws without these shortcuts (``tests/figures/test_figures.py``); a PNG's pixels are
     compressed with :data:`PNG_ZLIB`.
     """
     _share_mathtext()

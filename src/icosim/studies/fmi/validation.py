@@ -173,8 +173,9 @@ def measured_growth(run) -> float:
 
 def builtin_difference(scene, run, builtin) -> dict:
     """The run against the built-in model: ``difference`` (linear: largest position or velocity difference
-    relative to the largest value, as ``tests/test_fmi_linear.py`` measures; pendulum: largest joint point
-    difference in m) and, for the pendulum, ``force_difference`` (relative to the largest joint force)."""
+    relative to the largest value, as ``tests/problems/fmu/test_linear_scenes.py`` measures; pendulum: largest
+    joint point difference in m) and, for the pendulum, ``force_difference`` (relative to the largest joint
+    force)."""
     nan = float("nan")
     e0 = _array(run, "coupling")[0]
     if builtin == "linear":
