@@ -28,7 +28,7 @@ import numpy as np
 from ...engine.graph import CouplingGraph
 from ...engine.lagrange import monomial_coefficients
 from ...engine.problem import CosimulationProblem
-from ...engine.projection import mass_weighted_projection
+from ...engine.projection import joined_clusters, mass_weighted_projection
 from ...engine.residuals import Conditions
 from ...errors import StepFailure
 from .errors import UnitStepError
@@ -115,6 +115,7 @@ class FmuCosimulation(CosimulationProblem):
         self._holds = ["start"] * n  # what each unit holds now: "start", id of an end array, or "scratch"
         self._ends = [{} for _ in range(n)]  # id(end) -> (end, FMU state) of this macro step's integrations
         self._committed = None
+        self._clusters = joined_clusters(graph, range(n))  # each unit is one body
 
     # -- time and the initial point -----------------------------------------------------------------
     @property
@@ -309,7 +310,7 @@ class FmuCosimulation(CosimulationProblem):
     def project(self, state):
         """Mass-weighted projection of positions and velocities (Eq. 30), written into the units."""
         m = np.array([c.mass for c in self.couplings], dtype=float)
-        projected = mass_weighted_projection(self.graph, m, np.asarray(state, dtype=float))
+        projected = mass_weighted_projection(self._clusters, m, np.asarray(state, dtype=float))
         n = self.n_dim
         for i, unit in enumerate(self.units):
             self._to_start(i)

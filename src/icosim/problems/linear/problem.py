@@ -20,7 +20,7 @@ import numpy as np
 
 from ...engine import layout
 from ...engine.problem import CosimulationProblem
-from ...engine.projection import mass_weighted_projection
+from ...engine.projection import joined_clusters, mass_weighted_projection
 from .model import Coefficients
 from .subsystems import FORCE, OscillatorSubsystem
 
@@ -161,7 +161,7 @@ class LinearCosimulation(CosimulationProblem):
         :func:`icosim.engine.projection.mass_weighted_projection`)."""
         am = self.coefficients.am21
         masses = layout.stack(np.broadcast_arrays(1 + 0 * am, am), axis=-1)
-        return mass_weighted_projection(self.graph, masses, state)
+        return mass_weighted_projection(joined_clusters(self.graph, (0, 1)), masses, state)
 
 
 def _stack(arrays):
