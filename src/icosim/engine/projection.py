@@ -59,7 +59,8 @@ def mass_weighted_projection(clusters: Sequence[Sequence[int]], masses: Any, x: 
     lead = np.broadcast_shapes(x.shape[:-2], masses.shape[:-1])
     rows = list(np.broadcast_to(x, lead + x.shape[-2:])[..., b, :] for b in range(x.shape[-2]))
     for cluster in clusters:
-        weighted = total = None
+        weighted: Any = None
+        total: Any = None
         for b in cluster:
             m = masses[..., b, None]
             term = m * x[..., b, :]
