@@ -10,7 +10,7 @@ inner loops over the grid.
 The values are the same bit for bit: an elementwise operation computes each element alone, in
 whatever order memory is walked.  Only what goes to BLAS sees the layout (``@``, where NumPy hands
 each stacked product to ``dgemm``); those operands are kept C-contiguous as before
-(:meth:`icosim.problems.linear.subsystems.OscillatorSubsystem.node_matrices`).  Elementwise results follow the
+(:meth:`icosim.problems.linear.subsystems.LinearSubsystem.node_matrices`).  Elementwise results follow the
 layout of their operands (NumPy's ``K`` order), so it is set where arrays are made: the subsystems'
 exponential blocks and the coefficients (:func:`batched`), and the stacked and concatenated arrays
 (:func:`stack`, :func:`concatenate`, which are :func:`numpy.stack` and :func:`numpy.concatenate` with

@@ -9,7 +9,7 @@ from scipy.integrate import solve_ivp
 from icosim import ParameterError, PhysicalModel, TestModel, projection, spectral_radius_float64
 from icosim.engine.backends import Float64
 from icosim.engine.lagrange import corrector_nodes
-from icosim.problems.linear.subsystems import OscillatorSubsystem
+from icosim.problems.linear.subsystems import LinearSubsystem
 
 
 # -- exact subsystem propagation against numerical quadrature ------------------
@@ -25,7 +25,7 @@ from icosim.problems.linear.subsystems import OscillatorSubsystem
 )
 @pytest.mark.parametrize("k", [0, 1, 2])
 def test_subsystem_step_matches_ode_solution(kind, stiffness, damping, gain, k):
-    sub = OscillatorSubsystem(kind, stiffness, damping, gain, 0, k, Float64())
+    sub = LinearSubsystem.single(kind, stiffness, damping, gain, k, Float64())
     rng = np.random.default_rng(k)
     s0, U = rng.standard_normal(2), rng.standard_normal(k + 1)
     nodes = corrector_nodes(k)
@@ -39,7 +39,8 @@ def test_subsystem_step_matches_ode_solution(kind, stiffness, damping, gain, k):
         return [s[1], acc]
 
     ref = solve_ivp(rhs, (0, 1), s0, rtol=1e-12, atol=1e-13).y[:, -1]
-    s1, y = sub.step(s0, U, nodes)
+    s1, y = sub.step(s0, U[None], nodes)
+    y = y[0]  # the one port
     np.testing.assert_allclose(s1, ref, rtol=1e-9, atol=1e-11)
     acc_ref = rhs(1.0, ref)[1]
     assert y[2] == pytest.approx(acc_ref, rel=1e-8, abs=1e-10)

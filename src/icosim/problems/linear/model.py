@@ -28,7 +28,7 @@ import numpy as np
 
 from ...errors import ParameterError
 
-__all__ = ["Coefficients", "TestModel", "PhysicalModel"]
+__all__ = ["Coefficients", "Segment", "TestModel", "PhysicalModel"]
 
 
 def _check(name: str, value, *, positive=False, nonnegative=False, nonpositive=False):
@@ -74,6 +74,33 @@ class Coefficients:
     def map(self, fn) -> Coefficients:
         """Apply ``fn`` to every attribute (e.g. to add a broadcasting axis)."""
         return Coefficients(*(fn(getattr(self, f.name)) for f in fields(self)))
+
+    def segments(self, backend) -> tuple[Segment, Segment]:
+        """The two single-mass segments, masses ``1`` and ``am21``, in ``backend``'s arithmetic."""
+        one = backend.const(1) + 0 * self.am21
+        return (
+            Segment((one,), ((self.k1,),), ((self.delta1,),)),
+            Segment((self.am21,), ((self.k2,),), ((self.delta2,),)),
+        )
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One linear segment in the engine's dimensionless form: its masses (relative to a reference mass) and
+    the stiffness and damping per unit mass, ``stiffness[q][j]`` the force on mass ``q`` per displacement of
+    mass ``j`` divided by ``m_q`` (``None`` where structurally zero; arrays broadcast)."""
+
+    masses: tuple
+    stiffness: tuple
+    damping: tuple
+
+    def map(self, fn) -> Segment:
+        """Apply ``fn`` to every coefficient."""
+
+        def rows(matrix):
+            return tuple(tuple(None if c is None else fn(c) for c in row) for row in matrix)
+
+        return Segment(tuple(fn(m) for m in self.masses), rows(self.stiffness), rows(self.damping))
 
 
 @dataclass(frozen=True)

@@ -1,15 +1,17 @@
-"""The linear two-mass test model as a co-simulation problem (Sect. 2).
+"""Linear segments joined by rigid joints as a co-simulation problem: the paper's two-mass test model (Sect. 2)
+and chains of it.
 
-State: ``s[..., i, :] = (x_i, v_i)`` for subsystems ``i = 0, 1`` (the paper's
-``z_N``).  Coupling history: ``h[..., j, :] = e_N-j`` for ``j = 0..k`` (the
-paper's ``lambda_c,N ... lambda_c,N-k`` and/or ``a_tilde``).  Outputs at
-``T_N+1``: ``y[..., i, 0, :, 0] = (x_i, v_i, a_i, f_i)`` (one port, one component) with ``f_i`` the
-coupling force acting on subsystem ``i``: its input for a force-driven one, the force its drive exerts for
-a kinematically driven one (:mod:`icosim.engine.graph`).
+Every subsystem is a segment of ``n`` masses (:class:`~icosim.problems.linear.subsystems.LinearSubsystem`), the
+same ``n`` for all; its joints attach at its first mass (port 1) and its last (port 2; a single mass has both
+there).  State: ``s[..., i, :] = (x_i1 ... x_in, v_i1 ... v_in)`` for subsystem ``i`` (the paper's ``z_N``:
+``(x_i, v_i)``).  Coupling history: ``h[..., j, :] = e_N-j`` for ``j = 0..k`` (the paper's
+``lambda_c,N ... lambda_c,N-k`` and/or ``a_tilde``; for a graph, :meth:`~icosim.engine.graph.CouplingGraph.columns`).
+Outputs at ``T_N+1``: ``y[..., i, p, :, 0] = (x, v, a, f)`` of port ``p`` of subsystem ``i`` (one component)
+with ``f`` the coupling force acting there: its input for a force-driven port, the force its drive exerts for a
+kinematically driven one (:mod:`icosim.engine.graph`).
 
-All arrays may carry leading batch axes; the coefficients broadcast against
-them.  This is what lets :mod:`icosim.studies.stability` build the amplification
-matrices of a whole parameter grid in one pass.
+All arrays may carry leading batch axes; the coefficients broadcast against them.  This is what lets
+:mod:`icosim.studies.stability` build the amplification matrices of a whole parameter grid in one pass.
 """
 
 from __future__ import annotations
@@ -19,21 +21,25 @@ import copy
 import numpy as np
 
 from ...engine import layout
+from ...engine.graph import CouplingGraph
 from ...engine.problem import CosimulationProblem
 from ...engine.projection import joined_clusters, mass_weighted_projection
+from ...errors import ParameterError
 from .model import Coefficients
-from .subsystems import FORCE, OscillatorSubsystem
+from .subsystems import LinearSubsystem
 
 __all__ = ["LinearCosimulation"]
 
 
 class LinearCosimulation(CosimulationProblem):
-    """Two single-mass oscillators coupled by a rigid link, integrated exactly.
+    """Linear segments coupled by rigid joints, integrated exactly.
 
     Parameters
     ----------
-    coefficients : :class:`icosim.problems.linear.model.Coefficients` (arrays broadcast).
-    decomposition : ``"ff"``, ``"fd"`` or ``"dd"`` (or a Decomposition).
+    model : :class:`icosim.problems.linear.model.Coefficients` (the paper's two single-mass oscillators), or a
+        sequence of :class:`~icosim.problems.linear.model.Segment` (arrays broadcast).
+    graph : the :class:`~icosim.engine.graph.CouplingGraph` joining the segments (at most two ports each: the
+        first and the last mass); for the two oscillators a decomposition, ``"ff"`` ... ``"dd"``.
     k : degree of the Lagrange polynomials (any integer >= 0).
     backend : arithmetic; float64 by default.
 
@@ -57,42 +63,70 @@ class LinearCosimulation(CosimulationProblem):
     (True, 3)
     """
 
-    def __init__(self, coefficients: Coefficients, decomposition, k: int, backend=None):
-        super().__init__(decomposition, k, backend)
+    #: exact and constant (Eq. 13): the Jacobians are formed once per stage, not counted as work
+    constant_sensitivities = True
+
+    def __init__(self, model, graph, k: int, backend=None):
+        if isinstance(model, Coefficients):
+            graph = graph if isinstance(graph, CouplingGraph) else CouplingGraph.pair(graph)
+        elif not isinstance(graph, CouplingGraph):
+            raise ParameterError("segments are joined by a CouplingGraph")
+        super().__init__(graph, k, backend)
         be = self.backend
-        decomposition = self.decomposition
-        c = coefficients.map(be.asarray)
-        self.coefficients = c
-        # the multiplier acts with +lambda on subsystem 1 and -lambda on 2 (the graph's inputs): the gains are
-        # the inverse masses, 1 and 1/am21
-        self.subsystems = tuple(
-            OscillatorSubsystem(kind, kk, dd, g, 0, k, be)
-            for kind, kk, dd, g in zip(
-                decomposition.kinds,
-                (c.k1, c.k2),
-                (c.delta1, c.delta2),
-                (be.const(1) + 0 * c.am21, be.const(1) / c.am21),
+        if isinstance(model, Coefficients):
+            c = model.map(be.asarray)
+            self.coefficients = c
+            segments = c.segments(be)
+        else:
+            self.coefficients = None
+            segments = [sg.map(be.asarray) for sg in model]
+        self.segments = tuple(segments)
+        sizes = {len(sg.masses) for sg in self.segments}
+        if len(self.segments) != graph.n_subsystems or len(sizes) != 1:
+            raise ParameterError(
+                f"{graph.n_subsystems} subsystems need as many segments of one number of masses, got "
+                f"{len(self.segments)} with {sorted(sizes)} masses"
             )
+        #: masses per segment
+        self.n_masses = n = sizes.pop()
+        if max(graph.ports) > 2:
+            raise ParameterError("a segment has two ports: its first mass and its last")
+        self._port_mass = (0, n - 1)
+        self.subsystems = tuple(
+            LinearSubsystem(
+                tuple((self._port_mass[p], graph.port_kind(i, p)) for p in range(graph.ports[i])),
+                sg.stiffness,
+                sg.damping,
+                [be.const(1) / m for m in sg.masses],
+                k,
+                be,
+            )
+            for i, sg in enumerate(self.segments)
         )
+        bodies = [i * n + self._port_mass[p] for i in range(graph.n_subsystems) for p in range(graph.ports[i])]
+        self._clusters = joined_clusters(graph, bodies)
 
     # -- sizes and packing ---------------------------------------------------
     @property
     def n_state(self) -> int:
-        """Length of the packed state ``(x1, v1, x2, v2, e_N, ..., e_N-k)``."""
-        return 4 + (self.k + 1) * self.n_coupling
+        """Length of the packed state ``(s_1, ..., s_N, e_N, ..., e_N-k)`` (two masses: ``(x1, v1, x2, v2, ...)``)."""
+        return 2 * self.n_masses * self.graph.n_subsystems + (self.k + 1) * self.n_coupling
 
     def pack(self, state, history):
+        N, width = self.graph.n_subsystems, 2 * self.n_masses
         lead = np.broadcast_shapes(state.shape[:-2], history.shape[:-2])
-        state = np.broadcast_to(state, lead + (2, 2))
+        state = np.broadcast_to(state, lead + (N, width))
         history = np.broadcast_to(history, lead + history.shape[-2:])
-        # (x1, v1, x2, v2, e_N, ..., e_N-k): the rows of state and history one after the other (no reshape: that
-        # would copy a grid laid out with its grid axes fastest into C order first)
-        parts = [state[..., i, :] for i in range(2)] + [history[..., j, :] for j in range(history.shape[-2])]
+        # the rows of state and history one after the other (no reshape: that would copy a grid laid out with
+        # its grid axes fastest into C order first)
+        parts = [state[..., i, :] for i in range(N)] + [history[..., j, :] for j in range(history.shape[-2])]
         return layout.concatenate(parts, axis=-1)
 
     def unpack(self, w):
         lead = w.shape[:-1]
-        return w[..., :4].reshape(lead + (2, 2)), w[..., 4:].reshape(lead + (self.k + 1, self.n_coupling))
+        N, width = self.graph.n_subsystems, 2 * self.n_masses
+        split = N * width
+        return w[..., :split].reshape(lead + (N, width)), w[..., split:].reshape(lead + (self.k + 1, self.n_coupling))
 
     # -- what the float64 error estimate asks (icosim.engine.spectral.radius) ------
     def disturbed(self, rng, rel):
@@ -101,7 +135,6 @@ class LinearCosimulation(CosimulationProblem):
         subs = []
         for sub in self.subsystems:
             s = copy.copy(sub)
-            s.__dict__.pop("_node_cache", None)
             E = sub.blocks
             scale = rel * np.max(np.abs(E), axis=(-1, -2), keepdims=True)
             s.set_blocks(E + scale * rng.standard_normal(E.shape))
@@ -112,19 +145,18 @@ class LinearCosimulation(CosimulationProblem):
 
     def generator_norm(self):
         """``nu = max(1, ||A||_1)`` over the subsystems, ``A`` the matrix whose exponential a subsystem's blocks
-        are (per point; a kinematically driven subsystem's ``A`` has ones and zeros only)."""
+        are (per point; :meth:`~icosim.problems.linear.subsystems.LinearSubsystem.norm_bound`)."""
         nu = 1.0
         for sub in self.subsystems:
-            if sub.kind == FORCE:  # columns of A: k, 1 + delta, the gain, then the input's shift (ones)
-                nu = np.maximum(nu, np.maximum(np.abs(sub.stiffness), 1 + np.abs(sub.damping)))
-                nu = np.maximum(nu, np.abs(sub.gain))
+            nu = np.maximum(nu, sub.norm_bound())
         return nu[..., 0] if np.ndim(nu) else nu  # without the axis the basis vectors ride on (length 1)
 
     # -- the problem interface used by icosim.engine.macrostep ----------------------
     def _integrate(self, i, state, samples, nodes):
         self.work.subsystem_integrations += 1
-        end, y = self.subsystems[i].step(state[..., i, :], self.inputs(i, samples)[..., 0], nodes)
-        return end, y[..., None, :, None]
+        U = np.swapaxes(self.inputs(i, samples), -1, -2)  # (..., ports, nodes)
+        end, y = self.subsystems[i].step(state[..., i, :], U, nodes)
+        return end, y[..., None]
 
     def predict(self, i, state, history, *, final=False):
         return self._integrate(i, state, history, self.pred_nodes)
@@ -133,35 +165,47 @@ class LinearCosimulation(CosimulationProblem):
         return self._integrate(i, state, self.corrector_samples(history, e_new), self.corr_nodes)
 
     def reevaluate(self, i, end, y, e_old, e_new):
-        """Exact (the outputs are affine in the input at a fixed state): ``y + dy/du(1) (u_new - u_old)``.
+        """Exact (the outputs are affine in the inputs at a fixed state): ``y + sum_p dy/du_p(1) du_p``.
 
         The increment form keeps the propagated acceleration (no cancellation
         in ``-k x - delta v + g u`` when the acceleration is exponentially small).
         """
-        du = self.inputs(i, e_new)[..., 0] - self.inputs(i, e_old)[..., 0]
-        dy = self.subsystems[i].algebraic_sensitivity() * du[..., None]
-        return y + dy[..., None, :, None]
+        du = self.inputs(i, e_new) - self.inputs(i, e_old)
+        S = self.subsystems[i].algebraic_sensitivity()  # (..., inputs, ports, 4)
+        for p in range(S.shape[-3]):
+            y = y + (S[..., p, :, :] * du[..., p, None, None])[..., None]
+        return y
 
     def join(self, ends):
         return _stack(ends)
 
-    #: exact and constant (Eq. 13): the Jacobians are formed once per stage, not counted as work
-    constant_sensitivities = True
-
     def sensitivity(self, i, state, history, e, end=None, y=None):
-        """``dy_i/du_i``, shape ``(..., 1, 1, 4, 1)``: through the interpolation polynomial of the corrector
-        (Eq. 13) or, at a fixed end state, algebraically
-        (:meth:`~icosim.problems.linear.subsystems.OscillatorSubsystem.algebraic_sensitivity`)."""
+        """``dy_i/du_i``, shape ``(..., inputs, ports, 4, 1)``: through the interpolation polynomial of the
+        corrector (Eq. 13) or, at a fixed end state, algebraically
+        (:meth:`~icosim.problems.linear.subsystems.LinearSubsystem.algebraic_sensitivity`)."""
         sub = self.subsystems[i]
         dy = sub.step_sensitivity(self.corr_nodes) if end is None else sub.algebraic_sensitivity()
-        return dy[..., None, None, :, None]
+        return dy[..., None]
+
+    def masses(self):
+        """Every mass of every segment, ``(..., N n)`` (the bodies of :meth:`project`)."""
+        ms = [m for sg in self.segments for m in sg.masses]
+        return layout.stack(np.broadcast_arrays(*ms), axis=-1)
 
     def project(self, state):
         """Mass-weighted projection of positions and velocities (Eq. 30,
-        :func:`icosim.engine.projection.mass_weighted_projection`)."""
-        am = self.coefficients.am21
-        masses = layout.stack(np.broadcast_arrays(1 + 0 * am, am), axis=-1)
-        return mass_weighted_projection(joined_clusters(self.graph, (0, 1)), masses, state)
+        :func:`icosim.engine.projection.mass_weighted_projection`): every mass a body."""
+        n, N = self.n_masses, self.graph.n_subsystems
+        lead = state.shape[:-2]
+        # (..., N, 2n) -> bodies (..., N n, 2): each mass's (x, v)
+        bodies = np.stack([state[..., :, :n], state[..., :, n:]], axis=-1).reshape(lead + (N * n, 2))
+        if n == 1:
+            bodies = state
+        projected = mass_weighted_projection(self._clusters, self.masses(), bodies)
+        if n == 1:
+            return projected
+        pr = projected.reshape(projected.shape[:-2] + (N, n, 2))
+        return np.concatenate([pr[..., 0], pr[..., 1]], axis=-1)
 
 
 def _stack(arrays):
