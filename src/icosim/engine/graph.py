@@ -137,8 +137,9 @@ class CouplingGraph:
     ) -> CouplingGraph:
         """``N = len(decompositions) + 1`` subsystems in a row, joint ``j`` between ``j`` and ``j + 1``.
 
-        ``ports="ends"``: a subsystem's joint to its left neighbour attaches at its port 0, to its right one at
-        its port 1 (a segment's first and last mass); ``"one"``: every joint attaches at port 0.
+        ``ports="ends"``: a subsystem between two neighbours has the joint to its left one at its port 0 and to
+        its right one at its port 1 (a segment's first and last mass), the two end subsystems one port each;
+        ``"one"``: every subsystem has one port, where its joints attach.
         """
         if ports not in ("ends", "one"):
             raise ParameterError(f"ports must be 'ends' or 'one', got {ports!r}")
@@ -277,6 +278,8 @@ class CouplingGraph:
                 contiguous = first == list(range(first[0], first[0] + len(first)))
                 index = slice(first[0], first[0] + len(first)) if contiguous else np.array(first)
                 out.append(("one", index, None if all(s == 1 for s in signs) else np.array(signs, dtype=float)))
+            elif depth == 0:  # ports in no joint: no force
+                out.append(("zero", len(terms), None))
             else:
                 slots = [
                     (
@@ -291,6 +294,8 @@ class CouplingGraph:
     def inputs(self, i: int, e: Any) -> Any:
         """Subsystem ``i``'s inputs from coupling variables ``e`` on the last axis: ``(..., n_inputs(i))``."""
         how, index, signs = self._gathers[i]
+        if how == "zero":
+            return 0 * e[..., :1] + np.zeros(index)
         if how == "one":
             u = e[..., index]
             return u if signs is None else u * signs

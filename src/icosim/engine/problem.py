@@ -162,7 +162,8 @@ class CosimulationProblem:
         """Outputs of several subsystems, port after port: ``(..., ports, 4, n_c)``."""
         if len(ys) == 1:
             return ys[0]
-        return layout.concatenate(np.broadcast_arrays(*ys), axis=-3)
+        lead = np.broadcast_shapes(*(np.shape(y)[:-3] for y in ys))  # the ports' axis is not broadcast
+        return layout.concatenate([np.broadcast_to(y, lead + np.shape(y)[-3:]) for y in ys], axis=-3)
 
     def residuals(self, y: Any, e: Any, conditions: Conditions | None = None, e_held: Any = None) -> dict[str, Any]:
         """The coupling conditions at ``T_N+1`` (:class:`icosim.engine.residuals.Conditions`): ``pos``, ``vel``,

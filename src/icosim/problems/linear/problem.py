@@ -38,10 +38,12 @@ class LinearCosimulation(CosimulationProblem):
     ----------
     model : :class:`icosim.problems.linear.model.Coefficients` (the paper's two single-mass oscillators), or a
         sequence of :class:`~icosim.problems.linear.model.Segment` (arrays broadcast).
-    graph : the :class:`~icosim.engine.graph.CouplingGraph` joining the segments (at most two ports each: the
-        first and the last mass); for the two oscillators a decomposition, ``"ff"`` ... ``"dd"``.
+    graph : the :class:`~icosim.engine.graph.CouplingGraph` joining the segments; for the two oscillators a
+        decomposition, ``"ff"`` ... ``"dd"``.
     k : degree of the Lagrange polynomials (any integer >= 0).
     backend : arithmetic; float64 by default.
+    port_masses : per segment, the mass (0-based) each of its ports is at (default: port 1 at the first mass,
+        port 2 at the last).
 
     Examples
     --------
@@ -66,7 +68,7 @@ class LinearCosimulation(CosimulationProblem):
     #: exact and constant (Eq. 13): the Jacobians are formed once per stage, not counted as work
     constant_sensitivities = True
 
-    def __init__(self, model, graph, k: int, backend=None):
+    def __init__(self, model, graph, k: int, backend=None, *, port_masses=None):
         if isinstance(model, Coefficients):
             graph = graph if isinstance(graph, CouplingGraph) else CouplingGraph.pair(graph)
         elif not isinstance(graph, CouplingGraph):
@@ -89,12 +91,18 @@ class LinearCosimulation(CosimulationProblem):
             )
         #: masses per segment
         self.n_masses = n = sizes.pop()
-        if max(graph.ports) > 2:
-            raise ParameterError("a segment has two ports: its first mass and its last")
-        self._port_mass = (0, n - 1)
+        if port_masses is None:
+            if max(graph.ports) > 2:
+                raise ParameterError("a segment has two ports by default: its first mass and its last")
+            port_masses = [(0, n - 1)[: graph.ports[i]] for i in range(graph.n_subsystems)]
+        self.port_masses = tuple(tuple(int(q) for q in pm) for pm in port_masses)
+        if [len(pm) for pm in self.port_masses] != list(graph.ports) or not all(
+            0 <= q < n for pm in self.port_masses for q in pm
+        ):
+            raise ParameterError(f"port_masses {port_masses!r}: per segment a mass of {n} for each of its ports")
         self.subsystems = tuple(
             LinearSubsystem(
-                tuple((self._port_mass[p], graph.port_kind(i, p)) for p in range(graph.ports[i])),
+                tuple((self.port_masses[i][p], graph.port_kind(i, p)) for p in range(graph.ports[i])),
                 sg.stiffness,
                 sg.damping,
                 [be.const(1) / m for m in sg.masses],
@@ -103,7 +111,7 @@ class LinearCosimulation(CosimulationProblem):
             )
             for i, sg in enumerate(self.segments)
         )
-        bodies = [i * n + self._port_mass[p] for i in range(graph.n_subsystems) for p in range(graph.ports[i])]
+        bodies = [i * n + q for i in range(graph.n_subsystems) for q in self.port_masses[i]]
         self._clusters = joined_clusters(graph, bodies)
 
     # -- sizes and packing ---------------------------------------------------
