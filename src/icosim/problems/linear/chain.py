@@ -22,8 +22,8 @@ rigid body); in coordinates ``x = P r`` -- one per cluster and one per mass in n
 exactly on a chain (the joints form a tree).
 
 >>> chain = Chain.uniform(3, masses=(1.0,), ground_stiffness=(100.0,), ground_damping=(1.0,), H=1e-2)
->>> chain.graph().n_joints, [sg.masses for sg in chain.segments()]
-(2, [(1.0,), (1.0,), (1.0,)])
+>>> chain.graph().n_joints, [float(sg.masses[0]) for sg in chain.segments()]
+(2, [1.0, 1.0, 1.0])
 """
 
 from __future__ import annotations
