@@ -3,7 +3,7 @@
 The package integrates the links with :mod:`icosim.problems.pendulum.integrator.compiled` (numba).  This
 module is the same algorithm written with numpy arrays, and :class:`NumpyPendulum` is the
 co-simulation problem with its links integrated by it on their numpy right-hand sides
-(:class:`~icosim.problems.pendulum.links.Link1`, ``Link2``); tests compare the compiled integrator and whole
+(:mod:`reference_links`); tests compare the compiled integrator and whole
 runs against them (tests/problems/pendulum/test_pendulum_compiled.py) and them against scipy
 (tests/problems/pendulum/test_pendulum.py).
 
@@ -40,6 +40,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from reference_links import numpy_links
 
 from icosim.problems.pendulum.integrator.systems import IntegrationError, RadauResult
 from icosim.problems.pendulum.integrator.tableau import (
@@ -270,8 +271,13 @@ def _collocation(fun, t, y, h, scale, tol, inv_real, inv_complex):
 class NumpyPendulum(PendulumCosimulation):
     """:class:`~icosim.problems.pendulum.problem.PendulumCosimulation` with every link integration done by
     :func:`radau_batch` on the link's numpy closure ``link.rhs(coef, H)`` and its outputs by
-    ``link.outputs``: what the compiled kernels (:mod:`icosim.problems.pendulum.integrator.compiled_step`)
-    compute, by another route.  The counters (``stats``, ``jacobian_stats``) count the same events."""
+    ``link.outputs`` (:mod:`reference_links`): what the compiled kernels
+    (:mod:`icosim.problems.pendulum.integrator.compiled_step`) compute, by another route.  The counters
+    (``stats``, ``jacobian_stats``) count the same events."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.links = numpy_links(self.links)
 
     def _step_link(self, i, state, e, history, perturb):
         """The samples ``e``, ``history[0..k-1]`` of link ``i``'s input (with ``perturb``, two more members

@@ -13,6 +13,7 @@ import math
 import numpy as np
 import pytest
 from helpers import correct_all, predict_all
+from reference_links import NumpyLink1, NumpyLink2
 from reference_radau import radau_batch
 from scipy.integrate import solve_ivp
 
@@ -22,7 +23,6 @@ from icosim.errors import StepFailure
 from icosim.problems.pendulum.config import configured_runs
 from icosim.problems.pendulum.integrator.systems import IntegrationError
 from icosim.problems.pendulum.integrator.tableau import MU_REAL
-from icosim.problems.pendulum.links import Link1, Link2
 from icosim.problems.pendulum.manifold import ProjectionError, _constraint_jacobian, project_state
 from icosim.problems.pendulum.model import PendulumParameters, joint_constraint
 from icosim.problems.pendulum.problem import PendulumCosimulation
@@ -83,7 +83,7 @@ def test_radau_batch_members_match_single_integrations():
 def test_link_subsystem_over_a_macro_step_matches_solve_ivp():
     """A force-driven link 2 with a quadratic input polynomial: radau_batch vs solve_ivp Radau and DOP853."""
     coef = np.array([[[1.0, 5.0], [200.0, -300.0], [-4e4, 2e4]]])  # (B=1, K=3, 2) in tau = t/H
-    link = Link2(P, "force")
+    link = NumpyLink2(P, "force")
     fun = link.rhs(coef, H)
     y0 = P.initial_state()[2:] + np.array([0, 0, 0, 0.3, -0.2, 1.5])
     ours = radau_batch(fun, 0.0, H, y0, rtol=1e-6, atol=1e-6).y[0]
@@ -114,10 +114,10 @@ def test_links_reproduce_the_monolithic_joint_force_and_acceleration(omegas):
     state = mono.cosim_state(Y)
     s1, s2 = state[:2], state[2:]
     out = {
-        ("1", "force"): _outputs_at_start(Link1(P, "force"), s1, lam),
-        ("2", "force"): _outputs_at_start(Link2(P, "force"), s2, lam),
-        ("1", "kinematic"): _outputs_at_start(Link1(P, "kinematic"), s1, acc),
-        ("2", "kinematic"): _outputs_at_start(Link2(P, "kinematic"), s2, acc),
+        ("1", "force"): _outputs_at_start(NumpyLink1(P, "force"), s1, lam),
+        ("2", "force"): _outputs_at_start(NumpyLink2(P, "force"), s2, lam),
+        ("1", "kinematic"): _outputs_at_start(NumpyLink1(P, "kinematic"), s1, acc),
+        ("2", "kinematic"): _outputs_at_start(NumpyLink2(P, "kinematic"), s2, acc),
     }
     for key, y in out.items():
         np.testing.assert_allclose(y[0], out[("1", "force")][0], atol=1e-14, err_msg=f"position {key}")
@@ -215,7 +215,7 @@ def test_predictor_is_the_extrapolation_polynomial():
     y = predict_all(prob, state, hist)
     C = np.array(monomial_coefficients(predictor_nodes(k)), dtype=float)
     coef = np.einsum("mj,ju->mu", C, hist)[None]  # extrapolation through e_N, e_N-1, e_N-2
-    link = prob.links[0]
+    link = NumpyLink1(P, "force")
     direct = radau_batch(link.rhs(coef, H), 0.0, H, state[:2], rtol=1e-6, atol=1e-6)
     y_direct = link.outputs(direct.y, direct.f, coef.sum(axis=1))[0]
     np.testing.assert_allclose(y[0], y_direct, rtol=1e-10, atol=1e-13)

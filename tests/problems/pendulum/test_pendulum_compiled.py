@@ -11,13 +11,13 @@ import json
 import numpy as np
 import pytest
 import yaml
+from reference_links import NumpyLink1, NumpyLink2
 from reference_radau import NumpyPendulum, fd_jacobian, radau_batch
 
 from icosim import make_method
 from icosim.problems.pendulum import runs
 from icosim.problems.pendulum.integrator.compiled_algebra import all_finite, inverse, nan_maximum
 from icosim.problems.pendulum.integrator.systems import CompiledLink, IntegrationError
-from icosim.problems.pendulum.links import Link1, Link2
 from icosim.problems.pendulum.model import PendulumParameters
 from icosim.problems.pendulum.runs import run_cosimulation
 from icosim.studies.trade.measures import check_scheme
@@ -34,13 +34,13 @@ def _problem(L, kind, B, K, seed):
     """A link, a batch of B states near the initial one and random input polynomials with K coefficients."""
     rng = np.random.default_rng(seed)
     link = L(P, kind)
-    y = STATE[:2] if L is Link1 else STATE[2:]
+    y = STATE[:2] if L is NumpyLink1 else STATE[2:]
     y0 = y + 0.01 * rng.standard_normal((B, link.n))
     coef = 5 * rng.standard_normal((B, K, 2))
     return link, y0, coef
 
 
-@pytest.mark.parametrize("L", [Link1, Link2])
+@pytest.mark.parametrize("L", [NumpyLink1, NumpyLink2])
 @pytest.mark.parametrize("kind", ["force", "kinematic"])
 @pytest.mark.parametrize("B", [1, 3])
 @pytest.mark.parametrize("K", [1, 2, 4])
@@ -62,7 +62,7 @@ def test_one_macro_step_matches_radau_batch(L, kind, B, K):
     np.testing.assert_allclose(got.f, ref.f, rtol=1e-12, atol=1e-12)
 
 
-@pytest.mark.parametrize("L", [Link1, Link2])
+@pytest.mark.parametrize("L", [NumpyLink1, NumpyLink2])
 @pytest.mark.parametrize("kind", ["force", "kinematic"])
 @pytest.mark.parametrize("B", [1, 3])
 def test_many_steps_with_rejections_match_radau_batch(L, kind, B):
@@ -82,7 +82,7 @@ def test_many_steps_with_rejections_match_radau_batch(L, kind, B):
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # numpy's overflow in the input polynomial
 def test_errors_are_radau_batch_errors():
     """The kernel's error codes come back as radau_batch's exceptions, with the same messages."""
-    link, y0, coef = _problem(Link2, "force", 1, 2, seed=0)
+    link, y0, coef = _problem(NumpyLink2, "force", 1, 2, seed=0)
     kernel = CompiledLink(link)
     with pytest.raises(IntegrationError, match="more than 3 steps") as got:
         kernel.radau(coef, 0.3, 0.0, 0.3, y0, rtol=1e-10, atol=1e-10, max_steps=3)
@@ -106,7 +106,7 @@ def test_a_link_at_rest_integrates_with_zero_error_estimates():
     MAX_FACTOR times longer, as scipy's Radau grows a step whose error is 0; counters and next step agree."""
     from icosim.problems.pendulum.integrator.tableau import MAX_FACTOR
 
-    link = Link1(P, "kinematic")
+    link = NumpyLink1(P, "kinematic")
     coef, y0, H = np.zeros((1, 2, 2)), np.zeros((1, 2)), 1e-3
     ref = radau_batch(link.rhs(coef, H), 0.0, H, y0)
     got = CompiledLink(link).radau(coef, H, 0.0, H, y0)
@@ -244,7 +244,7 @@ def test_warm_up_compiles_the_signature_the_runs_use():
     from icosim.problems.pendulum.integrator import compiled
 
     compiled.warm_up()
-    for L in (Link1, Link2):
+    for L in (NumpyLink1, NumpyLink2):
         link, y0, coef = _problem(L, "force", 2, 3, seed=0)
         kernel = CompiledLink(link)
         kernel.radau(coef, 1e-3, 0.0, 1e-3, y0, jac0=kernel.fd_jacobian(coef[:1], 1e-3, 0.0, y0[:1])[0])

@@ -295,9 +295,8 @@ def test_counts_are_what_they_say(monkeypatch):
 
     On the numpy reference path (tests/reference_radau.py: the closures are what it calls); the compiled
     kernel's counters equal its counters (tests/problems/pendulum/test_pendulum_compiled.py)."""
+    import reference_links
     from reference_radau import NumpyPendulum
-
-    from icosim.problems.pendulum import links
 
     monkeypatch.setattr(runs_module, "PendulumCosimulation", NumpyPendulum)
 
@@ -321,8 +320,8 @@ def test_counts_are_what_they_say(monkeypatch):
 
         monkeypatch.setattr(cls, "rhs", rhs)
 
-    counting(links.Link1)
-    counting(links.Link2)
+    counting(reference_links.NumpyLink1)
+    counting(reference_links.NumpyLink2)
     H, T = 2e-3, 0.02
     res = run_cosimulation(P, BAUMGARTE, "fd", 1, H=H, t_end=T)
     assert res.stats["rejected"] == 0  # so every f at t > 0 ends an accepted step

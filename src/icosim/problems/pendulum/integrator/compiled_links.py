@@ -1,9 +1,8 @@
 """The links' right-hand sides compiled with numba (:mod:`icosim.problems.pendulum.integrator.compiled` integrates them).
 
-The same expressions, in the same order, as :class:`~icosim.problems.pendulum.links.Link1`
-and :class:`~icosim.problems.pendulum.links.Link2` (force-driven or kinematically driven),
-for one batch member at a time; the input polynomial in ``tau = t / H`` is
-evaluated by Horner's scheme as ``links._poly``.  A link is an integer id
+The links' equations (docs/pendulum.md; force-driven or kinematically driven), in the same order as
+their numpy reference in ``tests/reference_links.py``, for one batch member at a time; the input
+polynomial in ``tau = t / H`` is evaluated by Horner's scheme.  A link is an integer id
 (1 or 2), its kind :data:`FORCE` or :data:`KINEMATIC`, and its constants a
 float array (:func:`link_parameters`): no Python closures in compiled code.
 
