@@ -203,7 +203,14 @@ def test_library_inputs_cover_what_a_script_loads(script, import_server):
 def test_stability_claims_do_not_rest_on_the_pendulum_problem():
     files = {p.relative_to(SRC).as_posix() for p in script_closure(ROOT / "workflow/scripts/claims.py", SRC)}
     assert "icosim/studies/stability/checks.py" in files and "icosim/studies/pendulum/checks.py" in files
-    assert not {"icosim/problems/pendulum/problem.py", "icosim/problems/pendulum/runs.py", "icosim/studies/convergence/study.py"} & files
+    assert (
+        not {
+            "icosim/problems/pendulum/problem.py",
+            "icosim/problems/pendulum/runs.py",
+            "icosim/studies/convergence/study.py",
+        }
+        & files
+    )
     assert "icosim/problems/pendulum/integrator/radau.py" not in {
         p.relative_to(SRC).as_posix() for p in module_closure(["icosim.claims.registry"], SRC)
     }
