@@ -93,13 +93,15 @@ def run_workflow(
     overrides=None,
     keep_results=False,
     env=None,
+    args=(),
 ) -> Run:
     """``snakemake -c<cores> <targets>`` in ``workdir`` from a clean results/ (unless ``keep_results``: a later
     part of the same run); wall and CPU seconds of the run (Snakemake and every process it waited for).
 
     ``overrides`` (a nested mapping) is written to a config file given after ``configfiles``.  Snakemake runs
     with an empty ``PYTHONPATH`` (the tree's ``common.smk`` puts its own ``src`` first), or with ``env``'s
-    variables (one may be ``PYTHONPATH``) added to the environment.
+    variables (one may be ``PYTHONPATH``) added to the environment.  ``args`` are further options of
+    Snakemake (e.g. ``--force``).
     """
     if not keep_results:
         shutil.rmtree(workdir / "results", ignore_errors=True)
@@ -108,7 +110,7 @@ def run_workflow(
         path = workdir / "benchmark_overrides.yaml"
         path.write_text(yaml.safe_dump(overrides))
         files.append(str(path))
-    cmd = [snakemake_binary(), *targets, f"-c{cores}", "--quiet", "all"]
+    cmd = [snakemake_binary(), *args, *targets, f"-c{cores}", "--quiet", "all"]
     if files:
         cmd += ["--configfile", *files]
     ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)

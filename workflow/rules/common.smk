@@ -1,7 +1,5 @@
 # Shared helpers for all parts of the workflow.  The library lives in src/icosim and
 # knows nothing of Snakemake; rules are thin and call it from workflow/scripts/.
-import atexit
-import gc
 import json
 import os
 import sys
@@ -13,12 +11,6 @@ from snakemake.logging import logger
 from snakemake.utils import validate
 
 validate(config, "../schemas/config.schema.yaml")
-
-# Snakemake's process ends with Python's last garbage collections walking every object it made (the
-# parsed workflow, the DAG): about 0.3 of the 2 CPU-s of a dry run.  They live to the end anyway; the
-# last exit handler moves them out of the collector's sight (as icosim.job does for the jobs).  The
-# handlers registered before it (Snakemake's own, the log's flush) still run.
-atexit.register(gc.freeze)
 
 # Jobs import icosim from this checkout (also when it is not installed editable, and in
 # the conda environment of workflow/envs/icosim.yaml); the variable is set here, not

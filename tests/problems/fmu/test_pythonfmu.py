@@ -116,8 +116,7 @@ def test_a_unit_that_fails_fatally_stops_the_run_cleanly(capsys, tmp_path):
 # A workflow job's process with pythonfmu units: a scene run (its units opened and closed), then one unit left open.
 EXITING_JOB = textwrap.dedent(
     """
-    import atexit, gc, sys
-    atexit.register(gc.freeze)  # a workflow job's last exit handler (icosim.job.start_job)
+    import sys
     from icosim.problems.fmu.run import run_scene
     from icosim.problems.fmu.units import Unit
     run = run_scene(sys.argv[1])
