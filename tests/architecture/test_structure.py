@@ -11,7 +11,6 @@ from pathlib import Path
 from types import MappingProxyType
 
 import pytest
-from forkserver_imports import ImportForkServer
 from helpers import ROOT
 
 from icosim.sources import module_closure, module_path, script_closure
@@ -235,26 +234,27 @@ def test_workflow_scripts_are_thin(script):
     assert len(script.read_text().splitlines()) <= 45
 
 
-@pytest.fixture(scope="module")
-def import_server():
-    """Clean interpreters for the scripts' imports, forked from one that preloaded the third-party modules."""
-    server = ImportForkServer(cwd=ROOT, env={"PYTHONPATH": str(SRC), "MPLBACKEND": "Agg", "PATH": ""})
-    yield server
-    server.close()
+#: What a clean interpreter reports after a script's import statements: the files of the icosim modules loaded.
+_REPORT = "sorted(m.__file__ for n, m in sys.modules.items() if n.split('.')[0] == 'icosim')"
+
+
+def _loaded_files(statements: str) -> list:
+    """Files of the icosim modules that ``statements`` load in a fresh interpreter (the source tree's src/)."""
+    code = f"{statements}\nimport json, sys\nprint(json.dumps({_REPORT}))"
+    env = {"PYTHONPATH": str(SRC), "MPLBACKEND": "Agg", "PATH": "", "OPENBLAS_NUM_THREADS": "1"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT, env=env)
+    return json.loads(out.stdout)
 
 
 @pytest.mark.parametrize("script", SCRIPTS, ids=lambda p: p.stem)
-def test_library_inputs_cover_what_a_script_loads(script, import_server):
+def test_library_inputs_cover_what_a_script_loads(script):
     """The files script_closure lists (a rule's library inputs) are every icosim module its imports load."""
     listed = {p.relative_to(SRC).as_posix() for p in script_closure(script, SRC)}
     tree = ast.parse(script.read_text())
     stmts = [
         ast.unparse(n) for n in tree.body if isinstance(n, (ast.Import, ast.ImportFrom)) and "icosim" in ast.unparse(n)
     ]
-    loaded = {
-        str(Path(f).resolve().relative_to(SRC.resolve()).as_posix())
-        for f in import_server.loaded_files("\n".join(stmts))
-    }
+    loaded = {str(Path(f).resolve().relative_to(SRC.resolve()).as_posix()) for f in _loaded_files("\n".join(stmts))}
     assert loaded <= listed, sorted(loaded - listed)
 
 
