@@ -183,10 +183,7 @@ def _prediction_text(a: dict) -> str:
 
 
 def _text(s: dict) -> str:
-    c = s["coupling"]
-    lines = [
-        f"scene {s['scene']}: {c['method']}, {c['decomposition']}, k = {c['k']}, {c['scheme']}, H = {c['H']:g} s",
-    ]
+    lines = [f"scene {s['scene']}: {s['described']}"]
     for name, u in s["units"].items():
         warned = f", {u['warnings']} warnings (first: {u['first_warning']})" if u.get("warnings") else ""
         lines.append(
