@@ -157,7 +157,7 @@ def _check_text(report: dict) -> str:
 
 
 def _prediction_text(a: dict) -> str:
-    lines = [f"scene {a['scene']}: {a['method']}, {a['decomposition']}, k = {a['k']}, H = {a['H']:g} s"]
+    lines = [f"scene {a['scene']}: {a['coupling']}"]
     for name, u in a["units"].items():
         preload = f", F0 = {u['F0']:.6g} N" if u["F0"] else ""
         through = "" if u.get("feedthrough", True) else "; no direct feedthrough: identified through steps"
@@ -173,20 +173,17 @@ def _prediction_text(a: dict) -> str:
     for row in a["schemes"]:
         mark = "*" if row["scene"] else " "
         if row["rho"] is None:
-            lines.append(f"  {mark} {row['scheme']:<32} not defined: {row['reason']}")
+            lines.append(f"  {mark} {row['label']:<32} not defined: {row['reason']}")
         else:
             lines.append(
-                f"  {mark} {row['scheme']:<32} rho = {row['rho']:.10g} (+- {row['rho_error']:.1e})  {row['verdict']}"
+                f"  {mark} {row['label']:<32} rho = {row['rho']:.10g} (+- {row['rho_error']:.1e})  {row['verdict']}"
             )
     lines.append("  (* the scene's scheme)")
     return "\n".join(lines)
 
 
 def _text(s: dict) -> str:
-    c = s["coupling"]
-    lines = [
-        f"scene {s['scene']}: {c['method']}, {c['decomposition']}, k = {c['k']}, {c['scheme']}, H = {c['H']:g} s",
-    ]
+    lines = [f"scene {s['scene']}: {s['described']}"]
     for name, u in s["units"].items():
         warned = f", {u['warnings']} warnings (first: {u['first_warning']})" if u.get("warnings") else ""
         lines.append(

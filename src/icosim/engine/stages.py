@@ -17,10 +17,11 @@ work (:func:`plan`):
 
 * a coupling variable that drives only finished subsystems which do not respond (``as-integrated``): no
   condition depends on it;
-* a stage subsystem that two or more closed joints reach through one force input (a chain's middle unit
-  advancing after both its neighbours), with a method solve that has no acceleration-level condition
-  (Baumgarte at index 2 or 3, the weighted multiplier): the finished neighbours do not respond on the
-  position and velocity levels, so those conditions depend on one input -- two conditions, one unknown.
+* a stage subsystem that two or more closed joints reach through one force input from finished subsystems
+  (a chain's middle unit advancing after both its neighbours), with a method solve that has no
+  acceleration-level condition (Baumgarte at index 2 or 3, the weighted multiplier): the finished neighbours
+  do not respond on the position and velocity levels, so those conditions depend on one input -- two
+  conditions, one unknown.  Neighbours corrected at the same stage (Jacobi) respond through their own inputs.
 
 >>> from icosim.engine.graph import CouplingGraph
 >>> from icosim.engine.schemes import get_scheme
@@ -191,8 +192,9 @@ def _check_lone_variables(p: Plan) -> None:
 
 
 def _check_method(p: Plan, method: CouplingMethod) -> None:
-    """Two closed joints reaching a stage subsystem through one force input, with a solve that has no
-    acceleration-level condition: the position and velocity conditions depend on that one input only."""
+    """Two closed joints reaching a stage subsystem through one force input from finished subsystems, with a
+    solve that has no acceleration-level condition: the position and velocity conditions depend on that one
+    input only.  (A neighbour corrected at the same stage, as in Jacobi, responds through its own input.)"""
     levels = [lv for weight, lv in method.solves if weight != 0 and lv[2] == 0]
     if not levels:
         return
@@ -200,12 +202,12 @@ def _check_method(p: Plan, method: CouplingMethod) -> None:
     for stage in p.stages:
         for i in stage.corrected:
             for port in range(graph.ports[i]):
-                through = [j for j in stage.joints if any(
-                    side == (i, port) for side in graph.joints[j].sides)]  # fmt: skip
+                other = {j: graph.joints[j].second if graph.joints[j].first == i else graph.joints[j].first
+                         for j in stage.joints if (i, port) in graph.joints[j].sides}  # fmt: skip
+                through = [j for j, o in other.items() if o in stage.finished]
                 if len(through) < 2:
                     continue
-                others = sorted({graph.joints[j].second if graph.joints[j].first == i else graph.joints[j].first
-                                 for j in through})  # fmt: skip
+                others = sorted({other[j] for j in through})
                 joints = " and ".join(graph.describe_joint(j) for j in through)
                 index = method.params.get("index")
                 what = f"method {method.name}" + (f" (index {index})" if index is not None else "")

@@ -121,11 +121,13 @@ def test_gauss_seidel_chain_converges_with_order_k_plus_1(k, scheme):
 def test_orders_a_unit_cannot_serve_are_refused_naming_it():
     """A single mass after both neighbours has two position conditions and one input: refused for methods
     without an acceleration-level solve; Baumgarte at index 1 and projection are served, and a segment with
-    two ports (its first and last mass) is served by every method."""
+    two ports (its first and last mass) is served by every method.  With Jacobi the neighbours are corrected
+    with the middle mass and respond through their own inputs: served."""
     single = Chain((ChainSegment(masses=(1.0,), ground_stiffness=(10.0,)),) * 3, ("ff", "ff"), 1e-3)
     for name, params in (("weighted", {"index": 3}), ("baumgarte", {"index": 3}), ("baumgarte", {"index": 2, "mu": 1})):
         with pytest.raises(ParameterError, match=r"subsystem 2 advances after 1, 3.*e\.g\. gauss-seidel-123"):
             family_rho(ChainFamily(single, 1), make_method(name, **params), scheme="gauss-seidel-132")
+        assert np.isfinite(family_rho(ChainFamily(single, 1), make_method(name, **params), scheme="jacobi")[0])
     for name, params in (("baumgarte", {"index": 1, "mu": 1}), ("projection", {})):
         assert np.isfinite(
             family_rho(ChainFamily(single, 1), make_method(name, **params), scheme="gauss-seidel-132")[0]

@@ -2,8 +2,9 @@
 
 Per unit: opening it (the kind of unit, saved states, the variables the scene names, their causality, type and
 units of measure, the start values by the standard's rules), then the measured checks of
-:func:`icosim.problems.fmu.inspection.inspect_unit` (rollback, feedthrough, direction).  For the scene: the scheme against
-the units' feedthrough, the joint's consistency at ``t_start`` and the coupling variables there.  Nothing is
+:func:`icosim.problems.fmu.inspection.inspect_unit` (rollback, feedthrough, direction).  For the scene: the direction
+of every joint's multiplier on its two units, the scheme against the units' feedthrough, the joints' consistency
+at ``t_start`` and the coupling variables there.  Nothing is
 run beyond the probing steps; a refusal is a row, not an exception, so one run shows everything that is wrong.
 """
 
@@ -13,11 +14,11 @@ from dataclasses import asdict
 
 import numpy as np
 
-from ...engine.decompositions import get_decomposition
 from .errors import FmuError
 from .inspection import Finding, inspect_unit, joint_direction
+from .joints import check_scheme
 from .problem import Coupling, FmuCosimulation
-from .run import check_scheme, consistent_start, open_unit
+from .run import consistent_start, open_unit
 
 __all__ = ["check_scene"]
 
@@ -26,7 +27,8 @@ def check_scene(scene, *, cache=None) -> dict:
     """The checks of ``scene`` (a loaded :class:`~icosim.problems.fmu.scene.Scene`) as a JSON-ready report:
     ``units`` (name, what the unit is, its findings), ``scene_findings`` and ``refused`` (any refusal)."""
     c = scene.coupling
-    kinds = get_decomposition(c["decomposition"]).kinds
+    graph = scene.graph()
+    kinds = [graph.port_kind(i, 0) for i in range(graph.n_subsystems)]
     signs = scene.graph_signs()
     units, couplings, rows = [], [], []
     try:
@@ -55,15 +57,14 @@ def check_scene(scene, *, cache=None) -> dict:
             mass = unit.get_named(mass) if isinstance(mass, str) else mass
             couplings.append(Coupling(kind, signs[len(couplings)], mass, found.feedthrough, found.gain))
         scene_rows = []
-        if len(units) == 2:
+        if len(units) == len(scene.names):
             joint = joint_direction(
                 scene.names, kinds, signs, [c.gain for c in couplings],
                 [-int(sub["force_sign"]) for sub in scene.data["subsystems"].values()],
             )  # fmt: skip
             scene_rows.append(asdict(joint))
-            graph = scene.graph(len(units[0].elements["position"]))
             scene_rows.append(
-                _guarded("scheme", lambda: check_scheme(scene, units, couplings, graph), f"{c['scheme']}")
+                _guarded("scheme", lambda: check_scheme(scene, units, couplings, graph), scene.scheme_text())
             )
             problem = FmuCosimulation(
                 units, couplings, graph, c["k"], c["H"], t0=units[0].t, perturbation=c["perturbation"]
@@ -78,8 +79,7 @@ def check_scene(scene, *, cache=None) -> dict:
     refused = any(f["verdict"] == "refused" for r in rows for f in r["findings"]) or any(
         f["verdict"] == "refused" for f in scene_rows
     )
-    coupling = f"{scene.method.name}, {c['decomposition']}, k = {c['k']}, {c['scheme']}, H = {c['H']:g} s"
-    return {"scene": str(scene.path), "coupling": coupling, "units": rows, "scene_findings": scene_rows,
+    return {"scene": str(scene.path), "coupling": scene.describe(), "units": rows, "scene_findings": scene_rows,
             "refused": bool(refused)}  # fmt: skip
 
 

@@ -1,6 +1,8 @@
 """Before a run: identify the scene's units as linear single-mass oscillators from probing steps, and predict the
-spectral radius of the coupling for the scene's scheme and every other one (``icosim cosim --predict``), as
-``icosim advise`` does for a two-mass system typed in.
+spectral radius of the coupling for the scene's scheme and the others (``icosim cosim --predict``), as
+``icosim advise`` does for a two-mass system typed in: the identified oscillators joined as the scene joins its
+units are the built-in chain model (:func:`scene_chain`, :class:`~icosim.problems.linear.chain.Chain`; two units
+are the paper's two-mass model), whose spectral radius is that of the scene's coupling.
 
 A force-driven unit is taken to obey ``m a = -c x - d v + F + F_0`` in the physical coupling force ``F`` (the
 joint's multiplier acts with ``+lambda`` on the first unit and ``-lambda`` on the second; the unit's input is
@@ -18,18 +20,18 @@ of a linear fit about its start.  One unit's identification may take at most ``l
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
-from ...engine.decompositions import get_decomposition
-from ...engine.graph import CouplingGraph
-from ...engine.schemes import get_scheme, standard_schemes
-from ...engine.stages import check, plan
-from ..linear.model import PhysicalModel
+from ...engine.schemes import JACOBI, GaussSeidel, Scheme
+from ...engine.spectral.radius import spectral_radius_float64
+from ...engine.stages import plan
+from ..linear.chain import Chain, ChainFamily, ChainSegment
 from .errors import FmuError, SceneError
 from .run import open_units
 
-__all__ = ["identify", "predict_scene", "PROBES", "IDENTIFY_SECONDS"]
+__all__ = ["identify", "predict_scene", "scene_chain", "SceneChain", "PROBES", "IDENTIFY_SECONDS"]
 
 #: Probing inputs per step, in units of the probing amplitude: no pattern, so that position, velocity and
 #: input vary independently (a symmetric sequence makes them collinear); the last step checks the fit.
@@ -105,11 +107,90 @@ def identify(unit, coupling, H, *, physical=1, limit=IDENTIFY_SECONDS) -> dict:
     return {"m": float(m), "c": float(c), "d": float(d), "F0": float(f0), "misfit": float(misfit)}
 
 
+@dataclass(frozen=True)
+class SceneChain:
+    """A scene's units as the built-in chain model (:class:`~icosim.problems.linear.chain.Chain`): the units in a
+    row, ``path[q]`` the scene's unit (0-based, file order) that is the chain's segment ``q``; chain joint ``q``
+    is the scene's joint ``joints[q]``, its sides exchanged where ``flipped[q]`` (the scene names the later unit
+    first: ``fd`` becomes ``df``, the multiplier changes sign)."""
+
+    chain: Chain
+    path: tuple[int, ...]
+    joints: tuple[int, ...]
+    flipped: tuple[bool, ...]
+
+    def scheme(self, scheme: Scheme) -> Scheme:
+        """``scheme`` of the scene's units as the same scheme of the chain's segments."""
+        order = getattr(scheme, "order", None)
+        if order is None:
+            return scheme
+        where = {unit: q for q, unit in enumerate(self.path)}
+        return GaussSeidel([where[i - 1] + 1 for i in order], scheme.leading_outputs)
+
+    def orders(self) -> list[tuple[int, ...]]:
+        """The Gauss-Seidel orders along the chain, from either end, in the scene's numbers (1-based)."""
+        forward = tuple(i + 1 for i in self.path)
+        return [forward, forward[::-1]]
+
+
+def scene_chain(scene, parameters, H=None) -> SceneChain:
+    """The chain of single-mass segments ``ChainSegment((m,), (c,), (d,))`` with ``parameters[name]`` (SI: ``m``,
+    ``c``, ``d`` per unit) joined as the scene's joints join its units, at the scene's ``H`` (or ``H``).  The
+    joints must hold the units in a row (each unit in at most two joints); the row starts at the end unit that
+    comes first in the file.  Refused otherwise (:class:`~icosim.problems.fmu.errors.SceneError`)."""
+    graph = scene.graph()
+    names = scene.names
+    crowded = [i for i in range(graph.n_subsystems) if len(graph.neighbours(i)) > 2]
+    if crowded:
+        i = crowded[0]
+        raise SceneError(
+            f"{scene.path}: joints: the built-in chain model holds its units in a row, but {names[i]} takes part "
+            f"in {len(graph.neighbours(i))} joints; --predict and the chain comparisons need each unit in at most two"
+        )
+    start = min(i for i in range(graph.n_subsystems) if len(graph.neighbours(i)) == 1)
+    path = [start]
+    while len(path) < graph.n_subsystems:
+        path.append(next(o for o in graph.neighbours(path[-1]) if o not in path))
+    joints, flipped, decompositions = [], [], []
+    for a, b in zip(path, path[1:]):
+        j = next(j for j, jt in enumerate(graph.joints) if {jt.first, jt.second} == {a, b})
+        jt = graph.joints[j]
+        flip = jt.first != a
+        kinds = jt.decomposition.kinds[::-1] if flip else jt.decomposition.kinds
+        joints.append(j)
+        flipped.append(flip)
+        decompositions.append("".join("f" if k == "force" else "d" for k in kinds))
+    segments = []
+    for i in path:
+        p = parameters[names[i]]
+        segments.append(ChainSegment((p["m"],), (p["c"],), (p["d"],)))
+    H = float(scene.coupling["H"]) if H is None else H
+    return SceneChain(Chain(tuple(segments), tuple(decompositions), H), tuple(path), tuple(joints), tuple(flipped))
+
+
+def _oscillator(name, p, H) -> dict:
+    """``p`` with a spring or damper that is zero up to the fit's rounding set to zero (a free mass)."""
+    if not (np.isfinite(p["m"]) and p["m"] > 0):
+        raise FmuError(f"{name}: --predict: the identified mass is {p['m']!r}; the unit is not a driven mass")
+    out = dict(p)
+    for key, scale in (("c", H * H / p["m"]), ("d", H / p["m"])):
+        if out[key] < 0 and abs(out[key]) * scale <= 1e-9:
+            out[key] = 0.0
+        if not (np.isfinite(out[key]) and out[key] >= 0):
+            raise FmuError(
+                f"{name}: --predict: the identified {key} = {out[key]!r} is negative: the unit is not a mass with "
+                "a spring and a damper to the ground, which the prediction models"
+            )
+    return out
+
+
 def predict_scene(scene) -> dict:
-    """The identified units and the spectral radius of the scene's coupling for every standard scheme
-    (float64 with its error estimate, :func:`icosim.problems.linear.spectral.spectral_radius_float64`)."""
+    """The identified units and the spectral radius of the scene's coupling (float64 with its error estimate,
+    :func:`icosim.engine.spectral.radius.spectral_radius_float64` on the built-in chain of the identified
+    oscillators, :func:`scene_chain`) for the scene's scheme, Jacobi, the Gauss-Seidel orders along the chain
+    from either end, and the scene's order and its reverse; an order the stages cannot serve, or one that
+    re-evaluates a unit without feedthrough, is "not defined" with the reason."""
     from ...errors import ParameterError
-    from ..linear.spectral import spectral_radius_float64
 
     c = scene.coupling
     H = float(c["H"])
@@ -118,41 +199,50 @@ def predict_scene(scene) -> dict:
             f"{scene.path}: --predict identifies single-mass oscillators (one position per unit); this scene's "
             "joint has more components"
         )
+    scene_chain(scene, {name: {"m": 1.0, "c": 0.0, "d": 0.0} for name in scene.names})  # a row, before any unit
     limit = float(scene.data.get("limits", {}).get("identify_seconds", IDENTIFY_SECONDS))
     units, couplings = open_units(scene)
     try:
         found = {}
         for u, cp in zip(units, couplings):
             before = u.do_steps
-            physical = np.sign(cp.gain)  # the joint acts with opposite signs on the two units (checked)
+            physical = np.sign(cp.gain)  # every joint acts with opposite signs on its two units (checked)
             found[u.label] = identify(u, cp, H, physical=physical, limit=limit)
             found[u.label] |= {"probe_do_step_calls": u.do_steps - before, "feedthrough": cp.feedthrough}
     finally:
         for unit in units:
             unit.close()
-    p1, p2 = found.values()
-    for name, p in found.items():
-        if not (np.isfinite(p["m"]) and p["m"] > 0):
-            raise FmuError(f"{name}: --predict: the identified mass is {p['m']!r}; the unit is not a driven mass")
-    model = PhysicalModel(m1=p1["m"], m2=p2["m"], c1=p1["c"], c2=p2["c"], d1=p1["d"], d2=p2["d"], H=H)
-    dec = get_decomposition(c["decomposition"])
-    names = list(dict.fromkeys([get_scheme(c["scheme"]).name, *standard_schemes()]))
+    chain = scene_chain(scene, {name: _oscillator(name, p, H) for name, p in found.items()})
+    family = ChainFamily(chain.chain, int(c["k"]))
+    graph = scene.graph()
+    mine = scene.scheme
+    candidates = [mine, JACOBI] + [GaussSeidel(o) for o in chain.orders()]
+    if getattr(mine, "order", None) is not None:
+        candidates += [
+            GaussSeidel(mine.order, mine.leading_outputs),
+            GaussSeidel(mine.order[::-1], mine.leading_outputs),
+        ]
+    schemes = list({s.name: s for s in candidates}.values())
     rows = []
-    for name in names:
-        scheme = get_scheme(name)
-        row = {"scheme": name, "scene": name == get_scheme(c["scheme"]).name}
+    for scheme in schemes:
+        order = getattr(scheme, "order", None)
+        row = {
+            "scheme": scheme.name,
+            "order": None if order is None else [scene.names[i - 1] for i in order],
+            "label": scene.scheme_text(scheme),
+            "scene": scheme.name == mine.name,
+        }
         try:
-            check(scheme, dec)
-        except (ParameterError, AttributeError) as exc:
+            p = plan(scheme, graph, scene.method)
+        except ParameterError as exc:
             rows.append(row | {"rho": None, "verdict": "not defined", "reason": str(exc)})
             continue
-        lacking = [units[i].label for i in plan(scheme, CouplingGraph.pair(dec)).reevaluated
-                   if not couplings[i].feedthrough]  # fmt: skip
+        lacking = [units[i].label for i in p.reevaluated if not couplings[i].feedthrough]
         if lacking:
             why = f"it re-evaluates {lacking[0]} without a step, which has no direct feedthrough"
             rows.append(row | {"rho": None, "verdict": "not defined", "reason": why})
             continue
-        rho, err = spectral_radius_float64(model.coefficients(), scene.method, dec, c["k"], scheme=scheme)
+        rho, err = spectral_radius_float64(family, scene.method, scheme=chain.scheme(scheme))
         rho, err = float(rho), float(err)
         verdict = "stable" if rho + err < 1 else "unstable" if rho - err > 1 else "undecided"
         rows.append(row | {"rho": rho, "rho_error": err, "verdict": verdict})
@@ -161,7 +251,8 @@ def predict_scene(scene) -> dict:
         "units": found,
         "H": H,
         "method": scene.method.name,
-        "decomposition": dec.name,
+        "decomposition": c["decomposition"] if not scene.has_joints else ", ".join(scene.decompositions),
+        "coupling": scene.describe(scheme=False),
         "k": c["k"],
         "schemes": rows,
     }

@@ -7,13 +7,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...engine.decompositions import get_decomposition
 from ...engine.run import simulate
-from ...engine.schemes import get_scheme, standard_schemes
-from ...engine.stages import plan
 from .build import build_unit, is_source_dir
 from .errors import FmuError
 from .inspection import inspect_unit, joint_direction, refuse
+from .joints import check_scheme
 from .problem import Coupling, FmuCosimulation
 from .scene import Scene, load_scene
 from .units import ROLES, Unit
@@ -27,9 +25,9 @@ class SceneRun:
 
     scene: Scene
     times: np.ndarray
-    states: np.ndarray  # (n+1, 2, 2 n_dim): positions, then velocities
+    states: np.ndarray  # (n+1, N, 2 n_dim): positions, then velocities, per unit
     coupling: np.ndarray  # (n+1, n_e)
-    outputs: np.ndarray  # (n+1, 2, 4, n_dim); row 0 NaN (no step has produced it)
+    outputs: np.ndarray  # (n+1, N, 4, n_dim); row 0 NaN (no step has produced it)
     units: dict = field(default_factory=dict)  # name -> Unit.info()
     status: str = "completed"
     reason: str = ""
@@ -44,13 +42,37 @@ class SceneRun:
 
     @property
     def positions(self) -> np.ndarray:
-        """``(n+1, 2, n_dim)``."""
+        """``(n+1, N, n_dim)``."""
         return self.states[..., : self.n_dim]
 
     @property
     def velocities(self) -> np.ndarray:
-        """``(n+1, 2, n_dim)``."""
+        """``(n+1, N, n_dim)``."""
         return self.states[..., self.n_dim :]
+
+    def joint_gaps(self) -> np.ndarray:
+        """Per joint, the position of its first unit minus its second's, ``(n+1, M, n_dim)``."""
+        graph = self.scene.graph(self.n_dim)
+        first = [jt.first for jt in graph.joints]
+        second = [jt.second for jt in graph.joints]
+        return self.positions[:, first] - self.positions[:, second]
+
+    def joint_forces(self) -> np.ndarray:
+        """Per joint, the force it exerts on its first unit (on the second the opposite), ``(n+1, M, n_dim)``:
+        the joint's multiplier ``lambda_j`` where its first side is force driven (corrected, the run's coupling
+        variables), else the force the first unit's drive exerts (its output at the end of each macro step; NaN
+        at the start)."""
+        graph = self.scene.graph(self.n_dim)
+        out = np.empty((len(self.times), graph.n_joints, self.n_dim))
+        for j, jt in enumerate(graph.joints):
+            d = jt.decomposition
+            if d.kinds[0] == "force":
+                v = next(v for v in range(d.n_coupling) if d.variable_kind(v) == "force")
+                first = graph.columns(j)[v * self.n_dim]
+                out[:, j] = self.coupling[:, first : first + self.n_dim]
+            else:
+                out[:, j] = self.outputs[:, jt.first, 3, :]
+        return out
 
 
 def fmu_file(path, cache=None):
@@ -81,11 +103,12 @@ def open_unit(scene: Scene, name: str, kind: str, *, cache=None) -> Unit:
 
 
 def open_units(scene: Scene, *, cache=None, inspect=True):
-    """The scene's two units, opened with their start values at ``t_start``, checked
-    (:func:`icosim.problems.fmu.inspection.inspect_unit` per unit, :func:`~icosim.problems.fmu.inspection.joint_direction` for the
-    joint, :func:`check_scheme`; a refusal raises :class:`~icosim.problems.fmu.errors.FmuError`), and their couplings.
-    ``inspect=False`` skips the measured checks (every unit is taken to have feedthrough)."""
-    kinds = get_decomposition(scene.coupling["decomposition"]).kinds
+    """The scene's units, opened with their start values at ``t_start``, checked
+    (:func:`icosim.problems.fmu.inspection.inspect_unit` per unit, :func:`~icosim.problems.fmu.inspection.joint_direction`
+    for the joints, :func:`check_scheme`; a refusal raises :class:`~icosim.problems.fmu.errors.FmuError`), and their
+    couplings.  ``inspect=False`` skips the measured checks (every unit is taken to have feedthrough)."""
+    graph = scene.graph()
+    kinds = [graph.port_kind(i, 0) for i in range(graph.n_subsystems)]
     signs = scene.graph_signs()
     units, couplings = [], []
     try:
@@ -116,28 +139,12 @@ def open_units(scene: Scene, *, cache=None, inspect=True):
             )  # fmt: skip
             if joint.verdict == "refused":
                 raise FmuError(f"{scene.path}: {joint.key}: {joint.detail}; {joint.fix}")
-        check_scheme(scene, units, couplings, scene.graph(len(units[0].elements["position"])))
+        check_scheme(scene, units, couplings, graph)
     except BaseException:
         for unit in units:
             unit.close()
         raise
     return units, couplings
-
-
-def check_scheme(scene: Scene, units, couplings, graph):
-    """Refuse a scheme that re-evaluates a finished unit without a step where that unit's output follows its input
-    only through a step."""
-    scheme = get_scheme(scene.coupling["scheme"])
-    for i in plan(scheme, graph).reevaluated:
-        if not couplings[i].feedthrough:
-            others = [n for n in standard_schemes() if i not in plan(get_scheme(n), graph).reevaluated]
-            out = "acceleration" if couplings[i].kind == "force" else "drive's force"
-            raise FmuError(
-                f"{scene.path}: coupling.scheme: {scheme.name} re-evaluates the leading unit {units[i].label}'s "
-                f"{out} with the corrected coupling variables without a step, but {units[i].label} has no direct "
-                f"feedthrough (its {out} follows its input only through a step); use "
-                f"{', '.join(others)} or {scheme.name}-as-integrated"
-            )
 
 
 @dataclass
@@ -154,31 +161,36 @@ class Start:
 
 
 def consistent_start(scene: Scene, problem: FmuCosimulation) -> Start:
-    """The run's start: the joint's positions (and velocities, where the method enforces them) consistent at
+    """The run's start: every joint's positions (and velocities, where the method enforces them) consistent at
     ``t_start`` (``initial: check`` refuses a gap beyond ``initial_tolerance``, ``project`` projects the units onto
-    the joint, ``as-is`` accepts it and reports it), and the coupling variables the scene gives or, by default,
+    the joints, ``as-is`` accepts it and reports it), and the coupling variables the scene gives or, by default,
     those the units need at ``t_start`` (:meth:`FmuCosimulation.consistent_coupling`)."""
     state = problem.initial_state()
     n = problem.n_dim
-    gap_x, gap_v = state[0, :n] - state[1, :n], state[0, n:] - state[1, n:]
+    joints = problem.graph.joints
+    gaps_x = [state[jt.first, :n] - state[jt.second, :n] for jt in joints]
+    gaps_v = [state[jt.first, n:] - state[jt.second, n:] for jt in joints]
     size_x = max(1.0, float(np.max(np.abs(state[:, :n]))))
     size_v = max(1.0, float(np.max(np.abs(state[:, n:]))))
     tol = float(scene.data.get("initial_tolerance", 1e-9))
     mode = scene.data.get("initial", "check")
     method = scene.method
     velocity_level = method.projection or any(w != 0 and levels[1] != 0 for w, levels in method.solves)
-    checks = [("position", gap_x, size_x, "m")] + ([("velocity", gap_v, size_v, "m/s")] if velocity_level else [])
-    for what, gap, size, unit in checks:
-        worst = float(np.max(np.abs(gap)))
-        if mode == "check" and worst > tol * size:
-            a, b = scene.names
-            raise FmuError(
-                f"{scene.path}: initial: the joint's {what}s differ at t_start: {a} {_text(state[0], what, n)} "
-                f"{unit}, {b} {_text(state[1], what, n)} {unit} (gap {worst:.3g} {unit} > initial_tolerance "
-                f"{tol:g} x {size:g}); set consistent start values, or initial: project (units that can be set) "
-                "or initial: as-is (the gap is reported)"
-            )
-    position_gap, velocity_gap = float(np.max(np.abs(gap_x))), float(np.max(np.abs(gap_v)))
+    checks = [("position", gaps_x, size_x, "m")] + ([("velocity", gaps_v, size_v, "m/s")] if velocity_level else [])
+    for what, gaps, size, unit in checks:
+        for j, (jt, gap) in enumerate(zip(joints, gaps)):
+            worst = float(np.max(np.abs(gap)))
+            if mode == "check" and worst > tol * size:
+                a, b = scene.names[jt.first], scene.names[jt.second]
+                whose = "the joint's" if not scene.has_joints else f"{scene.joint_label(j)}:"
+                raise FmuError(
+                    f"{scene.path}: initial: {whose} {what}s differ at t_start: {a} "
+                    f"{_text(state[jt.first], what, n)} {unit}, {b} {_text(state[jt.second], what, n)} {unit} (gap "
+                    f"{worst:.3g} {unit} > initial_tolerance {tol:g} x {size:g}); set consistent start values, or "
+                    "initial: project (units that can be set) or initial: as-is (the gap is reported)"
+                )
+    position_gap = max(float(np.max(np.abs(g))) for g in gaps_x)
+    velocity_gap = max(float(np.max(np.abs(g))) for g in gaps_v)
     if mode == "project":
         state = problem.project(state)
     given = scene.data.get("initial_coupling")
@@ -219,7 +231,7 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
         problem = FmuCosimulation(
             units,
             couplings,
-            scene.graph(len(units[0].elements["position"])),
+            scene.graph(),
             c["k"],
             c["H"],
             t0=float(scene.data.get("t_start", 0.0)),
@@ -239,7 +251,7 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
                 start.state,
                 start.history,
                 scene.n_steps,
-                scheme=c["scheme"],
+                scheme=scene.scheme,
                 iterations=c["iterations"],
                 bound=divergence_bound(scene, start.state),
                 observe=step_done,
@@ -251,7 +263,7 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
             t_div = problem.t0 + traj.diverged_at * float(c["H"])
             status = "diverged"
             reason = f"diverged at macro step {traj.diverged_at} (t = {t_div:.12g} s): {traj.reason}"
-        nan_y = np.full((2, 4, problem.n_dim), np.nan)
+        nan_y = np.full((len(units), 4, problem.n_dim), np.nan)
         outputs = [nan_y if y is None else y for y in traj.outputs]
         times = problem.t0 + c["H"] * np.arange(len(traj.states))
         info = {u.label: u.info() for u in units}
@@ -283,8 +295,11 @@ def run_dataset(run: SceneRun, *, command: str = ""):
 
 
 def run_dataset_data(run: SceneRun, *, command: str = ""):
-    """The run as a :class:`~icosim.io.dataset.DatasetDict`: ``position``/``velocity``/``acceleration`` (subsystem, time),
-    ``multiplier`` and ``gap`` (time), the coupling variables, the scene and the units' provenance as attributes."""
+    """The run as a :class:`~icosim.io.dataset.DatasetDict`: ``position``/``velocity``/``acceleration`` (subsystem,
+    time), the coupling variables, per joint the force on its first unit and the gap -- ``multiplier`` and ``gap``
+    (time) for a scene without joints, ``joint_force`` and ``joint_gap`` (joint, time) with ``joint_first``,
+    ``joint_second`` and ``joint_decomposition`` along ``joint`` for a scene with joints -- and the scene and the
+    units' provenance as attributes."""
     import json
 
     from ...io.dataset import DatasetDict
@@ -292,22 +307,65 @@ def run_dataset_data(run: SceneRun, *, command: str = ""):
 
     scene = run.scene
     names = list(scene.names)
-    dec = get_decomposition(scene.coupling["decomposition"])
+    graph = scene.graph(run.n_dim)
     n = run.n_dim
     # one component: (subsystem, time) as the scalar test model; more: a trailing component axis
     comp = () if n == 1 else ("component",)
     squeeze = (lambda a: a[..., 0]) if n == 1 else (lambda a: a)
     sub_time = lambda a: squeeze(np.moveaxis(a, 0, 1))  # (time, subsystem, n) -> (subsystem, time[, n])
-    variables = list(dec.variables) if n == 1 else [f"{v}_{c}" for v in dec.variables for c in "xyz"[:n]]
-    ds = DatasetDict(
-        {
-            "position": (("subsystem", "time") + comp, sub_time(run.positions), {"units": "m"}),
-            "velocity": (("subsystem", "time") + comp, sub_time(run.velocities), {"units": "m s-1"}),
-            "acceleration": (
-                ("subsystem", "time") + comp,
-                sub_time(run.outputs[:, :, 2, :]),
-                {"units": "m s-2", "comment": "output at the end of each macro step; NaN at the start"},
+    if scene.has_joints:
+        variables = list(graph.variable_names())
+    else:
+        dec = graph.joints[0].decomposition
+        variables = list(dec.variables) if n == 1 else [f"{v}_{c}" for v in dec.variables for c in "xyz"[:n]]
+    per_unit = {
+        "position": (("subsystem", "time") + comp, sub_time(run.positions), {"units": "m"}),
+        "velocity": (("subsystem", "time") + comp, sub_time(run.velocities), {"units": "m s-1"}),
+        "acceleration": (
+            ("subsystem", "time") + comp,
+            sub_time(run.outputs[:, :, 2, :]),
+            {"units": "m s-2", "comment": "output at the end of each macro step; NaN at the start"},
+        ),
+    }
+    coupling = {
+        "coupling": (
+            ("time", "coupling_variable"),
+            run.coupling,
+            {"comment": "coupling variables e (N for lambda_c, m s-2 for a_tilde)"},
+        )
+    }
+    coords = {
+        "time": ("time", run.times, {"units": "s"}),
+        "subsystem": ("subsystem", names),
+        "coupling_variable": ("coupling_variable", variables),
+    } | ({} if n == 1 else {"component": ("component", list("xyz"[:n]))})
+    if scene.has_joints:
+        joint_time = lambda a: squeeze(np.moveaxis(a, 0, 1))  # (time, joint, n) -> (joint, time[, n])
+        per_joint = {
+            "joint_force": (
+                ("joint", "time") + comp,
+                joint_time(run.joint_forces()),
+                {
+                    "units": "N",
+                    "long_name": "force of the joint on its first subsystem (on the second the opposite)",
+                    "comment": "the joint's multiplier lambda_j where its first side is force driven, else the "
+                    "force the first subsystem's drive exerts (NaN at the start)",
+                },
             ),
+            "joint_gap": (
+                ("joint", "time") + comp,
+                joint_time(run.joint_gaps()),
+                {"units": "m", "long_name": "position of the joint's first subsystem minus its second's"},
+            ),
+        }
+        coords |= {
+            "joint": ("joint", np.arange(1, graph.n_joints + 1)),
+            "joint_first": ("joint", [names[jt.first] for jt in graph.joints]),
+            "joint_second": ("joint", [names[jt.second] for jt in graph.joints]),
+            "joint_decomposition": ("joint", [jt.decomposition.name for jt in graph.joints]),
+        }
+    else:
+        per_joint = {
             "multiplier": (
                 ("time",) + comp,
                 squeeze(run.outputs[:, 0, 3, :]),
@@ -322,19 +380,8 @@ def run_dataset_data(run: SceneRun, *, command: str = ""):
                 squeeze(run.positions[:, 0] - run.positions[:, 1]),
                 {"units": "m", "long_name": "position of the first subsystem minus the second's"},
             ),
-            "coupling": (
-                ("time", "coupling_variable"),
-                run.coupling,
-                {"comment": "coupling variables e (N for lambda_c, m s-2 for a_tilde)"},
-            ),
-        },
-        coords={
-            "time": ("time", run.times, {"units": "s"}),
-            "subsystem": ("subsystem", names),
-            "coupling_variable": ("coupling_variable", variables),
         }
-        | ({} if n == 1 else {"component": ("component", list("xyz"[:n]))}),
-    )
+    ds = DatasetDict(per_unit | per_joint | coupling, coords=coords)
     attrs = provenance_attrs(scene.data, title=f"FMU scene {scene.path.name}", command=command)
     attrs["scene_json"] = attrs["config_json"]
     attrs["status"] = run.status
@@ -345,6 +392,7 @@ def run_dataset_data(run: SceneRun, *, command: str = ""):
         attrs["initial_position_gap"] = run.start.position_gap
         attrs["initial_velocity_gap"] = run.start.velocity_gap
         attrs["initial_coupling_source"] = run.start.coupling_source
+    attrs["scheme"] = scene.scheme.name
     attrs["method_engine_parameters"] = json.dumps(scene.method.params, sort_keys=True)
     attrs["wall_time_s"] = run.wall_time
     for name, info in run.units.items():
@@ -367,6 +415,7 @@ def run_summary(run: SceneRun) -> dict:
         "macro_steps": steps,
         "t_end": float(run.times[-1]),
         "coupling": {k: v for k, v in run.scene.coupling.items()},
+        "described": run.scene.describe(),
         "units": run.units,
         "do_step_calls_per_macro_step": (sum(i["do_step_calls"] for i in run.units.values()) / steps)
         if steps
@@ -375,7 +424,7 @@ def run_summary(run: SceneRun) -> dict:
             name: (float(p[0]) if run.n_dim == 1 else [float(v) for v in p])
             for name, p in zip(run.scene.names, run.positions[-1])
         },
-        "max_abs_gap": float(np.max(np.abs(run.positions[:, 0] - run.positions[:, 1]))),  # largest component
+        "max_abs_gap": float(np.max(np.abs(run.joint_gaps()))),  # every joint, the largest component
         "diverged_at": run.diverged_at,
         "initial": None
         if run.start is None

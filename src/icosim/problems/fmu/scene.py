@@ -1,6 +1,6 @@
-"""Scene files: two FMU units and how they are coupled, checked against a JSON schema before anything is loaded.
+"""Scene files: FMU units and how they are joined, checked against a JSON schema before anything is loaded.
 
-A scene (YAML)::
+Two units (the paper's subsystems 1 and 2), the decomposition in the coupling::
 
     subsystems:
       body1: {fmu: ../../fmus/msd, start: {m: 1.0, c: 1000.0, d: 2.0, x0: 0.1},
@@ -10,13 +10,28 @@ A scene (YAML)::
     coupling: {method: projection, decomposition: ff, k: 1, scheme: jacobi, H: 1.0e-3}
     t_end: 0.5
 
+Any number of units joined by ``joints``, each with its own decomposition (first side, second side)::
+
+    subsystems: {a: {...}, b: {...}, c: {...}}
+    joints:
+      - {between: [a, b], decomposition: ff}
+      - {between: [b, c], decomposition: fd}
+    coupling: {method: baumgarte, index: 1, mu: 1.0e-3, k: 1, scheme: gauss-seidel, order: [c, b, a], H: 1.0e-3}
+
+``force_sign`` means what its format says (:meth:`Scene.graph_signs`): without ``joints`` the coupling force
+on the unit is ``force_sign * lambda`` (``+lambda`` on the first unit, ``-lambda`` on the second, so physical
+inputs have ``1`` and ``-1``); with ``joints`` the unit's input is ``force_sign`` times the sum of its joints'
+multipliers, ``+lambda_j`` where it is a joint's first side and ``-lambda_j`` where it is the second (physical
+inputs have ``1`` everywhere).  Each unit has one joint point: all its joints attach there, a kinematically
+driven unit is in one joint only, and the joints form a tree (a loop would repeat a condition).
+
 ``fmu`` is an ``.fmu`` file or a unit's source directory (``modelDescription.xml`` and ``sources/``, built on
-first use: :mod:`icosim.problems.fmu.build`), relative to the scene file; two subsystems may name the same one (two
-instances).  The first subsystem is the paper's subsystem 1.  A joint in the plane (the double pendulum,
-``config/scenes/double_pendulum_ff.yaml``) names two components in every variable entry
-(``position: [Px, Py]``).  Keys per subsystem: :data:`SUBSYSTEM_KEYS`;
-coupling keys: :data:`COUPLING_KEYS` and the method's parameters (as :func:`icosim.engine.methods.make_method`
-takes them, dimensional: ``mu`` and ``beta`` in s, ``gamma`` in s^2).  docs/fmi.md has the details.
+first use: :mod:`icosim.problems.fmu.build`), relative to the scene file; subsystems may name the same one
+(instances of it).  A joint in the plane (the double pendulum, ``config/scenes/double_pendulum_ff.yaml``) names
+two components in every variable entry (``position: [Px, Py]``).  Keys per subsystem: :data:`SUBSYSTEM_KEYS`;
+per joint :data:`JOINT_KEYS`; coupling keys: :data:`COUPLING_KEYS` and the method's parameters (as
+:func:`icosim.engine.methods.make_method` takes them, dimensional: ``mu`` and ``beta`` in s, ``gamma`` in s^2).
+docs/fmi.md has the details.
 """
 
 from __future__ import annotations
@@ -26,15 +41,16 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ...engine.bounds import MAX_K
-from ...engine.decompositions import get_decomposition
 from ...engine.graph import CouplingGraph, Joint
 from ...engine.methods import engine_method, get_spec
 from ...engine.schema import schema_defs
+from ...engine.schemes import SCHEMES, GaussSeidel, Scheme, get_scheme
 from ...errors import ParameterError
 from .build import is_source_dir
 from .errors import SceneError
+from .joints import NUMBERED, ORDERED_SCHEMES, check_order, driven_by, graph_message, joint_schema, scene_joints
 
-__all__ = ["Scene", "load_scene", "scene_schema", "SUBSYSTEM_KEYS", "COUPLING_KEYS", "SCENE_KEYS"]
+__all__ = ["Scene", "load_scene", "scene_schema", "SUBSYSTEM_KEYS", "JOINT_KEYS", "COUPLING_KEYS", "SCENE_KEYS"]
 
 #: Keys of one subsystem and what they hold.
 SUBSYSTEM_KEYS = {
@@ -46,22 +62,34 @@ SUBSYSTEM_KEYS = {
     "force": "name of the coupling-force input (a force-driven subsystem)",
     "acceleration_input": "name of the prescribed-acceleration input (a kinematically driven subsystem)",
     "reaction_force": "name of the output of the force the drive exerts (a kinematically driven subsystem)",
-    "force_sign": "+1 or -1: the coupling force on this subsystem is force_sign * lambda",
+    "force_sign": "+1 or -1: with joints, the unit's input is force_sign times the sum of its joints' multipliers "
+    "(+lambda_j on a joint's first subsystem, -lambda_j on its second); without joints, the coupling force on "
+    "this subsystem is force_sign * lambda",
     "mass": "the mass (a number, or the name of a unit variable holding it): the projection's weight",
     "set_position": "name of a tunable parameter or input that sets the position (projection)",
     "set_velocity": "name of a tunable parameter or input that sets the velocity (projection)",
     "rollback_tolerance": "relative difference accepted when a restored step is repeated (default 0: bit for bit)",
 }
 
+#: Keys of one joint and what they hold.
+JOINT_KEYS = {
+    "between": "the two subsystems the joint holds together, its first and its second side: the joint's "
+    "multiplier acts with +lambda_j on the first and -lambda_j on the second",
+    "decomposition": "which side is force driven and which kinematically driven (first side, second side)",
+}
+
 #: Top-level keys of a scene and what they hold.
 SCENE_KEYS = {
-    "subsystems": "the units by name (two)",
-    "coupling": "the method, decomposition, k, scheme, H and their options",
+    "subsystems": "the units by name (two without joints, the first the paper's subsystem 1; any number >= 2 "
+    "with joints)",
+    "joints": "the joints between the subsystems, each {between: [first, second], decomposition} (without it: "
+    "the two subsystems joined by coupling.decomposition)",
+    "coupling": "the method, decomposition (without joints), k, scheme (and order), H and their options",
     "t_start": "the start time (s; default 0)",
     "t_end": "the end time (s)",
     "initial_coupling": "the coupling variables at t_start, every component (default: computed from the units)",
     "initial": "check (default: refuse a joint whose positions or velocities differ at t_start), project (move "
-    "the units onto the joint) or as-is (run, and report the gap)",
+    "the units onto the joints) or as-is (run, and report the gap)",
     "initial_tolerance": "the gap accepted at t_start, relative to max(1, the largest position or velocity)",
     "divergence_bound": "a state (SI) beyond this ends the run as diverged (default 1e10 (1 + |state at t_start|))",
     "limits": "call_seconds: the longest an FMI call of a unit may take; identify_seconds: the longest the "
@@ -74,6 +102,7 @@ COUPLING_KEYS = {
     "decomposition": None,
     "k": None,
     "scheme": "jacobi",
+    "order": None,
     "H": None,
     "iterations": 1,
     "inputs": "auto",
@@ -81,7 +110,6 @@ COUPLING_KEYS = {
     "perturbation": 1.0e-3,
     "sensitivities": "each-step",
 }
-
 
 #: Subsystem keys that do not name unit variables.
 _NOT_NAMES = ("fmu", "start", "force_sign", "mass", "rollback_tolerance")
@@ -114,12 +142,18 @@ def scene_schema() -> dict:
     coupling = {
         "type": "object",
         "additionalProperties": False,
-        "required": ["method", "decomposition", "k", "H"],
+        "required": ["method", "k", "H"],
         "properties": {
             "method": defs["method"],
             "decomposition": defs["decomposition"],
             "k": {"type": "integer", "minimum": 0, "maximum": MAX_K},
-            "scheme": defs["scheme"],
+            "scheme": {
+                "anyOf": [
+                    {"enum": [*SCHEMES, *ORDERED_SCHEMES]},
+                    {"type": "string", "pattern": NUMBERED},
+                ]
+            },
+            "order": {"type": "array", "items": name, "minItems": 2, "uniqueItems": True},
             "H": {"type": "number", "exclusiveMinimum": 0},
             "iterations": {"type": "integer", "minimum": 1, "maximum": 100},
             "inputs": {"enum": ["auto", "derivatives", "substeps"]},
@@ -135,12 +169,8 @@ def scene_schema() -> dict:
         "additionalProperties": False,
         "required": ["subsystems", "coupling", "t_end"],
         "properties": {
-            "subsystems": {
-                "type": "object",
-                "minProperties": 2,
-                "maxProperties": 2,
-                "additionalProperties": sub,
-            },
+            "subsystems": {"type": "object", "minProperties": 2, "additionalProperties": sub},
+            "joints": {"type": "array", "minItems": 1, "items": joint_schema(name, defs["decomposition"])},
             "coupling": coupling,
             "t_start": {"type": "number"},
             "t_end": {"type": "number"},
@@ -157,6 +187,10 @@ def scene_schema() -> dict:
                 },
             },
         },
+        # with joints each joint has its decomposition; without, two subsystems joined by the coupling's
+        "if": {"required": ["joints"]},
+        "then": {"properties": {"coupling": {"not": {"required": ["decomposition"]}}}},
+        "else": {"properties": {"subsystems": {"maxProperties": 2}, "coupling": {"required": ["decomposition"]}}},
     }
 
 
@@ -169,26 +203,85 @@ class Scene:
     fmus: dict  # subsystem -> Path of its .fmu file or source directory
     method: object  # the CouplingMethod with the engine's (dimensionless) parameters
     n_steps: int
+    joints: tuple = ()  # the Joints (0-based subsystems); empty: the two subsystems of the coupling's decomposition
+    n_dim: int = 1  # components of every position entry (1: a line, 2: the plane)
 
     @property
     def names(self) -> tuple:
         return tuple(self.data["subsystems"])
 
     @property
-    def coupling(self) -> dict:
-        return {**COUPLING_KEYS, **self.data["coupling"]}
+    def has_joints(self) -> bool:
+        """Does the scene join its units by ``joints`` (else: two units, ``coupling.decomposition``)?"""
+        return "joints" in self.data
 
-    def graph(self, n_components: int = 1) -> CouplingGraph:
-        """The units and joints (:mod:`icosim.engine.graph`): the two units joined by the coupling's
-        decomposition."""
-        return CouplingGraph(2, (Joint(0, 1, self.coupling["decomposition"]),), n_components, names=self.names)
+    @property
+    def scheme(self) -> Scheme:
+        """The coupling scheme: a registered one, a numbered order, or ``gauss-seidel`` with ``coupling.order``
+        (the names turned into the subsystems' numbers in file order)."""
+        given = self.data["coupling"].get("scheme", COUPLING_KEYS["scheme"])
+        if given in ORDERED_SCHEMES:
+            numbers = [self.names.index(n) + 1 for n in self.data["coupling"]["order"]]
+            leading = "as-integrated" if given.endswith("-as-integrated") else "reevaluated"
+            return GaussSeidel(numbers, leading)
+        return get_scheme(given)
+
+    @property
+    def coupling(self) -> dict:
+        """The coupling keys with their defaults; ``scheme`` is the scheme's name (``gauss-seidel-312``), also
+        where the scene gives ``gauss-seidel`` with an order."""
+        return {**COUPLING_KEYS, **self.data["coupling"], "scheme": self.scheme.name}
+
+    @property
+    def decompositions(self) -> tuple:
+        """Each joint's decomposition name, in the joints' order."""
+        return tuple(j.decomposition.name for j in self.graph().joints)
+
+    def graph(self, n_components: int | None = None) -> CouplingGraph:
+        """The units and joints (:mod:`icosim.engine.graph`), one port per unit: the scene's ``joints``, or the
+        two units joined by the coupling's decomposition."""
+        n = self.n_dim if n_components is None else n_components
+        joints = self.joints or (Joint(0, 1, self.data["coupling"]["decomposition"]),)
+        return CouplingGraph(len(self.names), joints, n, names=self.names)
 
     def graph_signs(self) -> list[int]:
-        """Per unit, the sign with which the graph's coupling force reaches its input: the scene gives the sign
-        of ``lambda`` on each unit, the graph acts with ``-lambda`` on the second."""
-        return [
-            int(sub["force_sign"]) * (1 if i == 0 else -1) for i, sub in enumerate(self.data["subsystems"].values())
-        ]
+        """Per unit, the sign with which the graph's coupling force reaches its input.  With ``joints`` that is
+        the scene's ``force_sign``; without, the scene gives the sign of ``lambda`` on each unit, and the graph
+        acts with ``-lambda`` on the second."""
+        subs = self.data["subsystems"].values()
+        if self.has_joints:
+            return [int(sub["force_sign"]) for sub in subs]
+        return [int(sub["force_sign"]) * (1 if i == 0 else -1) for i, sub in enumerate(subs)]
+
+    def joint_label(self, j: int) -> str:
+        """``joints[j] (a–b, ff)``, or ``the joint`` of a scene without joints."""
+        if not self.has_joints:
+            return "the joint"
+        jt = self.graph().joints[j]
+        return f"joints[{j}] ({self.names[jt.first]}–{self.names[jt.second]}, {jt.decomposition.name})"
+
+    def describe(self, *, scheme: bool = True) -> str:
+        """The coupling in one line: method, decomposition or joints, ``k``, scheme (with the order by name;
+        ``scheme=False``: without), H."""
+        c = self.coupling
+        if self.has_joints:
+            joined = ", ".join(
+                f"{self.names[jt.first]}–{self.names[jt.second]} {jt.decomposition.name}" for jt in self.graph().joints
+            )
+            how = f"{len(self.names)} units, joints {joined}"
+        else:
+            how = str(c["decomposition"])
+        which = f", {self.scheme_text()}" if scheme else ""
+        return f"{self.method.name}, {how}, k = {c['k']}{which}, H = {c['H']:g} s"
+
+    def scheme_text(self, scheme: Scheme | None = None) -> str:
+        """A scheme's name, with the order by the subsystems' names where the scene has joints
+        (``gauss-seidel-321 (c → b → a)``)."""
+        scheme = self.scheme if scheme is None else scheme
+        order = getattr(scheme, "order", None)
+        if not self.has_joints or order is None:
+            return scheme.name
+        return f"{scheme.name} ({' → '.join(self.names[i - 1] for i in order)})"
 
 
 def _fail(path, where, message):
@@ -213,7 +306,8 @@ def load_scene(path) -> Scene:
         raise SceneError(f"{path}: not valid YAML: {' '.join(str(exc).split())}") from None
     _validate(path, data)
     c = {**COUPLING_KEYS, **data["coupling"]}
-    decomposition = get_decomposition(c["decomposition"])
+    names = list(data["subsystems"])
+    joints = scene_joints(path, data, names)
     spec = get_spec(c["method"])
     given = {k: c[k] for k in data["coupling"] if k not in COUPLING_KEYS}
     extra = sorted(set(given) - set(spec.arguments))
@@ -225,7 +319,14 @@ def load_scene(path) -> Scene:
         )
     try:
         method = spec.make(**given)
-        method.check_decomposition(decomposition)
+    except ParameterError as exc:
+        _fail(path, "coupling", str(exc))
+    for j, joint in enumerate(joints or (Joint(0, 1, c["decomposition"]),)):
+        try:
+            method.check_decomposition(joint.decomposition)
+        except ParameterError as exc:
+            _fail(path, f"joints[{j}].decomposition" if joints else "coupling", str(exc))
+    try:
         method = engine_method(method, c["H"])
     except ParameterError as exc:
         _fail(path, "coupling", str(exc))
@@ -252,14 +353,19 @@ def load_scene(path) -> Scene:
             f"every variable entry must name as many components (one name, or lists of one length), got {sizes}",
         )
     n_dim = next(iter(entries.values()), 1)
-    if "initial_coupling" in data and len(data["initial_coupling"]) != decomposition.n_coupling * n_dim:
+    scene = Scene(path, data, fmus, method, int(round(steps)), joints, n_dim)
+    graph = scene.graph()
+    check_order(path, data["coupling"], scene, graph, method)
+    if "initial_coupling" in data and len(data["initial_coupling"]) != graph.n_coupling:
+        variables = graph.variable_names() if joints else graph.joints[0].decomposition.variables
         _fail(
             path,
             "initial_coupling",
-            f"needs {decomposition.n_coupling * n_dim} values ("
-            f"{', '.join(decomposition.variables)}, {n_dim} component(s) each), got {len(data['initial_coupling'])}",
+            f"needs {graph.n_coupling} values ({', '.join(variables)}, {n_dim} component(s) each), got "
+            f"{len(data['initial_coupling'])}",
         )
-    for (name, sub), kind in zip(data["subsystems"].items(), decomposition.kinds):
+    for i, (name, sub) in enumerate(data["subsystems"].items()):
+        kind = graph.port_kind(i, 0)
         need = ("force",) if kind == "force" else ("acceleration_input", "reaction_force")
         projects = method.projection or data.get("initial") == "project"
         if projects:
@@ -267,7 +373,7 @@ def load_scene(path) -> Scene:
         for key in need:
             if key not in sub:
                 why = (
-                    f"subsystem {name} is {kind}-driven in decomposition {decomposition.name}"
+                    f"subsystem {name} is {kind}-driven in {driven_by(scene, graph, i)}"
                     if key in ("force", "acceleration_input", "reaction_force")
                     else f"method {spec.name} projects"
                     if method.projection
@@ -292,7 +398,7 @@ def load_scene(path) -> Scene:
                 "sources/); name the .fmu file or a unit's source directory",
             )
         fmus[name] = fmu
-    return Scene(path, data, fmus, method, int(round(steps)))
+    return scene
 
 
 def _validate(path, data):
@@ -306,9 +412,12 @@ def _validate(path, data):
         _check_numbers(path, data)
         return
     err = errors[0]
-    where = ".".join(str(p) for p in err.absolute_path) or "top level"
+    where = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in err.absolute_path).lstrip(".") or "top level"
     message = err.message
-    if err.validator == "enum":
+    joined = graph_message(where, err, data)
+    if joined is not None:
+        message = joined
+    elif err.validator == "enum":
         message = f"{err.instance!r} is not allowed; allowed: {', '.join(map(str, err.validator_value))}"
     elif err.validator == "required":
         keys = err.schema.get("properties", {})
