@@ -23,6 +23,8 @@ parameters mean what they mean for the built-in models (:func:`icosim.engine.met
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ...engine.graph import CouplingGraph
@@ -108,8 +110,8 @@ class FmuCosimulation(CosimulationProblem):
         self.perturbation, self.sensitivities = float(perturbation), sensitivities
         self.constant_sensitivities = sensitivities == "first-step"
         self.step_index = 0  # macro steps completed
-        self.C_pred = np.array(monomial_coefficients(self.pred_nodes), dtype=float)
-        self.C_corr = np.array(monomial_coefficients(self.corr_nodes), dtype=float)
+        self.C_pred = np.array(monomial_coefficients(self.pred_nodes), dtype=float).tolist()
+        self.C_corr = np.array(monomial_coefficients(self.corr_nodes), dtype=float).tolist()
         self._scale = [c.force_sign if c.kind == "force" else 1.0 for c in self.couplings]
         self._start = [u.save() for u in self.units]  # the FMU states at T_N
         self._holds = ["start"] * n  # what each unit holds now: "start", id of an end array, or "scratch"
@@ -174,7 +176,7 @@ class FmuCosimulation(CosimulationProblem):
             if c.feedthrough:
                 self._to_start(i)
                 self.units[i].set(c.input_key, self._scale[i] * u)
-                y = self._outputs(i, u)[1]
+                y = self._outputs(i, np.asarray(u, dtype=float).tolist())[1]
             else:
                 y = 2 * self._held_step(i, u, self.H) - self._held_step(i, u, 2 * self.H)
             y[0, :2] = starts[i]  # the state at T_0 as it is
@@ -187,7 +189,7 @@ class FmuCosimulation(CosimulationProblem):
         self._to_start(i)
         self.units[i].step(self.couplings[i].input_key, [self._scale[i] * u], self.time, h, step_index=0)
         self._holds[i] = "scratch"
-        return self._outputs(i, u)[1]
+        return self._outputs(i, np.asarray(u, dtype=float).tolist())[1]
 
     # -- one unit integrated --------------------------------------------------------------------------
     def _to_start(self, i):
@@ -203,30 +205,42 @@ class FmuCosimulation(CosimulationProblem):
 
     def _integrate(self, i, U, C):
         """Unit ``i`` over ``[T_N, T_N+1]`` from its start, its input through the samples ``U`` (``(k+1, n_dim)``)
-        with the monomial coefficients ``C``; returns its end ``(x, v)`` and outputs ``(1, 4, n_dim)``."""
+        with the monomial coefficients ``C`` (rows of floats); returns its end ``(x, v)`` and outputs
+        ``(1, 4, n_dim)``.  The polynomial's coefficients are formed in floats (k + 1 terms, summed in order)."""
         self._to_start(i)
-        coef = C @ U  # (k + 1, n_dim)
-        self.units[i].step(
-            self.couplings[i].input_key, self._scale[i] * coef, self.time, self.H, step_index=self.step_index + 1
-        )
+        samples = U.tolist()
+        coef = []
+        for weights in C:  # coef = C @ U
+            row = [weights[0] * u for u in samples[0]]
+            for w, sample in zip(weights[1:], samples[1:]):
+                row = [acc + w * u for acc, u in zip(row, sample)]
+            coef.append(row)
+        s = self._scale[i]
+        self.units[i].advance(
+            self.couplings[i].input_key, [[s * v for v in row] for row in coef], self.time, self.H,
+            step_index=self.step_index + 1,
+        )  # fmt: skip
         self.work.subsystem_integrations += 1
         self._holds[i] = "scratch"
-        return self._outputs(i, coef.sum(axis=0))
+        u1 = coef[0]
+        for row in coef[1:]:
+            u1 = [a + b for a, b in zip(u1, row)]
+        return self._outputs(i, u1)
 
     def _outputs(self, i, u1):
-        """Unit ``i``'s end ``(x, v)`` and outputs ``(1, 4, n_dim)`` as it stands, its input ``u1`` at
+        """Unit ``i``'s end ``(x, v)`` and outputs ``(1, 4, n_dim)`` as it stands, its input ``u1`` (floats) at
         ``T_N+1``.  A unit that returns a value that is not finite for finite inputs is at fault
         (:class:`UnitStepError`)."""
-        c = self.couplings[i]
+        c, n = self.couplings[i], self.n_dim
         if c.kind == "force":
-            x, v, a = values = self.units[i].get(_FORCE_OUTPUTS)
-            f = np.broadcast_to(np.asarray(u1, dtype=float), x.shape)
+            values = self.units[i].read(_FORCE_OUTPUTS)
+            flat = values + u1
         else:
-            x, v, a, r = values = self.units[i].get(_KINEMATIC_OUTPUTS)
-            f = c.force_sign * r
-        if not np.isfinite(values).all() and np.isfinite(u1).all():
-            self._not_finite(i, values)
-        return np.concatenate([x, v]), np.stack([x, v, a, f])[None]
+            values = self.units[i].read(_KINEMATIC_OUTPUTS)
+            flat = values[: 3 * n] + [c.force_sign * r for r in values[3 * n :]]
+        if not all(map(math.isfinite, values)) and all(map(math.isfinite, u1)):
+            self._not_finite(i, np.array(values).reshape(-1, n))
+        return np.array(flat[: 2 * n]), np.array(flat).reshape(1, 4, n)
 
     def _not_finite(self, i, values):
         unit = self.units[i]
@@ -248,7 +262,8 @@ class FmuCosimulation(CosimulationProblem):
         if self._holds[i] != id(end):
             self.units[i].restore(self._ends[i][id(end)][1])
             self._holds[i] = id(end)
-        self.units[i].set(self.couplings[i].input_key, self._scale[i] * u1)
+        u1, s = u1.tolist(), self._scale[i]
+        self.units[i].put(self.couplings[i].input_key, [s * v for v in u1])
         return self._outputs(i, u1)[1]
 
     # -- the problem interface -------------------------------------------------------------------------

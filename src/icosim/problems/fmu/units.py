@@ -32,6 +32,9 @@ from .variables import VariableTable, declared_start, family
 
 __all__ = ["Unit", "ROLES"]
 
+_GET, _SET, _GET_STATE, _SET_STATE = (guard.code(c) for c in ("get", "set", "getFMUstate", "setFMUstate"))
+_DO_STEP, _DERIVATIVES = guard.code("doStep"), guard.code("setRealInputDerivatives")
+
 _STATUS = {0: "ok", 1: "warning", 2: "discard", 3: "error", 4: "fatal", 5: "pending"}
 
 #: Scene key -> (what it names, causalities it may have).
@@ -95,6 +98,7 @@ class Unit:
         self.substeps = int(substeps)
         self.names = dict(names)
         self._plans = {}
+        self._reads, self._writes, self._orders = {}, {}, {}  # FMI 2.0: buffers of the macro step's calls
         self._arrays = {}  # FMI 3.0 arrays written element-wise: their whole value, as last set
         self.do_steps = self.saved = self.restored = self.warnings = self.check_steps = 0
         #: the status of a refused call (3 error, 4 fatal): after it the standard allows only freeing the
@@ -266,6 +270,38 @@ class Unit:
         plain = total == len(els) and np.array_equal(pick, np.arange(len(els)))
         return refs, total, (None if plain else pick), (None if np.all(factors == 1.0) else factors)
 
+    def read(self, keys) -> list:
+        """:meth:`get` as a flat list of floats (key after key, component after component): the macro step's
+        read, without numpy.  An FMI 2.0 unit reads into a buffer made once per ``keys``."""
+        fast = self._reads.get(keys)
+        if fast is None:
+            if self.fmi3 or self.fmu is None:
+                return self.get(keys).ravel().tolist()
+            fast = self._reads[keys] = self._read_plan(keys)
+        vr, n, buf, pick, factors = fast
+        guard.enter(self.index, _GET, self.t)
+        self.fmu.fmi2GetReal(self.fmu.component, vr, n, buf)
+        guard.leave()
+        values = buf[:n]
+        if pick is not None:
+            values = [values[j] for j in pick]
+        if factors is not None:
+            values = [v * f for v, f in zip(values, factors)]
+        return values
+
+    def _read_plan(self, keys):
+        from fmpy.fmi2 import fmi2Real, fmi2ValueReference
+
+        refs, total, pick, factors = self._plan(keys)
+        n = len(refs)
+        return (
+            (fmi2ValueReference * n)(*refs),
+            n,
+            (fmi2Real * n)(),
+            None if pick is None else pick.tolist(),
+            None if factors is None else factors.tolist(),
+        )
+
     def get(self, keys) -> np.ndarray:
         """Values (SI) of the variables named under ``keys`` (scene keys), shape ``(len(keys), components)``."""
         plan = self._plans.get(keys)
@@ -281,12 +317,39 @@ class Unit:
             values = values * factors
         return values.reshape(len(keys), -1)
 
+    def put(self, key, values):
+        """:meth:`set` from a list of floats (SI, one per component), without numpy for an FMI 2.0 unit."""
+        if self.fmi3:
+            return self.set(key, values)
+        factors = (self._writes.get(key) or self._writer(key))[3]
+        self._write(key, [v / f for v, f in zip(values, factors)])
+
     def set(self, key, value):
         """Set the variable(s) named under the scene key ``key`` (a number per component, SI)."""
         self._set_elements(key, np.atleast_1d(np.asarray(value, dtype=float)) / self.factors[key])
 
+    def _writer(self, key):
+        """An FMI 2.0 unit's write of ``key``: value references, their number and a buffer, made once."""
+        from fmpy.fmi2 import fmi2Real, fmi2ValueReference
+
+        refs = [el.value_reference for el in self.elements[key]]
+        n = len(refs)
+        out = self._writes[key] = ((fmi2ValueReference * n)(*refs), n, (fmi2Real * n)(), self.factors[key].tolist())
+        return out
+
+    def _write(self, key, values):
+        """Set ``key``'s variables to ``values`` (floats in the unit's own units, one per component; FMI 2.0)."""
+        vr, n, buf, _ = self._writes.get(key) or self._writer(key)
+        for q in range(n):
+            buf[q] = values[q]
+        guard.enter(self.index, _SET, self.t)
+        self.fmu.fmi2SetReal(self.fmu.component, vr, n, buf)
+        guard.leave()
+
     def _set_elements(self, key, values):
         els = self.elements[key]
+        if not self.fmi3:
+            return self._write(key, [float(v) for v in values])
         guard.enter(self.index, "set", self.t)
         if self.fmi3 and any(el.size > 1 for el in els):
             for el, v in zip(els, values):
@@ -298,10 +361,8 @@ class Unit:
                     whole = self._arrays[el.variable.name] = declared_start(el.variable, el.size)
                 whole[el.index] = v
                 self.fmu.setFloat64([el.value_reference], whole.tolist())
-        elif self.fmi3:
-            self.fmu.setFloat64([el.value_reference for el in els], [float(v) for v in values])
         else:
-            self.fmu.setReal([el.value_reference for el in els], [float(v) for v in values])
+            self.fmu.setFloat64([el.value_reference for el in els], [float(v) for v in values])
         guard.leave()
 
     def get_named(self, name) -> float:
@@ -316,14 +377,14 @@ class Unit:
     # -- states -------------------------------------------------------------------------------
     def save(self):
         self.saved += 1
-        guard.enter(self.index, "getFMUstate", self.t)
+        guard.enter(self.index, _GET_STATE, self.t)
         state = self.fmu.getFMUState() if self.fmi3 else self.fmu.getFMUstate()
         guard.leave()
         return (state, self.t)
 
     def restore(self, state):
         self.restored += 1
-        guard.enter(self.index, "setFMUstate", self.t)
+        guard.enter(self.index, _SET_STATE, self.t)
         (self.fmu.setFMUState if self.fmi3 else self.fmu.setFMUstate)(state[0])
         guard.leave()
         self.t = state[1]
@@ -338,6 +399,9 @@ class Unit:
         """Advance ``[t, t + H]`` with the input(s) ``key`` following ``u(tau) = sum_m coefficients[m] tau^m``
         (SI; ``coefficients`` ``(k + 1,)``, or ``(k + 1, components)``); afterwards the inputs hold ``u(1)`` (the
         outputs that depend on them directly are those at ``t + H``)."""
+        if self.exact_inputs and not self.fmi3:
+            rows = np.asarray(coefficients, dtype=float).reshape(len(coefficients), -1).tolist()
+            return self.advance(key, rows, t, H, step_index=step_index)
         c = np.asarray(coefficients, dtype=float).reshape(len(coefficients), -1) / self.factors[key]
         if self.exact_inputs:
             refs = [el.value_reference for el in self.elements[key]]
@@ -359,12 +423,53 @@ class Unit:
         self._set_elements(key, c.sum(axis=0))
         self.t = t + H
 
+    def advance(self, key, rows, t, H, *, step_index):
+        """:meth:`step` with the coefficients as rows of floats (``rows[m][q]``, SI); an FMI 2.0 unit that takes
+        input derivatives is driven without numpy: the same calls with the same values."""
+        if not self.exact_inputs or self.fmi3:
+            return self.step(key, np.array(rows, dtype=float), t, H, step_index=step_index)
+        vr, n, buf, factors = self._writes.get(key) or self._writer(key)
+        c = [[v / f for v, f in zip(row, factors)] for row in rows]
+        self._write(key, c[0])
+        if len(c) > 1:  # every order up to k, zeros too: a unit may keep the derivatives of the step before
+            orders = self._orders.get((key, len(c)))
+            if orders is None:
+                orders = self._orders[key, len(c)] = self._derivative_plan(vr, n, len(c))
+            refs, order, values, pairs = orders
+            for j, (q, m) in enumerate(pairs):
+                values[j] = math.factorial(m) * c[m][q] / H**m
+            guard.enter(self.index, _DERIVATIVES, t)
+            self.fmu.fmi2SetRealInputDerivatives(self.fmu.component, refs, len(pairs), order, values)
+            guard.leave()
+        self._do_step(t, H, step_index)
+        last = c[0]
+        for row in c[1:]:
+            last = [a + b for a, b in zip(last, row)]
+        self._write(key, last)
+        self.t = t + H
+
+    @staticmethod
+    def _derivative_plan(vr, n, rows):
+        from fmpy.fmi2 import fmi2Integer, fmi2Real, fmi2ValueReference
+
+        pairs = [(q, m) for m in range(1, rows) for q in range(n)]
+        size = len(pairs)
+        return (
+            (fmi2ValueReference * size)(*[vr[q] for q, _ in pairs]),
+            (fmi2Integer * size)(*[m for _, m in pairs]),
+            (fmi2Real * size)(),
+            pairs,
+        )
+
     def _do_step(self, t, h, step_index):
         self.do_steps += 1
         self.messages.clear()
-        guard.enter(self.index, "doStep", t, step_index)
+        guard.enter(self.index, _DO_STEP, t, step_index)
         try:
-            result = self.fmu.doStep(t, h, noSetFMUStatePriorToCurrentPoint=False)
+            if self.fmi3:
+                result = self.fmu.doStep(t, h, noSetFMUStatePriorToCurrentPoint=False)
+            else:
+                self.fmu.fmi2DoStep(self.fmu.component, t, h, False)  # what fmpy's doStep calls
         except Exception as exc:
             guard.leave()
             code = getattr(exc, "status", None)
