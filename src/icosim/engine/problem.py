@@ -117,6 +117,7 @@ class CosimulationProblem:
         self.work = Work()
         self._extrapolated: tuple = (None, None, None)  # (history, weights, e_p) of the last extrapolation
         self._jacobians: dict = {}
+        self._assembly: dict = {}  # (stage, algebraic) -> what jacobians() needs of the stage every time
 
     @property
     def decomposition(self) -> Decomposition:
@@ -162,6 +163,9 @@ class CosimulationProblem:
         """Outputs of several subsystems, port after port: ``(..., ports, 4, n_c)``."""
         if len(ys) == 1:
             return ys[0]
+        first = ys[0]
+        if first.ndim == 3 and all(y.shape[:-3] == () for y in ys):  # one point (an FMU step): no axes to lay out
+            return np.concatenate(ys, axis=-3)
         lead = np.broadcast_shapes(*(np.shape(y)[:-3] for y in ys))  # the ports' axis is not broadcast
         return layout.concatenate([np.broadcast_to(y, lead + np.shape(y)[-3:]) for y in ys], axis=-3)
 
@@ -196,30 +200,53 @@ class CosimulationProblem:
         key = (stage, algebraic)
         if self.constant_sensitivities and key in self._jacobians:
             return self._jacobians[key]
-        cols = stage.columns
-        blocks = []
+        how = self._assembly.get(key)
+        if how is None:
+            how = self._assembly[key] = self._assemble(stage)
+        Bs, B_all, dE, held = how
+        corrected = stage.corrected
+        Ss = []
         for i in stage.responders:
-            if i in stage.corrected:
+            if i in corrected:
                 S = self.sensitivity(i, state, history, e, None, ys[i])
             elif algebraic:
                 S = self.sensitivity(i, state, history, e, ends[i], ys[i])
             else:
                 S = 0 * self.sensitivity(i, state, history, e, ends[i], ys[i])
-            B = self.graph.input_matrix(i, cols)
-            if S.dtype == object:
-                B = np.array([[self.backend.const(b) for b in row] for row in B], dtype=object)
-            # (..., inputs, ports, 4, n_c) x (inputs, cols) -> (..., cols, ports, 4, n_c)
-            blocks.append(np.moveaxis(np.tensordot(S, B, axes=([-4], [0])), -1, -4))
-        dY = self.stack(blocks)
-        be = self.backend
-        dE = np.full((len(cols), len(cols)), be.const(0), dtype=be.dtype)
-        for c in range(len(cols)):
-            dE[c, c] = be.const(1)
-        res = self.residuals(dY, dE, stage.conditions, 0 * dE)  # a held multiplier does not follow e
+            Ss.append(S)
+        first = Ss[0]
+        if first.dtype == np.float64 and all(S.dtype == np.float64 and S.shape == first.shape for S in Ss):
+            # every responder at once: (..., R, inputs, ports, 4, n_c) x (R, inputs, cols) -> (..., cols, R ports,
+            # 4, n_c).  A column reaches one input of a responder (a joint attaches to one port of it), so each
+            # entry is one product by 0 or +-1, as the tensor product of one responder at a time had it.
+            S_all = np.stack(Ss, axis=-5)
+            dY = np.einsum("...rqpab,rqc->...crpab", S_all, B_all)
+            dY = dY.reshape(dY.shape[:-5] + (dY.shape[-5], -1) + dY.shape[-2:])
+        else:
+            blocks = []
+            for S, B in zip(Ss, Bs):
+                if S.dtype == object:
+                    B = np.array([[self.backend.const(b) for b in row] for row in B], dtype=object)
+                # (..., inputs, ports, 4, n_c) x (inputs, cols) -> (..., cols, ports, 4, n_c)
+                blocks.append(np.moveaxis(np.tensordot(S, B, axes=([-4], [0])), -1, -4))
+            dY = self.stack(blocks)
+        res = self.residuals(dY, dE, stage.conditions, held)  # a held multiplier does not follow e
         jac = {key_: np.swapaxes(val, -1, -2) for key_, val in res.items()}
         if self.constant_sensitivities:
             self._jacobians[key] = jac
         return jac
+
+    def _assemble(self, stage: Stage) -> tuple:
+        """What :meth:`jacobians` of ``stage`` needs every time: the responders' input matrices (apart, and
+        stacked where they have one shape), ``d e / d e`` and the held multipliers' (zero) derivative."""
+        cols = stage.columns
+        Bs = [self.graph.input_matrix(i, cols) for i in stage.responders]
+        B_all = np.stack(Bs) if all(B.shape == Bs[0].shape for B in Bs) else None
+        be = self.backend
+        dE = np.full((len(cols), len(cols)), be.const(0), dtype=be.dtype)
+        for c in range(len(cols)):
+            dE[c, c] = be.const(1)
+        return Bs, B_all, dE, 0 * dE
 
     # -- to be implemented by a subclass ------------------------------------------
     def predict(self, i: int, state: Any, history: Any, *, final: bool = False) -> Any:  # pragma: no cover

@@ -22,6 +22,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
+from functools import cache
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -82,14 +83,27 @@ class CouplingMethod:
         shape ``(..., n_level, n_e)``, levels ``pos``, ``vel``, ``acc``
         (constraint) and ``force`` (force balance, possibly empty).
         """
+        plain = getattr(backend, "dtype", None) is np.float64  # float64: the exact numbers converted once
+        solves = _float_solves(self.solves) if plain else self.solves
+        const = _same if plain else backend.const
+        kept = _KEPT.get(id(jacobians)) if plain else None
+        if kept is not None and kept[0] is not jacobians:
+            kept = None
         total = None
-        for weight, levels in self.solves:
+        for n, (weight, levels) in enumerate(solves):
             if weight == 0:
                 continue  # an unused level may be singular (e.g. velocity at k = 0)
-            r = _conditions(levels, residuals, axis=-1, const=backend.const)
-            J = _conditions(levels, jacobians, axis=-2, const=backend.const)
-            de = solve_small(J, -r)
-            term: np.ndarray = de if weight == 1 else backend.const(weight) * de
+            r = _conditions(levels, residuals, axis=-1, const=const)
+            if kept is not None and n in kept[1]:
+                de = kept[1][n].solve(-r)
+            elif plain and _kept_jacobians(jacobians):
+                # the same Jacobians as a step before (constant sensitivities): combined and factored once
+                factor = _Factored(_conditions(levels, jacobians, axis=-2, const=const))
+                _keep(jacobians, n, factor)
+                de = factor.solve(-r)
+            else:
+                de = solve_small(_conditions(levels, jacobians, axis=-2, const=const), -r)
+            term: np.ndarray = de if weight == 1 else const(weight) * de
             total = term if total is None else total + term
         return e_pred + total
 
@@ -293,6 +307,63 @@ def _conditions(
         rows.append(parts["force"])
     # levels all 0 would leave combined None (no registered method has them): mypy sees it, nothing checks it
     return rows[0] if len(rows) == 1 else layout.concatenate(rows, axis=axis)  # type: ignore[return-value]
+
+
+def _same(value: Any) -> Any:
+    return value
+
+
+@cache
+def _float_solves(solves: tuple) -> tuple:
+    """A method's solves with its exact weights and levels as floats (what float64's ``const`` makes of them)."""
+    return tuple((float(w), tuple(float(v) for v in levels)) for w, levels in solves)
+
+
+#: Jacobians seen twice (a problem's constant sensitivities hand the same object every step): id -> (the
+#: object, {solve: its factored matrix}); the object is kept, so its id is not reused while it is here.
+_KEPT: dict[int, tuple[Any, dict[int, _Factored]]] = {}
+_SEEN: dict[int, Any] = {}
+_KEEP = 16
+
+
+def _kept_jacobians(jacobians: Any) -> bool:
+    """Is ``jacobians`` the object of an earlier call (worth factoring once)?  Remembers it if not."""
+    if _SEEN.get(id(jacobians)) is jacobians:
+        return True
+    if len(_SEEN) >= _KEEP:
+        _SEEN.clear()
+    _SEEN[id(jacobians)] = jacobians
+    return False
+
+
+def _keep(jacobians: Any, n: int, factor: _Factored) -> None:
+    entry = _KEPT.get(id(jacobians))
+    if entry is None or entry[0] is not jacobians:
+        if len(_KEPT) >= _KEEP:
+            _KEPT.clear()
+        entry = _KEPT[id(jacobians)] = (jacobians, {})
+    entry[1][n] = factor
+
+
+class _Factored:
+    """A float64 coupling matrix ``J`` (one point or a stack) made ready for many right-hand sides: sizes 1 and 2
+    as :func:`solve_small` (closed forms), larger ones LU-factored once (LAPACK ``getrf``, then ``getrs`` per
+    solve: the two halves of ``gesv``, which :func:`numpy.linalg.solve` calls)."""
+
+    def __init__(self, J: np.ndarray) -> None:
+        self.J = J
+        self.lu = None
+        if J.shape[-1] > 2 and J.ndim == 2:
+            from scipy.linalg import lu_factor
+
+            self.lu = lu_factor(J, check_finite=False)
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        if self.lu is None or b.ndim != 1:
+            return solve_small(self.J, b)
+        from scipy.linalg import lu_solve
+
+        return lu_solve(self.lu, b, check_finite=False)
 
 
 def solve_small(J: np.ndarray, b: np.ndarray) -> np.ndarray:
