@@ -93,8 +93,9 @@ def macro_step(
     ys: list[Any] = [None] * graph.n_subsystems
     for stage in stages:
         # step 1: the stage's subsystems with the extrapolation polynomials; those in no closed joint are final
+        corrected = set(stage.corrected)
         for i in stage.units:
-            ends[i], ys[i] = problem.predict(i, state, history, final=i not in stage.corrected)
+            ends[i], ys[i] = problem.predict(i, state, history, final=i not in corrected)
         if stage.conditions is None:
             continue
         cols = stage.columns

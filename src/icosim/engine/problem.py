@@ -204,7 +204,7 @@ class CosimulationProblem:
         if how is None:
             how = self._assembly[key] = self._assemble(stage)
         Bs, B_all, dE, held = how
-        corrected = stage.corrected
+        corrected = set(stage.corrected)
         Ss = []
         for i in stage.responders:
             if i in corrected:
@@ -219,7 +219,7 @@ class CosimulationProblem:
             # every responder at once: (..., R, inputs, ports, 4, n_c) x (R, inputs, cols) -> (..., cols, R ports,
             # 4, n_c).  A column reaches one input of a responder (a joint attaches to one port of it), so each
             # entry is one product by 0 or +-1, as the tensor product of one responder at a time had it.
-            S_all = np.stack(Ss, axis=-5)
+            S_all = np.array(Ss) if first.ndim == 4 else np.stack(Ss, axis=-5)
             dY = np.einsum("...rqpab,rqc->...crpab", S_all, B_all)
             dY = dY.reshape(dY.shape[:-5] + (dY.shape[-5], -1) + dY.shape[-2:])
         else:

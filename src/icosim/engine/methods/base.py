@@ -101,6 +101,8 @@ class CouplingMethod:
                 factor = _Factored(_conditions(levels, jacobians, axis=-2, const=const))
                 _keep(jacobians, n, factor)
                 de = factor.solve(-r)
+            elif plain:
+                de = _solve_float(_conditions(levels, jacobians, axis=-2, const=const), -r)
             else:
                 de = solve_small(_conditions(levels, jacobians, axis=-2, const=const), -r)
             term: np.ndarray = de if weight == 1 else const(weight) * de
@@ -343,6 +345,33 @@ def _keep(jacobians: Any, n: int, factor: _Factored) -> None:
             _KEPT.clear()
         entry = _KEPT[id(jacobians)] = (jacobians, {})
     entry[1][n] = factor
+
+
+#: A float64 system of at least this size whose matrix is banded, with no more than a quarter of its diagonals
+#: occupied, is solved as a banded system (a chain's joints: tridiagonal): work linear in its size.
+BANDED_FROM = 16
+
+
+def _solve_float(J: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """:func:`solve_small` for float64, a large banded system of one point by its band (LAPACK ``gbsv``)."""
+    n = J.shape[-1]
+    if J.ndim != 2 or n < BANDED_FROM or b.ndim != 1:
+        return solve_small(J, b)
+    rows, cols = np.nonzero(J)
+    lower = int(np.max(rows - cols, initial=0))
+    upper = int(np.max(cols - rows, initial=0))
+    if 4 * (lower + upper + 1) > n:
+        return solve_small(J, b)
+    from scipy.linalg import solve_banded
+
+    band = np.zeros((lower + upper + 1, n))
+    for d in range(-lower, upper + 1):  # band[upper + i - j, j] = J[i, j]
+        diagonal = np.diagonal(J, d)
+        if d >= 0:
+            band[upper - d, d:] = diagonal
+        else:
+            band[upper - d, : n + d] = diagonal
+    return solve_banded((lower, upper), band, b, check_finite=False)
 
 
 class _Factored:

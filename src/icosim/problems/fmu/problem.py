@@ -204,11 +204,13 @@ class FmuCosimulation(CosimulationProblem):
             )
 
     def _integrate(self, i, U, C):
-        """Unit ``i`` over ``[T_N, T_N+1]`` from its start, its input through the samples ``U`` (``(k+1, n_dim)``)
-        with the monomial coefficients ``C`` (rows of floats); returns its end ``(x, v)`` and outputs
+        """Unit ``i`` over ``[T_N, T_N+1]`` from its start, its input through the samples ``U`` (``(k+1, n_dim)``, an
+        array or rows of floats) with the monomial coefficients ``C`` (rows of floats); returns its end ``(x, v)`` and outputs
         ``(1, 4, n_dim)``.  The polynomial's coefficients are formed in floats (k + 1 terms, summed in order)."""
-        self._to_start(i)
-        samples = U.tolist()
+        if self._holds[i] != "start":
+            self.units[i].restore(self._start[i])
+            self._holds[i] = "start"
+        samples = U.tolist() if isinstance(U, np.ndarray) else U
         coef = []
         for weights in C:  # coef = C @ U
             row = [weights[0] * u for u in samples[0]]
@@ -268,9 +270,12 @@ class FmuCosimulation(CosimulationProblem):
 
     # -- the problem interface -------------------------------------------------------------------------
     def predict(self, i, state, history, *, final=False):
+        """Unit ``i`` with the extrapolation polynomials; its FMU state is saved only where the end is ``final``
+        (a unit that is corrected in the same stage ends at its corrector's state)."""
         self._check_state(state)
         end, y = self._integrate(i, self.inputs(i, history), self.C_pred)
-        self._keep(i, end)
+        if final:
+            self._keep(i, end)
         return end, y
 
     def correct(self, i, state, history, e_new):
@@ -310,14 +315,15 @@ class FmuCosimulation(CosimulationProblem):
         else:
             base = self._at_end(i, end, u1) if end is not None else self._integrate(i, samples, self.C_corr)[1]
         out = np.empty((self.n_dim,) + base.shape)
+        rows = samples.tolist()
         for c in range(self.n_dim):
             if end is not None:
                 up = u1.copy()
                 up[c] += h[c]
                 yp = self._at_end(i, end, up)
             else:
-                Up = samples.copy()
-                Up[0, c] += h[c]
+                Up = [row[:] for row in rows]
+                Up[0][c] += float(h[c])
                 yp = self._integrate(i, Up, self.C_corr)[1]
             out[c] = (yp - base) / h[c]
         return out

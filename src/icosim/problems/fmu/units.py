@@ -34,6 +34,7 @@ __all__ = ["Unit", "ROLES"]
 
 _GET, _SET, _GET_STATE, _SET_STATE = (guard.code(c) for c in ("get", "set", "getFMUstate", "setFMUstate"))
 _DO_STEP, _DERIVATIVES = guard.code("doStep"), guard.code("setRealInputDerivatives")
+_FACTORIAL = [math.factorial(m) for m in range(16)]  # k is at most icosim.engine.bounds.MAX_K
 
 _STATUS = {0: "ok", 1: "warning", 2: "discard", 3: "error", 4: "fatal", 5: "pending"}
 
@@ -430,22 +431,31 @@ class Unit:
             return self.step(key, np.array(rows, dtype=float), t, H, step_index=step_index)
         vr, n, buf, factors = self._writes.get(key) or self._writer(key)
         c = [[v / f for v, f in zip(row, factors)] for row in rows]
-        self._write(key, c[0])
+        fmu, index, self.t = self.fmu, self.index, t
+        for q in range(n):
+            buf[q] = c[0][q]
+        guard.enter(index, _SET, t)
+        fmu.fmi2SetReal(fmu.component, vr, n, buf)
+        guard.leave()
         if len(c) > 1:  # every order up to k, zeros too: a unit may keep the derivatives of the step before
             orders = self._orders.get((key, len(c)))
             if orders is None:
                 orders = self._orders[key, len(c)] = self._derivative_plan(vr, n, len(c))
             refs, order, values, pairs = orders
             for j, (q, m) in enumerate(pairs):
-                values[j] = math.factorial(m) * c[m][q] / H**m
-            guard.enter(self.index, _DERIVATIVES, t)
-            self.fmu.fmi2SetRealInputDerivatives(self.fmu.component, refs, len(pairs), order, values)
+                values[j] = _FACTORIAL[m] * c[m][q] / H**m
+            guard.enter(index, _DERIVATIVES, t)
+            fmu.fmi2SetRealInputDerivatives(fmu.component, refs, len(pairs), order, values)
             guard.leave()
         self._do_step(t, H, step_index)
         last = c[0]
         for row in c[1:]:
             last = [a + b for a, b in zip(last, row)]
-        self._write(key, last)
+        for q in range(n):
+            buf[q] = last[q]
+        guard.enter(index, _SET, t)
+        fmu.fmi2SetReal(fmu.component, vr, n, buf)
+        guard.leave()
         self.t = t + H
 
     @staticmethod
