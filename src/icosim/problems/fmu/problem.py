@@ -118,6 +118,8 @@ class FmuCosimulation(CosimulationProblem):
         self._ends = [{} for _ in range(n)]  # id(end) -> (end, FMU state) of this macro step's integrations
         self._committed = None
         self._clusters = joined_clusters(graph, range(n))  # each unit is one body
+        self._negatives = {}  # id of a coefficient matrix -> (it, its negative)
+        self._masses = None  # the units' masses for the projection, as an array once asked
 
     # -- time and the initial point -----------------------------------------------------------------
     @property
@@ -207,27 +209,44 @@ class FmuCosimulation(CosimulationProblem):
         """Unit ``i`` over ``[T_N, T_N+1]`` from its start, its input through the samples ``U`` (``(k+1, n_dim)``, an
         array or rows of floats) with the monomial coefficients ``C`` (rows of floats); returns its end ``(x, v)`` and outputs
         ``(1, 4, n_dim)``.  The polynomial's coefficients are formed in floats (k + 1 terms, summed in order)."""
+        unit = self.units[i]
         if self._holds[i] != "start":
-            self.units[i].restore(self._start[i])
+            unit.restore(self._start[i])
             self._holds[i] = "start"
         samples = U.tolist() if isinstance(U, np.ndarray) else U
-        coef = []
-        for weights in C:  # coef = C @ U
-            row = [weights[0] * u for u in samples[0]]
-            for w, sample in zip(weights[1:], samples[1:]):
-                row = [acc + w * u for acc, u in zip(row, sample)]
-            coef.append(row)
         s = self._scale[i]
-        self.units[i].advance(
-            self.couplings[i].input_key, [[s * v for v in row] for row in coef], self.time, self.H,
-            step_index=self.step_index + 1,
+        # the input's coefficients s * (C @ U); s is +-1, whose product is exact, so it goes into the weights
+        C_s = C if s == 1.0 else self._negated(C) if s == -1.0 else None
+        coef = []
+        for weights in C if C_s is None else C_s:
+            if len(samples) == 2:
+                (w0, w1), (a, b) = weights, samples
+                row = [w0 * x + w1 * y for x, y in zip(a, b)]
+            else:
+                row = [weights[0] * u for u in samples[0]]
+                for w, sample in zip(weights[1:], samples[1:]):
+                    row = [acc + w * u for acc, u in zip(row, sample)]
+            coef.append(row)
+        unit.advance(
+            self.couplings[i].input_key, coef if C_s is not None else [[s * v for v in row] for row in coef],
+            self.time, self.H, step_index=self.step_index + 1,
         )  # fmt: skip
         self.work.subsystem_integrations += 1
         self._holds[i] = "scratch"
         u1 = coef[0]
         for row in coef[1:]:
             u1 = [a + b for a, b in zip(u1, row)]
+        if s == -1.0:
+            u1 = [-v for v in u1]
         return self._outputs(i, u1)
+
+    def _negated(self, C):
+        """``-C`` (rows of floats), made once per matrix."""
+        key = id(C)
+        kept = self._negatives.get(key)
+        if kept is None or kept[0] is not C:
+            kept = self._negatives[key] = (C, [[-w for w in row] for row in C])
+        return kept[1]
 
     def _outputs(self, i, u1):
         """Unit ``i``'s end ``(x, v)`` and outputs ``(1, 4, n_dim)`` as it stands, its input ``u1`` (floats) at
@@ -240,7 +259,8 @@ class FmuCosimulation(CosimulationProblem):
         else:
             values = self.units[i].read(_KINEMATIC_OUTPUTS)
             flat = values[: 3 * n] + [c.force_sign * r for r in values[3 * n :]]
-        if not all(map(math.isfinite, values)) and all(map(math.isfinite, u1)):
+        total = sum(values)  # finite if every value is (else inf or nan; an overflow only asks the long way)
+        if total - total != 0.0 and not all(map(math.isfinite, values)) and all(map(math.isfinite, u1)):
             self._not_finite(i, np.array(values).reshape(-1, n))
         return np.array(flat[: 2 * n]), np.array(flat).reshape(1, 4, n)
 
@@ -330,13 +350,16 @@ class FmuCosimulation(CosimulationProblem):
 
     def project(self, state):
         """Mass-weighted projection of positions and velocities (Eq. 30), written into the units."""
-        m = np.array([c.mass for c in self.couplings], dtype=float)
+        m = self._masses
+        if m is None:
+            m = self._masses = np.array([c.mass for c in self.couplings], dtype=float)
         projected = mass_weighted_projection(self._clusters, m, np.asarray(state, dtype=float))
         n = self.n_dim
+        rows = projected.tolist()
         for i, unit in enumerate(self.units):
             self._to_start(i)
-            unit.set("set_position", projected[i, :n])
-            unit.set("set_velocity", projected[i, n:])
+            unit.put("set_position", rows[i][:n])
+            unit.put("set_velocity", rows[i][n:])
             unit.free(self._start[i])
             self._start[i] = unit.save()
         self._committed = projected

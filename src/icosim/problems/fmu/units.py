@@ -100,6 +100,7 @@ class Unit:
         self.names = dict(names)
         self._plans = {}
         self._reads, self._writes, self._orders = {}, {}, {}  # FMI 2.0: buffers of the macro step's calls
+        self._si = {}  # key -> its variables are in SI units (factors 1)
         self._arrays = {}  # FMI 3.0 arrays written element-wise: their whole value, as last set
         self.do_steps = self.saved = self.restored = self.warnings = self.check_steps = 0
         #: the status of a refused call (3 error, 4 fatal): after it the standard allows only freeing the
@@ -336,6 +337,7 @@ class Unit:
         refs = [el.value_reference for el in self.elements[key]]
         n = len(refs)
         out = self._writes[key] = ((fmi2ValueReference * n)(*refs), n, (fmi2Real * n)(), self.factors[key].tolist())
+        self._si[key] = all(f == 1.0 for f in out[3])
         return out
 
     def _write(self, key, values):
@@ -430,36 +432,37 @@ class Unit:
         if not self.exact_inputs or self.fmi3:
             return self.step(key, np.array(rows, dtype=float), t, H, step_index=step_index)
         vr, n, buf, factors = self._writes.get(key) or self._writer(key)
-        c = [[v / f for v, f in zip(row, factors)] for row in rows]
+        # in the unit's own units; a factor of 1 divides exactly, so SI values pass as they are
+        c = rows if self._si[key] else [[v / f for v, f in zip(row, factors)] for row in rows]
         fmu, index, self.t = self.fmu, self.index, t
-        for q in range(n):
-            buf[q] = c[0][q]
+        comp = fmu.component
+        buf[:n] = c[0]
         guard.enter(index, _SET, t)
-        fmu.fmi2SetReal(fmu.component, vr, n, buf)
+        fmu.fmi2SetReal(comp, vr, n, buf)
         guard.leave()
         if len(c) > 1:  # every order up to k, zeros too: a unit may keep the derivatives of the step before
-            orders = self._orders.get((key, len(c)))
+            orders = self._orders.get((key, len(c), H))
             if orders is None:
-                orders = self._orders[key, len(c)] = self._derivative_plan(vr, n, len(c))
-            refs, order, values, pairs = orders
-            for j, (q, m) in enumerate(pairs):
-                values[j] = _FACTORIAL[m] * c[m][q] / H**m
+                orders = self._orders[key, len(c), H] = self._derivative_plan(vr, n, len(c), H)
+            refs, order, values, terms = orders
+            values[: len(terms)] = [factorial * c[m][q] / h_m for q, m, factorial, h_m in terms]
             guard.enter(index, _DERIVATIVES, t)
-            fmu.fmi2SetRealInputDerivatives(fmu.component, refs, len(pairs), order, values)
+            fmu.fmi2SetRealInputDerivatives(comp, refs, len(terms), order, values)
             guard.leave()
         self._do_step(t, H, step_index)
         last = c[0]
         for row in c[1:]:
             last = [a + b for a, b in zip(last, row)]
-        for q in range(n):
-            buf[q] = last[q]
+        buf[:n] = last
         guard.enter(index, _SET, t)
-        fmu.fmi2SetReal(fmu.component, vr, n, buf)
+        fmu.fmi2SetReal(comp, vr, n, buf)
         guard.leave()
         self.t = t + H
 
     @staticmethod
-    def _derivative_plan(vr, n, rows):
+    def _derivative_plan(vr, n, rows, H):
+        """The input derivatives' call of a step of ``H`` with ``rows`` coefficients: value references, orders,
+        a buffer, and per value its component, order, ``m!`` and ``H^m``."""
         from fmpy.fmi2 import fmi2Integer, fmi2Real, fmi2ValueReference
 
         pairs = [(q, m) for m in range(1, rows) for q in range(n)]
@@ -468,7 +471,7 @@ class Unit:
             (fmi2ValueReference * size)(*[vr[q] for q, _ in pairs]),
             (fmi2Integer * size)(*[m for _, m in pairs]),
             (fmi2Real * size)(),
-            pairs,
+            [(q, m, _FACTORIAL[m], H**m) for q, m in pairs],
         )
 
     def _do_step(self, t, h, step_index):
