@@ -142,9 +142,23 @@ class CosimulationProblem:
         last_history, last_weights, e_p = self._extrapolated
         if last_history is history and last_weights is self.w_pred:
             return e_p
-        e_p = sum(self.w_pred[j] * history[..., j, :] for j in range(self.k + 1))
+        w = self.w_pred
+        if w.dtype == np.float64 and getattr(history, "dtype", None) == np.float64:
+            # the same terms, summed in the same order from the first (sum() starts from 0: only -0 differs)
+            weights = self._float_weights(w)
+            e_p = weights[0] * history[..., 0, :]
+            for j in range(1, self.k + 1):
+                e_p = e_p + weights[j] * history[..., j, :]
+        else:
+            e_p = sum(w[j] * history[..., j, :] for j in range(self.k + 1))
         self._extrapolated = (history, self.w_pred, e_p)
         return e_p
+
+    def _float_weights(self, w: np.ndarray) -> list[float]:
+        kept = self.__dict__.get("_weights_as_floats")
+        if kept is None or kept[0] is not w:
+            kept = self._weights_as_floats = (w, w.tolist())
+        return kept[1]
 
     def corrector_samples(self, history: np.ndarray, e_new: np.ndarray) -> np.ndarray:
         """Samples of the interpolation polynomial (Eq. 11): ``e_new`` at ``T_N+1``, then ``e_N ... e_N-k+1``."""

@@ -35,7 +35,7 @@ work (:func:`plan`):
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, cached_property
 from typing import TYPE_CHECKING
 
 from ..errors import ParameterError
@@ -63,7 +63,7 @@ class Stage:
     finished: tuple[int, ...]
     conditions: Conditions | None
 
-    @property
+    @cached_property
     def responders(self) -> tuple[int, ...]:
         """The subsystems in a closed joint, in their order (whose outputs :attr:`conditions` reads)."""
         return tuple(sorted(self.corrected + self.finished))

@@ -30,7 +30,7 @@ import numpy as np
 from ...engine.graph import CouplingGraph
 from ...engine.lagrange import monomial_coefficients
 from ...engine.problem import CosimulationProblem
-from ...engine.projection import joined_clusters, mass_weighted_projection
+from ...engine.projection import joined_clusters
 from ...engine.residuals import Conditions
 from ...errors import StepFailure
 from .errors import UnitStepError
@@ -119,7 +119,10 @@ class FmuCosimulation(CosimulationProblem):
         self._committed = None
         self._clusters = joined_clusters(graph, range(n))  # each unit is one body
         self._negatives = {}  # id of a coefficient matrix -> (it, its negative)
-        self._masses = None  # the units' masses for the projection, as an array once asked
+        self._masses = None  # the units' masses for the projection, as floats once asked
+        # per unit, per input: the (column of e, sign) it sums (None: no joint, the graph's zeros)
+        self._terms = [graph.input_terms(i) if all(graph.input_terms(i)) else None for i in range(n)]
+        self._history_rows: tuple = (None, None)  # the last coupling history and its rows of floats
 
     # -- time and the initial point -----------------------------------------------------------------
     @property
@@ -289,18 +292,33 @@ class FmuCosimulation(CosimulationProblem):
         return self._outputs(i, u1)[1]
 
     # -- the problem interface -------------------------------------------------------------------------
+    def _samples(self, i, e_new, history):
+        """Unit ``i``'s input samples (rows of floats): :meth:`inputs` of ``history`` (``e_new`` None) or of
+        :meth:`corrector_samples` -- the same sums of the same terms, in floats."""
+        terms = self._terms[i]
+        if terms is None or not isinstance(history, np.ndarray) or history.ndim != 2:
+            rows = history if e_new is None else self.corrector_samples(history, np.asarray(e_new, dtype=float))
+            return np.asarray(self.inputs(i, rows), dtype=float).tolist()
+        kept, rows = self._history_rows
+        if kept is not history:
+            rows = history.tolist()
+            self._history_rows = (history, rows)
+        if e_new is not None:
+            rows = [np.asarray(e_new, dtype=float).tolist()] + rows[: self.k]
+        return [_gathered(row, terms) for row in rows]
+
     def predict(self, i, state, history, *, final=False):
         """Unit ``i`` with the extrapolation polynomials; its FMU state is saved only where the end is ``final``
         (a unit that is corrected in the same stage ends at its corrector's state)."""
         self._check_state(state)
-        end, y = self._integrate(i, self.inputs(i, history), self.C_pred)
+        end, y = self._integrate(i, self._samples(i, None, history), self.C_pred)
         if final:
             self._keep(i, end)
         return end, y
 
     def correct(self, i, state, history, e_new):
         self._check_state(state)
-        end, y = self._integrate(i, self.inputs(i, self.corrector_samples(history, e_new)), self.C_corr)
+        end, y = self._integrate(i, self._samples(i, e_new, history), self.C_corr)
         self._keep(i, end)
         return end, y
 
@@ -326,24 +344,22 @@ class FmuCosimulation(CosimulationProblem):
         """``dy_i/du_i`` by difference quotients from the outputs ``y`` at ``e``, ``(n_dim, 1, 4, n_dim)``: unit
         ``i`` repeats its corrector step with each input component perturbed at ``T_N+1`` (restored start state,
         one ``doStep`` each) or, at its fixed end state, is re-evaluated with it (no step)."""
-        e = np.asarray(e, dtype=float)
-        samples = self.inputs(i, self.corrector_samples(history, e))  # (k + 1, n_dim); row 0 at T_N+1
-        u1 = samples[0]
-        h = self.perturbation * np.maximum(1.0, np.abs(u1))
+        rows = self._samples(i, e, history)  # (k + 1, n_dim); row 0 at T_N+1
+        u1 = np.array(rows[0])
+        h = [self.perturbation * max(1.0, abs(u)) for u in rows[0]]
         if y is not None:
             base = y
         else:
-            base = self._at_end(i, end, u1) if end is not None else self._integrate(i, samples, self.C_corr)[1]
+            base = self._at_end(i, end, u1) if end is not None else self._integrate(i, rows, self.C_corr)[1]
         out = np.empty((self.n_dim,) + base.shape)
-        rows = samples.tolist()
         for c in range(self.n_dim):
             if end is not None:
                 up = u1.copy()
                 up[c] += h[c]
                 yp = self._at_end(i, end, up)
             else:
-                Up = [row[:] for row in rows]
-                Up[0][c] += float(h[c])
+                Up = [rows[0][:]] + rows[1:]  # the rows after the first are not changed
+                Up[0][c] += h[c]
                 yp = self._integrate(i, Up, self.C_corr)[1]
             out[c] = (yp - base) / h[c]
         return out
@@ -352,17 +368,16 @@ class FmuCosimulation(CosimulationProblem):
         """Mass-weighted projection of positions and velocities (Eq. 30), written into the units."""
         m = self._masses
         if m is None:
-            m = self._masses = np.array([c.mass for c in self.couplings], dtype=float)
-        projected = mass_weighted_projection(self._clusters, m, np.asarray(state, dtype=float))
+            m = self._masses = [float(c.mass) for c in self.couplings]
+        rows = _projected(self._clusters, m, np.asarray(state, dtype=float).tolist())
         n = self.n_dim
-        rows = projected.tolist()
         for i, unit in enumerate(self.units):
             self._to_start(i)
             unit.put("set_position", rows[i][:n])
             unit.put("set_velocity", rows[i][n:])
             unit.free(self._start[i])
             self._start[i] = unit.save()
-        self._committed = projected
+        self._committed = np.array(rows)
         return self._committed
 
     def close(self):
@@ -374,3 +389,33 @@ class FmuCosimulation(CosimulationProblem):
             if self._start[i] is not None:
                 unit.free(self._start[i])
                 self._start[i] = None
+
+
+def _projected(clusters, masses, rows):
+    """:func:`icosim.engine.projection.mass_weighted_projection` of one point in floats (rows of floats, a mass
+    per row): the same products, sums and quotient in the same order, so the same numbers."""
+    out = list(rows)
+    for cluster in clusters:
+        weighted = [masses[cluster[0]] * v for v in rows[cluster[0]]]
+        total = masses[cluster[0]]
+        for b in cluster[1:]:
+            m = masses[b]
+            weighted = [w + m * v for w, v in zip(weighted, rows[b])]
+            total = total + m
+        mean = [w / total for w in weighted]
+        for b in cluster:
+            out[b] = mean
+    return out
+
+
+def _gathered(row, terms):
+    """A unit's inputs from one row of coupling variables: per input the sum of its ``(column, sign)`` terms,
+    as :meth:`icosim.engine.graph.CouplingGraph.inputs` forms it (signs +-1: exact products)."""
+    out = []
+    for term in terms:
+        (c, sign), *rest = term
+        total = row[c] if sign == 1 else -row[c]
+        for c, sign in rest:
+            total = total + row[c] * sign
+        out.append(total)
+    return out
