@@ -3,9 +3,9 @@
 For one configuration (units, coupling graph, method, ``k``, scheme, sensitivities) the master -- the engine's
 :func:`icosim.engine.run.simulate` on an :class:`~icosim.problems.fmu.problem.FmuCosimulation` of test units
 ``fmus/msd`` (force driven, different masses) -- runs ``--steps`` macro steps.  Once, untimed, every FMI call it
-makes is recorded at the fmpy level: each ``fmi2*`` function of every unit's ``FMU2Slave`` (the functions fmpy's
-own ``setReal``, ``doStep``, ... go through) is wrapped on the instance, so nothing the units are asked escapes the
-count.  From that record a **bare fmpy loop** is built that makes exactly the same calls on fresh instances of the
+makes is recorded at the fmpy level: each ``fmi2*`` method of every unit's ``FMU2Slave`` (the functions fmpy's
+own ``setReal``, ``doStep``, ... go through) is wrapped on the instance, and so is each function of its loaded
+library (``fmu.dll``, which the master calls itself), so nothing the units are asked escapes the count.  From that record a **bare fmpy loop** is built that makes exactly the same calls on fresh instances of the
 same units, in the same order, with the same value references and values: the floor.  A second, untimed
 pass of the bare loop under the same wrappers checks that it makes the same calls per kind with the same value
 sizes.  Two floors are timed:
@@ -13,8 +13,9 @@ sizes.  Two floors are timed:
 * ``api``: fmpy's documented methods (``setReal(vrs, values)``, ``getReal``, ``setRealInputDerivatives``,
   ``doStep``, ``getFMUstate``, ``setFMUstate``, ``freeFMUstate``), the loop a user would write -- the floor the
   target (master <= 2 x floor) is stated against;
-* ``raw``: the same calls through fmpy's ``fmi2*`` functions with every ctypes argument built before the clock
-  starts (the cheapest way fmpy offers; reported for honesty: it is what is left when Python builds nothing).
+* ``raw``: the same calls to the functions of the units' libraries as fmpy loaded them (``fmu.dll.fmi2*``,
+  which the master calls too) with every ctypes argument built before the clock starts and no status looked
+  at (reported for honesty: it is what is left when Python builds and checks nothing).
 
 The master is timed twice: in the process itself (``engine``: the bare engine loop, no records) and as users run
 it (``cosim``): inside :func:`icosim.problems.fmu.guard.supervised`, the forked child of ``icosim cosim`` whose
@@ -181,6 +182,9 @@ class Recorder:
             for name in dir(type(fmu)):
                 if name.startswith("fmi2") and callable(getattr(fmu, name)):
                     setattr(fmu, name, self._wrap(u, name, getattr(fmu, name)))
+                    # the library's function too, which the units call themselves (fmpy's methods call the
+                    # function they loaded, not this attribute: a call is recorded once either way)
+                    setattr(fmu.dll, name, self._wrap(u, name, getattr(fmu.dll, name)))
 
     def _slot(self, u, address, new=False):
         if new or address not in self.handles:
@@ -196,6 +200,7 @@ class Recorder:
             self.calls.append((u, name, self._payload(u, name, args)))
             return res
 
+        wrapped.__wrapped__ = f
         return wrapped
 
     def _payload(self, u, name, args):
@@ -222,6 +227,7 @@ class Recorder:
         for fmu in self.fmus:
             for name in [n for n in vars(fmu) if n.startswith("fmi2")]:
                 delattr(fmu, name)
+                setattr(fmu.dll, name, getattr(fmu.dll, name).__wrapped__)
 
     def counts(self, steps):
         """Per kind: calls per macro step, and the value sizes seen (``nvr``)."""
@@ -280,7 +286,8 @@ def bare_api(fmus, calls, slots):
 
 
 def bare_raw(fmus, calls, slots):
-    """The recorded calls through fmpy's ``fmi2*`` functions, every ctypes argument built beforehand."""
+    """The recorded calls through the functions of the units' libraries as fmpy loaded them (``fmu.dll``), every
+    ctypes argument built beforehand, no status looked at."""
     from ctypes import byref, c_double, c_int, c_uint
 
     from fmpy.fmi2 import fmi2FMUstate
@@ -289,25 +296,25 @@ def bare_raw(fmus, calls, slots):
     ops = []
     for u, name, p in calls:
         fmu = fmus[u]
-        comp = fmu.component
+        comp, lib = fmu.component, fmu.dll
         if name == "fmi2SetReal":
             n = len(p[0])
-            ops.append((fmu.fmi2SetReal, (comp, (c_uint * n)(*p[0]), n, (c_double * n)(*p[1]))))
+            ops.append((lib.fmi2SetReal, (comp, (c_uint * n)(*p[0]), n, (c_double * n)(*p[1]))))
         elif name == "fmi2GetReal":
             n = len(p[0])
-            ops.append((fmu.fmi2GetReal, (comp, (c_uint * n)(*p[0]), n, (c_double * n)())))
+            ops.append((lib.fmi2GetReal, (comp, (c_uint * n)(*p[0]), n, (c_double * n)())))
         elif name == "fmi2SetRealInputDerivatives":
             n = len(p[0])
             args = (comp, (c_uint * n)(*p[0]), n, (c_int * n)(*p[1]), (c_double * n)(*p[2]))
-            ops.append((fmu.fmi2SetRealInputDerivatives, args))
+            ops.append((lib.fmi2SetRealInputDerivatives, args))
         elif name == "fmi2DoStep":
-            ops.append((fmu.fmi2DoStep, (comp, *p)))
+            ops.append((lib.fmi2DoStep, (comp, *p)))
         elif name == "fmi2GetFMUstate":
-            ops.append((fmu.fmi2GetFMUstate, (comp, byref(states[p]))))
+            ops.append((lib.fmi2GetFMUstate, (comp, byref(states[p]))))
         elif name == "fmi2SetFMUstate":
-            ops.append((fmu.fmi2SetFMUstate, (comp, slots[p] if p in slots else states[p])))
+            ops.append((lib.fmi2SetFMUstate, (comp, slots[p] if p in slots else states[p])))
         elif name == "fmi2FreeFMUstate":
-            ops.append((fmu.fmi2FreeFMUstate, (comp, byref(slots[p] if p in slots else states[p]))))
+            ops.append((lib.fmi2FreeFMUstate, (comp, byref(slots[p] if p in slots else states[p]))))
     return ops
 
 

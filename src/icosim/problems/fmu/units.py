@@ -20,6 +20,7 @@ import collections
 import math
 import shutil
 import tempfile
+from ctypes import byref
 from pathlib import Path
 
 import numpy as np
@@ -35,6 +36,18 @@ __all__ = ["Unit", "ROLES"]
 _GET, _SET, _GET_STATE, _SET_STATE = (guard.code(c) for c in ("get", "set", "getFMUstate", "setFMUstate"))
 _DO_STEP, _DERIVATIVES = guard.code("doStep"), guard.code("setRealInputDerivatives")
 _FACTORIAL = [math.factorial(m) for m in range(16)]  # k is at most icosim.engine.bounds.MAX_K
+
+
+def _refused(function, status):
+    """An FMI 2.0 call that returned more than a warning, raised as fmpy raises it.
+
+    The macro step's calls go to the functions of the unit's library as fmpy loaded them (``fmu.dll``, argument
+    and result types set by fmpy): its methods of the same names wrap each in two Python calls, which for a small
+    unit cost more than the call itself.  fmpy would log the calls only with a call logger, which no unit has."""
+    from fmpy.fmi1 import FMICallException
+
+    raise FMICallException(function=function, status=status)
+
 
 _STATUS = {0: "ok", 1: "warning", 2: "discard", 3: "error", 4: "fatal", 5: "pending"}
 
@@ -140,9 +153,16 @@ class Unit:
                 self._register_release()
                 self.fmu.instantiate(logMessage=self._log3)
             else:
-                from fmpy.fmi2 import FMU2Slave, defaultCallbacks, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+                from fmpy.fmi2 import (
+                    FMU2Slave,
+                    defaultCallbacks,
+                    fmi2CallbackFunctions,
+                    fmi2CallbackLoggerTYPE,
+                    fmi2FMUstate,
+                )
 
                 self.fmu = FMU2Slave(guid=md.guid, **common)
+                self._new_state = fmi2FMUstate
                 self._register_release()
                 cb = fmi2CallbackFunctions()
                 cb.logger = fmi2CallbackLoggerTYPE(self._log2)
@@ -281,9 +301,12 @@ class Unit:
                 return self.get(keys).ravel().tolist()
             fast = self._reads[keys] = self._read_plan(keys)
         vr, n, buf, pick, factors = fast
+        fmu = self.fmu
         guard.enter(self.index, _GET, self.t)
-        self.fmu.fmi2GetReal(self.fmu.component, vr, n, buf)
+        status = fmu.dll.fmi2GetReal(fmu.component, vr, n, buf)
         guard.leave()
+        if status > 1:
+            _refused("fmi2GetReal", status)
         values = buf[:n]
         if pick is not None:
             values = [values[j] for j in pick]
@@ -324,7 +347,7 @@ class Unit:
         if self.fmi3:
             return self.set(key, values)
         factors = (self._writes.get(key) or self._writer(key))[3]
-        self._write(key, [v / f for v, f in zip(values, factors)])
+        self._write(key, values if self._si[key] else [v / f for v, f in zip(values, factors)])
 
     def set(self, key, value):
         """Set the variable(s) named under the scene key ``key`` (a number per component, SI)."""
@@ -343,11 +366,13 @@ class Unit:
     def _write(self, key, values):
         """Set ``key``'s variables to ``values`` (floats in the unit's own units, one per component; FMI 2.0)."""
         vr, n, buf, _ = self._writes.get(key) or self._writer(key)
-        for q in range(n):
-            buf[q] = values[q]
+        buf[:n] = values
+        fmu = self.fmu
         guard.enter(self.index, _SET, self.t)
-        self.fmu.fmi2SetReal(self.fmu.component, vr, n, buf)
+        status = fmu.dll.fmi2SetReal(fmu.component, vr, n, buf)
         guard.leave()
+        if status > 1:
+            _refused("fmi2SetReal", status)
 
     def _set_elements(self, key, values):
         els = self.elements[key]
@@ -381,21 +406,41 @@ class Unit:
     def save(self):
         self.saved += 1
         guard.enter(self.index, _GET_STATE, self.t)
-        state = self.fmu.getFMUState() if self.fmi3 else self.fmu.getFMUstate()
+        if self.fmi3:
+            state = self.fmu.getFMUState()
+        else:  # what fmpy's getFMUstate does, its library function called itself
+            fmu, state = self.fmu, self._new_state()
+            status = fmu.dll.fmi2GetFMUstate(fmu.component, byref(state))
+            if status > 1:
+                guard.leave()
+                _refused("fmi2GetFMUstate", status)
         guard.leave()
         return (state, self.t)
 
     def restore(self, state):
         self.restored += 1
         guard.enter(self.index, _SET_STATE, self.t)
-        (self.fmu.setFMUState if self.fmi3 else self.fmu.setFMUstate)(state[0])
+        if self.fmi3:
+            self.fmu.setFMUState(state[0])
+        else:
+            fmu = self.fmu
+            status = fmu.dll.fmi2SetFMUstate(fmu.component, state[0])
+            if status > 1:
+                guard.leave()
+                _refused("fmi2SetFMUstate", status)
         guard.leave()
         self.t = state[1]
 
     def free(self, state):
         if self.failed or self.fmu is None:
             return  # a refused step leaves only freeing the instance allowed (fmi2Error) or nothing (fmi2Fatal)
-        (self.fmu.freeFMUState if self.fmi3 else self.fmu.freeFMUstate)(state[0])
+        if self.fmi3:
+            self.fmu.freeFMUState(state[0])
+        else:
+            fmu = self.fmu
+            status = fmu.dll.fmi2FreeFMUstate(fmu.component, byref(state[0]))
+            if status > 1:
+                _refused("fmi2FreeFMUstate", status)
 
     # -- stepping -----------------------------------------------------------------------------
     def step(self, key, coefficients, t, H, *, step_index):
@@ -435,11 +480,13 @@ class Unit:
         # in the unit's own units; a factor of 1 divides exactly, so SI values pass as they are
         c = rows if self._si[key] else [[v / f for v, f in zip(row, factors)] for row in rows]
         fmu, index, self.t = self.fmu, self.index, t
-        comp = fmu.component
+        comp, library = fmu.component, fmu.dll
         buf[:n] = c[0]
         guard.enter(index, _SET, t)
-        fmu.fmi2SetReal(comp, vr, n, buf)
+        status = library.fmi2SetReal(comp, vr, n, buf)
         guard.leave()
+        if status > 1:
+            _refused("fmi2SetReal", status)
         if len(c) > 1:  # every order up to k, zeros too: a unit may keep the derivatives of the step before
             orders = self._orders.get((key, len(c), H))
             if orders is None:
@@ -447,16 +494,26 @@ class Unit:
             refs, order, values, terms = orders
             values[: len(terms)] = [factorial * c[m][q] / h_m for q, m, factorial, h_m in terms]
             guard.enter(index, _DERIVATIVES, t)
-            fmu.fmi2SetRealInputDerivatives(comp, refs, len(terms), order, values)
+            status = library.fmi2SetRealInputDerivatives(comp, refs, len(terms), order, values)
             guard.leave()
-        self._do_step(t, H, step_index)
+            if status > 1:
+                _refused("fmi2SetRealInputDerivatives", status)
+        self.do_steps += 1
+        self.messages.clear()
+        guard.enter(index, _DO_STEP, t, step_index)
+        status = library.fmi2DoStep(comp, t, H, False)  # what fmpy's doStep calls
+        guard.leave()
+        if status > 1:
+            self._step_refused(status, t, step_index)
         last = c[0]
         for row in c[1:]:
             last = [a + b for a, b in zip(last, row)]
         buf[:n] = last
         guard.enter(index, _SET, t)
-        fmu.fmi2SetReal(comp, vr, n, buf)
+        status = library.fmi2SetReal(comp, vr, n, buf)
         guard.leave()
+        if status > 1:
+            _refused("fmi2SetReal", status)
         self.t = t + H
 
     @staticmethod
@@ -474,6 +531,15 @@ class Unit:
             [(q, m, _FACTORIAL[m], H**m) for q, m in pairs],
         )
 
+    def _step_refused(self, code, t, step_index):
+        """A doStep that returned ``code`` (more than a warning; None: it raised without one) ends the run."""
+        status = _STATUS.get(code, "failure")
+        self.failed = code if code in (3, 4) else 0
+        raise UnitStepError(
+            f"unit {self.label} refused macro step {step_index} at t = {t:.12g} s (doStep returned {status})"
+            f"{self.said()}"
+        ) from None
+
     def _do_step(self, t, h, step_index):
         self.do_steps += 1
         self.messages.clear()
@@ -482,16 +548,12 @@ class Unit:
             if self.fmi3:
                 result = self.fmu.doStep(t, h, noSetFMUStatePriorToCurrentPoint=False)
             else:
-                self.fmu.fmi2DoStep(self.fmu.component, t, h, False)  # what fmpy's doStep calls
+                status = self.fmu.dll.fmi2DoStep(self.fmu.component, t, h, False)  # what fmpy's doStep calls
+                if status > 1:
+                    _refused("fmi2DoStep", status)
         except Exception as exc:
             guard.leave()
-            code = getattr(exc, "status", None)
-            status = _STATUS.get(code, "failure")
-            self.failed = code if code in (3, 4) else 0
-            raise UnitStepError(
-                f"unit {self.label} refused macro step {step_index} at t = {t:.12g} s (doStep returned {status})"
-                f"{self.said()}"
-            ) from None
+            self._step_refused(getattr(exc, "status", None), t, step_index)
         guard.leave()
         if self.fmi3 and (result[1] or result[2]):  # terminateSimulation, earlyReturn
             what = "asked to terminate the simulation" if result[1] else f"returned early at t = {result[3]:.12g} s"
