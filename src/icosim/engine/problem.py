@@ -245,7 +245,7 @@ class CosimulationProblem:
                 blocks.append(np.moveaxis(np.tensordot(S, B, axes=([-4], [0])), -1, -4))
             dY = self.stack(blocks)
         res = self.residuals(dY, dE, stage.conditions, held)  # a held multiplier does not follow e
-        jac = {key_: np.swapaxes(val, -1, -2) for key_, val in res.items()}
+        jac = {key_: val.swapaxes(-1, -2) for key_, val in res.items()}
         if self.constant_sensitivities:
             self._jacobians[key] = jac
         return jac

@@ -220,16 +220,16 @@ class FmuCosimulation(CosimulationProblem):
         s = self._scale[i]
         # the input's coefficients s * (C @ U); s is +-1, whose product is exact, so it goes into the weights
         C_s = C if s == 1.0 else self._negated(C) if s == -1.0 else None
-        coef = []
-        for weights in C if C_s is None else C_s:
-            if len(samples) == 2:
-                (w0, w1), (a, b) = weights, samples
-                row = [w0 * x + w1 * y for x, y in zip(a, b)]
-            else:
+        if len(samples) == 2:  # k = 1
+            a, b = samples
+            coef = [[w0 * x + w1 * y for x, y in zip(a, b)] for w0, w1 in (C if C_s is None else C_s)]
+        else:
+            coef = []
+            for weights in C if C_s is None else C_s:
                 row = [weights[0] * u for u in samples[0]]
                 for w, sample in zip(weights[1:], samples[1:]):
                     row = [acc + w * u for acc, u in zip(row, sample)]
-            coef.append(row)
+                coef.append(row)
         unit.advance(
             self.couplings[i].input_key, coef if C_s is not None else [[s * v for v in row] for row in coef],
             self.time, self.H, step_index=self.step_index + 1,
@@ -337,7 +337,7 @@ class FmuCosimulation(CosimulationProblem):
             self._start[i] = kept
             self._holds[i] = "start" if self._holds[i] == id(end) else "scratch"
         self.step_index += 1
-        self._committed = np.stack(ends)
+        self._committed = np.array(ends)  # (units, 2 n_dim): np.stack's array
         return self._committed
 
     def sensitivity(self, i, state, history, e, end=None, y=None):
