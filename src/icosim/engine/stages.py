@@ -151,6 +151,7 @@ def _plan(scheme: Scheme, graph: CouplingGraph) -> Plan:
     return Plan(scheme, graph, tuple(stages))
 
 
+@cache  # a plan is made once per scheme and graph (_plan): its answer is asked every macro step
 def _lone_variable(p: Plan) -> tuple[int, int, list[int]] | None:
     """``(joint, column, subsystems it drives)``: a coupling variable that drives only finished subsystems."""
     graph = p.graph

@@ -22,7 +22,6 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
-from functools import cache
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -315,10 +314,18 @@ def _same(value: Any) -> Any:
     return value
 
 
-@cache
 def _float_solves(solves: tuple) -> tuple:
-    """A method's solves with its exact weights and levels as floats (what float64's ``const`` makes of them)."""
-    return tuple((float(w), tuple(float(v) for v in levels)) for w, levels in solves)
+    """A method's solves with its exact weights and levels as floats (what float64's ``const`` makes of them),
+    kept per solves object (hashing its Fractions every macro step would cost more than the conversion)."""
+    kept = _FLOAT_SOLVES.get(id(solves))
+    if kept is None or kept[0] is not solves:
+        if len(_FLOAT_SOLVES) >= _KEEP:
+            _FLOAT_SOLVES.clear()
+        kept = _FLOAT_SOLVES[id(solves)] = (solves, tuple((float(w), tuple(float(v) for v in lv)) for w, lv in solves))
+    return kept[1]
+
+
+_FLOAT_SOLVES: dict[int, tuple[tuple, tuple]] = {}  # id -> (the solves, as floats); the object kept, its id not reused
 
 
 #: Jacobians seen twice (a problem's constant sensitivities hand the same object every step): id -> (the
