@@ -122,6 +122,11 @@ class FmuCosimulation(CosimulationProblem):
         self._masses = None  # the units' masses for the projection, as floats once asked
         # per unit, per input: the (column of e, sign) it sums (None: no joint, the graph's zeros)
         self._terms = [graph.input_terms(i) if all(graph.input_terms(i)) else None for i in range(n)]
+        # where every input is one column of e as it is: those columns
+        self._picks = [
+            None if t is None or any(len(x) != 1 or x[0][1] != 1 for x in t) else [x[0][0] for x in t]
+            for t in self._terms
+        ]
         self._history_rows: tuple = (None, None)  # the last coupling history and its rows of floats
 
     # -- time and the initial point -----------------------------------------------------------------
@@ -305,6 +310,9 @@ class FmuCosimulation(CosimulationProblem):
             self._history_rows = (history, rows)
         if e_new is not None:
             rows = [np.asarray(e_new, dtype=float).tolist()] + rows[: self.k]
+        picks = self._picks[i]
+        if picks is not None:
+            return [[row[c] for c in picks] for row in rows]
         return [_gathered(row, terms) for row in rows]
 
     def predict(self, i, state, history, *, final=False):
