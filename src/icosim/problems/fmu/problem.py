@@ -127,6 +127,9 @@ class FmuCosimulation(CosimulationProblem):
             None if t is None or any(len(x) != 1 or x[0][1] != 1 for x in t) else [x[0][0] for x in t]
             for t in self._terms
         ]
+        self._pairs = [
+            None if t is None or len(t) != 1 or len(t[0]) != 2 else (*t[0][0], *t[0][1]) for t in self._terms
+        ]
         self._history_rows: tuple = (None, None)  # the last coupling history and its rows of floats
 
     # -- time and the initial point -----------------------------------------------------------------
@@ -310,9 +313,18 @@ class FmuCosimulation(CosimulationProblem):
             self._history_rows = (history, rows)
         if e_new is not None:
             rows = [np.asarray(e_new, dtype=float).tolist()] + rows[: self.k]
+        return self._gather(i, rows)
+
+    def _gather(self, i, rows):
+        """Unit ``i``'s inputs from rows of coupling variables (floats): the graph's sums of signed columns."""
         picks = self._picks[i]
         if picks is not None:
             return [[row[c] for c in picks] for row in rows]
+        pair = self._pairs[i]
+        if pair is not None:  # one input, two terms (a unit between two joints of a chain)
+            a, sign_a, b, sign_b = pair
+            return [[row[a] * sign_a + row[b] * sign_b] for row in rows]
+        terms = self._terms[i]
         return [_gathered(row, terms) for row in rows]
 
     def predict(self, i, state, history, *, final=False):
@@ -332,7 +344,10 @@ class FmuCosimulation(CosimulationProblem):
 
     def reevaluate(self, i, end, y, e_old, e_new):
         """Outputs at the fixed end state with the input at ``T_N+1`` set from ``e_new`` (``fmi2SetReal``, no step)."""
-        return self._at_end(i, end, self.inputs(i, np.asarray(e_new, dtype=float)))
+        e_new = np.asarray(e_new, dtype=float)
+        if self._terms[i] is None or e_new.ndim != 1:
+            return self._at_end(i, end, self.inputs(i, e_new))
+        return self._at_end(i, end, np.array(self._gather(i, [e_new.tolist()])[0]))
 
     def join(self, ends):
         """The macro step's end: each unit's FMU state of ``ends[i]`` becomes the next start; the rest are freed."""
