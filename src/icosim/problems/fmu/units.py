@@ -112,7 +112,7 @@ class Unit:
         self.substeps = int(substeps)
         self.names = dict(names)
         self._plans = {}
-        self._reads, self._writes, self._orders = {}, {}, {}  # FMI 2.0: buffers of the macro step's calls
+        self._reads, self._writes, self._drives = {}, {}, {}  # FMI 2.0: buffers of the macro step's calls
         self._si = {}  # key -> its variables are in SI units (factors 1)
         self._arrays = {}  # FMI 3.0 arrays written element-wise: their whole value, as last set
         self.do_steps = self.saved = self.restored = self.warnings = self.check_steps = 0
@@ -476,55 +476,60 @@ class Unit:
         input derivatives is driven without numpy: the same calls with the same values."""
         if not self.exact_inputs or self.fmi3:
             return self.step(key, np.array(rows, dtype=float), t, H, step_index=step_index)
-        vr, n, buf, factors = self._writes.get(key) or self._writer(key)
+        plan = self._drives.get((key, len(rows), H))
+        if plan is None:
+            plan = self._drives[key, len(rows), H] = self._drive_plan(key, len(rows), H)
+        vr, n, buf, factors, refs, order, values, terms = plan
         # in the unit's own units; a factor of 1 divides exactly, so SI values pass as they are
-        c = rows if self._si[key] else [[v / f for v, f in zip(row, factors)] for row in rows]
+        c = rows if factors is None else [[v / f for v, f in zip(row, factors)] for row in rows]
         fmu, index, self.t = self.fmu, self.index, t
-        comp, library = fmu.component, fmu.dll
+        comp, library, enter, leave = fmu.component, fmu.dll, guard.enter, guard.leave
         buf[:n] = c[0]
-        guard.enter(index, _SET, t)
+        enter(index, _SET, t)
         status = library.fmi2SetReal(comp, vr, n, buf)
-        guard.leave()
+        leave()
         if status > 1:
             _refused("fmi2SetReal", status)
-        if len(c) > 1:  # every order up to k, zeros too: a unit may keep the derivatives of the step before
-            orders = self._orders.get((key, len(c), H))
-            if orders is None:
-                orders = self._orders[key, len(c), H] = self._derivative_plan(vr, n, len(c), H)
-            refs, order, values, terms = orders
-            values[: len(terms)] = [factorial * c[m][q] / h_m for q, m, factorial, h_m in terms]
-            guard.enter(index, _DERIVATIVES, t)
+        if terms:  # every order up to k, zeros too: a unit may keep the derivatives of the step before
+            values[:] = [factorial * c[m][q] / h_m for q, m, factorial, h_m in terms]
+            enter(index, _DERIVATIVES, t)
             status = library.fmi2SetRealInputDerivatives(comp, refs, len(terms), order, values)
-            guard.leave()
+            leave()
             if status > 1:
                 _refused("fmi2SetRealInputDerivatives", status)
         self.do_steps += 1
         self.messages.clear()
-        guard.enter(index, _DO_STEP, t, step_index)
+        enter(index, _DO_STEP, t, step_index)
         status = library.fmi2DoStep(comp, t, H, False)  # what fmpy's doStep calls
-        guard.leave()
+        leave()
         if status > 1:
             self._step_refused(status, t, step_index)
         last = c[0]
         for row in c[1:]:
             last = [a + b for a, b in zip(last, row)]
         buf[:n] = last
-        guard.enter(index, _SET, t)
+        enter(index, _SET, t)
         status = library.fmi2SetReal(comp, vr, n, buf)
-        guard.leave()
+        leave()
         if status > 1:
             _refused("fmi2SetReal", status)
         self.t = t + H
 
-    @staticmethod
-    def _derivative_plan(vr, n, rows, H):
-        """The input derivatives' call of a step of ``H`` with ``rows`` coefficients: value references, orders,
-        a buffer, and per value its component, order, ``m!`` and ``H^m``."""
+    def _drive_plan(self, key, rows, H):
+        """What :meth:`advance` needs for a step of ``H`` with ``rows`` coefficients of ``key``, made once: its
+        write (value references, their number, a buffer), the factors to the unit's units (None: all 1), and the
+        input derivatives' call (value references, orders, a buffer, and per value its component, order, ``m!``
+        and ``H^m``)."""
         from fmpy.fmi2 import fmi2Integer, fmi2Real, fmi2ValueReference
 
+        vr, n, buf, factors = self._writes.get(key) or self._writer(key)
         pairs = [(q, m) for m in range(1, rows) for q in range(n)]
         size = len(pairs)
         return (
+            vr,
+            n,
+            buf,
+            None if self._si[key] else factors,
             (fmi2ValueReference * size)(*[vr[q] for q, _ in pairs]),
             (fmi2Integer * size)(*[m for _, m in pairs]),
             (fmi2Real * size)(),
