@@ -127,6 +127,7 @@ class FmuCosimulation(CosimulationProblem):
             None if t is None or any(len(x) != 1 or x[0][1] != 1 for x in t) else [x[0][0] for x in t]
             for t in self._terms
         ]
+        self._signed = [None if t is None or any(len(x) != 1 for x in t) else [x[0] for x in t] for t in self._terms]
         self._pairs = [
             None if t is None or len(t) != 1 or len(t[0]) != 2 else (*t[0][0], *t[0][1]) for t in self._terms
         ]
@@ -320,6 +321,9 @@ class FmuCosimulation(CosimulationProblem):
         picks = self._picks[i]
         if picks is not None:
             return [[row[c] for c in picks] for row in rows]
+        signed = self._signed[i]
+        if signed is not None:  # one column each, some negated (x * -1 is -x)
+            return [[row[c] * sign for c, sign in signed] for row in rows]
         pair = self._pairs[i]
         if pair is not None:  # one input, two terms (a unit between two joints of a chain)
             a, sign_a, b, sign_b = pair
