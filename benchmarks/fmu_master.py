@@ -1,12 +1,13 @@
 """The co-simulation master's wall time per macro step against the floor of its own FMI calls, side by side.
 
 For one configuration (units, coupling graph, method, ``k``, scheme, sensitivities) the master -- the engine's
-:func:`icosim.engine.run.simulate` on an :class:`~icosim.problems.fmu.problem.FmuCosimulation` of test units
-``fmus/msd`` (force driven, different masses) -- runs ``--steps`` macro steps.  Once, untimed, every FMI call it
-makes is recorded at the fmpy level: each ``fmi2*`` method of every unit's ``FMU2Slave`` (the functions fmpy's
-own ``setReal``, ``doStep``, ... go through) is wrapped on the instance, and so is each function of its loaded
-library (``fmu.dll``, which the master calls itself), so nothing the units are asked escapes the count.  From that record a **bare fmpy loop** is built that makes exactly the same calls on fresh instances of the
-same units, in the same order, with the same value references and values: the floor.  A second, untimed
+:func:`icosim.engine.run.simulate` on an :class:`~icosim.problems.fmu.problem.FmuCosimulation` of a scene's units
+or of test units ``fmus/msd`` (force driven, different masses) -- runs ``--steps`` macro steps.  Once, untimed,
+every FMI call it makes is recorded at the fmpy level: each ``fmi2*`` method of every unit's ``FMU2Slave`` (the
+functions fmpy's own ``setReal``, ``doStep``, ... go through) is wrapped on the instance, and so is each function
+of its loaded library (``fmu.dll``, which the master calls itself), so nothing the units are asked escapes the
+count.  From that record a **bare fmpy loop** is built that makes exactly the same calls on fresh instances of
+the same units, in the same order, with the same value references and values: the floor.  A second, untimed
 pass of the bare loop under the same wrappers checks that it makes the same calls per kind with the same value
 sizes.  Two floors are timed:
 
@@ -23,11 +24,13 @@ every FMI call writes the shared call record, with the run loop's divergence bou
 :func:`icosim.problems.fmu.run.run_scene` calls it.  Units are opened fresh for every timed run (not timed); each
 number is the best of ``--repeat`` runs, the four kinds interleaved.
 
-Configurations: the pair (projection and Baumgarte index 1, ff, k = 1, Jacobi and gauss-seidel-12, sensitivities
-first-step and each-step); the 10-unit chain (``CouplingGraph.chain(["ff"] * 9, ports="one")``, Baumgarte
-index 1 and projection, Jacobi and Gauss-Seidel 1..10, both sensitivities); chains of N = 2 ... 64 units
-(Baumgarte index 1, each-step, Jacobi and Gauss-Seidel 1..N) for the exponent of time over N (a least-squares
-fit of log time against log N).
+Configurations: the scenes ``config/scenes/two_mass_{ff,fd,dd,mm}.yaml`` as they are (units opened and checked,
+coupling and start as ``icosim cosim`` makes them); the pair of ``fmus/msd`` units (ff, k = 1; projection under
+Jacobi and gauss-seidel-12, Baumgarte index 1 under Jacobi; sensitivities first-step and each-step); the 10-unit
+chain (``CouplingGraph.chain(["ff"] * 9, ports="one")``, the same methods and schemes, Gauss-Seidel 1..10);
+chains of N = 2 ... 64 units (each-step; Baumgarte index 1 under Jacobi, projection under Gauss-Seidel 1..N)
+for the exponent of time over N (a least-squares fit of log time against log N).  Baumgarte index 1 (mu = H)
+under Gauss-Seidel diverges on these force-driven units within 200 steps, so it is not timed there.
 
 With ``--old COMMIT`` the same measurement runs for that commit too (a ``git worktree``, its ``src`` first on
 ``PYTHONPATH``), in a fresh process per tree, old - this tree - old; the JSON has both.  Never a timed assertion:
