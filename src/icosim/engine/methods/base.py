@@ -325,13 +325,11 @@ def _float_solves(solves: tuple) -> tuple:
     return kept[1]
 
 
-_FLOAT_SOLVES: dict[int, tuple[tuple, tuple]] = {}  # id -> (the solves, as floats); the object kept, its id not reused
-
-
 #: Jacobians seen twice (a problem's constant sensitivities hand the same object every step): id -> (the
 #: object, {solve: its factored matrix}); the object is kept, so its id is not reused while it is here.
 _KEPT: dict[int, tuple[Any, dict[int, _Factored]]] = {}
 _SEEN: dict[int, Any] = {}
+_FLOAT_SOLVES: dict[int, tuple[tuple, tuple]] = {}  # id -> (the solves, as floats): kept the same way
 _KEEP = 16
 
 

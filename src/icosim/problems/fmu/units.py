@@ -1,7 +1,8 @@
 """One FMU instance of a scene: checked against what the scene asks of it, opened the way the FMI standard says,
 stepped, saved and restored.
 
-Only fmpy talks to the FMU (imported when a unit is opened).  A unit reads and writes only the variables its
+Only fmpy talks to the FMU (imported when a unit is opened; the macro step's FMI 2.0 calls go to the library
+functions it loaded: :mod:`icosim.problems.fmu.fmi2_calls`).  A unit reads and writes only the variables its
 scene names (:data:`ROLES`), each with the setter and getter of its own type, in SI (:mod:`icosim.problems.fmu.measures`
 converts declared units).  Start values are checked before any call and set with fmpy's
 ``apply_start_values`` in the state the standard allows (:mod:`icosim.problems.fmu.variables`).  Over a macro step the
@@ -28,25 +29,13 @@ import numpy as np
 from . import guard, pythonfmu
 from .description import check_kind, read_description
 from .errors import FmuError, UnitStepError
+from .fmi2_calls import Fmi2Calls, refused
 from .measures import measure
 from .variables import VariableTable, declared_start, family
 
 __all__ = ["Unit", "ROLES"]
 
-_GET, _SET, _GET_STATE, _SET_STATE = (guard.code(c) for c in ("get", "set", "getFMUstate", "setFMUstate"))
-_DO_STEP, _DERIVATIVES = guard.code("doStep"), guard.code("setRealInputDerivatives")
-_FACTORIAL = [math.factorial(m) for m in range(16)]  # k is at most icosim.engine.bounds.MAX_K
-
-
-def _refused(function, status):
-    """An FMI 2.0 call that returned more than a warning, raised as fmpy raises it.
-
-    The macro step's calls go to the functions of the unit's library as fmpy loaded them (``fmu.dll``, argument
-    and result types set by fmpy): its methods of the same names wrap each in two Python calls, which for a small
-    unit cost more than the call itself.  fmpy would log the calls only with a call logger, which no unit has."""
-    from fmpy.fmi1 import FMICallException
-
-    raise FMICallException(function=function, status=status)
+_GET_STATE, _SET_STATE, _DO_STEP = (guard.code(c) for c in ("getFMUstate", "setFMUstate", "doStep"))
 
 
 _STATUS = {0: "ok", 1: "warning", 2: "discard", 3: "error", 4: "fatal", 5: "pending"}
@@ -69,7 +58,7 @@ def _listed(names) -> list:
     return list(names) if isinstance(names, (list, tuple)) else [names]
 
 
-class Unit:
+class Unit(Fmi2Calls):
     """One instance of an FMU, checked and opened with its start values at ``t0``.
 
     Parameters
@@ -292,41 +281,6 @@ class Unit:
         plain = total == len(els) and np.array_equal(pick, np.arange(len(els)))
         return refs, total, (None if plain else pick), (None if np.all(factors == 1.0) else factors)
 
-    def read(self, keys) -> list:
-        """:meth:`get` as a flat list of floats (key after key, component after component): the macro step's
-        read, without numpy.  An FMI 2.0 unit reads into a buffer made once per ``keys``."""
-        fast = self._reads.get(keys)
-        if fast is None:
-            if self.fmi3 or self.fmu is None:
-                return self.get(keys).ravel().tolist()
-            fast = self._reads[keys] = self._read_plan(keys)
-        vr, n, buf, pick, factors = fast
-        fmu = self.fmu
-        guard.enter(self.index, _GET, self.t)
-        status = fmu.dll.fmi2GetReal(fmu.component, vr, n, buf)
-        guard.leave()
-        if status > 1:
-            _refused("fmi2GetReal", status)
-        values = buf[:n]
-        if pick is not None:
-            values = [values[j] for j in pick]
-        if factors is not None:
-            values = [v * f for v, f in zip(values, factors)]
-        return values
-
-    def _read_plan(self, keys):
-        from fmpy.fmi2 import fmi2Real, fmi2ValueReference
-
-        refs, total, pick, factors = self._plan(keys)
-        n = len(refs)
-        return (
-            (fmi2ValueReference * n)(*refs),
-            n,
-            (fmi2Real * n)(),
-            None if pick is None else pick.tolist(),
-            None if factors is None else factors.tolist(),
-        )
-
     def get(self, keys) -> np.ndarray:
         """Values (SI) of the variables named under ``keys`` (scene keys), shape ``(len(keys), components)``."""
         plan = self._plans.get(keys)
@@ -342,37 +296,9 @@ class Unit:
             values = values * factors
         return values.reshape(len(keys), -1)
 
-    def put(self, key, values):
-        """:meth:`set` from a list of floats (SI, one per component), without numpy for an FMI 2.0 unit."""
-        if self.fmi3:
-            return self.set(key, values)
-        factors = (self._writes.get(key) or self._writer(key))[3]
-        self._write(key, values if self._si[key] else [v / f for v, f in zip(values, factors)])
-
     def set(self, key, value):
         """Set the variable(s) named under the scene key ``key`` (a number per component, SI)."""
         self._set_elements(key, np.atleast_1d(np.asarray(value, dtype=float)) / self.factors[key])
-
-    def _writer(self, key):
-        """An FMI 2.0 unit's write of ``key``: value references, their number and a buffer, made once."""
-        from fmpy.fmi2 import fmi2Real, fmi2ValueReference
-
-        refs = [el.value_reference for el in self.elements[key]]
-        n = len(refs)
-        out = self._writes[key] = ((fmi2ValueReference * n)(*refs), n, (fmi2Real * n)(), self.factors[key].tolist())
-        self._si[key] = all(f == 1.0 for f in out[3])
-        return out
-
-    def _write(self, key, values):
-        """Set ``key``'s variables to ``values`` (floats in the unit's own units, one per component; FMI 2.0)."""
-        vr, n, buf, _ = self._writes.get(key) or self._writer(key)
-        buf[:n] = values
-        fmu = self.fmu
-        guard.enter(self.index, _SET, self.t)
-        status = fmu.dll.fmi2SetReal(fmu.component, vr, n, buf)
-        guard.leave()
-        if status > 1:
-            _refused("fmi2SetReal", status)
 
     def _set_elements(self, key, values):
         els = self.elements[key]
@@ -413,7 +339,7 @@ class Unit:
             status = fmu.dll.fmi2GetFMUstate(fmu.component, byref(state))
             if status > 1:
                 guard.leave()
-                _refused("fmi2GetFMUstate", status)
+                refused("fmi2GetFMUstate", status)
         guard.leave()
         return (state, self.t)
 
@@ -427,7 +353,7 @@ class Unit:
             status = fmu.dll.fmi2SetFMUstate(fmu.component, state[0])
             if status > 1:
                 guard.leave()
-                _refused("fmi2SetFMUstate", status)
+                refused("fmi2SetFMUstate", status)
         guard.leave()
         self.t = state[1]
 
@@ -440,7 +366,7 @@ class Unit:
             fmu = self.fmu
             status = fmu.dll.fmi2FreeFMUstate(fmu.component, byref(state[0]))
             if status > 1:
-                _refused("fmi2FreeFMUstate", status)
+                refused("fmi2FreeFMUstate", status)
 
     # -- stepping -----------------------------------------------------------------------------
     def step(self, key, coefficients, t, H, *, step_index):
@@ -471,72 +397,7 @@ class Unit:
         self._set_elements(key, c.sum(axis=0))
         self.t = t + H
 
-    def advance(self, key, rows, t, H, *, step_index):
-        """:meth:`step` with the coefficients as rows of floats (``rows[m][q]``, SI); an FMI 2.0 unit that takes
-        input derivatives is driven without numpy: the same calls with the same values."""
-        if not self.exact_inputs or self.fmi3:
-            return self.step(key, np.array(rows, dtype=float), t, H, step_index=step_index)
-        plan = self._drives.get((key, len(rows), H))
-        if plan is None:
-            plan = self._drives[key, len(rows), H] = self._drive_plan(key, len(rows), H)
-        vr, n, buf, factors, refs, order, values, terms = plan
-        # in the unit's own units; a factor of 1 divides exactly, so SI values pass as they are
-        c = rows if factors is None else [[v / f for v, f in zip(row, factors)] for row in rows]
-        fmu, index, self.t = self.fmu, self.index, t
-        comp, library, enter, leave = fmu.component, fmu.dll, guard.enter, guard.leave
-        buf[:n] = c[0]
-        enter(index, _SET, t)
-        status = library.fmi2SetReal(comp, vr, n, buf)
-        leave()
-        if status > 1:
-            _refused("fmi2SetReal", status)
-        if terms:  # every order up to k, zeros too: a unit may keep the derivatives of the step before
-            values[:] = [factorial * c[m][q] / h_m for q, m, factorial, h_m in terms]
-            enter(index, _DERIVATIVES, t)
-            status = library.fmi2SetRealInputDerivatives(comp, refs, len(terms), order, values)
-            leave()
-            if status > 1:
-                _refused("fmi2SetRealInputDerivatives", status)
-        self.do_steps += 1
-        self.messages.clear()
-        enter(index, _DO_STEP, t, step_index)
-        status = library.fmi2DoStep(comp, t, H, False)  # what fmpy's doStep calls
-        leave()
-        if status > 1:
-            self._step_refused(status, t, step_index)
-        last = c[0]
-        for row in c[1:]:
-            last = [a + b for a, b in zip(last, row)]
-        buf[:n] = last
-        enter(index, _SET, t)
-        status = library.fmi2SetReal(comp, vr, n, buf)
-        leave()
-        if status > 1:
-            _refused("fmi2SetReal", status)
-        self.t = t + H
-
-    def _drive_plan(self, key, rows, H):
-        """What :meth:`advance` needs for a step of ``H`` with ``rows`` coefficients of ``key``, made once: its
-        write (value references, their number, a buffer), the factors to the unit's units (None: all 1), and the
-        input derivatives' call (value references, orders, a buffer, and per value its component, order, ``m!``
-        and ``H^m``)."""
-        from fmpy.fmi2 import fmi2Integer, fmi2Real, fmi2ValueReference
-
-        vr, n, buf, factors = self._writes.get(key) or self._writer(key)
-        pairs = [(q, m) for m in range(1, rows) for q in range(n)]
-        size = len(pairs)
-        return (
-            vr,
-            n,
-            buf,
-            None if self._si[key] else factors,
-            (fmi2ValueReference * size)(*[vr[q] for q, _ in pairs]),
-            (fmi2Integer * size)(*[m for _, m in pairs]),
-            (fmi2Real * size)(),
-            [(q, m, _FACTORIAL[m], H**m) for q, m in pairs],
-        )
-
-    def _step_refused(self, code, t, step_index):
+    def _steprefused(self, code, t, step_index):
         """A doStep that returned ``code`` (more than a warning; None: it raised without one) ends the run."""
         status = _STATUS.get(code, "failure")
         self.failed = code if code in (3, 4) else 0
@@ -555,10 +416,10 @@ class Unit:
             else:
                 status = self.fmu.dll.fmi2DoStep(self.fmu.component, t, h, False)  # what fmpy's doStep calls
                 if status > 1:
-                    _refused("fmi2DoStep", status)
+                    refused("fmi2DoStep", status)
         except Exception as exc:
             guard.leave()
-            self._step_refused(getattr(exc, "status", None), t, step_index)
+            self._steprefused(getattr(exc, "status", None), t, step_index)
         guard.leave()
         if self.fmi3 and (result[1] or result[2]):  # terminateSimulation, earlyReturn
             what = "asked to terminate the simulation" if result[1] else f"returned early at t = {result[3]:.12g} s"
