@@ -24,13 +24,13 @@ every FMI call writes the shared call record, with the run loop's divergence bou
 :func:`icosim.problems.fmu.run.run_scene` calls it.  Units are opened fresh for every timed run (not timed); each
 number is the best of ``--repeat`` runs, the four kinds interleaved.
 
-Configurations: the scenes ``config/scenes/two_mass_{ff,fd,dd,mm}.yaml`` as they are (units opened and checked,
-coupling and start as ``icosim cosim`` makes them); the pair of ``fmus/msd`` units (ff, k = 1; projection under
-Jacobi and gauss-seidel-12, Baumgarte index 1 under Jacobi; sensitivities first-step and each-step); the 10-unit
-chain (``CouplingGraph.chain(["ff"] * 9, ports="one")``, the same methods and schemes, Gauss-Seidel 1..10);
-chains of N = 2 ... 64 units (each-step; Baumgarte index 1 under Jacobi, projection under Gauss-Seidel 1..N)
-for the exponent of time over N (a least-squares fit of log time against log N).  Baumgarte index 1 (mu = H)
-under Gauss-Seidel diverges on these force-driven units within 200 steps, so it is not timed there.
+Configurations: the scenes ``config/scenes/{two_mass_{ff,fd,dd,mm},chain3,chain10}.yaml`` as they are (units opened
+and checked, coupling and start as ``icosim cosim`` makes them); the pair of ``fmus/msd`` units (ff, k = 1;
+projection under Jacobi and gauss-seidel-12, Baumgarte index 1 under Jacobi; sensitivities first-step and
+each-step); the 10-unit chain (``CouplingGraph.chain(["ff"] * 9, ports="one")``, the same methods and schemes,
+Gauss-Seidel 1..10); chains of N = 2 ... 64 units (each-step; Baumgarte index 1 under Jacobi, projection under
+Gauss-Seidel 1..N) for the exponent of time over N (a least-squares fit of log time against log N). Baumgarte index
+1 (mu = H) under Gauss-Seidel diverges on these force-driven units within 200 steps, so it is not timed there.
 
 With ``--old COMMIT`` the same measurement runs for that commit too (a ``git worktree``, its ``src`` first on
 ``PYTHONPATH``), in a fresh process per tree, old - this tree - old; the JSON has both.  Never a timed assertion:
@@ -54,7 +54,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 H = 1e-3
-SCENES = ("two_mass_ff", "two_mass_fd", "two_mass_dd", "two_mass_mm")  # config/scenes/*.yaml, as they are
+SCENES = ("two_mass_ff", "two_mass_fd", "two_mass_dd", "two_mass_mm", "chain3", "chain10")  # config/scenes, as they are
 NAMES = dict(position="x", velocity="v", acceleration="a", force="lambda", set_position="x_set", set_velocity="v_set")
 
 # -- configurations ----------------------------------------------------------------------------------------------
