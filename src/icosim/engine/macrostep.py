@@ -93,8 +93,9 @@ def macro_step(
     ys: list[Any] = [None] * graph.n_subsystems
     for stage in stages:
         # step 1: the stage's subsystems with the extrapolation polynomials; those in no closed joint are final
+        corrected = set(stage.corrected)
         for i in stage.units:
-            ends[i], ys[i] = problem.predict(i, state, history, final=i not in stage.corrected)
+            ends[i], ys[i] = problem.predict(i, state, history, final=i not in corrected)
         if stage.conditions is None:
             continue
         cols = stage.columns
@@ -127,6 +128,10 @@ def macro_step(
 
 def _with_columns(e: Any, cols: tuple[int, ...], values: Any) -> Any:
     """``e`` with the entries ``cols`` of its last axis replaced by ``values`` (leading axes broadcast)."""
+    if e.ndim == 1 and values.ndim == 1:  # one point (an FMU step): nothing to broadcast
+        out = e.copy()
+        out[list(cols)] = values
+        return out
     lead = np.broadcast_shapes(e.shape[:-1], values.shape[:-1])
     out = np.array(np.broadcast_to(e, lead + e.shape[-1:]), copy=True)
     out[..., list(cols)] = values

@@ -117,6 +117,7 @@ class CosimulationProblem:
         self.work = Work()
         self._extrapolated: tuple = (None, None, None)  # (history, weights, e_p) of the last extrapolation
         self._jacobians: dict = {}
+        self._assembly: dict = {}  # (stage, algebraic) -> what jacobians() needs of the stage every time
 
     @property
     def decomposition(self) -> Decomposition:
@@ -141,9 +142,23 @@ class CosimulationProblem:
         last_history, last_weights, e_p = self._extrapolated
         if last_history is history and last_weights is self.w_pred:
             return e_p
-        e_p = sum(self.w_pred[j] * history[..., j, :] for j in range(self.k + 1))
+        w = self.w_pred
+        if w.dtype == np.float64 and getattr(history, "dtype", None) == np.float64:
+            # the same terms, summed in the same order from the first (sum() starts from 0: only -0 differs)
+            weights = self._float_weights(w)
+            e_p = weights[0] * history[..., 0, :]
+            for j in range(1, self.k + 1):
+                e_p = e_p + weights[j] * history[..., j, :]
+        else:
+            e_p = sum(w[j] * history[..., j, :] for j in range(self.k + 1))
         self._extrapolated = (history, self.w_pred, e_p)
         return e_p
+
+    def _float_weights(self, w: np.ndarray) -> list[float]:
+        kept = self.__dict__.get("_weights_as_floats")
+        if kept is None or kept[0] is not w:
+            kept = self._weights_as_floats = (w, w.tolist())
+        return kept[1]
 
     def corrector_samples(self, history: np.ndarray, e_new: np.ndarray) -> np.ndarray:
         """Samples of the interpolation polynomial (Eq. 11): ``e_new`` at ``T_N+1``, then ``e_N ... e_N-k+1``."""
@@ -162,6 +177,9 @@ class CosimulationProblem:
         """Outputs of several subsystems, port after port: ``(..., ports, 4, n_c)``."""
         if len(ys) == 1:
             return ys[0]
+        first = ys[0]
+        if first.ndim == 3 and all(y.shape[:-3] == () for y in ys):  # one point (an FMU step): no axes to lay out
+            return np.concatenate(ys, axis=-3)
         lead = np.broadcast_shapes(*(np.shape(y)[:-3] for y in ys))  # the ports' axis is not broadcast
         return layout.concatenate([np.broadcast_to(y, lead + np.shape(y)[-3:]) for y in ys], axis=-3)
 
@@ -196,30 +214,53 @@ class CosimulationProblem:
         key = (stage, algebraic)
         if self.constant_sensitivities and key in self._jacobians:
             return self._jacobians[key]
-        cols = stage.columns
-        blocks = []
+        how = self._assembly.get(key)
+        if how is None:
+            how = self._assembly[key] = self._assemble(stage)
+        Bs, B_all, dE, held = how
+        corrected = set(stage.corrected)
+        Ss = []
         for i in stage.responders:
-            if i in stage.corrected:
+            if i in corrected:
                 S = self.sensitivity(i, state, history, e, None, ys[i])
             elif algebraic:
                 S = self.sensitivity(i, state, history, e, ends[i], ys[i])
             else:
                 S = 0 * self.sensitivity(i, state, history, e, ends[i], ys[i])
-            B = self.graph.input_matrix(i, cols)
-            if S.dtype == object:
-                B = np.array([[self.backend.const(b) for b in row] for row in B], dtype=object)
-            # (..., inputs, ports, 4, n_c) x (inputs, cols) -> (..., cols, ports, 4, n_c)
-            blocks.append(np.moveaxis(np.tensordot(S, B, axes=([-4], [0])), -1, -4))
-        dY = self.stack(blocks)
+            Ss.append(S)
+        first = Ss[0]
+        if first.dtype == np.float64 and all(S.dtype == np.float64 and S.shape == first.shape for S in Ss):
+            # every responder at once: (..., R, inputs, ports, 4, n_c) x (R, inputs, cols) -> (..., cols, R ports,
+            # 4, n_c).  A column reaches one input of a responder (a joint attaches to one port of it), so each
+            # entry is one product by 0 or +-1, as the tensor product of one responder at a time had it.
+            S_all = np.array(Ss) if first.ndim == 4 else np.stack(Ss, axis=-5)
+            dY = np.einsum("...rqpab,rqc->...crpab", S_all, B_all)
+            dY = dY.reshape(dY.shape[:-5] + (dY.shape[-5], -1) + dY.shape[-2:])
+        else:
+            blocks = []
+            for S, B in zip(Ss, Bs):
+                if S.dtype == object:
+                    B = np.array([[self.backend.const(b) for b in row] for row in B], dtype=object)
+                # (..., inputs, ports, 4, n_c) x (inputs, cols) -> (..., cols, ports, 4, n_c)
+                blocks.append(np.moveaxis(np.tensordot(S, B, axes=([-4], [0])), -1, -4))
+            dY = self.stack(blocks)
+        res = self.residuals(dY, dE, stage.conditions, held)  # a held multiplier does not follow e
+        jac = {key_: val.swapaxes(-1, -2) for key_, val in res.items()}
+        if self.constant_sensitivities:
+            self._jacobians[key] = jac
+        return jac
+
+    def _assemble(self, stage: Stage) -> tuple:
+        """What :meth:`jacobians` of ``stage`` needs every time: the responders' input matrices (apart, and
+        stacked where they have one shape), ``d e / d e`` and the held multipliers' (zero) derivative."""
+        cols = stage.columns
+        Bs = [self.graph.input_matrix(i, cols) for i in stage.responders]
+        B_all = np.stack(Bs) if all(B.shape == Bs[0].shape for B in Bs) else None
         be = self.backend
         dE = np.full((len(cols), len(cols)), be.const(0), dtype=be.dtype)
         for c in range(len(cols)):
             dE[c, c] = be.const(1)
-        res = self.residuals(dY, dE, stage.conditions, 0 * dE)  # a held multiplier does not follow e
-        jac = {key_: np.swapaxes(val, -1, -2) for key_, val in res.items()}
-        if self.constant_sensitivities:
-            self._jacobians[key] = jac
-        return jac
+        return Bs, B_all, dE, 0 * dE
 
     # -- to be implemented by a subclass ------------------------------------------
     def predict(self, i: int, state: Any, history: Any, *, final: bool = False) -> Any:  # pragma: no cover

@@ -40,6 +40,8 @@ from .graph import FORCE, CouplingGraph
 
 __all__ = ["Conditions", "LEVELS"]
 
+_EMPTY: dict[tuple, np.ndarray] = {}  # Conditions._empty
+
 #: The levels of the conditions: the constraint on three levels, the balance of forces.
 LEVELS = ("pos", "vel", "acc", "force")
 
@@ -103,25 +105,50 @@ class Conditions:
                 "force": self._n_balance}  # fmt: skip
 
     def __call__(self, y: Any, e: Any, *, scale: Sequence[Any] | None = None, e_held: Any = None) -> dict[str, Any]:
-        lead = np.broadcast_shapes(y.shape[:-3], e.shape[:-1])
         out = {}
         if self._n_constraint:
             first, second = self._first, self._second
+            # the three levels at once: (..., [joint,] level, component)
+            diff = y[..., first, :3, :] - y[..., second, :3, :]
+            several = not isinstance(first, int)
+            factors = None if scale is None else self._factors(scale, diff.dtype)
+            if factors is not None:
+                diff = diff * factors  # each level times its own factor, as level by level
             for q, key in enumerate(("pos", "vel", "acc")):
-                level = y[..., first, q, :] - y[..., second, q, :]
-                if level.ndim > len(lead) + 1:  # several joints: (..., joint, component) -> rows
+                level = diff[..., q, :]
+                if several:  # several joints: (..., joint, component) -> rows
                     level = level.reshape(level.shape[:-2] + (-1,))
-                out[key] = level if scale is None else scale[q] * level
+                out[key] = level if scale is None or factors is not None else scale[q] * level
         else:
-            empty = np.zeros(lead + (0,), dtype=y.dtype)
+            empty = self._empty(y, e)
             out.update(pos=empty, vel=empty, acc=empty)
         if self._balance:
             held = e if e_held is None else e_held
             rows = [self._balance_row(parts, y, e, held) for parts in self._balance]
             out["force"] = rows[0] if len(rows) == 1 else np.concatenate(np.broadcast_arrays(*rows), axis=-1)
         else:
-            out["force"] = np.zeros(lead + (0,), dtype=y.dtype)
+            out["force"] = self._empty(y, e)
         return out
+
+    def _factors(self, scale: Sequence[Any], dtype: Any) -> Any:
+        """The levels' factors as a column ``(3, 1)`` where they and the outputs are float64 (else None: level by
+        level in the numbers' own arithmetic); kept for the scale last seen."""
+        last = self.__dict__.get("_last_scale")
+        if last is not None and last[0] is scale and last[1] == dtype:
+            return last[2]
+        plain = dtype == np.float64 and all(type(f) is float or type(f) is int for f in scale)
+        factors = np.array([float(f) for f in scale[:3]])[:, None] if plain else None
+        self._last_scale = (scale, dtype, factors)
+        return factors
+
+    def _empty(self, y: Any, e: Any) -> Any:
+        """No rows (a level no joint has), kept per shape (read-only: it holds nothing)."""
+        key = (y.shape[:-3], e.shape[:-1], y.dtype)
+        empty = _EMPTY.get(key)
+        if empty is None:
+            empty = _EMPTY[key] = np.zeros(np.broadcast_shapes(key[0], key[1]) + (0,), dtype=y.dtype)
+            empty.flags.writeable = False
+        return empty
 
     @staticmethod
     def _balance_row(parts: list, y: Any, e: Any, held: Any) -> Any:

@@ -83,7 +83,7 @@ def simulate(
         except (StepFailure, np.linalg.LinAlgError) as exc:  # e.g. a singular coupling solve
             failed, reason, error = n, str(exc) or type(exc).__name__, exc
             break
-        mag = np.max(np.abs(np.asarray(state, dtype=float)))
+        mag = np.abs(np.asarray(state, dtype=float)).max()  # the method: np.max's dispatch costs more here
         if not np.isfinite(mag):
             diverged, reason = n, "state not finite"
         elif bound is not None and mag > bound:

@@ -35,7 +35,7 @@ work (:func:`plan`):
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, cached_property
 from typing import TYPE_CHECKING
 
 from ..errors import ParameterError
@@ -63,7 +63,7 @@ class Stage:
     finished: tuple[int, ...]
     conditions: Conditions | None
 
-    @property
+    @cached_property
     def responders(self) -> tuple[int, ...]:
         """The subsystems in a closed joint, in their order (whose outputs :attr:`conditions` reads)."""
         return tuple(sorted(self.corrected + self.finished))
@@ -151,6 +151,7 @@ def _plan(scheme: Scheme, graph: CouplingGraph) -> Plan:
     return Plan(scheme, graph, tuple(stages))
 
 
+@cache  # a plan is made once per scheme and graph (_plan): its answer is asked every macro step
 def _lone_variable(p: Plan) -> tuple[int, int, list[int]] | None:
     """``(joint, column, subsystems it drives)``: a coupling variable that drives only finished subsystems."""
     graph = p.graph

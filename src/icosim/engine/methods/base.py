@@ -82,14 +82,29 @@ class CouplingMethod:
         shape ``(..., n_level, n_e)``, levels ``pos``, ``vel``, ``acc``
         (constraint) and ``force`` (force balance, possibly empty).
         """
+        plain = getattr(backend, "dtype", None) is np.float64  # float64: the exact numbers converted once
+        solves = _float_solves(self.solves) if plain else self.solves
+        const = _same if plain else backend.const
+        kept = _KEPT.get(id(jacobians)) if plain else None
+        if kept is not None and kept[0] is not jacobians:
+            kept = None
         total = None
-        for weight, levels in self.solves:
+        for n, (weight, levels) in enumerate(solves):
             if weight == 0:
                 continue  # an unused level may be singular (e.g. velocity at k = 0)
-            r = _conditions(levels, residuals, axis=-1, const=backend.const)
-            J = _conditions(levels, jacobians, axis=-2, const=backend.const)
-            de = solve_small(J, -r)
-            term: np.ndarray = de if weight == 1 else backend.const(weight) * de
+            r = _conditions(levels, residuals, axis=-1, const=const)
+            if kept is not None and n in kept[1]:
+                de = kept[1][n].solve(-r)
+            elif plain and _kept_jacobians(jacobians):
+                # the same Jacobians as a step before (constant sensitivities): combined and factored once
+                factor = _Factored(_conditions(levels, jacobians, axis=-2, const=const))
+                _keep(jacobians, n, factor)
+                de = factor.solve(-r)
+            elif plain:
+                de = _solve_float(_conditions(levels, jacobians, axis=-2, const=const), -r)
+            else:
+                de = solve_small(_conditions(levels, jacobians, axis=-2, const=const), -r)
+            term: np.ndarray = de if weight == 1 else const(weight) * de
             total = term if total is None else total + term
         return e_pred + total
 
@@ -293,6 +308,96 @@ def _conditions(
         rows.append(parts["force"])
     # levels all 0 would leave combined None (no registered method has them): mypy sees it, nothing checks it
     return rows[0] if len(rows) == 1 else layout.concatenate(rows, axis=axis)  # type: ignore[return-value]
+
+
+def _same(value: Any) -> Any:
+    return value
+
+
+def _float_solves(solves: tuple) -> tuple:
+    """A method's solves with its exact weights and levels as floats (what float64's ``const`` makes of them),
+    kept per solves object (hashing its Fractions every macro step would cost more than the conversion)."""
+    kept = _FLOAT_SOLVES.get(id(solves))
+    if kept is None or kept[0] is not solves:
+        if len(_FLOAT_SOLVES) >= _KEEP:
+            _FLOAT_SOLVES.clear()
+        kept = _FLOAT_SOLVES[id(solves)] = (solves, tuple((float(w), tuple(float(v) for v in lv)) for w, lv in solves))
+    return kept[1]
+
+
+#: Jacobians seen twice (a problem's constant sensitivities hand the same object every step): id -> (the
+#: object, {solve: its factored matrix}); the object is kept, so its id is not reused while it is here.
+_KEPT: dict[int, tuple[Any, dict[int, _Factored]]] = {}
+_SEEN: dict[int, Any] = {}
+_FLOAT_SOLVES: dict[int, tuple[tuple, tuple]] = {}  # id -> (the solves, as floats): kept the same way
+_KEEP = 16
+
+
+def _kept_jacobians(jacobians: Any) -> bool:
+    """Is ``jacobians`` the object of an earlier call (worth factoring once)?  Remembers it if not."""
+    if _SEEN.get(id(jacobians)) is jacobians:
+        return True
+    if len(_SEEN) >= _KEEP:
+        _SEEN.clear()
+    _SEEN[id(jacobians)] = jacobians
+    return False
+
+
+def _keep(jacobians: Any, n: int, factor: _Factored) -> None:
+    entry = _KEPT.get(id(jacobians))
+    if entry is None or entry[0] is not jacobians:
+        if len(_KEPT) >= _KEEP:
+            _KEPT.clear()
+        entry = _KEPT[id(jacobians)] = (jacobians, {})
+    entry[1][n] = factor
+
+
+#: A float64 system of at least this size whose matrix is banded, with no more than a quarter of its diagonals
+#: occupied, is solved as a banded system (a chain's joints: tridiagonal): work linear in its size.
+BANDED_FROM = 16
+
+
+def _solve_float(J: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """:func:`solve_small` for float64, a large banded system of one point by its band (LAPACK ``gbsv``)."""
+    n = J.shape[-1]
+    if J.ndim != 2 or n < BANDED_FROM or b.ndim != 1:
+        return solve_small(J, b)
+    rows, cols = np.nonzero(J)
+    lower = int(np.max(rows - cols, initial=0))
+    upper = int(np.max(cols - rows, initial=0))
+    if 4 * (lower + upper + 1) > n:
+        return solve_small(J, b)
+    from scipy.linalg import solve_banded
+
+    band = np.zeros((lower + upper + 1, n))
+    for d in range(-lower, upper + 1):  # band[upper + i - j, j] = J[i, j]
+        diagonal = np.diagonal(J, d)
+        if d >= 0:
+            band[upper - d, d:] = diagonal
+        else:
+            band[upper - d, : n + d] = diagonal
+    return solve_banded((lower, upper), band, b, check_finite=False)
+
+
+class _Factored:
+    """A float64 coupling matrix ``J`` (one point or a stack) made ready for many right-hand sides: sizes 1 and 2
+    as :func:`solve_small` (closed forms), larger ones LU-factored once (LAPACK ``getrf``, then ``getrs`` per
+    solve: the two halves of ``gesv``, which :func:`numpy.linalg.solve` calls)."""
+
+    def __init__(self, J: np.ndarray) -> None:
+        self.J = J
+        self.lu = None
+        if J.shape[-1] > 2 and J.ndim == 2:
+            from scipy.linalg import lu_factor
+
+            self.lu = lu_factor(J, check_finite=False)
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        if self.lu is None or b.ndim != 1:
+            return solve_small(self.J, b)
+        from scipy.linalg import lu_solve
+
+        return lu_solve(self.lu, b, check_finite=False)
 
 
 def solve_small(J: np.ndarray, b: np.ndarray) -> np.ndarray:

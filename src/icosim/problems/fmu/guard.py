@@ -25,9 +25,7 @@ import traceback
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
-__all__ = ["enter", "leave", "register", "unregister", "scratch_dir", "supervised", "Outcome", "CALL_SECONDS"]
+__all__ = ["enter", "leave", "code", "register", "unregister", "scratch_dir", "supervised", "Outcome", "CALL_SECONDS"]
 
 #: The default limit of one FMI call, in seconds: generous (a unit's doStep may integrate a stiff model).
 CALL_SECONDS = 600.0
@@ -49,9 +47,12 @@ _CODE.update(get=_CODE["Get"], set=_CODE["Set"], getFMUstate=_CODE["GetFMUstate"
 _CODE.update(doStep=_CODE["DoStep"], setRealInputDerivatives=_CODE["SetRealInputDerivatives"])
 
 _NAME_BYTES, _MAX_UNITS = 64, 64
-_HEADER = 8  # float64 slots: active, unit, call, t, macro step, since (monotonic), units registered, spare
+#: float64 slots: active, unit, call, t, macro step, spare, units registered, the call's number.  A call is
+#: timed by the parent from when it first sees its number active, so the child writes no clock: a call's record
+#: is five stores into the shared memory (:func:`enter`) and one (:func:`leave`).
+_HEADER = 8
 
-_record = None  # np.ndarray over the shared memory, in the supervised child only
+_record = None  # a float64 memoryview of the shared memory, in the supervised child only
 _shared = None
 _units = []  # the labels of the units registered in the supervised child
 _scratch = None
@@ -75,18 +76,29 @@ def unregister(unit):
     """Nothing more is recorded of ``unit`` (its index stays taken: the record may still name it)."""
 
 
-def enter(index: int, call: str, t: float, step: int = -1):
-    """Unit ``index`` starts the FMI call ``call`` at simulated time ``t`` (macro step ``step``)."""
-    if _record is not None and index >= 0:
-        r = _record
-        r[1], r[2], r[3], r[4], r[5] = index, _CODE[call], t, step, time.monotonic()
+def enter(index: int, call: str | int, t: float, step: int = -1):
+    """Unit ``index`` starts the FMI call ``call`` (a name, or its :func:`code`) at simulated time ``t`` (macro
+    step ``step``)."""
+    r = _record
+    if r is not None and index >= 0:
+        r[1] = index
+        r[2] = call if call.__class__ is int else _CODE[call]
+        r[3] = t
+        r[4] = step
+        r[7] += 1.0
         r[0] = 1.0
+
+
+def code(call: str) -> int:
+    """The number :func:`enter` records for the call named ``call`` (a caller may keep it)."""
+    return _CODE[call]
 
 
 def leave():
     """The call returned."""
-    if _record is not None:
-        _record[0] = 0.0
+    r = _record
+    if r is not None:
+        r[0] = 0.0
 
 
 def scratch_dir():
@@ -150,7 +162,7 @@ def supervised(target, *, call_seconds: float = CALL_SECONDS, leftovers=()) -> O
         return Outcome(int(target() or 0))
     size = _HEADER * 8 + _MAX_UNITS * _NAME_BYTES
     shared = mmap.mmap(-1, size)
-    record = np.frombuffer(shared, dtype=np.float64, count=_HEADER)
+    record = memoryview(shared).cast("d")
     scratch = tempfile.mkdtemp(prefix="icosim-run-")
     streams = (sys.stdout, sys.stderr)
     sys.stdout.flush()
@@ -188,6 +200,7 @@ def supervised(target, *, call_seconds: float = CALL_SECONDS, leftovers=()) -> O
     reader = threading.Thread(target=_drain, args=(read_end, chunks), daemon=True)
     reader.start()
     message, status = "", None
+    seen, since = -1.0, 0.0  # the number of the call last seen active, and when it was first seen
     try:
         pause = 0.001
         while True:
@@ -203,12 +216,16 @@ def supervised(target, *, call_seconds: float = CALL_SECONDS, leftovers=()) -> O
                 else:
                     status = os.WEXITSTATUS(wait_status)
                 break
-            if record[0] == 1.0 and time.monotonic() - record[5] > call_seconds:
-                described = _describe(shared, record, limit=call_seconds)
-                os.kill(pid, signal.SIGKILL)
-                os.waitpid(pid, 0)
-                message, status = described, 2
-                break
+            if record[0] == 1.0:
+                number, now = record[7], time.monotonic()
+                if number != seen:
+                    seen, since = number, now
+                elif now - since > call_seconds:
+                    described = _describe(shared, record, limit=call_seconds)
+                    os.kill(pid, signal.SIGKILL)
+                    os.waitpid(pid, 0)
+                    message, status = described, 2
+                    break
             time.sleep(pause)
             pause = min(2 * pause, 0.05, call_seconds / 20)
     except BaseException:  # the parent interrupted (Ctrl-C): the child goes with it
@@ -222,7 +239,7 @@ def supervised(target, *, call_seconds: float = CALL_SECONDS, leftovers=()) -> O
         reader.join()
         os.close(read_end)
         shutil.rmtree(scratch, ignore_errors=True)
-        del record
+        record.release()
         shared.close()
     texts = b"".join(chunks).decode(errors="replace").split("\0")
     for stream, text in zip(streams, texts + ["", ""]):

@@ -23,12 +23,14 @@ parameters mean what they mean for the built-in models (:func:`icosim.engine.met
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ...engine.graph import CouplingGraph
 from ...engine.lagrange import monomial_coefficients
 from ...engine.problem import CosimulationProblem
-from ...engine.projection import joined_clusters, mass_weighted_projection
+from ...engine.projection import joined_clusters
 from ...engine.residuals import Conditions
 from ...errors import StepFailure
 from .errors import UnitStepError
@@ -108,14 +110,28 @@ class FmuCosimulation(CosimulationProblem):
         self.perturbation, self.sensitivities = float(perturbation), sensitivities
         self.constant_sensitivities = sensitivities == "first-step"
         self.step_index = 0  # macro steps completed
-        self.C_pred = np.array(monomial_coefficients(self.pred_nodes), dtype=float)
-        self.C_corr = np.array(monomial_coefficients(self.corr_nodes), dtype=float)
+        self.C_pred = np.array(monomial_coefficients(self.pred_nodes), dtype=float).tolist()
+        self.C_corr = np.array(monomial_coefficients(self.corr_nodes), dtype=float).tolist()
         self._scale = [c.force_sign if c.kind == "force" else 1.0 for c in self.couplings]
         self._start = [u.save() for u in self.units]  # the FMU states at T_N
         self._holds = ["start"] * n  # what each unit holds now: "start", id of an end array, or "scratch"
         self._ends = [{} for _ in range(n)]  # id(end) -> (end, FMU state) of this macro step's integrations
         self._committed = None
         self._clusters = joined_clusters(graph, range(n))  # each unit is one body
+        self._negatives = {}  # id of a coefficient matrix -> (it, its negative)
+        self._masses = None  # the units' masses for the projection, as floats once asked
+        # per unit, per input: the (column of e, sign) it sums (None: no joint, the graph's zeros)
+        self._terms = [graph.input_terms(i) if all(graph.input_terms(i)) else None for i in range(n)]
+        # where every input is one column of e as it is: those columns
+        self._picks = [
+            None if t is None or any(len(x) != 1 or x[0][1] != 1 for x in t) else [x[0][0] for x in t]
+            for t in self._terms
+        ]
+        self._signed = [None if t is None or any(len(x) != 1 for x in t) else [x[0] for x in t] for t in self._terms]
+        self._pairs = [
+            None if t is None or len(t) != 1 or len(t[0]) != 2 else (*t[0][0], *t[0][1]) for t in self._terms
+        ]
+        self._history_rows: tuple = (None, None)  # the last coupling history and its rows of floats
 
     # -- time and the initial point -----------------------------------------------------------------
     @property
@@ -174,7 +190,7 @@ class FmuCosimulation(CosimulationProblem):
             if c.feedthrough:
                 self._to_start(i)
                 self.units[i].set(c.input_key, self._scale[i] * u)
-                y = self._outputs(i, u)[1]
+                y = self._outputs(i, np.asarray(u, dtype=float).tolist())[1]
             else:
                 y = 2 * self._held_step(i, u, self.H) - self._held_step(i, u, 2 * self.H)
             y[0, :2] = starts[i]  # the state at T_0 as it is
@@ -187,7 +203,7 @@ class FmuCosimulation(CosimulationProblem):
         self._to_start(i)
         self.units[i].step(self.couplings[i].input_key, [self._scale[i] * u], self.time, h, step_index=0)
         self._holds[i] = "scratch"
-        return self._outputs(i, u)[1]
+        return self._outputs(i, np.asarray(u, dtype=float).tolist())[1]
 
     # -- one unit integrated --------------------------------------------------------------------------
     def _to_start(self, i):
@@ -202,31 +218,63 @@ class FmuCosimulation(CosimulationProblem):
             )
 
     def _integrate(self, i, U, C):
-        """Unit ``i`` over ``[T_N, T_N+1]`` from its start, its input through the samples ``U`` (``(k+1, n_dim)``)
-        with the monomial coefficients ``C``; returns its end ``(x, v)`` and outputs ``(1, 4, n_dim)``."""
-        self._to_start(i)
-        coef = C @ U  # (k + 1, n_dim)
-        self.units[i].step(
-            self.couplings[i].input_key, self._scale[i] * coef, self.time, self.H, step_index=self.step_index + 1
-        )
+        """Unit ``i`` over ``[T_N, T_N+1]`` from its start, its input through the samples ``U`` (``(k+1, n_dim)``, an
+        array or rows of floats) with the monomial coefficients ``C`` (rows of floats); returns its end ``(x, v)`` and outputs
+        ``(1, 4, n_dim)``.  The polynomial's coefficients are formed in floats (k + 1 terms, summed in order)."""
+        unit = self.units[i]
+        if self._holds[i] != "start":
+            unit.restore(self._start[i])
+            self._holds[i] = "start"
+        samples = U.tolist() if isinstance(U, np.ndarray) else U
+        s = self._scale[i]
+        # the input's coefficients s * (C @ U); s is +-1, whose product is exact, so it goes into the weights
+        C_s = C if s == 1.0 else self._negated(C) if s == -1.0 else None
+        if len(samples) == 2:  # k = 1
+            a, b = samples
+            coef = [[w0 * x + w1 * y for x, y in zip(a, b)] for w0, w1 in (C if C_s is None else C_s)]
+        else:
+            coef = []
+            for weights in C if C_s is None else C_s:
+                row = [weights[0] * u for u in samples[0]]
+                for w, sample in zip(weights[1:], samples[1:]):
+                    row = [acc + w * u for acc, u in zip(row, sample)]
+                coef.append(row)
+        unit.advance(
+            self.couplings[i].input_key, coef if C_s is not None else [[s * v for v in row] for row in coef],
+            self.time, self.H, step_index=self.step_index + 1,
+        )  # fmt: skip
         self.work.subsystem_integrations += 1
         self._holds[i] = "scratch"
-        return self._outputs(i, coef.sum(axis=0))
+        u1 = coef[0]
+        for row in coef[1:]:
+            u1 = [a + b for a, b in zip(u1, row)]
+        if s == -1.0:
+            u1 = [-v for v in u1]
+        return self._outputs(i, u1)
+
+    def _negated(self, C):
+        """``-C`` (rows of floats), made once per matrix."""
+        key = id(C)
+        kept = self._negatives.get(key)
+        if kept is None or kept[0] is not C:
+            kept = self._negatives[key] = (C, [[-w for w in row] for row in C])
+        return kept[1]
 
     def _outputs(self, i, u1):
-        """Unit ``i``'s end ``(x, v)`` and outputs ``(1, 4, n_dim)`` as it stands, its input ``u1`` at
+        """Unit ``i``'s end ``(x, v)`` and outputs ``(1, 4, n_dim)`` as it stands, its input ``u1`` (floats) at
         ``T_N+1``.  A unit that returns a value that is not finite for finite inputs is at fault
         (:class:`UnitStepError`)."""
-        c = self.couplings[i]
+        c, n = self.couplings[i], self.n_dim
         if c.kind == "force":
-            x, v, a = values = self.units[i].get(_FORCE_OUTPUTS)
-            f = np.broadcast_to(np.asarray(u1, dtype=float), x.shape)
+            values = self.units[i].read(_FORCE_OUTPUTS)
+            flat = values + u1
         else:
-            x, v, a, r = values = self.units[i].get(_KINEMATIC_OUTPUTS)
-            f = c.force_sign * r
-        if not np.isfinite(values).all() and np.isfinite(u1).all():
-            self._not_finite(i, values)
-        return np.concatenate([x, v]), np.stack([x, v, a, f])[None]
+            values = self.units[i].read(_KINEMATIC_OUTPUTS)
+            flat = values[: 3 * n] + [c.force_sign * r for r in values[3 * n :]]
+        total = sum(values)  # finite if every value is (else inf or nan; an overflow only asks the long way)
+        if total - total != 0.0 and not all(map(math.isfinite, values)) and all(map(math.isfinite, u1)):
+            self._not_finite(i, np.array(values).reshape(-1, n))
+        return np.array(flat[: 2 * n]), np.array(flat).reshape(1, 4, n)
 
     def _not_finite(self, i, values):
         unit = self.units[i]
@@ -248,25 +296,62 @@ class FmuCosimulation(CosimulationProblem):
         if self._holds[i] != id(end):
             self.units[i].restore(self._ends[i][id(end)][1])
             self._holds[i] = id(end)
-        self.units[i].set(self.couplings[i].input_key, self._scale[i] * u1)
+        u1, s = u1.tolist(), self._scale[i]
+        self.units[i].put(self.couplings[i].input_key, [s * v for v in u1])
         return self._outputs(i, u1)[1]
 
     # -- the problem interface -------------------------------------------------------------------------
+    def _samples(self, i, e_new, history):
+        """Unit ``i``'s input samples (rows of floats): :meth:`inputs` of ``history`` (``e_new`` None) or of
+        :meth:`corrector_samples` -- the same sums of the same terms, in floats."""
+        terms = self._terms[i]
+        if terms is None or not isinstance(history, np.ndarray) or history.ndim != 2:
+            rows = history if e_new is None else self.corrector_samples(history, np.asarray(e_new, dtype=float))
+            return np.asarray(self.inputs(i, rows), dtype=float).tolist()
+        kept, rows = self._history_rows
+        if kept is not history:
+            rows = history.tolist()
+            self._history_rows = (history, rows)
+        if e_new is not None:
+            rows = [np.asarray(e_new, dtype=float).tolist()] + rows[: self.k]
+        return self._gather(i, rows)
+
+    def _gather(self, i, rows):
+        """Unit ``i``'s inputs from rows of coupling variables (floats): the graph's sums of signed columns."""
+        picks = self._picks[i]
+        if picks is not None:
+            return [[row[c] for c in picks] for row in rows]
+        signed = self._signed[i]
+        if signed is not None:  # one column each, some negated (x * -1 is -x)
+            return [[row[c] * sign for c, sign in signed] for row in rows]
+        pair = self._pairs[i]
+        if pair is not None:  # one input, two terms (a unit between two joints of a chain)
+            a, sign_a, b, sign_b = pair
+            return [[row[a] * sign_a + row[b] * sign_b] for row in rows]
+        terms = self._terms[i]
+        return [_gathered(row, terms) for row in rows]
+
     def predict(self, i, state, history, *, final=False):
+        """Unit ``i`` with the extrapolation polynomials; its FMU state is saved only where the end is ``final``
+        (a unit that is corrected in the same stage ends at its corrector's state)."""
         self._check_state(state)
-        end, y = self._integrate(i, self.inputs(i, history), self.C_pred)
-        self._keep(i, end)
+        end, y = self._integrate(i, self._samples(i, None, history), self.C_pred)
+        if final:
+            self._keep(i, end)
         return end, y
 
     def correct(self, i, state, history, e_new):
         self._check_state(state)
-        end, y = self._integrate(i, self.inputs(i, self.corrector_samples(history, e_new)), self.C_corr)
+        end, y = self._integrate(i, self._samples(i, e_new, history), self.C_corr)
         self._keep(i, end)
         return end, y
 
     def reevaluate(self, i, end, y, e_old, e_new):
         """Outputs at the fixed end state with the input at ``T_N+1`` set from ``e_new`` (``fmi2SetReal``, no step)."""
-        return self._at_end(i, end, self.inputs(i, np.asarray(e_new, dtype=float)))
+        e_new = np.asarray(e_new, dtype=float)
+        if self._terms[i] is None or e_new.ndim != 1:
+            return self._at_end(i, end, self.inputs(i, e_new))
+        return self._at_end(i, end, np.array(self._gather(i, [e_new.tolist()])[0]))
 
     def join(self, ends):
         """The macro step's end: each unit's FMU state of ``ends[i]`` becomes the next start; the rest are freed."""
@@ -279,21 +364,20 @@ class FmuCosimulation(CosimulationProblem):
             self._start[i] = kept
             self._holds[i] = "start" if self._holds[i] == id(end) else "scratch"
         self.step_index += 1
-        self._committed = np.stack(ends)
+        self._committed = np.array(ends)  # (units, 2 n_dim): np.stack's array
         return self._committed
 
     def sensitivity(self, i, state, history, e, end=None, y=None):
         """``dy_i/du_i`` by difference quotients from the outputs ``y`` at ``e``, ``(n_dim, 1, 4, n_dim)``: unit
         ``i`` repeats its corrector step with each input component perturbed at ``T_N+1`` (restored start state,
         one ``doStep`` each) or, at its fixed end state, is re-evaluated with it (no step)."""
-        e = np.asarray(e, dtype=float)
-        samples = self.inputs(i, self.corrector_samples(history, e))  # (k + 1, n_dim); row 0 at T_N+1
-        u1 = samples[0]
-        h = self.perturbation * np.maximum(1.0, np.abs(u1))
+        rows = self._samples(i, e, history)  # (k + 1, n_dim); row 0 at T_N+1
+        u1 = np.array(rows[0])
+        h = [self.perturbation * max(1.0, abs(u)) for u in rows[0]]
         if y is not None:
             base = y
         else:
-            base = self._at_end(i, end, u1) if end is not None else self._integrate(i, samples, self.C_corr)[1]
+            base = self._at_end(i, end, u1) if end is not None else self._integrate(i, rows, self.C_corr)[1]
         out = np.empty((self.n_dim,) + base.shape)
         for c in range(self.n_dim):
             if end is not None:
@@ -301,24 +385,26 @@ class FmuCosimulation(CosimulationProblem):
                 up[c] += h[c]
                 yp = self._at_end(i, end, up)
             else:
-                Up = samples.copy()
-                Up[0, c] += h[c]
+                Up = [rows[0][:]] + rows[1:]  # the rows after the first are not changed
+                Up[0][c] += h[c]
                 yp = self._integrate(i, Up, self.C_corr)[1]
             out[c] = (yp - base) / h[c]
         return out
 
     def project(self, state):
         """Mass-weighted projection of positions and velocities (Eq. 30), written into the units."""
-        m = np.array([c.mass for c in self.couplings], dtype=float)
-        projected = mass_weighted_projection(self._clusters, m, np.asarray(state, dtype=float))
+        m = self._masses
+        if m is None:
+            m = self._masses = [float(c.mass) for c in self.couplings]
+        rows = _projected(self._clusters, m, np.asarray(state, dtype=float).tolist())
         n = self.n_dim
         for i, unit in enumerate(self.units):
             self._to_start(i)
-            unit.set("set_position", projected[i, :n])
-            unit.set("set_velocity", projected[i, n:])
+            unit.put("set_position", rows[i][:n])
+            unit.put("set_velocity", rows[i][n:])
             unit.free(self._start[i])
             self._start[i] = unit.save()
-        self._committed = projected
+        self._committed = np.array(rows)
         return self._committed
 
     def close(self):
@@ -330,3 +416,33 @@ class FmuCosimulation(CosimulationProblem):
             if self._start[i] is not None:
                 unit.free(self._start[i])
                 self._start[i] = None
+
+
+def _projected(clusters, masses, rows):
+    """:func:`icosim.engine.projection.mass_weighted_projection` of one point in floats (rows of floats, a mass
+    per row): the same products, sums and quotient in the same order, so the same numbers."""
+    out = list(rows)
+    for cluster in clusters:
+        weighted = [masses[cluster[0]] * v for v in rows[cluster[0]]]
+        total = masses[cluster[0]]
+        for b in cluster[1:]:
+            m = masses[b]
+            weighted = [w + m * v for w, v in zip(weighted, rows[b])]
+            total = total + m
+        mean = [w / total for w in weighted]
+        for b in cluster:
+            out[b] = mean
+    return out
+
+
+def _gathered(row, terms):
+    """A unit's inputs from one row of coupling variables: per input the sum of its ``(column, sign)`` terms,
+    as :meth:`icosim.engine.graph.CouplingGraph.inputs` forms it (signs +-1: exact products)."""
+    out = []
+    for term in terms:
+        (c, sign), *rest = term
+        total = row[c] if sign == 1 else -row[c]
+        for c, sign in rest:
+            total = total + row[c] * sign
+        out.append(total)
+    return out

@@ -1,7 +1,8 @@
 """One FMU instance of a scene: checked against what the scene asks of it, opened the way the FMI standard says,
 stepped, saved and restored.
 
-Only fmpy talks to the FMU (imported when a unit is opened).  A unit reads and writes only the variables its
+Only fmpy talks to the FMU (imported when a unit is opened; the macro step's FMI 2.0 calls go to the library
+functions it loaded: :mod:`icosim.problems.fmu.fmi2_calls`).  A unit reads and writes only the variables its
 scene names (:data:`ROLES`), each with the setter and getter of its own type, in SI (:mod:`icosim.problems.fmu.measures`
 converts declared units).  Start values are checked before any call and set with fmpy's
 ``apply_start_values`` in the state the standard allows (:mod:`icosim.problems.fmu.variables`).  Over a macro step the
@@ -20,6 +21,7 @@ import collections
 import math
 import shutil
 import tempfile
+from ctypes import byref
 from pathlib import Path
 
 import numpy as np
@@ -27,10 +29,14 @@ import numpy as np
 from . import guard, pythonfmu
 from .description import check_kind, read_description
 from .errors import FmuError, UnitStepError
+from .fmi2_calls import Fmi2Calls, refused
 from .measures import measure
 from .variables import VariableTable, declared_start, family
 
 __all__ = ["Unit", "ROLES"]
+
+_GET_STATE, _SET_STATE, _DO_STEP = (guard.code(c) for c in ("getFMUstate", "setFMUstate", "doStep"))
+
 
 _STATUS = {0: "ok", 1: "warning", 2: "discard", 3: "error", 4: "fatal", 5: "pending"}
 
@@ -52,7 +58,7 @@ def _listed(names) -> list:
     return list(names) if isinstance(names, (list, tuple)) else [names]
 
 
-class Unit:
+class Unit(Fmi2Calls):
     """One instance of an FMU, checked and opened with its start values at ``t0``.
 
     Parameters
@@ -95,6 +101,8 @@ class Unit:
         self.substeps = int(substeps)
         self.names = dict(names)
         self._plans = {}
+        self._reads, self._writes, self._drives = {}, {}, {}  # FMI 2.0: buffers of the macro step's calls
+        self._si = {}  # key -> its variables are in SI units (factors 1)
         self._arrays = {}  # FMI 3.0 arrays written element-wise: their whole value, as last set
         self.do_steps = self.saved = self.restored = self.warnings = self.check_steps = 0
         #: the status of a refused call (3 error, 4 fatal): after it the standard allows only freeing the
@@ -134,9 +142,16 @@ class Unit:
                 self._register_release()
                 self.fmu.instantiate(logMessage=self._log3)
             else:
-                from fmpy.fmi2 import FMU2Slave, defaultCallbacks, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+                from fmpy.fmi2 import (
+                    FMU2Slave,
+                    defaultCallbacks,
+                    fmi2CallbackFunctions,
+                    fmi2CallbackLoggerTYPE,
+                    fmi2FMUstate,
+                )
 
                 self.fmu = FMU2Slave(guid=md.guid, **common)
+                self._new_state = fmi2FMUstate
                 self._register_release()
                 cb = fmi2CallbackFunctions()
                 cb.logger = fmi2CallbackLoggerTYPE(self._log2)
@@ -287,6 +302,8 @@ class Unit:
 
     def _set_elements(self, key, values):
         els = self.elements[key]
+        if not self.fmi3:
+            return self._write(key, [float(v) for v in values])
         guard.enter(self.index, "set", self.t)
         if self.fmi3 and any(el.size > 1 for el in els):
             for el, v in zip(els, values):
@@ -298,10 +315,8 @@ class Unit:
                     whole = self._arrays[el.variable.name] = declared_start(el.variable, el.size)
                 whole[el.index] = v
                 self.fmu.setFloat64([el.value_reference], whole.tolist())
-        elif self.fmi3:
-            self.fmu.setFloat64([el.value_reference for el in els], [float(v) for v in values])
         else:
-            self.fmu.setReal([el.value_reference for el in els], [float(v) for v in values])
+            self.fmu.setFloat64([el.value_reference for el in els], [float(v) for v in values])
         guard.leave()
 
     def get_named(self, name) -> float:
@@ -316,28 +331,51 @@ class Unit:
     # -- states -------------------------------------------------------------------------------
     def save(self):
         self.saved += 1
-        guard.enter(self.index, "getFMUstate", self.t)
-        state = self.fmu.getFMUState() if self.fmi3 else self.fmu.getFMUstate()
+        guard.enter(self.index, _GET_STATE, self.t)
+        if self.fmi3:
+            state = self.fmu.getFMUState()
+        else:  # what fmpy's getFMUstate does, its library function called itself
+            fmu, state = self.fmu, self._new_state()
+            status = fmu.dll.fmi2GetFMUstate(fmu.component, byref(state))
+            if status > 1:
+                guard.leave()
+                refused("fmi2GetFMUstate", status)
         guard.leave()
         return (state, self.t)
 
     def restore(self, state):
         self.restored += 1
-        guard.enter(self.index, "setFMUstate", self.t)
-        (self.fmu.setFMUState if self.fmi3 else self.fmu.setFMUstate)(state[0])
+        guard.enter(self.index, _SET_STATE, self.t)
+        if self.fmi3:
+            self.fmu.setFMUState(state[0])
+        else:
+            fmu = self.fmu
+            status = fmu.dll.fmi2SetFMUstate(fmu.component, state[0])
+            if status > 1:
+                guard.leave()
+                refused("fmi2SetFMUstate", status)
         guard.leave()
         self.t = state[1]
 
     def free(self, state):
         if self.failed or self.fmu is None:
             return  # a refused step leaves only freeing the instance allowed (fmi2Error) or nothing (fmi2Fatal)
-        (self.fmu.freeFMUState if self.fmi3 else self.fmu.freeFMUstate)(state[0])
+        if self.fmi3:
+            self.fmu.freeFMUState(state[0])
+        else:
+            fmu = self.fmu
+            status = fmu.dll.fmi2FreeFMUstate(fmu.component, byref(state[0]))
+            if status > 1:
+                refused("fmi2FreeFMUstate", status)
 
     # -- stepping -----------------------------------------------------------------------------
     def step(self, key, coefficients, t, H, *, step_index):
         """Advance ``[t, t + H]`` with the input(s) ``key`` following ``u(tau) = sum_m coefficients[m] tau^m``
         (SI; ``coefficients`` ``(k + 1,)``, or ``(k + 1, components)``); afterwards the inputs hold ``u(1)`` (the
         outputs that depend on them directly are those at ``t + H``)."""
+        if self.exact_inputs and not self.fmi3:
+            rows = np.asarray(coefficients, dtype=float).reshape(len(coefficients), -1).tolist()
+            return self.advance(key, rows, t, H, step_index=step_index)
         c = np.asarray(coefficients, dtype=float).reshape(len(coefficients), -1) / self.factors[key]
         if self.exact_inputs:
             refs = [el.value_reference for el in self.elements[key]]
@@ -359,21 +397,29 @@ class Unit:
         self._set_elements(key, c.sum(axis=0))
         self.t = t + H
 
+    def _steprefused(self, code, t, step_index):
+        """A doStep that returned ``code`` (more than a warning; None: it raised without one) ends the run."""
+        status = _STATUS.get(code, "failure")
+        self.failed = code if code in (3, 4) else 0
+        raise UnitStepError(
+            f"unit {self.label} refused macro step {step_index} at t = {t:.12g} s (doStep returned {status})"
+            f"{self.said()}"
+        ) from None
+
     def _do_step(self, t, h, step_index):
         self.do_steps += 1
         self.messages.clear()
-        guard.enter(self.index, "doStep", t, step_index)
+        guard.enter(self.index, _DO_STEP, t, step_index)
         try:
-            result = self.fmu.doStep(t, h, noSetFMUStatePriorToCurrentPoint=False)
+            if self.fmi3:
+                result = self.fmu.doStep(t, h, noSetFMUStatePriorToCurrentPoint=False)
+            else:
+                status = self.fmu.dll.fmi2DoStep(self.fmu.component, t, h, False)  # what fmpy's doStep calls
+                if status > 1:
+                    refused("fmi2DoStep", status)
         except Exception as exc:
             guard.leave()
-            code = getattr(exc, "status", None)
-            status = _STATUS.get(code, "failure")
-            self.failed = code if code in (3, 4) else 0
-            raise UnitStepError(
-                f"unit {self.label} refused macro step {step_index} at t = {t:.12g} s (doStep returned {status})"
-                f"{self.said()}"
-            ) from None
+            self._steprefused(getattr(exc, "status", None), t, step_index)
         guard.leave()
         if self.fmi3 and (result[1] or result[2]):  # terminateSimulation, earlyReturn
             what = "asked to terminate the simulation" if result[1] else f"returned early at t = {result[3]:.12g} s"
