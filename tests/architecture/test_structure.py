@@ -87,6 +87,7 @@ FLOORS = (
             "icosim.io",
             "icosim.verdicts",
             "icosim.order_fit",
+            "icosim.step_limit",
             "icosim.labels",
             "icosim.sources",
             "icosim.job",
