@@ -104,6 +104,7 @@ FLOORS = (
             "icosim.studies.pendulum",
             "icosim.studies.trade",
             "icosim.studies.fmi",
+            "icosim.studies.chains",
         ),
     ),  # fmt: skip
     ("claims", ("icosim.claims",)),
