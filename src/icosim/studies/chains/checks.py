@@ -62,7 +62,7 @@ def _combos(ds, dims):
 
 
 def _label(combo) -> str:
-    return ", ".join(f"{k} {v}" for k, v in combo.items())
+    return ", ".join(f"{k} {' or '.join(map(str, v)) if isinstance(v, list) else v}" for k, v in combo.items())
 
 
 def check_two_unit(datasets, *, where: dict, rtol: float):
