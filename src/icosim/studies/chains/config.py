@@ -13,7 +13,7 @@ methods, checked before any work with errors that name the key and the values al
 
 >>> scheme_name("gauss-seidel-reverse", 3), scheme_name("gauss-seidel-forward", 10)
 ('gauss-seidel-321', 'gauss-seidel-1.2.3.4.5.6.7.8.9.10')
->>> pattern_decompositions("fd-df", 3)
+>>> pattern_decompositions("fd-df", 4)
 ('fd', 'df', 'fd')
 """
 
