@@ -1,5 +1,5 @@
 # icosim: replication of Schweizer et al., "Implicit co-simulation methods" (stability,
-# convergence and the double pendulum).  `snakemake -c2` builds everything configured.
+# convergence and the double pendulum), and chains of N units beyond it.  `snakemake -c2` builds everything configured.
 from snakemake.utils import min_version
 
 min_version("8.0")
@@ -10,6 +10,7 @@ configfile: "config/stability.yaml"
 configfile: "config/convergence.yaml"
 configfile: "config/pendulum.yaml"
 configfile: "config/fmi.yaml"
+configfile: "config/chains.yaml"
 
 
 include: "workflow/rules/common.smk"
@@ -17,6 +18,7 @@ include: "workflow/rules/stability.smk"
 include: "workflow/rules/convergence.smk"
 include: "workflow/rules/pendulum.smk"
 include: "workflow/rules/fmi.smk"
+include: "workflow/rules/chains.smk"
 include: "workflow/rules/report.smk"
 
 

@@ -86,6 +86,7 @@ FLOORS = (
             "icosim.io",
             "icosim.verdicts",
             "icosim.order_fit",
+            "icosim.step_limit",
             "icosim.labels",
             "icosim.sources",
             "icosim.job",
@@ -102,6 +103,7 @@ FLOORS = (
             "icosim.studies.pendulum",
             "icosim.studies.trade",
             "icosim.studies.fmi",
+            "icosim.studies.chains",
         ),
     ),  # fmt: skip
     ("claims", ("icosim.claims",)),

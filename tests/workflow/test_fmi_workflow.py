@@ -15,7 +15,13 @@ from helpers import ROOT, copy_workflow, scheduled_jobs, snakemake
 from icosim.problems.fmu.errors import SceneError
 from icosim.studies.fmi.config import order_cases, scene_files
 
-CI = ["config/ci/stability.yaml", "config/ci/convergence.yaml", "config/ci/pendulum.yaml", "config/ci/fmi.yaml"]
+CI = [
+    "config/ci/stability.yaml",
+    "config/ci/convergence.yaml",
+    "config/ci/pendulum.yaml",
+    "config/ci/fmi.yaml",
+    "config/ci/chains.yaml",
+]
 
 
 def ci_fmi_config():

@@ -12,15 +12,17 @@ module                                       check kinds
 :mod:`icosim.studies.convergence.checks`     ``convergence_order``
 :mod:`icosim.studies.pendulum.checks`        ``pendulum_stability``
 :mod:`icosim.studies.fmi.checks`             ``fmi_bound``, ``fmi_orders``
+:mod:`icosim.studies.chains.checks`          ``chain_two_unit``, ``chain_order``, ``chain_trend``, ``chain_placement``
 ===========================================  ==========================================================
 
 >>> sorted(CHECKS)
-['compare', 'convergence_order', 'fmi_bound', 'fmi_orders', 'pendulum_stability', 'pointwise', 'stable_fraction', 'trend']
+['chain_order', 'chain_placement', 'chain_trend', 'chain_two_unit', 'compare', 'convergence_order', 'fmi_bound', 'fmi_orders', 'pendulum_stability', 'pointwise', 'stable_fraction', 'trend']
 """
 
 from __future__ import annotations
 
 from .. import verdicts as _claims
+from ..studies.chains import checks as _chains
 from ..studies.convergence import checks as _convergence
 from ..studies.fmi import checks as _fmi
 from ..studies.pendulum import checks as _pendulum
@@ -30,7 +32,7 @@ from ..verdicts import Claim, Verdict
 __all__ = ["CHECKS", "DEFAULTS", "parse_claims", "load_claims", "evaluate_claim", "evaluate", "describe_claim"]
 
 #: check kind -> :class:`icosim.verdicts.CheckKind`, for every part.
-CHECKS = {**_stability.CHECKS, **_convergence.CHECKS, **_pendulum.CHECKS, **_fmi.CHECKS}
+CHECKS = {**_stability.CHECKS, **_convergence.CHECKS, **_pendulum.CHECKS, **_fmi.CHECKS, **_chains.CHECKS}
 
 #: A claim is about the paper's coupling scheme, Jacobi, unless a selector names another.
 DEFAULTS = {"scheme": "jacobi"}

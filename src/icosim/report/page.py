@@ -31,6 +31,7 @@ DATASET_PATHS = {
     "convergence": "results/convergence/fig{figure}/jacobi/",
     "pendulum": "results/pendulum/summary.nc",
     "fmi": "results/fmi/validation/",
+    "chains": "results/chains/",
 }
 #: The report's directory relative to the project directory (links to datasets go up from it).
 REPORT_DIR = "reports"

@@ -2,6 +2,8 @@
 
 Both use one search (:func:`stability_limit`) on a predicate ``stable(H)``:
 
+(the search itself: :mod:`icosim.step_limit`)
+
 1. scan the step sizes ``scan`` in increasing order until the first stable
    one and, after it, the first unstable one (the scan stops there);
 2. bisect (geometric midpoints) between the last stable and the first
@@ -36,7 +38,6 @@ the point where ``rho`` crosses 1.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -44,6 +45,7 @@ from ...engine.methods import make_method
 from ...io.dataset import DatasetDict
 from ...io.netcdf import provenance_attrs
 from ...problems.pendulum.model import PendulumParameters
+from ...step_limit import LIMIT_STATUSES, Limit, stability_limit
 from .linear_study import linear_rho, linear_stability
 from .measures import config_label, measured_run
 
@@ -60,69 +62,6 @@ __all__ = [
     "limited_by",
     "LIMIT_STATUSES",
 ]
-
-#: ``bisected``: a bracket refined to the resolution; ``stable up to the cap``: no unstable scan
-#: point (H_max censored); ``no stable step size``: every scan point unstable.
-LIMIT_STATUSES = ("bisected", "stable up to the cap", "no stable step size")
-
-
-@dataclass
-class Limit:
-    """Result of :func:`stability_limit` (module docstring)."""
-
-    H_max: float
-    H_unstable: float
-    H_band_low: float
-    status: str
-    evaluations: list = field(default_factory=list)  # (H, stable, info) in the order evaluated
-    rho_linear: dict = field(default_factory=dict)  # the linear model's rho at this search's H_max, H_band_low
-
-    @property
-    def n_evaluations(self) -> int:
-        return len(self.evaluations)
-
-
-def stability_limit(stable, scan, *, resolution: float = 0.02) -> Limit:
-    """Upper edge of the first stable band of ``stable(H)`` at or above ``scan[0]`` (module docstring).
-
-    ``stable(H)`` returns a bool or ``(bool, info)``.
-    """
-    if not resolution > 0:
-        raise ValueError(f"resolution must be > 0, got {resolution!r}")
-    scan = sorted(float(h) for h in scan)
-    evals = []
-
-    def check(H):
-        out = stable(H)
-        ok, info = out if isinstance(out, tuple) else (out, None)
-        evals.append((H, bool(ok), info))
-        return bool(ok)
-
-    nan = math.nan
-    first_stable = None
-    lo = hi = None
-    for H in scan:
-        ok = check(H)
-        if first_stable is None:
-            if ok:
-                first_stable = lo = H
-            continue
-        if ok:
-            lo = H
-        else:
-            hi = H
-            break
-    if first_stable is None:
-        return Limit(nan, scan[0], nan, "no stable step size", evals)
-    if hi is None:
-        return Limit(lo, nan, first_stable, "stable up to the cap", evals)
-    while hi / lo > 1 + resolution:
-        mid = math.sqrt(lo * hi)
-        if check(mid):
-            lo = mid
-        else:
-            hi = mid
-    return Limit(lo, hi, first_stable, "bisected", evals)
 
 
 def measured_predicate(settings: dict, scheme: str, method: str, decomposition: str, k: int, t_end: float):
