@@ -408,6 +408,10 @@ def solve_small(J: np.ndarray, b: np.ndarray) -> np.ndarray:
     catches it).  Larger systems use LU (numpy) or mpmath's ``lu_solve``.
     """
     n = J.shape[-1]
+    if n <= 2 and J.ndim == 2 and b.ndim == 1 and J.dtype == np.float64 and b.dtype == np.float64:
+        x = _solve_point(J.tolist(), b.tolist())
+        if x is not None:
+            return x
     if J.shape[:-1] != b.shape:  # (a single point's shapes agree: no broadcast to pay for)
         J, b = np.broadcast_arrays(J, b[..., None])
         b = b[..., 0]
@@ -427,6 +431,19 @@ def solve_small(J: np.ndarray, b: np.ndarray) -> np.ndarray:
     for idx in np.ndindex(b.shape[:-1]):
         out[idx] = _gauss(J[idx].tolist(), b[idx].tolist())
     return out
+
+
+def _solve_point(J: list[list[float]], b: list[float]) -> np.ndarray | None:
+    """The closed forms of :func:`solve_small` for one float64 point of size 1 or 2, in Python floats (the same
+    IEEE operations in the same order as on numpy's scalars, without their overhead).  None where a divisor is
+    zero: numpy's scalars make that point inf/nan (under its error state), Python's floats would raise."""
+    if len(b) == 1:
+        return np.array([b[0] / J[0][0]]) if J[0][0] != 0.0 else None
+    (a, bb), (c, d) = J
+    det = a * d - bb * c
+    if det == 0.0:
+        return None
+    return np.array([(d * b[0] - bb * b[1]) / det, (a * b[1] - c * b[0]) / det])
 
 
 def _gauss(A: list[list[Any]], y: list[Any]) -> list[Any]:
