@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from . import guard
+from .floats import summed
 
 __all__ = ["Fmi2Calls", "refused"]
 
@@ -105,35 +106,49 @@ class Fmi2Calls:
         vr, n, buf, factors, refs, order, values, terms = plan
         # in the unit's own units; a factor of 1 divides exactly, so SI values pass as they are
         c = rows if factors is None else [[v / f for v, f in zip(row, factors)] for row in rows]
-        fmu, index, self.t = self.fmu, self.index, t
-        comp, library, enter, leave = fmu.component, fmu.dll, guard.enter, guard.leave
+        fmu, self.t = self.fmu, t
+        comp, library = fmu.component, fmu.dll
+        # the guard's records of the four calls written here (guard.batch); every one names the macro step
+        rec = guard.batch(self.index, t, step_index, 4 if terms else 3)
+        if rec is not None:
+            r, number = rec
+            r[2] = _SET
+            r[0] = number
         buf[:n] = c[0]
-        enter(index, _SET, t)
         status = library.fmi2SetReal(comp, vr, n, buf)
-        leave()
+        if rec is not None:
+            r[0] = 0.0
         if status > 1:
             refused("fmi2SetReal", status)
         if terms:  # every order up to k, zeros too: a unit may keep the derivatives of the step before
             values[:] = [factorial * c[m][q] / h_m for q, m, factorial, h_m in terms]
-            enter(index, _DERIVATIVES, t)
+            if rec is not None:
+                number += 1.0
+                r[2] = _DERIVATIVES
+                r[0] = number
             status = library.fmi2SetRealInputDerivatives(comp, refs, len(terms), order, values)
-            leave()
+            if rec is not None:
+                r[0] = 0.0
             if status > 1:
                 refused("fmi2SetRealInputDerivatives", status)
         self.do_steps += 1
         self.messages.clear()
-        enter(index, _DO_STEP, t, step_index)
+        if rec is not None:
+            number += 1.0
+            r[2] = _DO_STEP
+            r[0] = number
         status = library.fmi2DoStep(comp, t, H, False)  # what fmpy's doStep calls
-        leave()
+        if rec is not None:
+            r[0] = 0.0
         if status > 1:
             self._steprefused(status, t, step_index)
-        last = c[0]
-        for row in c[1:]:
-            last = [a + b for a, b in zip(last, row)]
-        buf[:n] = last
-        enter(index, _SET, t)
+        buf[:n] = summed(c)
+        if rec is not None:
+            r[2] = _SET
+            r[0] = number + 1.0
         status = library.fmi2SetReal(comp, vr, n, buf)
-        leave()
+        if rec is not None:
+            r[0] = 0.0
         if status > 1:
             refused("fmi2SetReal", status)
         self.t = t + H
