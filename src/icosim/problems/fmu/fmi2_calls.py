@@ -1,6 +1,7 @@
 """A unit's FMI 2.0 calls of the macro step, made without numpy: the value references, buffers and factors of
 each read, write and input-derivatives call built once, the calls made to the functions of the unit's library as
-fmpy loaded them (``fmu.dll``, argument and result types set by fmpy).  fmpy's methods of the same names wrap each
+fmpy loaded them (``fmu.dll``; reads, writes and input derivatives with their ctypes arguments built once, through
+the same functions without declared argument types: :func:`_direct`).  fmpy's methods of the same names wrap each
 call in two Python calls, which for a small unit cost more than the call itself; the status is checked as fmpy
 checks it, and fmpy would log the calls only with a call logger, which no unit has.  FMI 3.0 units and units
 stepped in sub-steps take :class:`~icosim.problems.fmu.units.Unit`'s general path."""

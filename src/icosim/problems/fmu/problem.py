@@ -376,7 +376,7 @@ class FmuCosimulation(CosimulationProblem):
         ``i`` repeats its corrector step with each input component perturbed at ``T_N+1`` (restored start state,
         one ``doStep`` each) or, at its fixed end state, is re-evaluated with it (no step)."""
         rows = self._samples(i, e, history)  # (k + 1, n_dim); row 0 at T_N+1
-        u1 = np.array(rows[0])
+        u1 = np.array(rows[0]) if end is not None else None  # re-evaluated at the end state only
         h = [self.perturbation * max(1.0, abs(u)) for u in rows[0]]
         if y is not None:
             base = y
