@@ -134,7 +134,7 @@ class Conditions:
         """The levels' factors as a column ``(3, 1)`` where they and the outputs are float64 (else None: level by
         level in the numbers' own arithmetic); kept for the scale last seen."""
         last = self.__dict__.get("_last_scale")
-        if last is not None and last[0] is scale and last[1] == dtype:
+        if last is not None and last[0] is scale and (last[1] is dtype or last[1] == dtype):
             return last[2]
         plain = dtype == np.float64 and all(type(f) is float or type(f) is int for f in scale)
         factors = np.array([float(f) for f in scale[:3]])[:, None] if plain else None

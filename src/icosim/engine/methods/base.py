@@ -29,6 +29,7 @@ import numpy as np
 from ...errors import ParameterError
 from .. import layout
 from ..decompositions import DECOMPOSITIONS, Decomposition
+from .solve import Factored, solve_float, solve_small
 
 if TYPE_CHECKING:
     from ..backends import Backend
@@ -97,11 +98,11 @@ class CouplingMethod:
                 de = kept[1][n].solve(-r)
             elif plain and _kept_jacobians(jacobians):
                 # the same Jacobians as a step before (constant sensitivities): combined and factored once
-                factor = _Factored(_conditions(levels, jacobians, axis=-2, const=const))
+                factor = Factored(_conditions(levels, jacobians, axis=-2, const=const))
                 _keep(jacobians, n, factor)
                 de = factor.solve(-r)
             elif plain:
-                de = _solve_float(_conditions(levels, jacobians, axis=-2, const=const), -r)
+                de = solve_float(_conditions(levels, jacobians, axis=-2, const=const), -r)
             else:
                 de = solve_small(_conditions(levels, jacobians, axis=-2, const=const), -r)
             term: np.ndarray = de if weight == 1 else const(weight) * de
@@ -327,7 +328,7 @@ def _float_solves(solves: tuple) -> tuple:
 
 #: Jacobians seen twice (a problem's constant sensitivities hand the same object every step): id -> (the
 #: object, {solve: its factored matrix}); the object is kept, so its id is not reused while it is here.
-_KEPT: dict[int, tuple[Any, dict[int, _Factored]]] = {}
+_KEPT: dict[int, tuple[Any, dict[int, Factored]]] = {}
 _SEEN: dict[int, Any] = {}
 _FLOAT_SOLVES: dict[int, tuple[tuple, tuple]] = {}  # id -> (the solves, as floats): kept the same way
 _KEEP = 16
@@ -343,108 +344,10 @@ def _kept_jacobians(jacobians: Any) -> bool:
     return False
 
 
-def _keep(jacobians: Any, n: int, factor: _Factored) -> None:
+def _keep(jacobians: Any, n: int, factor: Factored) -> None:
     entry = _KEPT.get(id(jacobians))
     if entry is None or entry[0] is not jacobians:
         if len(_KEPT) >= _KEEP:
             _KEPT.clear()
         entry = _KEPT[id(jacobians)] = (jacobians, {})
     entry[1][n] = factor
-
-
-#: A float64 system of at least this size whose matrix is banded, with no more than a quarter of its diagonals
-#: occupied, is solved as a banded system (a chain's joints: tridiagonal): work linear in its size.
-BANDED_FROM = 16
-
-
-def _solve_float(J: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """:func:`solve_small` for float64, a large banded system of one point by its band (LAPACK ``gbsv``)."""
-    n = J.shape[-1]
-    if J.ndim != 2 or n < BANDED_FROM or b.ndim != 1:
-        return solve_small(J, b)
-    rows, cols = np.nonzero(J)
-    lower = int(np.max(rows - cols, initial=0))
-    upper = int(np.max(cols - rows, initial=0))
-    if 4 * (lower + upper + 1) > n:
-        return solve_small(J, b)
-    from scipy.linalg import solve_banded
-
-    band = np.zeros((lower + upper + 1, n))
-    for d in range(-lower, upper + 1):  # band[upper + i - j, j] = J[i, j]
-        diagonal = np.diagonal(J, d)
-        if d >= 0:
-            band[upper - d, d:] = diagonal
-        else:
-            band[upper - d, : n + d] = diagonal
-    return solve_banded((lower, upper), band, b, check_finite=False)
-
-
-class _Factored:
-    """A float64 coupling matrix ``J`` (one point or a stack) made ready for many right-hand sides: sizes 1 and 2
-    as :func:`solve_small` (closed forms), larger ones LU-factored once (LAPACK ``getrf``, then ``getrs`` per
-    solve: the two halves of ``gesv``, which :func:`numpy.linalg.solve` calls)."""
-
-    def __init__(self, J: np.ndarray) -> None:
-        self.J = J
-        self.lu = None
-        if J.shape[-1] > 2 and J.ndim == 2:
-            from scipy.linalg import lu_factor
-
-            self.lu = lu_factor(J, check_finite=False)
-
-    def solve(self, b: np.ndarray) -> np.ndarray:
-        if self.lu is None or b.ndim != 1:
-            return solve_small(self.J, b)
-        from scipy.linalg import lu_solve
-
-        return lu_solve(self.lu, b, check_finite=False)
-
-
-def solve_small(J: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Solve ``J x = b`` for stacks of small systems, float64 or mpmath objects.
-
-    Sizes 1 and 2 use closed forms, so a singular point yields inf/nan for that
-    point only instead of aborting a whole grid (the precision policy then
-    catches it).  Larger systems use LU (numpy) or mpmath's ``lu_solve``.
-    """
-    n = J.shape[-1]
-    if J.shape[:-1] != b.shape:  # (a single point's shapes agree: no broadcast to pay for)
-        J, b = np.broadcast_arrays(J, b[..., None])
-        b = b[..., 0]
-    if n == 1:
-        return b / J[..., 0]
-    if n == 2:
-        a, bb, c, d = J[..., 0, 0], J[..., 0, 1], J[..., 1, 0], J[..., 1, 1]
-        det = a * d - bb * c
-        x0 = (d * b[..., 0] - bb * b[..., 1]) / det
-        x1 = (a * b[..., 1] - c * b[..., 0]) / det
-        if np.ndim(det) == 0:  # one point: the pair as numpy.stack would make it
-            return np.array([x0, x1])
-        return layout.stack([x0, x1], axis=-1)
-    if J.dtype != object:
-        return np.linalg.solve(J, b[..., None])[..., 0]
-    out = np.empty(b.shape, dtype=object)
-    for idx in np.ndindex(b.shape[:-1]):
-        out[idx] = _gauss(J[idx].tolist(), b[idx].tolist())
-    return out
-
-
-def _gauss(A: list[list[Any]], y: list[Any]) -> list[Any]:
-    """Gaussian elimination with partial pivoting in the numbers' own arithmetic
-    (so mpmath values keep their context's precision and Arb balls their bounds).
-
-    The pivot is chosen by the float magnitude: comparing two Arb balls is
-    undecided when they overlap, and any nonzero pivot is correct (the size only
-    affects how wide the balls grow)."""
-    n = len(y)
-    A = [row[:] + [y[i]] for i, row in enumerate(A)]
-    for col in range(n):
-        piv = max(range(col, n), key=lambda r: float(abs(A[r][col])))
-        A[col], A[piv] = A[piv], A[col]
-        for r in range(col + 1, n):
-            f = A[r][col] / A[col][col]
-            A[r] = [a - f * p for a, p in zip(A[r], A[col])]
-    x = [None] * n
-    for r in range(n - 1, -1, -1):
-        x[r] = (A[r][n] - sum(A[r][c] * x[c] for c in range(r + 1, n))) / A[r][r]
-    return x

@@ -1,23 +1,38 @@
 """A unit's FMI 2.0 calls of the macro step, made without numpy: the value references, buffers and factors of
 each read, write and input-derivatives call built once, the calls made to the functions of the unit's library as
-fmpy loaded them (``fmu.dll``, argument and result types set by fmpy).  fmpy's methods of the same names wrap each
+fmpy loaded them (``fmu.dll``; reads, writes and input derivatives with their ctypes arguments built once, through
+the same functions without declared argument types: :func:`_direct`).  fmpy's methods of the same names wrap each
 call in two Python calls, which for a small unit cost more than the call itself; the status is checked as fmpy
 checks it, and fmpy would log the calls only with a call logger, which no unit has.  FMI 3.0 units and units
 stepped in sub-steps take :class:`~icosim.problems.fmu.units.Unit`'s general path."""
 
 from __future__ import annotations
 
+import ctypes
 import math
 
 import numpy as np
 
 from . import guard
+from .floats import summed
 
 __all__ = ["Fmi2Calls", "refused"]
 
 _GET, _SET = guard.code("get"), guard.code("set")
 _DO_STEP, _DERIVATIVES = guard.code("doStep"), guard.code("setRealInputDerivatives")
 _FACTORIAL = [math.factorial(m) for m in range(16)]  # k is at most icosim.engine.bounds.MAX_K
+
+
+def _direct(fmu, name):
+    """The function ``name`` of the unit's library as fmpy declared it, and the same function with no argument
+    types, to be called with ctypes objects of the declared types built once (then ctypes converts nothing, most
+    of a small call's cost).  A call takes the second only while the library's attribute is still the first (not
+    wrapped, e.g. by a benchmark recording the calls)."""
+    library = fmu.dll
+    declared = getattr(library, name)
+    if not hasattr(declared, "argtypes"):  # wrapped already: every call goes to the wrapper
+        return None, None
+    return declared, ctypes.CDLL(library._name, handle=library._handle)[name]
 
 
 def refused(function, status):
@@ -39,10 +54,11 @@ class Fmi2Calls:
             if self.fmi3 or self.fmu is None:
                 return self.get(keys).ravel().tolist()
             fast = self._reads[keys] = self._read_plan(keys)
-        vr, n, buf, pick, factors = fast
+        vr, n, buf, pick, factors, declared, bare, args = fast
         fmu = self.fmu
         guard.enter(self.index, _GET, self.t)
-        status = fmu.dll.fmi2GetReal(fmu.component, vr, n, buf)
+        f = fmu.dll.fmi2GetReal
+        status = bare(*args) if f is declared else f(fmu.component, vr, n, buf)
         guard.leave()
         if status > 1:
             refused("fmi2GetReal", status)
@@ -58,12 +74,15 @@ class Fmi2Calls:
 
         refs, total, pick, factors = self._plan(keys)
         n = len(refs)
+        vr, buf = (fmi2ValueReference * n)(*refs), (fmi2Real * n)()
         return (
-            (fmi2ValueReference * n)(*refs),
+            vr,
             n,
-            (fmi2Real * n)(),
+            buf,
             None if pick is None else pick.tolist(),
             None if factors is None else factors.tolist(),
+            *_direct(self.fmu, "fmi2GetReal"),
+            (ctypes.c_void_p(self.fmu.component), vr, ctypes.c_size_t(n), buf),
         )
 
     def put(self, key, values):
@@ -79,17 +98,22 @@ class Fmi2Calls:
 
         refs = [el.value_reference for el in self.elements[key]]
         n = len(refs)
-        out = self._writes[key] = ((fmi2ValueReference * n)(*refs), n, (fmi2Real * n)(), self.factors[key].tolist())
+        vr, buf, component = (fmi2ValueReference * n)(*refs), (fmi2Real * n)(), ctypes.c_void_p(self.fmu.component)
+        out = self._writes[key] = (
+            vr, n, buf, self.factors[key].tolist(), *_direct(self.fmu, "fmi2SetReal"),
+            (component, vr, ctypes.c_size_t(n), buf),
+        )  # fmt: skip
         self._si[key] = all(f == 1.0 for f in out[3])
         return out
 
     def _write(self, key, values):
         """Set ``key``'s variables to ``values`` (floats in the unit's own units, one per component; FMI 2.0)."""
-        vr, n, buf, _ = self._writes.get(key) or self._writer(key)
+        vr, n, buf, _, declared, bare, args = self._writes.get(key) or self._writer(key)
         buf[:n] = values
         fmu = self.fmu
         guard.enter(self.index, _SET, self.t)
-        status = fmu.dll.fmi2SetReal(fmu.component, vr, n, buf)
+        f = fmu.dll.fmi2SetReal
+        status = bare(*args) if f is declared else f(fmu.component, vr, n, buf)
         guard.leave()
         if status > 1:
             refused("fmi2SetReal", status)
@@ -102,38 +126,59 @@ class Fmi2Calls:
         plan = self._drives.get((key, len(rows), H))
         if plan is None:
             plan = self._drives[key, len(rows), H] = self._drive_plan(key, len(rows), H)
-        vr, n, buf, factors, refs, order, values, terms = plan
+        vr, n, buf, factors, refs, order, values, terms, direct = plan
+        set_declared, set_bare, set_args, derivatives_declared, derivatives_bare, derivatives_args = direct
         # in the unit's own units; a factor of 1 divides exactly, so SI values pass as they are
         c = rows if factors is None else [[v / f for v, f in zip(row, factors)] for row in rows]
-        fmu, index, self.t = self.fmu, self.index, t
-        comp, library, enter, leave = fmu.component, fmu.dll, guard.enter, guard.leave
+        fmu, self.t = self.fmu, t
+        comp, library = fmu.component, fmu.dll
+        # the guard's records of the four calls written here (guard.batch); every one names the macro step
+        rec = guard.batch(self.index, t, step_index, 4 if terms else 3)
+        if rec is not None:
+            r, number = rec
+            r[2] = _SET
+            r[0] = number
         buf[:n] = c[0]
-        enter(index, _SET, t)
-        status = library.fmi2SetReal(comp, vr, n, buf)
-        leave()
+        f = library.fmi2SetReal
+        status = set_bare(*set_args) if f is set_declared else f(comp, vr, n, buf)
+        if rec is not None:
+            r[0] = 0.0
         if status > 1:
             refused("fmi2SetReal", status)
         if terms:  # every order up to k, zeros too: a unit may keep the derivatives of the step before
             values[:] = [factorial * c[m][q] / h_m for q, m, factorial, h_m in terms]
-            enter(index, _DERIVATIVES, t)
-            status = library.fmi2SetRealInputDerivatives(comp, refs, len(terms), order, values)
-            leave()
+            if rec is not None:
+                number += 1.0
+                r[2] = _DERIVATIVES
+                r[0] = number
+            f = library.fmi2SetRealInputDerivatives
+            if f is derivatives_declared:
+                status = derivatives_bare(*derivatives_args)
+            else:
+                status = f(comp, refs, len(terms), order, values)
+            if rec is not None:
+                r[0] = 0.0
             if status > 1:
                 refused("fmi2SetRealInputDerivatives", status)
         self.do_steps += 1
         self.messages.clear()
-        enter(index, _DO_STEP, t, step_index)
+        if rec is not None:
+            number += 1.0
+            r[2] = _DO_STEP
+            r[0] = number
         status = library.fmi2DoStep(comp, t, H, False)  # what fmpy's doStep calls
-        leave()
+        if rec is not None:
+            r[0] = 0.0
         if status > 1:
             self._steprefused(status, t, step_index)
-        last = c[0]
-        for row in c[1:]:
-            last = [a + b for a, b in zip(last, row)]
-        buf[:n] = last
-        enter(index, _SET, t)
-        status = library.fmi2SetReal(comp, vr, n, buf)
-        leave()
+        buf[:n] = summed(c)
+        if rec is not None:
+            r[2] = _SET
+            r[0] = number + 1.0
+        f = library.fmi2SetReal
+        status = set_bare(*set_args) if f is set_declared else f(comp, vr, n, buf)
+        if rec is not None:
+            r[0] = 0.0
         if status > 1:
             refused("fmi2SetReal", status)
         self.t = t + H
@@ -145,16 +190,23 @@ class Fmi2Calls:
         and ``H^m``)."""
         from fmpy.fmi2 import fmi2Integer, fmi2Real, fmi2ValueReference
 
-        vr, n, buf, factors = self._writes.get(key) or self._writer(key)
+        vr, n, buf, factors, *write = self._writes.get(key) or self._writer(key)
         pairs = [(q, m) for m in range(1, rows) for q in range(n)]
         size = len(pairs)
+        refs, order = (
+            (fmi2ValueReference * size)(*[vr[q] for q, _ in pairs]),
+            (fmi2Integer * size)(*[m for _, m in pairs]),
+        )
+        values, component = (fmi2Real * size)(), ctypes.c_void_p(self.fmu.component)
+        derivatives = (component, refs, ctypes.c_size_t(size), order, values)
         return (
             vr,
             n,
             buf,
             None if self._si[key] else factors,
-            (fmi2ValueReference * size)(*[vr[q] for q, _ in pairs]),
-            (fmi2Integer * size)(*[m for _, m in pairs]),
-            (fmi2Real * size)(),
+            refs,
+            order,
+            values,
             [(q, m, _FACTORIAL[m], H**m) for q, m in pairs],
+            (*write, *_direct(self.fmu, "fmi2SetRealInputDerivatives"), derivatives),
         )

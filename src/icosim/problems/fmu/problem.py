@@ -34,6 +34,9 @@ from ...engine.projection import joined_clusters
 from ...engine.residuals import Conditions
 from ...errors import StepFailure
 from .errors import UnitStepError
+from .floats import gathered as _gathered
+from .floats import projected as _projected
+from .floats import summed as _summed
 
 __all__ = ["FmuCosimulation", "Coupling"]
 
@@ -231,7 +234,11 @@ class FmuCosimulation(CosimulationProblem):
         C_s = C if s == 1.0 else self._negated(C) if s == -1.0 else None
         if len(samples) == 2:  # k = 1
             a, b = samples
-            coef = [[w0 * x + w1 * y for x, y in zip(a, b)] for w0, w1 in (C if C_s is None else C_s)]
+            if len(a) == 1:  # one component: the same products and sums without the inner lists' loops
+                x, y = a[0], b[0]
+                coef = [[w0 * x + w1 * y] for w0, w1 in (C if C_s is None else C_s)]
+            else:
+                coef = [[w0 * x + w1 * y for x, y in zip(a, b)] for w0, w1 in (C if C_s is None else C_s)]
         else:
             coef = []
             for weights in C if C_s is None else C_s:
@@ -245,12 +252,7 @@ class FmuCosimulation(CosimulationProblem):
         )  # fmt: skip
         self.work.subsystem_integrations += 1
         self._holds[i] = "scratch"
-        u1 = coef[0]
-        for row in coef[1:]:
-            u1 = [a + b for a, b in zip(u1, row)]
-        if s == -1.0:
-            u1 = [-v for v in u1]
-        return self._outputs(i, u1)
+        return self._outputs(i, _summed(coef, s == -1.0))
 
     def _negated(self, C):
         """``-C`` (rows of floats), made once per matrix."""
@@ -274,7 +276,9 @@ class FmuCosimulation(CosimulationProblem):
         total = sum(values)  # finite if every value is (else inf or nan; an overflow only asks the long way)
         if total - total != 0.0 and not all(map(math.isfinite, values)) and all(map(math.isfinite, u1)):
             self._not_finite(i, np.array(values).reshape(-1, n))
-        return np.array(flat[: 2 * n]), np.array(flat).reshape(1, 4, n)
+        y = np.array(flat)
+        end, y.shape = y[: 2 * n], (1, 4, n)  # the end: a view of the outputs' first two rows
+        return end, y
 
     def _not_finite(self, i, values):
         unit = self.units[i]
@@ -372,7 +376,7 @@ class FmuCosimulation(CosimulationProblem):
         ``i`` repeats its corrector step with each input component perturbed at ``T_N+1`` (restored start state,
         one ``doStep`` each) or, at its fixed end state, is re-evaluated with it (no step)."""
         rows = self._samples(i, e, history)  # (k + 1, n_dim); row 0 at T_N+1
-        u1 = np.array(rows[0])
+        u1 = np.array(rows[0]) if end is not None else None  # re-evaluated at the end state only
         h = [self.perturbation * max(1.0, abs(u)) for u in rows[0]]
         if y is not None:
             base = y
@@ -416,33 +420,3 @@ class FmuCosimulation(CosimulationProblem):
             if self._start[i] is not None:
                 unit.free(self._start[i])
                 self._start[i] = None
-
-
-def _projected(clusters, masses, rows):
-    """:func:`icosim.engine.projection.mass_weighted_projection` of one point in floats (rows of floats, a mass
-    per row): the same products, sums and quotient in the same order, so the same numbers."""
-    out = list(rows)
-    for cluster in clusters:
-        weighted = [masses[cluster[0]] * v for v in rows[cluster[0]]]
-        total = masses[cluster[0]]
-        for b in cluster[1:]:
-            m = masses[b]
-            weighted = [w + m * v for w, v in zip(weighted, rows[b])]
-            total = total + m
-        mean = [w / total for w in weighted]
-        for b in cluster:
-            out[b] = mean
-    return out
-
-
-def _gathered(row, terms):
-    """A unit's inputs from one row of coupling variables: per input the sum of its ``(column, sign)`` terms,
-    as :meth:`icosim.engine.graph.CouplingGraph.inputs` forms it (signs +-1: exact products)."""
-    out = []
-    for term in terms:
-        (c, sign), *rest = term
-        total = row[c] if sign == 1 else -row[c]
-        for c, sign in rest:
-            total = total + row[c] * sign
-        out.append(total)
-    return out

@@ -1,0 +1,128 @@
+"""The coupling solves of small systems (:meth:`icosim.engine.methods.base.CouplingMethod.corrected_coupling`):
+closed forms for sizes 1 and 2, LU for larger ones, a banded solve for a large banded float64 system, and a float64
+matrix factored once for many right-hand sides."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .. import layout
+
+__all__ = ["solve_small", "solve_float", "Factored", "BANDED_FROM"]
+
+
+#: A float64 system of at least this size whose matrix is banded, with no more than a quarter of its diagonals
+#: occupied, is solved as a banded system (a chain's joints: tridiagonal): work linear in its size.
+BANDED_FROM = 16
+
+
+def solve_float(J: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """:func:`solve_small` for float64, a large banded system of one point by its band (LAPACK ``gbsv``)."""
+    n = J.shape[-1]
+    if J.ndim != 2 or n < BANDED_FROM or b.ndim != 1:
+        return solve_small(J, b)
+    rows, cols = np.nonzero(J)
+    lower = int(np.max(rows - cols, initial=0))
+    upper = int(np.max(cols - rows, initial=0))
+    if 4 * (lower + upper + 1) > n:
+        return solve_small(J, b)
+    from scipy.linalg import solve_banded
+
+    band = np.zeros((lower + upper + 1, n))
+    for d in range(-lower, upper + 1):  # band[upper + i - j, j] = J[i, j]
+        diagonal = np.diagonal(J, d)
+        if d >= 0:
+            band[upper - d, d:] = diagonal
+        else:
+            band[upper - d, : n + d] = diagonal
+    return solve_banded((lower, upper), band, b, check_finite=False)
+
+
+class Factored:
+    """A float64 coupling matrix ``J`` (one point or a stack) made ready for many right-hand sides: sizes 1 and 2
+    as :func:`solve_small` (closed forms), larger ones LU-factored once (LAPACK ``getrf``, then ``getrs`` per
+    solve: the two halves of ``gesv``, which :func:`numpy.linalg.solve` calls)."""
+
+    def __init__(self, J: np.ndarray) -> None:
+        self.J = J
+        self.lu = None
+        if J.shape[-1] > 2 and J.ndim == 2:
+            from scipy.linalg import lu_factor
+
+            self.lu = lu_factor(J, check_finite=False)
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        if self.lu is None or b.ndim != 1:
+            return solve_small(self.J, b)
+        from scipy.linalg import lu_solve
+
+        return lu_solve(self.lu, b, check_finite=False)
+
+
+def solve_small(J: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solve ``J x = b`` for stacks of small systems, float64 or mpmath objects.
+
+    Sizes 1 and 2 use closed forms, so a singular point yields inf/nan for that
+    point only instead of aborting a whole grid (the precision policy then
+    catches it).  Larger systems use LU (numpy) or mpmath's ``lu_solve``.
+    """
+    n = J.shape[-1]
+    if n <= 2 and J.ndim == 2 and b.ndim == 1 and J.dtype == np.float64 and b.dtype == np.float64:
+        x = _solve_point(J.tolist(), b.tolist())
+        if x is not None:
+            return x
+    if J.shape[:-1] != b.shape:  # (a single point's shapes agree: no broadcast to pay for)
+        J, b = np.broadcast_arrays(J, b[..., None])
+        b = b[..., 0]
+    if n == 1:
+        return b / J[..., 0]
+    if n == 2:
+        a, bb, c, d = J[..., 0, 0], J[..., 0, 1], J[..., 1, 0], J[..., 1, 1]
+        det = a * d - bb * c
+        x0 = (d * b[..., 0] - bb * b[..., 1]) / det
+        x1 = (a * b[..., 1] - c * b[..., 0]) / det
+        if np.ndim(det) == 0:  # one point: the pair as numpy.stack would make it
+            return np.array([x0, x1])
+        return layout.stack([x0, x1], axis=-1)
+    if J.dtype != object:
+        return np.linalg.solve(J, b[..., None])[..., 0]
+    out = np.empty(b.shape, dtype=object)
+    for idx in np.ndindex(b.shape[:-1]):
+        out[idx] = _gauss(J[idx].tolist(), b[idx].tolist())
+    return out
+
+
+def _solve_point(J: list[list[float]], b: list[float]) -> np.ndarray | None:
+    """The closed forms of :func:`solve_small` for one float64 point of size 1 or 2, in Python floats (the same
+    IEEE operations in the same order as on numpy's scalars, without their overhead).  None where a divisor is
+    zero: numpy's scalars make that point inf/nan (under its error state), Python's floats would raise."""
+    if len(b) == 1:
+        return np.array([b[0] / J[0][0]]) if J[0][0] != 0.0 else None
+    (a, bb), (c, d) = J
+    det = a * d - bb * c
+    if det == 0.0:
+        return None
+    return np.array([(d * b[0] - bb * b[1]) / det, (a * b[1] - c * b[0]) / det])
+
+
+def _gauss(A: list[list[Any]], y: list[Any]) -> list[Any]:
+    """Gaussian elimination with partial pivoting in the numbers' own arithmetic
+    (so mpmath values keep their context's precision and Arb balls their bounds).
+
+    The pivot is chosen by the float magnitude: comparing two Arb balls is
+    undecided when they overlap, and any nonzero pivot is correct (the size only
+    affects how wide the balls grow)."""
+    n = len(y)
+    A = [row[:] + [y[i]] for i, row in enumerate(A)]
+    for col in range(n):
+        piv = max(range(col, n), key=lambda r: float(abs(A[r][col])))
+        A[col], A[piv] = A[piv], A[col]
+        for r in range(col + 1, n):
+            f = A[r][col] / A[col][col]
+            A[r] = [a - f * p for a, p in zip(A[r], A[col])]
+    x = [None] * n
+    for r in range(n - 1, -1, -1):
+        x[r] = (A[r][n] - sum(A[r][c] * x[c] for c in range(r + 1, n))) / A[r][r]
+    return x
