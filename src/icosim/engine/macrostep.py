@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from .schemes import JACOBI, Scheme, get_scheme
-from .stages import plan
+from .stages import Plan, plan
 
 if TYPE_CHECKING:
     from .backends import Backend
@@ -53,7 +53,7 @@ def macro_step(
     state: np.ndarray,
     history: np.ndarray,
     *,
-    scheme: str | Scheme = JACOBI,
+    scheme: str | Scheme | Plan = JACOBI,
     iterations: int = 1,
     tol: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -62,7 +62,8 @@ def macro_step(
     Parameters
     ----------
     scheme : :class:`icosim.engine.schemes.Scheme` (or its name): the order of the subsystems, as stages
-        (:mod:`icosim.engine.stages`).  At each stage its subsystems are predicted with the extrapolation
+        (:mod:`icosim.engine.stages`); or the scheme's :class:`~icosim.engine.stages.Plan` on the problem's
+        graph, made once by a caller that takes many steps.  At each stage its subsystems are predicted with the extrapolation
         polynomials; the joints it closes get corrected coupling variables, from the stage's subsystems'
         full gradients and the finished subsystems' algebraic ones (their outputs re-evaluated with the
         corrected variables; a scheme whose earlier outputs stay as integrated skips that and they do not
@@ -85,9 +86,12 @@ def macro_step(
     -------
     state_new, history_new, y_new
     """
-    scheme = get_scheme(scheme)
     graph = problem.graph
-    stages = plan(scheme, graph).stages
+    if isinstance(scheme, Plan) and scheme.graph is graph:
+        stages, scheme = scheme.stages, scheme.scheme
+    else:
+        scheme = get_scheme(scheme.scheme if isinstance(scheme, Plan) else scheme)
+        stages = plan(scheme, graph).stages
     e = problem.extrapolate(history)
     ends: list[Any] = [None] * graph.n_subsystems
     ys: list[Any] = [None] * graph.n_subsystems

@@ -10,7 +10,7 @@ ends the run, recorded, never silently continued.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -71,8 +71,9 @@ def simulate(
     ``record=False`` keeps only the start and the last step.  ``step_kw`` go to
     :func:`~icosim.engine.macrostep.macro_step` (``scheme``, ``iterations``, ``tol``).
     """
-    # refuses what the scheme cannot serve (a wrapper of a method reads as the method)
-    plan(get_scheme(step_kw.get("scheme", JACOBI)), problem.graph, method)  # type: ignore[arg-type]
+    # refuses what the scheme cannot serve (a wrapper of a method reads as the method); made once, not per step
+    stages = plan(get_scheme(step_kw.get("scheme", JACOBI)), problem.graph, method)  # type: ignore[arg-type]
+    step_kw["scheme"] = replace(stages, graph=problem.graph)  # an equal graph's plan, for this one
     outputs: list[np.ndarray | None]  # outputs[0]: none yet
     states, coupling, outputs = [state], [history[..., 0, :]], [None]
     diverged = failed = reason = error = None
