@@ -26,6 +26,7 @@ from icosim import (
     weighted_multiplier,
 )
 from icosim.engine.backends import Multiprecision
+from icosim.engine.methods import engine_method
 from icosim.engine.lagrange import corrector_nodes, predictor_nodes, weights_at
 from icosim.engine.run import simulate
 from icosim.problems.linear.exact import MonolithicSolution, consistent_start
@@ -376,3 +377,26 @@ def test_policy_survives_a_point_no_precision_can_decide(monkeypatch):
     assert res.n_failed == 1 and res.verdict[0] == "undecided" and not res.stable[0]
     assert res.reason[0] == "ZeroDivisionError: no result here" and res.digits[0] == -1
     assert res.verdict[1] == "marginal" and res.verdict[2] in ("stable", "unstable")
+
+
+def test_one_problem_serves_methods_in_turn_as_fresh_problems_do():
+    """A problem with constant sensitivities hands the same Jacobians every step, and their combinations are
+    factored once: a second method on the same problem combines other levels and must not get the first's
+    factors.  Each run equals a run on a problem of its own, whichever ran before."""
+    from icosim.problems.linear.chain import Chain, ChainSegment
+
+    H = 1e-3
+    chain = Chain(tuple(ChainSegment((m,), (c,), (d,)) for m, c, d in ((1, 1e3, 2), (2, 500, 1), (0.5, 2e3, 0.5))),
+                  ("ff", "ff"), H)  # fmt: skip
+    methods = [("weighted", dict(index=1, a=1.0, b=1.0)), ("baumgarte", dict(index=1, mu=1e-2)), ("projection", {})]
+
+    def run(problem, name, params):
+        method = engine_method(make_method(name, **params), H)
+        start, history = np.array([[0.1, 0.0]] * 3), np.zeros((2, problem.n_coupling))
+        return np.array(simulate(problem, method, start, history, 50).states[-1])
+
+    alone = [run(chain.problem(1), *m) for m in methods]
+    shared = chain.problem(1)
+    for order in (methods, methods[::-1]):
+        for m in order:
+            assert np.array_equal(run(shared, *m), alone[methods.index(m)]), m[0]

@@ -90,16 +90,16 @@ class CouplingMethod:
         if kept is not None and kept[0] is not jacobians:
             kept = None
         total = None
-        for n, (weight, levels) in enumerate(solves):
+        for weight, levels in solves:
             if weight == 0:
                 continue  # an unused level may be singular (e.g. velocity at k = 0)
             r = _conditions(levels, residuals, axis=-1, const=const)
-            if kept is not None and n in kept[1]:
-                de = kept[1][n].solve(-r)
+            if kept is not None and levels in kept[1]:  # the factor of this combination of levels
+                de = kept[1][levels].solve(-r)
             elif plain and _kept_jacobians(jacobians):
                 # the same Jacobians as a step before (constant sensitivities): combined and factored once
                 factor = Factored(_conditions(levels, jacobians, axis=-2, const=const))
-                _keep(jacobians, n, factor)
+                _keep(jacobians, levels, factor)
                 de = factor.solve(-r)
             elif plain:
                 de = solve_float(_conditions(levels, jacobians, axis=-2, const=const), -r)
@@ -327,8 +327,9 @@ def _float_solves(solves: tuple) -> tuple:
 
 
 #: Jacobians seen twice (a problem's constant sensitivities hand the same object every step): id -> (the
-#: object, {solve: its factored matrix}); the object is kept, so its id is not reused while it is here.
-_KEPT: dict[int, tuple[Any, dict[int, Factored]]] = {}
+#: object, {a solve's levels: their combination factored}); the object is kept, so its id is not reused while it
+#: is here.  Keyed by the levels, not the solve's place: another method on the same problem combines others.
+_KEPT: dict[int, tuple[Any, dict[tuple, Factored]]] = {}
 _SEEN: dict[int, Any] = {}
 _FLOAT_SOLVES: dict[int, tuple[tuple, tuple]] = {}  # id -> (the solves, as floats): kept the same way
 _KEEP = 16
@@ -344,10 +345,10 @@ def _kept_jacobians(jacobians: Any) -> bool:
     return False
 
 
-def _keep(jacobians: Any, n: int, factor: Factored) -> None:
+def _keep(jacobians: Any, levels: tuple, factor: Factored) -> None:
     entry = _KEPT.get(id(jacobians))
     if entry is None or entry[0] is not jacobians:
         if len(_KEPT) >= _KEEP:
             _KEPT.clear()
         entry = _KEPT[id(jacobians)] = (jacobians, {})
-    entry[1][n] = factor
+    entry[1][levels] = factor
