@@ -1,6 +1,7 @@
 """A second exporter: the force-driven unit written in Python and exported with pythonfmu (fmus/python), coupled
-with the C unit.  It cannot interpolate inputs, so it gets the coupling polynomial as sub-steps: the run follows
-the built-in model to second order in the sub-step."""
+with the C unit, as one of a pair and as the middle unit of a 3-unit chain.  It cannot interpolate inputs, so it
+gets the coupling polynomial as sub-steps: the run follows the built-in model (the pair's, the chain's) to second
+order in the sub-step."""
 
 import os
 import re
@@ -65,6 +66,60 @@ def test_pythonfmu_unit_follows_the_builtin_model_to_second_order_in_the_sub_ste
         assert run.units["body1"]["inputs"] == f"substeps ({substeps})"
         assert run.units["body2"]["inputs"] == "derivatives"
         x = builtin(data, run.coupling[0])
+        errors.append(np.max(np.abs(run.states[..., 0] - x)) / np.max(np.abs(x)))
+    assert errors[1] < 1e-4
+    assert 3 < errors[0] / errors[1] < 5
+
+
+CHAIN_UNITS = [(1.0, 1000.0, 2.0), (2.0, 500.0, 1.0), (0.5, 2000.0, 0.5)]  # m, c, d of a, b, c
+
+
+def python_chain(path, scheme, substeps):
+    """Three units in a row joined by two ff joints, the middle one the pythonfmu unit (its force input the
+    sum of the two joints' multipliers), the ends the C unit; Baumgarte index 1, k = 1, 0.1 s."""
+    names = ("a", "b", "c")
+    subsystems = {}
+    for name, (m, c, d) in zip(names, CHAIN_UNITS):
+        python = name == "b"
+        subsystems[name] = {
+            "fmu": str(ROOT / "fmus" / ("python/msd_python.py" if python else "msd")),
+            "start": {"m": m, "c": c, "d": d, "x0": 0.1},
+            "position": "x", "velocity": "v", "acceleration": "a", "force": "lam" if python else "lambda",
+            "force_sign": 1,
+        }  # fmt: skip
+    coupling = {"method": "baumgarte", "index": 1, "mu": 1e-2, "k": 1, "H": 1e-3, "substeps": substeps}
+    coupling |= {"scheme": "jacobi"} if scheme == "jacobi" else {"scheme": "gauss-seidel", "order": list(scheme)}
+    data = {
+        "subsystems": subsystems,
+        "joints": [{"between": ["a", "b"], "decomposition": "ff"}, {"between": ["b", "c"], "decomposition": "ff"}],
+        "coupling": coupling,
+        "t_end": 0.1,
+        "initial_coupling": [0.0, 0.0],
+    }
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
+@pytest.mark.parametrize("scheme", ["jacobi", ("a", "b", "c"), ("c", "b", "a")], ids=str)
+def test_a_chain_with_the_pythonfmu_unit_in_the_middle_follows_the_builtin_chain(tmp_path, scheme):
+    """The middle unit of a 3-unit chain exported by pythonfmu (two joints reach its one force input), the ends
+    the C unit: the run follows the built-in chain (icosim.problems.linear.chain) from the same start, to second
+    order in the Python unit's sub-step, under Jacobi and two Gauss-Seidel orders."""
+    from icosim.problems.linear.chain import Chain, ChainSegment
+
+    H, n = 1e-3, 100
+    chain = Chain(tuple(ChainSegment((m,), (c,), (d,)) for m, c, d in CHAIN_UNITS), ("ff", "ff"), H)
+    problem = chain.problem(1)
+    method = engine_method(make_method("baumgarte", index=1, mu=1e-2), H)
+    name = scheme if scheme == "jacobi" else "gauss-seidel-" + "".join(str("abc".index(u) + 1) for u in scheme)
+    start, history = np.array([[0.1, 0.0]] * 3), np.zeros((2, problem.n_coupling))
+    x = np.array(simulate(problem, method, start, history, n, scheme=name).states)[..., 0]
+    errors = []
+    for substeps in (8, 16):
+        run = run_scene(python_chain(tmp_path / f"chain_{substeps}.yaml", scheme, substeps))
+        assert run.status == "completed"
+        assert run.units["b"]["generation_tool"].startswith("PythonFMU")
+        assert run.units["b"]["inputs"] == f"substeps ({substeps})" and run.units["a"]["inputs"] == "derivatives"
         errors.append(np.max(np.abs(run.states[..., 0] - x)) / np.max(np.abs(x)))
     assert errors[1] < 1e-4
     assert 3 < errors[0] / errors[1] < 5
