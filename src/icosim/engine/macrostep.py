@@ -95,24 +95,24 @@ def macro_step(
     e = problem.extrapolate(history)
     ends: list[Any] = [None] * graph.n_subsystems
     ys: list[Any] = [None] * graph.n_subsystems
+    n_solves = method.n_solves
     for stage in stages:
         # step 1: the stage's subsystems with the extrapolation polynomials; those in no closed joint are final
-        corrected = set(stage.corrected)
         for i in stage.units:
-            ends[i], ys[i] = problem.predict(i, state, history, final=i not in corrected)
+            ends[i], ys[i] = problem.predict(i, state, history, final=i not in stage.corrected)
         if stage.conditions is None:
             continue
-        cols = stage.columns
-        every = len(cols) == graph.n_coupling  # the stage closes every joint: e itself, in its order
+        cols = stage.column_index
+        every = len(stage.columns) == graph.n_coupling  # the stage closes every joint: e itself, in its order
         e_held = e if every else e[..., cols]  # as the stage's predictors and the finished subsystems saw it
         for it in range(max(1, iterations)):
             # step 2: corrected coupling variables of the closed joints
-            e_s = e if every else e[..., cols]
+            e_s = e if every else e_held if it == 0 else e[..., cols]
             y_s = problem.stack([ys[i] for i in stage.responders])
             r = problem.residuals(y_s, e_s, stage.conditions, e_held)
             J = problem.jacobians(state, history, e, ys, ends, stage, algebraic=scheme.reevaluates_leading)
             e_new = method.corrected_coupling(e_s, r, J, problem.backend)
-            problem.work.coupling_solves += method.n_solves
+            problem.work.coupling_solves += n_solves
             if it > 0 and tol is not None and _max_abs(e_new - e_s) <= tol:
                 break  # converged: the corrector already ran with (nearly) e_new
             e_old, e = e, e_new if every else _with_columns(e, cols, e_new)
@@ -130,15 +130,15 @@ def macro_step(
     return state_new, problem.shift(history, e), y
 
 
-def _with_columns(e: Any, cols: tuple[int, ...], values: Any) -> Any:
+def _with_columns(e: Any, cols: slice | np.ndarray, values: Any) -> Any:
     """``e`` with the entries ``cols`` of its last axis replaced by ``values`` (leading axes broadcast)."""
     if e.ndim == 1 and values.ndim == 1:  # one point (an FMU step): nothing to broadcast
         out = e.copy()
-        out[list(cols)] = values
+        out[cols] = values
         return out
     lead = np.broadcast_shapes(e.shape[:-1], values.shape[:-1])
     out = np.array(np.broadcast_to(e, lead + e.shape[-1:]), copy=True)
-    out[..., list(cols)] = values
+    out[..., cols] = values
     return out
 
 

@@ -38,6 +38,8 @@ from dataclasses import dataclass
 from functools import cache, cached_property
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from ..errors import ParameterError
 from .decompositions import DECOMPOSITIONS
 from .graph import CouplingGraph
@@ -72,6 +74,15 @@ class Stage:
     def columns(self) -> tuple[int, ...]:
         """The entries of ``e`` corrected at this stage."""
         return self.conditions.columns if self.conditions is not None else ()
+
+    @cached_property
+    def column_index(self) -> slice | np.ndarray:
+        """:attr:`columns` as an index of ``e``'s last axis: a slice where they are consecutive (a view, no
+        copy; a chain's stage closes neighbouring joints), else an integer array."""
+        cols = self.columns
+        if cols and list(cols) == list(range(cols[0], cols[-1] + 1)):
+            return slice(cols[0], cols[-1] + 1)
+        return np.array(cols, dtype=np.intp)
 
 
 @dataclass(frozen=True, eq=False)

@@ -48,12 +48,18 @@ class Factored:
     def __init__(self, J: np.ndarray) -> None:
         self.J = J
         self.lu = None
+        #: one point of size 1 or 2: its entries as floats, for the closed forms (:func:`_solve_point`)
+        self.rows = J.tolist() if J.shape[-1] <= 2 and J.ndim == 2 and J.dtype == np.float64 else None
         if J.shape[-1] > 2 and J.ndim == 2:
             from scipy.linalg import lu_factor
 
             self.lu = lu_factor(J, check_finite=False)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
+        if self.rows is not None and b.ndim == 1 and b.dtype == np.float64:
+            x = _solve_point(self.rows, b.tolist())
+            if x is not None:
+                return x
         if self.lu is None or b.ndim != 1:
             return solve_small(self.J, b)
         from scipy.linalg import lu_solve

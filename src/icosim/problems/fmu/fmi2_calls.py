@@ -19,6 +19,7 @@ from .floats import summed
 __all__ = ["Fmi2Calls", "refused"]
 
 _GET, _SET = guard.code("get"), guard.code("set")
+_GET_STATE, _SET_STATE = guard.code("getFMUstate"), guard.code("setFMUstate")
 _DO_STEP, _DERIVATIVES = guard.code("doStep"), guard.code("setRealInputDerivatives")
 _FACTORIAL = [math.factorial(m) for m in range(16)]  # k is at most icosim.engine.bounds.MAX_K
 
@@ -43,8 +44,67 @@ def refused(function, status):
 
 
 class Fmi2Calls:
-    """The macro step's reads, writes and steps of a :class:`~icosim.problems.fmu.units.Unit` (a mixin: it uses
-    the unit's instance, index, time, elements, factors and general methods)."""
+    """The macro step's reads, writes, steps and saved states of a :class:`~icosim.problems.fmu.units.Unit` (a
+    mixin: it uses the unit's instance, index, time, elements, factors and general methods)."""
+
+    # -- states: a macro step's rollback (what fmpy's getFMUstate, setFMUstate and freeFMUstate do) ----------
+    def save(self):
+        """The unit's FMU state, saved, and its time."""
+        self.saved += 1
+        guard.enter(self.index, _GET_STATE, self.t)
+        if self.fmi3:
+            state = self.fmu.getFMUState()
+        else:
+            declared, bare, component = self._states.get("fmi2GetFMUstate") or self._state_call("fmi2GetFMUstate")
+            state = self._new_state()
+            f = self.fmu.dll.fmi2GetFMUstate
+            status = (
+                bare(component, ctypes.byref(state)) if f is declared else f(self.fmu.component, ctypes.byref(state))
+            )
+            if status > 1:
+                guard.leave()
+                refused("fmi2GetFMUstate", status)
+        guard.leave()
+        return (state, self.t)
+
+    def restore(self, state):
+        """Back to a state :meth:`save` returned, and its time."""
+        self.restored += 1
+        guard.enter(self.index, _SET_STATE, self.t)
+        if self.fmi3:
+            self.fmu.setFMUState(state[0])
+        else:
+            declared, bare, component = self._states.get("fmi2SetFMUstate") or self._state_call("fmi2SetFMUstate")
+            f = self.fmu.dll.fmi2SetFMUstate
+            status = bare(component, state[0]) if f is declared else f(self.fmu.component, state[0])
+            if status > 1:
+                guard.leave()
+                refused("fmi2SetFMUstate", status)
+        guard.leave()
+        self.t = state[1]
+
+    def free(self, state):
+        """Free a state :meth:`save` returned."""
+        if self.failed or self.fmu is None:
+            return  # a refused step leaves only freeing the instance allowed (fmi2Error) or nothing (fmi2Fatal)
+        if self.fmi3:
+            self.fmu.freeFMUState(state[0])
+        else:
+            declared, bare, component = self._states.get("fmi2FreeFMUstate") or self._state_call("fmi2FreeFMUstate")
+            f = self.fmu.dll.fmi2FreeFMUstate
+            status = (
+                bare(component, ctypes.byref(state[0]))
+                if f is declared
+                else f(self.fmu.component, ctypes.byref(state[0]))
+            )
+            if status > 1:
+                refused("fmi2FreeFMUstate", status)
+
+    def _state_call(self, name):
+        """The library's function ``name`` as fmpy declared it and without argument types, and the instance as
+        the ctypes argument, made once (:func:`_direct`)."""
+        out = self._states[name] = (*_direct(self.fmu, name), ctypes.c_void_p(self.fmu.component))
+        return out
 
     def read(self, keys) -> list:
         """:meth:`get` as a flat list of floats (key after key, component after component): the macro step's

@@ -21,7 +21,6 @@ import collections
 import math
 import shutil
 import tempfile
-from ctypes import byref
 from pathlib import Path
 
 import numpy as np
@@ -35,7 +34,7 @@ from .variables import VariableTable, declared_start, family
 
 __all__ = ["Unit", "ROLES"]
 
-_GET_STATE, _SET_STATE, _DO_STEP = (guard.code(c) for c in ("getFMUstate", "setFMUstate", "doStep"))
+_DO_STEP = guard.code("doStep")
 
 
 _STATUS = {0: "ok", 1: "warning", 2: "discard", 3: "error", 4: "fatal", 5: "pending"}
@@ -101,7 +100,7 @@ class Unit(Fmi2Calls):
         self.substeps = int(substeps)
         self.names = dict(names)
         self._plans = {}
-        self._reads, self._writes, self._drives = {}, {}, {}  # FMI 2.0: buffers of the macro step's calls
+        self._reads, self._writes, self._drives, self._states = {}, {}, {}, {}  # FMI 2.0: the macro step's calls
         self._si = {}  # key -> its variables are in SI units (factors 1)
         self._arrays = {}  # FMI 3.0 arrays written element-wise: their whole value, as last set
         self.do_steps = self.saved = self.restored = self.warnings = self.check_steps = 0
@@ -327,46 +326,6 @@ class Unit(Fmi2Calls):
         values = self.fmu.getFloat64(ref, el.size) if self.fmi3 else self.fmu.getReal(ref)
         guard.leave()
         return float(values[el.index])
-
-    # -- states -------------------------------------------------------------------------------
-    def save(self):
-        self.saved += 1
-        guard.enter(self.index, _GET_STATE, self.t)
-        if self.fmi3:
-            state = self.fmu.getFMUState()
-        else:  # what fmpy's getFMUstate does, its library function called itself
-            fmu, state = self.fmu, self._new_state()
-            status = fmu.dll.fmi2GetFMUstate(fmu.component, byref(state))
-            if status > 1:
-                guard.leave()
-                refused("fmi2GetFMUstate", status)
-        guard.leave()
-        return (state, self.t)
-
-    def restore(self, state):
-        self.restored += 1
-        guard.enter(self.index, _SET_STATE, self.t)
-        if self.fmi3:
-            self.fmu.setFMUState(state[0])
-        else:
-            fmu = self.fmu
-            status = fmu.dll.fmi2SetFMUstate(fmu.component, state[0])
-            if status > 1:
-                guard.leave()
-                refused("fmi2SetFMUstate", status)
-        guard.leave()
-        self.t = state[1]
-
-    def free(self, state):
-        if self.failed or self.fmu is None:
-            return  # a refused step leaves only freeing the instance allowed (fmi2Error) or nothing (fmi2Fatal)
-        if self.fmi3:
-            self.fmu.freeFMUState(state[0])
-        else:
-            fmu = self.fmu
-            status = fmu.dll.fmi2FreeFMUstate(fmu.component, byref(state[0]))
-            if status > 1:
-                refused("fmi2FreeFMUstate", status)
 
     # -- stepping -----------------------------------------------------------------------------
     def step(self, key, coefficients, t, H, *, step_index):
