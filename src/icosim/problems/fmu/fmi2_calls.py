@@ -36,6 +36,19 @@ def _direct(fmu, name):
     return declared, ctypes.CDLL(library._name, handle=library._handle)[name]
 
 
+def _read_values(fast, status) -> list:
+    """The values of a read (:meth:`Fmi2Calls._get_real`) as floats in SI, or the call refused."""
+    if status > 1:
+        refused("fmi2GetReal", status)
+    _, n, buf, pick, factors, *_ = fast
+    values = buf[:n]
+    if pick is not None:
+        values = [values[j] for j in pick]
+    if factors is not None:
+        values = [v * f for v, f in zip(values, factors)]
+    return values
+
+
 def refused(function, status):
     """An FMI 2.0 call that returned more than a warning, raised as fmpy raises it."""
     from fmpy.fmi1 import FMICallException
@@ -114,20 +127,16 @@ class Fmi2Calls:
             if self.fmi3 or self.fmu is None:
                 return self.get(keys).ravel().tolist()
             fast = self._reads[keys] = self._read_plan(keys)
-        vr, n, buf, pick, factors, declared, bare, args = fast
-        fmu = self.fmu
         guard.enter(self.index, _GET, self.t)
-        f = fmu.dll.fmi2GetReal
-        status = bare(*args) if f is declared else f(fmu.component, vr, n, buf)
+        status = self._get_real(fast)
         guard.leave()
-        if status > 1:
-            refused("fmi2GetReal", status)
-        values = buf[:n]
-        if pick is not None:
-            values = [values[j] for j in pick]
-        if factors is not None:
-            values = [v * f for v, f in zip(values, factors)]
-        return values
+        return _read_values(fast, status)
+
+    def _get_real(self, fast):
+        """``fmi2GetReal`` of a read made once (:meth:`_read_plan`) into its buffer; its status."""
+        vr, n, buf, _, _, declared, bare, args = fast
+        f = self.fmu.dll.fmi2GetReal
+        return bare(*args) if f is declared else f(self.fmu.component, vr, n, buf)
 
     def _read_plan(self, keys):
         from fmpy.fmi2 import fmi2Real, fmi2ValueReference
@@ -178,11 +187,21 @@ class Fmi2Calls:
         if status > 1:
             refused("fmi2SetReal", status)
 
-    def advance(self, key, rows, t, H, *, step_index):
+    def advance(self, key, rows, t, H, *, step_index, restore=None, read=None):
         """:meth:`step` with the coefficients as rows of floats (``rows[m][q]``, SI); an FMI 2.0 unit that takes
-        input derivatives is driven without numpy: the same calls with the same values."""
+        input derivatives is driven without numpy: the same calls with the same values.  With ``restore``, the
+        unit first returns to that saved state (:meth:`restore`); with ``read``, the variables of those keys are
+        read at the end (:meth:`read`) and returned: one batch of the guard's records for the whole integration."""
         if not self.exact_inputs or self.fmi3:
-            return self.step(key, np.array(rows, dtype=float), t, H, step_index=step_index)
+            if restore is not None:
+                self.restore(restore)
+            self.step(key, np.array(rows, dtype=float), t, H, step_index=step_index)
+            return None if read is None else self.read(read)
+        fast = None
+        if read is not None:
+            fast = self._reads.get(read)
+            if fast is None:
+                fast = self._reads[read] = self._read_plan(read)
         plan = self._drives.get((key, len(rows), H))
         if plan is None:
             plan = self._drives[key, len(rows), H] = self._drive_plan(key, len(rows), H)
@@ -192,8 +211,24 @@ class Fmi2Calls:
         c = rows if factors is None else [[v / f for v, f in zip(row, factors)] for row in rows]
         fmu, self.t = self.fmu, t
         comp, library = fmu.component, fmu.dll
-        # the guard's records of the four calls written here (guard.batch); every one names the macro step
-        rec = guard.batch(self.index, t, step_index, 4 if terms else 3)
+        # the guard's records of the calls written here (guard.batch); every one names the macro step
+        rec = guard.batch(self.index, t, step_index, (4 if terms else 3) + (restore is not None) + (fast is not None))
+        if restore is not None:
+            self.restored += 1
+            state_declared, state_bare, state_comp = self._states.get("fmi2SetFMUstate") or self._state_call(
+                "fmi2SetFMUstate"
+            )
+            if rec is not None:
+                r, number = rec
+                r[2] = _SET_STATE
+                r[0] = number
+                rec = r, number + 1.0
+            f = library.fmi2SetFMUstate
+            status = state_bare(state_comp, restore[0]) if f is state_declared else f(comp, restore[0])
+            if rec is not None:
+                r[0] = 0.0
+            if status > 1:
+                refused("fmi2SetFMUstate", status)
         if rec is not None:
             r, number = rec
             r[2] = _SET
@@ -242,6 +277,16 @@ class Fmi2Calls:
         if status > 1:
             refused("fmi2SetReal", status)
         self.t = t + H
+        if fast is None:
+            return None
+        if rec is not None:
+            r[2] = _GET
+            r[3] = self.t
+            r[0] = number + 2.0
+        status = self._get_real(fast)
+        if rec is not None:
+            r[0] = 0.0
+        return _read_values(fast, status)
 
     def _drive_plan(self, key, rows, H):
         """What :meth:`advance` needs for a step of ``H`` with ``rows`` coefficients of ``key``, made once: its

@@ -225,9 +225,7 @@ class FmuCosimulation(CosimulationProblem):
         array or rows of floats) with the monomial coefficients ``C`` (rows of floats); returns its end ``(x, v)`` and outputs
         ``(1, 4, n_dim)``.  The polynomial's coefficients are formed in floats (k + 1 terms, summed in order)."""
         unit = self.units[i]
-        if self._holds[i] != "start":
-            unit.restore(self._start[i])
-            self._holds[i] = "start"
+        restore = None if self._holds[i] == "start" else self._start[i]
         samples = U.tolist() if isinstance(U, np.ndarray) else U
         s = self._scale[i]
         # the input's coefficients s * (C @ U); s is +-1, whose product is exact, so it goes into the weights
@@ -246,13 +244,13 @@ class FmuCosimulation(CosimulationProblem):
                 for w, sample in zip(weights[1:], samples[1:]):
                     row = [acc + w * u for acc, u in zip(row, sample)]
                 coef.append(row)
-        unit.advance(
+        self._holds[i] = "scratch"  # from here on: a refused call leaves the unit in no known state
+        values = unit.advance(
             self.couplings[i].input_key, coef if C_s is not None else [[s * v for v in row] for row in coef],
-            self.time, self.H, step_index=self.step_index + 1,
+            self.time, self.H, step_index=self.step_index + 1, restore=restore, read=self._output_keys(i),
         )  # fmt: skip
         self.work.subsystem_integrations += 1
-        self._holds[i] = "scratch"
-        return self._outputs(i, _summed(coef, s == -1.0))
+        return self._outputs(i, _summed(coef, s == -1.0), values)
 
     def _negated(self, C):
         """``-C`` (rows of floats), made once per matrix."""
@@ -262,16 +260,19 @@ class FmuCosimulation(CosimulationProblem):
             kept = self._negatives[key] = (C, [[-w for w in row] for row in C])
         return kept[1]
 
-    def _outputs(self, i, u1):
-        """Unit ``i``'s end ``(x, v)`` and outputs ``(1, 4, n_dim)`` as it stands, its input ``u1`` (floats) at
-        ``T_N+1``.  A unit that returns a value that is not finite for finite inputs is at fault
-        (:class:`UnitStepError`)."""
+    def _output_keys(self, i):
+        return _FORCE_OUTPUTS if self.couplings[i].kind == "force" else _KINEMATIC_OUTPUTS
+
+    def _outputs(self, i, u1, values=None):
+        """Unit ``i``'s end ``(x, v)`` and outputs ``(1, 4, n_dim)`` as it stands (``values``: as just read), its
+        input ``u1`` (floats) at ``T_N+1``.  A unit that returns a value that is not finite for finite inputs is
+        at fault (:class:`UnitStepError`)."""
         c, n = self.couplings[i], self.n_dim
+        if values is None:
+            values = self.units[i].read(self._output_keys(i))
         if c.kind == "force":
-            values = self.units[i].read(_FORCE_OUTPUTS)
             flat = values + u1
         else:
-            values = self.units[i].read(_KINEMATIC_OUTPUTS)
             flat = values[: 3 * n] + [c.force_sign * r for r in values[3 * n :]]
         total = sum(values)  # finite if every value is (else inf or nan; an overflow only asks the long way)
         if total - total != 0.0 and not all(map(math.isfinite, values)) and all(map(math.isfinite, u1)):
@@ -296,12 +297,12 @@ class FmuCosimulation(CosimulationProblem):
         self._holds[i] = id(end)
 
     def _at_end(self, i, end, u1):
-        """Unit ``i``'s outputs at its end state ``end`` with the input ``u1`` at ``T_N+1`` (no step)."""
+        """Unit ``i``'s outputs at its end state ``end`` with the input ``u1`` (floats) at ``T_N+1`` (no step)."""
         if self._holds[i] != id(end):
             self.units[i].restore(self._ends[i][id(end)][1])
             self._holds[i] = id(end)
-        u1, s = u1.tolist(), self._scale[i]
-        self.units[i].put(self.couplings[i].input_key, [s * v for v in u1])
+        s = self._scale[i]
+        self.units[i].put(self.couplings[i].input_key, u1 if s == 1.0 else [s * v for v in u1])  # 1 * v is v
         return self._outputs(i, u1)[1]
 
     # -- the problem interface -------------------------------------------------------------------------
@@ -354,8 +355,8 @@ class FmuCosimulation(CosimulationProblem):
         """Outputs at the fixed end state with the input at ``T_N+1`` set from ``e_new`` (``fmi2SetReal``, no step)."""
         e_new = np.asarray(e_new, dtype=float)
         if self._terms[i] is None or e_new.ndim != 1:
-            return self._at_end(i, end, self.inputs(i, e_new))
-        return self._at_end(i, end, np.array(self._gather(i, [e_new.tolist()])[0]))
+            return self._at_end(i, end, np.asarray(self.inputs(i, e_new), dtype=float).tolist())
+        return self._at_end(i, end, self._gather(i, [e_new.tolist()])[0])
 
     def join(self, ends):
         """The macro step's end: each unit's FMU state of ``ends[i]`` becomes the next start; the rest are freed."""
@@ -376,7 +377,7 @@ class FmuCosimulation(CosimulationProblem):
         ``i`` repeats its corrector step with each input component perturbed at ``T_N+1`` (restored start state,
         one ``doStep`` each) or, at its fixed end state, is re-evaluated with it (no step)."""
         rows = self._samples(i, e, history)  # (k + 1, n_dim); row 0 at T_N+1
-        u1 = np.array(rows[0]) if end is not None else None  # re-evaluated at the end state only
+        u1 = rows[0]  # floats; re-evaluated at the end state only where ``end`` is given
         h = [self.perturbation * max(1.0, abs(u)) for u in rows[0]]
         if y is not None:
             base = y
@@ -385,7 +386,7 @@ class FmuCosimulation(CosimulationProblem):
         out = np.empty((self.n_dim,) + base.shape)
         for c in range(self.n_dim):
             if end is not None:
-                up = u1.copy()
+                up = list(u1)
                 up[c] += h[c]
                 yp = self._at_end(i, end, up)
             else:
