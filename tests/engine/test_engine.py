@@ -26,8 +26,8 @@ from icosim import (
     weighted_multiplier,
 )
 from icosim.engine.backends import Multiprecision
-from icosim.engine.methods import engine_method
 from icosim.engine.lagrange import corrector_nodes, predictor_nodes, weights_at
+from icosim.engine.methods import engine_method
 from icosim.engine.run import simulate
 from icosim.problems.linear.exact import MonolithicSolution, consistent_start
 from icosim.problems.linear.spectral import amplification_matrix

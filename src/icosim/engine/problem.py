@@ -24,6 +24,7 @@ from .bounds import check_k
 from .decompositions import Decomposition
 from .graph import CouplingGraph
 from .lagrange import corrector_nodes, predictor_nodes, weights_at
+from .point_jacobian import PointJacobian, plain_factors
 
 if TYPE_CHECKING:
     from .residuals import Conditions
@@ -118,6 +119,7 @@ class CosimulationProblem:
         self._extrapolated: tuple = (None, None, None)  # (history, weights, e_p) of the last extrapolation
         self._jacobians: dict = {}
         self._assembly: dict = {}  # (stage, algebraic) -> what jacobians() needs of the stage every time
+        self._point_jacobians: dict = {}  # (stage, algebraic) -> its sparse map at one float64 point, or None
 
     @property
     def decomposition(self) -> Decomposition:
@@ -234,8 +236,13 @@ class CosimulationProblem:
             # 4, n_c).  A column reaches one input of a responder (a joint attaches to one port of it), so each
             # entry is one product by 0 or +-1, as the tensor product of one responder at a time had it.
             S_all = np.array(Ss) if first.ndim == 4 else np.stack(Ss, axis=-5)
-            dY = np.einsum("...rqpab,rqc->...crpab", S_all, B_all)
-            dY = dY.reshape(dY.shape[:-5] + (dY.shape[-5], -1) + dY.shape[-2:])
+            at_point = self._point_jacobian(key, stage, S_all, B_all, dE, held) if first.ndim == 4 else None
+            if at_point is not None:
+                jac = at_point[0](S_all.ravel().tolist(), at_point[1])
+                if self.constant_sensitivities:
+                    self._jacobians[key] = jac
+                return jac
+            dY = _output_derivatives(S_all, B_all)
         else:
             blocks = []
             for S, B in zip(Ss, Bs):
@@ -249,6 +256,25 @@ class CosimulationProblem:
         if self.constant_sensitivities:
             self._jacobians[key] = jac
         return jac
+
+    def _point_jacobian(self, key: tuple, stage: Stage, S_all: Any, B_all: Any, dE: Any, held: Any) -> tuple | None:
+        """The stage's Jacobians at one float64 point as a sparse map in floats and the levels' factors
+        (:mod:`icosim.engine.point_jacobian`), made once per stage; None where the general assembly serves."""
+        factors = plain_factors(self.condition_scale)
+        if factors is None or B_all is None:
+            return None
+        maps = self._point_jacobians
+        if key not in maps:
+            shape = S_all.shape
+            conditions = stage.conditions if stage.conditions is not None else self.every_condition
+
+            def general(z: np.ndarray) -> dict[str, np.ndarray]:
+                dY = _output_derivatives(z.reshape((-1,) + shape), B_all)
+                return {k: v.swapaxes(-1, -2) for k, v in conditions(dY, dE, e_held=held).items()}
+
+            maps[key] = PointJacobian.make(general, S_all.size)
+        point = maps[key]
+        return None if point is None else (point, factors)
 
     def _assemble(self, stage: Stage) -> tuple:
         """What :meth:`jacobians` of ``stage`` needs every time: the responders' input matrices (apart, and
@@ -280,6 +306,14 @@ class CosimulationProblem:
 
     def project(self, state: Any) -> Any:  # pragma: no cover - contract
         raise NotImplementedError(f"{type(self).__name__} has no projection step")
+
+
+def _output_derivatives(S_all: np.ndarray, B_all: np.ndarray) -> np.ndarray:
+    """The responders' output derivatives by the coupling variables: ``(..., R, inputs, ports, 4, n_c)`` x ``(R,
+    inputs, cols)`` -> ``(..., cols, R ports, 4, n_c)``.  A column reaches one input of a responder (a joint
+    attaches to one port of it), so each entry is one product by 0 or +-1."""
+    dY = np.einsum("...rqpab,rqc->...crpab", S_all, B_all)
+    return dY.reshape(dY.shape[:-5] + (dY.shape[-5], -1) + dY.shape[-2:])
 
 
 def _prepend(e_new: np.ndarray, older: np.ndarray) -> np.ndarray:
