@@ -148,9 +148,16 @@ class CosimulationProblem:
         if w.dtype == np.float64 and getattr(history, "dtype", None) == np.float64:
             # the same terms, summed in the same order from the first (sum() starts from 0: only -0 differs)
             weights = self._float_weights(w)
-            e_p = weights[0] * history[..., 0, :]
-            for j in range(1, self.k + 1):
-                e_p = e_p + weights[j] * history[..., j, :]
+            if history.ndim == 2:  # one point: the same products and sums in Python floats (IEEE doubles too)
+                rows = history.tolist()
+                sums = [weights[0] * v for v in rows[0]]
+                for j in range(1, self.k + 1):
+                    sums = [acc + weights[j] * v for acc, v in zip(sums, rows[j])]
+                e_p = np.array(sums)
+            else:
+                e_p = weights[0] * history[..., 0, :]
+                for j in range(1, self.k + 1):
+                    e_p = e_p + weights[j] * history[..., j, :]
         else:
             e_p = sum(w[j] * history[..., j, :] for j in range(self.k + 1))
         self._extrapolated = (history, self.w_pred, e_p)

@@ -9,6 +9,7 @@ ends the run, recorded, never silently continued.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
@@ -84,8 +85,8 @@ def simulate(
         except (StepFailure, np.linalg.LinAlgError) as exc:  # e.g. a singular coupling solve
             failed, reason, error = n, str(exc) or type(exc).__name__, exc
             break
-        mag = np.abs(np.asarray(state, dtype=float)).max()  # the method: np.max's dispatch costs more here
-        if not np.isfinite(mag):
+        mag = _magnitude(state)
+        if not math.isfinite(mag):
             diverged, reason = n, "state not finite"
         elif bound is not None and mag > bound:
             diverged, reason = n, f"|state| > {bound:g}"
@@ -101,3 +102,15 @@ def simulate(
         outputs.append(y)
         done = n
     return Trajectory(states, coupling, outputs, diverged, failed, reason, error, done)
+
+
+def _magnitude(state: Any) -> float:
+    """``max |state|``; not finite where any entry is not (a few values as floats: numpy's reductions cost more
+    than the loop there)."""
+    state = np.asarray(state, dtype=float)
+    if state.size > 16:
+        return float(np.abs(state).max())  # the method: np.max's dispatch costs more
+    values = state.ravel().tolist()
+    if not all(map(math.isfinite, values)):
+        return math.inf
+    return max(map(abs, values), default=0.0)

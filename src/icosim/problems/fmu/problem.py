@@ -383,6 +383,9 @@ class FmuCosimulation(CosimulationProblem):
             base = y
         else:
             base = self._at_end(i, end, u1) if end is not None else self._integrate(i, rows, self.C_corr)[1]
+        if self.n_dim == 1 and end is None:  # one input: one corrector step repeated, no array to fill
+            Up = [[rows[0][0] + h[0]]] + rows[1:]
+            return ((self._integrate(i, Up, self.C_corr)[1] - base) / h[0])[None]
         out = np.empty((self.n_dim,) + base.shape)
         for c in range(self.n_dim):
             if end is not None:
