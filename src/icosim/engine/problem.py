@@ -24,7 +24,7 @@ from .bounds import check_k
 from .decompositions import Decomposition
 from .graph import CouplingGraph
 from .lagrange import corrector_nodes, predictor_nodes, weights_at
-from .point_jacobian import PointJacobian, plain_factors
+from .point_jacobian import MAX_ENTRIES, PointJacobian, plain_factors
 
 if TYPE_CHECKING:
     from .residuals import Conditions
@@ -274,6 +274,9 @@ class CosimulationProblem:
         if key not in maps:
             shape = S_all.shape
             conditions = stage.conditions if stage.conditions is not None else self.every_condition
+            if sum(conditions.n_rows.values()) * len(conditions.columns) > MAX_ENTRIES:
+                maps[key] = None  # too large for the map: not even looked for (its search grows as the square)
+                return None
 
             def general(z: np.ndarray) -> dict[str, np.ndarray]:
                 dY = _output_derivatives(z.reshape((-1,) + shape), B_all)
