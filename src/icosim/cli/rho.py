@@ -132,7 +132,7 @@ def run(args, parser) -> int:
         "k": args.k,
         "scheme": scheme.name,
         "method_parameters": method.params,
-        "model": {n: float(getattr(args, n)) for n in ("lr1", "li1", "am21", "alr21", "ali21")},
+        "model": {n: float(getattr(args, n)) for n in MODEL_NAMES},
     }
     if args.json:
         print(dumps(result))
@@ -143,7 +143,7 @@ def run(args, parser) -> int:
 
 def _argument_message(text: str) -> str:
     """Messages from the library name parameters; make them read like argparse's."""
-    for name in ("lr1", "li1", "am21", "alr21", "ali21") + methods.argument_names():
+    for name in MODEL_NAMES + methods.argument_names():
         if text.startswith(f"{name} "):  # also "a and b must be ..." -> --a
             return f"argument --{name}: {text}"
     if text.startswith("method "):
@@ -163,7 +163,24 @@ def rho_answer(model, method, decomposition, k, *, digits=None, max_bits=1024, t
     ``model`` is a :class:`~icosim.problems.linear.model.TestModel` of one point (Fractions kept exact); ``scheme`` the
     coupling scheme (:mod:`icosim.engine.schemes`), used by the proof and by float64 alike.
     """
-    from ..problems.linear.spectral import certify_spectral_radius
+    from ..problems.linear.family import TwoMass
+
+    def floats():
+        return TwoMass(type(model)(*(float(getattr(model, n)) for n in MODEL_NAMES)), decomposition, k)
+
+    family = TwoMass(model, decomposition, k)
+    return family_answer(family, method, floats, digits=digits, max_bits=max_bits, timeout=timeout, scheme=scheme)
+
+
+#: The parameters of the test model (Eq. 71), as the command takes them.
+MODEL_NAMES = ("lr1", "li1", "am21", "alr21", "ali21")
+
+
+def family_answer(family, method, float_family, *, digits=None, max_bits=1024, timeout=None, scheme=JACOBI) -> dict:
+    """:func:`rho_answer` for the one point of any :class:`~icosim.engine.spectral.family.LinearFamily` (a chain's
+    too): the proof on ``family``, float64's value and error estimate on ``float_family()`` (the same point in
+    floats; called inside the time budget, an error there leaves float64's value out)."""
+    from ..engine.spectral.certified import certify_spectral_radius
 
     scheme = get_scheme(scheme)
 
@@ -174,10 +191,8 @@ def rho_answer(model, method, decomposition, k, *, digits=None, max_bits=1024, t
     out.update(rho_decimal=None, rho_float64=None, float64_error_estimate=None)
     try:
         with time_budget(timeout):
-            out["rho_float64"], out["float64_error_estimate"] = _float64(model, method, decomposition, k, scheme)
-            cert = certify_spectral_radius(
-                model, method, decomposition, k, max_bits=max_bits, digits=want, scheme=scheme
-            )
+            out["rho_float64"], out["float64_error_estimate"] = _float64(float_family, method, scheme)
+            cert = certify_spectral_radius(family, method, max_bits=max_bits, digits=want, scheme=scheme)
     except (ArithmeticError, ValueError) as exc:  # a timeout, a cap, an overflow: undecided, with the reason
         out["reason"], out["reason_code"] = str(exc), reason_code(exc)
         out["precision"] = "none (undecided)"
@@ -236,14 +251,13 @@ def rho_text(answer: dict, *, show_enclosure: bool = False, scheme=JACOBI) -> st
     return f"rho = {value}  ({order}{proof} at {a['precision_bits']} bits, {a['digits']} digits{f64_text}{note})"
 
 
-def _float64(model, method, decomposition, k, scheme=JACOBI):
+def _float64(float_family, method, scheme=JACOBI):
     """float64's value and error estimate for comparison (None where float64 gives nothing finite)."""
-    from ..problems.linear.spectral import spectral_radius_float64
+    from ..engine.spectral.radius import spectral_radius_float64
 
     try:
         with np.errstate(all="ignore"):
-            floats = type(model)(*(float(getattr(model, n)) for n in ("lr1", "li1", "am21", "alr21", "ali21")))
-            r, e = spectral_radius_float64(floats, method, decomposition, k, scheme=scheme)
+            r, e = spectral_radius_float64(float_family(), method, scheme=scheme)
     except PointTimeout:  # the command's time budget, not float64's failure
         raise
     except (ArithmeticError, ValueError, np.linalg.LinAlgError):  # float64 cannot even form the point
