@@ -46,9 +46,11 @@ __all__ = [
     "advise_chain",
     "chain_advice_text",
     "SCHEME_KINDS",
+    "UNIT_ORDER",
 ]
 
-_ORDER = re.compile(r"\d+(,\d+)+")
+#: An order of the units: their numbers separated by commas (``3,1,2``).
+UNIT_ORDER = re.compile(r"\d+(,\d+)+")
 
 
 def read_chain(path) -> Chain:
@@ -76,16 +78,15 @@ def chain_scheme(text: str | Scheme, chain: Chain) -> Scheme:
     n = chain.n_segments
     if isinstance(text, str) and text in SCHEME_KINDS:
         scheme = get_scheme(scheme_name(text, n))
-    elif isinstance(text, str) and _ORDER.fullmatch(text):
-        try:
-            scheme = GaussSeidel(text.split(","))
-        except ParameterError as exc:
-            raise ParameterError(f"scheme {text!r}: {exc}") from None
+    elif isinstance(text, str) and UNIT_ORDER.fullmatch(text):
+        order = [int(i) for i in text.split(",")]
+        if sorted(order) != list(range(1, n + 1)):
+            raise ParameterError(f"scheme {text!r}: an order must name each of the units 1 ... {n} once")
+        scheme = GaussSeidel(order)
     else:
         scheme = get_scheme(text)
     if isinstance(scheme, GaussSeidel) and len(scheme.order) != n:
-        order = ",".join(map(str, scheme.order))
-        raise ParameterError(f"scheme {text!r}: the order {order} must name each of the {n} units once")
+        raise ParameterError(f"scheme {text!r}: an order must name each of the units 1 ... {n} once")
     return scheme
 
 

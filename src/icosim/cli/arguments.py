@@ -26,6 +26,8 @@ __all__ = [
     "positive_int",
     "NEGATIVE_NUMBER",
     "add_scheme_arguments",
+    "scheme_or_order",
+    "CHAIN_ONLY",
     "fail",
 ]
 
@@ -123,6 +125,29 @@ def add_scheme_arguments(group):
         help="coupling scheme: jacobi (parallel, the paper's; default), gauss-seidel-12 (sequential, subsystem 1 "
         "first), gauss-seidel-21 (subsystem 2 first), or a variant (docs/gauss_seidel.md)",
     )
+
+
+#: What a scheme argument takes for a chain only (``--chain``): the kinds and an order of units by commas.
+CHAIN_ONLY = "with --chain: gauss-seidel-forward, gauss-seidel-reverse, orders like 3,1,2"
+
+
+def scheme_or_order(text):
+    """A scheme for two subsystems or a chain: a registered name or ``gauss-seidel-<order>``, and for a chain also
+    ``gauss-seidel-forward``, ``gauss-seidel-reverse`` or the units' numbers separated by commas (``3,1,2``);
+    which of them suits the problem is decided when it is known (:func:`icosim.advise.chains.chain_scheme`)."""
+    from ..advise.chains import SCHEME_KINDS, UNIT_ORDER
+    from ..engine.schemes import get_scheme
+
+    if text in SCHEME_KINDS or UNIT_ORDER.fullmatch(text):
+        return text
+    try:
+        get_scheme(text)
+    except ParameterError:
+        allowed = ", ".join(repr(name) for name in SCHEMES)
+        raise argparse.ArgumentTypeError(
+            f"invalid choice: {text!r} (choose from {allowed}, gauss-seidel-<order>; {CHAIN_ONLY})"
+        ) from None
+    return text
 
 
 def fail(parser, text: str):

@@ -33,7 +33,8 @@ from ..engine.spectral.policy import reason_code
 from ..engine.stages import check
 from ..errors import ParameterError, PointTimeout
 from ..io.jsonio import dumps
-from .arguments import add_scheme_arguments, bits, decimal, digits, order, seconds
+from .arguments import CHAIN_ONLY, bits, decimal, digits, order, scheme_or_order, seconds
+from .chain import add_chain_arguments, two_unit_arguments
 
 __all__ = ["add_parser", "run", "rho_answer", "rho_text"]
 
@@ -47,20 +48,30 @@ def add_parser(sub):
     )
     g = rho.add_argument_group("method and layout")
     g.add_argument("--method", required=True, choices=tuple(methods.METHODS))
-    g.add_argument("--decomposition", required=True, choices=tuple(DECOMPOSITIONS))
+    g.add_argument(
+        "--decomposition", choices=tuple(DECOMPOSITIONS), help="the joint's decomposition (required without --chain)"
+    )
     g.add_argument("--k", required=True, type=order, help=f"approximation order (integer 0..{MAX_K})")
-    add_scheme_arguments(g)
+    g.add_argument(
+        "--scheme",
+        type=scheme_or_order,
+        default="jacobi",
+        help="coupling scheme: jacobi (parallel, the paper's; default), gauss-seidel-12 (sequential, subsystem 1 "
+        "first), gauss-seidel-21 (subsystem 2 first), or a variant (docs/gauss_seidel.md); with --chain also "
+        "gauss-seidel-forward (units 1 -> N), gauss-seidel-reverse (N -> 1) or an order of the units such as 3,1,2",
+    )
     g = rho.add_argument_group("method parameters")
     with_index = ", ".join(spec.label for spec in methods.METHODS.values() if spec.takes_index)
     g.add_argument("--index", type=int, choices=methods.indices(), help=f"index of the formulation ({with_index})")
     for name, p in methods.parameters().items():  # every registered method's parameters
         g.add_argument(f"--{name}", type=decimal, help=p.help)
-    g = rho.add_argument_group("test-model parameters (Eq. 71)")
-    g.add_argument("--lr1", required=True, type=decimal, help="real part of subsystem 1's eigenvalue (<= 0)")
-    g.add_argument("--li1", required=True, type=decimal, help="imaginary part of subsystem 1's eigenvalue (>= 0)")
-    g.add_argument("--am21", required=True, type=decimal, help="mass ratio m2/m1 (> 0)")
-    g.add_argument("--alr21", required=True, type=decimal, help="damping ratio lr2/lr1 (>= 0)")
-    g.add_argument("--ali21", required=True, type=decimal, help="frequency ratio li2/li1 (>= 0)")
+    g = rho.add_argument_group("test-model parameters (Eq. 71; required without --chain)")
+    g.add_argument("--lr1", type=decimal, help="real part of subsystem 1's eigenvalue (<= 0)")
+    g.add_argument("--li1", type=decimal, help="imaginary part of subsystem 1's eigenvalue (>= 0)")
+    g.add_argument("--am21", type=decimal, help="mass ratio m2/m1 (> 0)")
+    g.add_argument("--alr21", type=decimal, help="damping ratio lr2/lr1 (>= 0)")
+    g.add_argument("--ali21", type=decimal, help="frequency ratio li2/li1 (>= 0)")
+    add_chain_arguments(rho)
     g = rho.add_argument_group(
         "precision and output",
         "The verdict is always proven in ball arithmetic (python-flint Arb) from the decimals as typed: stable "
@@ -105,7 +116,15 @@ def run(args, parser) -> int:
     """``icosim rho``: check the arguments (exit 2 naming the bad one), then answer."""
     from ..problems.linear.model import TestModel
 
-    scheme = get_scheme(args.scheme)
+    if args.chain is not None:
+        from .chain import run_rho
+
+        return run_rho(args, parser)
+    two_unit_arguments(args, parser, ("decomposition",) + MODEL_NAMES)
+    try:
+        scheme = get_scheme(args.scheme)
+    except ParameterError:
+        parser.error(f"argument --scheme: {args.scheme!r} names a chain's scheme: {CHAIN_ONLY}")
     try:
         method = _method_from_args(args)
         decomposition = get_decomposition(args.decomposition)

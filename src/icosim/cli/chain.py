@@ -1,0 +1,154 @@
+"""``--chain FILE`` of ``icosim rho`` and ``icosim advise``: a chain of linear oscillator segments joined by rigid
+joints, read from a YAML file (:func:`icosim.advise.chains.read_chain`), in place of the two subsystems.
+
+With ``--chain`` the two-unit arguments (``--decomposition``, ``--lr1`` ... for ``rho``; ``--m1`` ... and
+``--decompositions`` for ``advise``) do not apply: the units and the joints' decompositions come from the file,
+and giving them too is an error naming them.  The chain takes the macro step ``--H`` in s.  Bad input (a missing
+file, a bad key, an unknown scheme, an order missing a unit) exits with status 2 naming the argument or the key,
+before any work.
+"""
+
+from __future__ import annotations
+
+from ..errors import ParameterError
+
+__all__ = ["add_chain_arguments", "two_unit_arguments", "run_rho", "run_advise"]
+
+
+def add_chain_arguments(parser, *, H: bool = True):
+    """``--chain FILE`` (and, for ``rho``, ``--H``) on a command's parser."""
+    g = parser.add_argument_group(
+        "a chain instead of two subsystems",
+        "A YAML file {segments: [...], joints: ...} (docs/cli.md, config/chains/example3.yaml): one segment per "
+        "unit, one decomposition for every joint or a list of one per joint.",
+    )
+    g.add_argument("--chain", metavar="FILE", help="the chain's YAML file (replaces the two-unit arguments)")
+    if H:
+        from .arguments import number
+
+        g.add_argument("--H", type=number, help="macro step in s (with --chain)")
+
+
+def _given(args, names) -> list[str]:
+    return [f"--{n}" for n in names if getattr(args, n, None) is not None]
+
+
+def two_unit_arguments(args, parser, names) -> None:
+    """Without ``--chain``: every one of ``names`` is required (argparse's message); a chain's ``--H`` of ``rho``
+    does not apply."""
+    if missing := [f"--{n}" for n in names if getattr(args, n, None) is None]:
+        parser.error(f"the following arguments are required: {', '.join(missing)} (or --chain FILE)")
+    if "decomposition" in names and getattr(args, "H", None) is not None:
+        parser.error("argument --H: applies to --chain only (the test model's parameters are dimensionless)")
+
+
+def _chain(args, parser, two_unit):
+    """The chain of ``--chain`` after refusing the two-unit arguments given with it."""
+    from ..advise.chains import read_chain
+
+    if given := _given(args, two_unit):
+        parser.error(
+            f"argument --chain: not allowed with {', '.join(given)} (the units and the joints' decompositions "
+            "come from the chain file)"
+        )
+    try:
+        return read_chain(args.chain)
+    except ParameterError as exc:
+        parser.error(f"argument --chain: {exc}")
+
+
+def _scheme(text, chain, parser, argument="--scheme"):
+    from ..advise.chains import chain_scheme
+
+    try:
+        return chain_scheme(text, chain)
+    except ParameterError as exc:
+        parser.error(f"argument {argument}: {exc}")
+
+
+def run_rho(args, parser) -> int:
+    """``icosim rho --chain FILE``: the chain's spectral radius at ``--H``, its verdict proven as the two-unit
+    command's (:func:`icosim.cli.rho.family_answer`)."""
+    import numpy as np
+
+    from ..io.jsonio import dumps
+    from ..problems.linear.chain import ChainFamily
+    from .rho import MODEL_NAMES, _argument_message, _method_from_args, family_answer, rho_text
+
+    chain = _chain(args, parser, ("decomposition",) + MODEL_NAMES)
+    if args.H is None:
+        parser.error("the following arguments are required with --chain: --H")
+    if not args.H > 0:
+        parser.error(f"argument --H: must be a macro step in s (> 0), got {args.H!r}")
+    scheme = _scheme(args.scheme, chain, parser)
+    family = ChainFamily(chain.with_H(args.H), args.k)
+    try:
+        method = _method_from_args(args)
+    except ParameterError as exc:
+        parser.error(_argument_message(str(exc)))
+    try:
+        family.check(method, scheme)
+    except ParameterError as exc:  # a method not defined for a joint's decomposition, an order not served
+        parser.error(f"argument --method/--scheme: {exc} (the chain's joints: {', '.join(chain.decompositions)})")
+    if np.any(family.overflowing()):
+        parser.error(f"argument --H: {family.overflow_reason}")
+    answer = family_answer(
+        family,
+        method,
+        lambda: family,
+        digits=args.digits,
+        max_bits=args.max_bits,
+        timeout=args.timeout,
+        scheme=scheme,
+    )
+    result = {
+        **answer,
+        "method": method.name,
+        "chain": args.chain,
+        "joints": list(chain.decompositions),
+        "units": chain.n_segments,
+        "H": args.H,
+        "k": args.k,
+        "scheme": scheme.name,
+        "method_parameters": method.params,
+    }
+    print(dumps(result) if args.json else rho_text(answer, show_enclosure=args.certify, scheme=scheme))
+    return 0
+
+
+def run_advise(args, parser, params: dict) -> int:
+    """``icosim advise --chain FILE``: every configuration of the chain ranked (:func:`icosim.advise.chains.advise_chain`),
+    those the engine refuses listed with the reason."""
+    from ..advise import DEFAULT_K, DEFAULT_RTOL, DEFAULT_SCAN, Progress, advice_records, check_settings
+    from ..advise.chains import advise_chain, chain_advice_text, chain_configurations
+    from ..io.jsonio import dumps
+    from .arguments import fail
+
+    chain = _chain(args, parser, ("m1", "m2", "c1", "c2", "d1", "d2", "decompositions"))
+    for text in args.schemes or ():
+        _scheme(text, chain, parser, "--schemes")
+    try:
+        check_settings(args.H, n_scan=args.scan or DEFAULT_SCAN, rtol=args.rtol or DEFAULT_RTOL, policy=args.policy)
+        if len(args.H) == 1 and (args.scan is not None or args.rtol is not None):
+            raise ParameterError("scan and --rtol apply to an H range (--H H_LO H_HI) only")
+        configuration_list, refused = chain_configurations(
+            chain, methods=args.methods, k=args.k or DEFAULT_K, params=params, schemes=args.schemes
+        )
+    except ParameterError as exc:
+        fail(parser, str(exc))
+    bar = Progress(len(configuration_list))
+    try:
+        df = advise_chain(
+            chain,
+            args.H,
+            configuration_list=configuration_list,
+            refused=refused,
+            n_scan=args.scan or DEFAULT_SCAN,
+            rtol=args.rtol or DEFAULT_RTOL,
+            policy=args.policy,
+            progress=bar,
+        )
+    finally:
+        bar.close()
+    print(dumps(advice_records(df)) if args.json else chain_advice_text(df))
+    return 0
