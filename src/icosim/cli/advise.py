@@ -13,8 +13,17 @@ from ..engine.decompositions import DECOMPOSITIONS
 from ..engine.schemes import get_scheme
 from ..errors import ParameterError
 from ..io.jsonio import dumps
-from .arguments import CHAIN_ONLY, NEGATIVE_NUMBER, fail, number, order, positive_int, scheme_or_order
-from .chain import add_chain_arguments, two_unit_arguments
+from .arguments import (
+    CHAIN_ONLY,
+    NEGATIVE_NUMBER,
+    add_chain_arguments,
+    fail,
+    number,
+    order,
+    positive_int,
+    scheme_or_order,
+    two_unit_arguments,
+)
 
 __all__ = ["add_parser", "run", "advise_parameters"]
 
@@ -115,10 +124,6 @@ def run(args, parser) -> int:
     if len(args.H) > 2:
         parser.error(f"argument --H: give one macro step or a range H_LO H_HI, got {len(args.H)} values")
     params = {name: getattr(args, name) for name in advise_parameters() if getattr(args, name) is not None}
-    if args.chain is not None:
-        from .chain import run_advise
-
-        return run_advise(args, parser, params)
     two_unit_arguments(args, parser, ("m1", "m2", "c1", "c2", "d1", "d2"))
     for text in args.schemes or ():
         try:

@@ -28,6 +28,8 @@ __all__ = [
     "add_scheme_arguments",
     "scheme_or_order",
     "CHAIN_ONLY",
+    "add_chain_arguments",
+    "two_unit_arguments",
     "fail",
 ]
 
@@ -148,6 +150,27 @@ def scheme_or_order(text):
             f"invalid choice: {text!r} (choose from {allowed}, gauss-seidel-<order>; {CHAIN_ONLY})"
         ) from None
     return text
+
+
+def add_chain_arguments(parser, *, H: bool = True):
+    """``--chain FILE`` (and, for ``rho``, ``--H``) on a command's parser."""
+    g = parser.add_argument_group(
+        "a chain instead of two subsystems",
+        "A YAML file {segments: [...], joints: ...} (docs/cli.md, config/chains/example3.yaml): one segment per "
+        "unit, one decomposition for every joint or a list of one per joint.",
+    )
+    g.add_argument("--chain", metavar="FILE", help="the chain's YAML file (replaces the two-unit arguments)")
+    if H:
+        g.add_argument("--H", type=number, help="macro step in s (with --chain)")
+
+
+def two_unit_arguments(args, parser, names) -> None:
+    """Without ``--chain``: every one of ``names`` is required (argparse's message); a chain's ``--H`` of ``rho``
+    does not apply."""
+    if missing := [f"--{n}" for n in names if getattr(args, n, None) is None]:
+        parser.error(f"the following arguments are required: {', '.join(missing)} (or --chain FILE)")
+    if "decomposition" in names and getattr(args, "H", None) is not None:
+        parser.error("argument --H: applies to --chain only (the test model's parameters are dimensionless)")
 
 
 def fail(parser, text: str):

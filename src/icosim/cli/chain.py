@@ -12,34 +12,11 @@ from __future__ import annotations
 
 from ..errors import ParameterError
 
-__all__ = ["add_chain_arguments", "two_unit_arguments", "run_rho", "run_advise"]
-
-
-def add_chain_arguments(parser, *, H: bool = True):
-    """``--chain FILE`` (and, for ``rho``, ``--H``) on a command's parser."""
-    g = parser.add_argument_group(
-        "a chain instead of two subsystems",
-        "A YAML file {segments: [...], joints: ...} (docs/cli.md, config/chains/example3.yaml): one segment per "
-        "unit, one decomposition for every joint or a list of one per joint.",
-    )
-    g.add_argument("--chain", metavar="FILE", help="the chain's YAML file (replaces the two-unit arguments)")
-    if H:
-        from .arguments import number
-
-        g.add_argument("--H", type=number, help="macro step in s (with --chain)")
+__all__ = ["run", "run_rho", "run_advise"]
 
 
 def _given(args, names) -> list[str]:
     return [f"--{n}" for n in names if getattr(args, n, None) is not None]
-
-
-def two_unit_arguments(args, parser, names) -> None:
-    """Without ``--chain``: every one of ``names`` is required (argparse's message); a chain's ``--H`` of ``rho``
-    does not apply."""
-    if missing := [f"--{n}" for n in names if getattr(args, n, None) is None]:
-        parser.error(f"the following arguments are required: {', '.join(missing)} (or --chain FILE)")
-    if "decomposition" in names and getattr(args, "H", None) is not None:
-        parser.error("argument --H: applies to --chain only (the test model's parameters are dimensionless)")
 
 
 def _chain(args, parser, two_unit):
@@ -64,6 +41,16 @@ def _scheme(text, chain, parser, argument="--scheme"):
         return chain_scheme(text, chain)
     except ParameterError as exc:
         parser.error(f"argument {argument}: {exc}")
+
+
+def run(args, parser) -> int:
+    """The command of ``args`` with ``--chain`` (``icosim`` dispatches here when it is given)."""
+    if args.command == "rho":
+        return run_rho(args, parser)
+    from .advise import advise_parameters
+
+    params = {name: getattr(args, name) for name in advise_parameters() if getattr(args, name) is not None}
+    return run_advise(args, parser, params)
 
 
 def run_rho(args, parser) -> int:

@@ -33,8 +33,17 @@ from ..engine.spectral.policy import reason_code
 from ..engine.stages import check
 from ..errors import ParameterError, PointTimeout
 from ..io.jsonio import dumps
-from .arguments import CHAIN_ONLY, bits, decimal, digits, order, scheme_or_order, seconds
-from .chain import add_chain_arguments, two_unit_arguments
+from .arguments import (
+    CHAIN_ONLY,
+    add_chain_arguments,
+    bits,
+    decimal,
+    digits,
+    order,
+    scheme_or_order,
+    seconds,
+    two_unit_arguments,
+)
 
 __all__ = ["add_parser", "run", "rho_answer", "rho_text"]
 
@@ -116,10 +125,6 @@ def run(args, parser) -> int:
     """``icosim rho``: check the arguments (exit 2 naming the bad one), then answer."""
     from ..problems.linear.model import TestModel
 
-    if args.chain is not None:
-        from .chain import run_rho
-
-        return run_rho(args, parser)
     two_unit_arguments(args, parser, ("decomposition",) + MODEL_NAMES)
     try:
         scheme = get_scheme(args.scheme)
