@@ -36,7 +36,7 @@ from ..problems.linear.chain import Chain, ChainFamily
 from ..studies.chains.config import SCHEME_KINDS, scheme_name
 from .core import DEFAULT_K, Configuration, index_parameters
 from .output import configuration_table
-from .scan import DEFAULT_RTOL, DEFAULT_SCAN, check_settings, configuration_row, ranked
+from .scan import DEFAULT_RTOL, DEFAULT_SCAN, check_settings, configuration_row, ranked, settings_attrs
 
 __all__ = [
     "ChainSystem",
@@ -166,13 +166,7 @@ def advise_chain(
     df.attrs.update(
         chain={"segments": [asdict(s) for s in chain.segments_], "joints": list(chain.decompositions)},
         refused=[{"configuration": c.label, "scheme": c.scheme, "reason": why} for c, why in refused],
-        H=H.tolist(),
-        mode="point" if H.size == 1 else "range",
-        n_scan=int(n_scan) if H.size == 2 else None,
-        rtol=float(rtol) if H.size == 2 else None,
-        policy=policy,
-        digits=int(digits),
-        defaults="those not given are 1 in the paper's dimensionless form (mu_bar = mu/H = 1, a = b = 1)",
+        **settings_attrs(H, n_scan, rtol, policy, digits),
     )
     return df
 

@@ -13,6 +13,7 @@ __all__ = [
     "advise",
     "configuration_row",
     "ranked",
+    "settings_attrs",
     "DEFAULT_SCAN",
     "DEFAULT_RTOL",
 ]
@@ -145,18 +146,25 @@ def advise(
     df = ranked(rows, H)
     df.attrs.update(
         system=system.as_dict(),
-        H=H.tolist(),
-        mode="point" if H.size == 1 else "range",
         dimensionless=[system.dimensionless(h) for h in H],
         overdamped=list(system.overdamped),
         per_second=system.per_second() if eq71 else None,
-        n_scan=int(n_scan) if H.size == 2 else None,
-        rtol=float(rtol) if H.size == 2 else None,
-        policy=policy,
-        digits=int(digits),
-        defaults="those not given are 1 in the paper's dimensionless form (mu_bar = mu/H = 1, a = b = 1)",
+        **settings_attrs(H, n_scan, rtol, policy, digits),
     )
     return df
+
+
+def settings_attrs(H, n_scan, rtol, policy, digits) -> dict:
+    """The settings of an answer, for its ``df.attrs``."""
+    return {
+        "H": H.tolist(),
+        "mode": "point" if H.size == 1 else "range",
+        "n_scan": int(n_scan) if H.size == 2 else None,
+        "rtol": float(rtol) if H.size == 2 else None,
+        "policy": policy,
+        "digits": int(digits),
+        "defaults": "those not given are 1 in the paper's dimensionless form (mu_bar = mu/H = 1, a = b = 1)",
+    }
 
 
 def configuration_row(system, s, H, *, n_scan=DEFAULT_SCAN, rtol=DEFAULT_RTOL, policy="auto", digits=128) -> dict:

@@ -25,7 +25,7 @@ from .arguments import (
     two_unit_arguments,
 )
 
-__all__ = ["add_parser", "run", "advise_parameters"]
+__all__ = ["add_parser", "run", "advise_parameters", "scan_settings", "print_advice"]
 
 
 def advise_parameters() -> dict:
@@ -106,20 +106,34 @@ def add_parser(sub):
     return adv
 
 
+def scan_settings(args) -> dict:
+    """``n_scan``, ``rtol`` and ``policy`` of the arguments, checked with ``--H``
+    (:func:`icosim.advise.check_settings`; a :class:`~icosim.errors.ParameterError` naming the argument)."""
+    from ..advise import DEFAULT_RTOL, DEFAULT_SCAN, check_settings
+
+    settings = {"n_scan": args.scan or DEFAULT_SCAN, "rtol": args.rtol or DEFAULT_RTOL, "policy": args.policy}
+    check_settings(args.H, **settings)
+    if len(args.H) == 1 and (args.scan is not None or args.rtol is not None):
+        raise ParameterError("scan and --rtol apply to an H range (--H H_LO H_HI) only")
+    return settings
+
+
+def print_advice(args, n_configurations: int, compute, text) -> int:
+    """``compute(progress)``'s table printed as JSON records or as ``text(table)``, a progress bar meanwhile."""
+    from ..advise import Progress, advice_records
+
+    bar = Progress(n_configurations)
+    try:
+        df = compute(bar)
+    finally:
+        bar.close()
+    print(dumps(advice_records(df)) if args.json else text(df))
+    return 0
+
+
 def run(args, parser) -> int:
     """``icosim advise``: check the arguments (exit 2 naming the bad one), then answer."""
-    from ..advise import (
-        DEFAULT_K,
-        DEFAULT_RTOL,
-        DEFAULT_SCAN,
-        Progress,
-        TwoMassSystem,
-        advice_records,
-        advice_text,
-        advise,
-        check_settings,
-        configurations,
-    )
+    from ..advise import DEFAULT_K, TwoMassSystem, advice_text, advise, configurations
 
     if len(args.H) > 2:
         parser.error(f"argument --H: give one macro step or a range H_LO H_HI, got {len(args.H)} values")
@@ -132,9 +146,7 @@ def run(args, parser) -> int:
             parser.error(f"argument --schemes: {text!r} names a chain's scheme: {CHAIN_ONLY}")
     try:
         system = TwoMassSystem(args.m1, args.m2, args.c1, args.c2, args.d1, args.d2)
-        check_settings(args.H, n_scan=args.scan or DEFAULT_SCAN, rtol=args.rtol or DEFAULT_RTOL, policy=args.policy)
-        if len(args.H) == 1 and (args.scan is not None or args.rtol is not None):
-            raise ParameterError("scan and --rtol apply to an H range (--H H_LO H_HI) only")
+        settings = scan_settings(args)
         configuration_list = configurations(
             methods=args.methods,
             decompositions=args.decompositions,
@@ -146,18 +158,8 @@ def run(args, parser) -> int:
         fail(parser, str(exc))
     if not configuration_list:
         parser.error("argument --decompositions: none of the methods asked for is defined for these decompositions")
-    bar = Progress(len(configuration_list))
-    try:
-        df = advise(
-            system,
-            args.H,
-            configuration_list=configuration_list,
-            n_scan=args.scan or DEFAULT_SCAN,
-            rtol=args.rtol or DEFAULT_RTOL,
-            policy=args.policy,
-            progress=bar,
-        )
-    finally:
-        bar.close()
-    print(dumps(advice_records(df)) if args.json else advice_text(df))
-    return 0
+
+    def compute(bar):
+        return advise(system, args.H, configuration_list=configuration_list, progress=bar, **settings)
+
+    return print_advice(args, len(configuration_list), compute, advice_text)

@@ -60,7 +60,7 @@ def run_rho(args, parser) -> int:
 
     from ..io.jsonio import dumps
     from ..problems.linear.chain import ChainFamily
-    from .rho import MODEL_NAMES, _argument_message, _method_from_args, family_answer, rho_text
+    from .rho import MODEL_NAMES, _argument_message, _method_from_args, family_answer, precision, rho_text
 
     chain = _chain(args, parser, ("decomposition",) + MODEL_NAMES)
     if args.H is None:
@@ -79,15 +79,7 @@ def run_rho(args, parser) -> int:
         parser.error(f"argument --method/--scheme: {exc} (the chain's joints: {', '.join(chain.decompositions)})")
     if np.any(family.overflowing()):
         parser.error(f"argument --H: {family.overflow_reason}")
-    answer = family_answer(
-        family,
-        method,
-        lambda: family,
-        digits=args.digits,
-        max_bits=args.max_bits,
-        timeout=args.timeout,
-        scheme=scheme,
-    )
+    answer = family_answer(family, method, lambda: family, scheme=scheme, **precision(args))
     result = {
         **answer,
         "method": method.name,
@@ -106,36 +98,25 @@ def run_rho(args, parser) -> int:
 def run_advise(args, parser, params: dict) -> int:
     """``icosim advise --chain FILE``: every configuration of the chain ranked (:func:`icosim.advise.chains.advise_chain`),
     those the engine refuses listed with the reason."""
-    from ..advise import DEFAULT_K, DEFAULT_RTOL, DEFAULT_SCAN, Progress, advice_records, check_settings
+    from ..advise import DEFAULT_K
     from ..advise.chains import advise_chain, chain_advice_text, chain_configurations
-    from ..io.jsonio import dumps
+    from .advise import print_advice, scan_settings
     from .arguments import fail
 
     chain = _chain(args, parser, ("m1", "m2", "c1", "c2", "d1", "d2", "decompositions"))
     for text in args.schemes or ():
         _scheme(text, chain, parser, "--schemes")
     try:
-        check_settings(args.H, n_scan=args.scan or DEFAULT_SCAN, rtol=args.rtol or DEFAULT_RTOL, policy=args.policy)
-        if len(args.H) == 1 and (args.scan is not None or args.rtol is not None):
-            raise ParameterError("scan and --rtol apply to an H range (--H H_LO H_HI) only")
+        settings = scan_settings(args)
         configuration_list, refused = chain_configurations(
             chain, methods=args.methods, k=args.k or DEFAULT_K, params=params, schemes=args.schemes
         )
     except ParameterError as exc:
         fail(parser, str(exc))
-    bar = Progress(len(configuration_list))
-    try:
-        df = advise_chain(
-            chain,
-            args.H,
-            configuration_list=configuration_list,
-            refused=refused,
-            n_scan=args.scan or DEFAULT_SCAN,
-            rtol=args.rtol or DEFAULT_RTOL,
-            policy=args.policy,
-            progress=bar,
+
+    def compute(bar):
+        return advise_chain(
+            chain, args.H, configuration_list=configuration_list, refused=refused, progress=bar, **settings
         )
-    finally:
-        bar.close()
-    print(dumps(advice_records(df)) if args.json else chain_advice_text(df))
-    return 0
+
+    return print_advice(args, len(configuration_list), compute, chain_advice_text)

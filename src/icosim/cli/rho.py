@@ -139,16 +139,7 @@ def run(args, parser) -> int:
         check_derived(model)  # k = lr^2 + li^2, ... finite in float64
     except ParameterError as exc:
         parser.error(_argument_message(str(exc)))
-    answer = rho_answer(
-        model,
-        method,
-        decomposition,
-        args.k,
-        digits=args.digits,
-        max_bits=args.max_bits,
-        timeout=args.timeout,
-        scheme=scheme,
-    )
+    answer = rho_answer(model, method, decomposition, args.k, scheme=scheme, **precision(args))
     result = {
         **answer,
         "method": method.name,
@@ -163,6 +154,11 @@ def run(args, parser) -> int:
     else:
         print(rho_text(answer, show_enclosure=args.certify, scheme=scheme))
     return 0
+
+
+def precision(args) -> dict:
+    """The precision and time budget the arguments ask for (:func:`family_answer`'s keywords)."""
+    return {"digits": args.digits, "max_bits": args.max_bits, "timeout": args.timeout}
 
 
 def _argument_message(text: str) -> str:
