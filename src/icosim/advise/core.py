@@ -15,10 +15,11 @@ import numpy as np
 from ..engine import methods as _methods
 from ..engine.bounds import check_k
 from ..engine.schemes import get_scheme, standard_schemes
+from ..engine.spectral.policy import spectral_radius
 from ..engine.stages import couples
 from ..errors import ParameterError
+from ..problems.linear.family import TwoMass
 from ..problems.linear.model import PhysicalModel
-from ..problems.linear.spectral import spectral_radius
 
 __all__ = [
     "TwoMassSystem",
@@ -79,6 +80,10 @@ class TwoMassSystem:
     def model(self, H) -> PhysicalModel:
         """The engine's physical model at macro step(s) ``H`` (an array broadcasts)."""
         return PhysicalModel(H=np.asarray(H, dtype=float), **self.as_dict())
+
+    def family(self, H, decomposition, k: int) -> TwoMass:
+        """The points at macro step(s) ``H`` for the spectral analysis (:func:`evaluate`)."""
+        return TwoMass(self.model(H), decomposition, k)
 
     @property
     def overdamped(self) -> tuple[bool, bool]:
@@ -270,7 +275,8 @@ class Evaluation:
 
 
 def evaluate(system: TwoMassSystem, configuration: Configuration, H, *, policy="auto", digits=128) -> Evaluation:
-    """``rho`` of ``configuration`` at every macro step in ``H``: one batched call, or one per H where the engine's
+    """``rho`` of ``configuration`` at every macro step in ``H`` (``system`` a :class:`TwoMassSystem`, or any object
+    whose ``family(H, decomposition, k)`` gives the points, a chain's too): one batched call, or one per H where the engine's
     parameters change with it (a Baumgarte ``mu`` in s).
 
     The verdict is the precision policy's (:func:`icosim.problems.linear.spectral.spectral_radius`): ``stable``,
@@ -281,20 +287,14 @@ def evaluate(system: TwoMassSystem, configuration: Configuration, H, *, policy="
     H = np.atleast_1d(np.asarray(H, dtype=float))
     kw = {"digits": digits, "policy": policy, "scheme": configuration.scheme}
     names = ("rho", "err", "digits", "verdict", "arithmetic")
-    if configuration.h_dependent:
-        parts = [
-            spectral_radius(
-                system.model(h), configuration.engine_method(h), configuration.decomposition, configuration.k, **kw
-            )
-            for h in H
-        ]
+    c = configuration
+    if c.h_dependent:
+        parts = [spectral_radius(system.family(h, c.decomposition, c.k), c.engine_method(h), **kw) for h in H]
         rho, err, dig, verdict, arithmetic = (
             np.concatenate([np.atleast_1d(getattr(r, n)) for r in parts]) for n in names
         )
     else:
-        r = spectral_radius(
-            system.model(H), configuration.engine_method(), configuration.decomposition, configuration.k, **kw
-        )
+        r = spectral_radius(system.family(H, c.decomposition, c.k), c.engine_method(), **kw)
         rho, err, dig, verdict, arithmetic = (np.atleast_1d(np.asarray(getattr(r, n))) for n in names)
     if policy == "float64":  # no recheck: what float64 cannot decide stays undecided
         untrusted = ~(np.isfinite(rho) & (np.abs(rho - 1) > err))

@@ -8,7 +8,7 @@ import time
 
 import numpy as np
 
-__all__ = ["Progress", "advice_records", "advice_text"]
+__all__ = ["Progress", "advice_records", "advice_text", "configuration_table"]
 
 
 class Progress:
@@ -131,6 +131,13 @@ def advice_text(df) -> str:
             f"(lr1 = {ps['lr1_per_H']:.4g} 1/s * H, li1 = {ps['li1_per_H']:.4g} 1/s * H; the ratios do not depend on H)"
         )
     lines.append(f"Method parameters: {a['defaults']}.")
+    return "\n".join(lines + configuration_table(df))
+
+
+def configuration_table(df) -> list[str]:
+    """The lines of :func:`advice_text` below the system: what was computed and how, and the ranked table."""
+    a = df.attrs
+    lines = []
     prec = "float64; certified in ball arithmetic (a proven enclosure of rho) where float64 cannot decide"
     if a["policy"] == "float64":
         prec = "float64 only (points float64 cannot decide are 'undecided')"
@@ -169,4 +176,4 @@ def advice_text(df) -> str:
     widths = {c: max(len(c), *(len(v) for v in table[c])) for c in table.columns}
     left = {c: (lambda w: lambda v: f"{v:<{w}}")(widths[c]) for c in table.columns}
     lines += [line.rstrip() for line in table.to_string(index=False, justify="left", formatters=left).splitlines()]
-    return "\n".join(lines)
+    return lines

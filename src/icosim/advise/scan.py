@@ -7,7 +7,16 @@ import numpy as np
 from ..errors import ParameterError
 from .core import TwoMassSystem, configurations, evaluate
 
-__all__ = ["stable_intervals", "check_settings", "advise", "DEFAULT_SCAN", "DEFAULT_RTOL"]
+__all__ = [
+    "stable_intervals",
+    "check_settings",
+    "advise",
+    "configuration_row",
+    "ranked",
+    "settings_attrs",
+    "DEFAULT_SCAN",
+    "DEFAULT_RTOL",
+]
 
 #: Grid points of the first scan over an H range.
 DEFAULT_SCAN = 32
@@ -126,29 +135,7 @@ def advise(
     eq71 = system.dimensionless(float(H[-1]))["eq71"] == "ok"
     rows = []
     for n, s in enumerate(configuration_list, start=1):
-        base = {
-            "configuration": s.label,
-            "scheme": s.scheme,
-            "method": s.method,
-            "index": s.index,
-            "parameters": s.parameter_text,
-            "method_parameters": dict(s.params),
-            "decomposition": s.decomposition,
-            "k": s.k,
-        }
-        if H.size == 1:
-            ev = evaluate(system, s, H, policy=policy, digits=digits)
-            row = {
-                **base,
-                "H": float(H[0]),
-                "rho": float(ev.rho[0]),
-                "rho_float64_error": float(ev.err[0]),
-                "digits": int(ev.digits[0]),
-                "verdict": str(ev.verdict[0]),
-                "decided_by": str(ev.arithmetic[0]),
-            }
-        else:
-            row = {**base, **_range_row(system, s, H, n_scan, rtol, policy, digits)}
+        row = configuration_row(system, s, H, n_scan=n_scan, rtol=rtol, policy=policy, digits=digits)
         row_H = row.get("H", row.get("H_max"))
         if eq71:
             p = system.dimensionless(row_H) if row_H is not None and np.isfinite(row_H) else {}
@@ -156,6 +143,60 @@ def advise(
         rows.append(row)
         if progress is not None:
             progress(n)
+    df = ranked(rows, H)
+    df.attrs.update(
+        system=system.as_dict(),
+        dimensionless=[system.dimensionless(h) for h in H],
+        overdamped=list(system.overdamped),
+        per_second=system.per_second() if eq71 else None,
+        **settings_attrs(H, n_scan, rtol, policy, digits),
+    )
+    return df
+
+
+def settings_attrs(H, n_scan, rtol, policy, digits) -> dict:
+    """The settings of an answer, for its ``df.attrs``."""
+    return {
+        "H": H.tolist(),
+        "mode": "point" if H.size == 1 else "range",
+        "n_scan": int(n_scan) if H.size == 2 else None,
+        "rtol": float(rtol) if H.size == 2 else None,
+        "policy": policy,
+        "digits": int(digits),
+        "defaults": "those not given are 1 in the paper's dimensionless form (mu_bar = mu/H = 1, a = b = 1)",
+    }
+
+
+def configuration_row(system, s, H, *, n_scan=DEFAULT_SCAN, rtol=DEFAULT_RTOL, policy="auto", digits=128) -> dict:
+    """One row of :func:`advise`'s table: the configuration ``s`` of ``system`` (anything :func:`~.core.evaluate`
+    takes) at one macro step ``H`` (an array of one) or over the range ``H = (H_lo, H_hi)``."""
+    base = {
+        "configuration": s.label,
+        "scheme": s.scheme,
+        "method": s.method,
+        "index": s.index,
+        "parameters": s.parameter_text,
+        "method_parameters": dict(s.params),
+        "decomposition": s.decomposition,
+        "k": s.k,
+    }
+    if H.size == 1:
+        ev = evaluate(system, s, H, policy=policy, digits=digits)
+        return {
+            **base,
+            "H": float(H[0]),
+            "rho": float(ev.rho[0]),
+            "rho_float64_error": float(ev.err[0]),
+            "digits": int(ev.digits[0]),
+            "verdict": str(ev.verdict[0]),
+            "decided_by": str(ev.arithmetic[0]),
+        }
+    return {**base, **_range_row(system, s, H, n_scan, rtol, policy, digits)}
+
+
+def ranked(rows: list, H):
+    """:func:`advise`'s table from its rows: stable configurations ranked first (module :mod:`icosim.advise`), a
+    ``rank`` column in front (missing for those not stable)."""
     import pandas as pd  # here: the commands that only build advise's parser need not import it
 
     df = pd.DataFrame(rows)
@@ -179,19 +220,6 @@ def advise(
     df = df.loc[order].reset_index(drop=True)
     stable = df["verdict"] == "stable" if H.size == 1 else df["H_max"].notna()
     df.insert(0, "rank", pd.array([i + 1 if s else None for i, s in enumerate(stable)], dtype="Int64"))
-    df.attrs.update(
-        system=system.as_dict(),
-        H=H.tolist(),
-        mode="point" if H.size == 1 else "range",
-        dimensionless=[system.dimensionless(h) for h in H],
-        overdamped=list(system.overdamped),
-        per_second=system.per_second() if eq71 else None,
-        n_scan=int(n_scan) if H.size == 2 else None,
-        rtol=float(rtol) if H.size == 2 else None,
-        policy=policy,
-        digits=int(digits),
-        defaults="those not given are 1 in the paper's dimensionless form (mu_bar = mu/H = 1, a = b = 1)",
-    )
     return df
 
 

@@ -9,6 +9,8 @@ sub-command                 module
                             system, stable or not, up to which macro step
 ``icosim map``              :mod:`.map`: a stability map as PNG, PDF and NetCDF
 ``icosim cosim``            :mod:`.cosim`: an FMU scene run with a coupling method
+``rho``/``advise --chain``  :mod:`.chain`: the same answers for a chain of
+                            linear oscillator segments read from a YAML file
 ==========================  ===================================================
 
 :mod:`.arguments` holds the argument types they share, so that every command takes and
@@ -24,7 +26,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from . import advise, cosim, rho
+from . import advise, chain, cosim, rho
 from . import map as map_
 
 __all__ = ["main", "build_parser", "COMMANDS"]
@@ -97,7 +99,9 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     args = parser.parse_args(_negative_values_attached(argv, parser))
     try:
-        return COMMANDS[args.command].run(args, args.subparser)
+        # ``--chain FILE`` (rho, advise): a chain in place of the two subsystems (:mod:`.chain`)
+        command = chain if getattr(args, "chain", None) is not None else COMMANDS[args.command]
+        return command.run(args, args.subparser)
     except KeyboardInterrupt:
         # files are written whole or not at all (renamed into place when complete): say so, no traceback
         print(f"icosim {args.command}: interrupted; no output file was left half-written", file=sys.stderr)

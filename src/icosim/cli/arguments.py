@@ -26,6 +26,10 @@ __all__ = [
     "positive_int",
     "NEGATIVE_NUMBER",
     "add_scheme_arguments",
+    "scheme_or_order",
+    "CHAIN_ONLY",
+    "add_chain_arguments",
+    "two_unit_arguments",
     "fail",
 ]
 
@@ -123,6 +127,50 @@ def add_scheme_arguments(group):
         help="coupling scheme: jacobi (parallel, the paper's; default), gauss-seidel-12 (sequential, subsystem 1 "
         "first), gauss-seidel-21 (subsystem 2 first), or a variant (docs/gauss_seidel.md)",
     )
+
+
+#: What a scheme argument takes for a chain only (``--chain``): the kinds and an order of units by commas.
+CHAIN_ONLY = "with --chain: gauss-seidel-forward, gauss-seidel-reverse, orders like 3,1,2"
+
+
+def scheme_or_order(text):
+    """A scheme for two subsystems or a chain: a registered name or ``gauss-seidel-<order>``, and for a chain also
+    ``gauss-seidel-forward``, ``gauss-seidel-reverse`` or the units' numbers separated by commas (``3,1,2``);
+    which of them suits the problem is decided when it is known (:func:`icosim.advise.chains.chain_scheme`)."""
+    from ..advise.chains import SCHEME_KINDS, UNIT_ORDER
+    from ..engine.schemes import get_scheme
+
+    if text in SCHEME_KINDS or UNIT_ORDER.fullmatch(text):
+        return text
+    try:
+        get_scheme(text)
+    except ParameterError:
+        allowed = ", ".join(repr(name) for name in SCHEMES)
+        raise argparse.ArgumentTypeError(
+            f"invalid choice: {text!r} (choose from {allowed}, gauss-seidel-<order>; {CHAIN_ONLY})"
+        ) from None
+    return text
+
+
+def add_chain_arguments(parser, *, H: bool = True):
+    """``--chain FILE`` (and, for ``rho``, ``--H``) on a command's parser."""
+    g = parser.add_argument_group(
+        "a chain instead of two subsystems",
+        "A YAML file {segments: [...], joints: ...} (docs/cli.md, config/chains/example3.yaml): one segment per "
+        "unit, one decomposition for every joint or a list of one per joint.",
+    )
+    g.add_argument("--chain", metavar="FILE", help="the chain's YAML file (replaces the two-unit arguments)")
+    if H:
+        g.add_argument("--H", type=number, help="macro step in s (with --chain)")
+
+
+def two_unit_arguments(args, parser, names) -> None:
+    """Without ``--chain``: every one of ``names`` is required (argparse's message); a chain's ``--H`` of ``rho``
+    does not apply."""
+    if missing := [f"--{n}" for n in names if getattr(args, n, None) is None]:
+        parser.error(f"the following arguments are required: {', '.join(missing)} (or --chain FILE)")
+    if "decomposition" in names and getattr(args, "H", None) is not None:
+        parser.error("argument --H: applies to --chain only (the test model's parameters are dimensionless)")
 
 
 def fail(parser, text: str):

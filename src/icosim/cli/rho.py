@@ -33,7 +33,17 @@ from ..engine.spectral.policy import reason_code
 from ..engine.stages import check
 from ..errors import ParameterError, PointTimeout
 from ..io.jsonio import dumps
-from .arguments import add_scheme_arguments, bits, decimal, digits, order, seconds
+from .arguments import (
+    CHAIN_ONLY,
+    add_chain_arguments,
+    bits,
+    decimal,
+    digits,
+    order,
+    scheme_or_order,
+    seconds,
+    two_unit_arguments,
+)
 
 __all__ = ["add_parser", "run", "rho_answer", "rho_text"]
 
@@ -47,20 +57,30 @@ def add_parser(sub):
     )
     g = rho.add_argument_group("method and layout")
     g.add_argument("--method", required=True, choices=tuple(methods.METHODS))
-    g.add_argument("--decomposition", required=True, choices=tuple(DECOMPOSITIONS))
+    g.add_argument(
+        "--decomposition", choices=tuple(DECOMPOSITIONS), help="the joint's decomposition (required without --chain)"
+    )
     g.add_argument("--k", required=True, type=order, help=f"approximation order (integer 0..{MAX_K})")
-    add_scheme_arguments(g)
+    g.add_argument(
+        "--scheme",
+        type=scheme_or_order,
+        default="jacobi",
+        help="coupling scheme: jacobi (parallel, the paper's; default), gauss-seidel-12 (sequential, subsystem 1 "
+        "first), gauss-seidel-21 (subsystem 2 first), or a variant (docs/gauss_seidel.md); with --chain also "
+        "gauss-seidel-forward (units 1 -> N), gauss-seidel-reverse (N -> 1) or an order of the units such as 3,1,2",
+    )
     g = rho.add_argument_group("method parameters")
     with_index = ", ".join(spec.label for spec in methods.METHODS.values() if spec.takes_index)
     g.add_argument("--index", type=int, choices=methods.indices(), help=f"index of the formulation ({with_index})")
     for name, p in methods.parameters().items():  # every registered method's parameters
         g.add_argument(f"--{name}", type=decimal, help=p.help)
-    g = rho.add_argument_group("test-model parameters (Eq. 71)")
-    g.add_argument("--lr1", required=True, type=decimal, help="real part of subsystem 1's eigenvalue (<= 0)")
-    g.add_argument("--li1", required=True, type=decimal, help="imaginary part of subsystem 1's eigenvalue (>= 0)")
-    g.add_argument("--am21", required=True, type=decimal, help="mass ratio m2/m1 (> 0)")
-    g.add_argument("--alr21", required=True, type=decimal, help="damping ratio lr2/lr1 (>= 0)")
-    g.add_argument("--ali21", required=True, type=decimal, help="frequency ratio li2/li1 (>= 0)")
+    g = rho.add_argument_group("test-model parameters (Eq. 71; required without --chain)")
+    g.add_argument("--lr1", type=decimal, help="real part of subsystem 1's eigenvalue (<= 0)")
+    g.add_argument("--li1", type=decimal, help="imaginary part of subsystem 1's eigenvalue (>= 0)")
+    g.add_argument("--am21", type=decimal, help="mass ratio m2/m1 (> 0)")
+    g.add_argument("--alr21", type=decimal, help="damping ratio lr2/lr1 (>= 0)")
+    g.add_argument("--ali21", type=decimal, help="frequency ratio li2/li1 (>= 0)")
+    add_chain_arguments(rho)
     g = rho.add_argument_group(
         "precision and output",
         "The verdict is always proven in ball arithmetic (python-flint Arb) from the decimals as typed: stable "
@@ -105,7 +125,11 @@ def run(args, parser) -> int:
     """``icosim rho``: check the arguments (exit 2 naming the bad one), then answer."""
     from ..problems.linear.model import TestModel
 
-    scheme = get_scheme(args.scheme)
+    two_unit_arguments(args, parser, ("decomposition",) + MODEL_NAMES)
+    try:
+        scheme = get_scheme(args.scheme)
+    except ParameterError:
+        parser.error(f"argument --scheme: {args.scheme!r} names a chain's scheme: {CHAIN_ONLY}")
     try:
         method = _method_from_args(args)
         decomposition = get_decomposition(args.decomposition)
@@ -115,16 +139,7 @@ def run(args, parser) -> int:
         check_derived(model)  # k = lr^2 + li^2, ... finite in float64
     except ParameterError as exc:
         parser.error(_argument_message(str(exc)))
-    answer = rho_answer(
-        model,
-        method,
-        decomposition,
-        args.k,
-        digits=args.digits,
-        max_bits=args.max_bits,
-        timeout=args.timeout,
-        scheme=scheme,
-    )
+    answer = rho_answer(model, method, decomposition, args.k, scheme=scheme, **precision(args))
     result = {
         **answer,
         "method": method.name,
@@ -132,7 +147,7 @@ def run(args, parser) -> int:
         "k": args.k,
         "scheme": scheme.name,
         "method_parameters": method.params,
-        "model": {n: float(getattr(args, n)) for n in ("lr1", "li1", "am21", "alr21", "ali21")},
+        "model": {n: float(getattr(args, n)) for n in MODEL_NAMES},
     }
     if args.json:
         print(dumps(result))
@@ -141,9 +156,14 @@ def run(args, parser) -> int:
     return 0
 
 
+def precision(args) -> dict:
+    """The precision and time budget the arguments ask for (:func:`family_answer`'s keywords)."""
+    return {"digits": args.digits, "max_bits": args.max_bits, "timeout": args.timeout}
+
+
 def _argument_message(text: str) -> str:
     """Messages from the library name parameters; make them read like argparse's."""
-    for name in ("lr1", "li1", "am21", "alr21", "ali21") + methods.argument_names():
+    for name in MODEL_NAMES + methods.argument_names():
         if text.startswith(f"{name} "):  # also "a and b must be ..." -> --a
             return f"argument --{name}: {text}"
     if text.startswith("method "):
@@ -163,7 +183,24 @@ def rho_answer(model, method, decomposition, k, *, digits=None, max_bits=1024, t
     ``model`` is a :class:`~icosim.problems.linear.model.TestModel` of one point (Fractions kept exact); ``scheme`` the
     coupling scheme (:mod:`icosim.engine.schemes`), used by the proof and by float64 alike.
     """
-    from ..problems.linear.spectral import certify_spectral_radius
+    from ..problems.linear.family import TwoMass
+
+    def floats():
+        return TwoMass(type(model)(*(float(getattr(model, n)) for n in MODEL_NAMES)), decomposition, k)
+
+    family = TwoMass(model, decomposition, k)
+    return family_answer(family, method, floats, digits=digits, max_bits=max_bits, timeout=timeout, scheme=scheme)
+
+
+#: The parameters of the test model (Eq. 71), as the command takes them.
+MODEL_NAMES = ("lr1", "li1", "am21", "alr21", "ali21")
+
+
+def family_answer(family, method, float_family, *, digits=None, max_bits=1024, timeout=None, scheme=JACOBI) -> dict:
+    """:func:`rho_answer` for the one point of any :class:`~icosim.engine.spectral.family.LinearFamily` (a chain's
+    too): the proof on ``family``, float64's value and error estimate on ``float_family()`` (the same point in
+    floats; called inside the time budget, an error there leaves float64's value out)."""
+    from ..engine.spectral.certified import certify_spectral_radius
 
     scheme = get_scheme(scheme)
 
@@ -174,10 +211,8 @@ def rho_answer(model, method, decomposition, k, *, digits=None, max_bits=1024, t
     out.update(rho_decimal=None, rho_float64=None, float64_error_estimate=None)
     try:
         with time_budget(timeout):
-            out["rho_float64"], out["float64_error_estimate"] = _float64(model, method, decomposition, k, scheme)
-            cert = certify_spectral_radius(
-                model, method, decomposition, k, max_bits=max_bits, digits=want, scheme=scheme
-            )
+            out["rho_float64"], out["float64_error_estimate"] = _float64(float_family, method, scheme)
+            cert = certify_spectral_radius(family, method, max_bits=max_bits, digits=want, scheme=scheme)
     except (ArithmeticError, ValueError) as exc:  # a timeout, a cap, an overflow: undecided, with the reason
         out["reason"], out["reason_code"] = str(exc), reason_code(exc)
         out["precision"] = "none (undecided)"
@@ -236,14 +271,13 @@ def rho_text(answer: dict, *, show_enclosure: bool = False, scheme=JACOBI) -> st
     return f"rho = {value}  ({order}{proof} at {a['precision_bits']} bits, {a['digits']} digits{f64_text}{note})"
 
 
-def _float64(model, method, decomposition, k, scheme=JACOBI):
+def _float64(float_family, method, scheme=JACOBI):
     """float64's value and error estimate for comparison (None where float64 gives nothing finite)."""
-    from ..problems.linear.spectral import spectral_radius_float64
+    from ..engine.spectral.radius import spectral_radius_float64
 
     try:
         with np.errstate(all="ignore"):
-            floats = type(model)(*(float(getattr(model, n)) for n in ("lr1", "li1", "am21", "alr21", "ali21")))
-            r, e = spectral_radius_float64(floats, method, decomposition, k, scheme=scheme)
+            r, e = spectral_radius_float64(float_family(), method, scheme=scheme)
     except PointTimeout:  # the command's time budget, not float64's failure
         raise
     except (ArithmeticError, ValueError, np.linalg.LinAlgError):  # float64 cannot even form the point

@@ -3,6 +3,8 @@ model (the chain of two single masses), the monolithic DAE integrated numericall
 growth of time stepping against the spectral radius, the convergence order of the co-simulation, and the
 Gauss-Seidel orders the engine refuses."""
 
+import re
+
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -153,3 +155,31 @@ def test_certified_verdict_of_a_chain_point_agrees_with_float64():
         cert = certify_spectral_radius(family.point((i,)), method, scheme="gauss-seidel-1234")
         assert float(cert.rho_lower) <= rho[i] + err[i] and rho[i] - err[i] <= float(cert.rho_upper)
         assert cert.verdict == ("stable" if rho[i] + err[i] < 1 else "unstable")
+
+
+_ONE = {"masses": [1.0], "ground_stiffness": [1000.0], "ground_damping": [2.0]}
+_TWO = {"masses": [2.0], "ground_stiffness": [4000.0], "ground_damping": [1.0]}
+
+
+def test_from_dict_builds_the_chain_of_its_segments_and_joints():
+    chain = Chain.from_dict({"segments": [_ONE, _TWO, _ONE], "joints": "ff"}, H=1e-2)
+    direct = Chain((ChainSegment(**_ONE), ChainSegment(**_TWO), ChainSegment(**_ONE)), ("ff", "ff"), 1e-2)
+    assert chain == direct
+
+
+@pytest.mark.parametrize(
+    "d,key",
+    [
+        ({"joints": "ff"}, "segments:"),
+        ({"segments": [_ONE, _TWO]}, "joints:"),
+        ({"segments": [_ONE, _TWO], "joints": ["ff", "ff"]}, "joints:"),
+        ({"segments": [_ONE, _TWO], "joints": ["xy"]}, "joints[0]:"),
+        ({"segments": [_ONE, {"masses": [-1.0]}], "joints": "ff"}, "segments[1]:"),
+        ({"segments": [_ONE, {"masses": [1.0], "mass": 2}], "joints": "ff"}, "segments[1]:"),
+        ({"segments": [_ONE, _TWO, _ONE], "joints": ["fd", "df"]}, "joints:"),  # a driven single mass in two joints
+        ({"segments": [_ONE, _TWO], "joints": "ff", "H": 1}, "H:"),
+    ],
+)
+def test_from_dict_refuses_bad_input_naming_the_key(d, key):
+    with pytest.raises(ParameterError, match=re.escape(key)):
+        Chain.from_dict(d)

@@ -36,7 +36,7 @@ import numpy as np
 import scipy.linalg
 
 from ...engine import layout
-from ...engine.decompositions import get_decomposition
+from ...engine.decompositions import DECOMPOSITIONS, get_decomposition
 from ...engine.graph import CouplingGraph
 from ...engine.projection import joined_clusters
 from ...engine.spectral.family import LinearFamily
@@ -45,7 +45,7 @@ from .model import Segment
 from .problem import LinearCosimulation
 from .subsystems import decay_rate
 
-__all__ = ["ChainSegment", "Chain", "ChainSolution", "ChainFamily", "chain_start"]
+__all__ = ["ChainSegment", "Chain", "ChainSolution", "ChainFamily", "chain_start", "read_segments"]
 
 
 def _numbers(name, values, *, positive=False, length=None):
@@ -114,6 +114,24 @@ class ChainSegment:
         return out[0], out[1]
 
 
+def read_segments(items, key: str = "segments") -> tuple[ChainSegment, ...]:
+    """Segments from a list of mappings of :class:`ChainSegment`'s parameters, an error naming ``key[i]``."""
+    if not isinstance(items, list) or not items:
+        raise ParameterError(f"{key}: must be a non-empty list of segments")
+    allowed = ("masses", "ground_stiffness", "ground_damping", "stiffness", "damping")
+    out = []
+    for i, seg in enumerate(items):
+        unknown = sorted(set(seg) - set(allowed)) if isinstance(seg, dict) else []
+        if not isinstance(seg, dict) or "masses" not in seg or unknown:
+            got = f"unknown key {unknown[0]!r}" if unknown else f"{seg!r}"
+            raise ParameterError(f"{key}[{i}]: must be a mapping with masses and {', '.join(allowed[1:])}; {got}")
+        try:
+            out.append(ChainSegment(**seg))
+        except ParameterError as exc:
+            raise ParameterError(f"{key}[{i}]: {exc}") from None
+    return tuple(out)
+
+
 @dataclass(frozen=True)
 class Chain:
     """``N`` segments in a row, joint ``j`` between segment ``j``'s last mass and segment ``j + 1``'s first with
@@ -145,6 +163,28 @@ class Chain:
     def uniform(cls, n_segments: int, *, decomposition="ff", H=1e-3, **segment) -> Chain:
         """``n_segments`` equal segments joined by ``decomposition``."""
         return cls((ChainSegment(**segment),) * n_segments, (decomposition,) * (n_segments - 1), H)
+
+    @classmethod
+    def from_dict(cls, d, H=1e-3) -> Chain:
+        """``{segments: [...], joints: [...]}``: one segment per unit, one decomposition per joint or a single one
+        for all (``docs/chains.md``); an error names the key and the values allowed."""
+        if not isinstance(d, dict):
+            raise ParameterError("a chain is a mapping with the keys segments and joints")
+        if missing := [key for key in ("segments", "joints") if key not in d]:
+            raise ParameterError(f"{missing[0]}: is missing (a chain has the keys segments and joints)")
+        if unknown := sorted(set(d) - {"segments", "joints"}):
+            raise ParameterError(f"{unknown[0]}: not a key of a chain; allowed: segments, joints")
+        segs = read_segments(d["segments"])
+        joints = d["joints"] if isinstance(d["joints"], list) else [d["joints"]] * (len(segs) - 1)
+        for j, dec in enumerate(joints):
+            if dec not in DECOMPOSITIONS:
+                raise ParameterError(f"joints[{j}]: must be one of {', '.join(DECOMPOSITIONS)}, got {dec!r}")
+        if len(joints) != len(segs) - 1:
+            raise ParameterError(f"joints: {len(segs)} segments need {len(segs) - 1} joints (or one for all)")
+        try:
+            return cls(segs, tuple(joints), H)
+        except ParameterError as exc:
+            raise ParameterError(f"{'segments' if 'segment' in str(exc) else 'joints'}: {exc}") from None
 
     @classmethod
     def two_mass(cls, m1, m2, c1, c2, d1, d2, H, decomposition="ff") -> Chain:

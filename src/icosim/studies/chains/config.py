@@ -22,7 +22,7 @@ from __future__ import annotations
 from ...engine.decompositions import DECOMPOSITIONS
 from ...engine.methods import METHODS, make_method
 from ...errors import ParameterError
-from ...problems.linear.chain import Chain, ChainSegment
+from ...problems.linear.chain import Chain, ChainSegment, read_segments
 
 __all__ = [
     "SCHEME_KINDS",
@@ -135,13 +135,10 @@ def check_config(cfg: dict) -> None:
     _require(cfg["stability"]["scan"], "stability.scan.", ("min", "max", "n"))
     units = cfg["units"]
     for name, kind in units.items():
-        if not isinstance(kind, list) or not kind:
-            _fail(f"units.{name}", "must be a non-empty list of segments")
-        for i, seg in enumerate(kind):
-            try:
-                ChainSegment(**seg)
-            except (ParameterError, TypeError) as exc:
-                _fail(f"units.{name}[{i}]", str(exc))
+        try:
+            read_segments(kind, f"units.{name}")
+        except ParameterError as exc:
+            raise ParameterError(f"chains.{exc}") from None
         if len({len(seg["masses"]) for seg in kind}) != 1:
             _fail(f"units.{name}", "every segment of a kind has the same number of masses")
     methods = cfg["methods"]
