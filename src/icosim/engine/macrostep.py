@@ -63,8 +63,8 @@ def macro_step(
     ----------
     scheme : :class:`icosim.engine.schemes.Scheme` (or its name): the order of the subsystems, as stages
         (:mod:`icosim.engine.stages`); or the scheme's :class:`~icosim.engine.stages.Plan` on the problem's
-        graph, made once by a caller that takes many steps.  At each stage its subsystems are predicted with the extrapolation
-        polynomials; the joints it closes get corrected coupling variables, from the stage's subsystems'
+        graph, made once by a caller that takes many steps.  At each stage its subsystems are predicted with
+        the extrapolation polynomials; the joints it closes get corrected coupling variables, from the stage's subsystems'
         full gradients and the finished subsystems' algebraic ones (their outputs re-evaluated with the
         corrected variables; a scheme whose earlier outputs stay as integrated skips that and they do not
         respond); the stage's subsystems in a closed joint are corrected with the interpolation polynomials

@@ -13,27 +13,16 @@ numbers exactly, without numpy's overhead on arrays of a few values.  Larger sta
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from typing import Any
+from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["PointJacobian", "plain_factors", "MAX_ENTRIES"]
+from .residuals import LEVELS
 
-#: The levels of the conditions, as :data:`icosim.engine.residuals.LEVELS`.
-_LEVELS = ("pos", "vel", "acc", "force")
+__all__ = ["PointJacobian", "MAX_ENTRIES"]
+
 #: Above this many entries a loop in Python floats costs more than numpy's assembly.
 MAX_ENTRIES = 32
-
-
-def plain_factors(scale: Sequence[Any] | None) -> tuple[float, float, float, float] | None:
-    """The levels' factors as floats (the balance of forces: 1), or None where the constraint levels' are not
-    plain numbers (then the general assembly multiplies in their own arithmetic)."""
-    if scale is None:
-        return (1.0, 1.0, 1.0, 1.0)
-    if all(type(f) is float or type(f) is int for f in scale[:3]):
-        return (float(scale[0]), float(scale[1]), float(scale[2]), 1.0)
-    return None
 
 
 class PointJacobian:
@@ -48,20 +37,20 @@ class PointJacobian:
         unscaled, returning each level ``(stack, rows, cols)`` -- or None where it is not of that form."""
         levels = general(np.concatenate([np.eye(n), np.zeros((1, n))]))  # unit vectors, then the constant
         entries, blocks, at = [], [], 0
-        for q, key in enumerate(_LEVELS):
+        for q, key in enumerate(LEVELS):
             values = levels[key].reshape(n + 1, -1)
             blocks.append((key, at, at + values.shape[1], levels[key].shape[1:]))
             at += values.shape[1]
             for column in values.T:
                 constant = float(column[n])
                 coefficients = column[:n] - constant  # small integers: exact
-                nonzero = np.flatnonzero(coefficients)
-                if len(nonzero) + (constant != 0.0) > 2 or not np.isin(coefficients[nonzero], (-1.0, 1.0)).all():
+                terms = [(int(i), float(coefficients[i])) for i in np.flatnonzero(coefficients)]
+                if len(terms) + (constant != 0.0) > 2 or constant not in (-1.0, 0.0, 1.0):
                     return None
-                if constant not in (-1.0, 0.0, 1.0):
+                if any(c not in (-1.0, 1.0) for _, c in terms):
                     return None
-                (i, j), (si, sj) = (list(nonzero) + [-1, -1])[:2], (list(coefficients[nonzero]) + [0.0, 0.0])[:2]
-                entries.append((int(i), float(si), int(j), float(sj), constant, q))
+                (i, si), (j, sj) = (terms + [(-1, 0.0), (-1, 0.0)])[:2]
+                entries.append((i, si, j, sj, constant, q))
         if len(entries) > MAX_ENTRIES:
             return None
         return cls(entries, blocks)

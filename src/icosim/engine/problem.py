@@ -24,7 +24,8 @@ from .bounds import check_k
 from .decompositions import Decomposition
 from .graph import CouplingGraph
 from .lagrange import corrector_nodes, predictor_nodes, weights_at
-from .point_jacobian import MAX_ENTRIES, PointJacobian, plain_factors
+from .point_jacobian import MAX_ENTRIES, PointJacobian
+from .residuals import plain_factors
 
 if TYPE_CHECKING:
     from .residuals import Conditions

@@ -38,7 +38,7 @@ import numpy as np
 
 from .graph import FORCE, CouplingGraph
 
-__all__ = ["Conditions", "LEVELS"]
+__all__ = ["Conditions", "LEVELS", "plain_factors"]
 
 _EMPTY: dict[tuple, np.ndarray] = {}  # Conditions._empty
 
@@ -49,6 +49,16 @@ LEVELS = ("pos", "vel", "acc", "force")
 def _index(positions: Sequence[int]) -> Any:
     """An index of the port axis: an int for one port (the axis dropped, no copy), else an array."""
     return positions[0] if len(positions) == 1 else np.array(positions)
+
+
+def plain_factors(scale: Sequence[Any] | None) -> tuple[float, float, float, float] | None:
+    """The levels' factors as floats (the balance of forces: 1), or None where the constraint levels' are not
+    plain numbers (then each level is multiplied in their own arithmetic)."""
+    if scale is None:
+        return (1.0, 1.0, 1.0, 1.0)
+    if all(type(f) is float or type(f) is int for f in scale[:3]):
+        return (float(scale[0]), float(scale[1]), float(scale[2]), 1.0)
+    return None
 
 
 class Conditions:
@@ -136,7 +146,7 @@ class Conditions:
         last = self.__dict__.get("_last_scale")
         if last is not None and last[0] is scale and (last[1] is dtype or last[1] == dtype):
             return last[2]
-        plain = dtype == np.float64 and all(type(f) is float or type(f) is int for f in scale)
+        plain = dtype == np.float64 and plain_factors(scale) is not None
         factors = np.array([float(f) for f in scale[:3]])[:, None] if plain else None
         self._last_scale = (scale, dtype, factors)
         return factors

@@ -68,12 +68,8 @@ class Fmi2Calls:
         if self.fmi3:
             state = self.fmu.getFMUState()
         else:
-            declared, bare, component = self._states.get("fmi2GetFMUstate") or self._state_call("fmi2GetFMUstate")
             state = self._new_state()
-            f = self.fmu.dll.fmi2GetFMUstate
-            status = (
-                bare(component, ctypes.byref(state)) if f is declared else f(self.fmu.component, ctypes.byref(state))
-            )
+            status = self._state_call("fmi2GetFMUstate", ctypes.byref(state))
             if status > 1:
                 guard.leave()
                 refused("fmi2GetFMUstate", status)
@@ -87,9 +83,7 @@ class Fmi2Calls:
         if self.fmi3:
             self.fmu.setFMUState(state[0])
         else:
-            declared, bare, component = self._states.get("fmi2SetFMUstate") or self._state_call("fmi2SetFMUstate")
-            f = self.fmu.dll.fmi2SetFMUstate
-            status = bare(component, state[0]) if f is declared else f(self.fmu.component, state[0])
+            status = self._state_call("fmi2SetFMUstate", state[0])
             if status > 1:
                 guard.leave()
                 refused("fmi2SetFMUstate", status)
@@ -103,21 +97,19 @@ class Fmi2Calls:
         if self.fmi3:
             self.fmu.freeFMUState(state[0])
         else:
-            declared, bare, component = self._states.get("fmi2FreeFMUstate") or self._state_call("fmi2FreeFMUstate")
-            f = self.fmu.dll.fmi2FreeFMUstate
-            status = (
-                bare(component, ctypes.byref(state[0]))
-                if f is declared
-                else f(self.fmu.component, ctypes.byref(state[0]))
-            )
+            status = self._state_call("fmi2FreeFMUstate", ctypes.byref(state[0]))
             if status > 1:
                 refused("fmi2FreeFMUstate", status)
 
-    def _state_call(self, name):
-        """The library's function ``name`` as fmpy declared it and without argument types, and the instance as
-        the ctypes argument, made once (:func:`_direct`)."""
-        out = self._states[name] = (*_direct(self.fmu, name), ctypes.c_void_p(self.fmu.component))
-        return out
+    def _state_call(self, name, argument):
+        """The status of the library's state function ``name`` called on the instance with ``argument``: without
+        declared argument types, the instance as a ctypes argument made once (:func:`_direct`)."""
+        direct = self._states.get(name)
+        if direct is None:
+            direct = self._states[name] = (*_direct(self.fmu, name), ctypes.c_void_p(self.fmu.component))
+        declared, bare, component = direct
+        f = getattr(self.fmu.dll, name)
+        return bare(component, argument) if f is declared else f(self.fmu.component, argument)
 
     def read(self, keys) -> list:
         """:meth:`get` as a flat list of floats (key after key, component after component): the macro step's
@@ -215,16 +207,12 @@ class Fmi2Calls:
         rec = guard.batch(self.index, t, step_index, (4 if terms else 3) + (restore is not None) + (fast is not None))
         if restore is not None:
             self.restored += 1
-            state_declared, state_bare, state_comp = self._states.get("fmi2SetFMUstate") or self._state_call(
-                "fmi2SetFMUstate"
-            )
             if rec is not None:
                 r, number = rec
                 r[2] = _SET_STATE
                 r[0] = number
                 rec = r, number + 1.0
-            f = library.fmi2SetFMUstate
-            status = state_bare(state_comp, restore[0]) if f is state_declared else f(comp, restore[0])
+            status = self._state_call("fmi2SetFMUstate", restore[0])
             if rec is not None:
                 r[0] = 0.0
             if status > 1:
