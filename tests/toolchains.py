@@ -1,5 +1,5 @@
-"""The toolchain markers: tests that need a C compiler, CMake and fmpy (``fmu``), a SLURM cluster (``slurm``) or
-headless Chromium (``browser``).  A pytest plugin, loaded by tests/conftest.py.
+"""The toolchain markers: tests that need a C compiler, CMake and fmpy (``fmu``), a SLURM cluster (``slurm``),
+headless Chromium (``browser``) or the units and systems of other tools in ``../shared/outside`` (``outside``).  A pytest plugin, loaded by tests/conftest.py.
 
 A marked test runs where its toolchain is present and is skipped where it is not, with a reason naming what is
 missing.  ``ICOSIM_REQUIRE_TOOLCHAINS`` (marker names, comma-separated) makes a missing toolchain fail those tests
@@ -20,6 +20,7 @@ import importlib.util
 import os
 import shutil
 import subprocess
+from pathlib import Path
 
 import pytest
 
@@ -51,8 +52,19 @@ def _browser_missing() -> list[str]:
     return [] if find_chromium() else ["Chromium on PATH (Debian: apt-get install chromium)"]
 
 
+#: Units and systems exported by other tools (their origin and licences: its README), beside the project's root.
+OUTSIDE = Path(__file__).resolve().parents[1].parent / "shared" / "outside"
+
+
+def _outside_missing() -> list[str]:
+    missing = [] if (OUTSIDE / "README.md").is_file() else [f"the other tools' units in {OUTSIDE}"]
+    if importlib.util.find_spec("fmpy") is None:
+        missing.append("fmpy (the fmi extra)")
+    return missing
+
+
 #: Marker -> what its toolchain lacks on this machine (an empty list: present).
-TOOLCHAINS = {"fmu": _fmu_missing, "slurm": _slurm_missing, "browser": _browser_missing}
+TOOLCHAINS = {"fmu": _fmu_missing, "slurm": _slurm_missing, "browser": _browser_missing, "outside": _outside_missing}
 REQUIRE = "ICOSIM_REQUIRE_TOOLCHAINS"
 
 
