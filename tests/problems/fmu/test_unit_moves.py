@@ -159,3 +159,39 @@ def test_a_constant_position_output_is_refused_by_name(tmp_path):
     assert found["responds"]["verdict"] == "refused"
     with pytest.raises(FmuError, match=r"^body2: responds: its position y\[1\] does not respond to its force \(0\.0 m"):
         run_scene(path)
+
+
+# -- a unit of our own that depends on the flag (fmus/faulty, faults 11 and 12) --------------------------------------
+
+
+def flag_scene(tmp_path, fault):
+    """``faulty`` with fault 11 (false read as "the last step again from its start") or 12 (and no restore after a
+    step with true), or ``msd`` itself (fault None), joined to ``msd``."""
+    body1 = {"fmu": str(ROOT / "fmus" / ("msd" if fault is None else "faulty")),
+             "start": {"m": 1.0, "c": 1000.0, "d": 2.0, "x0": 0.1} | ({} if fault is None else {"fault": fault}),
+             "position": "x", "velocity": "v", "acceleration": "a", "force": "lambda", "force_sign": 1}  # fmt: skip
+    body2 = spring(2.0, 500.0, 1.0) | {"force_sign": -1}
+    body2["start"] = body2["start"] | {"x0": 0.1}
+    return write(tmp_path, {"body1": body1, "body2": body2}, 1e-3, 0.05, f"flag_{fault}.yaml")
+
+
+def test_a_unit_that_needs_the_flag_is_stepped_with_it_and_moves_as_msd(tmp_path):
+    """Fault 11 stepped with noSetFMUStatePriorToCurrentPoint true on every step is ``msd``: the run is ``msd``'s
+    bit for bit (which does not read the flag), and the check table and the dataset say how it was stepped."""
+    found = findings(check_scene(load_scene(flag_scene(tmp_path, 11))), "body1")
+    assert found["doStep flag"]["verdict"] == "note" and "x is " in found["doStep flag"]["detail"]
+    assert found["rollback"]["verdict"] == "pass"
+    run, reference = run_scene(flag_scene(tmp_path, 11)), run_scene(flag_scene(tmp_path, None))
+    np.testing.assert_array_equal(run.states, reference.states)
+    assert np.ptp(run.states[:, 0, 0]) > 0.01  # it moves
+    attrs = run_dataset_data(run).attrs
+    assert attrs["body1_do_step_flag"] == "true on every step (the unit needs it)"
+    assert run_dataset_data(reference).attrs["body1_do_step_flag"] == "true on final steps"
+
+
+def test_a_unit_that_needs_the_flag_and_then_cannot_roll_back_is_refused_naming_it(tmp_path):
+    with pytest.raises(FmuError) as refused:
+        run_scene(flag_scene(tmp_path, 12))
+    text = str(refused.value)
+    assert text.startswith("body1: doStep flag: its step depends on doStep's noSetFMUStatePriorToCurrentPoint")
+    assert "with the flag it needs (true on every step) its restored steps do not repeat" in text
