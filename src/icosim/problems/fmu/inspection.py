@@ -1,7 +1,12 @@
 """A unit checked before it is trusted: what the coupling needs of it, measured on the unit at its start.
 
-* **rollback** -- save the state, step, read the outputs, restore, step again: the outputs must agree (bit for
-  bit, or within ``rollback_tolerance``), and the restored unit must stand where it stood;
+* **doStep flag** -- does the unit's step depend on ``noSetFMUStatePriorToCurrentPoint``; such a unit is stepped
+  with ``true`` on every step where its restored steps still repeat with it, and refused otherwise;
+* **rollback** -- save the state, step, read the outputs, restore, step again: the outputs must agree within
+  the rollback tolerance (:func:`rollback_tolerance`), and the restored unit must stand where it stood;
+* **moves** -- over a probing step the position's change against the trapezoid integral of the velocity, the
+  velocity's against the acceleration's, and the step against the same interval in sub-steps;
+* **responds** -- the position and velocity follow the input at all, the same way;
 * **feedthrough** -- does the coupling output (acceleration of a force-driven unit, the drive's force of a
   kinematically driven one) follow the coupling input without a step, as the ``ModelStructure`` declares or
   not; and does it respond at all, after a step.  The macro step and the identification use what the unit does;
