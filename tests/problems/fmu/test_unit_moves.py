@@ -195,3 +195,32 @@ def test_a_unit_that_needs_the_flag_and_then_cannot_roll_back_is_refused_naming_
     text = str(refused.value)
     assert text.startswith("body1: doStep flag: its step depends on doStep's noSetFMUStatePriorToCurrentPoint")
     assert "with the flag it needs (true on every step) its restored steps do not repeat" in text
+
+
+def test_the_flag_is_true_on_the_final_integration_of_each_macro_step(monkeypatch):
+    """Jacobi with one corrector step: per macro step and unit, the prediction and the sensitivity's step are
+    rolled back (false), the corrector's integration is final (true).  The calls are counted on the units' own
+    library function, which the fast path calls."""
+    import collections
+
+    from icosim.problems.fmu import run as run_module
+
+    flags, opened = collections.Counter(), run_module.open_units
+
+    def counted(*args, **kwargs):
+        units, couplings = opened(*args, **kwargs)
+        for unit in units:
+            library, step = unit.fmu.dll, unit.fmu.dll.fmi2DoStep
+
+            def recorded(c, t, h, flag, step=step, name=unit.label):
+                flags[name, bool(flag)] += 1
+                return step(c, t, h, flag)
+
+            library.fmi2DoStep = recorded
+        return units, couplings
+
+    monkeypatch.setattr(run_module, "open_units", counted)
+    run = run_module.run_scene(ROOT / "config" / "scenes" / "two_mass_ff.yaml")
+    steps = len(run.times) - 1
+    for name in ("body1", "body2"):
+        assert flags[name, True] == steps and flags[name, False] == 2 * steps
