@@ -7,6 +7,10 @@
  *   6 the position output +Inf  7 fmi2DoStep never returns             8 fmi2DoStep crashes the process (SIGSEGV)
  *   9 fmi2SetFMUstate restores all but a count of the steps taken, which adds 1e-6 m a step to the position output
  *  10 fmi2ExitInitializationMode refuses (fmi2Error, "no licence")
+ *  11 fmi2DoStep reads noSetFMUStatePriorToCurrentPoint = false as "integrate the last step again from its start"
+ *     (where it started is kept outside the saved state), as OSP's quarter-truck units do: with false on every
+ *     step it stands still; with true it is msd
+ *  12 as 11, and after a step with the flag true fmi2SetFMUstate does nothing (it returns fmi2OK)
  *
  * Every message goes through the fmi2CallbackLogger with the instance name.  Otherwise the unit is msd: input
  * derivatives, saved states (a copy of the instance, state.h), the x_set/v_set hooks and fail_time.
@@ -24,7 +28,7 @@
 enum { I_FAULT, NINTEGER };
 enum {
     FAULT_NONE, FAULT_WARNING, FAULT_DISCARD, FAULT_ERROR, FAULT_FATAL, FAULT_NAN, FAULT_INF, FAULT_HANG,
-    FAULT_CRASH, FAULT_ROLLBACK, FAULT_LICENCE, NFAULT
+    FAULT_CRASH, FAULT_ROLLBACK, FAULT_LICENCE, FAULT_FLAG, FAULT_FLAG_RESTORE, NFAULT
 };
 
 typedef struct {
@@ -35,6 +39,8 @@ typedef struct {
     fmi2Integer fault;
     double steps;         /* fault 9: steps taken since instantiation, kept by fmi2SetFMUstate */
     int nan_a, inf_x;     /* faults 5 and 6: the last step spoiled the acceleration or the position output */
+    double last_x, last_v; /* faults 11 and 12: where the last step started, kept by fmi2SetFMUstate */
+    int has_last, last_final; /* and whether it was taken with noSetFMUStatePriorToCurrentPoint true */
     int initialized;
     fmi2CallbackFunctions cb;
     char name[64];
@@ -65,6 +71,8 @@ static void defaults(Instance *i) {
     i->fault = FAULT_NONE;
     i->steps = 0;
     i->nan_a = i->inf_x = 0;
+    i->last_x = i->last_v = 0;
+    i->has_last = i->last_final = 0;
     i->initialized = 0;
 }
 
@@ -174,10 +182,16 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *s) {
 }
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate s) {
     Instance *i = (Instance *)c;
-    double steps = i->steps;
-    int rollback = i->fault == FAULT_ROLLBACK;
+    double steps = i->steps, last_x = i->last_x, last_v = i->last_v;
+    int rollback = i->fault == FAULT_ROLLBACK, has_last = i->has_last, last_final = i->last_final;
+    int flag = i->fault == FAULT_FLAG || i->fault == FAULT_FLAG_RESTORE;
+    if (i->fault == FAULT_FLAG_RESTORE && last_final) return fmi2OK; /* fault 12: nothing is restored */
     if (state_restore(c, s, sizeof(Instance))) return fmi2Error;
     if (rollback) i->steps = steps;
+    if (flag) {
+        i->last_x = last_x, i->last_v = last_v;
+        i->has_last = has_last, i->last_final = last_final;
+    }
     return fmi2OK;
 }
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *s) {
@@ -221,7 +235,6 @@ static volatile int hang = 1; /* fault 7 spins on it: a volatile read each turn,
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSetPrior) {
     Instance *i = (Instance *)c;
-    (void)noSetPrior;
     int fault = t >= i->fault_time ? (int)i->fault : FAULT_NONE;
     switch (fault) {
     case FAULT_DISCARD:
@@ -243,6 +256,16 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSet
         step_message(i, fmi2Fatal, "logStatusFatal", "faulty: the step from t = %.17g crashes the process (fault 8)", t);
         raise(SIGSEGV);
         return fmi2Fatal;
+    case FAULT_FLAG:
+    case FAULT_FLAG_RESTORE:
+        if (noSetPrior || !i->has_last) {
+            i->last_x = i->m.x, i->last_v = i->m.v;
+            i->has_last = 1;
+        } else { /* false read as a rejected last step: from its start again */
+            i->m.x = i->last_x, i->m.v = i->last_v;
+        }
+        i->last_final = noSetPrior != fmi2False;
+        break;
     default:
         break;
     }

@@ -15,7 +15,7 @@ from dataclasses import asdict
 import numpy as np
 
 from .errors import FmuError
-from .inspection import Finding, inspect_unit, joint_direction
+from .inspection import Finding, inspect_unit, joint_direction, rollback_tolerance
 from .joints import check_scheme
 from .problem import Coupling, FmuCosimulation
 from .run import consistent_start, open_unit
@@ -50,7 +50,7 @@ def check_scene(scene, *, cache=None) -> dict:
                 force_sign=sub["force_sign"],
                 H=float(c["H"]),
                 t0=unit.t,
-                rollback_tolerance=float(sub.get("rollback_tolerance", 0.0)),
+                rollback_tolerance=rollback_tolerance(sub),
             )
             row["findings"].extend(asdict(f) for f in found.findings)
             mass = sub.get("mass")

@@ -179,15 +179,15 @@ class Fmi2Calls:
         if status > 1:
             refused("fmi2SetReal", status)
 
-    def advance(self, key, rows, t, H, *, step_index, restore=None, read=None):
+    def advance(self, key, rows, t, H, *, step_index, restore=None, read=None, final=False):
         """:meth:`step` with the coefficients as rows of floats (``rows[m][q]``, SI); an FMI 2.0 unit that takes
-        input derivatives is driven without numpy: the same calls with the same values.  With ``restore``, the
+        input derivatives is driven without numpy: the same calls with the same values (``final`` as there).  With ``restore``, the
         unit first returns to that saved state (:meth:`restore`); with ``read``, the variables of those keys are
         read at the end (:meth:`read`) and returned: one batch of the guard's records for the whole integration."""
         if not self.exact_inputs or self.fmi3:
             if restore is not None:
                 self.restore(restore)
-            self.step(key, np.array(rows, dtype=float), t, H, step_index=step_index)
+            self.step(key, np.array(rows, dtype=float), t, H, step_index=step_index, final=final)
             return None if read is None else self.read(read)
         fast = None
         if read is not None:
@@ -249,7 +249,8 @@ class Fmi2Calls:
             number += 1.0
             r[2] = _DO_STEP
             r[0] = number
-        status = library.fmi2DoStep(comp, t, H, False)  # what fmpy's doStep calls
+        # noSetFMUStatePriorToCurrentPoint: true where no state before t + H will be restored
+        status = library.fmi2DoStep(comp, t, H, final or self.always_final)  # what fmpy's doStep calls
         if rec is not None:
             r[0] = 0.0
         if status > 1:

@@ -1,7 +1,12 @@
 """A unit checked before it is trusted: what the coupling needs of it, measured on the unit at its start.
 
-* **rollback** -- save the state, step, read the outputs, restore, step again: the outputs must agree (bit for
-  bit, or within ``rollback_tolerance``), and the restored unit must stand where it stood;
+* **doStep flag** -- does the unit's step depend on ``noSetFMUStatePriorToCurrentPoint``; such a unit is stepped
+  with ``true`` on every step where its restored steps still repeat with it, and refused otherwise;
+* **rollback** -- save the state, step, read the outputs, restore, step again: the outputs must agree within
+  the rollback tolerance (:func:`rollback_tolerance`), and the restored unit must stand where it stood;
+* **moves** -- over a probing step the position's change against the trapezoid integral of the velocity, the
+  velocity's against the acceleration's, and the step against the same interval in sub-steps;
+* **responds** -- the position and velocity follow the input at all, the same way;
 * **feedthrough** -- does the coupling output (acceleration of a force-driven unit, the drive's force of a
   kinematically driven one) follow the coupling input without a step, as the ``ModelStructure`` declares or
   not; and does it respond at all, after a step.  The macro step and the identification use what the unit does;
@@ -24,7 +29,16 @@ import numpy as np
 
 from .errors import FmuError
 
-__all__ = ["Finding", "Inspection", "inspect_unit", "joint_direction", "refuse", "declared_feedthrough"]
+__all__ = [
+    "Finding",
+    "Inspection",
+    "inspect_unit",
+    "joint_direction",
+    "refuse",
+    "declared_feedthrough",
+    "rollback_tolerance",
+    "ROLLBACK_TOLERANCE",
+]
 
 
 @dataclass(frozen=True)
@@ -71,12 +85,43 @@ def _probe_outputs(unit, kind):
     return unit.get(("position", "velocity", out))
 
 
-def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=0.0) -> Inspection:
+#: The relative difference accepted by default between a step and the same step repeated from a restored state
+#: (a subsystem's ``rollback_tolerance`` replaces it): see :func:`rollback_tolerance`.
+ROLLBACK_TOLERANCE = 1e-12
+
+#: Sub-steps in which the movement check takes a probing step again.
+MOVE_SUBSTEPS = 2
+
+
+def rollback_tolerance(sub) -> float:
+    """The relative difference a subsystem ``sub`` (its scene entry) accepts between a step and the same step
+    repeated from a restored state: its ``rollback_tolerance``, else :data:`ROLLBACK_TOLERANCE`.
+
+    Why ``1e-12``: the coupling sees a unit through its outputs and their difference quotients (the perturbation
+    ``p max(1, |u|)``, ``p = 1e-3`` by default).  A repeated step that is off by ``delta |y|`` moves a quotient
+    by ``delta |y| / (p max(1, |u|))``: at ``delta = 1e-12`` a relative ``1e-9`` of the output per unit input,
+    far below what the corrector and the coupling's own error (a power of ``H``) resolve; a difference above it
+    is no longer the last digits of a variable-step solver but a state that is not restored."""
+    value = sub.get("rollback_tolerance")
+    return ROLLBACK_TOLERANCE if value is None else float(value)
+
+
+def _relative(a, b) -> np.ndarray:
+    """``|a - b| / max(|a|, |b|)`` elementwise (0 where both are 0, inf where either is not finite)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    size = np.maximum(np.abs(a), np.abs(b))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        d = np.where(a == b, 0.0, np.abs(a - b) / size)
+    return np.where(np.isfinite(a) & np.isfinite(b), d, np.inf)
+
+
+def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=ROLLBACK_TOLERANCE) -> Inspection:
     """Measure ``unit`` at its start state and check it (the unit is left at its start, its input at zero).
 
     ``kind`` is ``"force"`` or ``"kinematic"``; ``force_sign`` the scene's.  Each component of a vector joint is
     probed on its own; the component that responds most gives the unit's gain (its sign is the unit's own input
-    convention; :func:`joint_direction` checks the two units' together)."""
+    convention; :func:`joint_direction` checks the two units' together).  A unit whose step depends on doStep's
+    ``noSetFMUStatePriorToCurrentPoint`` is stepped with ``true`` from here on (:attr:`Unit.always_final`)."""
     key = "force" if kind == "force" else "acceleration_input"
     out = "acceleration" if kind == "force" else "reaction_force"
     found = Inspection(unit.label, kind)
@@ -85,27 +130,45 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=0.0) -
     n = len(unit.elements[key])
     zero = np.zeros(n)
     unit_inputs = np.eye(n)  # 1 N or 1 m/s^2 on one component: finite whatever the unit's mass
+    moving = ("position", "velocity") + (("acceleration",) if "acceleration" in unit.elements else ())
     start = unit.save()
-    algebraic, step_gain, velocity_gain = np.zeros(n), np.zeros(n), np.zeros(n)
+    algebraic, step_gain, velocity_gain, position_gain = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
+    probes = []  # (what, outputs at the start, after one step of H, after the same interval in sub-steps)
     try:
+        flag = _flag_probe(unit, key, unit_inputs[0], start, t0, H, rollback_tolerance)
         unit.set(key, zero)
         base = _probe_outputs(unit, kind)
+        base_moving = unit.get(moving)
+        pushed_moving = []
         for c in range(n):
             unit.set(key, unit_inputs[c])
             algebraic[c] = _probe_outputs(unit, kind)[2, c] - base[2, c]
+            pushed_moving.append(unit.get(moving))
         unit.set(key, zero)
 
-        def stepped(u):
+        def stepped(u, parts=1):
+            unit.restore(start)
+            for j in range(parts):
+                unit.step(key, [u], t0 + j * H / parts, H / parts, step_index=0)
+            return _probe_outputs(unit, kind), unit.get(moving)
+
+        def twice(u):  # two steps: an explicit integration moves the position only in the second
             unit.restore(start)
             unit.step(key, [u], t0, H, step_index=0)
-            return _probe_outputs(unit, kind)
+            unit.step(key, [u], t0 + H, H, step_index=0)
+            return unit.get(("position",))[0]
 
-        first = stepped(zero)
-        again = stepped(zero)
+        first, first_moving = stepped(zero)
+        again, _ = stepped(zero)
+        still = twice(zero)
+        probes.append(("without input", base_moving, first_moving, stepped(zero, MOVE_SUBSTEPS)[1]))
         for c in range(n):
-            pushed = stepped(unit_inputs[c])
+            pushed, pushed_end = stepped(unit_inputs[c])
             step_gain[c] = pushed[2, c] - first[2, c]
             velocity_gain[c] = pushed[1, c] - first[1, c]
+            position_gain[c] = twice(unit_inputs[c])[c] - still[c]
+            what = "with a unit input" + (f" on component {c + 1}" if n > 1 else "")
+            probes.append((what, pushed_moving[c], pushed_end, stepped(unit_inputs[c], MOVE_SUBSTEPS)[1]))
         unit.restore(start)
         unit.set(key, zero)
         back = _probe_outputs(unit, kind)
@@ -118,9 +181,23 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=0.0) -
     gains = np.where(responds, algebraic, step_gain) if found.feedthrough else step_gain
     c = int(np.argmax(np.abs(np.nan_to_num(gains))))
     found.gain = float(gains[c])
-    found.findings.append(_rollback(first, again, base, back, rollback_tolerance))
+    rollback = _rollback(unit, first, again, base, back, rollback_tolerance)
+    if flag is not None:
+        if rollback.verdict == "refused":
+            flag = Finding(
+                "doStep flag",
+                "refused",
+                f"{flag.detail}; and with the flag it needs (true on every step) its restored steps do not repeat: "
+                f"{rollback.detail}",
+                "the coupling repeats steps from saved states: a unit that integrates again from where it stood "
+                "before, rather than from its restored state, cannot be coupled; export it without that behaviour",
+            )
+        found.findings.append(flag)
+    found.findings.append(rollback)
     found.findings.append(_feedthrough(kind, found, float(step_gain[c]), float(velocity_gain[c])))
     found.findings.append(_direction(kind, found, force_sign, float(velocity_gain[c])))
+    found.findings.append(_moves(unit, H, moving, probes, rollback_tolerance))
+    found.findings.append(_responds(unit, kind, key, position_gain, velocity_gain))
     found.findings.append(_units(unit))
     found.findings.append(_starts(unit))
     if unit.description_problems:
@@ -131,23 +208,174 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=0.0) -
     return found
 
 
-def _rollback(first, again, base, back, tol) -> Finding:
+def _flag_probe(unit, key, push, start, t0, H, tol) -> Finding | None:
+    """Does the unit's step depend on doStep's ``noSetFMUStatePriorToCurrentPoint``?  From the restored start,
+    a step of ``H`` (flag true) and a second one taken with each value of the flag (the same history before it,
+    the input ``push`` held: the unit moves), and the first pair again (a unit that does not repeat it is
+    not restored, which the rollback check names).  FMI 2.0 (section 4.2.2) and 3.0 say the flag only tells whether
+    a state before the current point may later be restored; a unit that reads false as "reject the last step
+    and integrate it again from its start" stands still under a master that rolls back.  None: it does not
+    depend on it; else a note, and the unit is stepped with true on every step (:attr:`Unit.always_final`)."""
+    ends = []
+    for final in (True, False, True):
+        unit.restore(start)
+        unit.step(key, [push], t0, H, step_index=0, final=True)
+        unit.step(key, [push], t0 + H, H, step_index=0, final=final)
+        ends.append(unit.get(("position", "velocity")))
+    unit.restore(start)
+    if np.any(_relative(ends[0], ends[2]) > tol):
+        return None  # the same steps do not repeat: a restore that fails, which the rollback check names
+    ends = {True: ends[0], False: ends[1]}
+    d = _relative(ends[True], ends[False])
+    if not np.any(d > tol):
+        return None
+    unit.always_final = True
+    row, col = (int(i) for i in np.argwhere(d > tol)[0])
+    name = unit.elements[("position", "velocity")[row]][col].name
+    return Finding(
+        "doStep flag",
+        "note",
+        f"its step depends on doStep's noSetFMUStatePriorToCurrentPoint (the standard gives it no such meaning): "
+        f"after two steps of {H:g} s its {name} is {float(ends[True][row, col])!r} with true on the second, "
+        f"{float(ends[False][row, col])!r} with false; it is stepped with true on every step",
+    )
+
+
+def _rollback(unit, first, again, base, back, tol) -> Finding:
+    """A step repeated from the restored start, and the restored start itself, against the first: the largest
+    relative difference (kept as :attr:`Unit.rollback_difference`) within ``tol`` (:func:`rollback_tolerance`)."""
     names = ("position", "velocity", "coupling output")
+    worst, where = 0.0, None
     for what, a, b in (("after a repeated step", first, again), ("after restoring the saved state", base, back)):
-        a, b = np.asarray(a), np.asarray(b)
-        bad = np.argwhere(~(np.abs(a - b) <= tol * np.maximum(np.abs(a), np.abs(b))))
-        if bad.size:
-            row, col = (int(i) for i in bad[0])
+        d = _relative(a, b)
+        if d.size and float(np.max(d)) > worst:
+            worst = float(np.max(d))
+            if where is None and worst > tol:  # the first that differs is named
+                row, col = (int(i) for i in np.unravel_index(int(np.argmax(d)), d.shape))
+                where = (what, float(np.asarray(a)[row, col]), float(np.asarray(b)[row, col]), row, col, worst)
+    unit.rollback_difference = worst
+    flag = " (stepped with noSetFMUStatePriorToCurrentPoint true)" if unit.always_final else ""
+    if where is not None:
+        what, a, b, row, col, by = where
+        return Finding(
+            "rollback",
+            "refused",
+            f"its {names[row]} (component {col + 1}) differs {what}{flag}: {a!r} then {b!r}, {by:.3g} relative, "
+            f"more than the rollback tolerance {tol:g} (the restored state is not the saved one: the coupling's "
+            "difference quotients and corrector would follow that difference, not the unit's response)",
+            "the coupling repeats steps from saved states, so a unit whose fmi2SetFMUstate does not restore "
+            "everything cannot be coupled (rollback_tolerance in the subsystem accepts a larger relative difference)",
+        )
+    if worst == 0:
+        return Finding("rollback", "pass", f"a restored step repeats bit for bit{flag}")
+    return Finding("rollback", "pass", f"a restored step repeats within {worst:.3g} relative (tolerance {tol:g}){flag}")
+
+
+def _moves(unit, H, moving, probes, tol) -> Finding:
+    """Does the unit move as its outputs say?  Over each probing step of ``H`` (outputs ``s`` at its start,
+    ``e`` at its end): the position's change against the trapezoid integral of the velocity, the velocity's
+    against the acceleration's; and the step against the same interval taken in :data:`MOVE_SUBSTEPS`
+    sub-steps.
+
+    The tolerance: a consistent one-step integration of any order changes ``x`` by ``H v(xi)`` for some ``xi``
+    in the step (the mean value theorem for the exact solution; explicit and implicit Euler at the step's two
+    ends), so over a step short enough that ``v`` is monotone the change lies between ``H v(s)`` and ``H v(e)``
+    and departs from the trapezoid by at most ``H |v(e) - v(s)| / 2``; twice that is allowed, ``H |v(e) -
+    v(s)|``, plus the unit's relative tolerance ``tol`` (its rollback tolerance, at least 16 rounding units) of
+    the quantity's scale ``max |x| + H max |v|`` over the step and the components (for the velocity ``max |x| / H
+    + max |v| + H max |a|``: a velocity is known to the rounding of the position it moves).  Sub-steps are held to the same bound (two first-order integrations of one interval differ
+    by at most ``H^2 |a| / 2``).  A unit that does not integrate (stands still, or moves every other step) is
+    off by the whole change."""
+    rtol = max(float(tol), 16 * np.finfo(float).eps)
+    pairs = [(0, 1)] + ([(1, 2)] if len(moving) == 3 else [])
+    worst = None
+    for what, s, e, sub in probes:
+        for lo, hi in pairs:  # the quantity and its derivative
+            # the scale of every component and level (a velocity at rest beside a position of 1 m is known to the
+            # rounding of that position over H, not to 0)
+            size = sum(np.max(np.abs([s[j], e[j], sub[j]])) * H ** (j - lo) for j in range(hi + 1))
+            floor = rtol * size
+            for c in range(s.shape[1]):
+                x0, x1, d0, d1 = s[lo, c], e[lo, c], s[hi, c], e[hi, c]
+                trapezoid = H * (d0 + d1) / 2
+                allowed = H * abs(d1 - d0) + floor
+                for check, measured, against in (
+                    ("trapezoid", x1 - x0, trapezoid),
+                    ("sub-steps", sub[lo, c] - x0, x1 - x0),
+                ):
+                    defect = abs(measured - against)
+                    if not defect <= allowed:
+                        excess = defect / allowed if allowed > 0 else np.inf
+                        if worst is None or excess > worst[0]:
+                            worst = (excess, what, lo, hi, c, check, measured, against, allowed, d0, d1)
+    if worst is None:
+        return Finding(
+            "moves",
+            "pass",
+            f"over a step of {H:g} s its position changes as its velocity integrates"
+            + (", its velocity as its acceleration" if len(moving) == 3 else "")
+            + f" (trapezoid), and {MOVE_SUBSTEPS} sub-steps agree",
+        )
+    _, what, lo, hi, c, check, measured, against, allowed, d0, d1 = worst
+    quantity, rate = unit.elements[moving[lo]][c].name, unit.elements[moving[hi]][c].name
+    if check == "trapezoid":
+        said = (
+            f"over a step of {H:g} s {what}, its {moving[lo]} {quantity} changes by {measured:.6g} but the "
+            f"trapezoid integral of its {moving[hi]} {rate} ({d0:.6g} to {d1:.6g}) is {against:.6g}"
+        )
+    else:
+        said = (
+            f"over {H:g} s {what}, its {moving[lo]} {quantity} changes by {against:.6g} in one step but by "
+            f"{measured:.6g} in {MOVE_SUBSTEPS} sub-steps (sub-step check)"
+        )
+    return Finding(
+        "moves",
+        "refused",
+        f"{said}: off by {abs(measured - against):.3g}, more than the {allowed:.3g} a consistent integration "
+        "allows: the unit does not move as its outputs say",
+        "a unit with a fixed internal step larger than the macro step, or one that does not integrate over the "
+        "step it is given, cannot be coupled at this H: take H a multiple of the unit's internal step, or check "
+        f"that {moving[lo]} and {moving[hi]} name the unit's {moving[lo]} and its derivative",
+    )
+
+
+def _responds(unit, kind, key, position_gain, velocity_gain) -> Finding:
+    """With a unit input, the velocity must have moved after a step and the position after two (an explicit
+    integration moves it only in the second), both the same way: a gain of exactly zero is a variable that does
+    not follow the input, e.g. a constant named as the position."""
+    per = "N" if kind == "force" else "m/s^2"
+    when = {"position": "two steps", "velocity": "a step"}
+    for name, gains in (("position", position_gain), ("velocity", velocity_gain)):
+        c = int(np.argmax(np.abs(np.nan_to_num(gains))))
+        if not np.isfinite(gains[c]) or gains[c] == 0:
+            var = unit.elements[name][0].name
             return Finding(
-                "rollback",
+                "responds",
                 "refused",
-                f"its {names[row]} (component {col + 1}) differs {what}: {a[row, col]!r} then {b[row, col]!r} "
-                "(the restored state is not the saved one)",
-                "the coupling repeats steps from saved states, so a unit whose fmi2SetFMUstate does not restore "
-                "everything cannot be coupled (rollback_tolerance in the subsystem accepts a relative difference)",
+                f"its {name} {var} does not respond to its {key} ({float(gains[c])!r} {_unit_of(name)} per {per} "
+                f"after {when[name]}): it is not the {name} of the body the input drives",
+                f"name the unit's {name} output as {name}",
+                name,
             )
-    how = "bit for bit" if tol == 0 else f"within {tol:g} relative"
-    return Finding("rollback", "pass", f"a restored step repeats {how}")
+    bad = np.sign(position_gain) * np.sign(velocity_gain) < 0
+    if bad.any():
+        c = int(np.argmax(bad))
+        return Finding(
+            "responds",
+            "refused",
+            f"its position moves by {position_gain[c]:+.3g} m in two steps but its velocity by "
+            f"{velocity_gain[c]:+.3g} m/s in one, per {per} of its input: the outputs contradict each other",
+        )
+    return Finding(
+        "responds",
+        "pass",
+        f"its position moves by {position_gain[0]:+.3g} m in two steps, its velocity by {velocity_gain[0]:+.3g} "
+        f"m/s in one, per {per} of its input",
+    )
+
+
+def _unit_of(name) -> str:
+    return {"position": "m", "velocity": "m/s"}[name]
 
 
 def _feedthrough(kind, found, step_gain, velocity_gain) -> Finding:

@@ -77,6 +77,8 @@ class FmuCosimulation(CosimulationProblem):
         (exact up to rounding for linear units).
     sensitivities : ``"each-step"`` (recomputed every macro step) or ``"first-step"`` (computed once and kept:
         exact for linear units, whose sensitivities are constant).
+    iterations : the macro step's corrector steps: the last one's integration is final (doStep's
+        ``noSetFMUStatePriorToCurrentPoint``), as is a prediction that is not corrected.
     """
 
     def __init__(
@@ -90,6 +92,7 @@ class FmuCosimulation(CosimulationProblem):
         t0=0.0,
         perturbation=1e-3,
         sensitivities="each-step",
+        iterations=1,
     ):
         self.units, self.couplings = tuple(units), tuple(couplings)
         dims = {len(u.elements["position"]) for u in self.units}
@@ -113,6 +116,8 @@ class FmuCosimulation(CosimulationProblem):
         self.perturbation, self.sensitivities = float(perturbation), sensitivities
         self.constant_sensitivities = sensitivities == "first-step"
         self.step_index = 0  # macro steps completed
+        self.iterations = int(iterations)
+        self._corrections = [0] * len(self.units)  # corrector integrations of each unit in this macro step
         self.C_pred = np.array(monomial_coefficients(self.pred_nodes), dtype=float).tolist()
         self.C_corr = np.array(monomial_coefficients(self.corr_nodes), dtype=float).tolist()
         self._scale = [c.force_sign if c.kind == "force" else 1.0 for c in self.couplings]
@@ -220,10 +225,11 @@ class FmuCosimulation(CosimulationProblem):
                 "an FMU problem advances only from the state it last returned (its units' states live in the FMUs)"
             )
 
-    def _integrate(self, i, U, C):
+    def _integrate(self, i, U, C, final=False):
         """Unit ``i`` over ``[T_N, T_N+1]`` from its start, its input through the samples ``U`` (``(k+1, n_dim)``, an
         array or rows of floats) with the monomial coefficients ``C`` (rows of floats); returns its end ``(x, v)`` and outputs
-        ``(1, 4, n_dim)``.  The polynomial's coefficients are formed in floats (k + 1 terms, summed in order)."""
+        ``(1, 4, n_dim)``.  The polynomial's coefficients are formed in floats (k + 1 terms, summed in order).
+        ``final``: the macro step will not integrate the unit again from ``T_N`` (the unit is told so)."""
         unit = self.units[i]
         restore = None if self._holds[i] == "start" else self._start[i]
         samples = U.tolist() if isinstance(U, np.ndarray) else U
@@ -248,6 +254,7 @@ class FmuCosimulation(CosimulationProblem):
         values = unit.advance(
             self.couplings[i].input_key, coef if C_s is not None else [[s * v for v in row] for row in coef],
             self.time, self.H, step_index=self.step_index + 1, restore=restore, read=self._output_keys(i),
+            final=final,
         )  # fmt: skip
         self.work.subsystem_integrations += 1
         return self._outputs(i, _summed(coef, s == -1.0), values)
@@ -340,14 +347,17 @@ class FmuCosimulation(CosimulationProblem):
         """Unit ``i`` with the extrapolation polynomials; its FMU state is saved only where the end is ``final``
         (a unit that is corrected in the same stage ends at its corrector's state)."""
         self._check_state(state)
-        end, y = self._integrate(i, self._samples(i, None, history), self.C_pred)
+        end, y = self._integrate(i, self._samples(i, None, history), self.C_pred, final)
         if final:
             self._keep(i, end)
         return end, y
 
     def correct(self, i, state, history, e_new):
+        """Unit ``i`` with the interpolation polynomials; the last corrector step's integration is final."""
         self._check_state(state)
-        end, y = self._integrate(i, self._samples(i, e_new, history), self.C_corr)
+        self._corrections[i] += 1
+        final = self._corrections[i] >= self.iterations
+        end, y = self._integrate(i, self._samples(i, e_new, history), self.C_corr, final)
         self._keep(i, end)
         return end, y
 
@@ -369,6 +379,7 @@ class FmuCosimulation(CosimulationProblem):
             self._start[i] = kept
             self._holds[i] = "start" if self._holds[i] == id(end) else "scratch"
         self.step_index += 1
+        self._corrections = [0] * len(self.units)
         self._committed = np.array(ends)  # (units, 2 n_dim): np.stack's array
         return self._committed
 

@@ -10,7 +10,7 @@ import numpy as np
 from ...engine.run import simulate
 from .build import build_unit, is_source_dir
 from .errors import FmuError
-from .inspection import inspect_unit, joint_direction, refuse
+from .inspection import inspect_unit, joint_direction, refuse, rollback_tolerance
 from .joints import check_scheme
 from .problem import Coupling, FmuCosimulation
 from .scene import Scene, load_scene
@@ -126,7 +126,7 @@ def open_units(scene: Scene, *, cache=None, inspect=True):
                     force_sign=sub["force_sign"],
                     H=float(scene.coupling["H"]),
                     t0=unit.t,
-                    rollback_tolerance=float(sub.get("rollback_tolerance", 0.0)),
+                    rollback_tolerance=rollback_tolerance(sub),
                 )
                 refuse(found)
                 feedthrough, gain = found.feedthrough, found.gain
@@ -237,6 +237,7 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
             t0=float(scene.data.get("t_start", 0.0)),
             perturbation=c["perturbation"],
             sensitivities=c["sensitivities"],
+            iterations=c["iterations"],
         )
         start = consistent_start(scene, problem)
 

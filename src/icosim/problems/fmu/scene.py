@@ -68,7 +68,7 @@ SUBSYSTEM_KEYS = {
     "mass": "the mass (a number, or the name of a unit variable holding it): the projection's weight",
     "set_position": "name of a tunable parameter or input that sets the position (projection)",
     "set_velocity": "name of a tunable parameter or input that sets the velocity (projection)",
-    "rollback_tolerance": "relative difference accepted when a restored step is repeated (default 0: bit for bit)",
+    "rollback_tolerance": "relative difference accepted when a restored step is repeated (default 1e-12; 0: bit for bit)",
 }
 
 #: Keys of one joint and what they hold.

@@ -104,6 +104,11 @@ class Unit(Fmi2Calls):
         self._si = {}  # key -> its variables are in SI units (factors 1)
         self._arrays = {}  # FMI 3.0 arrays written element-wise: their whole value, as last set
         self.do_steps = self.saved = self.restored = self.warnings = self.check_steps = 0
+        #: doStep's noSetFMUStatePriorToCurrentPoint on every step, not only on the final ones: a unit whose step
+        #: depends on the flag (the inspection finds it) is stepped as it needs
+        self.always_final = False
+        #: the largest relative difference of a step repeated from a restored state (the inspection measures it)
+        self.rollback_difference = float("nan")
         #: the status of a refused call (3 error, 4 fatal): after it the standard allows only freeing the
         #: instance (error) or nothing at all (fatal)
         self.failed = 0
@@ -262,6 +267,8 @@ class Unit(Fmi2Calls):
             "checks_do_step_calls": self.check_steps,
             "warnings": self.warnings,
             "first_warning": self.first_warning,
+            "do_step_flag": "true on every step (the unit needs it)" if self.always_final else "true on final steps",
+            "rollback_difference": self.rollback_difference,
         }
 
     # -- values -------------------------------------------------------------------------------
@@ -328,13 +335,14 @@ class Unit(Fmi2Calls):
         return float(values[el.index])
 
     # -- stepping -----------------------------------------------------------------------------
-    def step(self, key, coefficients, t, H, *, step_index):
+    def step(self, key, coefficients, t, H, *, step_index, final=False):
         """Advance ``[t, t + H]`` with the input(s) ``key`` following ``u(tau) = sum_m coefficients[m] tau^m``
         (SI; ``coefficients`` ``(k + 1,)``, or ``(k + 1, components)``); afterwards the inputs hold ``u(1)`` (the
-        outputs that depend on them directly are those at ``t + H``)."""
+        outputs that depend on them directly are those at ``t + H``).  ``final``: no state before ``t + H`` will
+        be restored (doStep's ``noSetFMUStatePriorToCurrentPoint``)."""
         if self.exact_inputs and not self.fmi3:
             rows = np.asarray(coefficients, dtype=float).reshape(len(coefficients), -1).tolist()
-            return self.advance(key, rows, t, H, step_index=step_index)
+            return self.advance(key, rows, t, H, step_index=step_index, final=final)
         c = np.asarray(coefficients, dtype=float).reshape(len(coefficients), -1) / self.factors[key]
         if self.exact_inputs:
             refs = [el.value_reference for el in self.elements[key]]
@@ -346,13 +354,13 @@ class Unit(Fmi2Calls):
                 guard.enter(self.index, "setRealInputDerivatives", t)
                 self.fmu.setRealInputDerivatives([refs[q] for q, _ in orders], [m for _, m in orders], values)
                 guard.leave()
-            self._do_step(t, H, step_index)
+            self._do_step(t, H, step_index, final)
         else:
             n = self.substeps
             for j in range(n):
                 tau = (j + 0.5) / n
                 self._set_elements(key, [float(np.polyval(c[::-1, q], tau)) for q in range(c.shape[1])])
-                self._do_step(t + j * H / n, H / n, step_index)
+                self._do_step(t + j * H / n, H / n, step_index, final)
         self._set_elements(key, c.sum(axis=0))
         self.t = t + H
 
@@ -365,15 +373,16 @@ class Unit(Fmi2Calls):
             f"{self.said()}"
         ) from None
 
-    def _do_step(self, t, h, step_index):
+    def _do_step(self, t, h, step_index, final=False):
+        final = bool(final or self.always_final)
         self.do_steps += 1
         self.messages.clear()
         guard.enter(self.index, _DO_STEP, t, step_index)
         try:
             if self.fmi3:
-                result = self.fmu.doStep(t, h, noSetFMUStatePriorToCurrentPoint=False)
+                result = self.fmu.doStep(t, h, noSetFMUStatePriorToCurrentPoint=final)
             else:
-                status = self.fmu.dll.fmi2DoStep(self.fmu.component, t, h, False)  # what fmpy's doStep calls
+                status = self.fmu.dll.fmi2DoStep(self.fmu.component, t, h, final)  # what fmpy's doStep calls
                 if status > 1:
                     refused("fmi2DoStep", status)
         except Exception as exc:
