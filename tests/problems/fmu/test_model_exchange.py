@@ -23,7 +23,7 @@ from toolchains import OUTSIDE
 from icosim.cli import main
 from icosim.engine.run import simulate
 from icosim.problems.fmu.build import build_unit
-from icosim.problems.fmu.errors import FmuError, SceneError
+from icosim.problems.fmu.errors import FmuError
 from icosim.problems.fmu.exchange import DEFAULT_TOLERANCE, ExchangeUnit, open_fmu_unit
 from icosim.problems.fmu.problem import FmuCosimulation
 from icosim.problems.fmu.run import open_units, run_scene
@@ -132,10 +132,12 @@ def test_the_dataset_says_the_interface(tmp_path):
         assert ds.attrs["body2_interface"] == "co-simulation"
 
 
-def test_tolerance_is_refused_on_a_co_simulation_unit(tmp_path):
-    body = {"interface": "co-simulation", "tolerance": 1e-8}
-    with pytest.raises(SceneError, match=r"subsystems\.body1\.tolerance: .*model exchange"):
-        load_scene(fd_scene(tmp_path, 1e-3, 0.01, 0, body1=body))
+def test_tolerance_is_refused_on_a_co_simulation_unit(tmp_path, capsys):
+    body = {"fmu": str(msd_fmu()), "interface": "co-simulation", "tolerance": 1e-8, "start": {}} | MSD_NAMES
+    assert main(["cosim", str(fd_scene(tmp_path, 1e-3, 0.01, 0, body1=body)), "--out", str(tmp_path / "r.nc")]) == 2
+    err = capsys.readouterr().err
+    assert "body1: tolerance: is the integrator's tolerance of a model exchange unit" in err
+    assert "(interface co-simulation)" in err and not (tmp_path / "r.nc").exists()
     with pytest.raises(FmuError, match="tolerance: .*coupled as co-simulation .*interface auto"):
         open_fmu_unit("msd", msd_fmu(), MSD_NAMES, {}, tolerance=1e-8)
 

@@ -275,27 +275,13 @@ class ExchangeUnit(Unit):
         held); afterwards the unit holds the end state, ``t + H`` and ``u(1)``."""
         from scipy.integrate import DOP853
 
-        if key is None:
-            c = None
-        else:
-            c = np.asarray(coefficients, dtype=float).reshape(len(coefficients), -1) / self.factors[key]
+        inputs_at = self._driver(key, coefficients, t, H)
         self.do_steps += 1
         self.messages.clear()
         prefix = "fmi3" if self.fmi3 else "fmi2"
         set_time, set_states, _, _, get_derivatives = self._calls
         comp, xbuf, dxbuf, nx = self._component, self._xbuf, self._dxbuf, self._nx
         xview, dxview = self._xview, self._dxview
-        write = self._set_elements
-        n_terms = 0 if c is None else c.shape[0]
-
-        def inputs_at(tt):
-            if c is None:
-                return
-            tau = (tt - t) / H
-            u = c[n_terms - 1].copy()
-            for m in range(n_terms - 2, -1, -1):
-                u = u * tau + c[m]
-            write(key, u)
 
         def rhs(tt, x):
             self.evaluations += 1
@@ -344,6 +330,23 @@ class ExchangeUnit(Unit):
         finally:
             guard.leave()
         self.t = t + H
+
+    def _driver(self, key, coefficients, t, H):
+        """The function of time that sets the input(s) ``key`` to the coupling polynomial over ``[t, t + H]``
+        (Horner's rule in ``tau``, in the unit's own units; ``key`` None: nothing to set)."""
+        if key is None:
+            return lambda tt: None
+        c = np.asarray(coefficients, dtype=float).reshape(len(coefficients), -1) / self.factors[key]
+        write, top = self._set_elements, c.shape[0] - 1
+
+        def inputs_at(tt):
+            tau = (tt - t) / H
+            u = c[top].copy()
+            for m in range(top - 1, -1, -1):
+                u = u * tau + c[m]
+            write(key, u)
+
+        return inputs_at
 
     def _integrator_step(self, tt, x, inputs_at, step_index):
         """An accepted integrator step inside the macro step: the unit at it, told so."""

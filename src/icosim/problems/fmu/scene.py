@@ -371,13 +371,6 @@ def load_scene(path) -> Scene:
         )
     for i, (name, sub) in enumerate(data["subsystems"].items()):
         kind = graph.port_kind(i, 0)
-        if "tolerance" in sub and sub.get("interface") == "co-simulation":
-            _fail(
-                path,
-                f"subsystems.{name}.tolerance",
-                "is the integrator's tolerance of a model exchange unit; a co-simulation unit integrates with its "
-                "own solver: remove tolerance, or set interface: model-exchange (or auto)",
-            )
         need = ("force",) if kind == "force" else ("acceleration_input", "reaction_force")
         projects = method.projection or data.get("initial") == "project"
         if projects:
