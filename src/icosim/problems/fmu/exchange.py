@@ -333,17 +333,33 @@ class ExchangeUnit(Unit):
 
     def _driver(self, key, coefficients, t, H):
         """The function of time that sets the input(s) ``key`` to the coupling polynomial over ``[t, t + H]``
-        (Horner's rule in ``tau``, in the unit's own units; ``key`` None: nothing to set)."""
+        (Horner's rule in ``tau``, in floats, in the unit's own units; ``key`` None: nothing to set).  A constant
+        input is set once."""
         if key is None:
             return lambda tt: None
-        c = np.asarray(coefficients, dtype=float).reshape(len(coefficients), -1) / self.factors[key]
-        write, top = self._set_elements, c.shape[0] - 1
+        c = (np.asarray(coefficients, dtype=float).reshape(len(coefficients), -1) / self.factors[key]).tolist()
+        write = self._set_elements if self.fmi3 else self._write
+        if len(c) == 1:
+            write(key, c[0])
+            return lambda tt: None
+        rows = c[::-1]
+        if len(c[0]) == 1:  # one component: no inner lists
+            terms = [row[0] for row in rows]
+
+            def inputs_at(tt):
+                tau = (tt - t) / H
+                u = 0.0
+                for cm in terms:
+                    u = u * tau + cm
+                write(key, [u])
+
+            return inputs_at
 
         def inputs_at(tt):
             tau = (tt - t) / H
-            u = c[top].copy()
-            for m in range(top - 1, -1, -1):
-                u = u * tau + c[m]
+            u = [0.0] * len(rows[0])
+            for row in rows:
+                u = [a * tau + cm for a, cm in zip(u, row)]
             write(key, u)
 
         return inputs_at
