@@ -275,7 +275,12 @@ class ExchangeUnit(Unit):
         held); afterwards the unit holds the end state, ``t + H`` and ``u(1)``."""
         from scipy.integrate import DOP853
 
-        inputs_at = self._driver(key, coefficients, t, H)
+        drive, index = self._driver(key, coefficients, t, H), self.index
+
+        def inputs_at(tt):
+            drive(tt)  # its write is a call of its own in the guard's record: the integration's record again
+            guard.enter(index, _INTEGRATE, t, step_index)
+
         self.do_steps += 1
         self.messages.clear()
         prefix = "fmi3" if self.fmi3 else "fmi2"
