@@ -232,6 +232,13 @@ def test_bouncing_ball_is_refused_as_model_exchange_naming_its_event_indicators(
         unit.close()
 
 
+@pytest.mark.parametrize("version", ["fmus2", "fmus3"])
+def test_a_time_event_is_refused_naming_its_time(version):
+    """Stair counts up at every second: no event indicators, but a time event at t = 1 s."""
+    with pytest.raises(FmuError, match=r"stair: declares a time event at t = 1 s .*use interface co-simulation"):
+        open_fmu_unit("stair", REFERENCE / version / "Stair.fmu", {}, {}, interface="model-exchange")
+
+
 def test_bouncing_ball_refusal_is_the_open_row_of_the_check(tmp_path, capsys):
     path = fd_scene(tmp_path, 1e-3, 0.01, 0, body1={"fmu": str(REFERENCE / "fmus2" / "BouncingBall.fmu"),
                     "interface": "model-exchange", "position": "h", "velocity": "v", "acceleration": "v",
