@@ -193,7 +193,8 @@ class ExchangeUnit(Unit):
             for name in ("SetTime", "SetContinuousStates", "GetContinuousStates", "GetNominalsOfContinuousStates")
         ) + (getattr(library, derivatives),)
         self._component = fmu.component
-        self._completed = not bool(getattr(md.modelExchange, "completedIntegratorStepNotNeeded", False))
+        # FMI 2.0 completedIntegratorStepNotNeeded, FMI 3.0 needsCompletedIntegratorStep, as fmpy reads both
+        self._completed = bool(md.modelExchange.needsCompletedIntegratorStep)
         nominal = np.ones(nx)
         if nx:
             self._check(f"{prefix}GetContinuousStates", self._calls[2](self._component, self._xbuf, self._nx))
