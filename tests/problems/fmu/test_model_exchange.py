@@ -241,6 +241,30 @@ def test_statespace_driven_through_its_input_as_model_exchange_and_co_simulation
     assert 1e-5 < abs(ys["co-simulation"] / exact - 1.0) < 1e-3  # Euler's error at 1e-3 s, far above the tolerance
 
 
+def test_a_unit_with_only_model_exchange_is_integrated(tmp_path):
+    """Dahlquist (FMI 2.0) with its <CoSimulation> element taken out of the model description (the binary
+    serves both): interface auto takes its model exchange."""
+    import re
+    import zipfile
+
+    source, target = REFERENCE / "fmus2" / "Dahlquist.fmu", tmp_path / "Dahlquist.fmu"
+    with zipfile.ZipFile(source) as zin, zipfile.ZipFile(target, "w", zipfile.ZIP_DEFLATED) as zout:
+        for item in zin.infolist():
+            data = zin.read(item.filename)
+            if item.filename == "modelDescription.xml":
+                data = re.sub(rb"<CoSimulation.*?</CoSimulation>", b"", data, flags=re.S)
+            zout.writestr(item, data)
+    unit = open_fmu_unit("d", target, {"position": "x"}, {})
+    try:
+        assert isinstance(unit, ExchangeUnit) and unit.md.coSimulation is None
+        assert "interface auto: it has no co-simulation" in unit.opened
+        for j in range(10):
+            unit.step(None, None, j * 0.1, 0.1, step_index=j + 1)
+        assert unit.get(("position",))[0, 0] == pytest.approx(np.exp(-1.0), rel=1e-9)
+    finally:
+        unit.close()
+
+
 # -- events --------------------------------------------------------------------------------------------------------
 
 
