@@ -118,7 +118,9 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=0.0) -
     gains = np.where(responds, algebraic, step_gain) if found.feedthrough else step_gain
     c = int(np.argmax(np.abs(np.nan_to_num(gains))))
     found.gain = float(gains[c])
-    found.findings.append(_rollback(first, again, base, back, rollback_tolerance))
+    found.findings.append(
+        _not_finite(unit, kind, base, first) or _rollback(first, again, base, back, rollback_tolerance)
+    )
     found.findings.append(_feedthrough(kind, found, float(step_gain[c]), float(velocity_gain[c])))
     found.findings.append(_direction(kind, found, force_sign, float(velocity_gain[c])))
     found.findings.append(_units(unit))
@@ -129,6 +131,24 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=0.0) -
             Finding("description", "note", f"fmpy's validation of its modelDescription.xml reports: {problems}")
         )
     return found
+
+
+def _not_finite(unit, kind, base, first) -> Finding | None:
+    """A refusal where the unit's outputs are not finite at its start or after a step with its input at zero (a
+    NaN is no value to compare: the rollback check would blame the restore); None where they are finite."""
+    keys = ("position", "velocity", "acceleration" if kind == "force" else "reaction_force")
+    for when, values in (("at its start", base), ("after a step with its input at zero", first)):
+        bad = np.argwhere(~np.isfinite(np.asarray(values, dtype=float)))
+        if bad.size:
+            row, col = (int(i) for i in bad[0])
+            name = unit.elements[keys[row]][col].name
+            return Finding(
+                "outputs",
+                "refused",
+                f"its {keys[row]} {name} is {float(values[row][col])!r} {when}{unit.said()}",
+                "a unit whose outputs are not finite cannot be coupled: check its start values and parameters",
+            )
+    return None
 
 
 def _rollback(first, again, base, back, tol) -> Finding:

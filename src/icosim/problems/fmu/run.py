@@ -158,6 +158,7 @@ class Start:
     position_gap: float
     velocity_gap: float
     initial: str  # "check", "project" or "as-is"
+    warning: str = ""  # initial_coupling given in the scene that the units do not meet
 
 
 def consistent_start(scene: Scene, problem: FmuCosimulation) -> Start:
@@ -184,7 +185,7 @@ def consistent_start(scene: Scene, problem: FmuCosimulation) -> Start:
                 a, b = scene.names[jt.first], scene.names[jt.second]
                 whose = "the joint's" if not scene.has_joints else f"{scene.joint_label(j)}:"
                 raise FmuError(
-                    f"{scene.path}: initial: {whose} {what}s differ at t_start: {a} "
+                    f"{scene.path}: initial: {whose} {_PLURAL[what]} differ at t_start: {a} "
                     f"{_text(state[jt.first], what, n)} {unit}, {b} {_text(state[jt.second], what, n)} {unit} (gap "
                     f"{worst:.3g} {unit} > initial_tolerance {tol:g} x {size:g}); set consistent start values, or "
                     "initial: project (units that can be set) or initial: as-is (the gap is reported)"
@@ -194,11 +195,32 @@ def consistent_start(scene: Scene, problem: FmuCosimulation) -> Start:
     if mode == "project":
         state = problem.project(state)
     given = scene.data.get("initial_coupling")
+    warning = ""
     if given is not None:
         e0, source = np.asarray(given, dtype=float), "scene"
+        warning = given_coupling_warning(scene, e0, problem.consistent_coupling())
     else:
         e0, source = problem.consistent_coupling(), "computed"
-    return Start(state, problem.initial_history(e0), source, position_gap, velocity_gap, mode)
+    return Start(state, problem.initial_history(e0), source, position_gap, velocity_gap, mode, warning)
+
+
+def given_coupling_warning(scene: Scene, given, computed, rtol: float = 1e-6) -> str:
+    """A warning where the scene's ``initial_coupling`` departs from the coupling variables the units need at
+    ``t_start`` (beyond ``rtol`` of the larger of 1 and their size): the history then starts off the solution, an
+    error of the size of the departure that the following steps carry (first order in H, whatever the method's
+    order); ``""`` where they agree."""
+    scale = max(1.0, float(np.max(np.abs(computed))), float(np.max(np.abs(given))))
+    if float(np.max(np.abs(given - computed))) <= rtol * scale:
+        return ""
+    fmt = lambda v: "[" + ", ".join(f"{x:.6g}" for x in v) + "]"
+    return (
+        f"{scene.path}: initial_coupling: {fmt(given)} differs from the coupling variables the units need at "
+        f"t_start, {fmt(computed)} (computed from the units); a start off the units costs the run its order "
+        "(first-order accurate in H): leave initial_coupling out to start from the computed values"
+    )
+
+
+_PLURAL = {"position": "positions", "velocity": "velocities"}
 
 
 def _text(row, what, n) -> str:
@@ -392,6 +414,7 @@ def run_dataset_data(run: SceneRun, *, command: str = ""):
         attrs["initial_position_gap"] = run.start.position_gap
         attrs["initial_velocity_gap"] = run.start.velocity_gap
         attrs["initial_coupling_source"] = run.start.coupling_source
+        attrs["initial_coupling_warning"] = run.start.warning
     attrs["scheme"] = scene.scheme.name
     attrs["method_engine_parameters"] = json.dumps(scene.method.params, sort_keys=True)
     attrs["wall_time_s"] = run.wall_time
@@ -434,6 +457,7 @@ def run_summary(run: SceneRun) -> dict:
             "velocity_gap": run.start.velocity_gap,
             "coupling": run.start.coupling_source,
             "coupling_values": [float(v) for v in run.coupling[0]],
+            "warning": run.start.warning or None,
         },
         "wall_time_s": run.wall_time,
     }

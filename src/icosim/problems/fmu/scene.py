@@ -49,6 +49,7 @@ from ...errors import ParameterError
 from .build import is_source_dir
 from .errors import SceneError
 from .joints import NUMBERED, ORDERED_SCHEMES, check_order, driven_by, graph_message, joint_schema, scene_joints
+from .variables import quoted_number_hint
 
 __all__ = ["Scene", "load_scene", "scene_schema", "SUBSYSTEM_KEYS", "JOINT_KEYS", "COUPLING_KEYS", "SCENE_KEYS"]
 
@@ -422,19 +423,11 @@ def _validate(path, data):
     elif err.validator == "required":
         keys = err.schema.get("properties", {})
         message = f"{message}; its keys: {', '.join(keys)}"
-    elif err.validator == "type" and isinstance(err.instance, str) and _is_number(err.instance):
-        message = f"{message} (YAML reads {err.instance} as text: write the exponent with its sign, e.g. 1.0e+6)"
+    elif err.validator == "type" and isinstance(err.instance, str) and quoted_number_hint(err.instance):
+        message = f"{message}{quoted_number_hint(err.instance)}"
     elif err.validator == "additionalProperties":
         message = f"{message}; allowed keys: {', '.join(err.schema.get('properties', {}))}"
     raise SceneError(f"{path}: {where}: {message}")
-
-
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
 
 
 def _check_numbers(path, data):
