@@ -18,6 +18,7 @@ from .errors import FmuError, UnitStepError
 from .inspection import Finding, inspect_unit, joint_direction
 from .joints import check_scheme
 from .problem import Coupling, FmuCosimulation
+from .record import Recorder
 from .run import consistent_start, open_unit
 
 __all__ = ["check_scene"]
@@ -44,6 +45,8 @@ def check_scene(scene, *, cache=None) -> dict:
             md = unit.md
             row["unit"] = f"{md.modelName} (FMI {md.fmiVersion}, {md.generationTool or 'unknown tool'})"
             row["findings"].append(asdict(Finding("open", "pass", "co-simulation, saves and restores its state")))
+            if sub.get("record"):
+                row["findings"].append(asdict(_record_row(unit, sub["record"], name)))
             try:
                 found = inspect_unit(
                     unit,
@@ -85,6 +88,15 @@ def check_scene(scene, *, cache=None) -> dict:
     )
     return {"scene": str(scene.path), "coupling": scene.describe(), "units": rows, "scene_findings": scene_rows,
             "refused": bool(refused)}  # fmt: skip
+
+
+def _record_row(unit, names, name) -> Finding:
+    try:
+        rec = Recorder(unit, names)
+    except FmuError as exc:
+        return Finding("record", "refused", _without_label(str(exc), name), key=f"subsystems.{name}.record")
+    said = ", ".join(f"{n} ({el.variable.causality}, {el.variable.type})" for n, (el, _) in zip(names, rec.elements))
+    return Finding("record", "pass", f"{said}: read after each accepted macro step")
 
 
 def _without_label(message: str, name: str) -> str:

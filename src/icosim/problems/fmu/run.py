@@ -13,6 +13,7 @@ from .errors import FmuError
 from .inspection import inspect_unit, joint_direction, refuse
 from .joints import check_scheme
 from .problem import Coupling, FmuCosimulation
+from .record import Recorder, recorded_entries
 from .scene import Scene, load_scene
 from .units import ROLES, Unit
 
@@ -34,6 +35,7 @@ class SceneRun:
     wall_time: float = 0.0
     start: object = None  # the run's Start (consistent_start)
     diverged_at: int | None = None
+    recorded: dict = field(default_factory=dict)  # subsystem -> (names, units, values (n+1, names)): record
 
     @property
     def n_dim(self) -> int:
@@ -115,6 +117,8 @@ def open_units(scene: Scene, *, cache=None, inspect=True):
         for (name, sub), kind in zip(scene.data["subsystems"].items(), kinds):
             unit = open_unit(scene, name, kind, cache=cache)
             units.append(unit)
+            if "record" in sub:
+                Recorder(unit, sub["record"])  # the names checked before any step
             mass = sub.get("mass")
             if isinstance(mass, str):
                 mass = unit.get_named(mass)
@@ -261,8 +265,22 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
             sensitivities=c["sensitivities"],
         )
         start = consistent_start(scene, problem)
+        recorders = {
+            i: Recorder(u, sub["record"])
+            for i, (u, sub) in enumerate(zip(units, scene.data["subsystems"].values()))
+            if sub.get("record")
+        }
+        rows = {i: [] for i in recorders}
+
+        def read_recorded(e):
+            for i, rec in recorders.items():
+                problem.stand(i, e)  # the accepted state and coupling variables, wherever the step left the unit
+                rows[i].append(rec.read())
+
+        read_recorded(start.history[..., 0, :])
 
         def step_done(n, state, history, y):
+            read_recorded(history[..., 0, :])
             if progress is not None:
                 progress(n)
 
@@ -289,6 +307,11 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
         outputs = [nan_y if y is None else y for y in traj.outputs]
         times = problem.t0 + c["H"] * np.arange(len(traj.states))
         info = {u.label: u.info() for u in units}
+        n_rows = len(traj.states)
+        recorded = {
+            units[i].label: (rec.names, rec.units, np.array(rows[i][:n_rows], dtype=float).reshape(n_rows, -1))
+            for i, rec in recorders.items()
+        }
         for u, cp in zip(units, couplings):
             info[u.label]["feedthrough"] = "yes" if cp.feedthrough else "through a step only"
         return SceneRun(
@@ -303,6 +326,7 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
             time.perf_counter() - clock,
             start,
             traj.diverged_at,
+            recorded,
         )
     finally:
         if problem is not None:
@@ -403,7 +427,7 @@ def run_dataset_data(run: SceneRun, *, command: str = ""):
                 {"units": "m", "long_name": "position of the first subsystem minus the second's"},
             ),
         }
-    ds = DatasetDict(per_unit | per_joint | coupling, coords=coords)
+    ds = DatasetDict(per_unit | per_joint | coupling | recorded_entries(run.recorded), coords=coords)
     attrs = provenance_attrs(scene.data, title=f"FMU scene {scene.path.name}", command=command)
     attrs["scene_json"] = attrs["config_json"]
     attrs["status"] = run.status

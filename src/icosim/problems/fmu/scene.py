@@ -70,6 +70,8 @@ SUBSYSTEM_KEYS = {
     "set_position": "name of a tunable parameter or input that sets the position (projection)",
     "set_velocity": "name of a tunable parameter or input that sets the velocity (projection)",
     "rollback_tolerance": "relative difference accepted when a restored step is repeated (default 0: bit for bit)",
+    "record": "names of unit variables (outputs, locals, parameters, inputs) written to the dataset as "
+    "<subsystem>.<variable>(time), read at t_start and after each accepted macro step",
 }
 
 #: Keys of one joint and what they hold.
@@ -113,7 +115,7 @@ COUPLING_KEYS = {
 }
 
 #: Subsystem keys that do not name unit variables.
-_NOT_NAMES = ("fmu", "start", "force_sign", "mass", "rollback_tolerance")
+_NOT_NAMES = ("fmu", "start", "force_sign", "mass", "rollback_tolerance", "record")
 
 
 def scene_schema() -> dict:
@@ -137,6 +139,7 @@ def scene_schema() -> dict:
             "force_sign": {"enum": [1, -1]},
             "mass": {"oneOf": [{"type": "number", "exclusiveMinimum": 0}, name]},
             "rollback_tolerance": {"type": "number", "minimum": 0},
+            "record": {"type": "array", "items": name, "uniqueItems": True},
         },
     }
     params = defs["method_parameters"]["properties"]
