@@ -19,7 +19,7 @@ import numpy as np
 from . import guard
 from .errors import FmuError
 
-__all__ = ["Recorder", "READABLE", "recorded_entries"]
+__all__ = ["Recorder", "Recording", "READABLE", "recorded_entries"]
 
 #: Causalities whose variables the get functions may read in step mode.
 READABLE = ("output", "local", "parameter", "calculatedParameter", "structuralParameter", "input")
@@ -72,6 +72,33 @@ class Recorder:
             out.append(float(values[el.index]))
         guard.leave()
         return out
+
+
+class Recording:
+    """The recorded variables of a run's units, read at ``t_start`` with the coupling variables ``e0`` there, then
+    by :meth:`read` after each accepted macro step; :meth:`result` at the end."""
+
+    def __init__(self, problem, units, scene, e0):
+        self.problem = problem
+        subs = scene.data["subsystems"].values()
+        self.recorders = {
+            i: Recorder(u, sub["record"]) for i, (u, sub) in enumerate(zip(units, subs)) if sub.get("record")
+        }
+        self.rows = {i: [] for i in self.recorders}
+        self.read(e0)
+
+    def read(self, e):
+        """Read every recorded variable at the communication point with the accepted coupling variables ``e``."""
+        for i, rec in self.recorders.items():
+            self.problem.stand(i, e)  # the accepted state and input, wherever the step left the unit
+            self.rows[i].append(rec.read())
+
+    def result(self, n_rows) -> dict:
+        """Subsystem -> (names, units, values ``(n_rows, names)``) of the first ``n_rows`` communication points."""
+        return {
+            rec.unit.label: (rec.names, rec.units, np.array(self.rows[i][:n_rows], dtype=float).reshape(n_rows, -1))
+            for i, rec in self.recorders.items()
+        }
 
 
 def recorded_entries(recorded: dict) -> dict:

@@ -10,10 +10,11 @@ import numpy as np
 from ...engine.run import simulate
 from .build import build_unit, is_source_dir
 from .errors import FmuError
+from .initial import given_coupling_warning
 from .inspection import inspect_unit, joint_direction, refuse
 from .joints import check_scheme
 from .problem import Coupling, FmuCosimulation
-from .record import Recorder, recorded_entries
+from .record import Recorder, Recording, recorded_entries
 from .scene import Scene, load_scene
 from .units import ROLES, Unit
 
@@ -117,8 +118,7 @@ def open_units(scene: Scene, *, cache=None, inspect=True):
         for (name, sub), kind in zip(scene.data["subsystems"].items(), kinds):
             unit = open_unit(scene, name, kind, cache=cache)
             units.append(unit)
-            if "record" in sub:
-                Recorder(unit, sub["record"])  # the names checked before any step
+            Recorder(unit, sub.get("record", []))  # the names to record checked before any step
             mass = sub.get("mass")
             if isinstance(mass, str):
                 mass = unit.get_named(mass)
@@ -189,7 +189,7 @@ def consistent_start(scene: Scene, problem: FmuCosimulation) -> Start:
                 a, b = scene.names[jt.first], scene.names[jt.second]
                 whose = "the joint's" if not scene.has_joints else f"{scene.joint_label(j)}:"
                 raise FmuError(
-                    f"{scene.path}: initial: {whose} {_PLURAL[what]} differ at t_start: {a} "
+                    f"{scene.path}: initial: {whose} {what.replace('y', 'ie')}s differ at t_start: {a} "  # velocities
                     f"{_text(state[jt.first], what, n)} {unit}, {b} {_text(state[jt.second], what, n)} {unit} (gap "
                     f"{worst:.3g} {unit} > initial_tolerance {tol:g} x {size:g}); set consistent start values, or "
                     "initial: project (units that can be set) or initial: as-is (the gap is reported)"
@@ -199,32 +199,12 @@ def consistent_start(scene: Scene, problem: FmuCosimulation) -> Start:
     if mode == "project":
         state = problem.project(state)
     given = scene.data.get("initial_coupling")
-    warning = ""
     if given is not None:
         e0, source = np.asarray(given, dtype=float), "scene"
-        warning = given_coupling_warning(scene, e0, problem.consistent_coupling())
     else:
         e0, source = problem.consistent_coupling(), "computed"
+    warning = "" if given is None else given_coupling_warning(scene.path, e0, problem.consistent_coupling())
     return Start(state, problem.initial_history(e0), source, position_gap, velocity_gap, mode, warning)
-
-
-def given_coupling_warning(scene: Scene, given, computed, rtol: float = 1e-6) -> str:
-    """A warning where the scene's ``initial_coupling`` departs from the coupling variables the units need at
-    ``t_start`` (beyond ``rtol`` of the larger of 1 and their size): the history then starts off the solution, an
-    error of the size of the departure that the following steps carry (first order in H, whatever the method's
-    order); ``""`` where they agree."""
-    scale = max(1.0, float(np.max(np.abs(computed))), float(np.max(np.abs(given))))
-    if float(np.max(np.abs(given - computed))) <= rtol * scale:
-        return ""
-    fmt = lambda v: "[" + ", ".join(f"{x:.6g}" for x in v) + "]"
-    return (
-        f"{scene.path}: initial_coupling: {fmt(given)} differs from the coupling variables the units need at "
-        f"t_start, {fmt(computed)} (computed from the units); a start off the units costs the run its order "
-        "(first-order accurate in H): leave initial_coupling out to start from the computed values"
-    )
-
-
-_PLURAL = {"position": "positions", "velocity": "velocities"}
 
 
 def _text(row, what, n) -> str:
@@ -265,22 +245,10 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
             sensitivities=c["sensitivities"],
         )
         start = consistent_start(scene, problem)
-        recorders = {
-            i: Recorder(u, sub["record"])
-            for i, (u, sub) in enumerate(zip(units, scene.data["subsystems"].values()))
-            if sub.get("record")
-        }
-        rows = {i: [] for i in recorders}
-
-        def read_recorded(e):
-            for i, rec in recorders.items():
-                problem.stand(i, e)  # the accepted state and coupling variables, wherever the step left the unit
-                rows[i].append(rec.read())
-
-        read_recorded(start.history[..., 0, :])
+        recording = Recording(problem, units, scene, start.history[..., 0, :])
 
         def step_done(n, state, history, y):
-            read_recorded(history[..., 0, :])
+            recording.read(history[..., 0, :])
             if progress is not None:
                 progress(n)
 
@@ -307,11 +275,6 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
         outputs = [nan_y if y is None else y for y in traj.outputs]
         times = problem.t0 + c["H"] * np.arange(len(traj.states))
         info = {u.label: u.info() for u in units}
-        n_rows = len(traj.states)
-        recorded = {
-            units[i].label: (rec.names, rec.units, np.array(rows[i][:n_rows], dtype=float).reshape(n_rows, -1))
-            for i, rec in recorders.items()
-        }
         for u, cp in zip(units, couplings):
             info[u.label]["feedthrough"] = "yes" if cp.feedthrough else "through a step only"
         return SceneRun(
@@ -326,7 +289,7 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
             time.perf_counter() - clock,
             start,
             traj.diverged_at,
-            recorded,
+            recording.result(len(traj.states)),
         )
     finally:
         if problem is not None:
