@@ -68,6 +68,13 @@ def test_recorded_variables_follow_the_run(capsys, tmp_path, scheme):
     np.testing.assert_array_equal(ds["body2.x"].values, ds["position"].values[1])
     # at t_start: Newton's law of msd with the computed coupling force, m a = -c x0 + lambda
     assert ds["body1.a"].values[0] == pytest.approx(-1000.0 * 0.1 + ds["coupling"].values[0, 0])
+    # reading does not move the run: the same scene without record gives the same trajectory, bit for bit
+    (tmp_path / "plain").mkdir()
+    plain = run(
+        capsys, tmp_path / "plain", scene(tmp_path / "plain", ("body1", msd(1)), ("body2", msd(2)), scheme=scheme)
+    )
+    np.testing.assert_array_equal(plain["position"].values, ds["position"].values)
+    np.testing.assert_array_equal(plain["coupling"].values, ds["coupling"].values)
 
 
 def test_a_name_the_unit_lacks_is_refused(capsys, tmp_path):

@@ -1,15 +1,16 @@
 """Variables a scene asks to record: ``record: [names]`` per subsystem, read from the unit at ``t_start`` and after
 each accepted macro step, written to the dataset as ``<subsystem>.<variable>(time)``.
 
-Which variables may be read follows the standard: FMI 2.0 (section 2.1.7, and the Co-Simulation state machine of
-section 4.2.4) lets ``fmi2GetReal``/``Integer``/``Boolean`` be called in the step-complete state on every variable
-but the independent one, and FMI 3.0 (section 2.2.6) so for ``fmi3Get{VariableType}``; a ``local`` must not be
-*connected* to another unit (section 2.2.7), but reading it for the record is what its visibility is for.  So any
-numeric variable (Real, Integer, Boolean, Enumeration; FMI 3.0 Float, Int, UInt, Boolean, Enumeration, an array
-element as ``y[2]``) of causality output, local, parameter, calculated parameter, structural parameter or input is
-recorded (an input or parameter: the value the unit holds); the independent variable (its value is the dataset's
-``time``), a String, Binary or Clock is refused naming the variable and the unit.  A value is recorded as the unit
-holds it, in its declared unit (the dataset's ``units`` attribute says which), not converted to SI.
+Which variables may be read follows the standard: FMI 2.0 lets ``fmi2GetReal``/``Integer``/``Boolean`` determine
+the value of every variable of the model description at the current time (section 2.1.7), in the step-complete
+state of Co-Simulation too (section 4.2.4), and FMI 3.0's ``fmi3Get{VariableType}`` so; a ``local`` must not be
+*connected* to another unit (FMI 2.0 section 2.2.7), but reading it for the record is what its visibility is for.
+So any numeric variable (Real, Integer, Boolean, Enumeration; FMI 3.0 Float, Int, UInt, Boolean, Enumeration, an
+array element as ``y[2]``) of causality output, local, parameter, calculated parameter, structural parameter or
+input is recorded (an input or parameter: the value the unit holds).  The independent variable is refused (its
+value is the dataset's ``time``), and so are String, Binary and Clock variables, naming the variable and the unit.
+A value is recorded as the unit holds it, in its declared unit (the dataset's ``units`` attribute says which), not
+converted to SI.
 """
 
 from __future__ import annotations
