@@ -56,10 +56,12 @@ def kinematic_fit(unit, *, H, t0=0.0, tol=1e-2) -> Finding:
     """The kinematic role measured on ``unit`` at its start (left there, its input at zero): with the acceleration
     input held at 1 (SI) on one component over a step ``H``, against 0, the acceleration output must move by 1 on
     that component and the velocity by ``H`` (within ``tol``, relative), the other components not at all.  A unit
-    without an acceleration output has its kinematics in its inputs: nothing to measure."""
+    without an acceleration input or output has its kinematics in its inputs: nothing to measure here."""
     key = "acceleration_input"
-    if "acceleration" not in unit.elements or "velocity" not in unit.elements:
+    if key not in unit.elements or "acceleration" not in unit.elements or "velocity" not in unit.elements:
         return Finding("role", "pass", "no kinematic outputs named: the coupling point's motion is its inputs")
+    if any(k in unit.elements for k in ("position_input", "velocity_input")):  # a drive through several inputs
+        return Finding("role", "pass", "its position or velocity inputs prescribe the point's motion with it")
     n = len(unit.elements[key])
     outputs = ("velocity", "acceleration", "reaction_force")
     start = unit.save()
