@@ -119,7 +119,7 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=0.0) -
     c = int(np.argmax(np.abs(np.nan_to_num(gains))))
     found.gain = float(gains[c])
     found.findings.append(
-        _not_finite(unit, kind, base, first) or _rollback(first, again, base, back, rollback_tolerance)
+        _not_finite(unit, kind, base, first, again, back) or _rollback(first, again, base, back, rollback_tolerance)
     )
     found.findings.append(_feedthrough(kind, found, float(step_gain[c]), float(velocity_gain[c])))
     found.findings.append(_direction(kind, found, force_sign, float(velocity_gain[c])))
@@ -137,11 +137,14 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=0.0) -
     return found
 
 
-def _not_finite(unit, kind, base, first) -> Finding | None:
-    """A refusal where the unit's outputs are not finite at its start or after a step with its input at zero (a
-    NaN is no value to compare: the rollback check would blame the restore); None where they are finite."""
+def _not_finite(unit, kind, base, first, again, back) -> Finding | None:
+    """A refusal where the unit's outputs are not finite at its start, after a step with its input at zero (or
+    that step repeated) or restored (a NaN is no value to compare: the rollback check would blame the restore);
+    None where they are finite."""
     keys = ("position", "velocity", "acceleration" if kind == "force" else "reaction_force")
-    for when, values in (("at its start", base), ("after a step with its input at zero", first)):
+    after = "after a step with its input at zero"
+    read = (("at its start", base), (after, first), (f"{after}, repeated", again), ("restored", back))
+    for when, values in read:
         bad = np.argwhere(~np.isfinite(np.asarray(values, dtype=float)))
         if bad.size:
             row, col = (int(i) for i in bad[0])
