@@ -136,7 +136,7 @@ def _declared(variable) -> str | None:
 
 def measure(label: str, md, key: str, variable) -> Measure:
     """The unit of ``variable`` in the role ``key`` (:data:`ROLE_QUANTITIES`): :class:`FmuError` naming both where
-    it is not the role's quantity (a velocity driving a kinematic unit: power-bond coupling, refused)."""
+    it is not the role's quantity (a velocity as a force or acceleration input: a compliant unit's, refused)."""
     velocity_input(label, key, variable)
     unit = _declared(variable)
     if unit is None:
