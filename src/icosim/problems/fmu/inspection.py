@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import FmuError
+from .roles import kinematic_fit
 
 __all__ = ["Finding", "Inspection", "inspect_unit", "joint_direction", "refuse", "declared_feedthrough"]
 
@@ -124,9 +125,7 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=0.0) -
     found.findings.append(_feedthrough(kind, found, float(step_gain[c]), float(velocity_gain[c])))
     found.findings.append(_direction(kind, found, force_sign, float(velocity_gain[c])))
     if kind == "kinematic":
-        from .roles import kinematic_fit  # builds on this module's Finding
-
-        found.findings.append(kinematic_fit(unit, H=H, t0=t0))
+        found.findings.append(Finding("role", *kinematic_fit(unit, H=H, t0=t0)))
     found.findings.append(_units(unit))
     found.findings.append(_starts(unit))
     if unit.description_problems:

@@ -23,7 +23,6 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import FmuError
-from .inspection import Finding
 
 __all__ = ["velocity_input", "kinematic_fit", "COMPLIANT"]
 
@@ -52,16 +51,17 @@ def velocity_input(label, key, variable):
         )
 
 
-def kinematic_fit(unit, *, H, t0=0.0, tol=1e-2) -> Finding:
+def kinematic_fit(unit, *, H, t0=0.0, tol=1e-2) -> tuple:
     """The kinematic role measured on ``unit`` at its start (left there, its input at zero): with the acceleration
     input held at 1 (SI) on one component over a step ``H``, against 0, the acceleration output must move by 1 on
     that component and the velocity by ``H`` (within ``tol``, relative), the other components not at all.  A unit
-    without an acceleration input or output has its kinematics in its inputs: nothing to measure here."""
+    without an acceleration input or output has its kinematics in its inputs: nothing to measure here.  Returns the
+    check's ``(verdict, detail, fix, key)`` (:class:`~icosim.problems.fmu.inspection.Finding` ``role``)."""
     key = "acceleration_input"
     if key not in unit.elements or "acceleration" not in unit.elements or "velocity" not in unit.elements:
-        return Finding("role", "pass", "no kinematic outputs named: the coupling point's motion is its inputs")
+        return "pass", "no kinematic outputs named: the coupling point's motion is its inputs", "", ""
     if any(k in unit.elements for k in ("position_input", "velocity_input")):  # a drive through several inputs
-        return Finding("role", "pass", "its position or velocity inputs prescribe the point's motion with it")
+        return "pass", "its position or velocity inputs prescribe the point's motion with it", "", ""
     n = len(unit.elements[key])
     outputs = ("velocity", "acceleration", "reaction_force")
     start = unit.save()
@@ -104,12 +104,11 @@ def kinematic_fit(unit, *, H, t0=0.0, tol=1e-2) -> Finding:
                 f"N s/m on a body of {force / da[c]:.4g} kg ({da[c]:.4g} 1/s, a damping over a mass), the response "
                 f"of {COMPLIANT}"
             )
-        return Finding(
-            "role",
+        return (
             "refused",
             detail,
             "a kinematically driven unit names the acceleration input of its coupling point and that point's "
             "position, velocity and acceleration outputs",
             f"subsystems.{unit.label}.acceleration_input",
         )
-    return Finding("role", "pass", f"its kinematic outputs move as its acceleration input prescribes (H = {H:g} s)")
+    return "pass", f"its kinematic outputs move as its acceleration input prescribes (H = {H:g} s)", "", ""
