@@ -116,6 +116,9 @@ def _run(scene, args, out) -> int:
         return _error(f"{exc}; no dataset written")
     write_netcdf(run_dataset(result, command=f"icosim cosim {args.scene} --out {args.out}"), out)
     summary = {**run_summary(result), "out": str(out)}
+    warning = (summary["initial"] or {}).get("warning")
+    if warning:
+        print(f"icosim cosim: warning: {warning}", file=sys.stderr)
     print(dumps(summary) if args.json else _text(summary))
     return 0 if result.status == "completed" else 1
 
@@ -194,7 +197,11 @@ def _text(s: dict) -> str:
     start = s.get("initial") or {}
     if start:
         values = ", ".join(f"{v:.6g}" for v in start["coupling_values"])
-        gap = f", joint gap at start {start['position_gap']:.3g} m (as-is)" if start["mode"] == "as-is" else ""
+        gap = (
+            f", joint gap at start {start['position_gap']:.3g} m, {start['velocity_gap']:.3g} m/s (as-is)"
+            if start["mode"] == "as-is"
+            else ""
+        )
         lines.append(f"  initial coupling variables {values} ({start['coupling']}){gap}")
     per_step = s["do_step_calls_per_macro_step"]
     lines.append(

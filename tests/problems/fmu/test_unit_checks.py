@@ -263,7 +263,7 @@ def test_an_inconsistent_start_is_refused_projected_or_accepted(capsys, tmp_path
     assert projected.start.position_gap == pytest.approx(0.02)
     out = tmp_path / "as_is.nc"
     status, text, _ = cosim(capsys, write(tmp_path, first, second, name="a.yaml", initial="as-is"), "--out", out)
-    assert status == 0 and "joint gap at start 0.02 m (as-is)" in text
+    assert status == 0 and "joint gap at start 0.02 m, 0 m/s (as-is)" in text
     attrs = open_dataset(out).attrs
     assert attrs["initial"] == "as-is" and attrs["initial_position_gap"] == pytest.approx(0.02)
 

@@ -14,10 +14,11 @@ from dataclasses import asdict
 
 import numpy as np
 
-from .errors import FmuError
+from .errors import FmuError, UnitStepError
 from .inspection import Finding, inspect_unit, joint_direction, rollback_tolerance
 from .joints import check_scheme
 from .problem import Coupling, FmuCosimulation
+from .record import Recorder
 from .run import consistent_start, open_unit
 
 __all__ = ["check_scene"]
@@ -32,7 +33,7 @@ def check_scene(scene, *, cache=None) -> dict:
     signs = scene.graph_signs()
     units, couplings, rows = [], [], []
     try:
-        for (name, sub), kind in zip(scene.data["subsystems"].items(), kinds):
+        for i, ((name, sub), kind) in enumerate(zip(scene.data["subsystems"].items(), kinds)):
             row = {"name": name, "unit": str(scene.fmus[name]), "findings": []}
             rows.append(row)
             try:
@@ -44,20 +45,26 @@ def check_scene(scene, *, cache=None) -> dict:
             md = unit.md
             row["unit"] = f"{md.modelName} (FMI {md.fmiVersion}, {md.generationTool or 'unknown tool'})"
             row["findings"].append(asdict(Finding("open", "pass", unit.opened)))
-            found = inspect_unit(
-                unit,
-                kind=kind,
-                force_sign=sub["force_sign"],
-                H=float(c["H"]),
-                t0=unit.t,
-                rollback_tolerance=rollback_tolerance(sub),
-            )
+            if sub.get("record"):
+                row["findings"].append(asdict(_record_row(unit, sub["record"], name)))
+            try:
+                found = inspect_unit(
+                    unit,
+                    kind=kind,
+                    force_sign=sub["force_sign"],
+                    H=float(c["H"]),
+                    t0=unit.t,
+                    rollback_tolerance=rollback_tolerance(sub),
+                )
+            except UnitStepError as exc:  # a unit that cannot take its first step is a refusal, not a crash
+                row["findings"].append(asdict(Finding("step", "refused", f"{exc}: its first step cannot be taken")))
+                continue
             row["findings"].extend(asdict(f) for f in found.findings)
             mass = sub.get("mass")
             mass = unit.get_named(mass) if isinstance(mass, str) else mass
-            couplings.append(Coupling(kind, signs[len(couplings)], mass, found.feedthrough, found.gain))
+            couplings.append(Coupling(kind, signs[i], mass, found.feedthrough, found.gain))
         scene_rows = []
-        if len(units) == len(scene.names):
+        if len(couplings) == len(scene.names):
             joint = joint_direction(
                 scene.names, kinds, signs, [c.gain for c in couplings],
                 [-int(sub["force_sign"]) for sub in scene.data["subsystems"].values()],
@@ -70,7 +77,7 @@ def check_scene(scene, *, cache=None) -> dict:
                 units, couplings, graph, c["k"], c["H"], t0=units[0].t, perturbation=c["perturbation"]
             )
             try:
-                scene_rows.append(_start_row(scene, problem))
+                scene_rows.extend(_start_rows(scene, problem))
             finally:
                 problem.close()
     finally:
@@ -81,6 +88,15 @@ def check_scene(scene, *, cache=None) -> dict:
     )
     return {"scene": str(scene.path), "coupling": scene.describe(), "units": rows, "scene_findings": scene_rows,
             "refused": bool(refused)}  # fmt: skip
+
+
+def _record_row(unit, names, name) -> Finding:
+    try:
+        rec = Recorder(unit, names)
+    except FmuError as exc:
+        return Finding("record", "refused", _without_label(str(exc), name), key=f"subsystems.{name}.record")
+    said = ", ".join(f"{n} ({el.variable.causality}, {el.variable.type})" for n, (el, _) in zip(names, rec.elements))
+    return Finding("record", "pass", f"{said}: read after each accepted macro step")
 
 
 def _without_label(message: str, name: str) -> str:
@@ -95,16 +111,19 @@ def _guarded(check, action, detail) -> dict:
     return asdict(Finding(check, "pass", detail))
 
 
-def _start_row(scene, problem) -> dict:
+def _start_rows(scene, problem) -> list:
     try:
         start = consistent_start(scene, problem)
     except FmuError as exc:
         text = str(exc).split("initial: ", 1)[-1]
-        return asdict(Finding("start", "refused", text))
+        return [asdict(Finding("start", "refused", text))]
     except (np.linalg.LinAlgError, ValueError) as exc:
-        return asdict(Finding("start", "refused", f"no coupling variables meet the joint at t_start ({exc})"))
+        return [asdict(Finding("start", "refused", f"no coupling variables meet the joint at t_start ({exc})"))]
     e0 = ", ".join(f"{v:.6g}" for v in start.history[0])
     gap = f"joint gap {start.position_gap:.3g} m, {start.velocity_gap:.3g} m/s"
-    return asdict(
-        Finding("start", "pass", f"{gap} ({start.initial}); coupling variables {e0} ({start.coupling_source})")
-    )
+    rows = [
+        asdict(Finding("start", "pass", f"{gap} ({start.initial}); coupling variables {e0} ({start.coupling_source})"))
+    ]
+    if start.warning:
+        rows.append(asdict(Finding("initial_coupling", "note", start.warning.split("initial_coupling: ", 1)[-1])))
+    return rows

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import FmuError
+from .roles import kinematic_fit
 
 __all__ = [
     "Finding",
@@ -181,7 +182,9 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=ROLLBA
     gains = np.where(responds, algebraic, step_gain) if found.feedthrough else step_gain
     c = int(np.argmax(np.abs(np.nan_to_num(gains))))
     found.gain = float(gains[c])
-    rollback = _rollback(unit, first, again, base, back, rollback_tolerance)
+    rollback = _not_finite(unit, kind, base, first, again, back) or _rollback(
+        unit, first, again, base, back, rollback_tolerance
+    )
     if flag is not None:
         if rollback.verdict == "refused":
             flag = Finding(
@@ -196,6 +199,8 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=ROLLBA
     found.findings.append(rollback)
     found.findings.append(_feedthrough(kind, found, float(step_gain[c]), float(velocity_gain[c])))
     found.findings.append(_direction(kind, found, force_sign, float(velocity_gain[c])))
+    if kind == "kinematic":
+        found.findings.append(Finding("role", *kinematic_fit(unit, H=H, t0=t0)))
     found.findings.append(_moves(unit, H, moving, probes, rollback_tolerance))
     found.findings.append(_responds(unit, kind, key, position_gain, velocity_gain))
     found.findings.append(_units(unit))
@@ -239,6 +244,27 @@ def _flag_probe(unit, key, push, start, t0, H, tol) -> Finding | None:
         f"after two steps of {H:g} s its {name} is {float(ends[True][row, col])!r} with true on the second, "
         f"{float(ends[False][row, col])!r} with false; it is stepped with true on every step",
     )
+
+
+def _not_finite(unit, kind, base, first, again, back) -> Finding | None:
+    """A refusal where the unit's outputs are not finite at its start, after a step with its input at zero (or
+    that step repeated) or restored (a NaN is no value to compare: the rollback check would blame the restore);
+    None where they are finite."""
+    keys = ("position", "velocity", "acceleration" if kind == "force" else "reaction_force")
+    after = "after a step with its input at zero"
+    read = (("at its start", base), (after, first), (f"{after}, repeated", again), ("restored", back))
+    for when, values in read:
+        bad = np.argwhere(~np.isfinite(np.asarray(values, dtype=float)))
+        if bad.size:
+            row, col = (int(i) for i in bad[0])
+            name = unit.elements[keys[row]][col].name
+            return Finding(
+                "outputs",
+                "refused",
+                f"its {keys[row]} {name} is {float(values[row][col])!r} {when}{unit.said()}",
+                "a unit whose outputs are not finite cannot be coupled: check its start values and parameters",
+            )
+    return None
 
 
 def _rollback(unit, first, again, base, back, tol) -> Finding:

@@ -191,7 +191,17 @@ def check_order(path, c: dict, scene, graph: CouplingGraph, method) -> None:
                 f"only with scheme {' or '.join(ORDERED_SCHEMES)}; scheme {given} does not take an order",
             )
         key = "coupling.scheme"
-        numbers = getattr(get_scheme(given), "order", None)
+        try:
+            numbers = getattr(get_scheme(given), "order", None)
+        except ParameterError as exc:
+            every = _numbered(range(1, len(names) + 1))
+            _fail(
+                path,
+                key,
+                f"{exc}; allowed: {', '.join(SCHEMES)}, gauss-seidel-<order> naming each of the {len(names)} "
+                f"subsystems once by its number in file order (e.g. gauss-seidel-{every}), or scheme: gauss-seidel "
+                f"with order: [{allowed}]",
+            )
         if numbers is not None and len(numbers) != len(names):
             _fail(
                 path,

@@ -22,6 +22,7 @@ import re
 from dataclasses import dataclass
 
 from .errors import FmuError
+from .roles import COMPLIANT, velocity_input
 
 __all__ = ["ROLE_QUANTITIES", "Measure", "measure", "parse"]
 
@@ -135,7 +136,8 @@ def _declared(variable) -> str | None:
 
 def measure(label: str, md, key: str, variable) -> Measure:
     """The unit of ``variable`` in the role ``key`` (:data:`ROLE_QUANTITIES`): :class:`FmuError` naming both where
-    it is not the role's quantity (a velocity driving a kinematic unit: power-bond coupling, refused)."""
+    it is not the role's quantity (a velocity as a force or acceleration input: a compliant unit's, refused)."""
+    velocity_input(label, key, variable)
     unit = _declared(variable)
     if unit is None:
         return Measure(None, 1.0, "not declared")
@@ -152,11 +154,8 @@ def measure(label: str, md, key: str, variable) -> Measure:
     quantity, wanted = ROLE_QUANTITIES[key]
     if dims != wanted:
         why = ""
-        if key == "acceleration_input" and dims == _VELOCITY:
-            why = (
-                "; a kinematically driven unit whose drive is a velocity (power-bond coupling) is not supported: "
-                "the coupling methods prescribe the acceleration"
-            )
+        if key in ("force", "acceleration_input") and dims == _VELOCITY:
+            why = f": the unit takes a velocity, {COMPLIANT}"
         raise FmuError(
             f"{label}: {key}: {variable.name!r} is in {unit} ({_dims_text(dims)}), but {key} must be "
             f"{quantity} ({_dims_text(wanted)}){why}"

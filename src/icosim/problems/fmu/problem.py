@@ -213,6 +213,13 @@ class FmuCosimulation(CosimulationProblem):
         self._holds[i] = "scratch"
         return self._outputs(i, np.asarray(u, dtype=float).tolist())[1]
 
+    def stand(self, i, e):
+        """Unit ``i`` at the communication point ``T_N`` (its saved state restored where it holds another) with its
+        input from the coupling variables ``e`` there (``(n_e,)``), as the outputs at ``T_N`` are read."""
+        self._to_start(i)
+        c = self.couplings[i]
+        self.units[i].set(c.input_key, self._scale[i] * np.asarray(self.inputs(i, np.asarray(e, dtype=float))))
+
     # -- one unit integrated --------------------------------------------------------------------------
     def _to_start(self, i):
         if self._holds[i] != "start":

@@ -11,9 +11,11 @@ from ...engine.run import simulate
 from .build import build_unit, is_source_dir
 from .errors import FmuError
 from .exchange import open_fmu_unit
+from .initial import given_coupling_warning
 from .inspection import inspect_unit, joint_direction, refuse, rollback_tolerance
 from .joints import check_scheme
 from .problem import Coupling, FmuCosimulation
+from .record import Recorder, Recording, recorded_entries
 from .scene import Scene, load_scene
 from .units import ROLES, Unit
 
@@ -35,6 +37,7 @@ class SceneRun:
     wall_time: float = 0.0
     start: object = None  # the run's Start (consistent_start)
     diverged_at: int | None = None
+    recorded: dict = field(default_factory=dict)  # subsystem -> (names, units, values (n+1, names)): record
 
     @property
     def n_dim(self) -> int:
@@ -118,6 +121,7 @@ def open_units(scene: Scene, *, cache=None, inspect=True):
         for (name, sub), kind in zip(scene.data["subsystems"].items(), kinds):
             unit = open_unit(scene, name, kind, cache=cache)
             units.append(unit)
+            Recorder(unit, sub.get("record", []))  # the names to record checked before any step
             mass = sub.get("mass")
             if isinstance(mass, str):
                 mass = unit.get_named(mass)
@@ -161,6 +165,7 @@ class Start:
     position_gap: float
     velocity_gap: float
     initial: str  # "check", "project" or "as-is"
+    warning: str = ""  # initial_coupling given in the scene that the units do not meet
 
 
 def consistent_start(scene: Scene, problem: FmuCosimulation) -> Start:
@@ -187,7 +192,7 @@ def consistent_start(scene: Scene, problem: FmuCosimulation) -> Start:
                 a, b = scene.names[jt.first], scene.names[jt.second]
                 whose = "the joint's" if not scene.has_joints else f"{scene.joint_label(j)}:"
                 raise FmuError(
-                    f"{scene.path}: initial: {whose} {what}s differ at t_start: {a} "
+                    f"{scene.path}: initial: {whose} {what.replace('y', 'ie')}s differ at t_start: {a} "  # velocities
                     f"{_text(state[jt.first], what, n)} {unit}, {b} {_text(state[jt.second], what, n)} {unit} (gap "
                     f"{worst:.3g} {unit} > initial_tolerance {tol:g} x {size:g}); set consistent start values, or "
                     "initial: project (units that can be set) or initial: as-is (the gap is reported)"
@@ -201,7 +206,8 @@ def consistent_start(scene: Scene, problem: FmuCosimulation) -> Start:
         e0, source = np.asarray(given, dtype=float), "scene"
     else:
         e0, source = problem.consistent_coupling(), "computed"
-    return Start(state, problem.initial_history(e0), source, position_gap, velocity_gap, mode)
+    warning = "" if given is None else given_coupling_warning(scene.path, e0, problem.consistent_coupling())
+    return Start(state, problem.initial_history(e0), source, position_gap, velocity_gap, mode, warning)
 
 
 def _text(row, what, n) -> str:
@@ -243,8 +249,10 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
             iterations=c["iterations"],
         )
         start = consistent_start(scene, problem)
+        recording = Recording(problem, units, scene, start.history[..., 0, :])
 
         def step_done(n, state, history, y):
+            recording.read(history[..., 0, :])
             if progress is not None:
                 progress(n)
 
@@ -285,6 +293,7 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
             time.perf_counter() - clock,
             start,
             traj.diverged_at,
+            recording.result(len(traj.states)),
         )
     finally:
         if problem is not None:
@@ -385,7 +394,7 @@ def run_dataset_data(run: SceneRun, *, command: str = ""):
                 {"units": "m", "long_name": "position of the first subsystem minus the second's"},
             ),
         }
-    ds = DatasetDict(per_unit | per_joint | coupling, coords=coords)
+    ds = DatasetDict(per_unit | per_joint | coupling | recorded_entries(run.recorded), coords=coords)
     attrs = provenance_attrs(scene.data, title=f"FMU scene {scene.path.name}", command=command)
     attrs["scene_json"] = attrs["config_json"]
     attrs["status"] = run.status
@@ -396,6 +405,7 @@ def run_dataset_data(run: SceneRun, *, command: str = ""):
         attrs["initial_position_gap"] = run.start.position_gap
         attrs["initial_velocity_gap"] = run.start.velocity_gap
         attrs["initial_coupling_source"] = run.start.coupling_source
+        attrs["initial_coupling_warning"] = run.start.warning
     attrs["scheme"] = scene.scheme.name
     attrs["method_engine_parameters"] = json.dumps(scene.method.params, sort_keys=True)
     attrs["wall_time_s"] = run.wall_time
@@ -438,6 +448,7 @@ def run_summary(run: SceneRun) -> dict:
             "velocity_gap": run.start.velocity_gap,
             "coupling": run.start.coupling_source,
             "coupling_values": [float(v) for v in run.coupling[0]],
+            "warning": run.start.warning or None,
         },
         "wall_time_s": run.wall_time,
     }

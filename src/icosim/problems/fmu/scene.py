@@ -49,6 +49,7 @@ from ...errors import ParameterError
 from .build import is_source_dir
 from .errors import SceneError
 from .joints import NUMBERED, ORDERED_SCHEMES, check_order, driven_by, graph_message, joint_schema, scene_joints
+from .variables import quoted_number_hint
 
 __all__ = ["Scene", "load_scene", "scene_schema", "SUBSYSTEM_KEYS", "JOINT_KEYS", "COUPLING_KEYS", "SCENE_KEYS"]
 
@@ -72,6 +73,8 @@ SUBSYSTEM_KEYS = {
     "interface": "auto (default: co-simulation where the unit can roll back, else model exchange), co-simulation "
     "or model-exchange",
     "tolerance": "the integrator's relative tolerance of a model exchange unit (default 1e-10)",
+    "record": "names of unit variables (outputs, locals, parameters, inputs) written to the dataset as "
+    "<subsystem>.<variable>(time), read at t_start and after each accepted macro step",
 }
 
 #: Keys of one joint and what they hold.
@@ -115,7 +118,7 @@ COUPLING_KEYS = {
 }
 
 #: Subsystem keys that do not name unit variables.
-_NOT_NAMES = ("fmu", "start", "force_sign", "mass", "rollback_tolerance", "interface", "tolerance")
+_NOT_NAMES = ("fmu", "start", "force_sign", "mass", "rollback_tolerance", "interface", "tolerance", "record")
 
 
 def scene_schema() -> dict:
@@ -141,6 +144,7 @@ def scene_schema() -> dict:
             "rollback_tolerance": {"type": "number", "minimum": 0},
             "interface": {"enum": ["auto", "co-simulation", "model-exchange"]},
             "tolerance": {"type": "number", "exclusiveMinimum": 0, "exclusiveMaximum": 1},
+            "record": {"type": "array", "items": name, "uniqueItems": True},
         },
     }
     params = defs["method_parameters"]["properties"]
@@ -427,19 +431,11 @@ def _validate(path, data):
     elif err.validator == "required":
         keys = err.schema.get("properties", {})
         message = f"{message}; its keys: {', '.join(keys)}"
-    elif err.validator == "type" and isinstance(err.instance, str) and _is_number(err.instance):
-        message = f"{message} (YAML reads {err.instance} as text: write the exponent with its sign, e.g. 1.0e+6)"
+    elif err.validator == "type" and isinstance(err.instance, str) and quoted_number_hint(err.instance):
+        message = f"{message}{quoted_number_hint(err.instance)}"
     elif err.validator == "additionalProperties":
         message = f"{message}; allowed keys: {', '.join(err.schema.get('properties', {}))}"
     raise SceneError(f"{path}: {where}: {message}")
-
-
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
 
 
 def _check_numbers(path, data):

@@ -262,7 +262,7 @@ class VariableTable:
         bad = f"{where}: {var.name!r} is declared {var.type}, which takes {_SPELLING[fam]}; got {value!r}"
         if fam == "real":
             if isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise FmuError(bad + (_quoted_number_hint(value) if isinstance(value, str) else ""))
+                raise FmuError(bad + (quoted_number_hint(value) if isinstance(value, str) else ""))
             if not math.isfinite(value):
                 raise FmuError(f"{where}: must be a finite number, got {value!r}")
             return float(value)
@@ -336,9 +336,13 @@ def _text(value) -> str:
     return str(value)
 
 
-def _quoted_number_hint(text: str) -> str:
+def quoted_number_hint(text: str) -> str:
+    """Why YAML read ``text`` as text where a number was wanted: an exponent without its sign (YAML 1.1 reads
+    ``1.0e6`` as a string) or quotes around the number; ``""`` if ``text`` is no number."""
     try:
         float(text)
     except ValueError:
         return ""
-    return f" (YAML reads {text} as text: write the exponent with its sign, e.g. 1.0e+6)"
+    if re.search(r"[eE]\d", text.strip()):
+        return f" (YAML reads {text} as text: write the exponent with its sign, e.g. 1.0e+6)"
+    return f" ({text!r} is quoted text: write the number without quotes)"
