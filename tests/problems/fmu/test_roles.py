@@ -67,9 +67,10 @@ def test_the_wheel_in_a_kinematic_role_is_refused_as_compliant(capsys, tmp_path)
         r"moves by ([-+.\d]+) m/s\^2 .* its drive force moves by ([-+.\d]+) N, ([-+.\d]+) kg", role["detail"]
     )
     accel, force, mass = (float(v) for v in numbers.groups())
-    # a velocity held at 1 m/s on the damper: the force dc, the wheel's acceleration dc / m (to a step's decay)
-    assert accel == pytest.approx(WHEEL_DC / WHEEL_M, rel=1e-2)
-    assert force == pytest.approx(WHEEL_DC, rel=1e-2)
+    # a velocity held at 1 m/s on the damper: the force dc, the wheel's acceleration dc / m, to the step's decay of
+    # the damper's relative velocity (dc H / m = 2.5 % at H = 1e-3 s)
+    assert accel == pytest.approx(WHEEL_DC / WHEEL_M, rel=3e-2)
+    assert force == pytest.approx(WHEEL_DC, rel=3e-2)
     assert mass == pytest.approx(WHEEL_M, rel=1e-2)
     # and a run is refused the same way, one line
     status = main(["cosim", str(scene(tmp_path, wheel(), "fd")), "--out", str(tmp_path / "run.nc")])

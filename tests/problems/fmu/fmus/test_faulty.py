@@ -135,12 +135,12 @@ def test_initialisation_refused(tmp_path):
     assert messages == [("unit", ERROR, "faulty: initialisation refused: no licence for this unit")]
 
 
-def test_fault_is_a_fixed_parameter_of_0_to_10(tmp_path):
+def test_fault_is_a_fixed_parameter_of_0_to_12(tmp_path):
     messages = []
     fmu = fmu_instance("faulty", tmp_path / "faulty", messages)
     assert fmu.getInteger([FAULT]) == [0] and fmu.getReal([FAULT_TIME]) == [0.0]
     with pytest.raises(Exception, match="status 3"):
-        fmu.setInteger([FAULT], [11])
+        fmu.setInteger([FAULT], [13])
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
     fmu.exitInitializationMode()
