@@ -79,22 +79,27 @@ def _with_parents(name: str) -> list[str]:
 
 
 def module_closure(modules, root) -> list[Path]:
-    """Files of ``modules`` (dotted names) and of everything they import from the package, sorted."""
+    """Files of ``modules`` (dotted names) and of everything they import from the package, sorted.
+
+    A module that is not there -- asked for, or imported by one of them -- is an error
+    (:class:`ModuleNotFoundError` naming it and who wants it): a closure without it would vouch for less
+    than it says."""
     root = Path(root)
-    todo = [n for m in modules for n in _with_parents(m)]
+    todo = [(n, None) for m in modules for n in _with_parents(m)]
     seen, files = set(), set()
     while todo:
-        name = todo.pop()
+        name, importer = todo.pop()
         if name in seen:
             continue
         seen.add(name)
         path = module_path(name, root)
         if path is None:
-            continue
+            who = f"imported by {importer}" if importer else "asked for"
+            raise ModuleNotFoundError(f"no module {name} under {root} ({who})", name=name)
         files.add(path)
         stat = path.stat()
         for imported in _module_imports(name, path, root, stat.st_mtime_ns, stat.st_size):
-            todo += _with_parents(imported)
+            todo += [(n, name) for n in _with_parents(imported)]
     return sorted(files)
 
 

@@ -166,6 +166,52 @@ def test_the_engine_imports_only_itself_and_the_errors():
     assert not outside, sorted(outside)
 
 
+#: The engine's module-level containers and caches, with why they hold no run's state.
+ENGINE_MODULE_STATE = {
+    "icosim/engine/methods/base.py:UNIT_TEXT": "a constant table: how a unit reads in running text",
+    "icosim/engine/schemes.py:SCHEMES": "the registry of schemes, filled at import",
+    "icosim/engine/decompositions.py:DECOMPOSITIONS": "the registry of decompositions, filled at import",
+    "icosim/engine/backends.py:_EXPM_CACHE": "float64 exponentials by the bytes of their argument (a pure function)",
+    "icosim/engine/backends.py:_BALL_EXPM_CACHE": "ball exponentials by precision and the matrix's exact key",
+    "icosim/engine/lagrange.py:monomial_coefficients (cache)": "exact Lagrange coefficients by their nodes",
+    "icosim/engine/lagrange.py:_weights_at (cache)": "exact Lagrange weights by their nodes and point",
+}
+
+
+def _engine_module_containers():
+    """``file:name`` of each module-level name the engine binds to a dict, list or set, or caches with
+    functools, and each call of ``id()`` and use of an object's ``__dict__`` anywhere in it."""
+    found = set()
+    for path in sorted((PACKAGE / "engine").rglob("*.py")):
+        rel = path.relative_to(SRC).as_posix()
+        tree = ast.parse(path.read_text())
+        for stmt in tree.body:
+            value = stmt.value if isinstance(stmt, (ast.Assign, ast.AnnAssign)) else None
+            targets = stmt.targets if isinstance(stmt, ast.Assign) else [getattr(stmt, "target", None)]
+            mutable = isinstance(value, (ast.Dict, ast.List, ast.Set)) or (
+                isinstance(value, ast.Call) and ast.unparse(value.func) in ("dict", "list", "set")
+            )
+            if mutable:
+                found.update(f"{rel}:{t.id}" for t in targets if isinstance(t, ast.Name) and t.id != "__all__")
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Call) and ast.unparse(node.func) == "id":
+                found.add(f"{rel}:id() at line {node.lineno}")
+            if isinstance(node, ast.Attribute) and node.attr == "__dict__":  # a memo hidden from the class
+                found.add(f"{rel}:__dict__ at line {node.lineno}")
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                cached = [ast.unparse(d) for d in node.decorator_list if "cache" in ast.unparse(d)]
+                found.update(f"{rel}:{node.name} ({d})" for d in cached if d not in ("cached_property",))
+    return found
+
+
+def test_the_engine_keeps_no_run_state_in_its_modules():
+    """Plans, kept Jacobians and their factors belong to the problem that steps with them
+    (:class:`icosim.engine.problem.CosimulationProblem`), not to module caches keyed by an object's id: a
+    problem used with a second method must never get the first's factors.  What remains at module level is
+    the registries (filled at import) and caches of pure functions of values, listed with why."""
+    assert _engine_module_containers() == set(ENGINE_MODULE_STATE)
+
+
 def test_the_report_and_the_figures_read_the_studies_through_their_data_contracts():
     """report/ and figures/ draw what the studies wrote; from a study they import only its data contracts,
     and a data contract imports no other module of a study (so a report never reruns a study's code)."""
@@ -287,6 +333,22 @@ def test_an_edited_module_is_read_again(tmp_path):
     assert [p.name for p in module_closure(["icosim.a"], tmp_path)] == ["__init__.py", "a.py", "b.py"]
     (pkg / "a.py").write_text("from . import b, c\n")
     assert [p.name for p in module_closure(["icosim.a"], tmp_path)] == ["__init__.py", "a.py", "b.py", "c.py"]
+
+
+def test_a_missing_module_is_an_error_naming_it_and_who_wants_it(tmp_path):
+    """A closure that skipped a module it was asked for, or one a module imports, would vouch for less than it
+    says (a rule's library digest without the module)."""
+    pkg = tmp_path / "icosim"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "a.py").write_text("from . import gone\n")
+    (pkg / "b.py").write_text("import icosim.gone\n")
+    with pytest.raises(ModuleNotFoundError, match=r"no module icosim\.missing under .* \(asked for\)"):
+        module_closure(["icosim.missing"], tmp_path)
+    with pytest.raises(ModuleNotFoundError, match=r"no module icosim\.gone under .* \(imported by icosim\.b\)"):
+        module_closure(["icosim.b"], tmp_path)
+    # ``from . import name``: a name that is no module is an attribute of the package, not a missing module
+    assert [p.name for p in module_closure(["icosim.a"], tmp_path)] == ["__init__.py", "a.py"]
 
 
 def test_the_library_digest_follows_paths_and_contents_not_time_stamps(tmp_path):

@@ -100,7 +100,7 @@ def script_library(script):
 
 # The engine every numerical result rests on: the macro step, its problems and methods,
 # and the stability analysis.
-ENGINE = lib("engine.macrostep", "engine.spectral", "engine.linear_problem", "engine.methods")
+ENGINE = lib("engine.macrostep", "engine.spectral", "problems.linear.problem", "engine.methods")
 
 
 def engine_library(script):

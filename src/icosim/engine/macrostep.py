@@ -18,11 +18,12 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
-from .schemes import JACOBI, Scheme, get_scheme
-from .stages import Plan, plan
+from .schemes import JACOBI, Scheme
+from .stages import Plan
 
 if TYPE_CHECKING:
     from .backends import Backend
+    from .methods.solve import KeptFactors
     from .problem import CosimulationProblem
 
 __all__ = ["macro_step"]
@@ -44,6 +45,7 @@ class CouplingRule(Protocol):
         residuals: Mapping[str, np.ndarray],
         jacobians: Mapping[str, np.ndarray],
         backend: Backend,
+        factors: KeptFactors | None = None,
     ) -> np.ndarray: ...
 
 
@@ -62,15 +64,16 @@ def macro_step(
     Parameters
     ----------
     scheme : :class:`icosim.engine.schemes.Scheme` (or its name): the order of the subsystems, as stages
-        (:mod:`icosim.engine.stages`); or the scheme's :class:`~icosim.engine.stages.Plan` on the problem's
-        graph, made once by a caller that takes many steps.  At each stage its subsystems are predicted with
-        the extrapolation polynomials; the joints it closes get corrected coupling variables, from the stage's subsystems'
-        full gradients and the finished subsystems' algebraic ones (their outputs re-evaluated with the
-        corrected variables; a scheme whose earlier outputs stay as integrated skips that and they do not
-        respond); the stage's subsystems in a closed joint are corrected with the interpolation polynomials
-        through them.  A joint not yet closed drives its subsystems with its extrapolated variables: the
-        interpolation polynomial through ``e_p`` at ``T_N+1`` and the past samples is the extrapolation
-        polynomial.  Jacobi (default, the paper's) is one stage: every subsystem, every joint.
+        (:mod:`icosim.engine.stages`), the problem's plan of it
+        (:meth:`~icosim.engine.problem.CosimulationProblem.plan`); or a :class:`~icosim.engine.stages.Plan` on
+        the problem's graph.  At each stage its subsystems are predicted with the extrapolation polynomials; the
+        joints it closes get corrected coupling variables, from the stage's subsystems' full gradients and the
+        finished subsystems' algebraic ones (their outputs re-evaluated with the corrected variables; a scheme
+        whose earlier outputs stay as integrated skips that and they do not respond); the stage's subsystems in
+        a closed joint are corrected with the interpolation polynomials through them.  A joint not yet closed
+        drives its subsystems with its extrapolated variables: the interpolation polynomial through ``e_p`` at
+        ``T_N+1`` and the past samples is the extrapolation polynomial.  Jacobi (default, the paper's) is one
+        stage: every subsystem, every joint.
     iterations : number of corrector steps.  The paper's scheme is one
         (semi-implicit; exact for the linear model because the sensitivities
         are constant).  More steps re-linearise about the latest coupling
@@ -87,11 +90,11 @@ def macro_step(
     state_new, history_new, y_new
     """
     graph = problem.graph
-    if isinstance(scheme, Plan) and scheme.graph is graph:
-        stages, scheme = scheme.stages, scheme.scheme
-    else:
-        scheme = get_scheme(scheme.scheme if isinstance(scheme, Plan) else scheme)
-        stages = plan(scheme, graph).stages
+    p = scheme if isinstance(scheme, Plan) and scheme.graph is graph else None
+    if p is None:  # the problem's own plan (its kept Jacobians are per stage)
+        p = problem.plan(scheme.scheme if isinstance(scheme, Plan) else scheme)
+    stages = p.stages
+    algebraic = p.scheme.reevaluates_leading
     e = problem.extrapolate(history)
     ends: list[Any] = [None] * graph.n_subsystems
     ys: list[Any] = [None] * graph.n_subsystems
@@ -110,8 +113,8 @@ def macro_step(
             e_s = e if every else e_held if it == 0 else e[..., cols]
             y_s = problem.stack([ys[i] for i in stage.responders])
             r = problem.residuals(y_s, e_s, stage.conditions, e_held)
-            J = problem.jacobians(state, history, e, ys, ends, stage, algebraic=scheme.reevaluates_leading)
-            e_new = method.corrected_coupling(e_s, r, J, problem.backend)
+            J = problem.jacobians(state, history, e, ys, ends, stage, algebraic=algebraic)
+            e_new = method.corrected_coupling(e_s, r, J, problem.backend, problem.kept_factors(stage, algebraic))
             problem.work.coupling_solves += n_solves
             if it > 0 and tol is not None and _max_abs(e_new - e_s) <= tol:
                 break  # converged: the corrector already ran with (nearly) e_new
@@ -119,7 +122,7 @@ def macro_step(
             # step 3: corrector of the stage's subsystems; the finished ones' outputs follow e algebraically
             for i in stage.corrected:
                 ends[i], ys[i] = problem.correct(i, state, history, e)
-            if scheme.reevaluates_leading:
+            if algebraic:
                 for i in stage.finished:
                     ys[i] = problem.reevaluate(i, ends[i], ys[i], e_old, e)
     y = problem.stack(ys)

@@ -18,18 +18,22 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from . import layout
+from . import layout, stages
 from .backends import Backend, Float64
 from .bounds import check_k
 from .decompositions import Decomposition
 from .graph import CouplingGraph
 from .lagrange import corrector_nodes, predictor_nodes, weights_at
+from .methods.solve import KeptFactors
 from .point_jacobian import MAX_ENTRIES, PointJacobian
-from .residuals import plain_factors
+from .residuals import level_factors, plain_factors
+from .schemes import get_scheme
 
 if TYPE_CHECKING:
+    from .methods.base import CouplingMethod
     from .residuals import Conditions
-    from .stages import Stage
+    from .schemes import Scheme
+    from .stages import Plan, Stage
 
 __all__ = ["CosimulationProblem", "Work"]
 
@@ -98,8 +102,10 @@ class CosimulationProblem:
     and counts each subsystem integration in :attr:`work`.  The base class provides :meth:`extrapolate`,
     :meth:`shift`, :meth:`corrector_samples`, :meth:`inputs`, :meth:`stack`, :meth:`residuals` (the engine's
     coupling conditions, :mod:`icosim.engine.residuals`, scaled by :attr:`condition_scale`) and
-    :meth:`jacobians` (assembled from the sensitivities; kept when :attr:`constant_sensitivities`); a problem
-    with conditions of its own overrides the last two.
+    :meth:`jacobians` (assembled from the sensitivities; kept when :attr:`constant_sensitivities`, with their
+    factors: :meth:`kept_factors`); a problem with conditions of its own overrides the last two.  What a run
+    forms once and reuses -- a scheme's stages on the graph (:meth:`plan`), the kept Jacobians and their factors
+    -- is held by the problem, never shared with another.
     """
 
     #: the sensitivities do not change from step to step (a linear problem): the Jacobians are formed once
@@ -118,7 +124,10 @@ class CosimulationProblem:
         self.w_pred = np.array([be.const(w) for w in weights_at(self.pred_nodes, 1)], dtype=be.dtype)
         self.work = Work()
         self._extrapolated: tuple = (None, None, None)  # (history, weights, e_p) of the last extrapolation
-        self._jacobians: dict = {}
+        self._weights_as_floats: tuple = (None, [])  # (weights, as floats) of the last extrapolation in floats
+        self._plans: dict = {}  # scheme -> its stages on the graph (the kept Jacobians below are per stage)
+        self._jacobians: dict = {}  # (stage, algebraic) -> (the kept Jacobians, their factors): constant ones
+        self._level_factors: tuple = (None, None, None)  # (scale, dtype, its levels' factors) last formed
         self._assembly: dict = {}  # (stage, algebraic) -> what jacobians() needs of the stage every time
         self._point_jacobians: dict = {}  # (stage, algebraic) -> its sparse map at one float64 point, or None
 
@@ -138,6 +147,17 @@ class CosimulationProblem:
     def n_coupling(self) -> int:
         """Number of coupling variables ``e`` (per time point)."""
         return self.graph.n_coupling
+
+    def plan(self, scheme: str | Scheme, method: CouplingMethod | None = None) -> Plan:
+        """The stages of ``scheme`` on this problem's graph (:func:`icosim.engine.stages.plan`), made once per scheme
+        and held here: the Jacobians kept per stage stay kept from step to step.  With ``method``, refuses one
+        whose solves the stages cannot serve."""
+        p = self._plans.get(scheme)
+        if p is None:
+            p = self._plans[scheme] = stages.plan(get_scheme(scheme), self.graph)
+        if method is not None:
+            p.check_method(method)
+        return p
 
     def extrapolate(self, history: np.ndarray) -> np.ndarray:
         """Predicted coupling variables ``e_p`` at ``T_N+1`` (Eq. 9/35/59).  A macro step asks for it once and
@@ -165,8 +185,8 @@ class CosimulationProblem:
         return e_p
 
     def _float_weights(self, w: np.ndarray) -> list[float]:
-        kept = self.__dict__.get("_weights_as_floats")
-        if kept is None or kept[0] is not w:
+        kept = self._weights_as_floats
+        if kept[0] is not w:
             kept = self._weights_as_floats = (w, w.tolist())
         return kept[1]
 
@@ -201,7 +221,15 @@ class CosimulationProblem:
         conditions' held subsystems saw them."""
         if conditions is None:
             conditions = self.every_condition
-        return conditions(y, e, scale=self.condition_scale, e_held=e_held)
+        scale = self.condition_scale
+        if scale is None:
+            return conditions(y, e, e_held=e_held)
+        dtype = getattr(y, "dtype", None)
+        last_scale, last_dtype, factors = self._level_factors
+        if last_scale is not scale or last_dtype != dtype:  # formed once per scale (a problem's H)
+            factors = level_factors(scale, dtype)
+            self._level_factors = (scale, dtype, factors)
+        return conditions(y, e, scale=scale, e_held=e_held, factors=factors)
 
     @property
     def every_condition(self) -> Conditions:
@@ -223,7 +251,7 @@ class CosimulationProblem:
         conditions, which are linear in outputs and coupling variables together."""
         key = (stage, algebraic)
         if self.constant_sensitivities and key in self._jacobians:
-            return self._jacobians[key]
+            return self._jacobians[key][0]
         how = self._assembly.get(key)
         if how is None:
             how = self._assembly[key] = self._assemble(stage)
@@ -248,7 +276,7 @@ class CosimulationProblem:
             if at_point is not None:
                 jac = at_point[0](S_all.ravel().tolist(), at_point[1])
                 if self.constant_sensitivities:
-                    self._jacobians[key] = jac
+                    self._jacobians[key] = (jac, KeptFactors())
                 return jac
             dY = _output_derivatives(S_all, B_all)
         else:
@@ -262,8 +290,15 @@ class CosimulationProblem:
         res = self.residuals(dY, dE, stage.conditions, held)  # a held multiplier does not follow e
         jac = {key_: val.swapaxes(-1, -2) for key_, val in res.items()}
         if self.constant_sensitivities:
-            self._jacobians[key] = jac
+            self._jacobians[key] = (jac, KeptFactors())
         return jac
+
+    def kept_factors(self, stage: Stage, algebraic: bool = True) -> KeptFactors | None:
+        """The factors of ``stage``'s Jacobians where they are kept (:attr:`constant_sensitivities`: the same
+        Jacobians every step, combined and factored once), for
+        :meth:`~icosim.engine.methods.base.CouplingMethod.corrected_coupling`; else None."""
+        kept = self._jacobians.get((stage, algebraic))
+        return None if kept is None else kept[1]
 
     def _point_jacobian(self, key: tuple, stage: Stage, S_all: Any, B_all: Any, dE: Any, held: Any) -> tuple | None:
         """The stage's Jacobians at one float64 point as a sparse map in floats and the levels' factors

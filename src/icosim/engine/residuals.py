@@ -38,9 +38,7 @@ import numpy as np
 
 from .graph import FORCE, CouplingGraph
 
-__all__ = ["Conditions", "LEVELS", "plain_factors"]
-
-_EMPTY: dict[tuple, np.ndarray] = {}  # Conditions._empty
+__all__ = ["Conditions", "LEVELS", "plain_factors", "level_factors"]
 
 #: The levels of the conditions: the constraint on three levels, the balance of forces.
 LEVELS = ("pos", "vel", "acc", "force")
@@ -61,6 +59,15 @@ def plain_factors(scale: Sequence[Any] | None) -> tuple[float, float, float, flo
     return None
 
 
+def level_factors(scale: Sequence[Any], dtype: Any) -> np.ndarray | None:
+    """The constraint levels' factors as a float64 column ``(3, 1)`` where they and the outputs (``dtype``) are
+    float64 -- one product scales the three levels, as level by level -- else None (each level is multiplied
+    in the numbers' own arithmetic)."""
+    if dtype != np.float64 or plain_factors(scale) is None:
+        return None
+    return np.array([float(f) for f in scale[:3]])[:, None]
+
+
 class Conditions:
     """The coupling conditions of ``joints`` of ``graph``, read from the outputs of ``units``.
 
@@ -69,7 +76,8 @@ class Conditions:
     returns ``{pos, vel, acc, force}`` (rows on the last axis; a level no joint has is empty).  A
     force-driven side of a subsystem in ``held`` saw the multiplier as it was when it integrated, not as it
     is corrected (a finished subsystem whose outputs stay as integrated): its ``lambda_j`` is read from
-    ``e_held``.
+    ``e_held``.  ``scale`` multiplies the constraint's levels; ``factors``, its :func:`level_factors` where
+    the caller keeps them (a problem's, formed once per scale).  The conditions hold no state.
     """
 
     def __init__(self, graph: CouplingGraph, joints: Sequence[int], units: Sequence[int], held: Sequence[int] = ()):
@@ -114,14 +122,17 @@ class Conditions:
         return {"pos": self._n_constraint, "vel": self._n_constraint, "acc": self._n_constraint,
                 "force": self._n_balance}  # fmt: skip
 
-    def __call__(self, y: Any, e: Any, *, scale: Sequence[Any] | None = None, e_held: Any = None) -> dict[str, Any]:
+    def __call__(
+        self, y: Any, e: Any, *, scale: Sequence[Any] | None = None, e_held: Any = None, factors: Any = None
+    ) -> dict[str, Any]:
         out = {}
         if self._n_constraint:
             first, second = self._first, self._second
             # the three levels at once: (..., [joint,] level, component)
             diff = y[..., first, :3, :] - y[..., second, :3, :]
             several = not isinstance(first, int)
-            factors = None if scale is None else self._factors(scale, diff.dtype)
+            if factors is None and scale is not None:
+                factors = level_factors(scale, diff.dtype)
             if factors is not None:
                 diff = diff * factors  # each level times its own factor, as level by level
             for q, key in enumerate(("pos", "vel", "acc")):
@@ -140,25 +151,11 @@ class Conditions:
             out["force"] = self._empty(y, e)
         return out
 
-    def _factors(self, scale: Sequence[Any], dtype: Any) -> Any:
-        """The levels' factors as a column ``(3, 1)`` where they and the outputs are float64 (else None: level by
-        level in the numbers' own arithmetic); kept for the scale last seen."""
-        last = self.__dict__.get("_last_scale")
-        if last is not None and last[0] is scale and (last[1] is dtype or last[1] == dtype):
-            return last[2]
-        plain = dtype == np.float64 and plain_factors(scale) is not None
-        factors = np.array([float(f) for f in scale[:3]])[:, None] if plain else None
-        self._last_scale = (scale, dtype, factors)
-        return factors
-
-    def _empty(self, y: Any, e: Any) -> Any:
-        """No rows (a level no joint has), kept per shape (read-only: it holds nothing)."""
-        key = (y.shape[:-3], e.shape[:-1], y.dtype)
-        empty = _EMPTY.get(key)
-        if empty is None:
-            empty = _EMPTY[key] = np.zeros(np.broadcast_shapes(key[0], key[1]) + (0,), dtype=y.dtype)
-            empty.flags.writeable = False
-        return empty
+    @staticmethod
+    def _empty(y: Any, e: Any) -> Any:
+        """No rows (a level no joint has)."""
+        lead, other = y.shape[:-3], e.shape[:-1]
+        return np.zeros((lead if lead == other else np.broadcast_shapes(lead, other)) + (0,), dtype=y.dtype)
 
     @staticmethod
     def _balance_row(parts: list, y: Any, e: Any, held: Any) -> Any:

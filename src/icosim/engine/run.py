@@ -11,15 +11,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..errors import StepFailure
 from .macrostep import CouplingRule, macro_step
-from .schemes import JACOBI, get_scheme
-from .stages import plan
+from .schemes import JACOBI
 
 if TYPE_CHECKING:
     from .problem import CosimulationProblem
@@ -72,9 +71,8 @@ def simulate(
     ``record=False`` keeps only the start and the last step.  ``step_kw`` go to
     :func:`~icosim.engine.macrostep.macro_step` (``scheme``, ``iterations``, ``tol``).
     """
-    # refuses what the scheme cannot serve (a wrapper of a method reads as the method); made once, not per step
-    stages = plan(get_scheme(step_kw.get("scheme", JACOBI)), problem.graph, method)  # type: ignore[arg-type]
-    step_kw["scheme"] = replace(stages, graph=problem.graph)  # an equal graph's plan, for this one
+    # the problem's plan of the scheme; refuses what it cannot serve (a wrapper of a method reads as the method)
+    step_kw["scheme"] = problem.plan(step_kw.get("scheme", JACOBI), method)  # type: ignore[arg-type]
     outputs: list[np.ndarray | None]  # outputs[0]: none yet
     states, coupling, outputs = [state], [history[..., 0, :]], [None]
     diverged = failed = reason = error = None

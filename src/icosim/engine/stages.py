@@ -35,7 +35,7 @@ work (:func:`plan`):
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cache, cached_property
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -111,17 +111,24 @@ class Plan:
         """One stage closes every joint from every subsystem's outputs (Jacobi)."""
         return len(self.stages) == 1
 
+    def check_method(self, method: CouplingMethod) -> None:
+        """Refuse (:class:`~icosim.errors.ParameterError`) a method the joints' decompositions or the stages
+        cannot serve, naming why and what would."""
+        for joint in self.graph.joints:
+            method.check_decomposition(joint.decomposition)
+        _check_method(self, method)
+
 
 def plan(scheme: Scheme, graph: CouplingGraph, method: CouplingMethod | None = None) -> Plan:
     """The stages of ``scheme`` on ``graph``; refuses (:class:`~icosim.errors.ParameterError`) what they cannot
-    serve -- with ``method``, also a method whose solves they cannot serve -- naming why and what would."""
+    serve -- with ``method``, also a method whose solves they cannot serve -- naming why and what would.  Made
+    anew on each call: a problem holds the plans it steps with
+    (:meth:`~icosim.engine.problem.CosimulationProblem.plan`)."""
     p = _plan(scheme, graph)
     if not scheme.reevaluates_leading:
         _check_lone_variables(p)
     if method is not None:
-        for joint in graph.joints:
-            method.check_decomposition(joint.decomposition)
-        _check_method(p, method)
+        p.check_method(method)
     return p
 
 
@@ -141,7 +148,6 @@ def couples(scheme: Scheme, graph: CouplingGraph | str | Decomposition, method: 
     return True
 
 
-@cache
 def _plan(scheme: Scheme, graph: CouplingGraph) -> Plan:
     done: list[int] = []
     closed: set[int] = set()
@@ -162,7 +168,6 @@ def _plan(scheme: Scheme, graph: CouplingGraph) -> Plan:
     return Plan(scheme, graph, tuple(stages))
 
 
-@cache  # a plan is made once per scheme and graph (_plan): its answer is asked every macro step
 def _lone_variable(p: Plan) -> tuple[int, int, list[int]] | None:
     """``(joint, column, subsystems it drives)``: a coupling variable that drives only finished subsystems."""
     graph = p.graph

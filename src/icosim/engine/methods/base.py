@@ -22,6 +22,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
+from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -29,7 +30,7 @@ import numpy as np
 from ...errors import ParameterError
 from .. import layout
 from ..decompositions import DECOMPOSITIONS, Decomposition
-from .solve import Factored, solve_float, solve_small
+from .solve import Factored, KeptFactors, solve_float, solve_small
 
 if TYPE_CHECKING:
     from ..backends import Backend
@@ -70,38 +71,46 @@ class CouplingMethod:
             why = self.refusal or f"it is defined for {', '.join(self.decompositions)}"
             raise ParameterError(f"method {self.name!r} is not defined for decomposition {decomposition.name!r}: {why}")
 
+    @cached_property
+    def float_solves(self) -> tuple:
+        """:attr:`solves` with the exact weights and levels as floats (what float64's ``const`` makes of them), made
+        once: hashing their Fractions every macro step would cost more than the conversion."""
+        return tuple((float(w), tuple(float(v) for v in lv)) for w, lv in self.solves)
+
     def corrected_coupling(
         self,
         e_pred: np.ndarray,
         residuals: Mapping[str, np.ndarray],
         jacobians: Mapping[str, np.ndarray],
         backend: Backend,
+        factors: KeptFactors | None = None,
     ) -> np.ndarray:
         """``e_p + sum_s w_s delta_e_s`` from the linearised coupling conditions.
 
         ``residuals[level]`` has shape ``(..., n_level)`` and ``jacobians[level]``
         shape ``(..., n_level, n_e)``, levels ``pos``, ``vel``, ``acc``
-        (constraint) and ``force`` (force balance, possibly empty).
+        (constraint) and ``force`` (force balance, possibly empty).  ``factors``:
+        the factored combinations of these Jacobians, where the problem keeps them
+        (constant sensitivities: the same Jacobians every step); a float64 solve
+        reads and fills it.
         """
         plain = getattr(backend, "dtype", None) is np.float64  # float64: the exact numbers converted once
-        solves = _float_solves(self.solves) if plain else self.solves
+        solves = self.float_solves if plain else self.solves
         const = _same if plain else backend.const
-        kept = _KEPT.get(id(jacobians)) if plain else None
-        if kept is not None and kept[0] is not jacobians:
-            kept = None
+        kept = factors if plain else None
         total = None
         for weight, levels in solves:
             if weight == 0:
                 continue  # an unused level may be singular (e.g. velocity at k = 0)
             r = _conditions(levels, residuals, axis=-1, const=const)
-            if kept is not None and levels in kept[1]:  # the factor of this combination of levels
-                de = kept[1][levels].solve(-r)
-            elif plain and _kept_jacobians(jacobians):
-                # the same Jacobians as a step before (constant sensitivities): combined and factored once
-                factor = Factored(_conditions(levels, jacobians, axis=-2, const=const))
-                _keep(jacobians, levels, factor)
+            if kept is not None and kept.used:  # the combination of these levels, factored once
+                factor = kept.by_levels.get(levels)
+                if factor is None:
+                    factor = kept.by_levels[levels] = Factored(_conditions(levels, jacobians, axis=-2, const=const))
                 de = factor.solve(-r)
             elif plain:
+                if kept is not None:
+                    kept.used = True
                 de = solve_float(_conditions(levels, jacobians, axis=-2, const=const), -r)
             else:
                 de = solve_small(_conditions(levels, jacobians, axis=-2, const=const), -r)
@@ -313,42 +322,3 @@ def _conditions(
 
 def _same(value: Any) -> Any:
     return value
-
-
-def _float_solves(solves: tuple) -> tuple:
-    """A method's solves with its exact weights and levels as floats (what float64's ``const`` makes of them),
-    kept per solves object (hashing its Fractions every macro step would cost more than the conversion)."""
-    kept = _FLOAT_SOLVES.get(id(solves))
-    if kept is None or kept[0] is not solves:
-        if len(_FLOAT_SOLVES) >= _KEEP:
-            _FLOAT_SOLVES.clear()
-        kept = _FLOAT_SOLVES[id(solves)] = (solves, tuple((float(w), tuple(float(v) for v in lv)) for w, lv in solves))
-    return kept[1]
-
-
-#: Jacobians seen twice (a problem's constant sensitivities hand the same object every step): id -> (the
-#: object, {a solve's levels: their combination factored}); the object is kept, so its id is not reused while it
-#: is here.  Keyed by the levels, not the solve's place: another method on the same problem combines others.
-_KEPT: dict[int, tuple[Any, dict[tuple, Factored]]] = {}
-_SEEN: dict[int, Any] = {}
-_FLOAT_SOLVES: dict[int, tuple[tuple, tuple]] = {}  # id -> (the solves, as floats): kept the same way
-_KEEP = 16
-
-
-def _kept_jacobians(jacobians: Any) -> bool:
-    """Is ``jacobians`` the object of an earlier call (worth factoring once)?  Remembers it if not."""
-    if _SEEN.get(id(jacobians)) is jacobians:
-        return True
-    if len(_SEEN) >= _KEEP:
-        _SEEN.clear()
-    _SEEN[id(jacobians)] = jacobians
-    return False
-
-
-def _keep(jacobians: Any, levels: tuple, factor: Factored) -> None:
-    entry = _KEPT.get(id(jacobians))
-    if entry is None or entry[0] is not jacobians:
-        if len(_KEPT) >= _KEEP:
-            _KEPT.clear()
-        entry = _KEPT[id(jacobians)] = (jacobians, {})
-    entry[1][levels] = factor

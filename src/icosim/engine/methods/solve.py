@@ -1,6 +1,7 @@
 """The coupling solves of small systems (:meth:`icosim.engine.methods.base.CouplingMethod.corrected_coupling`):
 closed forms for sizes 1 and 2, LU for larger ones, a banded solve for a large banded float64 system, and a float64
-matrix factored once for many right-hand sides."""
+matrix factored once for many right-hand sides (:class:`KeptFactors`: held by the problem whose Jacobians they
+are)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import numpy as np
 
 from .. import layout
 
-__all__ = ["solve_small", "solve_float", "Factored", "BANDED_FROM"]
+__all__ = ["solve_small", "solve_float", "Factored", "KeptFactors", "BANDED_FROM"]
 
 
 #: A float64 system of at least this size whose matrix is banded, with no more than a quarter of its diagonals
@@ -65,6 +66,22 @@ class Factored:
         from scipy.linalg import lu_solve
 
         return lu_solve(self.lu, b, check_finite=False)
+
+
+class KeptFactors:
+    """The factored coupling matrices of one set of Jacobians that a problem hands every step (constant
+    sensitivities), by the combination of levels they were formed with (another method on the same Jacobians
+    combines others).  The problem that keeps the Jacobians holds it; a method fills it
+    (:meth:`~icosim.engine.methods.base.CouplingMethod.corrected_coupling`).
+
+    Their first solve is direct (a factorisation pays only where it is used again); every later one is by the
+    combination's factor, made once."""
+
+    __slots__ = ("used", "by_levels")
+
+    def __init__(self) -> None:
+        self.used = False
+        self.by_levels: dict[tuple, Factored] = {}
 
 
 def solve_small(J: np.ndarray, b: np.ndarray) -> np.ndarray:

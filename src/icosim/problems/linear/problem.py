@@ -148,7 +148,7 @@ class LinearCosimulation(CosimulationProblem):
             s.set_blocks(E + scale * rng.standard_normal(E.shape))
             subs.append(s)
         p.subsystems = tuple(subs)
-        p._jacobians = {}
+        p._jacobians = {}  # its own Jacobians, with their own factors
         return p
 
     def generator_norm(self):

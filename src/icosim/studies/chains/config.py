@@ -30,7 +30,7 @@ __all__ = [
     "pattern_decompositions",
     "unit_segments",
     "build_chain",
-    "served",
+    "refusal",
     "method_of",
     "check_config",
 ]
@@ -66,13 +66,13 @@ def build_chain(kind: list, pattern: str, n_units: int, H) -> Chain:
     return Chain(unit_segments(kind, n_units), pattern_decompositions(pattern, n_units), H)
 
 
-def served(kind: list, pattern: str, n_units: int) -> str:
-    """``""`` if the chain can be built, else why not (the model's refusal)."""
+def refusal(kind: list, pattern: str, n_units: int) -> str | None:
+    """Why the chain cannot be built (the model's refusal), or None where it can."""
     try:
         build_chain(kind, pattern, n_units, 1.0)
     except ParameterError as exc:
         return str(exc)
-    return ""
+    return None
 
 
 def method_of(methods: dict, name: str):
@@ -169,13 +169,13 @@ def check_config(cfg: dict) -> None:
     _check_names("convergence.unit", [cv["unit"]], list(units))
     _check_pattern("convergence.pattern", cv["pattern"])
     for n in cv["n_units"]:
-        if why := served(units[cv["unit"]], cv["pattern"], n):
+        if why := refusal(units[cv["unit"]], cv["pattern"], n):
             _fail("convergence", f"unit {cv['unit']!r}, pattern {cv['pattern']!r}, {n} units: {why}")
     pl = cfg["placement"]
     _check_ints("placement.n_units", [pl["n_units"]], 3)
     _check_names("placement.unit", [pl["unit"]], list(units))
     _check_pattern("placement.pattern", pl["pattern"])
-    if why := served(units[pl["unit"]], pl["pattern"], pl["n_units"]):
+    if why := refusal(units[pl["unit"]], pl["pattern"], pl["n_units"]):
         _fail("placement", f"unit {pl['unit']!r}, pattern {pl['pattern']!r}: {why}")
     for name, factors in pl["variants"].items():
         for key, f in factors.items():

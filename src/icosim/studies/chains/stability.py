@@ -27,7 +27,7 @@ from ...problems.linear.chain import ChainFamily
 from ...problems.linear.model import PhysicalModel
 from ...problems.linear.spectral import spectral_radius_float64 as paper_rho
 from ...step_limit import stability_limit
-from .config import build_chain, method_of, pattern_decompositions, scheme_name, served
+from .config import build_chain, method_of, pattern_decompositions, refusal, scheme_name
 
 __all__ = ["scan_steps", "rho_over_H", "largest_stable_H", "two_mass_rho", "stability_data", "NOT_SERVED"]
 
@@ -105,8 +105,8 @@ def stability_data(cfg: dict, *, command: str = "", log=None) -> DatasetDict:
     status = np.full(shape, NOT_SERVED, dtype=object)
     for idx in itertools.product(*(range(n) for n in shape)):
         unit, pattern, n, mname, k, kind = (dims[d][i] for d, i in zip(dims, idx))
-        if served(units[unit], pattern, n):
-            continue
+        if refusal(units[unit], pattern, n) is not None:
+            continue  # recorded as not served
         method, scheme = method_of(methods, mname), scheme_name(kind, n)
         chain = build_chain(units[unit], pattern, n, 1.0)
         lim, rho[idx], rho_err[idx] = largest_stable_H(chain, method, k, scheme, scan, st["resolution"])
