@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .drives import KINEMATICS, drive_rows, is_drive, prescribed_end
 from .errors import FmuError
 
 __all__ = ["Finding", "Inspection", "inspect_unit", "joint_direction", "refuse", "declared_feedthrough"]
@@ -65,10 +66,16 @@ def declared_feedthrough(md, output_variable, input_variable):
     return None
 
 
-def _probe_outputs(unit, kind):
-    """Position, velocity and the coupling output as the unit stands (SI), ``(3, components)``."""
+def _probe_outputs(unit, kind, point=None):
+    """Position, velocity and the coupling output as the unit stands (SI), ``(3, components)``; a drive's
+    position and velocity where it has no outputs for them are ``point`` (prescribed)."""
     out = "acceleration" if kind == "force" else "reaction_force"
-    return unit.get(("position", "velocity", out))
+    if point is None:
+        return unit.get(("position", "velocity", out))
+    return np.stack(
+        [unit.get((k,))[0] if k in unit.elements else np.asarray(p) for k, p in zip(KINEMATICS, point)]
+        + [unit.get((out,))[0]]
+    )
 
 
 def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=0.0) -> Inspection:
@@ -77,26 +84,47 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=0.0) -
     ``kind`` is ``"force"`` or ``"kinematic"``; ``force_sign`` the scene's.  Each component of a vector joint is
     probed on its own; the component that responds most gives the unit's gain (its sign is the unit's own input
     convention; :func:`joint_direction` checks the two units' together)."""
-    key = "force" if kind == "force" else "acceleration_input"
+    drive = is_drive(unit, kind)
+    key = "force" if kind == "force" else "drive" if drive else "acceleration_input"
     out = "acceleration" if kind == "force" else "reaction_force"
     found = Inspection(unit.label, kind)
-    in_var, out_var = unit.elements[key][0].variable, unit.elements[out][0].variable
+    out_var = unit.elements[out][0].variable
+    # a drive: the acceleration where it has that input, else the input nearest to it (velocity, position)
+    in_var = unit.elements[key][-len(unit.elements[out])].variable
     found.declared = declared_feedthrough(unit.md, out_var, in_var)
-    n = len(unit.elements[key])
+    n = len(unit.elements[out])
     zero = np.zeros(n)
+    rest = [0.0] * n  # a drive's point at rest at 0 while it is probed
+
+    def put(u):
+        if drive:
+            values = {"position_input": rest, "velocity_input": rest, "acceleration_input": list(u)}
+            unit.put("drive", [q for k in unit.drive_keys for q in values[k]])
+        else:
+            unit.set(key, u)
+
+    def outputs(u=None, h=0.0):
+        """The probed outputs; a drive's point after ``h`` with the acceleration ``u`` (at once: ``h = 0``)."""
+        if not drive:
+            return _probe_outputs(unit, kind)
+        return _probe_outputs(unit, kind, prescribed_end([list(u)], rest, rest, h)[:2])
+
     unit_inputs = np.eye(n)  # 1 N or 1 m/s^2 on one component: finite whatever the unit's mass
     start = unit.save()
     algebraic, step_gain, velocity_gain = np.zeros(n), np.zeros(n), np.zeros(n)
     try:
-        unit.set(key, zero)
-        base = _probe_outputs(unit, kind)
+        put(zero)
+        base = outputs(zero)
         for c in range(n):
-            unit.set(key, unit_inputs[c])
-            algebraic[c] = _probe_outputs(unit, kind)[2, c] - base[2, c]
-        unit.set(key, zero)
+            put(unit_inputs[c])
+            algebraic[c] = outputs(unit_inputs[c])[2, c] - base[2, c]
+        put(zero)
 
         def stepped(u):
             unit.restore(start)
+            if drive:
+                unit.step(key, np.array(drive_rows(unit.drive_keys, [list(u)], rest, rest, H)), t0, H, step_index=0)
+                return outputs(u, H)
             unit.step(key, [u], t0, H, step_index=0)
             return _probe_outputs(unit, kind)
 
@@ -107,8 +135,8 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=0.0) -
             step_gain[c] = pushed[2, c] - first[2, c]
             velocity_gain[c] = pushed[1, c] - first[1, c]
         unit.restore(start)
-        unit.set(key, zero)
-        back = _probe_outputs(unit, kind)
+        put(zero)
+        back = outputs(zero)
     finally:
         unit.restore(start)
         unit.free(start)

@@ -36,6 +36,8 @@ ROLE_QUANTITIES = {
     "velocity": ("a velocity", _VELOCITY),
     "acceleration": ("an acceleration", _ACCELERATION),
     "acceleration_input": ("an acceleration", _ACCELERATION),
+    "position_input": ("a length", _LENGTH),
+    "velocity_input": ("a velocity", _VELOCITY),
     "force": ("a force", _FORCE),
     "reaction_force": ("a force", _FORCE),
     "set_position": ("a length", _LENGTH),
@@ -155,7 +157,7 @@ def measure(label: str, md, key: str, variable) -> Measure:
         if key == "acceleration_input" and dims == _VELOCITY:
             why = (
                 "; a kinematically driven unit whose drive is a velocity (power-bond coupling) is not supported: "
-                "the coupling methods prescribe the acceleration"
+                "the coupling methods prescribe the acceleration (a velocity input of a drive is its velocity_input)"
             )
         raise FmuError(
             f"{label}: {key}: {variable.name!r} is in {unit} ({_dims_text(dims)}), but {key} must be "

@@ -56,12 +56,14 @@ __all__ = ["Scene", "load_scene", "scene_schema", "SUBSYSTEM_KEYS", "JOINT_KEYS"
 SUBSYSTEM_KEYS = {
     "fmu": "the unit: an .fmu file or a source directory, relative to the scene file",
     "start": "start values of the unit's parameters and inputs",
-    "position": "name of the position output",
-    "velocity": "name of the velocity output",
-    "acceleration": "name of the acceleration output",
+    "position": "name of the position output (a drive without it: its point's position is the prescribed one)",
+    "velocity": "name of the velocity output (a drive without it: its point's velocity is the prescribed one)",
+    "acceleration": "name of the acceleration output (a drive without it: the prescribed acceleration)",
     "force": "name of the coupling-force input (a force-driven subsystem)",
     "acceleration_input": "name of the prescribed-acceleration input (a kinematically driven subsystem)",
     "reaction_force": "name of the output of the force the drive exerts (a kinematically driven subsystem)",
+    "position_input": "name of the prescribed-position input (a kinematically driven subsystem: a drive)",
+    "velocity_input": "name of the prescribed-velocity input (a kinematically driven subsystem: a drive)",
     "force_sign": "+1 or -1: with joints, the unit's input is force_sign times the sum of its joints' multipliers "
     "(+lambda_j on a joint's first subsystem, -lambda_j on its second); without joints, the coupling force on "
     "this subsystem is force_sign * lambda",
@@ -111,6 +113,16 @@ COUPLING_KEYS = {
     "sensitivities": "each-step",
 }
 
+_KINEMATICS = ("position", "velocity", "acceleration")
+_DRIVE_INPUTS = ("position_input", "velocity_input", "acceleration_input")
+
+
+def _partner(graph, i) -> int:
+    """The subsystem at the other side of subsystem ``i``'s first joint."""
+    jt = graph.joints[graph.joints_of(i)[0]]
+    return jt.second if jt.first == i else jt.first
+
+
 #: Subsystem keys that do not name unit variables.
 _NOT_NAMES = ("fmu", "start", "force_sign", "mass", "rollback_tolerance")
 
@@ -124,7 +136,7 @@ def scene_schema() -> dict:
     sub = {
         "type": "object",
         "additionalProperties": False,
-        "required": ["fmu", "position", "velocity", "acceleration", "force_sign"],
+        "required": ["fmu", "force_sign"],  # the variables each kind needs: load_scene
         "properties": {
             "fmu": name,
             "start": {
@@ -364,23 +376,67 @@ def load_scene(path) -> Scene:
             f"needs {graph.n_coupling} values ({', '.join(variables)}, {n_dim} component(s) each), got "
             f"{len(data['initial_coupling'])}",
         )
+    kinds = [graph.port_kind(i, 0) for i in range(len(names))]
     for i, (name, sub) in enumerate(data["subsystems"].items()):
-        kind = graph.port_kind(i, 0)
-        need = ("force",) if kind == "force" else ("acceleration_input", "reaction_force")
+        kind = kinds[i]
+        own = [k for k in _KINEMATICS if k in sub]
+        drive = kind == "kinematic" and (any(k in sub for k in _DRIVE_INPUTS[:2]) or len(own) < 3)
+        need = ("force", *_KINEMATICS) if kind == "force" else ("reaction_force",)
+        if kind == "kinematic" and not drive:
+            need += ("acceleration_input",)
         projects = method.projection or data.get("initial") == "project"
-        if projects:
+        if projects and not drive:
             need += ("mass", "set_position", "set_velocity")
+        elif projects:  # a drive's point follows the joint where the unit has no output for it (weight 0)
+            need += tuple(
+                setter for k, setter in (("position", "set_position"), ("velocity", "set_velocity")) if k in sub
+            )
+        if kind == "force":
+            extra = [k for k in _DRIVE_INPUTS if k in sub]
+            if extra:
+                _fail(
+                    path,
+                    f"subsystems.{name}.{extra[0]}",
+                    f"subsystem {name} is force-driven in "
+                    f"{driven_by(scene, graph, i)}: only a kinematically driven subsystem takes a drive's inputs",
+                )
+        elif not any(k in sub for k in _DRIVE_INPUTS):
+            _fail(
+                path,
+                f"subsystems.{name}.acceleration_input",
+                f"required: subsystem {name} is kinematically "
+                f"driven in {driven_by(scene, graph, i)} ({SUBSYSTEM_KEYS['acceleration_input']}; a drive takes "
+                f"any of {', '.join(_DRIVE_INPUTS)})",
+            )
+        elif drive:
+            other = _partner(graph, i)
+            partner = data["subsystems"][names[other]]
+            missing = [k for k in _KINEMATICS[:2] if k not in sub and kinds[other] == "kinematic" and k not in partner]
+            if missing:
+                _fail(
+                    path,
+                    f"subsystems.{name}.{missing[0]}",
+                    f"required: neither {name} nor {names[other]} (both "
+                    f"kinematically driven) has a {missing[0]} output, so nothing says where their joint is",
+                )
+            if projects and kinds[other] == "kinematic" and "mass" not in sub and "mass" not in partner:
+                _fail(
+                    path,
+                    f"subsystems.{name}.mass",
+                    f"required: method {spec.name} projects onto the joint of two "
+                    f"drives, {name} and {names[other]}, and neither has a mass (the projection's weight)",
+                )
         for key in need:
             if key not in sub:
                 why = (
                     f"subsystem {name} is {kind}-driven in {driven_by(scene, graph, i)}"
-                    if key in ("force", "acceleration_input", "reaction_force")
+                    if key in ("force", "acceleration_input", "reaction_force", *_KINEMATICS)
                     else f"method {spec.name} projects"
                     if method.projection
                     else "initial: project moves the units onto the joint"
                 )
                 _fail(path, f"subsystems.{name}.{key}", f"required: {why} ({SUBSYSTEM_KEYS[key]})")
-        if projects and isinstance(sub["position"], list) and len(sub["position"]) > 1:
+        if projects and isinstance(sub.get("position"), list) and len(sub["position"]) > 1:
             _fail(
                 path,
                 f"subsystems.{name}.position",
