@@ -118,7 +118,8 @@ def test_openmodelica_units_without_saved_states_are_refused(capsys, tmp_path, n
     fmu = external_fmu(name)
     other = {"fmu": str(ROOT / "fmus" / "msd"), "position": "x", "velocity": "v", "acceleration": "a",
              "force": "lambda", "force_sign": -1}  # fmt: skip
-    mine = {"fmu": str(fmu), "position": "y", "velocity": "y", "acceleration": "y", "force": "f", "force_sign": 1}
+    mine = {"fmu": str(fmu), "interface": "co-simulation", "position": "y", "velocity": "y", "acceleration": "y",
+            "force": "f", "force_sign": 1}  # fmt: skip
     data = {"subsystems": {"om": mine, "msd": other}, "t_end": 0.01,
             "coupling": {"method": "baumgarte", "index": 3, "decomposition": "ff", "k": 0, "H": 1e-3}}  # fmt: skip
     path = tmp_path / "scene.yaml"

@@ -119,8 +119,11 @@ def test_model_exchange_only_unit(capsys, tmp_path):
         return head + '<ModelExchange modelIdentifier="msd" canGetAndSetFMUstate="true">' + rest
 
     fmu = edited_unit(tmp_path, to_me)
-    path = scene(tmp_path, body1=body(1, fmu=fmu.name))
+    path = scene(tmp_path, body1=body(1, fmu=fmu.name, interface="co-simulation"))
     assert_refused(*cosim(capsys, path, tmp_path), "body1", "offers model exchange only")
+    # interface auto takes its model exchange, which this co-simulation binary lacks
+    path = scene(tmp_path, body1=body(1, fmu=fmu.name))
+    assert_refused(*cosim(capsys, path, tmp_path), "body1", "could not be instantiated", "fmi2CompletedIntegratorStep")
 
 
 def test_variable_the_unit_lacks_lists_close_matches(capsys, tmp_path):

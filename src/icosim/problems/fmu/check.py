@@ -43,7 +43,7 @@ def check_scene(scene, *, cache=None) -> dict:
             units.append(unit)
             md = unit.md
             row["unit"] = f"{md.modelName} (FMI {md.fmiVersion}, {md.generationTool or 'unknown tool'})"
-            row["findings"].append(asdict(Finding("open", "pass", "co-simulation, saves and restores its state")))
+            row["findings"].append(asdict(Finding("open", "pass", unit.opened)))
             found = inspect_unit(
                 unit,
                 kind=kind,

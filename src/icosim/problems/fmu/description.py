@@ -1,5 +1,6 @@
-"""A unit's model description, read the way fmpy reads it, and the kind of unit a scene can couple: FMI 2.0 or
-3.0 co-simulation that saves and restores its state."""
+"""A unit's model description, read the way fmpy reads it, and the kind of unit a scene can couple as
+co-simulation: FMI 2.0 or 3.0 co-simulation that saves and restores its state (model exchange:
+:mod:`icosim.problems.fmu.exchange`)."""
 
 from __future__ import annotations
 
@@ -57,9 +58,11 @@ def check_kind(label: str, path: Path, md):
                  getattr(md, "scheduledExecution", None))) if present is not None]  # fmt: skip
         has = " and ".join(kinds) or "no interface"
         raise FmuError(
-            f"{label}: {path} offers {has} only (no <CoSimulation> in its modelDescription.xml); a scene needs "
-            "co-simulation units, which bring their own solver"
+            f"{label}: {path} offers {has} only (no <CoSimulation> in its modelDescription.xml); as "
+            "co-simulation a unit brings its own solver"
+            + ("; use interface: model-exchange (or auto)" if md.modelExchange is not None else "")
         )
     if not md.coSimulation.canGetAndSetFMUstate:
         flag = "canGetAndSetFMUState" if md.fmiVersion.startswith("3.") else "canGetAndSetFMUstate"
-        raise FmuError(f"{label}: {path} declares {flag}=false; {STATE_REASON}")
+        other = "; its model exchange leaves the state with icosim: use interface: model-exchange (or auto)"
+        raise FmuError(f"{label}: {path} declares {flag}=false; {STATE_REASON}{other if md.modelExchange else ''}")

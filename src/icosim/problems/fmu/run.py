@@ -10,6 +10,7 @@ import numpy as np
 from ...engine.run import simulate
 from .build import build_unit, is_source_dir
 from .errors import FmuError
+from .exchange import open_fmu_unit
 from .inspection import inspect_unit, joint_direction, refuse
 from .joints import check_scheme
 from .problem import Coupling, FmuCosimulation
@@ -93,11 +94,13 @@ def open_unit(scene: Scene, name: str, kind: str, *, cache=None) -> Unit:
     c, sub = scene.coupling, scene.data["subsystems"][name]
     projects = scene.method.projection or scene.data.get("initial") == "project"
     names = {k: sub[k] for k in ROLES if k in sub and k in _needed(kind, projects)}
-    return Unit(
+    return open_fmu_unit(
         name,
         fmu_file(scene.fmus[name], cache),
         names,
         sub.get("start", {}),
+        interface=sub.get("interface", "auto"),
+        tolerance=sub.get("tolerance"),
         inputs=c["inputs"],
         substeps=c["substeps"],
         t0=float(scene.data.get("t_start", 0.0)),

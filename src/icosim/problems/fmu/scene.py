@@ -71,6 +71,9 @@ SUBSYSTEM_KEYS = {
     "set_position": "name of a tunable parameter or input that sets the position (projection)",
     "set_velocity": "name of a tunable parameter or input that sets the velocity (projection)",
     "rollback_tolerance": "relative difference accepted when a restored step is repeated (default 0: bit for bit)",
+    "interface": "auto (default: co-simulation where the unit can roll back, else model exchange), co-simulation "
+    "or model-exchange",
+    "tolerance": "the integrator's relative tolerance of a model exchange unit (default 1e-10)",
 }
 
 #: Keys of one joint and what they hold.
@@ -124,7 +127,7 @@ def _partner(graph, i) -> int:
 
 
 #: Subsystem keys that do not name unit variables.
-_NOT_NAMES = ("fmu", "start", "force_sign", "mass", "rollback_tolerance")
+_NOT_NAMES = ("fmu", "start", "force_sign", "mass", "rollback_tolerance", "interface", "tolerance")
 
 
 def scene_schema() -> dict:
@@ -148,6 +151,8 @@ def scene_schema() -> dict:
             "force_sign": {"enum": [1, -1]},
             "mass": {"oneOf": [{"type": "number", "exclusiveMinimum": 0}, name]},
             "rollback_tolerance": {"type": "number", "minimum": 0},
+            "interface": {"enum": ["auto", "co-simulation", "model-exchange"]},
+            "tolerance": {"type": "number", "exclusiveMinimum": 0, "exclusiveMaximum": 1},
         },
     }
     params = defs["method_parameters"]["properties"]

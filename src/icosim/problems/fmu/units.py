@@ -81,7 +81,7 @@ class Unit(Fmi2Calls):
         self.label, self.path = label, Path(path)
         self.md, self.description_problems = read_description(label, self.path)
         md = self.md
-        check_kind(label, self.path, md)
+        self._check_kind(md)
         self.fmi3 = md.fmiVersion.startswith("3.")
         self.table = table = VariableTable(label, md, start)
         self.start_values = table.start_values(start)
@@ -138,26 +138,28 @@ class Unit(Fmi2Calls):
             raise FmuError(f"{self.label}: cannot unpack {self.path}: {exc}") from None
         for var in md.modelVariables:  # arrays sized by the scene's structural parameters (fmpy reads .shape)
             var.shape = self.table.shapes[var.name]
-        common = dict(unzipDirectory=unzipdir, modelIdentifier=md.coSimulation.modelIdentifier, instanceName=self.label)
+        common = dict(unzipDirectory=unzipdir, modelIdentifier=self._interface(md).modelIdentifier,
+                      instanceName=self.label)  # fmt: skip
         stage = "instantiated"
         try:
             guard.enter(self.index, "instantiate", self.t)
             if self.fmi3:
-                from fmpy.fmi3 import FMU3Slave
+                from fmpy import fmi3
 
-                self.fmu = FMU3Slave(guid=md.guid, **common)  # fmpy keeps the instantiation token as guid
+                # fmpy keeps the instantiation token as guid
+                self.fmu = getattr(fmi3, self._classes[1])(guid=md.guid, **common)
                 self._register_release()
                 self.fmu.instantiate(logMessage=self._log3)
             else:
+                from fmpy import fmi2
                 from fmpy.fmi2 import (
-                    FMU2Slave,
                     defaultCallbacks,
                     fmi2CallbackFunctions,
                     fmi2CallbackLoggerTYPE,
                     fmi2FMUstate,
                 )
 
-                self.fmu = FMU2Slave(guid=md.guid, **common)
+                self.fmu = getattr(fmi2, self._classes[0])(guid=md.guid, **common)
                 self._new_state = fmi2FMUstate
                 self._register_release()
                 cb = fmi2CallbackFunctions()
@@ -186,11 +188,29 @@ class Unit(Fmi2Calls):
                 if s.state == "initialization":
                     self._apply(apply_start_values, s)
             self.fmu.exitInitializationMode()  # co-simulation: step mode follows (FMI 3.0 without event mode)
+            self._initialised()
             guard.leave()
         except FmuError:
             raise
         except Exception as exc:
             raise FmuError(f"{self.label}: could not be {stage}: {_call_text(exc)}{self.said()}") from None
+
+    #: the interface a unit is opened with, as the scene's ``interface`` names it
+    interface = "co-simulation"
+    #: fmpy's classes of the interface (FMI 2.0, FMI 3.0)
+    _classes = ("FMU2Slave", "FMU3Slave")
+    #: what the check table's open row says of the unit
+    opened = "co-simulation, saves and restores its state"
+
+    def _check_kind(self, md):
+        check_kind(self.label, self.path, md)
+
+    @staticmethod
+    def _interface(md):
+        return md.coSimulation
+
+    def _initialised(self):
+        """After initialisation: a co-simulation unit is in step mode."""
 
     def _register_release(self):
         pythonfmu.register(self, self.md, self.fmu.dll)
@@ -263,6 +283,7 @@ class Unit(Fmi2Calls):
             "fmi_version": md.fmiVersion,
             "generation_tool": md.generationTool or "",
             "fmu": str(self.path),
+            "interface": self.interface,
             "inputs": "derivatives" if self.exact_inputs else f"substeps ({self.substeps})",
             "do_step_calls": self.do_steps,
             "states_saved": self.saved,
