@@ -16,10 +16,8 @@ macro step sees are the observable part of it:
   force on unit ``i`` in the graph's sense: the sum of its joints' ``+-lambda`` for a force-driven unit,
   ``force_sign * reaction_force`` for a kinematically driven one.
 
-A kinematically driven unit with position or velocity inputs, or without its own position, velocity or
-acceleration outputs, is a *drive* (:mod:`icosim.problems.fmu.drives`): its inputs follow the prescribed
-acceleration and its integrals from the driven point's state at ``T_N``, and the kinematics it has no outputs for
-are the prescribed ones (the problem keeps them; at ``T_0`` they are its joint partner's).
+A kinematically driven unit that takes its point's position or velocity, or has no outputs for them, is a drive
+(:mod:`icosim.problems.fmu.drives`): the problem prescribes its point's motion.
 
 A unit's input is ``force_sign`` times the force the graph gives it (:class:`Coupling`).  The constraint
 residuals are those of the engine's dimensionless setting (``g``, ``H g'``, ``H^2 g''``), so the method
@@ -38,7 +36,7 @@ from ...engine.problem import CosimulationProblem
 from ...engine.projection import joined_clusters
 from ...engine.residuals import Conditions
 from ...errors import StepFailure
-from .drives import KINEMATICS, drive_rows, is_drive, prescribed_end
+from .drives import DrivenPoints
 from .errors import UnitStepError
 from .floats import gathered as _gathered
 from .floats import projected as _projected
@@ -67,7 +65,7 @@ class Coupling:
         return "force" if self.kind == "force" else "acceleration_input"
 
 
-class FmuCosimulation(CosimulationProblem):
+class FmuCosimulation(DrivenPoints, CosimulationProblem):
     """FMU units joined by rigid joints (decompositions ff, fd, df, dd per joint).
 
     Parameters
@@ -141,11 +139,7 @@ class FmuCosimulation(CosimulationProblem):
             None if t is None or len(t) != 1 or len(t[0]) != 2 else (*t[0][0], *t[0][1]) for t in self._terms
         ]
         self._history_rows: tuple = (None, None)  # the last coupling history and its rows of floats
-        #: per unit: None, or a drive's inputs and the kinematic outputs it has (the others are prescribed)
-        self._drives = [
-            (u.drive_keys, tuple(k for k in KINEMATICS if k in u.elements)) if is_drive(u, c.kind) else None
-            for u, c in zip(self.units, self.couplings)
-        ]
+        self._drives = self._drive_entries()
 
     # -- time and the initial point -----------------------------------------------------------------
     @property
@@ -154,34 +148,9 @@ class FmuCosimulation(CosimulationProblem):
         return self.t0 + self.step_index * self.H
 
     def initial_state(self):
-        """The units' positions and velocities after initialisation, ``(2, 2 n_dim)``; a drive's point has those of
-        its own outputs, the others its joint partner's (the joint holds at ``T_0``), and its inputs are set to
-        them (the start state saved again)."""
-        n = self.n_dim
-        rows = [None] * len(self.units)
-        for i, u in enumerate(self.units):
-            if self._drives[i] is None:
-                rows[i] = u.get(("position", "velocity")).ravel()
-        for i, drive in enumerate(self._drives):
-            if drive is None:
-                continue
-            jt = self.graph.joints[self.graph.joints_of(i)[0]]
-            other = jt.second if jt.first == i else jt.first
-            point = []
-            for q, key in enumerate(("position", "velocity")):
-                if key in drive[1]:
-                    point.append(self.units[i].get((key,)).ravel())
-                elif rows[other] is not None and self._drives[other] is None:
-                    point.append(rows[other][q * n : (q + 1) * n])
-                else:  # a drive at the other side too: its own output (the scene asks one of them for it)
-                    point.append(self.units[other].get((key,)).ravel())
-            x, v = point
-            rows[i] = np.concatenate([x, v])
-            self._to_start(i)
-            self.units[i].put("drive", self._drive_values(i, x.tolist(), v.tolist(), [0.0] * n))
-            self.units[i].free(self._start[i])
-            self._start[i] = self.units[i].save()
-        self._committed = np.stack(rows)
+        """The units' positions and velocities after initialisation, ``(2, 2 n_dim)`` (a drive's point:
+        :meth:`~icosim.problems.fmu.drives.DrivenPoints._start_points`)."""
+        self._committed = np.stack(self._start_points())
         return self._committed
 
     def initial_history(self, e0=None):
@@ -230,9 +199,7 @@ class FmuCosimulation(CosimulationProblem):
         for i, c in enumerate(self.couplings):
             u = self.inputs(i, e)
             if c.feedthrough and self._drives[i] is not None:
-                self._to_start(i)
-                x0, v0 = (row.tolist() for row in starts[i])
-                y = self._drive_outputs(i, x0, v0, np.asarray(u, dtype=float).tolist())[1]
+                y = self._drive_at_start(i, starts[i], u)
             elif c.feedthrough:
                 self._to_start(i)
                 self.units[i].set(c.input_key, self._scale[i] * u)
@@ -248,48 +215,11 @@ class FmuCosimulation(CosimulationProblem):
         """Unit ``i``'s outputs after a step of ``h`` from its start with the input held at ``u``."""
         self._to_start(i)
         if self._drives[i] is not None:
-            coef = [np.asarray(u, dtype=float).tolist()]
-            x0, v0 = self._point(i)
-            rows = drive_rows(self._drives[i][0], coef, x0, v0, h)
-            self.units[i].step("drive", np.array(rows), self.time, h, step_index=0)
             self._holds[i] = "scratch"
-            return self._outputs(
-                i, coef[0], self._merged(i, self.units[i].read(self._output_keys(i)), *prescribed_end(coef, x0, v0, h))
-            )[1]
+            return self._drive_step(i, [np.asarray(u, dtype=float).tolist()], h, 0)[1]
         self.units[i].step(self.couplings[i].input_key, [self._scale[i] * u], self.time, h, step_index=0)
         self._holds[i] = "scratch"
         return self._outputs(i, np.asarray(u, dtype=float).tolist())[1]
-
-    # -- a drive (docs/fmi.md, "Drives by position, velocity and acceleration") --------------------------------
-    def _point(self, i):
-        """A drive's point at ``T_N`` (position and velocity, lists of floats): the committed state."""
-        row = self._committed[i].tolist()
-        return row[: self.n_dim], row[self.n_dim :]
-
-    def _drive_values(self, i, x, v, a):
-        """A drive's input values (its ``drive`` entry) for the point at ``x``, ``v`` with acceleration ``a``."""
-        given = {"position_input": x, "velocity_input": v, "acceleration_input": a}
-        return [q for key in self._drives[i][0] for q in given[key]]
-
-    def _merged(self, i, values, x, v, a):
-        """A drive's outputs in the order of a kinematic unit's (position, velocity, acceleration, reaction force;
-        floats, component after component): its own where it has them (``values``, as read), else ``x``, ``v``,
-        ``a`` (prescribed)."""
-        n, own = self.n_dim, self._drives[i][1]
-        out, at = [], 0
-        for key, prescribed in zip(KINEMATICS, (x, v, a)):
-            if key in own:
-                out += values[at : at + n]
-                at += n
-            else:
-                out += prescribed
-        return out + values[at:]
-
-    def _drive_outputs(self, i, x, v, a):
-        """A drive at its present state with its point at ``x``, ``v`` and acceleration ``a`` (no step): its end
-        and outputs (:meth:`_outputs`)."""
-        self.units[i].put("drive", self._drive_values(i, x, v, a))
-        return self._outputs(i, a, self._merged(i, self.units[i].read(self._output_keys(i)), x, v, a))
 
     # -- one unit integrated --------------------------------------------------------------------------
     def _to_start(self, i):
@@ -329,20 +259,8 @@ class FmuCosimulation(CosimulationProblem):
                 coef.append(row)
         self._holds[i] = "scratch"  # from here on: a refused call leaves the unit in no known state
         if self._drives[i] is not None:
-            x0, v0 = self._point(i)
-            rows = drive_rows(self._drives[i][0], coef, x0, v0, self.H)
-            values = unit.advance(
-                "drive",
-                rows,
-                self.time,
-                self.H,
-                step_index=self.step_index + 1,
-                restore=restore,
-                read=self._output_keys(i),
-            )
             self.work.subsystem_integrations += 1
-            end = prescribed_end(coef, x0, v0, self.H)
-            return self._outputs(i, end[2], self._merged(i, values, *end))
+            return self._drive_step(i, coef, self.H, self.step_index + 1, restore)
         values = unit.advance(
             self.couplings[i].input_key, coef if C_s is not None else [[s * v for v in row] for row in coef],
             self.time, self.H, step_index=self.step_index + 1, restore=restore, read=self._output_keys(i),
@@ -402,8 +320,7 @@ class FmuCosimulation(CosimulationProblem):
             self.units[i].restore(self._ends[i][id(end)][1])
             self._holds[i] = id(end)
         if self._drives[i] is not None:  # the point stands where the end state has it; its acceleration is u1
-            n = self.n_dim
-            return self._drive_outputs(i, list(end[:n]), list(end[n:]), u1)[1]
+            return self._drive_outputs(i, list(end[: self.n_dim]), list(end[self.n_dim :]), u1)[1]
         s = self._scale[i]
         self.units[i].put(self.couplings[i].input_key, u1 if s == 1.0 else [s * v for v in u1])  # 1 * v is v
         return self._outputs(i, u1)[1]
@@ -511,10 +428,9 @@ class FmuCosimulation(CosimulationProblem):
         n = self.n_dim
         for i, unit in enumerate(self.units):
             self._to_start(i)
-            if "set_position" in unit.elements:
-                unit.put("set_position", rows[i][:n])
-            if "set_velocity" in unit.elements:
-                unit.put("set_velocity", rows[i][n:])
+            for key, values in (("set_position", rows[i][:n]), ("set_velocity", rows[i][n:])):
+                if key in unit.elements:  # a drive's point without its outputs is the committed state
+                    unit.put(key, values)
             unit.free(self._start[i])
             self._start[i] = unit.save()
         self._committed = np.array(rows)

@@ -47,6 +47,7 @@ from ...engine.schema import schema_defs
 from ...engine.schemes import SCHEMES, GaussSeidel, Scheme, get_scheme
 from ...errors import ParameterError
 from .build import is_source_dir
+from .drives import role_keys
 from .errors import SceneError
 from .joints import NUMBERED, ORDERED_SCHEMES, check_order, driven_by, graph_message, joint_schema, scene_joints
 
@@ -115,16 +116,6 @@ COUPLING_KEYS = {
     "perturbation": 1.0e-3,
     "sensitivities": "each-step",
 }
-
-_KINEMATICS = ("position", "velocity", "acceleration")
-_DRIVE_INPUTS = ("position_input", "velocity_input", "acceleration_input")
-
-
-def _partner(graph, i) -> int:
-    """The subsystem at the other side of subsystem ``i``'s first joint."""
-    jt = graph.joints[graph.joints_of(i)[0]]
-    return jt.second if jt.first == i else jt.first
-
 
 #: Subsystem keys that do not name unit variables.
 _NOT_NAMES = ("fmu", "start", "force_sign", "mass", "rollback_tolerance", "interface", "tolerance")
@@ -381,61 +372,15 @@ def load_scene(path) -> Scene:
             f"needs {graph.n_coupling} values ({', '.join(variables)}, {n_dim} component(s) each), got "
             f"{len(data['initial_coupling'])}",
         )
-    kinds = [graph.port_kind(i, 0) for i in range(len(names))]
     for i, (name, sub) in enumerate(data["subsystems"].items()):
-        kind = kinds[i]
-        own = [k for k in _KINEMATICS if k in sub]
-        drive = kind == "kinematic" and (any(k in sub for k in _DRIVE_INPUTS[:2]) or len(own) < 3)
-        need = ("force", *_KINEMATICS) if kind == "force" else ("reaction_force",)
-        if kind == "kinematic" and not drive:
-            need += ("acceleration_input",)
+        kind = graph.port_kind(i, 0)
         projects = method.projection or data.get("initial") == "project"
-        if projects and not drive:
-            need += ("mass", "set_position", "set_velocity")
-        elif projects:  # a drive's point follows the joint where the unit has no output for it (weight 0)
-            need += tuple(
-                setter for k, setter in (("position", "set_position"), ("velocity", "set_velocity")) if k in sub
-            )
-        if kind == "force":
-            extra = [k for k in _DRIVE_INPUTS if k in sub]
-            if extra:
-                _fail(
-                    path,
-                    f"subsystems.{name}.{extra[0]}",
-                    f"subsystem {name} is force-driven in "
-                    f"{driven_by(scene, graph, i)}: only a kinematically driven subsystem takes a drive's inputs",
-                )
-        elif not any(k in sub for k in _DRIVE_INPUTS):
-            _fail(
-                path,
-                f"subsystems.{name}.acceleration_input",
-                f"required: subsystem {name} is kinematically "
-                f"driven in {driven_by(scene, graph, i)} ({SUBSYSTEM_KEYS['acceleration_input']}; a drive takes "
-                f"any of {', '.join(_DRIVE_INPUTS)})",
-            )
-        elif drive:
-            other = _partner(graph, i)
-            partner = data["subsystems"][names[other]]
-            missing = [k for k in _KINEMATICS[:2] if k not in sub and kinds[other] == "kinematic" and k not in partner]
-            if missing:
-                _fail(
-                    path,
-                    f"subsystems.{name}.{missing[0]}",
-                    f"required: neither {name} nor {names[other]} (both "
-                    f"kinematically driven) has a {missing[0]} output, so nothing says where their joint is",
-                )
-            if projects and kinds[other] == "kinematic" and "mass" not in sub and "mass" not in partner:
-                _fail(
-                    path,
-                    f"subsystems.{name}.mass",
-                    f"required: method {spec.name} projects onto the joint of two "
-                    f"drives, {name} and {names[other]}, and neither has a mass (the projection's weight)",
-                )
+        need = role_keys(path, data, graph, i, spec.name, projects, driven_by(scene, graph, i))
         for key in need:
             if key not in sub:
                 why = (
                     f"subsystem {name} is {kind}-driven in {driven_by(scene, graph, i)}"
-                    if key in ("force", "acceleration_input", "reaction_force", *_KINEMATICS)
+                    if key not in ("mass", "set_position", "set_velocity")
                     else f"method {spec.name} projects"
                     if method.projection
                     else "initial: project moves the units onto the joint"
