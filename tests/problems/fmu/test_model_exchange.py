@@ -105,6 +105,33 @@ def test_system1_as_model_exchange_follows_the_exact_joined_masses(tmp_path, k, 
     assert errors[-1] < bound * X0
 
 
+@pytest.mark.parametrize("scheme", ["jacobi", "gauss-seidel-12", "gauss-seidel-21"])
+@pytest.mark.parametrize("k", [0, 1, 2])
+@pytest.mark.parametrize("method, params", [("baumgarte", {"index": 1, "mu": 1e-3}),
+                                            ("weighted", {"index": 1, "a": 1.0, "b": 1.0})])  # fmt: skip
+def test_system1_as_model_exchange_follows_the_builtin_model(tmp_path, method, params, k, scheme):
+    """The same scene as the built-in linear two-mass model with System1's parameters (icosim.problems.linear),
+    every scheme: the same trajectory within 1e-9 of the largest value (the built-in model and the fmus unit
+    integrate exactly, the model exchange unit to its tolerance; some of these configurations are unstable, from
+    the start's inconsistency, as in tests/problems/fmu/test_linear_scenes.py)."""
+    from icosim.engine.methods import engine_method, make_method
+    from icosim.problems.linear.model import PhysicalModel
+    from icosim.problems.linear.problem import LinearCosimulation
+
+    H, n = 1e-3, 80
+    path = fd_scene(tmp_path, H, n * H, k, method=method, params=params | {"scheme": scheme, "perturbation": 1.0})
+    data = yaml.safe_load(path.read_text()) | {"initial_coupling": [0.0, 0.0], "divergence_bound": 1e300}
+    path.write_text(yaml.safe_dump(data))
+    run = run_scene(path)
+    assert run.status == "completed" and run.units["body1"]["interface"] == "model-exchange"
+    model = PhysicalModel(H=H, m1=M1, m2=M2, c1=K1, c2=K2, d1=C1, d2=C2)
+    problem = LinearCosimulation(model.coefficients(), "fd", k)
+    start, history = np.array([[X0, 0.0], [X0, 0.0]]), np.zeros((k + 1, problem.n_coupling))
+    traj = simulate(problem, engine_method(make_method(method, **params), H), start, history, n, scheme=scheme)
+    x = np.array(traj.states)[..., 0]
+    assert np.max(np.abs(run.states[..., 0] - x)) < 1e-9 * max(1.0, np.max(np.abs(x)))
+
+
 def test_interface_auto_takes_model_exchange_where_co_simulation_cannot_roll_back(tmp_path, capsys):
     path = fd_scene(tmp_path, 1e-3, 0.05, 1)
     run = run_scene(path)
@@ -214,6 +241,30 @@ def test_statespace_driven_through_its_input_as_model_exchange_and_co_simulation
     assert 1e-5 < abs(ys["co-simulation"] / exact - 1.0) < 1e-3  # Euler's error at 1e-3 s, far above the tolerance
 
 
+def test_a_unit_with_only_model_exchange_is_integrated(tmp_path):
+    """Dahlquist (FMI 2.0) with its <CoSimulation> element taken out of the model description (the binary
+    serves both): interface auto takes its model exchange."""
+    import re
+    import zipfile
+
+    source, target = REFERENCE / "fmus2" / "Dahlquist.fmu", tmp_path / "Dahlquist.fmu"
+    with zipfile.ZipFile(source) as zin, zipfile.ZipFile(target, "w", zipfile.ZIP_DEFLATED) as zout:
+        for item in zin.infolist():
+            data = zin.read(item.filename)
+            if item.filename == "modelDescription.xml":
+                data = re.sub(rb"<CoSimulation.*?</CoSimulation>", b"", data, flags=re.S)
+            zout.writestr(item, data)
+    unit = open_fmu_unit("d", target, {"position": "x"}, {})
+    try:
+        assert isinstance(unit, ExchangeUnit) and unit.md.coSimulation is None
+        assert "interface auto: it has no co-simulation" in unit.opened
+        for j in range(10):
+            unit.step(None, None, j * 0.1, 0.1, step_index=j + 1)
+        assert unit.get(("position",))[0, 0] == pytest.approx(np.exp(-1.0), rel=1e-9)
+    finally:
+        unit.close()
+
+
 # -- events --------------------------------------------------------------------------------------------------------
 
 
@@ -230,6 +281,13 @@ def test_bouncing_ball_is_refused_as_model_exchange_naming_its_event_indicators(
         assert isinstance(unit, Unit) and unit.interface == "co-simulation"
     finally:
         unit.close()
+
+
+@pytest.mark.parametrize("version", ["fmus2", "fmus3"])
+def test_a_time_event_is_refused_naming_its_time(version):
+    """Stair counts up at every second: no event indicators, but a time event at t = 1 s."""
+    with pytest.raises(FmuError, match=r"stair: declares a time event at t = 1 s .*use interface co-simulation"):
+        open_fmu_unit("stair", REFERENCE / version / "Stair.fmu", {}, {}, interface="model-exchange")
 
 
 def test_bouncing_ball_refusal_is_the_open_row_of_the_check(tmp_path, capsys):

@@ -8,6 +8,7 @@ module                holds
 :mod:`.variables`     typed variables, array elements, start values by the standard's rules
 :mod:`.measures`      units of measure of the coupling variables, converted to SI
 :mod:`.units`         one FMU instance: opened, stepped with a polynomial input, saved, restored
+:mod:`.exchange`      a model exchange unit integrated by icosim, its states kept by icosim
 :mod:`.inspection`    a unit checked before it is trusted: rollback, feedthrough, direction
 :mod:`.check`         ``icosim cosim --check``: every check as a table
 :mod:`.guard`         the supervised run: a unit that hangs or crashes named

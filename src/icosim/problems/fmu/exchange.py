@@ -18,14 +18,14 @@ method takes one or a few steps per macro step.  A stiff unit (one whose fastest
 macro step) makes an explicit method take many steps: such a unit is better coupled as co-simulation.
 
 The default relative tolerance :data:`DEFAULT_TOLERANCE` (absolute: the same times each state's nominal value)
-keeps the integration error below what the coupling resolves: the coupling's own error at a macro step of 1e-3 s
-is about 1e-9 of the amplitude and above for every method and ``k``, and it converges with the coupling's order
-only as long as the integration error stays under it.
+keeps the integration error below what the coupling resolves at the macro steps the studies use, so that a run
+converges with the coupling's order; a smaller one comes near the rounding of the states (docs/fmi.md).
 
 Events are not supported: a unit that declares event indicators (``numberOfEventIndicators > 0``) is refused
 when it is opened, naming the count, as is one that declares a time event after its initialisation or asks for
 an event after an integrator step (a step event).  Without events a unit's discrete states do not change over
-a run, so its continuous states, the time and its inputs are all a macro step needs to keep (docs/fmi.md).
+a run, so its continuous states, the time and its inputs are all a macro step needs to keep; after an event a
+repeated integration would need the discrete states from before it, which only ``fmi2SetFMUstate`` restores.
 """
 
 from __future__ import annotations
@@ -193,7 +193,8 @@ class ExchangeUnit(Unit):
             for name in ("SetTime", "SetContinuousStates", "GetContinuousStates", "GetNominalsOfContinuousStates")
         ) + (getattr(library, derivatives),)
         self._component = fmu.component
-        self._completed = not bool(getattr(md.modelExchange, "completedIntegratorStepNotNeeded", False))
+        # FMI 2.0 completedIntegratorStepNotNeeded, FMI 3.0 needsCompletedIntegratorStep, as fmpy reads both
+        self._completed = bool(md.modelExchange.needsCompletedIntegratorStep)
         nominal = np.ones(nx)
         if nx:
             self._check(f"{prefix}GetContinuousStates", self._calls[2](self._component, self._xbuf, self._nx))
@@ -275,7 +276,12 @@ class ExchangeUnit(Unit):
         held); afterwards the unit holds the end state, ``t + H`` and ``u(1)``."""
         from scipy.integrate import DOP853
 
-        inputs_at = self._driver(key, coefficients, t, H)
+        drive, index = self._driver(key, coefficients, t, H), self.index
+
+        def inputs_at(tt):
+            drive(tt)  # its write is a call of its own in the guard's record: the integration's record again
+            guard.enter(index, _INTEGRATE, t, step_index)
+
         self.do_steps += 1
         self.messages.clear()
         prefix = "fmi3" if self.fmi3 else "fmi2"
