@@ -49,6 +49,7 @@ class Inspection:
     feedthrough: bool = True
     declared: bool | None = None
     gain: float = float("nan")  # d output / d input: algebraic where the unit has feedthrough, else after a step
+    follows_point: bool = False  # a drive's force follows its point's position or velocity without a step
 
     @property
     def refused(self) -> list:
@@ -118,6 +119,12 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=0.0) -
         for c in range(n):
             put(unit_inputs[c])
             algebraic[c] = outputs(unit_inputs[c])[2, c] - base[2, c]
+        point = 0.0  # a drive: its force's response to its point's position or velocity input, without a step
+        for moved in ("position_input", "velocity_input") if drive else ():
+            if moved in unit.drive_keys:
+                values = {"position_input": rest, "velocity_input": rest, "acceleration_input": rest, moved: [1.0] * n}
+                unit.put("drive", [q for k in unit.drive_keys for q in values[k]])
+                point = max(point, float(np.max(np.abs(unit.get((out,))[0] - base[2]))))
         put(zero)
 
         def stepped(u):
@@ -142,8 +149,10 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=0.0) -
         unit.free(start)
     scale = np.maximum(np.abs(base[2]), 1e-300)
     responds = np.isfinite(algebraic) & (np.abs(algebraic) > 1e-12 * scale)
-    found.feedthrough = bool(responds.any())
-    gains = np.where(responds, algebraic, step_gain) if found.feedthrough else step_gain
+    # a drive whose force follows its point at once has current outputs: read at the step's end as they are
+    found.follows_point = point > 1e-12 * float(np.max(scale))
+    found.feedthrough = bool(responds.any()) or found.follows_point
+    gains = np.where(responds, algebraic, step_gain) if responds.any() else step_gain
     c = int(np.argmax(np.abs(np.nan_to_num(gains))))
     found.gain = float(gains[c])
     found.findings.append(_rollback(first, again, base, back, rollback_tolerance))
@@ -182,6 +191,13 @@ def _feedthrough(kind, found, step_gain, velocity_gain) -> Finding:
     out = "acceleration" if kind == "force" else "drive's force"
     inp = "force input" if kind == "force" else "acceleration input"
     said = {True: "declares it", False: "declares none", None: "does not say"}[found.declared]
+    if found.follows_point and kind == "kinematic":
+        return Finding(
+            "feedthrough",
+            "pass",
+            f"its {out} follows its point's position or velocity input without a "
+            "step (its acceleration input at the step's end: only through the motion it prescribes)",
+        )
     if found.feedthrough:
         return Finding("feedthrough", "pass", f"its {out} follows its {inp} without a step (ModelStructure {said})")
     responds = abs(step_gain) > 0 or abs(velocity_gain) > 0
