@@ -4,7 +4,8 @@
   bit, or within ``rollback_tolerance``), and the restored unit must stand where it stood;
 * **feedthrough** -- does the coupling output (acceleration of a force-driven unit, the drive's force of a
   kinematically driven one) follow the coupling input without a step, as the ``ModelStructure`` declares or
-  not; and does it respond at all, after a step.  The macro step and the identification use what the unit does;
+  not (a drive's force: its point's position or velocity input too, :mod:`icosim.problems.fmu.drives`); and does
+  it respond at all, after a step.  The macro step and the identification use what the unit does;
 * **direction** -- the sign of that response: with the scene's ``force_sign``s, every joint's multiplier must
   act on its two units with opposite signs (:func:`joint_direction`; a unit whose input acts against the
   physical force needs the other ``force_sign``); a kinematically driven unit must move the way its prescribed
