@@ -9,7 +9,8 @@
 * **responds** -- the position and velocity follow the input at all, the same way;
 * **feedthrough** -- does the coupling output (acceleration of a force-driven unit, the drive's force of a
   kinematically driven one) follow the coupling input without a step, as the ``ModelStructure`` declares or
-  not; and does it respond at all, after a step.  The macro step and the identification use what the unit does;
+  not (a drive's force: its point's position or velocity input too, :mod:`icosim.problems.fmu.drives`); and does
+  it respond at all, after a step.  The macro step and the identification use what the unit does;
 * **direction** -- the sign of that response: with the scene's ``force_sign``s, every joint's multiplier must
   act on its two units with opposite signs (:func:`joint_direction`; a unit whose input acts against the
   physical force needs the other ``force_sign``); a kinematically driven unit must move the way its prescribed
@@ -27,6 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .drives import KINEMATICS, drive_rows, is_drive, prescribed_end
 from .errors import FmuError
 from .roles import kinematic_fit
 
@@ -63,6 +65,7 @@ class Inspection:
     feedthrough: bool = True
     declared: bool | None = None
     gain: float = float("nan")  # d output / d input: algebraic where the unit has feedthrough, else after a step
+    follows_point: bool = False  # a drive's force follows its point's position or velocity without a step
 
     @property
     def refused(self) -> list:
@@ -80,10 +83,16 @@ def declared_feedthrough(md, output_variable, input_variable):
     return None
 
 
-def _probe_outputs(unit, kind):
-    """Position, velocity and the coupling output as the unit stands (SI), ``(3, components)``."""
+def _probe_outputs(unit, kind, point=None):
+    """Position, velocity and the coupling output as the unit stands (SI), ``(3, components)``; a drive's
+    position and velocity where it has no outputs for them are ``point`` (prescribed)."""
     out = "acceleration" if kind == "force" else "reaction_force"
-    return unit.get(("position", "velocity", out))
+    if point is None:
+        return unit.get(("position", "velocity", out))
+    return np.stack(
+        [unit.get((k,))[0] if k in unit.elements else np.asarray(p) for k, p in zip(KINEMATICS, point)]
+        + [unit.get((out,))[0]]
+    )
 
 
 #: The relative difference accepted by default between a step and the same step repeated from a restored state
@@ -122,64 +131,104 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=ROLLBA
     ``kind`` is ``"force"`` or ``"kinematic"``; ``force_sign`` the scene's.  Each component of a vector joint is
     probed on its own; the component that responds most gives the unit's gain (its sign is the unit's own input
     convention; :func:`joint_direction` checks the two units' together).  A unit whose step depends on doStep's
-    ``noSetFMUStatePriorToCurrentPoint`` is stepped with ``true`` from here on (:attr:`Unit.always_final`)."""
-    key = "force" if kind == "force" else "acceleration_input"
+    ``noSetFMUStatePriorToCurrentPoint`` is stepped with ``true`` from here on (:attr:`Unit.always_final`).  A
+    drive (:func:`~icosim.problems.fmu.drives.is_drive`) is probed with its point starting at rest at 0, the
+    point's position and velocity where it has no outputs for them being the prescribed ones."""
+    drive = is_drive(unit, kind)
+    key = "force" if kind == "force" else "drive" if drive else "acceleration_input"
     out = "acceleration" if kind == "force" else "reaction_force"
     found = Inspection(unit.label, kind)
-    in_var, out_var = unit.elements[key][0].variable, unit.elements[out][0].variable
+    out_var = unit.elements[out][0].variable
+    # a drive: the acceleration where it has that input, else the input nearest to it (velocity, position)
+    in_var = unit.elements[key][-len(unit.elements[out])].variable
     found.declared = declared_feedthrough(unit.md, out_var, in_var)
-    n = len(unit.elements[key])
+    n = len(unit.elements[out])
     zero = np.zeros(n)
+    rest = [0.0] * n  # a drive's point at rest at 0 while it is probed
+    at_rest = (rest, rest)
+
+    def put(u):
+        if drive:
+            values = {"position_input": rest, "velocity_input": rest, "acceleration_input": list(u)}
+            unit.put("drive", [q for k in unit.drive_keys for q in values[k]])
+        else:
+            unit.set(key, u)
+
+    def outputs(point=at_rest):
+        """The probed outputs; a drive's point where it has no outputs for it: ``point`` (prescribed)."""
+        return _probe_outputs(unit, kind, point if drive else None)
+
+    def advance(u, t, h, point=at_rest, final=False):
+        """One step of ``h`` from ``t`` with the input ``u`` held; the driven point after it (a drive's)."""
+        if not drive:
+            unit.step(key, [u], t, h, step_index=0, final=final)
+            return point
+        rows = np.array(drive_rows(unit.drive_keys, [list(u)], *point, h))
+        unit.step(key, rows, t, h, step_index=0, final=final)
+        return tuple(prescribed_end([list(u)], *point, h)[:2])
+
     unit_inputs = np.eye(n)  # 1 N or 1 m/s^2 on one component: finite whatever the unit's mass
-    moving = ("position", "velocity") + (("acceleration",) if "acceleration" in unit.elements else ())
+    moving = tuple(k for k in KINEMATICS if k in unit.elements)
+    # the motion checks read the unit's own position and velocity outputs (a drive without them has none to check)
+    checks_motion = moving[:2] == ("position", "velocity")
     start = unit.save()
     algebraic, step_gain, velocity_gain, position_gain = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
     probes = []  # (what, outputs at the start, after one step of H, after the same interval in sub-steps)
     try:
-        flag = _flag_probe(unit, key, unit_inputs[0], start, t0, H, rollback_tolerance)
-        unit.set(key, zero)
-        base = _probe_outputs(unit, kind)
-        base_moving = unit.get(moving)
+        flag = _flag_probe(unit, advance, outputs, unit_inputs[0], start, t0, H, rollback_tolerance)
+        put(zero)
+        base = outputs()
+        base_moving = unit.get(moving) if checks_motion else None
         pushed_moving = []
         for c in range(n):
-            unit.set(key, unit_inputs[c])
-            algebraic[c] = _probe_outputs(unit, kind)[2, c] - base[2, c]
-            pushed_moving.append(unit.get(moving))
-        unit.set(key, zero)
+            put(unit_inputs[c])
+            algebraic[c] = outputs()[2, c] - base[2, c]
+            pushed_moving.append(unit.get(moving) if checks_motion else None)
+        point = 0.0  # a drive: its force's response to its point's position or velocity input, without a step
+        for moved in ("position_input", "velocity_input") if drive else ():
+            if moved in unit.drive_keys:
+                values = {"position_input": rest, "velocity_input": rest, "acceleration_input": rest, moved: [1.0] * n}
+                unit.put("drive", [q for k in unit.drive_keys for q in values[k]])
+                point = max(point, float(np.max(np.abs(unit.get((out,))[0] - base[2]))))
+        put(zero)
 
         def stepped(u, parts=1):
             unit.restore(start)
+            at = at_rest
             for j in range(parts):
-                unit.step(key, [u], t0 + j * H / parts, H / parts, step_index=0)
-            return _probe_outputs(unit, kind), unit.get(moving)
+                at = advance(u, t0 + j * H / parts, H / parts, at)
+            return outputs(at), (unit.get(moving) if checks_motion else None)
 
         def twice(u):  # two steps: an explicit integration moves the position only in the second
             unit.restore(start)
-            unit.step(key, [u], t0, H, step_index=0)
-            unit.step(key, [u], t0 + H, H, step_index=0)
-            return unit.get(("position",))[0]
+            at = advance(u, t0, H)
+            return outputs(advance(u, t0 + H, H, at))[0]
 
         first, first_moving = stepped(zero)
         again, _ = stepped(zero)
         still = twice(zero)
-        probes.append(("without input", base_moving, first_moving, stepped(zero, MOVE_SUBSTEPS)[1]))
+        if checks_motion:
+            probes.append(("without input", base_moving, first_moving, stepped(zero, MOVE_SUBSTEPS)[1]))
         for c in range(n):
             pushed, pushed_end = stepped(unit_inputs[c])
             step_gain[c] = pushed[2, c] - first[2, c]
             velocity_gain[c] = pushed[1, c] - first[1, c]
             position_gain[c] = twice(unit_inputs[c])[c] - still[c]
-            what = "with a unit input" + (f" on component {c + 1}" if n > 1 else "")
-            probes.append((what, pushed_moving[c], pushed_end, stepped(unit_inputs[c], MOVE_SUBSTEPS)[1]))
+            if checks_motion:
+                what = "with a unit input" + (f" on component {c + 1}" if n > 1 else "")
+                probes.append((what, pushed_moving[c], pushed_end, stepped(unit_inputs[c], MOVE_SUBSTEPS)[1]))
         unit.restore(start)
-        unit.set(key, zero)
-        back = _probe_outputs(unit, kind)
+        put(zero)
+        back = outputs()
     finally:
         unit.restore(start)
         unit.free(start)
     scale = np.maximum(np.abs(base[2]), 1e-300)
     responds = np.isfinite(algebraic) & (np.abs(algebraic) > 1e-12 * scale)
-    found.feedthrough = bool(responds.any())
-    gains = np.where(responds, algebraic, step_gain) if found.feedthrough else step_gain
+    # a drive whose force follows its point at once has current outputs: read at the step's end as they are
+    found.follows_point = point > 1e-12 * float(np.max(scale))
+    found.feedthrough = bool(responds.any()) or found.follows_point
+    gains = np.where(responds, algebraic, step_gain) if responds.any() else step_gain
     c = int(np.argmax(np.abs(np.nan_to_num(gains))))
     found.gain = float(gains[c])
     rollback = _not_finite(unit, kind, base, first, again, back) or _rollback(
@@ -201,8 +250,10 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=ROLLBA
     found.findings.append(_direction(kind, found, force_sign, float(velocity_gain[c])))
     if kind == "kinematic":
         found.findings.append(Finding("role", *kinematic_fit(unit, H=H, t0=t0)))
-    found.findings.append(_moves(unit, H, moving, probes, rollback_tolerance))
-    found.findings.append(_responds(unit, kind, key, position_gain, velocity_gain))
+    if checks_motion:
+        found.findings.append(_moves(unit, H, moving, probes, rollback_tolerance))
+        if not drive:  # a drive's point moves as the master prescribes it
+            found.findings.append(_responds(unit, kind, key, position_gain, velocity_gain))
     found.findings.append(_units(unit))
     found.findings.append(_starts(unit))
     if unit.description_problems:
@@ -213,7 +264,7 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=ROLLBA
     return found
 
 
-def _flag_probe(unit, key, push, start, t0, H, tol) -> Finding | None:
+def _flag_probe(unit, advance, outputs, push, start, t0, H, tol) -> Finding | None:
     """Does the unit's step depend on doStep's ``noSetFMUStatePriorToCurrentPoint``?  From the restored start,
     a step of ``H`` (flag true) and a second one taken with each value of the flag (the same history before it,
     the input ``push`` held: the unit moves), and the first pair again (a unit that does not repeat it is
@@ -224,9 +275,8 @@ def _flag_probe(unit, key, push, start, t0, H, tol) -> Finding | None:
     ends = []
     for final in (True, False, True):
         unit.restore(start)
-        unit.step(key, [push], t0, H, step_index=0, final=True)
-        unit.step(key, [push], t0 + H, H, step_index=0, final=final)
-        ends.append(unit.get(("position", "velocity")))
+        point = advance(push, t0, H, final=True)
+        ends.append(outputs(advance(push, t0 + H, H, point, final=final)))
     unit.restore(start)
     if np.any(_relative(ends[0], ends[2]) > tol):
         return None  # the same steps do not repeat: a restore that fails, which the rollback check names
@@ -236,7 +286,8 @@ def _flag_probe(unit, key, push, start, t0, H, tol) -> Finding | None:
         return None
     unit.always_final = True
     row, col = (int(i) for i in np.argwhere(d > tol)[0])
-    name = unit.elements[("position", "velocity")[row]][col].name
+    keys = (*KINEMATICS[:2], "acceleration" if "force" in unit.elements else "reaction_force")
+    name = unit.elements[keys[row]][col].name if keys[row] in unit.elements else f"{keys[row]} (prescribed)"
     return Finding(
         "doStep flag",
         "note",
@@ -408,6 +459,13 @@ def _feedthrough(kind, found, step_gain, velocity_gain) -> Finding:
     out = "acceleration" if kind == "force" else "drive's force"
     inp = "force input" if kind == "force" else "acceleration input"
     said = {True: "declares it", False: "declares none", None: "does not say"}[found.declared]
+    if found.follows_point and kind == "kinematic":
+        return Finding(
+            "feedthrough",
+            "pass",
+            f"its {out} follows its point's position or velocity input without a "
+            "step (its acceleration input at the step's end: only through the motion it prescribes)",
+        )
     if found.feedthrough:
         return Finding("feedthrough", "pass", f"its {out} follows its {inp} without a step (ModelStructure {said})")
     responds = abs(step_gain) > 0 or abs(velocity_gain) > 0
