@@ -28,8 +28,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import motion
 from .drives import KINEMATICS, drive_rows, is_drive, prescribed_end
 from .errors import FmuError
+from .findings import Finding, relative
+from .motion import MOVE_SUBSTEPS
 from .roles import kinematic_fit
 
 __all__ = [
@@ -42,17 +45,6 @@ __all__ = [
     "rollback_tolerance",
     "ROLLBACK_TOLERANCE",
 ]
-
-
-@dataclass(frozen=True)
-class Finding:
-    """One check of one unit: ``verdict`` is ``pass``, ``refused`` or ``note``."""
-
-    check: str
-    verdict: str
-    detail: str
-    fix: str = ""
-    key: str = ""  # the scene key a refusal is about, where it is one
 
 
 @dataclass
@@ -99,9 +91,6 @@ def _probe_outputs(unit, kind, point=None):
 #: (a subsystem's ``rollback_tolerance`` replaces it): see :func:`rollback_tolerance`.
 ROLLBACK_TOLERANCE = 1e-12
 
-#: Sub-steps in which the movement check takes a probing step again.
-MOVE_SUBSTEPS = 2
-
 
 def rollback_tolerance(sub) -> float:
     """The relative difference a subsystem ``sub`` (its scene entry) accepts between a step and the same step
@@ -114,15 +103,6 @@ def rollback_tolerance(sub) -> float:
     is no longer the last digits of a variable-step solver but a state that is not restored."""
     value = sub.get("rollback_tolerance")
     return ROLLBACK_TOLERANCE if value is None else float(value)
-
-
-def _relative(a, b) -> np.ndarray:
-    """``|a - b| / max(|a|, |b|)`` elementwise (0 where both are 0, inf where either is not finite)."""
-    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    size = np.maximum(np.abs(a), np.abs(b))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        d = np.where(a == b, 0.0, np.abs(a - b) / size)
-    return np.where(np.isfinite(a) & np.isfinite(b), d, np.inf)
 
 
 def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=ROLLBACK_TOLERANCE) -> Inspection:
@@ -175,7 +155,7 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=ROLLBA
     algebraic, step_gain, velocity_gain, position_gain = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
     probes = []  # (what, outputs at the start, after one step of H, after the same interval in sub-steps)
     try:
-        flag = _flag_probe(unit, advance, outputs, unit_inputs[0], start, t0, H, rollback_tolerance)
+        flag = motion.flag_probe(unit, advance, outputs, unit_inputs[0], start, t0, H, rollback_tolerance)
         put(zero)
         base = outputs()
         base_moving = unit.get(moving) if checks_motion else None
@@ -251,9 +231,9 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=ROLLBA
     if kind == "kinematic":
         found.findings.append(Finding("role", *kinematic_fit(unit, H=H, t0=t0)))
     if checks_motion:
-        found.findings.append(_moves(unit, H, moving, probes, rollback_tolerance))
+        found.findings.append(motion.moves(unit, H, moving, probes, rollback_tolerance))
         if not drive:  # a drive's point moves as the master prescribes it
-            found.findings.append(_responds(unit, kind, key, position_gain, velocity_gain))
+            found.findings.append(motion.responds(unit, kind, key, position_gain, velocity_gain))
     found.findings.append(_units(unit))
     found.findings.append(_starts(unit))
     if unit.description_problems:
@@ -262,39 +242,6 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=ROLLBA
             Finding("description", "note", f"fmpy's validation of its modelDescription.xml reports: {problems}")
         )
     return found
-
-
-def _flag_probe(unit, advance, outputs, push, start, t0, H, tol) -> Finding | None:
-    """Does the unit's step depend on doStep's ``noSetFMUStatePriorToCurrentPoint``?  From the restored start,
-    a step of ``H`` (flag true) and a second one taken with each value of the flag (the same history before it,
-    the input ``push`` held: the unit moves), and the first pair again (a unit that does not repeat it is
-    not restored, which the rollback check names).  FMI 2.0 (section 4.2.2) and 3.0 say the flag only tells whether
-    a state before the current point may later be restored; a unit that reads false as "reject the last step
-    and integrate it again from its start" stands still under a master that rolls back.  None: it does not
-    depend on it; else a note, and the unit is stepped with true on every step (:attr:`Unit.always_final`)."""
-    ends = []
-    for final in (True, False, True):
-        unit.restore(start)
-        point = advance(push, t0, H, final=True)
-        ends.append(outputs(advance(push, t0 + H, H, point, final=final)))
-    unit.restore(start)
-    if np.any(_relative(ends[0], ends[2]) > tol):
-        return None  # the same steps do not repeat: a restore that fails, which the rollback check names
-    ends = {True: ends[0], False: ends[1]}
-    d = _relative(ends[True], ends[False])
-    if not np.any(d > tol):
-        return None
-    unit.always_final = True
-    row, col = (int(i) for i in np.argwhere(d > tol)[0])
-    keys = (*KINEMATICS[:2], "acceleration" if "force" in unit.elements else "reaction_force")
-    name = unit.elements[keys[row]][col].name if keys[row] in unit.elements else f"{keys[row]} (prescribed)"
-    return Finding(
-        "doStep flag",
-        "note",
-        f"its step depends on doStep's noSetFMUStatePriorToCurrentPoint (the standard gives it no such meaning): "
-        f"after two steps of {H:g} s its {name} is {float(ends[True][row, col])!r} with true on the second, "
-        f"{float(ends[False][row, col])!r} with false; it is stepped with true on every step",
-    )
 
 
 def _not_finite(unit, kind, base, first, again, back) -> Finding | None:
@@ -324,7 +271,7 @@ def _rollback(unit, first, again, base, back, tol) -> Finding:
     names = ("position", "velocity", "coupling output")
     worst, where = 0.0, None
     for what, a, b in (("after a repeated step", first, again), ("after restoring the saved state", base, back)):
-        d = _relative(a, b)
+        d = relative(a, b)
         if d.size and float(np.max(d)) > worst:
             worst = float(np.max(d))
             if where is None and worst > tol:  # the first that differs is named
@@ -346,113 +293,6 @@ def _rollback(unit, first, again, base, back, tol) -> Finding:
     if worst == 0:
         return Finding("rollback", "pass", f"a restored step repeats bit for bit{flag}")
     return Finding("rollback", "pass", f"a restored step repeats within {worst:.3g} relative (tolerance {tol:g}){flag}")
-
-
-def _moves(unit, H, moving, probes, tol) -> Finding:
-    """Does the unit move as its outputs say?  Over each probing step of ``H`` (outputs ``s`` at its start,
-    ``e`` at its end): the position's change against the trapezoid integral of the velocity, the velocity's
-    against the acceleration's; and the step against the same interval taken in :data:`MOVE_SUBSTEPS`
-    sub-steps.
-
-    The tolerance: a consistent one-step integration of any order changes ``x`` by ``H v(xi)`` for some ``xi``
-    in the step (the mean value theorem for the exact solution; explicit and implicit Euler at the step's two
-    ends), so over a step short enough that ``v`` is monotone the change lies between ``H v(s)`` and ``H v(e)``
-    and departs from the trapezoid by at most ``H |v(e) - v(s)| / 2``; twice that is allowed, ``H |v(e) -
-    v(s)|``, plus the unit's relative tolerance ``tol`` (its rollback tolerance, at least 16 rounding units) of
-    the quantity's scale ``max |x| + H max |v|`` over the step and the components (for the velocity ``max |x| / H
-    + max |v| + H max |a|``: a velocity is known to the rounding of the position it moves).  Sub-steps are held to the same bound (two first-order integrations of one interval differ
-    by at most ``H^2 |a| / 2``).  A unit that does not integrate (stands still, or moves every other step) is
-    off by the whole change."""
-    rtol = max(float(tol), 16 * np.finfo(float).eps)
-    pairs = [(0, 1)] + ([(1, 2)] if len(moving) == 3 else [])
-    worst = None
-    for what, s, e, sub in probes:
-        for lo, hi in pairs:  # the quantity and its derivative
-            # the scale of every component and level (a velocity at rest beside a position of 1 m is known to the
-            # rounding of that position over H, not to 0)
-            size = sum(np.max(np.abs([s[j], e[j], sub[j]])) * H ** (j - lo) for j in range(hi + 1))
-            floor = rtol * size
-            for c in range(s.shape[1]):
-                x0, x1, d0, d1 = s[lo, c], e[lo, c], s[hi, c], e[hi, c]
-                trapezoid = H * (d0 + d1) / 2
-                allowed = H * abs(d1 - d0) + floor
-                for check, measured, against in (
-                    ("trapezoid", x1 - x0, trapezoid),
-                    ("sub-steps", sub[lo, c] - x0, x1 - x0),
-                ):
-                    defect = abs(measured - against)
-                    if not defect <= allowed:
-                        excess = defect / allowed if allowed > 0 else np.inf
-                        if worst is None or excess > worst[0]:
-                            worst = (excess, what, lo, hi, c, check, measured, against, allowed, d0, d1)
-    if worst is None:
-        return Finding(
-            "moves",
-            "pass",
-            f"over a step of {H:g} s its position changes as its velocity integrates"
-            + (", its velocity as its acceleration" if len(moving) == 3 else "")
-            + f" (trapezoid), and {MOVE_SUBSTEPS} sub-steps agree",
-        )
-    _, what, lo, hi, c, check, measured, against, allowed, d0, d1 = worst
-    quantity, rate = unit.elements[moving[lo]][c].name, unit.elements[moving[hi]][c].name
-    if check == "trapezoid":
-        said = (
-            f"over a step of {H:g} s {what}, its {moving[lo]} {quantity} changes by {measured:.6g} but the "
-            f"trapezoid integral of its {moving[hi]} {rate} ({d0:.6g} to {d1:.6g}) is {against:.6g}"
-        )
-    else:
-        said = (
-            f"over {H:g} s {what}, its {moving[lo]} {quantity} changes by {against:.6g} in one step but by "
-            f"{measured:.6g} in {MOVE_SUBSTEPS} sub-steps (sub-step check)"
-        )
-    return Finding(
-        "moves",
-        "refused",
-        f"{said}: off by {abs(measured - against):.3g}, more than the {allowed:.3g} a consistent integration "
-        "allows: the unit does not move as its outputs say",
-        "a unit with a fixed internal step larger than the macro step, or one that does not integrate over the "
-        "step it is given, cannot be coupled at this H: take H a multiple of the unit's internal step, or check "
-        f"that {moving[lo]} and {moving[hi]} name the unit's {moving[lo]} and its derivative",
-    )
-
-
-def _responds(unit, kind, key, position_gain, velocity_gain) -> Finding:
-    """With a unit input, the velocity must have moved after a step and the position after two (an explicit
-    integration moves it only in the second), both the same way: a gain of exactly zero is a variable that does
-    not follow the input, e.g. a constant named as the position."""
-    per = "N" if kind == "force" else "m/s^2"
-    when = {"position": "two steps", "velocity": "a step"}
-    for name, gains in (("position", position_gain), ("velocity", velocity_gain)):
-        c = int(np.argmax(np.abs(np.nan_to_num(gains))))
-        if not np.isfinite(gains[c]) or gains[c] == 0:
-            var = unit.elements[name][0].name
-            return Finding(
-                "responds",
-                "refused",
-                f"its {name} {var} does not respond to its {key} ({float(gains[c])!r} {_unit_of(name)} per {per} "
-                f"after {when[name]}): it is not the {name} of the body the input drives",
-                f"name the unit's {name} output as {name}",
-                name,
-            )
-    bad = np.sign(position_gain) * np.sign(velocity_gain) < 0
-    if bad.any():
-        c = int(np.argmax(bad))
-        return Finding(
-            "responds",
-            "refused",
-            f"its position moves by {position_gain[c]:+.3g} m in two steps but its velocity by "
-            f"{velocity_gain[c]:+.3g} m/s in one, per {per} of its input: the outputs contradict each other",
-        )
-    return Finding(
-        "responds",
-        "pass",
-        f"its position moves by {position_gain[0]:+.3g} m in two steps, its velocity by {velocity_gain[0]:+.3g} "
-        f"m/s in one, per {per} of its input",
-    )
-
-
-def _unit_of(name) -> str:
-    return {"position": "m", "velocity": "m/s"}[name]
 
 
 def _feedthrough(kind, found, step_gain, velocity_gain) -> Finding:
