@@ -33,7 +33,7 @@ from .drives import KINEMATICS, drive_rows, is_drive, prescribed_end
 from .errors import FmuError
 from .findings import Finding, relative
 from .motion import MOVE_SUBSTEPS
-from .roles import kinematic_fit
+from .roles import force_fit, kinematic_fit
 
 __all__ = [
     "Finding",
@@ -228,8 +228,8 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=ROLLBA
     found.findings.append(rollback)
     found.findings.append(_feedthrough(kind, found, float(step_gain[c]), float(velocity_gain[c])))
     found.findings.append(_direction(kind, found, force_sign, float(velocity_gain[c])))
-    if kind == "kinematic":
-        found.findings.append(Finding("role", *kinematic_fit(unit, H=H, t0=t0)))
+    fit = kinematic_fit(unit, H=H, t0=t0) if kind == "kinematic" else force_fit(unit)
+    found.findings.append(Finding("role", *fit))
     if checks_motion:
         found.findings.append(motion.moves(unit, H, moving, probes, rollback_tolerance))
         if not drive:  # a drive's point moves as the master prescribes it

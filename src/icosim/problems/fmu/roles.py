@@ -53,6 +53,25 @@ def velocity_input(label, key, variable):
         )
 
 
+def force_fit(unit) -> tuple:
+    """The force role as far as it can be decided: a force input that declares a unit of measure was checked
+    against it when the unit was opened (a velocity is refused there); one that declares none cannot be told from
+    a compliant unit's velocity input by any response at the port (docs/fmi.md, roles), so the role is the
+    scene's word, said as a note.  Returns the check's ``(verdict, detail, fix, key)``."""
+    undeclared = [m for m, el in zip(unit.measures["force"], unit.elements["force"]) if m.read_from == "not declared"]
+    if not undeclared:
+        return "pass", "its force input declares a force (units of measure)", "", ""
+    names = ", ".join(el.name for el in unit.elements["force"])
+    return (
+        "note",
+        f"undecided: its force input {names} declares no unit of measure, and a compliant unit (velocity in, force "
+        "out, as OSP's Wheel) responds at the port as a force-driven one does: the role is taken as the scene says",
+        "declare the input's unit in the unit's model description, or check that it is the force on the body whose "
+        "position the scene names",
+        "",
+    )
+
+
 def kinematic_fit(unit, *, H, t0=0.0, tol=1e-2) -> tuple:
     """The kinematic role measured on ``unit`` at its start (left there, its input at zero): with the acceleration
     input held at 1 (SI) on one component over a step ``H``, against 0, the acceleration output must move by 1 on
