@@ -226,3 +226,12 @@ def test_the_dataset_holds_the_accepted_steps(tmp_path):
 def test_a_control_that_cannot_run_is_refused(tmp_path, control, match):
     with pytest.raises(SceneError, match=match):
         load_scene(scene_file(tmp_path, "two_mass_fd.yaml", control=control, H=1e-4))
+
+
+def test_a_step_rejected_at_h_min_ends_the_run(tmp_path):
+    """The start's held history is first order: at a tolerance of 1e-6 the chain's first step needs H ~ 1e-8 (its
+    lambda changes by about 100 N/s), so H_min = 1e-7 ends the run at the first step, saying why."""
+    control = {"tolerance": 1e-6, "H_min": 1e-7, "H_max": 1e-2}
+    run = run_scene(scene_file(tmp_path, "chain3.yaml", control=control, t_end=0.01, H=1e-4))
+    assert run.status == "diverged" and len(run.times) == 1
+    assert "> 1 at H_min = 1e-07 s" in run.reason and run.steps.n_rejected > 0

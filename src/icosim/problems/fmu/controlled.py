@@ -22,8 +22,8 @@ from ...engine.control.controller import StepController
 from ...engine.control.driver import adaptive_macro_steps
 from ...engine.methods import engine_method, get_spec
 from ...engine.run import Trajectory, simulate
-from ...errors import ParameterError, StepFailure
-from .errors import SceneError
+from ...errors import ParameterError
+from .errors import SceneError, UnitStepError
 
 __all__ = ["CONTROL_KEYS", "control_schema", "check_control", "scene_steps", "controlled_entries"]
 
@@ -127,9 +127,14 @@ def scene_steps(scene, problem, start, bound, accepted):
         iterations=c["iterations"],
     )
     traj = Trajectory(states, coupling, outputs, steps=len(steps.H))
-    if steps.status == "failed":
+    if steps.status == "failed":  # a step that could not be computed even at H_min, or too many steps
         traj.failed_at, traj.reason = len(states), steps.reason
-        traj.error = StepFailure(f"{scene.path}: coupling.control: no acceptable macro step: {steps.reason}")
+        at = f"t = {problem.t0 + steps.t[-1]:.12g} s"
+        traj.error = (
+            SceneError(f"{scene.path}: coupling.control: {steps.reason} (at {at}): raise H_min or the tolerance")
+            if steps.reason.startswith("more than")
+            else UnitStepError(f"no acceptable macro step at {at} down to H_min = {ctl.H_min:g} s: {steps.reason}")
+        )
     elif steps.status == "diverged":
         traj.diverged_at, traj.reason = len(states), steps.reason
     return traj, problem.t0 + steps.t, steps

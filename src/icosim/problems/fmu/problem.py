@@ -24,23 +24,16 @@ parameters mean what they mean for the built-in models (:func:`icosim.engine.met
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from fractions import Fraction
 
 import numpy as np
 
 from ...engine.graph import CouplingGraph
-from ...engine.lagrange import (
-    lagrange_coefficients,
-    lagrange_weights,
-    monomial_coefficients,
-    variable_corrector_nodes,
-    variable_predictor_nodes,
-)
+from ...engine.lagrange import monomial_coefficients
 from ...engine.problem import CosimulationProblem
 from ...engine.projection import joined_clusters
 from ...engine.residuals import Conditions
-from ...errors import ParameterError, StepFailure
+from ...errors import StepFailure
+from .checkpoint import Checkpoints
 from .errors import UnitStepError
 from .floats import gathered as _gathered
 from .floats import projected as _projected
@@ -69,7 +62,7 @@ class Coupling:
         return "force" if self.kind == "force" else "acceleration_input"
 
 
-class FmuCosimulation(CosimulationProblem):
+class FmuCosimulation(Checkpoints, CosimulationProblem):
     """FMU units joined by rigid joints (decompositions ff, fd, df, dd per joint).
 
     Parameters
@@ -133,9 +126,7 @@ class FmuCosimulation(CosimulationProblem):
         self._holds = ["start"] * n  # what each unit holds now: "start", id of an end array, or "scratch"
         self._ends = [{} for _ in range(n)]  # id(end) -> (end, FMU state) of this macro step's integrations
         self._committed = None
-        self._clock = (self.t0, 0)  # (T, N) at the last change of H: T_N = T + (N' - N) H
-        self._steps = None  # (H, past steps) of the last set_macro_step
-        self._kept = None  # the latest checkpoint: its FMU states are freed by the next one, not by join
+        self._clock, self._steps, self._kept = (self.t0, 0), None, None  # Checkpoints: T_N's origin, sizes, latest
         self._clusters = joined_clusters(graph, range(n))  # each unit is one body
         self._negatives = {}  # id of a coefficient matrix -> (it, its negative)
         self._masses = None  # the units' masses for the projection, as floats once asked
@@ -156,77 +147,7 @@ class FmuCosimulation(CosimulationProblem):
     @property
     def time(self) -> float:
         """``T_N``: the communication point the units stand at."""
-        t, n = self._clock
-        return t + (self.step_index - n) * self.H
-
-    def set_macro_step(self, H, past_steps=None):
-        """Size ``H`` of the next macro step and the sizes ``H_N-1, ..., H_N-k`` of the past ones (newest first;
-        None: equal steps), as :meth:`icosim.problems.pendulum.problem.PendulumCosimulation.set_macro_step`: the
-        extrapolation and interpolation polynomials through the actual nodes, the conditions' scale
-        ``(1, H, H^2)``; the kept Jacobians belong to the old step and are formed again."""
-        if not (isinstance(H, (int, float)) and math.isfinite(H) and H > 0):
-            raise ParameterError(f"H must be a finite number > 0, got {H!r}")
-        past = [float(H)] * self.k if past_steps is None else [float(h) for h in past_steps][: self.k]
-        if len(past) != self.k or not all(math.isfinite(h) and h > 0 for h in past):
-            raise ParameterError(f"need {self.k} past step sizes > 0, got {past_steps!r}")
-        steps = (float(H), tuple(past))
-        if steps == self._steps:
-            return
-        self._clock = (self.time, self.step_index)
-        self._steps, self.H = steps, float(H)
-        exact = [Fraction(h) for h in [self.H] + past]  # binary floats are exact rationals
-        pred = variable_predictor_nodes(exact[0], exact[1:])
-        corr = variable_corrector_nodes(exact[0], exact[1:])
-        self.w_pred = np.array([float(w) for w in lagrange_weights(pred, 1)], dtype=float)
-        self.C_pred = np.array(lagrange_coefficients(pred), dtype=float).tolist()
-        self.C_corr = np.array(lagrange_coefficients(corr), dtype=float).tolist()
-        self.condition_scale = (1.0, self.H, self.H**2)
-        self._jacobians.clear()
-        self._negatives.clear()
-
-    # -- the checkpoint: the units' FMU states at T_N and the problem's bookkeeping ---------------------------
-    def checkpoint(self):
-        """The problem at ``T_N``, between macro steps: each unit's saved FMU state there (held, not copied: no
-        FMI call), the step count, the time, the step sizes and the state it last returned.  Only the latest is
-        kept: taking one frees the FMU states of the one before; while one is kept no integration is final
-        (doStep's ``noSetFMUStatePriorToCurrentPoint`` stays false: a restore may follow)."""
-        if any(self._ends):
-            raise StepFailure("an FMU problem takes a checkpoint between macro steps, not within one")
-        kept = FmuCheckpoint(self.step_index, self._clock, self._steps, self.H, self._committed, tuple(self._start))
-        old, self._kept = self._kept, kept
-        if old is not None:
-            for i, unit in enumerate(self.units):
-                if old.starts[i] is not self._start[i]:
-                    unit.free(old.starts[i])
-        return kept
-
-    def restore(self, checkpoint):
-        """Back to ``checkpoint`` (the latest one taken; an older one's FMU states are freed): the units' saved
-        states at its ``T_N`` become their start again, this macro step's saved ends are freed."""
-        if checkpoint is not self._kept:
-            raise StepFailure(
-                "an FMU problem restores only its latest checkpoint (the FMU states of an older one are freed)"
-            )
-        for i, unit in enumerate(self.units):
-            for _, other in self._ends[i].values():
-                unit.free(other)
-            self._ends[i].clear()
-            if self._start[i] is not checkpoint.starts[i]:
-                unit.free(self._start[i])
-                self._start[i] = checkpoint.starts[i]
-                self._holds[i] = "scratch"
-            elif self._holds[i] != "start":
-                self._holds[i] = "scratch"
-        steps = checkpoint.steps or (checkpoint.H, (checkpoint.H,) * self.k)
-        if self._steps is not None and steps != self._steps:
-            self.set_macro_step(*steps)
-        self.step_index, self._clock, self._committed = checkpoint.step_index, checkpoint.clock, checkpoint.state
-        self._corrections = [0] * len(self.units)
-
-    def _free_start(self, i):
-        """Free unit ``i``'s saved start unless the kept checkpoint holds it."""
-        if self._kept is None or self._kept.starts[i] is not self._start[i]:
-            self.units[i].free(self._start[i])
+        return self._clock[0] + (self.step_index - self._clock[1]) * self.H  # T_0 + N H while H is fixed
 
     def initial_state(self):
         """The units' positions and velocities after initialisation, ``(2, 2 n_dim)``."""
@@ -523,20 +444,5 @@ class FmuCosimulation(CosimulationProblem):
             self._ends[i].clear()
             if self._start[i] is not None:
                 self._free_start(i)
-            if self._kept is not None and self._kept.starts[i] is not None:
-                unit.free(self._kept.starts[i])
-            self._start[i] = None
-        self._kept = None
-
-
-@dataclass(frozen=True)
-class FmuCheckpoint:
-    """:meth:`FmuCosimulation.checkpoint`: the step count ``N``, the time's reference, the step sizes set, the state
-    returned at ``T_N`` and each unit's saved FMU state there."""
-
-    step_index: int
-    clock: tuple
-    steps: tuple | None
-    H: float
-    state: object
-    starts: tuple
+                self._start[i] = None
+        self._release()
