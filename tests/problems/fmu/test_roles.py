@@ -62,7 +62,7 @@ def test_the_wheel_in_a_kinematic_role_is_refused_as_compliant(capsys, tmp_path)
     role = found["role"]
     assert status == 2 and role["verdict"] == "refused", role
     assert "the input does not prescribe the motion of the point it outputs" in role["detail"]
-    assert "a compliant unit (velocity in, force out), which needs signal (power-bond) coupling" in role["detail"]
+    assert "a compliant unit (velocity in, force out): join it as a drive through its velocity" in role["detail"]
     numbers = re.search(
         r"moves by ([-+.\d]+) m/s\^2 .* its drive force moves by ([-+.\d]+) N, ([-+.\d]+) kg", role["detail"]
     )

@@ -9,7 +9,8 @@
 * **responds** -- the position and velocity follow the input at all, the same way;
 * **feedthrough** -- does the coupling output (acceleration of a force-driven unit, the drive's force of a
   kinematically driven one) follow the coupling input without a step, as the ``ModelStructure`` declares or
-  not; and does it respond at all, after a step.  The macro step and the identification use what the unit does;
+  not (a drive's force: its point's position or velocity input too, :mod:`icosim.problems.fmu.drives`); and does
+  it respond at all, after a step.  The macro step and the identification use what the unit does;
 * **direction** -- the sign of that response: with the scene's ``force_sign``s, every joint's multiplier must
   act on its two units with opposite signs (:func:`joint_direction`; a unit whose input acts against the
   physical force needs the other ``force_sign``); a kinematically driven unit must move the way its prescribed
@@ -27,7 +28,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import motion
+from .drives import KINEMATICS, drive_rows, is_drive, prescribed_end
 from .errors import FmuError
+from .findings import Finding, relative
+from .motion import MOVE_SUBSTEPS
 from .roles import kinematic_fit
 
 __all__ = [
@@ -42,17 +47,6 @@ __all__ = [
 ]
 
 
-@dataclass(frozen=True)
-class Finding:
-    """One check of one unit: ``verdict`` is ``pass``, ``refused`` or ``note``."""
-
-    check: str
-    verdict: str
-    detail: str
-    fix: str = ""
-    key: str = ""  # the scene key a refusal is about, where it is one
-
-
 @dataclass
 class Inspection:
     """What was measured on a unit and what was found."""
@@ -63,6 +57,7 @@ class Inspection:
     feedthrough: bool = True
     declared: bool | None = None
     gain: float = float("nan")  # d output / d input: algebraic where the unit has feedthrough, else after a step
+    follows_point: bool = False  # a drive's force follows its point's position or velocity without a step
 
     @property
     def refused(self) -> list:
@@ -80,18 +75,21 @@ def declared_feedthrough(md, output_variable, input_variable):
     return None
 
 
-def _probe_outputs(unit, kind):
-    """Position, velocity and the coupling output as the unit stands (SI), ``(3, components)``."""
+def _probe_outputs(unit, kind, point=None):
+    """Position, velocity and the coupling output as the unit stands (SI), ``(3, components)``; a drive's
+    position and velocity where it has no outputs for them are ``point`` (prescribed)."""
     out = "acceleration" if kind == "force" else "reaction_force"
-    return unit.get(("position", "velocity", out))
+    if point is None:
+        return unit.get(("position", "velocity", out))
+    return np.stack(
+        [unit.get((k,))[0] if k in unit.elements else np.asarray(p) for k, p in zip(KINEMATICS, point)]
+        + [unit.get((out,))[0]]
+    )
 
 
 #: The relative difference accepted by default between a step and the same step repeated from a restored state
 #: (a subsystem's ``rollback_tolerance`` replaces it): see :func:`rollback_tolerance`.
 ROLLBACK_TOLERANCE = 1e-12
-
-#: Sub-steps in which the movement check takes a probing step again.
-MOVE_SUBSTEPS = 2
 
 
 def rollback_tolerance(sub) -> float:
@@ -107,79 +105,110 @@ def rollback_tolerance(sub) -> float:
     return ROLLBACK_TOLERANCE if value is None else float(value)
 
 
-def _relative(a, b) -> np.ndarray:
-    """``|a - b| / max(|a|, |b|)`` elementwise (0 where both are 0, inf where either is not finite)."""
-    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    size = np.maximum(np.abs(a), np.abs(b))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        d = np.where(a == b, 0.0, np.abs(a - b) / size)
-    return np.where(np.isfinite(a) & np.isfinite(b), d, np.inf)
-
-
 def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=ROLLBACK_TOLERANCE) -> Inspection:
     """Measure ``unit`` at its start state and check it (the unit is left at its start, its input at zero).
 
     ``kind`` is ``"force"`` or ``"kinematic"``; ``force_sign`` the scene's.  Each component of a vector joint is
     probed on its own; the component that responds most gives the unit's gain (its sign is the unit's own input
     convention; :func:`joint_direction` checks the two units' together).  A unit whose step depends on doStep's
-    ``noSetFMUStatePriorToCurrentPoint`` is stepped with ``true`` from here on (:attr:`Unit.always_final`)."""
-    key = "force" if kind == "force" else "acceleration_input"
+    ``noSetFMUStatePriorToCurrentPoint`` is stepped with ``true`` from here on (:attr:`Unit.always_final`).  A
+    drive (:func:`~icosim.problems.fmu.drives.is_drive`) is probed with its point starting at rest at 0, the
+    point's position and velocity where it has no outputs for them being the prescribed ones."""
+    drive = is_drive(unit, kind)
+    key = "force" if kind == "force" else "drive" if drive else "acceleration_input"
     out = "acceleration" if kind == "force" else "reaction_force"
     found = Inspection(unit.label, kind)
-    in_var, out_var = unit.elements[key][0].variable, unit.elements[out][0].variable
+    out_var = unit.elements[out][0].variable
+    # a drive: the acceleration where it has that input, else the input nearest to it (velocity, position)
+    in_var = unit.elements[key][-len(unit.elements[out])].variable
     found.declared = declared_feedthrough(unit.md, out_var, in_var)
-    n = len(unit.elements[key])
+    n = len(unit.elements[out])
     zero = np.zeros(n)
+    rest = [0.0] * n  # a drive's point at rest at 0 while it is probed
+    at_rest = (rest, rest)
+
+    def put(u):
+        if drive:
+            values = {"position_input": rest, "velocity_input": rest, "acceleration_input": list(u)}
+            unit.put("drive", [q for k in unit.drive_keys for q in values[k]])
+        else:
+            unit.set(key, u)
+
+    def outputs(point=at_rest):
+        """The probed outputs; a drive's point where it has no outputs for it: ``point`` (prescribed)."""
+        return _probe_outputs(unit, kind, point if drive else None)
+
+    def advance(u, t, h, point=at_rest, final=False):
+        """One step of ``h`` from ``t`` with the input ``u`` held; the driven point after it (a drive's)."""
+        if not drive:
+            unit.step(key, [u], t, h, step_index=0, final=final)
+            return point
+        rows = np.array(drive_rows(unit.drive_keys, [list(u)], *point, h))
+        unit.step(key, rows, t, h, step_index=0, final=final)
+        return tuple(prescribed_end([list(u)], *point, h)[:2])
+
     unit_inputs = np.eye(n)  # 1 N or 1 m/s^2 on one component: finite whatever the unit's mass
-    moving = ("position", "velocity") + (("acceleration",) if "acceleration" in unit.elements else ())
+    moving = tuple(k for k in KINEMATICS if k in unit.elements)
+    # the motion checks read the unit's own position and velocity outputs (a drive without them has none to check)
+    checks_motion = moving[:2] == ("position", "velocity")
     start = unit.save()
     algebraic, step_gain, velocity_gain, position_gain = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
     probes = []  # (what, outputs at the start, after one step of H, after the same interval in sub-steps)
     try:
-        flag = _flag_probe(unit, key, unit_inputs[0], start, t0, H, rollback_tolerance)
-        unit.set(key, zero)
-        base = _probe_outputs(unit, kind)
-        base_moving = unit.get(moving)
+        flag = motion.flag_probe(unit, advance, outputs, unit_inputs[0], start, t0, H, rollback_tolerance)
+        put(zero)
+        base = outputs()
+        base_moving = unit.get(moving) if checks_motion else None
         pushed_moving = []
         for c in range(n):
-            unit.set(key, unit_inputs[c])
-            algebraic[c] = _probe_outputs(unit, kind)[2, c] - base[2, c]
-            pushed_moving.append(unit.get(moving))
-        unit.set(key, zero)
+            put(unit_inputs[c])
+            algebraic[c] = outputs()[2, c] - base[2, c]
+            pushed_moving.append(unit.get(moving) if checks_motion else None)
+        point = 0.0  # a drive: its force's response to its point's position or velocity input, without a step
+        for moved in ("position_input", "velocity_input") if drive else ():
+            if moved in unit.drive_keys:
+                values = {"position_input": rest, "velocity_input": rest, "acceleration_input": rest, moved: [1.0] * n}
+                unit.put("drive", [q for k in unit.drive_keys for q in values[k]])
+                point = max(point, float(np.max(np.abs(unit.get((out,))[0] - base[2]))))
+        put(zero)
 
         def stepped(u, parts=1):
             unit.restore(start)
+            at = at_rest
             for j in range(parts):
-                unit.step(key, [u], t0 + j * H / parts, H / parts, step_index=0)
-            return _probe_outputs(unit, kind), unit.get(moving)
+                at = advance(u, t0 + j * H / parts, H / parts, at)
+            return outputs(at), (unit.get(moving) if checks_motion else None)
 
         def twice(u):  # two steps: an explicit integration moves the position only in the second
             unit.restore(start)
-            unit.step(key, [u], t0, H, step_index=0)
-            unit.step(key, [u], t0 + H, H, step_index=0)
-            return unit.get(("position",))[0]
+            at = advance(u, t0, H)
+            return outputs(advance(u, t0 + H, H, at))[0]
 
         first, first_moving = stepped(zero)
         again, _ = stepped(zero)
         still = twice(zero)
-        probes.append(("without input", base_moving, first_moving, stepped(zero, MOVE_SUBSTEPS)[1]))
+        if checks_motion:
+            probes.append(("without input", base_moving, first_moving, stepped(zero, MOVE_SUBSTEPS)[1]))
         for c in range(n):
             pushed, pushed_end = stepped(unit_inputs[c])
             step_gain[c] = pushed[2, c] - first[2, c]
             velocity_gain[c] = pushed[1, c] - first[1, c]
             position_gain[c] = twice(unit_inputs[c])[c] - still[c]
-            what = "with a unit input" + (f" on component {c + 1}" if n > 1 else "")
-            probes.append((what, pushed_moving[c], pushed_end, stepped(unit_inputs[c], MOVE_SUBSTEPS)[1]))
+            if checks_motion:
+                what = "with a unit input" + (f" on component {c + 1}" if n > 1 else "")
+                probes.append((what, pushed_moving[c], pushed_end, stepped(unit_inputs[c], MOVE_SUBSTEPS)[1]))
         unit.restore(start)
-        unit.set(key, zero)
-        back = _probe_outputs(unit, kind)
+        put(zero)
+        back = outputs()
     finally:
         unit.restore(start)
         unit.free(start)
     scale = np.maximum(np.abs(base[2]), 1e-300)
     responds = np.isfinite(algebraic) & (np.abs(algebraic) > 1e-12 * scale)
-    found.feedthrough = bool(responds.any())
-    gains = np.where(responds, algebraic, step_gain) if found.feedthrough else step_gain
+    # a drive whose force follows its point at once has current outputs: read at the step's end as they are
+    found.follows_point = point > 1e-12 * float(np.max(scale))
+    found.feedthrough = bool(responds.any()) or found.follows_point
+    gains = np.where(responds, algebraic, step_gain) if responds.any() else step_gain
     c = int(np.argmax(np.abs(np.nan_to_num(gains))))
     found.gain = float(gains[c])
     rollback = _not_finite(unit, kind, base, first, again, back) or _rollback(
@@ -201,8 +230,10 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=ROLLBA
     found.findings.append(_direction(kind, found, force_sign, float(velocity_gain[c])))
     if kind == "kinematic":
         found.findings.append(Finding("role", *kinematic_fit(unit, H=H, t0=t0)))
-    found.findings.append(_moves(unit, H, moving, probes, rollback_tolerance))
-    found.findings.append(_responds(unit, kind, key, position_gain, velocity_gain))
+    if checks_motion:
+        found.findings.append(motion.moves(unit, H, moving, probes, rollback_tolerance))
+        if not drive:  # a drive's point moves as the master prescribes it
+            found.findings.append(motion.responds(unit, kind, key, position_gain, velocity_gain))
     found.findings.append(_units(unit))
     found.findings.append(_starts(unit))
     if unit.description_problems:
@@ -211,39 +242,6 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=ROLLBA
             Finding("description", "note", f"fmpy's validation of its modelDescription.xml reports: {problems}")
         )
     return found
-
-
-def _flag_probe(unit, key, push, start, t0, H, tol) -> Finding | None:
-    """Does the unit's step depend on doStep's ``noSetFMUStatePriorToCurrentPoint``?  From the restored start,
-    a step of ``H`` (flag true) and a second one taken with each value of the flag (the same history before it,
-    the input ``push`` held: the unit moves), and the first pair again (a unit that does not repeat it is
-    not restored, which the rollback check names).  FMI 2.0 (section 4.2.2) and 3.0 say the flag only tells whether
-    a state before the current point may later be restored; a unit that reads false as "reject the last step
-    and integrate it again from its start" stands still under a master that rolls back.  None: it does not
-    depend on it; else a note, and the unit is stepped with true on every step (:attr:`Unit.always_final`)."""
-    ends = []
-    for final in (True, False, True):
-        unit.restore(start)
-        unit.step(key, [push], t0, H, step_index=0, final=True)
-        unit.step(key, [push], t0 + H, H, step_index=0, final=final)
-        ends.append(unit.get(("position", "velocity")))
-    unit.restore(start)
-    if np.any(_relative(ends[0], ends[2]) > tol):
-        return None  # the same steps do not repeat: a restore that fails, which the rollback check names
-    ends = {True: ends[0], False: ends[1]}
-    d = _relative(ends[True], ends[False])
-    if not np.any(d > tol):
-        return None
-    unit.always_final = True
-    row, col = (int(i) for i in np.argwhere(d > tol)[0])
-    name = unit.elements[("position", "velocity")[row]][col].name
-    return Finding(
-        "doStep flag",
-        "note",
-        f"its step depends on doStep's noSetFMUStatePriorToCurrentPoint (the standard gives it no such meaning): "
-        f"after two steps of {H:g} s its {name} is {float(ends[True][row, col])!r} with true on the second, "
-        f"{float(ends[False][row, col])!r} with false; it is stepped with true on every step",
-    )
 
 
 def _not_finite(unit, kind, base, first, again, back) -> Finding | None:
@@ -273,7 +271,7 @@ def _rollback(unit, first, again, base, back, tol) -> Finding:
     names = ("position", "velocity", "coupling output")
     worst, where = 0.0, None
     for what, a, b in (("after a repeated step", first, again), ("after restoring the saved state", base, back)):
-        d = _relative(a, b)
+        d = relative(a, b)
         if d.size and float(np.max(d)) > worst:
             worst = float(np.max(d))
             if where is None and worst > tol:  # the first that differs is named
@@ -297,117 +295,17 @@ def _rollback(unit, first, again, base, back, tol) -> Finding:
     return Finding("rollback", "pass", f"a restored step repeats within {worst:.3g} relative (tolerance {tol:g}){flag}")
 
 
-def _moves(unit, H, moving, probes, tol) -> Finding:
-    """Does the unit move as its outputs say?  Over each probing step of ``H`` (outputs ``s`` at its start,
-    ``e`` at its end): the position's change against the trapezoid integral of the velocity, the velocity's
-    against the acceleration's; and the step against the same interval taken in :data:`MOVE_SUBSTEPS`
-    sub-steps.
-
-    The tolerance: a consistent one-step integration of any order changes ``x`` by ``H v(xi)`` for some ``xi``
-    in the step (the mean value theorem for the exact solution; explicit and implicit Euler at the step's two
-    ends), so over a step short enough that ``v`` is monotone the change lies between ``H v(s)`` and ``H v(e)``
-    and departs from the trapezoid by at most ``H |v(e) - v(s)| / 2``; twice that is allowed, ``H |v(e) -
-    v(s)|``, plus the unit's relative tolerance ``tol`` (its rollback tolerance, at least 16 rounding units) of
-    the quantity's scale ``max |x| + H max |v|`` over the step and the components (for the velocity ``max |x| / H
-    + max |v| + H max |a|``: a velocity is known to the rounding of the position it moves).  Sub-steps are held to the same bound (two first-order integrations of one interval differ
-    by at most ``H^2 |a| / 2``).  A unit that does not integrate (stands still, or moves every other step) is
-    off by the whole change."""
-    rtol = max(float(tol), 16 * np.finfo(float).eps)
-    pairs = [(0, 1)] + ([(1, 2)] if len(moving) == 3 else [])
-    worst = None
-    for what, s, e, sub in probes:
-        for lo, hi in pairs:  # the quantity and its derivative
-            # the scale of every component and level (a velocity at rest beside a position of 1 m is known to the
-            # rounding of that position over H, not to 0)
-            size = sum(np.max(np.abs([s[j], e[j], sub[j]])) * H ** (j - lo) for j in range(hi + 1))
-            floor = rtol * size
-            for c in range(s.shape[1]):
-                x0, x1, d0, d1 = s[lo, c], e[lo, c], s[hi, c], e[hi, c]
-                trapezoid = H * (d0 + d1) / 2
-                allowed = H * abs(d1 - d0) + floor
-                for check, measured, against in (
-                    ("trapezoid", x1 - x0, trapezoid),
-                    ("sub-steps", sub[lo, c] - x0, x1 - x0),
-                ):
-                    defect = abs(measured - against)
-                    if not defect <= allowed:
-                        excess = defect / allowed if allowed > 0 else np.inf
-                        if worst is None or excess > worst[0]:
-                            worst = (excess, what, lo, hi, c, check, measured, against, allowed, d0, d1)
-    if worst is None:
-        return Finding(
-            "moves",
-            "pass",
-            f"over a step of {H:g} s its position changes as its velocity integrates"
-            + (", its velocity as its acceleration" if len(moving) == 3 else "")
-            + f" (trapezoid), and {MOVE_SUBSTEPS} sub-steps agree",
-        )
-    _, what, lo, hi, c, check, measured, against, allowed, d0, d1 = worst
-    quantity, rate = unit.elements[moving[lo]][c].name, unit.elements[moving[hi]][c].name
-    if check == "trapezoid":
-        said = (
-            f"over a step of {H:g} s {what}, its {moving[lo]} {quantity} changes by {measured:.6g} but the "
-            f"trapezoid integral of its {moving[hi]} {rate} ({d0:.6g} to {d1:.6g}) is {against:.6g}"
-        )
-    else:
-        said = (
-            f"over {H:g} s {what}, its {moving[lo]} {quantity} changes by {against:.6g} in one step but by "
-            f"{measured:.6g} in {MOVE_SUBSTEPS} sub-steps (sub-step check)"
-        )
-    return Finding(
-        "moves",
-        "refused",
-        f"{said}: off by {abs(measured - against):.3g}, more than the {allowed:.3g} a consistent integration "
-        "allows: the unit does not move as its outputs say",
-        "a unit with a fixed internal step larger than the macro step, or one that does not integrate over the "
-        "step it is given, cannot be coupled at this H: take H a multiple of the unit's internal step, or check "
-        f"that {moving[lo]} and {moving[hi]} name the unit's {moving[lo]} and its derivative",
-    )
-
-
-def _responds(unit, kind, key, position_gain, velocity_gain) -> Finding:
-    """With a unit input, the velocity must have moved after a step and the position after two (an explicit
-    integration moves it only in the second), both the same way: a gain of exactly zero is a variable that does
-    not follow the input, e.g. a constant named as the position."""
-    per = "N" if kind == "force" else "m/s^2"
-    when = {"position": "two steps", "velocity": "a step"}
-    for name, gains in (("position", position_gain), ("velocity", velocity_gain)):
-        c = int(np.argmax(np.abs(np.nan_to_num(gains))))
-        if not np.isfinite(gains[c]) or gains[c] == 0:
-            var = unit.elements[name][0].name
-            return Finding(
-                "responds",
-                "refused",
-                f"its {name} {var} does not respond to its {key} ({float(gains[c])!r} {_unit_of(name)} per {per} "
-                f"after {when[name]}): it is not the {name} of the body the input drives",
-                f"name the unit's {name} output as {name}",
-                name,
-            )
-    bad = np.sign(position_gain) * np.sign(velocity_gain) < 0
-    if bad.any():
-        c = int(np.argmax(bad))
-        return Finding(
-            "responds",
-            "refused",
-            f"its position moves by {position_gain[c]:+.3g} m in two steps but its velocity by "
-            f"{velocity_gain[c]:+.3g} m/s in one, per {per} of its input: the outputs contradict each other",
-        )
-    return Finding(
-        "responds",
-        "pass",
-        f"its position moves by {position_gain[0]:+.3g} m in two steps, its velocity by {velocity_gain[0]:+.3g} "
-        f"m/s in one, per {per} of its input",
-    )
-
-
-def _unit_of(name) -> str:
-    return {"position": "m", "velocity": "m/s"}[name]
-
-
 def _feedthrough(kind, found, step_gain, velocity_gain) -> Finding:
     out = "acceleration" if kind == "force" else "drive's force"
     inp = "force input" if kind == "force" else "acceleration input"
     said = {True: "declares it", False: "declares none", None: "does not say"}[found.declared]
+    if found.follows_point and kind == "kinematic":
+        return Finding(
+            "feedthrough",
+            "pass",
+            f"its {out} follows its point's position or velocity input without a "
+            "step (its acceleration input at the step's end: only through the motion it prescribes)",
+        )
     if found.feedthrough:
         return Finding("feedthrough", "pass", f"its {out} follows its {inp} without a step (ModelStructure {said})")
     responds = abs(step_gain) > 0 or abs(velocity_gain) > 0

@@ -37,6 +37,8 @@ ROLE_QUANTITIES = {
     "velocity": ("a velocity", _VELOCITY),
     "acceleration": ("an acceleration", _ACCELERATION),
     "acceleration_input": ("an acceleration", _ACCELERATION),
+    "position_input": ("a length", _LENGTH),
+    "velocity_input": ("a velocity", _VELOCITY),
     "force": ("a force", _FORCE),
     "reaction_force": ("a force", _FORCE),
     "set_position": ("a length", _LENGTH),

@@ -28,6 +28,7 @@ from ...engine.schemes import JACOBI, GaussSeidel, Scheme
 from ...engine.spectral.radius import spectral_radius_float64
 from ...engine.stages import plan
 from ..linear.chain import Chain, ChainFamily, ChainSegment
+from .drives import KINEMATICS
 from .errors import FmuError, SceneError
 from .run import open_units
 
@@ -194,6 +195,17 @@ def predict_scene(scene) -> dict:
 
     c = scene.coupling
     H = float(c["H"])
+    graph = scene.graph()
+    for i, (name, sub) in enumerate(scene.data["subsystems"].items()):
+        own = [k for k in KINEMATICS if k in sub]
+        if graph.port_kind(i, 0) == "kinematic" and (
+            len(own) < 3 or "position_input" in sub or "velocity_input" in sub
+        ):
+            raise SceneError(
+                f"{scene.path}: subsystems.{name}: --predict identifies single-mass oscillators driven at their mass "
+                f"by an acceleration input; {name} is a drive with the inputs or outputs of another kind of unit "
+                "(docs/fmi.md, drives by position, velocity and acceleration): run the scene without --predict"
+            )
     if any(isinstance(sub["position"], list) and len(sub["position"]) > 1 for sub in scene.data["subsystems"].values()):
         raise SceneError(
             f"{scene.path}: --predict identifies single-mass oscillators (one position per unit); this scene's "

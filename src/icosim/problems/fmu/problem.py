@@ -16,6 +16,9 @@ macro step sees are the observable part of it:
   force on unit ``i`` in the graph's sense: the sum of its joints' ``+-lambda`` for a force-driven unit,
   ``force_sign * reaction_force`` for a kinematically driven one.
 
+A kinematically driven unit that takes its point's position or velocity, or has no outputs for them, is a drive
+(:mod:`icosim.problems.fmu.drives`): the problem prescribes its point's motion.
+
 A unit's input is ``force_sign`` times the force the graph gives it (:class:`Coupling`).  The constraint
 residuals are those of the engine's dimensionless setting (``g``, ``H g'``, ``H^2 g''``), so the method
 parameters mean what they mean for the built-in models (:func:`icosim.engine.methods.engine_method`).
@@ -34,6 +37,7 @@ from ...engine.projection import joined_clusters
 from ...engine.residuals import Conditions
 from ...errors import StepFailure
 from .checkpoint import Checkpoints
+from .drives import DrivenPoints
 from .errors import UnitStepError
 from .floats import gathered as _gathered
 from .floats import projected as _projected
@@ -62,7 +66,7 @@ class Coupling:
         return "force" if self.kind == "force" else "acceleration_input"
 
 
-class FmuCosimulation(Checkpoints, CosimulationProblem):
+class FmuCosimulation(Checkpoints, DrivenPoints, CosimulationProblem):
     """FMU units joined by rigid joints (decompositions ff, fd, df, dd per joint).
 
     Parameters
@@ -96,7 +100,7 @@ class FmuCosimulation(Checkpoints, CosimulationProblem):
         iterations=1,
     ):
         self.units, self.couplings = tuple(units), tuple(couplings)
-        dims = {len(u.elements["position"]) for u in self.units}
+        dims = {len(u.elements.get("position") or u.elements["reaction_force"]) for u in self.units}
         if len(dims) != 1:
             raise ValueError("every unit must name as many position components")
         #: components of the joint's position (1: a point on a line; 2: a joint in the plane)
@@ -142,6 +146,7 @@ class FmuCosimulation(Checkpoints, CosimulationProblem):
             None if t is None or len(t) != 1 or len(t[0]) != 2 else (*t[0][0], *t[0][1]) for t in self._terms
         ]
         self._history_rows: tuple = (None, None)  # the last coupling history and its rows of floats
+        self._drives = self._drive_entries()
 
     # -- time and the initial point -----------------------------------------------------------------
     @property
@@ -150,8 +155,9 @@ class FmuCosimulation(Checkpoints, CosimulationProblem):
         return self._clock[0] + (self.step_index - self._clock[1]) * self.H  # T_0 + N H while H is fixed
 
     def initial_state(self):
-        """The units' positions and velocities after initialisation, ``(2, 2 n_dim)``."""
-        self._committed = np.stack([u.get(("position", "velocity")).ravel() for u in self.units])
+        """The units' positions and velocities after initialisation, ``(2, 2 n_dim)`` (a drive's point:
+        :meth:`~icosim.problems.fmu.drives.DrivenPoints._start_points`)."""
+        self._committed = np.stack(self._start_points())
         return self._committed
 
     def initial_history(self, e0=None):
@@ -190,6 +196,8 @@ class FmuCosimulation(Checkpoints, CosimulationProblem):
     def _start_outputs(self, i):
         """Unit ``i``'s position and velocity at ``T_0``, ``(2, n_dim)``."""
         self._to_start(i)
+        if self._drives[i] is not None:
+            return np.asarray(self._committed[i], dtype=float).reshape(2, self.n_dim)
         return self.units[i].get(("position", "velocity"))
 
     def _start_conditions(self, e, starts, conditions):
@@ -197,7 +205,9 @@ class FmuCosimulation(Checkpoints, CosimulationProblem):
         ys = []
         for i, c in enumerate(self.couplings):
             u = self.inputs(i, e)
-            if c.feedthrough:
+            if c.feedthrough and self._drives[i] is not None:
+                y = self._drive_at_start(i, starts[i], u)
+            elif c.feedthrough:
                 self._to_start(i)
                 self.units[i].set(c.input_key, self._scale[i] * u)
                 y = self._outputs(i, np.asarray(u, dtype=float).tolist())[1]
@@ -211,6 +221,9 @@ class FmuCosimulation(Checkpoints, CosimulationProblem):
     def _held_step(self, i, u, h):
         """Unit ``i``'s outputs after a step of ``h`` from its start with the input held at ``u``."""
         self._to_start(i)
+        if self._drives[i] is not None:
+            self._holds[i] = "scratch"
+            return self._drive_step(i, [np.asarray(u, dtype=float).tolist()], h, 0)[1]
         self.units[i].step(self.couplings[i].input_key, [self._scale[i] * u], self.time, h, step_index=0)
         self._holds[i] = "scratch"
         return self._outputs(i, np.asarray(u, dtype=float).tolist())[1]
@@ -261,6 +274,9 @@ class FmuCosimulation(Checkpoints, CosimulationProblem):
                     row = [acc + w * u for acc, u in zip(row, sample)]
                 coef.append(row)
         self._holds[i] = "scratch"  # from here on: a refused call leaves the unit in no known state
+        if self._drives[i] is not None:
+            self.work.subsystem_integrations += 1
+            return self._drive_step(i, coef, self.H, self.step_index + 1, restore)
         values = unit.advance(
             self.couplings[i].input_key, coef if C_s is not None else [[s * v for v in row] for row in coef],
             self.time, self.H, step_index=self.step_index + 1, restore=restore, read=self._output_keys(i),
@@ -278,6 +294,8 @@ class FmuCosimulation(Checkpoints, CosimulationProblem):
         return kept[1]
 
     def _output_keys(self, i):
+        if self._drives[i] is not None:
+            return self._drives[i][1] + ("reaction_force",)
         return _FORCE_OUTPUTS if self.couplings[i].kind == "force" else _KINEMATIC_OUTPUTS
 
     def _outputs(self, i, u1, values=None):
@@ -302,7 +320,7 @@ class FmuCosimulation(Checkpoints, CosimulationProblem):
         unit = self.units[i]
         keys = _FORCE_OUTPUTS if self.couplings[i].kind == "force" else _KINEMATIC_OUTPUTS
         row, col = (int(j) for j in np.argwhere(~np.isfinite(values))[0])
-        name = unit.elements[keys[row]][col].name
+        name = unit.elements[keys[row]][col].name if keys[row] in unit.elements else f"(prescribed) {keys[row]}"
         raise UnitStepError(
             f"unit {unit.label} returned {keys[row]} {name} = {float(values[row, col])!r} in macro step {self.step_index + 1} "
             f"(t = {self.time:.12g} s) although its input was finite{unit.said()}"
@@ -318,6 +336,8 @@ class FmuCosimulation(Checkpoints, CosimulationProblem):
         if self._holds[i] != id(end):
             self.units[i].restore(self._ends[i][id(end)][1])
             self._holds[i] = id(end)
+        if self._drives[i] is not None:  # the point stands where the end state has it; its acceleration is u1
+            return self._drive_outputs(i, list(end[: self.n_dim]), list(end[self.n_dim :]), u1)[1]
         s = self._scale[i]
         self.units[i].put(self.couplings[i].input_key, u1 if s == 1.0 else [s * v for v in u1])  # 1 * v is v
         return self._outputs(i, u1)[1]
@@ -423,14 +443,15 @@ class FmuCosimulation(Checkpoints, CosimulationProblem):
     def project(self, state):
         """Mass-weighted projection of positions and velocities (Eq. 30), written into the units."""
         m = self._masses
-        if m is None:
-            m = self._masses = [float(c.mass) for c in self.couplings]
+        if m is None:  # a drive without its own position has no inertia there: its point follows the joint
+            m = self._masses = [0.0 if c.mass is None else float(c.mass) for c in self.couplings]
         rows = _projected(self._clusters, m, np.asarray(state, dtype=float).tolist())
         n = self.n_dim
         for i, unit in enumerate(self.units):
             self._to_start(i)
-            unit.put("set_position", rows[i][:n])
-            unit.put("set_velocity", rows[i][n:])
+            for key, values in (("set_position", rows[i][:n]), ("set_velocity", rows[i][n:])):
+                if key in unit.elements:  # a drive's point without its outputs is the committed state
+                    unit.put(key, values)
             self._free_start(i)
             self._start[i] = unit.save()
         self._committed = np.array(rows)

@@ -1,7 +1,8 @@
 """Does a unit fit the role the scene gives it?  A force-driven unit takes the force on its coupling point and
 outputs that point's motion; a kinematically driven unit takes the point's acceleration and outputs the force its
 drive exerts; a compliant unit takes a velocity and returns a force (OSP's Wheel: ``in_vel`` in,
-``out_spring_damper_f`` out), which needs signal (power-bond) coupling, which icosim does not yet offer for it.
+``out_spring_damper_f`` out), which is joined as a drive through its velocity (``velocity_input``), or by signal
+(power-bond) coupling, which icosim does not yet offer.
 
 What separates them (docs/fmi.md, roles):
 
@@ -28,8 +29,9 @@ __all__ = ["velocity_input", "kinematic_fit", "COMPLIANT"]
 
 #: What a compliant unit is and why it is refused.
 COMPLIANT = (
-    "a compliant unit (velocity in, force out), which needs signal (power-bond) coupling: icosim does not yet offer "
-    "it for such a unit"
+    "a compliant unit (velocity in, force out): join it as a drive through its velocity (velocity_input: its "
+    "velocity input, reaction_force: the force it returns, as the kinematically driven side of the joint), or by "
+    "signal (power-bond) coupling, which icosim does not yet offer"
 )
 
 # the FMI quantity attribute (Modelica's names) that says a variable is a velocity

@@ -87,7 +87,9 @@ def fmu_file(path, cache=None):
 
 def _needed(kind, projects):
     keys = {"position", "velocity", "acceleration"}
-    keys |= {"force"} if kind == "force" else {"acceleration_input", "reaction_force"}
+    keys |= (
+        {"force"} if kind == "force" else {"acceleration_input", "reaction_force", "position_input", "velocity_input"}
+    )
     return keys | ({"set_position", "set_velocity"} if projects else set())
 
 

@@ -48,6 +48,7 @@ from ...engine.schemes import SCHEMES, GaussSeidel, Scheme, get_scheme
 from ...errors import ParameterError
 from .build import is_source_dir
 from .controlled import check_control, control_schema
+from .drives import role_keys
 from .errors import SceneError
 from .joints import NUMBERED, ORDERED_SCHEMES, check_order, driven_by, graph_message, joint_schema, scene_joints
 from .variables import quoted_number_hint
@@ -58,12 +59,14 @@ __all__ = ["Scene", "load_scene", "scene_schema", "SUBSYSTEM_KEYS", "JOINT_KEYS"
 SUBSYSTEM_KEYS = {
     "fmu": "the unit: an .fmu file or a source directory, relative to the scene file",
     "start": "start values of the unit's parameters and inputs",
-    "position": "name of the position output",
-    "velocity": "name of the velocity output",
-    "acceleration": "name of the acceleration output",
+    "position": "name of the position output (a drive without it: its point's position is the prescribed one)",
+    "velocity": "name of the velocity output (a drive without it: its point's velocity is the prescribed one)",
+    "acceleration": "name of the acceleration output (a drive without it: the prescribed acceleration)",
     "force": "name of the coupling-force input (a force-driven subsystem)",
     "acceleration_input": "name of the prescribed-acceleration input (a kinematically driven subsystem)",
     "reaction_force": "name of the output of the force the drive exerts (a kinematically driven subsystem)",
+    "position_input": "name of the prescribed-position input (a kinematically driven subsystem: a drive)",
+    "velocity_input": "name of the prescribed-velocity input (a kinematically driven subsystem: a drive)",
     "force_sign": "+1 or -1: with joints, the unit's input is force_sign times the sum of its joints' multipliers "
     "(+lambda_j on a joint's first subsystem, -lambda_j on its second); without joints, the coupling force on "
     "this subsystem is force_sign * lambda",
@@ -132,7 +135,7 @@ def scene_schema() -> dict:
     sub = {
         "type": "object",
         "additionalProperties": False,
-        "required": ["fmu", "position", "velocity", "acceleration", "force_sign"],
+        "required": ["fmu", "force_sign"],  # the variables each kind needs: load_scene
         "properties": {
             "fmu": name,
             "start": {
@@ -379,21 +382,19 @@ def load_scene(path) -> Scene:
         )
     for i, (name, sub) in enumerate(data["subsystems"].items()):
         kind = graph.port_kind(i, 0)
-        need = ("force",) if kind == "force" else ("acceleration_input", "reaction_force")
         projects = method.projection or data.get("initial") == "project"
-        if projects:
-            need += ("mass", "set_position", "set_velocity")
+        need = role_keys(path, data, graph, i, spec.name, projects, driven_by(scene, graph, i))
         for key in need:
             if key not in sub:
                 why = (
                     f"subsystem {name} is {kind}-driven in {driven_by(scene, graph, i)}"
-                    if key in ("force", "acceleration_input", "reaction_force")
+                    if key not in ("mass", "set_position", "set_velocity")
                     else f"method {spec.name} projects"
                     if method.projection
                     else "initial: project moves the units onto the joint"
                 )
                 _fail(path, f"subsystems.{name}.{key}", f"required: {why} ({SUBSYSTEM_KEYS[key]})")
-        if projects and isinstance(sub["position"], list) and len(sub["position"]) > 1:
+        if projects and isinstance(sub.get("position"), list) and len(sub["position"]) > 1:
             _fail(
                 path,
                 f"subsystems.{name}.position",

@@ -27,6 +27,7 @@ import numpy as np
 
 from . import guard, pythonfmu
 from .description import check_kind, read_description
+from .drives import DRIVE_KEYS
 from .errors import FmuError, UnitStepError
 from .fmi2_calls import Fmi2Calls, refused
 from .measures import measure
@@ -46,6 +47,8 @@ ROLES = {
     "acceleration": ("the acceleration output", ("output",)),
     "force": ("the coupling-force input", ("input",)),
     "acceleration_input": ("the prescribed-acceleration input", ("input",)),
+    "position_input": ("the prescribed-position input", ("input",)),
+    "velocity_input": ("the prescribed-velocity input", ("input",)),
     "reaction_force": ("the output of the force the drive exerts", ("output",)),
     "set_position": ("a tunable parameter or input that sets the position (projection)", ("parameter", "input")),
     "set_velocity": ("a tunable parameter or input that sets the velocity (projection)", ("parameter", "input")),
@@ -90,6 +93,11 @@ class Unit(Fmi2Calls):
             self.elements[key] = els
             self.measures[key] = [measure(label, md, key, el.variable) for el in els]
             self.factors[key] = np.array([m.factor for m in self.measures[key]])
+        #: a drive's inputs (:mod:`icosim.problems.fmu.drives`), set together as the one entry ``drive``
+        self.drive_keys = tuple(k for k in DRIVE_KEYS if k in self.elements)
+        if self.drive_keys:
+            self.elements["drive"] = [el for k in self.drive_keys for el in self.elements[k]]
+            self.factors["drive"] = np.concatenate([self.factors[k] for k in self.drive_keys])
         self.interpolates = bool(getattr(md.coSimulation, "canInterpolateInputs", False)) and not self.fmi3
         if inputs == "derivatives" and not self.interpolates:
             raise FmuError(

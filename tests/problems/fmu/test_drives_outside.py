@@ -1,0 +1,112 @@
+"""OMSimulator's DualMassOscillator coupled as its units ship (../shared/outside/omsimulator): System1 force-driven
+(input F, outputs x1, v1, a1), System2 a drive (inputs x1, v1, a1 of Modelica's Move, output F), both as Model
+Exchange, fd (docs/fmi.md, drives by position, velocity and acceleration).
+
+The exact solution is the monolithic system of DualMassOscillator.mo (ReferenceSystemEq) by the matrix
+exponential (test_drives.exact); the orders are the built-in linear model's under the same method, k and
+decomposition (test_drives.builtin_order).
+"""
+
+import numpy as np
+import pytest
+import yaml
+from test_drives import AMPLITUDE, builtin_order, exact, exact_coupling, write
+from toolchains import OUTSIDE
+
+from icosim.engine.run import simulate
+from icosim.order_fit import asymptotic_order
+from icosim.problems.fmu.errors import FmuError
+from icosim.problems.fmu.problem import FmuCosimulation
+from icosim.problems.fmu.run import open_units, run_scene
+from icosim.problems.fmu.scene import load_scene
+
+pytestmark = [pytest.mark.outside, pytest.mark.fmu]
+
+UNITS = OUTSIDE / "omsimulator"
+
+
+def om_scene(tmp_path, method, k, H, t_end, params, *, tolerance=None):
+    """System1 and System2 as Model Exchange, fd; System2's F is the force on mass 1 (force_sign 1)."""
+    tol = {} if tolerance is None else {"tolerance": tolerance}
+    me = {"interface": "model-exchange", **tol}
+    data = {
+        "subsystems": {
+            "system1": {"fmu": str(UNITS / "DualMassOscillator.System1.fmu"), **me, "position": "x1",
+                        "velocity": "v1", "acceleration": "a1", "force": "F", "force_sign": 1},
+            "system2": {"fmu": str(UNITS / "DualMassOscillator.System2.fmu"), **me, "position_input": "x1",
+                        "velocity_input": "v1", "acceleration_input": "a1", "reaction_force": "F", "force_sign": 1},
+        },
+        "coupling": {"method": method, "decomposition": "fd", "k": k, "H": H, "perturbation": 1.0, **params},
+        "t_end": t_end,
+    }  # fmt: skip
+    path = tmp_path / f"dual_mass_{method}_{k}_{H:g}.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
+BAUMGARTE = {"index": 1, "mu": 1e-3}
+
+
+def test_dual_mass_oscillator_meets_the_exact_solution_at_10_s(tmp_path):
+    """Baumgarte index 1, k = 2, H = 1e-3 from the computed start, as a user runs it: x1 at t = 10 s within 1e-6
+    of the amplitude of the exact solution (OMSimulator's own tests are 7e-3 off it at H = 1e-4)."""
+    run = run_scene(om_scene(tmp_path, "baumgarte", 2, 1e-3, 10.0, BAUMGARTE))
+    assert run.status == "completed"
+    assert run.units["system2"]["interface"] == "model-exchange"
+    assert abs(run.states[-1, 0, 0] - exact([10.0])[0, 0]) < 1e-6 * AMPLITUDE
+
+
+def test_the_c_unit_is_system2(tmp_path):
+    """fmus/move_oscillator (System2's equations, integrated exactly) coupled as System2 is: the same run within
+    the Model Exchange integrator's tolerance."""
+    om = run_scene(om_scene(tmp_path, "baumgarte", 1, 1e-3, 1.0, BAUMGARTE, tolerance=1e-12))
+    c = run_scene(write(tmp_path, "baumgarte", 1, 1e-3, 1.0))
+    assert np.max(np.abs(om.states[..., 0] - c.states[..., 0])) < 1e-9 * AMPLITUDE
+
+
+ORDER_CASES = [
+    ("baumgarte", 0, BAUMGARTE),
+    ("baumgarte", 1, BAUMGARTE),
+    ("baumgarte", 2, BAUMGARTE),
+    ("baumgarte", 0, {"index": 2, "mu": 1e-3}),
+    ("baumgarte", 0, {"index": 3}),
+    ("weighted", 0, {"index": 1, "a": 1.0, "b": 1.0}),
+    ("weighted", 1, {"index": 1, "a": 1.0, "b": 1.0}),
+    ("weighted", 0, {"index": 2, "a": 1.0}),
+]
+
+
+@pytest.mark.parametrize("method, k, params", ORDER_CASES, ids=lambda v: str(v))
+def test_dual_mass_oscillator_converges_with_the_two_unit_orders(tmp_path, method, k, params):
+    """Every method and index at the k the two-unit study serves them (projection cannot move a Model Exchange
+    unit: refused, below), from the exact start: the error of x1 falls with the built-in model's order."""
+    Hs = [2e-3, 1e-3, 5e-4, 2.5e-4]
+    errors = []
+    for H in Hs:
+        scene = load_scene(om_scene(tmp_path, method, k, H, 0.25, params, tolerance=1e-12))
+        units, couplings = open_units(scene)
+        problem = FmuCosimulation(units, couplings, "fd", k, H, perturbation=1.0)
+        try:
+            history = np.array([exact_coupling(-j * H, "fd") for j in range(k + 1)])
+            traj = simulate(problem, scene.method, problem.initial_state(), history, scene.n_steps)
+        finally:
+            problem.close()
+            for unit in units:
+                unit.close()
+        x = np.array(traj.states)[:, 0, 0]
+        assert len(x) == scene.n_steps + 1
+        errors.append(float(np.max(np.abs(x - exact(H * np.arange(len(x)))[:, 0]))))
+    fit = asymptotic_order(Hs, errors)
+    expected = builtin_order(method, k, Hs, params=params)
+    assert fit.status == "asymptotic", (errors, fit)
+    assert abs(fit.order - expected) < 0.1, (errors, fit.order, expected)
+
+
+def test_projection_of_a_model_exchange_unit_is_refused(tmp_path):
+    """The projection would have to move System1's continuous states: refused, naming the unit and the key."""
+    path = om_scene(tmp_path, "projection", 1, 1e-3, 0.1, {})
+    data = yaml.safe_load(path.read_text())
+    data["subsystems"]["system1"] |= {"mass": 1.0, "set_position": "x1", "set_velocity": "v1"}
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    with pytest.raises(FmuError, match="system1: set_position: a model exchange unit"):
+        run_scene(path)
