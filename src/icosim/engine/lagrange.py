@@ -35,6 +35,7 @@ True
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 from fractions import Fraction
 from functools import cache
@@ -46,6 +47,7 @@ __all__ = [
     "monomial_coefficients",
     "weights_at",
     "variable_predictor_nodes",
+    "variable_step_polynomials",
     "variable_corrector_nodes",
     "lagrange_coefficients",
     "lagrange_weights",
@@ -128,6 +130,34 @@ def variable_corrector_nodes(H: Any, past_steps: Sequence[Any]) -> tuple[Any, ..
     """
     k = len(past_steps)
     return (H / H,) + variable_predictor_nodes(H, past_steps)[:k]
+
+
+def variable_step_polynomials(H: float, past_steps: Sequence[float] | None, k: int) -> tuple:
+    """The polynomials of a macro step of size ``H`` after the past sizes ``H_N-1, ..., H_N-k`` (newest first;
+    None: ``k`` steps of ``H``), through :func:`variable_predictor_nodes` and :func:`variable_corrector_nodes`:
+    ``(H, past, w_pred, C_pred, C_corr)`` -- the extrapolation weights at ``tau = 1`` and both matrices of
+    :func:`lagrange_coefficients`, computed exactly from the float sizes and rounded once to floats.  A size that
+    is not a finite number > 0 raises :class:`~icosim.errors.ParameterError`.
+
+    >>> H, past, w, C_pred, C_corr = variable_step_polynomials(0.5, [1.0], 1)  # nodes 0, -2: e_p = 1.5 e_N - 0.5 e_N-1
+    >>> w.tolist(), C_corr.tolist()
+    ([1.5, -0.5], [[0.0, 1.0], [1.0, -1.0]])
+    """
+    import numpy as np
+
+    from ..errors import ParameterError
+
+    if not (isinstance(H, (int, float)) and math.isfinite(H) and H > 0):
+        raise ParameterError(f"H must be a finite number > 0, got {H!r}")
+    past = [float(H)] * k if past_steps is None else [float(h) for h in past_steps][:k]
+    if len(past) != k or not all(math.isfinite(h) and h > 0 for h in past):
+        raise ParameterError(f"need {k} past step sizes > 0, got {past_steps!r}")
+    exact = [Fraction(h) for h in [float(H)] + past]  # binary floats are exact rationals
+    pred = variable_predictor_nodes(exact[0], exact[1:])
+    corr = variable_corrector_nodes(exact[0], exact[1:])
+    w_pred = np.array([float(w) for w in lagrange_weights(pred, 1)], dtype=float)
+    C_pred = np.array(lagrange_coefficients(pred), dtype=float)
+    return float(H), past, w_pred, C_pred, np.array(lagrange_coefficients(corr), dtype=float)
 
 
 def lagrange_coefficients(nodes: Iterable[Any]) -> tuple[tuple[Any, ...], ...]:

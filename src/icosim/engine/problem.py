@@ -99,7 +99,26 @@ class CosimulationProblem:
     ``project(state) -> state``
         the projection step (needed by methods that project).
 
-    and counts each subsystem integration in :attr:`work`.  The base class provides :meth:`extrapolate`,
+    and counts each subsystem integration in :attr:`work`.
+
+    **Checkpoint.**  The arrays are the state as the macro step sees it; a problem may hold more of it (an FMU
+    problem's units hold their states inside the FMUs).  So a problem saves and restores what it holds between
+    macro steps:
+
+    ``checkpoint() -> checkpoint``
+        an opaque object holding the problem's state at ``T_N`` beyond the arrays ``state`` and ``history``
+        (which the caller keeps), taken between macro steps;
+    ``restore(checkpoint)``
+        the problem back at that ``T_N``: the next macro step from the state and history it was taken with
+        gives what it gave then, bit for bit.
+
+    A problem whose arrays are its whole state (the linear models, the pendulum) has the trivial checkpoint
+    (None; :meth:`restore` does nothing): any state may be given to any step.  A stateful problem advances only
+    from the state it last returned or whose checkpoint it last restored, and may keep only its latest
+    checkpoint (the FMU problem's holds its units' saved FMU states: docs/engine.md).  The run loop
+    (:func:`icosim.engine.run.simulate` with ``rollback``) and the adaptive driver
+    (:func:`icosim.engine.control.driver.adaptive_macro_steps`: a rejected step is retried from the checkpoint)
+    use it.  The base class provides :meth:`extrapolate`,
     :meth:`shift`, :meth:`corrector_samples`, :meth:`inputs`, :meth:`stack`, :meth:`residuals` (the engine's
     coupling conditions, :mod:`icosim.engine.residuals`, scaled by :attr:`condition_scale`) and
     :meth:`jacobians` (assembled from the sensitivities; kept when :attr:`constant_sensitivities`, with their
@@ -333,6 +352,13 @@ class CosimulationProblem:
         for c in range(len(cols)):
             dE[c, c] = be.const(1)
         return Bs, B_all, dE, 0 * dE
+
+    def checkpoint(self) -> Any:
+        """The problem's state at ``T_N`` beyond the arrays (class docstring): None, the arrays are all of it."""
+        return None
+
+    def restore(self, checkpoint: Any) -> None:
+        """Back to ``checkpoint`` (:meth:`checkpoint`): nothing to do where the arrays are the whole state."""
 
     # -- to be implemented by a subclass ------------------------------------------
     def predict(self, i: int, state: Any, history: Any, *, final: bool = False) -> Any:  # pragma: no cover

@@ -58,6 +58,7 @@ def simulate(
     bound: float | None = None,
     observe: Callable[[int, np.ndarray, np.ndarray, np.ndarray], str | None] | None = None,
     record: bool = True,
+    rollback: bool = False,
     **step_kw: Any,
 ) -> Trajectory:
     """Run ``n_steps`` macro steps from ``state`` and the coupling history.
@@ -68,7 +69,11 @@ def simulate(
     (a string); a step fails when it raises :class:`StepFailure` or a singular
     linear system (:class:`numpy.linalg.LinAlgError`).  Either stops the run
     and is recorded: an unstable run is reported, never silently continued.
-    ``record=False`` keeps only the start and the last step.  ``step_kw`` go to
+    ``record=False`` keeps only the start and the last step.  ``rollback``: the
+    problem's checkpoint (:meth:`~icosim.engine.problem.CosimulationProblem.checkpoint`)
+    is taken before each step and restored when the step fails or diverges, so
+    the problem stands where the trajectory ends (a stateful one can go on from
+    there).  ``step_kw`` go to
     :func:`~icosim.engine.macrostep.macro_step` (``scheme``, ``iterations``, ``tol``).
     """
     # the problem's plan of the scheme; refuses what it cannot serve (a wrapper of a method reads as the method)
@@ -78,10 +83,13 @@ def simulate(
     diverged = failed = reason = error = None
     done = 0
     for n in range(1, n_steps + 1):
+        checkpoint = problem.checkpoint() if rollback else None
         try:
             state, history, y = macro_step(problem, method, state, history, **step_kw)
         except (StepFailure, np.linalg.LinAlgError) as exc:  # e.g. a singular coupling solve
             failed, reason, error = n, str(exc) or type(exc).__name__, exc
+            if rollback:
+                problem.restore(checkpoint)
             break
         mag = _magnitude(state)
         if not math.isfinite(mag):
@@ -92,6 +100,8 @@ def simulate(
             reason = observe(n, state, history, y)
             diverged = n if reason else None
         if diverged:
+            if rollback:
+                problem.restore(checkpoint)
             break
         if not record and len(states) > 1:
             states.pop(), coupling.pop(), outputs.pop()

@@ -16,6 +16,12 @@ again at the new spacing when the very first step is rejected: far-away
 start-up nodes would only inflate the extrapolation error and with it the
 estimate.
 
+**Retry.**  The driver takes the problem's checkpoint
+(:meth:`~icosim.engine.problem.CosimulationProblem.checkpoint`) before each
+candidate step and restores it when the step is rejected, so the retry starts
+from the state the rejected step started from, also for a problem that holds
+state of its own (FMU units).
+
 **Acceptance.**  A step's error norm is the larger of the predictor-corrector
 estimate (:func:`~.controller.pc_estimate`) and the problem's own part
 ``extra_error(state)`` (e.g. the pendulum's joint drift over its tolerance); a step
@@ -77,6 +83,7 @@ def adaptive_macro_steps(
     controller: StepController,
     tol: float,
     restart: Callable,
+    method_at: Callable | None = None,
     observe: Callable | None = None,
     extra_error: Callable | None = None,
     on_accept: Callable | None = None,
@@ -88,7 +95,8 @@ def adaptive_macro_steps(
     """Macro steps from ``0`` to ``t_end``, each sized by ``controller`` (module docstring).
 
     ``state`` and ``history`` are the start (``history`` at the spacing ``H0``);
-    ``restart(H)`` gives the starting history at spacing ``H``;
+    ``restart(H)`` gives the starting history at spacing ``H``; ``method_at(H)`` the method of a step of size
+    ``H`` (default: ``method`` for every size; a method with dimensional parameters is rebuilt per size);
     ``observe(n, state, history, y)`` a reason why the candidate step ``n`` diverged, or None (the observer
     of :func:`icosim.engine.run.simulate`); ``extra_error(state)`` the problem's
     part of the error norm at an accepted candidate (default: none);
@@ -117,9 +125,16 @@ def adaptive_macro_steps(
             problem.set_macro_step(H, past)
             e_p = problem.extrapolate(history)
             failure = None
+            checkpoint = problem.checkpoint()  # restored when the step is rejected
             try:
                 state_new, hist_new, y = macro_step(
-                    problem, method, state, history, scheme=scheme, iterations=iterations, tol=corrector_tol
+                    problem,
+                    method if method_at is None else method_at(H),
+                    state,
+                    history,
+                    scheme=scheme,
+                    iterations=iterations,
+                    tol=corrector_tol,
                 )
                 diverged = observe(len(steps) + 1, state_new, hist_new, y) if observe is not None else None
             except (StepFailure, np.linalg.LinAlgError) as exc:
@@ -131,6 +146,7 @@ def adaptive_macro_steps(
                 extra = extra_error(state_new) if extra_error is not None else 0.0
                 err = max(est, extra)
             if not controller.accepts(err):
+                problem.restore(checkpoint)
                 rejected_H.append(H)
                 if H <= controller.H_min * (1 + 1e-9):
                     status = "failed" if failure else "diverged"

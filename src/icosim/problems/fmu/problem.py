@@ -36,6 +36,7 @@ from ...engine.problem import CosimulationProblem
 from ...engine.projection import joined_clusters
 from ...engine.residuals import Conditions
 from ...errors import StepFailure
+from .checkpoint import Checkpoints
 from .drives import DrivenPoints
 from .errors import UnitStepError
 from .floats import gathered as _gathered
@@ -65,7 +66,7 @@ class Coupling:
         return "force" if self.kind == "force" else "acceleration_input"
 
 
-class FmuCosimulation(DrivenPoints, CosimulationProblem):
+class FmuCosimulation(Checkpoints, DrivenPoints, CosimulationProblem):
     """FMU units joined by rigid joints (decompositions ff, fd, df, dd per joint).
 
     Parameters
@@ -129,6 +130,7 @@ class FmuCosimulation(DrivenPoints, CosimulationProblem):
         self._holds = ["start"] * n  # what each unit holds now: "start", id of an end array, or "scratch"
         self._ends = [{} for _ in range(n)]  # id(end) -> (end, FMU state) of this macro step's integrations
         self._committed = None
+        self._clock, self._steps, self._kept = (self.t0, 0), None, None  # Checkpoints: T_N's origin, sizes, latest
         self._clusters = joined_clusters(graph, range(n))  # each unit is one body
         self._negatives = {}  # id of a coefficient matrix -> (it, its negative)
         self._masses = None  # the units' masses for the projection, as floats once asked
@@ -150,7 +152,7 @@ class FmuCosimulation(DrivenPoints, CosimulationProblem):
     @property
     def time(self) -> float:
         """``T_N``: the communication point the units stand at."""
-        return self.t0 + self.step_index * self.H
+        return self._clock[0] + (self.step_index - self._clock[1]) * self.H  # T_0 + N H while H is fixed
 
     def initial_state(self):
         """The units' positions and velocities after initialisation, ``(2, 2 n_dim)`` (a drive's point:
@@ -242,7 +244,8 @@ class FmuCosimulation(DrivenPoints, CosimulationProblem):
     def _check_state(self, state):
         if self._committed is not None and state is not self._committed:
             raise StepFailure(
-                "an FMU problem advances only from the state it last returned (its units' states live in the FMUs)"
+                "an FMU problem advances only from the state it last returned or restored (its units' states live "
+                "in the FMUs: restore a checkpoint to go back)"
             )
 
     def _integrate(self, i, U, C, final=False):
@@ -277,7 +280,7 @@ class FmuCosimulation(DrivenPoints, CosimulationProblem):
         values = unit.advance(
             self.couplings[i].input_key, coef if C_s is not None else [[s * v for v in row] for row in coef],
             self.time, self.H, step_index=self.step_index + 1, restore=restore, read=self._output_keys(i),
-            final=final,
+            final=final and self._kept is None,
         )  # fmt: skip
         self.work.subsystem_integrations += 1
         return self._outputs(i, _summed(coef, s == -1.0), values)
@@ -402,7 +405,7 @@ class FmuCosimulation(DrivenPoints, CosimulationProblem):
             for _, other in self._ends[i].values():
                 self.units[i].free(other)
             self._ends[i].clear()
-            self.units[i].free(self._start[i])
+            self._free_start(i)
             self._start[i] = kept
             self._holds[i] = "start" if self._holds[i] == id(end) else "scratch"
         self.step_index += 1
@@ -449,7 +452,7 @@ class FmuCosimulation(DrivenPoints, CosimulationProblem):
             for key, values in (("set_position", rows[i][:n]), ("set_velocity", rows[i][n:])):
                 if key in unit.elements:  # a drive's point without its outputs is the committed state
                     unit.put(key, values)
-            unit.free(self._start[i])
+            self._free_start(i)
             self._start[i] = unit.save()
         self._committed = np.array(rows)
         return self._committed
@@ -461,5 +464,6 @@ class FmuCosimulation(DrivenPoints, CosimulationProblem):
                 unit.free(s)
             self._ends[i].clear()
             if self._start[i] is not None:
-                unit.free(self._start[i])
+                self._free_start(i)
                 self._start[i] = None
+        self._release()

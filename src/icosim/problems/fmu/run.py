@@ -7,8 +7,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...engine.run import simulate
 from .build import build_unit, is_source_dir
+from .controlled import controlled_entries, scene_steps
 from .errors import FmuError
 from .exchange import open_fmu_unit
 from .initial import given_coupling_warning
@@ -38,6 +38,7 @@ class SceneRun:
     start: object = None  # the run's Start (consistent_start)
     diverged_at: int | None = None
     recorded: dict = field(default_factory=dict)  # subsystem -> (names, units, values (n+1, names)): record
+    steps: object = None  # a controlled run's macro steps (AdaptiveSteps; coupling.control), else None
 
     @property
     def n_dim(self) -> int:
@@ -259,27 +260,16 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
                 progress(n)
 
         with np.errstate(over="ignore", invalid="ignore"):  # a diverging run is reported, not warned about
-            traj = simulate(
-                problem,
-                scene.method,
-                start.state,
-                start.history,
-                scene.n_steps,
-                scheme=scene.scheme,
-                iterations=c["iterations"],
-                bound=divergence_bound(scene, start.state),
-                observe=step_done,
-            )
+            traj, times, steps = scene_steps(scene, problem, start, divergence_bound(scene, start.state), step_done)
         if traj.failed_at is not None:
             raise traj.error
         status, reason = "completed", ""
         if traj.diverged_at is not None:
-            t_div = problem.t0 + traj.diverged_at * float(c["H"])
+            t_div = times[-1] + steps.rejected_H[-1] if steps else problem.t0 + traj.diverged_at * float(c["H"])
             status = "diverged"
             reason = f"diverged at macro step {traj.diverged_at} (t = {t_div:.12g} s): {traj.reason}"
         nan_y = np.full((len(units), 4, problem.n_dim), np.nan)
         outputs = [nan_y if y is None else y for y in traj.outputs]
-        times = problem.t0 + c["H"] * np.arange(len(traj.states))
         info = {u.label: u.info() for u in units}
         for u, cp in zip(units, couplings):
             info[u.label]["feedthrough"] = "yes" if cp.feedthrough else "through a step only"
@@ -296,6 +286,7 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
             start,
             traj.diverged_at,
             recording.result(len(traj.states)),
+            steps,
         )
     finally:
         if problem is not None:
@@ -396,7 +387,8 @@ def run_dataset_data(run: SceneRun, *, command: str = ""):
                 {"units": "m", "long_name": "position of the first subsystem minus the second's"},
             ),
         }
-    ds = DatasetDict(per_unit | per_joint | coupling | recorded_entries(run.recorded), coords=coords)
+    controlled, control_attrs = controlled_entries(run)
+    ds = DatasetDict(per_unit | per_joint | coupling | recorded_entries(run.recorded) | controlled, coords=coords)
     attrs = provenance_attrs(scene.data, title=f"FMU scene {scene.path.name}", command=command)
     attrs["scene_json"] = attrs["config_json"]
     attrs["status"] = run.status
@@ -417,7 +409,7 @@ def run_dataset_data(run: SceneRun, *, command: str = ""):
     attrs["do_step_calls"] = sum(i["do_step_calls"] for i in run.units.values())
     attrs["states_saved"] = sum(i["states_saved"] for i in run.units.values())
     attrs["states_restored"] = sum(i["states_restored"] for i in run.units.values())
-    ds.attrs.update(attrs)
+    ds.attrs.update(attrs | control_attrs)
     return ds
 
 

@@ -47,6 +47,7 @@ from ...engine.schema import schema_defs
 from ...engine.schemes import SCHEMES, GaussSeidel, Scheme, get_scheme
 from ...errors import ParameterError
 from .build import is_source_dir
+from .controlled import check_control, control_schema
 from .drives import role_keys
 from .errors import SceneError
 from .joints import NUMBERED, ORDERED_SCHEMES, check_order, driven_by, graph_message, joint_schema, scene_joints
@@ -118,6 +119,7 @@ COUPLING_KEYS = {
     "substeps": 16,
     "perturbation": 1.0e-3,
     "sensitivities": "each-step",
+    "control": None,  # controlled macro steps (icosim.problems.fmu.controlled); None: H fixed
 }
 
 #: Subsystem keys that do not name unit variables.
@@ -172,6 +174,7 @@ def scene_schema() -> dict:
             "substeps": {"type": "integer", "minimum": 1, "maximum": 100000},
             "perturbation": {"type": "number", "exclusiveMinimum": 0},
             "sensitivities": {"enum": ["each-step", "first-step"]},
+            "control": control_schema(),
             **params,
         },
     }
@@ -342,6 +345,7 @@ def load_scene(path) -> Scene:
         method = engine_method(method, c["H"])
     except ParameterError as exc:
         _fail(path, "coupling", str(exc))
+    check_control(path, c)
     t0, t_end, H = float(data.get("t_start", 0.0)), float(data["t_end"]), float(c["H"])
     steps = (t_end - t0) / H
     if not steps >= 1 or abs(steps - round(steps)) > 1e-6 * max(1.0, steps):

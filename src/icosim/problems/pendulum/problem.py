@@ -9,20 +9,13 @@ forward differences, integrated in one batch with the predictor.
 from __future__ import annotations
 
 import math
-from fractions import Fraction
 
 import numpy as np
 
 from ...engine.backends import Float64
 from ...engine.bounds import check_k
 from ...engine.decompositions import get_decomposition
-from ...engine.lagrange import (
-    lagrange_coefficients,
-    lagrange_weights,
-    monomial_coefficients,
-    variable_corrector_nodes,
-    variable_predictor_nodes,
-)
+from ...engine.lagrange import monomial_coefficients, variable_step_polynomials
 from ...engine.problem import CosimulationProblem
 from ...errors import ParameterError
 from .conditions import CONDITIONS, check_decomposition
@@ -266,17 +259,7 @@ class PendulumCosimulation(CosimulationProblem):
         computed exactly from the float step sizes and rounded once;
         ``past_steps=None`` means equal steps (the nodes of a fixed ``H``).
         """
-        if not (isinstance(H, (int, float)) and math.isfinite(H) and H > 0):
-            raise ParameterError(f"H must be a finite number > 0, got {H!r}")
-        self.H = float(H)
-        past = [self.H] * self.k if past_steps is None else [float(h) for h in past_steps][: self.k]
-        if len(past) != self.k or not all(math.isfinite(h) and h > 0 for h in past):
-            raise ParameterError(f"need {self.k} past step sizes > 0, got {past_steps!r}")
-        exact = [Fraction(h) for h in [self.H] + past]  # binary floats are exact rationals
-        pred = variable_predictor_nodes(exact[0], exact[1:])
-        corr = variable_corrector_nodes(exact[0], exact[1:])
-        self.w_pred = np.array([float(w) for w in lagrange_weights(pred, 1)], dtype=float)
-        self.C_corr = np.array(lagrange_coefficients(corr), dtype=float)
+        self.H, _, self.w_pred, _, self.C_corr = variable_step_polynomials(H, past_steps, self.k)
         self._cache = None  # the predictor's responses (kept for the Jacobians) belong to the old nodes
 
 
