@@ -17,7 +17,10 @@ module                holds
 :mod:`.check`         ``icosim cosim --check``: every check as a table
 :mod:`.guard`         the supervised run: a unit that hangs or crashes named
 :mod:`.pythonfmu`     pythonfmu's interpreter state released before the process exits
-:mod:`.problem`       two units as a :class:`~icosim.engine.problem.CosimulationProblem`
+:mod:`.problem`       units and joints as a :class:`~icosim.engine.problem.CosimulationProblem`
+:mod:`.consistent`    the consistent initial coupling at ``t_start``
+:mod:`.checkpoint`    the FMU problem's checkpoint and its macro step of varying size
+:mod:`.controlled`    ``coupling.control``: a scene's controlled macro steps
 :mod:`.run`           a scene run through the engine's run loop, its start, its dataset
 :mod:`.initial`       a scene's ``initial_coupling`` against the units' own
 :mod:`.record`        the variables a scene asks to record
