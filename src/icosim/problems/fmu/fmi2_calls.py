@@ -178,7 +178,7 @@ class Fmi2Calls:
         """:meth:`step` with the coefficients as rows of floats (``rows[m][q]``, SI); an FMI 2.0 unit that takes
         input derivatives is driven without numpy: the same calls with the same values (``final`` as there).  With ``restore``, the
         unit first returns to that saved state (:meth:`restore`); with ``read``, the variables of those keys are
-        read at the end (:meth:`read`) and returned; each call in the supervisor's record (:func:`guard.call`)."""
+        read at the end (:meth:`read`) and returned; the calls recorded as one sequence (:func:`guard.calls`)."""
         if not self.exact_inputs or self.fmi3:
             if restore is not None:
                 self.restore(restore)
@@ -198,47 +198,50 @@ class Fmi2Calls:
         c = rows if factors is None else [[v / f for v, f in zip(row, factors)] for row in rows]
         fmu, self.t = self.fmu, t
         comp, library = fmu.component, fmu.dll
-        call = guard.call  # every call of the integration is recorded, naming the macro step
-        if restore is not None:
-            self.restored += 1
-            with call(self, "fmi2SetFMUstate", t, step_index):
+        sequence = guard.calls(self, t, step_index)  # every call recorded, naming the macro step
+        try:
+            if restore is not None:
+                self.restored += 1
+                sequence.now("fmi2SetFMUstate")
                 status = self._state_call("fmi2SetFMUstate", restore[0])
-            if status > 1:
-                refused("fmi2SetFMUstate", status)
-        buf[:n] = c[0]
-        f = library.fmi2SetReal
-        with call(self, "fmi2SetReal", t, step_index):
+                if status > 1:
+                    refused("fmi2SetFMUstate", status)
+            buf[:n] = c[0]
+            f = library.fmi2SetReal
+            sequence.now("fmi2SetReal")
             status = set_bare(*set_args) if f is set_declared else f(comp, vr, n, buf)
-        if status > 1:
-            refused("fmi2SetReal", status)
-        if terms:  # every order up to k, zeros too: a unit may keep the derivatives of the step before
-            values[:] = [factorial * c[m][q] / h_m for q, m, factorial, h_m in terms]
-            f = library.fmi2SetRealInputDerivatives
-            with call(self, "fmi2SetRealInputDerivatives", t, step_index):
+            if status > 1:
+                refused("fmi2SetReal", status)
+            if terms:  # every order up to k, zeros too: a unit may keep the derivatives of the step before
+                values[:] = [factorial * c[m][q] / h_m for q, m, factorial, h_m in terms]
+                f = library.fmi2SetRealInputDerivatives
+                sequence.now("fmi2SetRealInputDerivatives")
                 if f is derivatives_declared:
                     status = derivatives_bare(*derivatives_args)
                 else:
                     status = f(comp, refs, len(terms), order, values)
-            if status > 1:
-                refused("fmi2SetRealInputDerivatives", status)
-        self.do_steps += 1
-        self.messages.clear()
-        # noSetFMUStatePriorToCurrentPoint: true where no state before t + H will be restored
-        with call(self, "fmi2DoStep", t, step_index):
+                if status > 1:
+                    refused("fmi2SetRealInputDerivatives", status)
+            self.do_steps += 1
+            self.messages.clear()
+            sequence.now("fmi2DoStep")
+            # noSetFMUStatePriorToCurrentPoint: true where no state before t + H will be restored
             status = library.fmi2DoStep(comp, t, H, final or self.always_final)  # what fmpy's doStep calls
-        if status > 1:
-            self._steprefused(status, t, step_index)
-        buf[:n] = summed(c)
-        f = library.fmi2SetReal
-        with call(self, "fmi2SetReal", t, step_index):
+            if status > 1:
+                self._steprefused(status, t, step_index)
+            buf[:n] = summed(c)
+            f = library.fmi2SetReal
+            sequence.now("fmi2SetReal")
             status = set_bare(*set_args) if f is set_declared else f(comp, vr, n, buf)
-        if status > 1:
-            refused("fmi2SetReal", status)
-        self.t = t + H
-        if fast is None:
-            return None
-        with call(self, "fmi2GetReal", self.t, step_index):
+            if status > 1:
+                refused("fmi2SetReal", status)
+            self.t = t + H
+            if fast is None:
+                return None
+            sequence.now("fmi2GetReal")
             status = self._get_real(fast)
+        finally:
+            sequence.end()
         return _read_values(fast, status)
 
     def _drive_plan(self, key, rows, H):

@@ -35,6 +35,7 @@ from pathlib import Path
 
 __all__ = [
     "call",
+    "calls",
     "register",
     "unregister",
     "under_way",
@@ -78,20 +79,22 @@ _CODE = {name: float(i) for i, name in enumerate(CALLS)}
 #: Bytes of a slot's label in the labels file.
 _LABEL_BYTES = 128
 #: float64 slots of the shared record: the number of the call under way (0: none), its unit's slot, its call
-#: (:data:`CALLS`), t, macro step, the last call's number.  A call is timed by the parent from when it first sees
-#: its number, so the child writes no clock: entering a call is a few stores into the shared memory, leaving one.
-_RECORD = 6
+#: (:data:`CALLS`), t, macro step.  A call is timed by the parent from when it first sees its number, so the child
+#: writes no clock: entering a call is a few stores into the shared memory, leaving one.
+_RECORD = 5
 
 _record = None  # a float64 memoryview of the shared memory, in the supervised child only
 _labels = None  # the file descriptor of the slots' labels, in the supervised child only
 _free = []  # the slots given back, reused first
 _taken = 0  # the slots ever taken in this child
-_outer = []  # the records of the calls under way that a call inside them interrupted, innermost last
+_number = 0.0  # the last call's number
+#: per call or sequence under way, innermost last: the record it interrupted (a call inside another), or None
+_open = []
 _scratch = None
 
 
 class _Nothing:
-    """The context manager of a call that is not recorded."""
+    """The context manager (and sequence, :func:`calls`) of calls that are not recorded."""
 
     __slots__ = ()
 
@@ -101,38 +104,60 @@ class _Nothing:
     def __exit__(self, kind, value, trace):
         return False
 
+    def now(self, name):
+        pass
+
+    def end(self):
+        pass
+
 
 class _Call:
-    """The context manager of the call :func:`call` names (one, reused: calls nest only inside its block)."""
+    """The context manager of the call :func:`call` names (one, reused: a call inside it is entered only
+    after it, in its block)."""
 
     __slots__ = ("args",)
 
     def __enter__(self):
+        global _number
         r = _record
-        slot, code, t, step = self.args
-        if r[0] != 0.0:  # inside another call: its record comes back when this one returns
-            _outer.append((r[0], r[1], r[2], r[3], r[4]))
-        number = r[5] + 1.0
-        r[5] = number
-        r[1] = slot
-        r[2] = code
-        r[3] = t
-        r[4] = step
+        _open.append((r[0], r[1], r[2], r[3], r[4]) if r[0] != 0.0 else None)
+        _number = number = _number + 1.0
+        r[1], r[2], r[3], r[4] = self.args
         r[0] = number
         return self
 
     def __exit__(self, kind, value, trace):
         r = _record
-        if _outer:  # the outer call again, under its own number: timed from when the parent saw it last
-            number, r[1], r[2], r[3], r[4] = _outer.pop()
-            r[0] = number
-        else:
+        outer = _open.pop()
+        if outer is None:
             r[0] = 0.0
+        else:  # the outer call again, under its own number: timed from when the parent saw it last
+            number, r[1], r[2], r[3], r[4] = outer
+            r[0] = number
         return False
+
+
+class _Calls:
+    """The FMI calls of one unit made one after another (:func:`calls`)."""
+
+    __slots__ = ()
+
+    def now(self, name: str):
+        """The call ``name`` starts now (the one before has returned)."""
+        global _number
+        r = _record
+        _number = number = _number + 1.0
+        r[2] = _CODE[name]
+        r[0] = number
+
+    def end(self):
+        """The sequence is over: no call of it is under way (the call it was made in, if any, again)."""
+        _CALL.__exit__(None, None, None)
 
 
 _NOTHING = _Nothing()
 _CALL = _Call()
+_CALLS = _Calls()
 
 
 def call(unit, name: str, t: float, step: int = -1):
@@ -141,10 +166,35 @@ def call(unit, name: str, t: float, step: int = -1):
     leaving it, however it is left; a unit not registered (:func:`register`, its ``index`` -1) or a process not
     supervised records nothing."""
     slot = unit.index
-    if _record is None or slot < 0:
+    if slot < 0 or _record is None:
         return _NOTHING
     _CALL.args = (slot, _CODE[name], t, step)
     return _CALL
+
+
+def calls(unit, t: float, step: int = -1):
+    """The FMI calls ``unit`` makes one after another at ``t`` (macro step ``step``), a hot path's record without a
+    ``with`` block per call::
+
+        sequence = guard.calls(unit, t, step)
+        try:
+            sequence.now("fmi2SetReal")
+            ...  # the call
+            sequence.now("fmi2DoStep")
+            ...
+        finally:
+            sequence.end()
+
+    Each call is recorded from its ``now`` to the next ``now`` or to ``end``; ``end`` in a ``finally`` ends the
+    record however the sequence is left, as a ``with`` block would.  Nothing is recorded where :func:`call`
+    records nothing."""
+    slot = unit.index
+    if slot < 0 or _record is None:
+        return _NOTHING
+    _CALL.args = (slot, 0, t, step)
+    _CALL.__enter__()
+    _record[0] = 0.0  # no call of it under way before its first now()
+    return _CALLS
 
 
 def under_way():
@@ -249,7 +299,7 @@ def supervised(target, *, call_seconds: float = CALL_SECONDS, leftovers=()) -> O
     target may have been writing, e.g. the ``.*.part`` temporaries of a dataset) and the scratch directory are
     removed, and the outcome's status is 2 with the message.  Otherwise the child's own status is returned.
     """
-    global _record, _labels, _scratch, _taken
+    global _record, _labels, _scratch, _taken, _number
     if not hasattr(os, "fork") or _record is not None:
         return Outcome(int(target() or 0))
     shared = mmap.mmap(-1, _RECORD * 8)
@@ -264,7 +314,7 @@ def supervised(target, *, call_seconds: float = CALL_SECONDS, leftovers=()) -> O
     if pid == 0:  # the child: the run itself
         os.close(read_end)
         _labels = os.open(labels_path, os.O_RDWR | os.O_CREAT, 0o600)
-        _record, _scratch, _taken, _free[:], _outer[:] = record, scratch, 0, [], []
+        _record, _scratch, _taken, _number, _free[:], _open[:] = record, scratch, 0, 0.0, [], []
         # streams without a file descriptor of their own (captured in memory) are sent to the parent at the end
         buffered = [not _has_fd(s) for s in streams]
         if buffered[0]:
