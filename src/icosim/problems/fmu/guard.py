@@ -5,7 +5,8 @@ limit and reports a child that died, naming the unit, the call and the macro ste
 Every FMI call a unit makes is a ``with`` block, :func:`call`: the record is written on entering and cleared on
 leaving, whatever happens inside (an exception, a refusal raised by the caller), so no record outlives its call
 and a live child is never stopped for a call that returned.  A call made inside another one (a Model Exchange
-unit's input written within its integration) restores the outer record when it returns.  A unit takes a slot
+unit's input written within its integration) restores the outer record when it returns.  A hot path's calls made
+one after another may be one sequence instead (:func:`calls`), ended in a ``finally``.  A unit takes a slot
 when it opens (:func:`register`) and gives it back when it closes (:func:`unregister`; a later unit reuses it);
 the slots' labels are written to a file of the scratch directory, which grows with them, so any number of units
 may be open in one child.

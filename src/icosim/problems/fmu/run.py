@@ -230,8 +230,7 @@ def run_scene(scene, *, cache=None, progress=None, opened=None) -> SceneRun:
     refused step or an output that is not finite raises :class:`~icosim.problems.fmu.errors.UnitStepError` (nothing is
     returned); a state that is not finite or beyond :func:`divergence_bound` ends the run with
     ``status = "diverged"`` and the step.  ``progress(n_done)`` is called after each step.  ``opened``: the units
-    and couplings :func:`open_units` returned, at their start (the caller closes them), else they are opened here.
-    """
+    and couplings :func:`open_units` returned, at their start (the caller closes them), else they are opened here."""
     scene = scene if isinstance(scene, Scene) else load_scene(scene)
     c = scene.coupling
     clock = time.perf_counter()
