@@ -195,3 +195,43 @@ def test_the_report_section_renders():
         assert text in html
     assert 'id="claim-fmi-fmu_two_mass_follows_builtin_linear"' in html or "fmu_two_mass_follows_builtin_linear" in html
     assert "gauss-seidel-12: 1.4 (unstable)" in html
+
+
+@pytest.mark.fmu  # the run builds the test units
+@pytest.mark.skipif(not hasattr(__import__("os"), "fork"), reason="the supervised run needs os.fork")
+def test_scene_job_opens_each_unit_once_and_writes_what_a_run_and_a_check_write(monkeypatch, tmp_path):
+    """The workflow's job of a scene opens each unit once (predicted from its start, then run): its run and its
+    check are those of :func:`run_scene` and :func:`scene_validation` made apart (each opening the units), the
+    run's counters without the prediction's probes."""
+    from icosim.problems.fmu import run as fmu_run
+    from icosim.problems.fmu.run import run_dataset, run_scene
+    from icosim.problems.fmu.scene import load_scene
+    from icosim.studies.fmi.validation import scene_job, scene_validation
+
+    monkeypatch.setenv("ICOSIM_FMU_CACHE", str(CACHE))
+    scene = load_scene(ROOT / "config" / "scenes" / "two_mass_unstable.yaml")
+    opens = tmp_path / "opens"
+    opened = fmu_run.open_unit
+
+    def counted(scene, name, kind, **kw):  # the child's openings, one line each
+        with opens.open("a") as f:
+            f.write(f"{name}\n")
+        return opened(scene, name, kind, **kw)
+
+    monkeypatch.setattr(fmu_run, "open_unit", counted)
+    paths = tmp_path / "run.nc", tmp_path / "validation.nc"
+    scene_job(
+        scene, name="two_mass_unstable", builtin="linear", cache=CACHE, run_path=paths[0], validation_path=paths[1]
+    )
+    assert sorted(opens.read_text().split()) == sorted(scene.names)
+    monkeypatch.setattr(fmu_run, "open_unit", opened)
+    run = run_dataset(run_scene(scene, cache=CACHE))
+    checked = scene_validation(scene, run, name="two_mass_unstable", builtin="linear", cache=CACHE)
+    job_run, job_checked = xr.open_dataset(paths[0]), xr.open_dataset(paths[1])
+    for name in ("position", "velocity", "coupling"):
+        np.testing.assert_array_equal(job_run[name].values, run[name].values)
+    for key in ("do_step_calls", "states_saved", "states_restored", "status", "diverged_at"):
+        assert job_run.attrs[key] == run.attrs[key], key
+    for name in ("predicted_rho", "measured_growth", "builtin_difference"):
+        assert float(job_checked[name]) == float(checked[name]), name
+    assert job_checked.attrs["identified_json"] == checked.attrs["identified_json"]

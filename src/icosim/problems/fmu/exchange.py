@@ -48,8 +48,6 @@ DEFAULT_TOLERANCE = 1e-10
 #: The values of a subsystem's ``interface``.
 INTERFACES = ("auto", "co-simulation", "model-exchange")
 
-_INTEGRATE = guard.code("DoStep")  # an integration is recorded as the step of the macro step it makes
-
 
 def check_exchange(label, path, md):
     """Refuse a unit that cannot be integrated here as Model Exchange: not FMI 2.0 or 3.0, without
@@ -126,6 +124,7 @@ class ExchangeUnit(Unit):
 
     interface = "model-exchange"
     _classes = ("FMU2Model", "FMU3Model")
+    _instantiate = ("fmi2Instantiate", "fmi3InstantiateModelExchange")
 
     def __init__(self, label, path, names, start, *, tolerance=None, t0=0.0):
         self.tolerance = DEFAULT_TOLERANCE if tolerance is None else float(tolerance)
@@ -277,11 +276,8 @@ class ExchangeUnit(Unit):
         held); afterwards the unit holds the end state, ``t + H`` and ``u(1)``."""
         from scipy.integrate import DOP853
 
-        drive, index = self._driver(key, coefficients, t, H), self.index
-
-        def inputs_at(tt):
-            drive(tt)  # its write is a call of its own in the guard's record: the integration's record again
-            guard.enter(index, _INTEGRATE, t, step_index)
+        # its writes are calls of their own inside the integration's record (which comes back after each)
+        inputs_at = self._driver(key, coefficients, t, H)
 
         self.do_steps += 1
         self.messages.clear()
@@ -299,7 +295,9 @@ class ExchangeUnit(Unit):
             self._check(f"{prefix}GetDerivatives", get_derivatives(comp, dxbuf, nx))
             return dxview.copy()
 
-        guard.enter(self.index, _INTEGRATE, t, step_index)
+        # an integration is recorded as the step of the macro step it makes
+        integration = guard.call(self, "fmi3DoStep" if self.fmi3 else "fmi2DoStep", t, step_index)
+        integration.__enter__()  # left in the finally below
         try:
             x = self._x
             if self.nx:
@@ -335,7 +333,7 @@ class ExchangeUnit(Unit):
                 f"unit {self.label} refused macro step {step_index} at t = {t:.12g} s ({exc}){self.said()}"
             ) from None
         finally:
-            guard.leave()
+            integration.__exit__(None, None, None)
         self.t = t + H
 
     def _driver(self, key, coefficients, t, H):

@@ -18,9 +18,6 @@ from .floats import summed
 
 __all__ = ["Fmi2Calls", "refused"]
 
-_GET, _SET = guard.code("get"), guard.code("set")
-_GET_STATE, _SET_STATE = guard.code("getFMUstate"), guard.code("setFMUstate")
-_DO_STEP, _DERIVATIVES = guard.code("doStep"), guard.code("setRealInputDerivatives")
 _FACTORIAL = [math.factorial(m) for m in range(16)]  # k is at most icosim.engine.bounds.MAX_K
 
 
@@ -64,30 +61,28 @@ class Fmi2Calls:
     def save(self):
         """The unit's FMU state, saved, and its time."""
         self.saved += 1
-        guard.enter(self.index, _GET_STATE, self.t)
         if self.fmi3:
-            state = self.fmu.getFMUState()
+            with guard.call(self, "fmi3GetFMUState", self.t):
+                state = self.fmu.getFMUState()
         else:
             state = self._new_state()
-            status = self._state_call("fmi2GetFMUstate", ctypes.byref(state))
+            with guard.call(self, "fmi2GetFMUstate", self.t):
+                status = self._state_call("fmi2GetFMUstate", ctypes.byref(state))
             if status > 1:
-                guard.leave()
                 refused("fmi2GetFMUstate", status)
-        guard.leave()
         return (state, self.t)
 
     def restore(self, state):
         """Back to a state :meth:`save` returned, and its time."""
         self.restored += 1
-        guard.enter(self.index, _SET_STATE, self.t)
         if self.fmi3:
-            self.fmu.setFMUState(state[0])
+            with guard.call(self, "fmi3SetFMUState", self.t):
+                self.fmu.setFMUState(state[0])
         else:
-            status = self._state_call("fmi2SetFMUstate", state[0])
+            with guard.call(self, "fmi2SetFMUstate", self.t):
+                status = self._state_call("fmi2SetFMUstate", state[0])
             if status > 1:
-                guard.leave()
                 refused("fmi2SetFMUstate", status)
-        guard.leave()
         self.t = state[1]
 
     def free(self, state):
@@ -95,9 +90,11 @@ class Fmi2Calls:
         if self.failed or self.fmu is None:
             return  # a refused step leaves only freeing the instance allowed (fmi2Error) or nothing (fmi2Fatal)
         if self.fmi3:
-            self.fmu.freeFMUState(state[0])
+            with guard.call(self, "fmi3FreeFMUState", self.t):
+                self.fmu.freeFMUState(state[0])
         else:
-            status = self._state_call("fmi2FreeFMUstate", ctypes.byref(state[0]))
+            with guard.call(self, "fmi2FreeFMUstate", self.t):
+                status = self._state_call("fmi2FreeFMUstate", ctypes.byref(state[0]))
             if status > 1:
                 refused("fmi2FreeFMUstate", status)
 
@@ -119,9 +116,8 @@ class Fmi2Calls:
             if self.fmi3 or self.fmu is None:
                 return self.get(keys).ravel().tolist()
             fast = self._reads[keys] = self._read_plan(keys)
-        guard.enter(self.index, _GET, self.t)
-        status = self._get_real(fast)
-        guard.leave()
+        with guard.call(self, "fmi2GetReal", self.t):
+            status = self._get_real(fast)
         return _read_values(fast, status)
 
     def _get_real(self, fast):
@@ -172,10 +168,9 @@ class Fmi2Calls:
         vr, n, buf, _, declared, bare, args = self._writes.get(key) or self._writer(key)
         buf[:n] = values
         fmu = self.fmu
-        guard.enter(self.index, _SET, self.t)
         f = fmu.dll.fmi2SetReal
-        status = bare(*args) if f is declared else f(fmu.component, vr, n, buf)
-        guard.leave()
+        with guard.call(self, "fmi2SetReal", self.t):
+            status = bare(*args) if f is declared else f(fmu.component, vr, n, buf)
         if status > 1:
             refused("fmi2SetReal", status)
 
@@ -183,7 +178,7 @@ class Fmi2Calls:
         """:meth:`step` with the coefficients as rows of floats (``rows[m][q]``, SI); an FMI 2.0 unit that takes
         input derivatives is driven without numpy: the same calls with the same values (``final`` as there).  With ``restore``, the
         unit first returns to that saved state (:meth:`restore`); with ``read``, the variables of those keys are
-        read at the end (:meth:`read`) and returned: one batch of the guard's records for the whole integration."""
+        read at the end (:meth:`read`) and returned; the calls recorded as one sequence (:func:`guard.calls`)."""
         if not self.exact_inputs or self.fmi3:
             if restore is not None:
                 self.restore(restore)
@@ -203,78 +198,50 @@ class Fmi2Calls:
         c = rows if factors is None else [[v / f for v, f in zip(row, factors)] for row in rows]
         fmu, self.t = self.fmu, t
         comp, library = fmu.component, fmu.dll
-        # the guard's records of the calls written here (guard.batch); every one names the macro step
-        rec = guard.batch(self.index, t, step_index, (4 if terms else 3) + (restore is not None) + (fast is not None))
-        if restore is not None:
-            self.restored += 1
-            if rec is not None:
-                r, number = rec
-                r[2] = _SET_STATE
-                r[0] = number
-                rec = r, number + 1.0
-            status = self._state_call("fmi2SetFMUstate", restore[0])
-            if rec is not None:
-                r[0] = 0.0
+        sequence = guard.calls(self, t, step_index)  # every call recorded, naming the macro step
+        try:
+            if restore is not None:
+                self.restored += 1
+                sequence.now("fmi2SetFMUstate")
+                status = self._state_call("fmi2SetFMUstate", restore[0])
+                if status > 1:
+                    refused("fmi2SetFMUstate", status)
+            buf[:n] = c[0]
+            f = library.fmi2SetReal
+            sequence.now("fmi2SetReal")
+            status = set_bare(*set_args) if f is set_declared else f(comp, vr, n, buf)
             if status > 1:
-                refused("fmi2SetFMUstate", status)
-        if rec is not None:
-            r, number = rec
-            r[2] = _SET
-            r[0] = number
-        buf[:n] = c[0]
-        f = library.fmi2SetReal
-        status = set_bare(*set_args) if f is set_declared else f(comp, vr, n, buf)
-        if rec is not None:
-            r[0] = 0.0
-        if status > 1:
-            refused("fmi2SetReal", status)
-        if terms:  # every order up to k, zeros too: a unit may keep the derivatives of the step before
-            values[:] = [factorial * c[m][q] / h_m for q, m, factorial, h_m in terms]
-            if rec is not None:
-                number += 1.0
-                r[2] = _DERIVATIVES
-                r[0] = number
-            f = library.fmi2SetRealInputDerivatives
-            if f is derivatives_declared:
-                status = derivatives_bare(*derivatives_args)
-            else:
-                status = f(comp, refs, len(terms), order, values)
-            if rec is not None:
-                r[0] = 0.0
+                refused("fmi2SetReal", status)
+            if terms:  # every order up to k, zeros too: a unit may keep the derivatives of the step before
+                values[:] = [factorial * c[m][q] / h_m for q, m, factorial, h_m in terms]
+                f = library.fmi2SetRealInputDerivatives
+                sequence.now("fmi2SetRealInputDerivatives")
+                if f is derivatives_declared:
+                    status = derivatives_bare(*derivatives_args)
+                else:
+                    status = f(comp, refs, len(terms), order, values)
+                if status > 1:
+                    refused("fmi2SetRealInputDerivatives", status)
+            self.do_steps += 1
+            self.messages.clear()
+            sequence.now("fmi2DoStep")
+            # noSetFMUStatePriorToCurrentPoint: true where no state before t + H will be restored
+            status = library.fmi2DoStep(comp, t, H, final or self.always_final)  # what fmpy's doStep calls
             if status > 1:
-                refused("fmi2SetRealInputDerivatives", status)
-        self.do_steps += 1
-        self.messages.clear()
-        if rec is not None:
-            number += 1.0
-            r[2] = _DO_STEP
-            r[0] = number
-        # noSetFMUStatePriorToCurrentPoint: true where no state before t + H will be restored
-        status = library.fmi2DoStep(comp, t, H, final or self.always_final)  # what fmpy's doStep calls
-        if rec is not None:
-            r[0] = 0.0
-        if status > 1:
-            self._steprefused(status, t, step_index)
-        buf[:n] = summed(c)
-        if rec is not None:
-            r[2] = _SET
-            r[0] = number + 1.0
-        f = library.fmi2SetReal
-        status = set_bare(*set_args) if f is set_declared else f(comp, vr, n, buf)
-        if rec is not None:
-            r[0] = 0.0
-        if status > 1:
-            refused("fmi2SetReal", status)
-        self.t = t + H
-        if fast is None:
-            return None
-        if rec is not None:
-            r[2] = _GET
-            r[3] = self.t
-            r[0] = number + 2.0
-        status = self._get_real(fast)
-        if rec is not None:
-            r[0] = 0.0
+                self._steprefused(status, t, step_index)
+            buf[:n] = summed(c)
+            f = library.fmi2SetReal
+            sequence.now("fmi2SetReal")
+            status = set_bare(*set_args) if f is set_declared else f(comp, vr, n, buf)
+            if status > 1:
+                refused("fmi2SetReal", status)
+            self.t = t + H
+            if fast is None:
+                return None
+            sequence.now("fmi2GetReal")
+            status = self._get_real(fast)
+        finally:
+            sequence.end()
         return _read_values(fast, status)
 
     def _drive_plan(self, key, rows, H):

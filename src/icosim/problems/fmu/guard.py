@@ -2,8 +2,17 @@
 shared with its parent, which unit is in which FMI call since when; the parent stops a call that outlasts its
 limit and reports a child that died, naming the unit, the call and the macro step.
 
-:func:`supervised` is what ``icosim cosim`` (and the workflow's FMU jobs) run under; without it the records are
-not kept and :func:`enter`/:func:`leave` cost a function call each.  The child's scratch files (the units
+Every FMI call a unit makes is a ``with`` block, :func:`call`: the record is written on entering and cleared on
+leaving, whatever happens inside (an exception, a refusal raised by the caller), so no record outlives its call
+and a live child is never stopped for a call that returned.  A call made inside another one (a Model Exchange
+unit's input written within its integration) restores the outer record when it returns.  A hot path's calls made
+one after another may be one sequence instead (:func:`calls`), ended in a ``finally``.  A unit takes a slot
+when it opens (:func:`register`) and gives it back when it closes (:func:`unregister`; a later unit reuses it);
+the slots' labels are written to a file of the scratch directory, which grows with them, so any number of units
+may be open in one child.
+
+:func:`supervised` is what ``icosim cosim`` (and the workflow's FMU jobs) run under; without it nothing is
+recorded and :func:`call` returns a context manager that does nothing.  The child's scratch files (the units
 unpacked) live in a directory the parent removes however the child ends, and a dataset is renamed into place
 only when complete (:func:`icosim.io.netcdf.write_netcdf`), so nothing half-written is left.
 
@@ -26,113 +35,215 @@ from dataclasses import dataclass
 from pathlib import Path
 
 __all__ = [
-    "enter",
-    "batch",
-    "leave",
-    "code",
+    "call",
+    "calls",
     "register",
     "unregister",
+    "under_way",
+    "slots",
     "scratch_dir",
     "supervised",
     "Outcome",
+    "CALLS",
     "CALL_SECONDS",
 ]
 
 #: The default limit of one FMI call, in seconds: generous (a unit's doStep may integrate a stiff model).
 CALL_SECONDS = 600.0
 
-#: The FMI calls by the names the messages use (``fmi2``/``fmi3`` prefixed by the unit's version).
+#: The FMI calls a record may name, as the standard names them.
 CALLS = (
     "",
-    "instantiate",
-    "Get",
-    "Set",
-    "GetFMUstate",
-    "SetFMUstate",
-    "DoStep",
-    "SetRealInputDerivatives",
-    "Terminate",
+    "fmi2Instantiate",
+    "fmi3InstantiateCoSimulation",
+    "fmi3InstantiateModelExchange",
+    "fmi2GetReal",
+    "fmi3GetFloat64",
+    "fmi2SetReal",
+    "fmi3SetFloat64",
+    "fmi2GetFMUstate",
+    "fmi3GetFMUState",
+    "fmi2SetFMUstate",
+    "fmi3SetFMUState",
+    "fmi2FreeFMUstate",
+    "fmi3FreeFMUState",
+    "fmi2SetRealInputDerivatives",
+    "fmi2DoStep",
+    "fmi3DoStep",
+    "fmi2Terminate",
+    "fmi3Terminate",
+    "fmi2FreeInstance",
+    "fmi3FreeInstance",
 )
-_CODE = {name: i for i, name in enumerate(CALLS)}
-_CODE.update(get=_CODE["Get"], set=_CODE["Set"], getFMUstate=_CODE["GetFMUstate"], setFMUstate=_CODE["SetFMUstate"])
-_CODE.update(doStep=_CODE["DoStep"], setRealInputDerivatives=_CODE["SetRealInputDerivatives"])
+_CODE = {name: float(i) for i, name in enumerate(CALLS)}
 
-_NAME_BYTES, _MAX_UNITS = 64, 64
-#: float64 slots: the number of the call under way (0: none), unit, call, t, macro step, spare, units registered,
-#: the last call's number.  A call is timed by the parent from when it first sees its number, so the child writes
-#: no clock: a call's record is a few stores into the shared memory (:func:`enter`) and one (:func:`leave`).
-_HEADER = 8
+#: Bytes of a slot's label in the labels file.
+_LABEL_BYTES = 128
+#: float64 slots of the shared record: the number of the call under way (0: none), its unit's slot, its call
+#: (:data:`CALLS`), t, macro step.  A call is timed by the parent from when it first sees its number, so the child
+#: writes no clock: entering a call is a few stores into the shared memory, leaving one.
+_RECORD = 5
 
 _record = None  # a float64 memoryview of the shared memory, in the supervised child only
-_shared = None
-_units = []  # the labels of the units registered in the supervised child
+_labels = None  # the file descriptor of the slots' labels, in the supervised child only
+_free = []  # the slots given back, reused first
+_taken = 0  # the slots ever taken in this child
+_number = 0.0  # the last call's number
+#: per call or sequence under way, innermost last: the record it interrupted (a call inside another), or None
+_open = []
 _scratch = None
 
 
+class _Nothing:
+    """The context manager (and sequence, :func:`calls`) of calls that are not recorded."""
+
+    __slots__ = ()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, value, trace):
+        return False
+
+    def now(self, name):
+        pass
+
+    def end(self):
+        pass
+
+
+class _Call:
+    """The context manager of the call :func:`call` names (one, reused: a call inside it is entered only
+    after it, in its block)."""
+
+    __slots__ = ("args",)
+
+    def __enter__(self):
+        global _number
+        r = _record
+        _open.append((r[0], r[1], r[2], r[3], r[4]) if r[0] != 0.0 else None)
+        _number = number = _number + 1.0
+        r[1], r[2], r[3], r[4] = self.args
+        r[0] = number
+        return self
+
+    def __exit__(self, kind, value, trace):
+        r = _record
+        outer = _open.pop()
+        if outer is None:
+            r[0] = 0.0
+        else:  # the outer call again, under its own number: timed from when the parent saw it last
+            number, r[1], r[2], r[3], r[4] = outer
+            r[0] = number
+        return False
+
+
+class _Calls:
+    """The FMI calls of one unit made one after another (:func:`calls`)."""
+
+    __slots__ = ()
+
+    def now(self, name: str):
+        """The call ``name`` starts now (the one before has returned)."""
+        global _number
+        r = _record
+        _number = number = _number + 1.0
+        r[2] = _CODE[name]
+        r[0] = number
+
+    def end(self):
+        """The sequence is over: no call of it is under way (the call it was made in, if any, again)."""
+        _CALL.__exit__(None, None, None)
+
+
+_NOTHING = _Nothing()
+_CALL = _Call()
+_CALLS = _Calls()
+
+
+def call(unit, name: str, t: float, step: int = -1):
+    """The context manager of the FMI call ``name`` (:data:`CALLS`) of ``unit`` at simulated time ``t`` (macro
+    step ``step``): ``with guard.call(unit, "fmi2DoStep", t, step): ...``.  Recorded from entering the block to
+    leaving it, however it is left; a unit not registered (:func:`register`, its ``index`` -1) or a process not
+    supervised records nothing."""
+    slot = unit.index
+    if slot < 0 or _record is None:
+        return _NOTHING
+    _CALL.args = (slot, _CODE[name], t, step)
+    return _CALL
+
+
+def calls(unit, t: float, step: int = -1):
+    """The FMI calls ``unit`` makes one after another at ``t`` (macro step ``step``), a hot path's record without a
+    ``with`` block per call::
+
+        sequence = guard.calls(unit, t, step)
+        try:
+            sequence.now("fmi2SetReal")
+            ...  # the call
+            sequence.now("fmi2DoStep")
+            ...
+        finally:
+            sequence.end()
+
+    Each call is recorded from its ``now`` to the next ``now`` or to ``end``; ``end`` in a ``finally`` ends the
+    record however the sequence is left, as a ``with`` block would.  Nothing is recorded where :func:`call`
+    records nothing."""
+    slot = unit.index
+    if slot < 0 or _record is None:
+        return _NOTHING
+    _CALL.args = (slot, 0, t, step)
+    _CALL.__enter__()
+    _record[0] = 0.0  # no call of it under way before its first now()
+    return _CALLS
+
+
+def under_way():
+    """The call recorded now, as ``(unit label, call, t, macro step)``, or None: what the parent would name."""
+    if _record is None or _record[0] == 0.0:
+        return None
+    r = _record
+    return _label(_labels, int(r[1])), CALLS[int(r[2])], float(r[3]), int(r[4])
+
+
 def register(unit) -> int:
-    """A unit's index in the records (its label and FMI version written where the parent reads them); -1 when
-    the process is not supervised or the table is full (its calls are then not named)."""
-    if _shared is None or len(_units) >= _MAX_UNITS:
+    """A slot for ``unit`` in the records (a slot given back first), its label written where the parent reads it;
+    -1 when the process is not supervised."""
+    global _taken
+    if _record is None:
         return -1
-    _units.append(unit.label)
-    index = len(_units) - 1
-    name = f"{'fmi3' if unit.fmi3 else 'fmi2'}:{unit.label}".encode()[: _NAME_BYTES - 1]
-    start = _HEADER * 8 + index * _NAME_BYTES
-    _shared[start : start + _NAME_BYTES] = name.ljust(_NAME_BYTES, b"\0")
-    _record[6] = index + 1
-    return index
+    if _free:
+        slot = min(_free)
+        _free.remove(slot)
+    else:
+        slot, _taken = _taken, _taken + 1
+    label = unit.label.encode()[: _LABEL_BYTES - 1].ljust(_LABEL_BYTES, b"\0")
+    os.pwrite(_labels, label, slot * _LABEL_BYTES)
+    return slot
 
 
 def unregister(unit):
-    """Nothing more is recorded of ``unit`` (its index stays taken: the record may still name it)."""
+    """``unit`` closed: its slot is given back (its label stays until a unit takes the slot) and ``unit.index``
+    is -1, so nothing more of it is recorded."""
+    slot = getattr(unit, "index", -1)
+    if _record is not None and slot >= 0 and slot not in _free:
+        _free.append(slot)
+    unit.index = -1
 
 
-def enter(index: int, call: str | int, t: float, step: int = -1):
-    """Unit ``index`` starts the FMI call ``call`` (a name, or its :func:`code`) at simulated time ``t`` (macro
-    step ``step``)."""
-    r = _record
-    if r is not None and index >= 0:
-        r[1] = index
-        r[2] = call if call.__class__ is int else _CODE[call]
-        r[3] = t
-        r[4] = step
-        number = r[7] + 1.0
-        r[7] = number
-        r[0] = number
-
-
-def batch(index: int, t: float, step: int, calls: int):
-    """Unit ``index`` is about to make ``calls`` FMI calls at ``t`` (macro step ``step``), one after the other:
-    the record with the unit, time and step written and the calls' numbers taken, and the first number; None
-    when not recorded.  The caller of such a batch writes its ``j``-th call's name and number itself, two stores
-    (``r[2] = code(name); r[0] = first + j``), and :func:`leave` (``r[0] = 0.0``) after each: a hot path's
-    calls recorded without a function call each."""
-    r = _record
-    if r is None or index < 0:
-        return None
-    r[1] = index
-    r[3] = t
-    r[4] = step
-    first = r[7] + 1.0
-    r[7] = first + (calls - 1)
-    return r, first
-
-
-def code(call: str) -> int:
-    """The number :func:`enter` records for the call named ``call`` (a caller may keep it)."""
-    return _CODE[call]
-
-
-def leave():
-    """The call returned."""
-    r = _record
-    if r is not None:
-        r[0] = 0.0
+def slots() -> int:
+    """The slots taken in this child so far, those given back included (at most the units open at once)."""
+    return _taken
 
 
 def scratch_dir():
     """Where units are unpacked: the supervised run's scratch directory, else the system's (None)."""
     return _scratch
+
+
+def _label(fd, slot) -> str:
+    raw = os.pread(fd, _LABEL_BYTES, slot * _LABEL_BYTES)
+    return raw.split(b"\0")[0].decode(errors="replace")
 
 
 @dataclass
@@ -144,22 +255,25 @@ class Outcome:
     message: str = ""
 
 
-def _describe(shared, record, *, limit=None, signum=None) -> str:
-    index, code, t, step = int(record[1]), int(record[2]), float(record[3]), int(record[4])
-    start = _HEADER * 8 + index * _NAME_BYTES
-    raw = bytes(shared[start : start + _NAME_BYTES]).split(b"\0")[0].decode(errors="replace")
-    version, _, label = raw.partition(":")
-    call = f"{version}{CALLS[code]}" if code and CALLS[code] != "instantiate" else "fmi2Instantiate"
-    if code == _CODE["instantiate"] and version == "fmi3":
-        call = "fmi3InstantiateCoSimulation"
+def _describe(labels_path, record, *, limit=None, signum=None) -> str:
+    slot, code, t, step = int(record[1]), int(record[2]), float(record[3]), int(record[4])
+    try:
+        fd = os.open(labels_path, os.O_RDONLY)
+        try:
+            label = _label(fd, slot)
+        finally:
+            os.close(fd)
+    except OSError:
+        label = f"in slot {slot}"
+    name = CALLS[code] if 0 <= code < len(CALLS) else f"call {code}"
     where = f"macro step {step}, t = {t:.12g} s" if step >= 0 else f"t = {t:.12g} s"
     if limit is not None:
         return (
-            f"unit {label} did not return from {call} within {limit:g} s ({where}); the run was stopped "
+            f"unit {label} did not return from {name} within {limit:g} s ({where}); the run was stopped "
             "(limits.call_seconds in the scene sets the limit)"
         )
-    name = signal.Signals(signum).name if signum in signal.Signals._value2member_map_ else f"signal {signum}"
-    return f"unit {label} crashed the process in {call} ({name}, {where})"
+    signame = signal.Signals(signum).name if signum in signal.Signals._value2member_map_ else f"signal {signum}"
+    return f"unit {label} crashed the process in {name} ({signame}, {where})"
 
 
 def _has_fd(stream) -> bool:
@@ -186,13 +300,13 @@ def supervised(target, *, call_seconds: float = CALL_SECONDS, leftovers=()) -> O
     target may have been writing, e.g. the ``.*.part`` temporaries of a dataset) and the scratch directory are
     removed, and the outcome's status is 2 with the message.  Otherwise the child's own status is returned.
     """
-    global _record, _shared, _scratch
+    global _record, _labels, _scratch, _taken, _number
     if not hasattr(os, "fork") or _record is not None:
         return Outcome(int(target() or 0))
-    size = _HEADER * 8 + _MAX_UNITS * _NAME_BYTES
-    shared = mmap.mmap(-1, size)
+    shared = mmap.mmap(-1, _RECORD * 8)
     record = memoryview(shared).cast("d")
     scratch = tempfile.mkdtemp(prefix="icosim-run-")
+    labels_path = os.path.join(scratch, "units")  # the slots' labels, written by the child as units open
     streams = (sys.stdout, sys.stderr)
     sys.stdout.flush()
     sys.stderr.flush()
@@ -200,7 +314,8 @@ def supervised(target, *, call_seconds: float = CALL_SECONDS, leftovers=()) -> O
     pid = os.fork()
     if pid == 0:  # the child: the run itself
         os.close(read_end)
-        _shared, _record, _scratch, _units[:] = shared, record, scratch, []
+        _labels = os.open(labels_path, os.O_RDWR | os.O_CREAT, 0o600)
+        _record, _scratch, _taken, _number, _free[:], _open[:] = record, scratch, 0, 0.0, [], []
         # streams without a file descriptor of their own (captured in memory) are sent to the parent at the end
         buffered = [not _has_fd(s) for s in streams]
         if buffered[0]:
@@ -238,7 +353,7 @@ def supervised(target, *, call_seconds: float = CALL_SECONDS, leftovers=()) -> O
                 if os.WIFSIGNALED(wait_status):
                     signum = os.WTERMSIG(wait_status)
                     if record[0] != 0.0:
-                        message = _describe(shared, record, signum=signum)
+                        message = _describe(labels_path, record, signum=signum)
                     else:
                         message = f"the run process died of {signal.Signals(signum).name} outside any unit call"
                     status = 2
@@ -251,7 +366,7 @@ def supervised(target, *, call_seconds: float = CALL_SECONDS, leftovers=()) -> O
                 if number != seen:
                     seen, since = number, now
                 elif now - since > call_seconds:
-                    described = _describe(shared, record, limit=call_seconds)
+                    described = _describe(labels_path, record, limit=call_seconds)
                     os.kill(pid, signal.SIGKILL)
                     os.waitpid(pid, 0)
                     message, status = described, 2

@@ -185,12 +185,16 @@ def _oscillator(name, p, H) -> dict:
     return out
 
 
-def predict_scene(scene) -> dict:
+def predict_scene(scene, *, opened=None) -> dict:
     """The identified units and the spectral radius of the scene's coupling (float64 with its error estimate,
     :func:`icosim.engine.spectral.radius.spectral_radius_float64` on the built-in chain of the identified
     oscillators, :func:`scene_chain`) for the scene's scheme, Jacobi, the Gauss-Seidel orders along the chain
     from either end, and the scene's order and its reverse; an order the stages cannot serve, or one that
-    re-evaluates a unit without feedthrough, is "not defined" with the reason."""
+    re-evaluates a unit without feedthrough, is "not defined" with the reason.
+
+    ``opened``: the scene's units and couplings as :func:`~icosim.problems.fmu.run.open_units` returned them, left
+    open at their start with their counters as they were (a run may follow on them); else they are opened here
+    and closed."""
     from ...errors import ParameterError
 
     c = scene.coupling
@@ -213,17 +217,20 @@ def predict_scene(scene) -> dict:
         )
     scene_chain(scene, {name: {"m": 1.0, "c": 0.0, "d": 0.0} for name in scene.names})  # a row, before any unit
     limit = float(scene.data.get("limits", {}).get("identify_seconds", IDENTIFY_SECONDS))
-    units, couplings = open_units(scene)
+    units, couplings = open_units(scene) if opened is None else opened
     try:
         found = {}
         for u, cp in zip(units, couplings):
-            before = u.do_steps
+            counters = u.do_steps, u.saved, u.restored, u.warnings, u.first_warning
             physical = np.sign(cp.gain)  # every joint acts with opposite signs on its two units (checked)
             found[u.label] = identify(u, cp, H, physical=physical, limit=limit)
-            found[u.label] |= {"probe_do_step_calls": u.do_steps - before, "feedthrough": cp.feedthrough}
+            found[u.label] |= {"probe_do_step_calls": u.do_steps - counters[0], "feedthrough": cp.feedthrough}
+            if opened is not None:  # the probes are not the run's: its counters as they were
+                u.do_steps, u.saved, u.restored, u.warnings, u.first_warning = counters
     finally:
-        for unit in units:
-            unit.close()
+        if opened is None:
+            for unit in units:
+                unit.close()
     chain = scene_chain(scene, {name: _oscillator(name, p, H) for name, p in found.items()})
     family = ChainFamily(chain.chain, int(c["k"]))
     graph = scene.graph()

@@ -65,13 +65,12 @@ class Recorder:
         """The variables' values as the unit holds them now (floats; a Boolean as 0 or 1)."""
         unit = self.unit
         out = []
-        guard.enter(unit.index, "get", unit.t)
-        for el, getter in self.elements:
-            get = getattr(unit.fmu, getter)
-            ref = [el.value_reference]
-            values = get(ref, el.size) if unit.fmi3 else get(ref)
-            out.append(float(values[el.index]))
-        guard.leave()
+        with guard.call(unit, "fmi3GetFloat64" if unit.fmi3 else "fmi2GetReal", unit.t):
+            for el, getter in self.elements:
+                get = getattr(unit.fmu, getter)
+                ref = [el.value_reference]
+                values = get(ref, el.size) if unit.fmi3 else get(ref)
+                out.append(float(values[el.index]))
         return out
 
 

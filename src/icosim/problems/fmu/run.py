@@ -225,19 +225,19 @@ def divergence_bound(scene: Scene, state) -> float:
     return float(given) if given is not None else 1e10 * (1.0 + float(np.max(np.abs(state))))
 
 
-def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
+def run_scene(scene, *, cache=None, progress=None, opened=None) -> SceneRun:
     """Run a scene (a :class:`~icosim.problems.fmu.scene.Scene` or a path) to ``t_end``.
 
     The units are opened and checked (:func:`open_units`), the start made consistent (:func:`consistent_start`),
     then the engine's run loop (:func:`icosim.engine.run.simulate`) takes the macro steps.  A unit's
     refused step or an output that is not finite raises :class:`~icosim.problems.fmu.errors.UnitStepError` (nothing is
     returned); a state that is not finite or beyond :func:`divergence_bound` ends the run with
-    ``status = "diverged"`` and the step.  ``progress(n_done)`` is called after each step.
-    """
+    ``status = "diverged"`` and the step.  ``progress(n_done)`` is called after each step.  ``opened``: the units
+    and couplings :func:`open_units` returned, at their start (the caller closes them), else they are opened here."""
     scene = scene if isinstance(scene, Scene) else load_scene(scene)
     c = scene.coupling
     clock = time.perf_counter()
-    units, couplings = open_units(scene, cache=cache)
+    units, couplings = open_units(scene, cache=cache) if opened is None else opened
     problem = None
     try:
         problem = FmuCosimulation(
@@ -291,7 +291,7 @@ def run_scene(scene, *, cache=None, progress=None) -> SceneRun:
     finally:
         if problem is not None:
             problem.close()
-        for unit in units:
+        for unit in units if opened is None else ():
             unit.close()
 
 

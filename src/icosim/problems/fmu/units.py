@@ -35,9 +35,6 @@ from .variables import VariableTable, declared_start, family
 
 __all__ = ["Unit", "ROLES"]
 
-_DO_STEP = guard.code("doStep")
-
-
 _STATUS = {0: "ok", 1: "warning", 2: "discard", 3: "error", 4: "fatal", 5: "pending"}
 
 #: Scene key -> (what it names, causalities it may have).
@@ -146,8 +143,9 @@ class Unit(Fmi2Calls):
         common = dict(unzipDirectory=unzipdir, modelIdentifier=self._interface(md).modelIdentifier,
                       instanceName=self.label)  # fmt: skip
         stage = "instantiated"
+        opening = guard.call(self, self._instantiate[self.fmi3], self.t)
+        opening.__enter__()  # left in the finally below: the record lasts exactly as long as the opening
         try:
-            guard.enter(self.index, "instantiate", self.t)
             if self.fmi3:
                 from fmpy import fmi3
 
@@ -194,16 +192,19 @@ class Unit(Fmi2Calls):
                     self._apply(apply_start_values, s)
             self.fmu.exitInitializationMode()  # co-simulation: step mode follows (FMI 3.0 without event mode)
             self._initialised()
-            guard.leave()
         except FmuError:
             raise
         except Exception as exc:
             raise FmuError(f"{self.label}: could not be {stage}: {_call_text(exc)}{self.said()}") from None
+        finally:
+            opening.__exit__(None, None, None)
 
     #: the interface a unit is opened with, as the scene's ``interface`` names it
     interface = "co-simulation"
     #: fmpy's classes of the interface (FMI 2.0, FMI 3.0)
     _classes = ("FMU2Slave", "FMU3Slave")
+    #: the instantiation as the supervisor's record names it (FMI 2.0, FMI 3.0)
+    _instantiate = ("fmi2Instantiate", "fmi3InstantiateCoSimulation")
     #: what the check table's open row says of the unit
     opened = "co-simulation, saves and restores its state"
 
@@ -260,14 +261,16 @@ class Unit(Fmi2Calls):
         release = pythonfmu.take(self)
         if fmu is not None and not self.failed:
             try:
-                fmu.terminate()
+                with guard.call(self, "fmi3Terminate" if self.fmi3 else "fmi2Terminate", self.t):
+                    fmu.terminate()
             except Exception:
                 pass
         if release is not None:
             release()  # while the library is loaded: fmpy's dlclose may unload it
         if fmu is not None and self.failed < 4:
             try:
-                fmu.freeInstance()  # fmi2FreeInstance, then dlclose
+                with guard.call(self, "fmi3FreeInstance" if self.fmi3 else "fmi2FreeInstance", self.t):
+                    fmu.freeInstance()  # fmi2FreeInstance, then dlclose
             except Exception:
                 pass
         guard.unregister(self)
@@ -322,9 +325,8 @@ class Unit(Fmi2Calls):
         if plan is None:
             plan = self._plans[keys] = self._plan(keys)
         refs, total, pick, factors = plan
-        guard.enter(self.index, "get", self.t)
-        values = np.array(self.fmu.getFloat64(refs, total) if self.fmi3 else self.fmu.getReal(refs), dtype=float)
-        guard.leave()
+        with guard.call(self, "fmi3GetFloat64" if self.fmi3 else "fmi2GetReal", self.t):
+            values = np.array(self.fmu.getFloat64(refs, total) if self.fmi3 else self.fmu.getReal(refs), dtype=float)
         if pick is not None:
             values = values[pick]
         if factors is not None:
@@ -339,7 +341,10 @@ class Unit(Fmi2Calls):
         els = self.elements[key]
         if not self.fmi3:
             return self._write(key, [float(v) for v in values])
-        guard.enter(self.index, "set", self.t)
+        with guard.call(self, "fmi3SetFloat64", self.t):
+            self._set_float64(els, values)
+
+    def _set_float64(self, els, values):
         if self.fmi3 and any(el.size > 1 for el in els):
             for el, v in zip(els, values):
                 if el.size == 1:
@@ -352,15 +357,13 @@ class Unit(Fmi2Calls):
                 self.fmu.setFloat64([el.value_reference], whole.tolist())
         else:
             self.fmu.setFloat64([el.value_reference for el in els], [float(v) for v in values])
-        guard.leave()
 
     def get_named(self, name) -> float:
         """The value of a scalar Real/Float64 variable (or array element) named ``name``, as the unit holds it."""
         el = self.table.element("mass", name)
-        guard.enter(self.index, "get", self.t)
         ref = [el.value_reference]
-        values = self.fmu.getFloat64(ref, el.size) if self.fmi3 else self.fmu.getReal(ref)
-        guard.leave()
+        with guard.call(self, "fmi3GetFloat64" if self.fmi3 else "fmi2GetReal", self.t):
+            values = self.fmu.getFloat64(ref, el.size) if self.fmi3 else self.fmu.getReal(ref)
         return float(values[el.index])
 
     # -- stepping -----------------------------------------------------------------------------
@@ -380,9 +383,8 @@ class Unit(Fmi2Calls):
             orders = [(q, m) for m in range(1, c.shape[0]) for q in range(len(refs))]
             if orders:
                 values = [math.factorial(m) * float(c[m, q]) / H**m for q, m in orders]
-                guard.enter(self.index, "setRealInputDerivatives", t)
-                self.fmu.setRealInputDerivatives([refs[q] for q, _ in orders], [m for _, m in orders], values)
-                guard.leave()
+                with guard.call(self, "fmi2SetRealInputDerivatives", t):
+                    self.fmu.setRealInputDerivatives([refs[q] for q, _ in orders], [m for _, m in orders], values)
             self._do_step(t, H, step_index, final)
         else:
             n = self.substeps
@@ -406,18 +408,16 @@ class Unit(Fmi2Calls):
         final = bool(final or self.always_final)
         self.do_steps += 1
         self.messages.clear()
-        guard.enter(self.index, _DO_STEP, t, step_index)
         try:
-            if self.fmi3:
-                result = self.fmu.doStep(t, h, noSetFMUStatePriorToCurrentPoint=final)
-            else:
-                status = self.fmu.dll.fmi2DoStep(self.fmu.component, t, h, final)  # what fmpy's doStep calls
-                if status > 1:
-                    refused("fmi2DoStep", status)
+            with guard.call(self, "fmi3DoStep" if self.fmi3 else "fmi2DoStep", t, step_index):
+                if self.fmi3:
+                    result = self.fmu.doStep(t, h, noSetFMUStatePriorToCurrentPoint=final)
+                else:
+                    status = self.fmu.dll.fmi2DoStep(self.fmu.component, t, h, final)  # what fmpy's doStep calls
+            if not self.fmi3 and status > 1:
+                refused("fmi2DoStep", status)
         except Exception as exc:
-            guard.leave()
             self._steprefused(getattr(exc, "status", None), t, step_index)
-        guard.leave()
         if self.fmi3 and (result[1] or result[2]):  # terminateSimulation, earlyReturn
             what = "asked to terminate the simulation" if result[1] else f"returned early at t = {result[3]:.12g} s"
             raise UnitStepError(f"unit {self.label} {what} in macro step {step_index} (from t = {t:.12g} s)")

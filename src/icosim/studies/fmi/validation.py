@@ -196,15 +196,17 @@ def builtin_difference(scene, run, builtin) -> dict:
     return {"difference": nan, "force_difference": nan}
 
 
-def scene_validation(scene, run, *, name: str, builtin: str = "none", cache=None):
+def scene_validation(scene, run, *, name: str, builtin: str = "none", cache=None, prediction=None):
     """:func:`scene_validation_data` as an :class:`xarray.Dataset`."""
-    return scene_validation_data(scene, run, name=name, builtin=builtin, cache=cache).to_xarray()
+    return scene_validation_data(scene, run, name=name, builtin=builtin, cache=cache, prediction=prediction).to_xarray()
 
 
-def scene_validation_data(scene, run, *, name: str, builtin: str = "none", cache=None) -> DatasetDict:
+def scene_validation_data(scene, run, *, name: str, builtin: str = "none", cache=None, prediction=None) -> DatasetDict:
     """One scene's validation dataset: the prediction before the run, the growth measured on it, the
     difference to the built-in model.  ``run``: the scene's dataset (:func:`icosim.problems.fmu.run.run_dataset_data`
-    or :func:`~icosim.problems.fmu.run.run_dataset`)."""
+    or :func:`~icosim.problems.fmu.run.run_dataset`).  ``prediction``: what
+    :func:`~icosim.problems.fmu.predict.predict_scene` returned (or the :class:`SceneError` it raised) for the
+    scene, else it is made here."""
     from ...io.netcdf import provenance_attrs
     from ...problems.fmu.predict import predict_scene
 
@@ -215,8 +217,11 @@ def scene_validation_data(scene, run, *, name: str, builtin: str = "none", cache
     nan = float("nan")
     schemes, rhos, errs, verdicts = [], [], [], []
     try:
-        with fmu_cache(cache):
-            prediction = predict_scene(scene)
+        if prediction is None:
+            with fmu_cache(cache):
+                prediction = predict_scene(scene)
+        if isinstance(prediction, SceneError):
+            raise prediction
         for row in prediction["schemes"]:
             schemes.append(row["scheme"])
             rhos.append(nan if row["rho"] is None else row["rho"])
@@ -292,13 +297,26 @@ def scene_job(scene, *, name: str, builtin: str, cache, run_path, validation_pat
 
     from ...io.netcdf import write_netcdf
     from ...problems.fmu.guard import CALL_SECONDS, supervised
-    from ...problems.fmu.run import run_dataset, run_scene
+    from ...problems.fmu.predict import predict_scene
+    from ...problems.fmu.run import open_units, run_dataset, run_scene
 
     def work():
-        run = run_scene(scene, cache=cache)
+        # each unit opened once: predicted from its start (left there), then run
+        with fmu_cache(cache):
+            opened = open_units(scene, cache=cache)
+        try:
+            try:
+                with fmu_cache(cache):
+                    prediction = predict_scene(scene, opened=opened)
+            except SceneError as exc:  # a joint in the plane: no single-mass units to identify
+                prediction = exc
+            run = run_scene(scene, cache=cache, opened=opened)
+        finally:
+            for unit in opened[0]:
+                unit.close()
         ds = run_dataset(run, command=command)
         write_netcdf(ds, run_path)
-        checked = scene_validation(scene, ds, name=name, builtin=builtin, cache=cache)
+        checked = scene_validation(scene, ds, name=name, builtin=builtin, cache=cache, prediction=prediction)
         write_netcdf(checked, validation_path)
         logging.info(
             "%s: %s after %d macro steps, %.2f s %s; predicted rho %s (%s), measured growth %s, difference to the "
