@@ -46,19 +46,10 @@ class Limit:
         return len(self.evaluations)
 
 
-def stability_limit(stable, scan, *, resolution: float = 0.02, prefetch=None) -> Limit:
+def stability_limit(stable, scan, *, resolution: float = 0.02) -> Limit:
     """Upper edge of the first stable band of ``stable(H)`` at or above ``scan[0]`` (module docstring).
 
-    ``stable(H)`` returns a bool or ``(bool, info)``.  ``prefetch(Hs)``, if given, is called before every second
-    halving with the midpoint and those of the next halving either way it goes (the step sizes the next two
-    halvings can check), so a predicate that costs mostly per call can compute them in one batch; the step
-    sizes checked and the result are those without it.
-
-    >>> asked = []
-    >>> lim = stability_limit(lambda H: H <= 0.0123, [1e-3, 1e-2, 1e-1], resolution=0.02, prefetch=asked.extend)
-    >>> plain = stability_limit(lambda H: H <= 0.0123, [1e-3, 1e-2, 1e-1], resolution=0.02)
-    >>> lim.evaluations == plain.evaluations, all(h in asked for h, _, _ in lim.evaluations[3:])
-    (True, True)
+    ``stable(H)`` returns a bool or ``(bool, info)``.
     """
     if not resolution > 0:
         raise ValueError(f"resolution must be > 0, got {resolution!r}")
@@ -89,14 +80,8 @@ def stability_limit(stable, scan, *, resolution: float = 0.02, prefetch=None) ->
         return Limit(nan, scan[0], nan, "no stable step size", evals)
     if hi is None:
         return Limit(lo, nan, first_stable, "stable up to the cap", evals)
-    fetched = set()
     while hi / lo > 1 + resolution:
         mid = math.sqrt(lo * hi)
-        if prefetch is not None and mid not in fetched:
-            # the children are formed as the loop forms them, so they are the step sizes it checks next
-            ahead = [mid] + ([math.sqrt(lo * mid), math.sqrt(mid * hi)] if mid / lo > 1 + resolution else [])
-            fetched.update(ahead)
-            prefetch(ahead)
         if check(mid):
             lo = mid
         else:

@@ -5,7 +5,7 @@ The spectral radius ``rho`` of a whole chain (``docs/chains.md``, section 6) is 
 error estimate over a geometric scan of ``H`` (one batched call per configuration).  A step size is **stable**
 where ``rho + error < 1``: a point float64 cannot decide counts as not stable.  The largest stable ``H`` is the
 upper edge of the first stable band at or above the scan's first point, bisected to the configured resolution
-(:func:`icosim.step_limit.stability_limit`, two halvings per batched call), so ``rho < 1`` holds at ``H_max`` and not at ``H_unstable``, its
+(:func:`icosim.step_limit.stability_limit`), so ``rho < 1`` holds at ``H_max`` and not at ``H_unstable``, its
 neighbour above.
 
 For two units of single masses the chain is the paper's two-mass model: the dataset holds that model's ``rho``
@@ -48,24 +48,19 @@ def rho_over_H(chain, method, k: int, scheme: str):
 
 def largest_stable_H(chain, method, k: int, scheme: str, scan, resolution: float):
     """The :class:`~icosim.step_limit.Limit` of ``rho + error < 1`` over ``H``, and ``(rho, error)`` over the
-    scan.  The scan's points are computed in one batch, the bisection's two halvings at a time (its midpoint and
-    both of the next ones: :func:`~icosim.step_limit.stability_limit`'s ``prefetch``)."""
+    scan.  The scan's points are computed in one batch; the bisection's one at a time."""
     scan = np.asarray(scan, dtype=float)
     rho, err = rho_over_H(chain.with_H(scan), method, k, scheme)
     known = {float(H): (float(r), float(e)) for H, r, e in zip(scan, rho, err)}
 
-    def prefetch(Hs):
-        todo = [H for H in Hs if H not in known]
-        if todo:
-            r, e = rho_over_H(chain.with_H(np.array(todo)), method, k, scheme)
-            known.update({H: (float(ri), float(ei)) for H, ri, ei in zip(todo, r, e)})
-
     def stable(H):
-        prefetch([H])
+        if H not in known:
+            r, e = rho_over_H(chain.with_H(np.array([H])), method, k, scheme)
+            known[H] = (float(r[0]), float(e[0]))
         r, e = known[H]
         return bool(r + e < 1), {"rho": r, "error": e}
 
-    return stability_limit(stable, scan, resolution=resolution, prefetch=prefetch), rho, err
+    return stability_limit(stable, scan, resolution=resolution), rho, err
 
 
 def two_mass_rho(kind: list, decomposition: str, method, k: int, scheme: str, H) -> np.ndarray:
