@@ -138,3 +138,23 @@ def test_a_bad_configuration_is_refused_naming_the_key(edit, message):
     edit(cfg)
     with pytest.raises(ParameterError, match=message):
         check_config(cfg)
+
+
+def test_the_batched_runs_are_the_runs_alone():
+    """Eq. (72) of a batch of step sizes against each step size run alone from the exact solution."""
+    from icosim.engine.run import simulate
+    from icosim.problems.linear.chain import chain_start
+    from icosim.studies.chains.convergence import exact_samples, run_errors
+
+    cfg = _config()
+    H, method, scheme = np.array([2e-3, 1e-3]), make_method("projection"), scheme_name("gauss-seidel-forward", 3)
+    chain = build_chain(cfg["units"]["segment"], "ff", 3, H)
+    exact = [exact_samples(chain.with_H(h), t_end=0.05, x0=0.01) for h in H]
+    batched = run_errors(chain, method, 1, scheme, exact)
+    for j, (solution, ref) in enumerate(exact):
+        problem = solution.chain.problem(1)
+        S = np.array(simulate(problem, method, *chain_start(problem, solution), len(ref), scheme=scheme).states[1:])
+        m = chain.n_masses
+        numerical = np.concatenate([S[..., :m].reshape(len(ref), -1), S[..., m:].reshape(len(ref), -1)], axis=-1)
+        assert batched[j] == pytest.approx(nrmse(ref, numerical), rel=1e-12)
+    assert len(exact[0][1]) == 25 and len(exact[1][1]) == 50

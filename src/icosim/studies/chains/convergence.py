@@ -21,7 +21,7 @@ from ...order_fit import asymptotic_order
 from ...problems.linear.chain import ChainSolution, chain_start
 from .config import build_chain, method_of, scheme_name
 
-__all__ = ["nrmse", "run_error", "convergence_data"]
+__all__ = ["nrmse", "exact_samples", "run_errors", "convergence_data"]
 
 
 def nrmse(reference, numerical) -> float:
@@ -33,20 +33,42 @@ def nrmse(reference, numerical) -> float:
     return float(np.sqrt(np.sum((ref - num) ** 2) / np.sum((ref - ref.mean(axis=0)) ** 2)))
 
 
-def run_error(chain, method, k: int, scheme: str, *, t_end: float, x0: float) -> float:
-    """Eq. (72) of one run of ``chain`` (scalar ``H``) over ``t_end`` (rounded to whole macro steps)."""
-    problem = chain.problem(k)
+def exact_samples(chain, *, t_end: float, x0: float):
+    """The exact solution of ``chain`` (scalar ``H``) from every mass at ``x0`` at rest: the
+    :class:`~icosim.problems.linear.chain.ChainSolution` and Eq. (72)'s reference, every mass's position and
+    velocity at the macro steps ``1 .. round(t_end / H)`` (``(steps, 2 N n)``).  It rests on neither method, ``k``
+    nor scheme: computed once per chain and step size."""
     n_all = chain.n_segments * chain.n_masses
     solution = ChainSolution(chain, np.full(n_all, float(x0)), np.zeros(n_all))
-    state, history = chain_start(problem, solution)
     steps = max(1, int(round(t_end / float(chain.H))))
+    exact = solution.state(np.arange(1, steps + 1, dtype=float))
+    return solution, np.concatenate([exact["x"], exact["v"]], axis=-1)
+
+
+def run_errors(chain, method, k: int, scheme: str, exact: list) -> np.ndarray:
+    """Eq. (72) of the runs of ``chain`` at each of its ``H`` (an array), in one batched run of as many macro
+    steps as the smallest ``H`` takes; each point compared over its own ``round(t_end / H)`` steps.  ``exact``:
+    :func:`exact_samples` of each point.  A point that leaves the batched run before its own last step (the
+    run stops where any point's state is not finite) is run alone."""
+    problem = chain.problem(k)
+    starts = [chain_start(problem, solution) for solution, _ in exact]
+    state, history = (np.stack([s[i] for s in starts]) for i in (0, 1))
+    steps = max(len(ref) for _, ref in exact)
     with np.errstate(all="ignore"):
         traj = simulate(problem, method, state, history, steps, scheme=scheme)
-    S = np.array(traj.states[1:])
-    m = chain.n_masses
-    numerical = np.concatenate([S[..., :m].reshape(steps, -1), S[..., m:].reshape(steps, -1)], axis=-1)
-    exact = solution.state(np.arange(1, steps + 1, dtype=float))
-    return nrmse(np.concatenate([exact["x"], exact["v"]], axis=-1), numerical)
+    H, m = np.atleast_1d(chain.H), chain.n_masses
+    errors = np.full(H.size, np.nan)
+    for j, (solution, ref) in enumerate(exact):
+        n = len(ref)
+        if len(traj.states) > n:
+            S = np.array([s[j] for s in traj.states[1 : n + 1]])
+        else:
+            alone = solution.chain.problem(k)
+            with np.errstate(all="ignore"):
+                S = np.array(simulate(alone, method, *chain_start(alone, solution), n, scheme=scheme).states[1:])
+        numerical = np.concatenate([S[..., :m].reshape(n, -1), S[..., m:].reshape(n, -1)], axis=-1)
+        errors[j] = nrmse(ref, numerical)
+    return errors
 
 
 def convergence_data(cfg: dict, *, command: str = "", log=None) -> DatasetDict:
@@ -63,12 +85,14 @@ def convergence_data(cfg: dict, *, command: str = "", log=None) -> DatasetDict:
     error = np.full(shape + (H.size,), np.nan)
     order, spread = np.full(shape, np.nan), np.full(shape, np.nan)
     status = np.full(shape, "", dtype=object)
+    chains = {n: build_chain(cfg["units"][cv["unit"]], cv["pattern"], n, H) for n in dims["n_units"]}
+    exact = {
+        n: [exact_samples(chain.with_H(h), t_end=cv["t_end"], x0=cv["x0"]) for h in H] for n, chain in chains.items()
+    }
     for idx in itertools.product(*(range(s) for s in shape)):
         n, mname, k, kind = (dims[d][i] for d, i in zip(dims, idx))
         method, scheme = method_of(methods, mname), scheme_name(kind, n)
-        for j, h in enumerate(H):
-            chain = build_chain(cfg["units"][cv["unit"]], cv["pattern"], n, h)
-            error[idx + (j,)] = run_error(chain, method, k, scheme, t_end=cv["t_end"], x0=cv["x0"])
+        error[idx] = run_errors(chains[n], method, k, scheme, exact[n])
         fit = asymptotic_order(H, error[idx])
         order[idx], spread[idx], status[idx] = fit.order, fit.spread, fit.status
         if log:

@@ -58,12 +58,16 @@ def placement_data(cfg: dict, *, command: str = "", log=None) -> DatasetDict:
     rho = np.full(shape + (scan.size,), np.nan)
     H_max, H_unstable = np.full(shape, np.nan), np.full(shape, np.nan)
     status = np.full(shape, "", dtype=object)
+    searched = {}  # the chain with no unit changed is the same for every variant: searched once
     for idx in itertools.product(*(range(s) for s in shape)):
         variant, position, mname, k, kind = (dims[d][i] for d, i in zip(dims, idx))
-        chain = changed_chain(base, pl["variants"][variant], position)
-        lim, rho[idx], _ = largest_stable_H(
-            chain, method_of(methods, mname), k, scheme_name(kind, n), scan, cfg["stability"]["resolution"]
-        )
+        key = (None if position == "none" else variant, position, mname, k, kind)
+        if key not in searched:
+            chain = changed_chain(base, pl["variants"][variant], position)
+            searched[key] = largest_stable_H(
+                chain, method_of(methods, mname), k, scheme_name(kind, n), scan, cfg["stability"]["resolution"]
+            )
+        lim, rho[idx], _ = searched[key]
         H_max[idx], H_unstable[idx], status[idx] = lim.H_max, lim.H_unstable, lim.status
         if log:
             log(f"{variant} at {position}, {mname} k={k} {kind}: H_max {lim.H_max:.4g} s ({lim.status})")
