@@ -119,26 +119,32 @@ def mass1(run, decomposition):
     return run.states[:, 1 if decomposition == "df" else 0, 0]
 
 
+def exact_start_positions(scene, decomposition="fd"):
+    """Mass 1's position over a run of ``scene`` from the exact start (the coupling history at ``T_0 ... T_-k``
+    the exact solution's; mass 1 is the first unit, or the second with df)."""
+    c = scene.coupling
+    k, H = c["k"], c["H"]
+    units, couplings = open_units(scene)
+    problem = FmuCosimulation(units, couplings, decomposition, k, H, perturbation=1.0)
+    try:
+        history = np.array([exact_coupling(-j * H, decomposition) for j in range(k + 1)])
+        if decomposition == "df":
+            history = history * [-1.0, 1.0]  # the multiplier acts on the first side: -F on system2's point
+        with np.errstate(all="ignore"):
+            traj = simulate(problem, scene.method, problem.initial_state(), history, scene.n_steps)
+    finally:
+        problem.close()
+        for unit in units:
+            unit.close()
+    return np.array(traj.states)[:, 1 if decomposition == "df" else 0, 0]
+
+
 def exact_start_errors(tmp_path, method, k, Hs, t_end, decomposition="fd", params=None):
-    """The largest error of mass 1's position over ``[0, t_end]`` at each ``H``, from the exact start (the
-    coupling history at ``T_0 ... T_-k`` the exact solution's)."""
+    """The largest error of mass 1's position over ``[0, t_end]`` at each ``H``, from the exact start."""
     errors = []
     for H in Hs:
         scene = load_scene(write(tmp_path, method, k, H, t_end, decomposition, params=params))
-        units, couplings = open_units(scene)
-        problem = FmuCosimulation(units, couplings, decomposition, k, H, perturbation=1.0)
-        try:
-            history = np.array([exact_coupling(-j * H, decomposition) for j in range(k + 1)])
-            if decomposition == "df":
-                history = history * [-1.0, 1.0]  # the multiplier acts on the first side: -F on system2's point
-            with np.errstate(all="ignore"):
-                traj = simulate(problem, scene.method, problem.initial_state(), history, scene.n_steps)
-        finally:
-            problem.close()
-            for unit in units:
-                unit.close()
-        states = np.array(traj.states)
-        x = states[:, 1 if decomposition == "df" else 0, 0]
+        x = exact_start_positions(scene, decomposition)
         t = H * np.arange(len(x))
         errors.append(float(np.max(np.abs(x - exact(t)[:, 0]))) if len(x) == scene.n_steps + 1 else np.nan)
     return errors

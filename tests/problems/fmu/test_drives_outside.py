@@ -10,14 +10,12 @@ decomposition (test_drives.builtin_order).
 import numpy as np
 import pytest
 import yaml
-from test_drives import AMPLITUDE, builtin_order, exact, exact_coupling, write
+from test_drives import AMPLITUDE, builtin_order, exact, exact_start_positions, write
 from toolchains import OUTSIDE
 
-from icosim.engine.run import simulate
 from icosim.order_fit import asymptotic_order
 from icosim.problems.fmu.errors import FmuError
-from icosim.problems.fmu.problem import FmuCosimulation
-from icosim.problems.fmu.run import open_units, run_scene
+from icosim.problems.fmu.run import run_scene
 from icosim.problems.fmu.scene import load_scene
 
 pytestmark = [pytest.mark.outside, pytest.mark.fmu]
@@ -84,16 +82,7 @@ def test_dual_mass_oscillator_converges_with_the_two_unit_orders(tmp_path, metho
     errors = []
     for H in Hs:
         scene = load_scene(om_scene(tmp_path, method, k, H, 0.25, params, tolerance=1e-12))
-        units, couplings = open_units(scene)
-        problem = FmuCosimulation(units, couplings, "fd", k, H, perturbation=1.0)
-        try:
-            history = np.array([exact_coupling(-j * H, "fd") for j in range(k + 1)])
-            traj = simulate(problem, scene.method, problem.initial_state(), history, scene.n_steps)
-        finally:
-            problem.close()
-            for unit in units:
-                unit.close()
-        x = np.array(traj.states)[:, 0, 0]
+        x = exact_start_positions(scene)
         assert len(x) == scene.n_steps + 1
         errors.append(float(np.max(np.abs(x - exact(H * np.arange(len(x)))[:, 0]))))
     fit = asymptotic_order(Hs, errors)
