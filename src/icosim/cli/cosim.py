@@ -32,7 +32,12 @@ def add_parser(sub):
         epilog="Scene format, what each unit must offer and how it is checked: docs/fmi.md.  Units named by a "
         "source directory (fmus/) are built on first use into $ICOSIM_FMU_CACHE (default ~/.cache/icosim/fmus).",
     )
-    p.add_argument("scene", metavar="SCENE.yaml", help="the scene file")
+    p.add_argument(
+        "scene",
+        metavar="SCENE.yaml",
+        help="the scene file (YAML), or a system file (.ssp, .ssd, OspSystemStructure.xml, or a folder holding one) "
+        "run with its own defaults",
+    )
     p.add_argument("--out", metavar="RUN.nc", help="the NetCDF file to write (required unless --predict or --check)")
     what = p.add_mutually_exclusive_group()
     what.add_argument(
