@@ -53,6 +53,23 @@ def test_parameters_bound_through_a_mapping_with_transformations_get_omsimulator
     assert (connection.factor, connection.offset) == (1.0, 0.0)
 
 
+def test_an_ssp_archive_is_read_as_the_folder_it_packs(tmp_path, monkeypatch):
+    """OMSimulator's suite packs each of these folders into an ``.ssp`` (its resources/CMakeLists.txt): so here."""
+    import zipfile
+
+    monkeypatch.setenv("ICOSIM_FMU_CACHE", str(tmp_path / "cache"))
+    folder = OMS / "LinearTransformation3"
+    archive = tmp_path / "LinearTransformation3.ssp"
+    with zipfile.ZipFile(archive, "w") as z:
+        for f in sorted(folder.rglob("*")):
+            z.write(f, f.relative_to(folder).as_posix())
+    system = read_system(archive)
+    assert system.path == archive and system.format == "SSP 2.0"
+    assert system.components["Gain1"].start == {"u": 14.0, "k": 13.0}
+    unpacked = system.components["Gain1"].source.parent.parent
+    assert unpacked.parent == tmp_path / "cache" / "ssp" and (unpacked / "SystemStructure.ssd").exists()
+
+
 def test_a_nested_system_is_refused_naming_it_and_the_file():
     path = OMS / "importParameterMapping" / "SystemStructure.ssd"
     with pytest.raises(SceneError, match=r"SystemStructure\.ssd: System System2: nested systems are not supported"):
@@ -109,6 +126,28 @@ def test_the_quarter_truck_s_power_bond_is_a_joint_with_the_wheel_a_velocity_dri
         "velocity_input": "in_vel", "reaction_force": "out_spring_damper_f", "force_sign": -1}  # fmt: skip
     assert scene.data["joints"] == [{"between": ["chassis", "wheel"], "decomposition": "fd"}]
     assert scene.data["coupling"]["H"] == 1e-4 and scene.data["t_end"] == 1.0
+
+
+@pytest.mark.outside
+def test_declared_units_decide_the_sides_of_a_power_bond_before_names(tmp_path):
+    """The quarter truck with its Wheel's ``out_spring_damper_f`` declared in m/s (the unit edited, libcosim's file
+    unchanged): the bond's velocity then runs from the wheel, which is taken as the force side."""
+    import zipfile
+
+    (tmp_path / "OspSystemStructure.xml").write_bytes((OSP / "OspSystemStructure.xml").read_bytes())
+    (tmp_path / "Chassis.fmu").symlink_to(OSP / "Chassis.fmu")
+    with zipfile.ZipFile(OSP / "Wheel.fmu") as zin, zipfile.ZipFile(tmp_path / "Wheel.fmu", "w") as zout:
+        for item in zin.infolist():
+            data = zin.read(item)
+            if item.filename == "modelDescription.xml":
+                old = 'name="out_spring_damper_f" valueReference="15" variability="discrete" causality="output">\n'
+                assert old + "\t\t\t<Real/>" in data.decode()
+                data = data.decode().replace(old + "\t\t\t<Real/>", old + '\t\t\t<Real unit="m/s"/>', 1).encode()
+            zout.writestr(item, data)
+    data = yaml.safe_load(yaml.safe_dump(load_scene(tmp_path).data))
+    assert data["joints"] == [{"between": ["wheel", "chassis"], "decomposition": "fd"}]
+    assert data["subsystems"]["wheel"]["velocity"] == "out_spring_damper_f"
+    assert data["subsystems"]["chassis"]["velocity_input"] == "force"
 
 
 def _overlay(tmp_path, name, **keys):

@@ -150,15 +150,14 @@ def _typed(path, where, element):
 
 
 def _causalities(path, component) -> dict:
-    """The unit's variables -> causality, from its model description (an ``.fmu`` or a unit's folder)."""
-    from fmpy import read_model_description
+    """The unit's variables -> (causality, type, unit), from its model description."""
+    from ..description import read_description
+    from ..errors import FmuError
 
-    if not component.source.exists():
-        _fail(path, f"Simulator {component.name}.source", f"{component.source} does not exist")
     try:
-        md = read_model_description(str(component.source))
-    except Exception as exc:  # fmpy raises several kinds for a broken unit
-        _fail(path, f"Simulator {component.name}.source", f"cannot read its model description: {exc}")
+        md, _ = read_description(f"Simulator {component.name}", component.source)
+    except FmuError as exc:
+        _fail(path, f"Simulator {component.name}.source", str(exc))
     return {v.name: (v.causality, v.type, getattr(v, "unit", None)) for v in md.modelVariables}
 
 

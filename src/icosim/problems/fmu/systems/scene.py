@@ -7,8 +7,9 @@ first unit force driven (``force``: its bond input, ``velocity``: its bond outpu
 ``reaction_force``; without its own position outputs its point moves as prescribed).  The bond says that the
 force side's input is the drive's output: ``force_sign`` +1 on the force side and -1 on the drive (the joint's
 multiplier is the force side's input).  Which side is which the file does not say; icosim takes the force side to
-be the unit whose bond output is its output ``velocity`` beside outputs ``position`` and ``acceleration``, and the
-checks before the run measure that it moves so (``moves``, ``direction``, ``role``).  A scene naming the system
+be the unit whose bond output is a velocity (by its declared unit, or where the bond declares none by its name
+``velocity``) beside outputs ``position`` and ``acceleration``, and the checks before the run measure that it moves
+so (``moves``, ``direction``, ``role``).  A scene naming the system
 (``system:``) may give the roles itself in ``subsystems``.
 
 Any other connection is a signal connection, which the engine does not yet run: refused by name before any work,
@@ -128,26 +129,49 @@ def _recordable(connector) -> bool:
         None, "Real", "Integer", "Boolean", "Enumeration")  # fmt: skip
 
 
-def _outputs(path) -> set:
-    from fmpy import read_model_description
+def _variables(label, path) -> dict:
+    from ..description import read_description
 
-    return {v.name for v in read_model_description(str(path)).modelVariables if v.causality == "output"}
+    return {v.name: v for v in read_description(label, path)[0].modelVariables}
+
+
+def _quantity(variable) -> str | None:
+    """``velocity`` or ``force`` where the variable's declared unit says so, else None."""
+    from ..measures import ROLE_QUANTITIES, parse
+
+    unit = variable.unit or (variable.declaredType.unit if variable.declaredType is not None else None)
+    dims = parse(unit)[0] if unit and parse(unit) else None
+    for key in ("velocity", "force"):
+        if dims is not None and dims == ROLE_QUANTITIES[key][1]:
+            return key
+    return None
 
 
 def _sides(system, bond, a, b) -> tuple[str, str]:
-    """(force-driven unit, velocity drive) of a bond: the force side's bond output is its ``velocity`` beside its
-    outputs ``position`` and ``acceleration``."""
+    """(force-driven unit, velocity drive) of a bond: by the declared units of the bond's variables where they
+    declare a velocity or a force, else the unit whose bond output is its output ``velocity``; the force side must
+    have outputs ``position`` and ``acceleration``."""
+    variables = {c.start[0]: _variables(c.start[0], system.components[c.start[0]].source) for c in (a, b)}
+    said = {}
+    for c in (a, b):
+        for unit, name in (c.start, c.end):
+            q = _quantity(variables[unit][name])
+            if q is not None:
+                said.setdefault(c.label, set()).add(q)
     fits = []
     for c in (a, b):
         unit = c.start[0]
-        outputs = _outputs(system.components[unit].source)
-        if c.start[1] == "velocity" and {"position", "acceleration"} <= outputs:
+        outputs = {n for n, v in variables[unit].items() if v.causality == "output"}
+        by_units = said.get(c.label) == {"velocity"} and said.get((b if c is a else a).label, {"force"}) == {"force"}
+        by_name = not said and c.start[1] == "velocity"
+        if (by_units or by_name) and {"position", "acceleration"} <= outputs:
             fits.append((unit, c.end[0]))
     if len(fits) != 1:
         _fail(system.path, f"powerBond {bond} ({a.label}, {b.label})", "cannot tell which side is force driven "
-              "(the unit whose bond output is its output 'velocity' beside outputs 'position' and 'acceleration'); "
-              "name the roles in a scene: system: FILE, subsystems: {<unit>: {force, position, velocity, "
-              "acceleration, force_sign}, <drive>: {velocity_input, reaction_force, force_sign}}, joints")  # fmt: skip
+              "(the unit whose bond output is a velocity, by its declared unit or else its name 'velocity', beside "
+              "outputs 'position' and 'acceleration'); name the roles in a scene: system: FILE, subsystems: "
+              "{<unit>: {force, position, velocity, acceleration, force_sign}, <drive>: {velocity_input, "
+              "reaction_force, force_sign}}, with joints or coupling.decomposition")  # fmt: skip
     return fits[0]
 
 

@@ -39,12 +39,13 @@ def _fail(path, where, message):
 
 
 def unpack_ssp(path) -> Path:
-    """An ``.ssp`` archive unpacked into ``<cache>/ssp/<sha256 of its bytes>`` (once): its ``SystemStructure.ssd``."""
+    """An ``.ssp`` archive unpacked into ``ssp/<sha256 of its bytes>`` in the units' cache
+    (:func:`icosim.problems.fmu.build.cache_dir`), once: its ``SystemStructure.ssd``."""
     from ..build import cache_dir
 
     path = Path(path)
     digest = hashlib.sha256(path.read_bytes()).hexdigest()
-    where = cache_dir().parent / "ssp" / digest
+    where = cache_dir() / "ssp" / digest
     ssd = where / "SystemStructure.ssd"
     if not ssd.exists():
         try:
