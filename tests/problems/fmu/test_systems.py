@@ -85,6 +85,13 @@ def test_a_signal_connection_is_refused_naming_it_before_any_unit_is_opened():
     assert "signal connections" in text and "not yet supported" in text
 
 
+def test_a_scene_naming_a_missing_system_is_refused_naming_its_key(tmp_path):
+    scene = tmp_path / "scene.yaml"
+    scene.write_text("system: nowhere/OspSystemStructure.xml\n")
+    with pytest.raises(SceneError, match=r"scene\.yaml: system: nowhere/OspSystemStructure\.xml does not exist"):
+        load_scene(scene)
+
+
 def test_a_scene_naming_a_system_refuses_a_component_the_system_lacks(tmp_path):
     scene = tmp_path / "scene.yaml"
     system = OMS / "LinearTransformation3" / "SystemStructure.ssd"

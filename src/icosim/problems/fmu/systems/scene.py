@@ -36,6 +36,9 @@ OVERLAY_KEYS = ("interface", "tolerance", "start", "record", "rollback_tolerance
                 "set_velocity")  # fmt: skip
 
 
+_INTERFACES = {"CoSimulation": "co-simulation", "ModelExchange": "model-exchange", "any": "auto"}
+
+
 def _fail(path, where, message):
     raise SceneError(f"{path}: {where}: {message}")
 
@@ -66,6 +69,8 @@ def system_scene_data(path, overlay: dict | None = None, *, where=None) -> tuple
     subsystems, joints, bonded = {}, [], {}
     for name, comp in system.components.items():
         subsystems[name] = {"fmu": str(comp.source), "start": dict(comp.start)}
+        if comp.implementation in _INTERFACES:  # SSP: the interface the file asks of the unit
+            subsystems[name]["interface"] = _INTERFACES[comp.implementation]
     for bond, (a, b) in bonds.items():
         for unit in {a.start[0], a.end[0]}:
             if unit in bonded:
@@ -198,4 +203,7 @@ def scene_data(path) -> tuple[dict, System | None]:
     if not isinstance(data["system"], str) or not data["system"]:
         _fail(path, "system", f"must name a system file (or its folder), got {data['system']!r}")
     overlay = {k: v for k, v in data.items() if k != "system"}
-    return system_scene_data(find_system_file((path.parent / data["system"]).resolve()), overlay, where=path)
+    target = (path.parent / data["system"]).resolve()
+    if not target.exists():
+        _fail(path, "system", f"{data['system']} does not exist (resolved to {target})")
+    return system_scene_data(find_system_file(target), overlay, where=path)
