@@ -86,6 +86,8 @@ def run(args, parser) -> int:
         scene = load_scene(args.scene)
     except SceneError as exc:
         return _error(str(exc))
+    for note in scene.system.notes if scene.system is not None else ():
+        print(f"icosim cosim: note: {note}", file=sys.stderr)
     limit = float(scene.data.get("limits", {}).get("call_seconds", CALL_SECONDS))
     if args.predict:
         target, leftovers = (lambda: _predict(scene, args)), ()

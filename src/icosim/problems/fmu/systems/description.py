@@ -78,6 +78,7 @@ class System:
     step_size: float | None = None
     algorithm: str | None = None
     ecco: dict | None = None
+    notes: list = field(default_factory=list)  # what a run from it takes that the file did not say
 
     def power_bonds(self) -> dict:
         """Bond name -> its connections, in file order."""
@@ -113,4 +114,5 @@ class System:
             "step_size": self.step_size,
             "algorithm": self.algorithm,
             "ecco": self.ecco,
+            "notes": self.notes,
         }

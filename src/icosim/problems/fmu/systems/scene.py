@@ -125,6 +125,11 @@ def system_scene_data(path, overlay: dict | None = None, *, where=None) -> tuple
     if "t_end" not in data:
         t0 = float(data.get("t_start", 0.0))
         data["t_end"] = system.stop_time if system.stop_time is not None else t0 + DEFAULT_T_END
+        if system.stop_time is None:
+            system.notes.append(f"the file gives no end time: the run ends {DEFAULT_T_END:g} s after its start")
+    if system.algorithm == "ecco" and "control" not in data["coupling"]:
+        system.notes.append("the file asks for libcosim's ECCO step control: read and kept (system_json), not "
+                            f"used; icosim couples at the fixed H = {data['coupling']['H']:g} s")  # fmt: skip
     return data, system
 
 
