@@ -23,6 +23,7 @@ from icosim.problems.fmu.scene import load_scene
 from icosim.problems.fmu.systems import read_system
 
 OMS = ROOT / "tests" / "data" / "omsimulator_ssp"
+LIBCOSIM = ROOT / "tests" / "data" / "libcosim_osp"
 OSP = OUTSIDE / "osp-quarter-truck"
 
 
@@ -98,6 +99,21 @@ def test_a_scene_naming_a_system_refuses_a_component_the_system_lacks(tmp_path):
     scene.write_text(yaml.safe_dump({"system": str(system), "subsystems": {"Gain2": {"interface": "auto"}}}))
     with pytest.raises(SceneError, match=r"scene\.yaml: subsystems\.Gain2: the system has no component 'Gain2'"):
         load_scene(scene)
+
+
+# -- libcosim's own OSP files -----------------------------------------------------------------------------------------
+
+
+def test_libcosim_s_function_blocks_are_refused_naming_the_element():
+    path = LIBCOSIM / "OspSystemStructure_EndTime.xml"
+    with pytest.raises(SceneError, match=r"OspSystemStructure_EndTime\.xml: Functions: libcosim's function blocks"):
+        read_system(path)
+
+
+def test_a_simulator_s_own_step_size_is_refused_naming_it():
+    path = LIBCOSIM / "OspSystemStructure_Bond.xml"
+    with pytest.raises(SceneError, match=r"_Bond\.xml: Simulator CraneController\.stepSize: a unit's own step size"):
+        load_scene(path)
 
 
 # -- OSP's quarter truck ----------------------------------------------------------------------------------------------

@@ -18,7 +18,12 @@ def is_system_file(path) -> bool:
     path = Path(path)
     if path.is_dir():
         return (path / OSP_NAME).exists() or (path / "SystemStructure.ssd").exists()
-    return path.suffix in (".ssp", ".ssd") or path.name == OSP_NAME or path.name.endswith("OspSystemStructure.xml")
+    return path.suffix in (".ssp", ".ssd") or _is_osp(path)
+
+
+def _is_osp(path) -> bool:
+    """libcosim's names: ``OspSystemStructure.xml``, and in its tests ``OspSystemStructure_<case>.xml``."""
+    return path.suffix == ".xml" and (path.name.startswith("OspSystemStructure") or path.name.endswith(OSP_NAME))
 
 
 def find_system_file(path) -> Path:
@@ -44,7 +49,7 @@ def read_system(path) -> System:
         from .ssp import read_ssp
 
         return read_ssp(path)
-    if path.name.endswith("OspSystemStructure.xml"):
+    if _is_osp(path):
         from .osp import read_osp
 
         return read_osp(path)
