@@ -77,6 +77,15 @@ def test_a_nested_system_is_refused_naming_it_and_the_file():
         read_system(path)
 
 
+def test_an_invalid_parameter_file_is_refused_naming_it_as_omsimulator_does():
+    """OMSimulator's ``invalidSSV.py``: System1.ssv, line 4: "The attribute 'type' is not allowed"."""
+    with pytest.raises(SceneError) as refused:
+        read_system(OMS / "invalidSSV" / "SystemStructure.ssd")
+    text = str(refused.value)
+    assert "parameter set: System1.ssv is not a valid SSP parameter set" in text
+    assert "'type' attribute not allowed" in text
+
+
 def test_a_signal_connection_is_refused_naming_it_before_any_unit_is_opened():
     path = OMS / "LinearTransformation" / "SystemStructure.ssd"  # its FMUs are not here: nothing is opened
     with pytest.raises(SceneError) as refused:

@@ -63,6 +63,21 @@ def unpack_ssp(path) -> Path:
     return ssd
 
 
+def _valid(path, shown, reader, kind):
+    """A pyssp-standard file object of ``path``, validated against its version's schema (else refused naming it)."""
+    from lxml import etree
+
+    try:
+        read = reader(path, mode="r")
+        read.__check_compliance__()
+    except (OSError, etree.XMLSyntaxError) as exc:
+        _fail(shown, kind, f"{path.name}: cannot read: {exc}")
+    except Exception as exc:  # xmlschema's validation errors
+        first = " ".join(str(exc).split())[:400]
+        _fail(shown, kind, f"{path.name} is not a valid SSP {kind}: {first}")
+    return read
+
+
 def read_ssp(path) -> System:
     """Read an ``.ssp`` archive or an ``.ssd`` file (the units are not opened)."""
     from lxml import etree
@@ -86,6 +101,9 @@ def read_ssp(path) -> System:
     system_el = root.find("ssd:System", ns)
     if system_el is None:
         _fail(shown, "System", "the file has no system")
+    system_bound = [
+        _bound(shown, base, b, f"System {ssd.system.name}") for b in ssd.system.parameter_bindings or []
+    ]  # read (and validated) first: a broken parameter file is named before the structure's refusals
     for tag, why in (("ssd:Elements/ssd:System", "nested systems are not supported: flatten the system"),
                      ("ssd:Elements/ssd:SignalDictionaryReference", "signal dictionaries are not supported"),
                      ("ssd:SignalDictionaries", "signal dictionaries are not supported")):  # fmt: skip
@@ -107,8 +125,8 @@ def read_ssp(path) -> System:
         for binding in comp.parameter_bindings or []:
             for name, value in _bound(shown, base, binding, f"Component {comp.name}").items():
                 components[comp.name].start[name] = value
-    for binding in ssd.system.parameter_bindings or []:
-        for name, value in _bound(shown, base, binding, f"System {ssd.system.name}").items():
+    for bound in system_bound:
+        for name, value in bound.items():
             owner, _, variable = name.partition(".")
             if owner not in components or not variable:
                 _fail(shown, f"System {ssd.system.name} ParameterBinding", f"{name!r} names no component's variable "
@@ -175,9 +193,7 @@ def _bound(path, base, binding, owner) -> dict:
         source = (base / binding.source).resolve()
         if not source.exists():
             _fail(path, f"{where} source", f"{binding.source} does not exist (resolved to {source})")
-        ssv = SSV(source, mode="r")
-        ssv.__check_compliance__()
-        parameters = ssv.ssv_elem.parameters
+        parameters = _valid(source, path, SSV, "parameter set").ssv_elem.parameters
     elif binding.ssv is not None:
         parameters = binding.ssv.parameters
     else:
@@ -189,9 +205,7 @@ def _bound(path, base, binding, owner) -> dict:
             source = (base / mapping.source).resolve()
             if not source.exists():
                 _fail(path, f"{where} ParameterMapping", f"{mapping.source} does not exist (resolved to {source})")
-            ssm = SSM(source, mode="r")
-            ssm.__check_compliance__()
-            entries = ssm.ssm_elem.entries
+            entries = _valid(source, path, SSM, "parameter mapping").ssm_elem.entries
         else:
             entries = mapping.ssm.entries if mapping.ssm is not None else []
         mapped = {}
