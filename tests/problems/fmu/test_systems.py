@@ -77,6 +77,16 @@ def test_a_nested_system_is_refused_naming_it_and_the_file():
         read_system(path)
 
 
+def test_an_invalid_system_structure_is_refused_naming_what_its_schema_does_not_allow():
+    """OMSimulator's ``invalidSSD.py``: line 16, a Connector's "attribute 'type': The attribute 'type' is not
+    allowed"."""
+    with pytest.raises(SceneError) as refused:
+        read_system(OMS / "invalidSSD" / "SystemStructure.ssd")
+    text = str(refused.value)
+    assert "invalidSSD/SystemStructure.ssd: schema: not a valid SSP 1.0 system structure" in text
+    assert "'type' attribute not allowed" in text and "'name': 'C1'" in text
+
+
 def test_an_invalid_parameter_file_is_refused_naming_it_as_omsimulator_does():
     """OMSimulator's ``invalidSSV.py``: System1.ssv, line 4: "The attribute 'type' is not allowed"."""
     with pytest.raises(SceneError) as refused:
