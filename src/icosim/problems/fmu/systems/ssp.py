@@ -48,18 +48,30 @@ def unpack_ssp(path) -> Path:
     where = cache_dir() / "ssp" / digest
     ssd = where / "SystemStructure.ssd"
     if not ssd.exists():
+        import shutil
+        import tempfile
+
+        where.parent.mkdir(parents=True, exist_ok=True)
+        part = Path(tempfile.mkdtemp(prefix=f".{digest}.", dir=where.parent))  # whole or not at all
         try:
             with zipfile.ZipFile(path) as z:
                 names = z.namelist()
                 if "SystemStructure.ssd" not in names:
                     _fail(path, "archive", "holds no SystemStructure.ssd")
                 for name in names:
-                    target = (where / name).resolve()
-                    if where.resolve() not in target.parents and target != where.resolve():
+                    target = (part / name).resolve()
+                    if part.resolve() not in target.parents:
                         _fail(path, "archive", f"entry {name!r} lies outside the archive's folder")
-                z.extractall(where)
+                z.extractall(part)
+            try:
+                part.replace(where)
+            except OSError:  # another process unpacked it meanwhile
+                if not ssd.exists():
+                    raise
         except zipfile.BadZipFile as exc:
             _fail(path, "archive", f"not a zip archive: {exc}")
+        finally:
+            shutil.rmtree(part, ignore_errors=True)
     return ssd
 
 
