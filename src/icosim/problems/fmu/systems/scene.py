@@ -24,17 +24,13 @@ from ..errors import SceneError
 from .description import System
 from .read import find_system_file, is_system_file, read_system
 
-__all__ = ["scene_data", "system_scene_data", "DEFAULT_T_END", "ROLE_KEYS", "OVERLAY_KEYS"]
+__all__ = ["scene_data", "system_scene_data", "DEFAULT_T_END", "ROLE_KEYS"]
 
 #: The interval a system runs where neither the file nor the scene gives an end time (s).
 DEFAULT_T_END = 1.0
 #: Subsystem keys that name a unit's role at a joint.
 ROLE_KEYS = ("position", "velocity", "acceleration", "force", "acceleration_input", "reaction_force",
              "position_input", "velocity_input", "force_sign")  # fmt: skip
-#: Per-component keys a scene naming a system may give (besides the roles).
-OVERLAY_KEYS = ("interface", "tolerance", "start", "record", "rollback_tolerance", "mass", "set_position",
-                "set_velocity")  # fmt: skip
-
 
 _INTERFACES = {"CoSimulation": "co-simulation", "ModelExchange": "model-exchange", "any": "auto"}
 
@@ -79,7 +75,7 @@ def system_scene_data(path, overlay: dict | None = None, *, where=None) -> tuple
             bonded[unit] = bond
         given = [u for u in (a.start[0], a.end[0]) if any(k in subs.get(u, {}) for k in ROLE_KEYS)]
         if given:
-            continue  # the scene names the roles (and the joints, or the joint below by its order)
+            continue  # the scene names the roles, and joins the units by its joints or coupling.decomposition
         force_side, drive = _sides(system, bond, a, b)
         to_drive = a if a.start[0] == force_side else b
         to_force = b if to_drive is a else a
@@ -104,13 +100,12 @@ def system_scene_data(path, overlay: dict | None = None, *, where=None) -> tuple
         subsystems[name].update(extra)
         subsystems[name]["start"] = start
     for name, sub in subsystems.items():
-        # a drive without an acceleration input cannot be stood at a communication point for reading (the FMU
-        # problem sets its coupling input there): its connectors are the joint's, in joint_force and the motion
-        if "velocity_input" in sub and "acceleration_input" not in sub and "record" not in sub:
-            continue
-        sub.setdefault("record", [c.name for c in system.components[name].connectors if _recordable(c)])
         if not sub["start"]:
             del sub["start"]
+        # a drive without an acceleration input cannot be stood at a communication point for reading (the FMU
+        # problem sets its coupling input there): its connectors are the joint's, in joint_force and the motion
+        if "velocity_input" not in sub or "acceleration_input" in sub:
+            sub.setdefault("record", [c.name for c in system.components[name].connectors if _recordable(c)])
     data = {k: v for k, v in overlay.items() if k != "subsystems"}
     data["subsystems"] = subsystems
     if "joints" not in data and joints:
