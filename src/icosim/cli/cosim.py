@@ -32,7 +32,12 @@ def add_parser(sub):
         epilog="Scene format, what each unit must offer and how it is checked: docs/fmi.md.  Units named by a "
         "source directory (fmus/) are built on first use into $ICOSIM_FMU_CACHE (default ~/.cache/icosim/fmus).",
     )
-    p.add_argument("scene", metavar="SCENE.yaml", help="the scene file")
+    p.add_argument(
+        "scene",
+        metavar="SCENE.yaml",
+        help="the scene file (YAML), or a system file (.ssp, .ssd, OspSystemStructure.xml, or a folder holding one) "
+        "run with its own defaults",
+    )
     p.add_argument("--out", metavar="RUN.nc", help="the NetCDF file to write (required unless --predict or --check)")
     what = p.add_mutually_exclusive_group()
     what.add_argument(
@@ -81,6 +86,8 @@ def run(args, parser) -> int:
         scene = load_scene(args.scene)
     except SceneError as exc:
         return _error(str(exc))
+    for note in scene.system.notes if scene.system is not None else ():
+        print(f"icosim cosim: note: {note}", file=sys.stderr)
     limit = float(scene.data.get("limits", {}).get("call_seconds", CALL_SECONDS))
     if args.predict:
         target, leftovers = (lambda: _predict(scene, args)), ()

@@ -391,6 +391,8 @@ def run_dataset_data(run: SceneRun, *, command: str = ""):
     ds = DatasetDict(per_unit | per_joint | coupling | recorded_entries(run.recorded) | controlled, coords=coords)
     attrs = provenance_attrs(scene.data, title=f"FMU scene {scene.path.name}", command=command)
     attrs["scene_json"] = attrs["config_json"]
+    if scene.system is not None:  # the system file read: what it gave, including what icosim keeps but does not use
+        attrs["system_json"] = json.dumps(scene.system.summary(), sort_keys=True)
     attrs["status"] = run.status
     attrs["reason"] = run.reason
     attrs["diverged_at"] = -1 if run.diverged_at is None else int(run.diverged_at)

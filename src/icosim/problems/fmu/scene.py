@@ -31,6 +31,7 @@ first use: :mod:`icosim.problems.fmu.build`), relative to the scene file; subsys
 two components in every variable entry (``position: [Px, Py]``).  Keys per subsystem: :data:`SUBSYSTEM_KEYS`;
 per joint :data:`JOINT_KEYS`; coupling keys: :data:`COUPLING_KEYS` and the method's parameters (as
 :func:`icosim.engine.methods.make_method` takes them, dimensional: ``mu`` and ``beta`` in s, ``gamma`` in s^2).
+A scene may name an SSP or OSP system file (``system:``, :mod:`icosim.problems.fmu.systems.scene`).
 docs/fmi.md has the details.
 """
 
@@ -92,6 +93,7 @@ JOINT_KEYS = {
 SCENE_KEYS = {
     "subsystems": "the units by name (two without joints, the first the paper's subsystem 1; any number >= 2 "
     "with joints)",
+    "system": "an SSP or OSP system file (or its folder), relative to the scene: its components are the subsystems",
     "joints": "the joints between the subsystems, each {between: [first, second], decomposition} (without it: "
     "the two subsystems joined by coupling.decomposition)",
     "coupling": "the method, decomposition (without joints), k, scheme (and order), H and their options",
@@ -220,6 +222,7 @@ class Scene:
     n_steps: int
     joints: tuple = ()  # the Joints (0-based subsystems); empty: the two subsystems of the coupling's decomposition
     n_dim: int = 1  # components of every position entry (1: a line, 2: the plane)
+    system: object = None  # the system file it came from (icosim.problems.fmu.systems), or None
 
     @property
     def names(self) -> tuple:
@@ -304,21 +307,12 @@ def _fail(path, where, message):
 
 
 def load_scene(path) -> Scene:
-    """Read and check a scene file (no unit is loaded): :class:`~icosim.problems.fmu.errors.SceneError` names the file,
-    the key and what is allowed."""
-    import yaml
-
-    from ...io.yamlio import load_yaml
+    """Read and check a scene file, or an SSP or OSP system file as a scene (:mod:`icosim.problems.fmu.systems`; no
+    unit is loaded): :class:`~icosim.problems.fmu.errors.SceneError` names the file, the key and what is allowed."""
+    from .systems.scene import scene_data
 
     path = Path(path)
-    try:
-        data = load_yaml(path.read_text())
-    except FileNotFoundError:
-        raise SceneError(f"{path}: no such scene file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SceneError(f"{path}: cannot read the scene: {exc}") from None
-    except yaml.YAMLError as exc:
-        raise SceneError(f"{path}: not valid YAML: {' '.join(str(exc).split())}") from None
+    data, system = scene_data(path)
     _validate(path, data)
     c = {**COUPLING_KEYS, **data["coupling"]}
     names = list(data["subsystems"])
@@ -369,7 +363,7 @@ def load_scene(path) -> Scene:
             f"every variable entry must name as many components (one name, or lists of one length), got {sizes}",
         )
     n_dim = next(iter(entries.values()), 1)
-    scene = Scene(path, data, fmus, method, int(round(steps)), joints, n_dim)
+    scene = Scene(path, data, fmus, method, int(round(steps)), joints, n_dim, system)
     graph = scene.graph()
     check_order(path, data["coupling"], scene, graph, method)
     if "initial_coupling" in data and len(data["initial_coupling"]) != graph.n_coupling:

@@ -1,0 +1,209 @@
+"""A system as a scene: its components as subsystems, its power bonds as joints, its defaults as the coupling.
+
+A power bond (OSP: two ``VariableConnection``s of one ``powerBond``) between a unit that takes a force and returns
+its point's velocity and a unit that takes a velocity and returns the force at that point is a joint ``fd``: the
+first unit force driven (``force``: its bond input, ``velocity``: its bond output, ``position`` and
+``acceleration``: its outputs of those names), the second a drive through its velocity (``velocity_input``,
+``reaction_force``; without its own position outputs its point moves as prescribed).  The bond says that the
+force side's input is the drive's output: ``force_sign`` +1 on the force side and -1 on the drive (the joint's
+multiplier is the force side's input).  Which side is which the file does not say; icosim takes the force side to
+be the unit whose bond output is a velocity (by its declared unit, or where the bond declares none by its name
+``velocity``) beside outputs ``position`` and ``acceleration``, and the checks before the run measure that it moves
+so (``moves``, ``direction``, ``role``).  A scene naming the system
+(``system:``) may give the roles itself in ``subsystems``.
+
+Any other connection is a signal connection, which the engine does not yet run: refused by name before any work,
+never dropped.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..errors import SceneError
+from .description import System
+from .read import find_system_file, is_system_file, read_system
+
+__all__ = ["scene_data", "system_scene_data", "DEFAULT_T_END", "ROLE_KEYS"]
+
+#: The interval a system runs where neither the file nor the scene gives an end time (s).
+DEFAULT_T_END = 1.0
+#: Subsystem keys that name a unit's role at a joint.
+ROLE_KEYS = ("position", "velocity", "acceleration", "force", "acceleration_input", "reaction_force",
+             "position_input", "velocity_input", "force_sign")  # fmt: skip
+
+_INTERFACES = {"CoSimulation": "co-simulation", "ModelExchange": "model-exchange", "any": "auto"}
+
+
+def _fail(path, where, message):
+    raise SceneError(f"{path}: {where}: {message}")
+
+
+def default_coupling(H: float) -> dict:
+    """The coupling a system runs with unless the scene gives one: the paper's Baumgarte index 1 with
+    ``mu = H``, ``k = 1``, Jacobi, at the file's step."""
+    return {"method": "baumgarte", "index": 1, "mu": H, "k": 1, "scheme": "jacobi", "H": H}
+
+
+def system_scene_data(path, overlay: dict | None = None, *, where=None) -> tuple[dict, System]:
+    """The scene data of the system at ``path`` (a file or a folder), with a scene's ``overlay`` (its keys other than
+    ``system``) applied; ``where`` names the scene file in messages.  Returns the data (checked afterwards as
+    every scene) and the system read."""
+    overlay = dict(overlay or {})
+    system = read_system(path)
+    shown = where or system.path
+    subs = overlay.get("subsystems", {}) or {}
+    unknown = [n for n in subs if n not in system.components]
+    if unknown:
+        _fail(shown, f"subsystems.{unknown[0]}", f"the system has no component {unknown[0]!r}; its components: "
+              f"{', '.join(system.components)}")  # fmt: skip
+    bonds = system.power_bonds()
+    for c in system.connections:
+        if c.power_bond is None:
+            _fail(system.path, f"connection {c.label}", "signal connections (an output feeding an input) are not yet "
+                  "supported: icosim runs power bonds between a force-driven unit and a velocity drive as joints")  # fmt: skip
+    subsystems, joints, bonded = {}, [], {}
+    for name, comp in system.components.items():
+        subsystems[name] = {"fmu": str(comp.source), "start": dict(comp.start)}
+        if comp.implementation in _INTERFACES:  # SSP: the interface the file asks of the unit
+            subsystems[name]["interface"] = _INTERFACES[comp.implementation]
+    for bond, (a, b) in bonds.items():
+        for unit in {a.start[0], a.end[0]}:
+            if unit in bonded:
+                _fail(system.path, f"powerBond {bond}", f"{unit} is in power bonds {bonded[unit]} and {bond}: a unit "
+                      "has one coupling point with one force input")  # fmt: skip
+            bonded[unit] = bond
+        given = [u for u in (a.start[0], a.end[0]) if any(k in subs.get(u, {}) for k in ROLE_KEYS)]
+        if given:
+            continue  # the scene names the roles, and joins the units by its joints or coupling.decomposition
+        force_side, drive = _sides(system, bond, a, b)
+        to_drive = a if a.start[0] == force_side else b
+        to_force = b if to_drive is a else a
+        for c in (to_drive, to_force):
+            if (c.factor, c.offset, c.unit_factor, c.unit_offset) != (1.0, 0.0, 1.0, 0.0):
+                _fail(system.path, f"connection {c.label}", "a power bond with a transformation is not supported")
+        subsystems[force_side].update(
+            {
+                "position": "position",
+                "velocity": to_drive.start[1],
+                "acceleration": "acceleration",
+                "force": to_force.end[1],
+                "force_sign": 1,
+            }  # fmt: skip
+        )
+        subsystems[drive].update(
+            {"velocity_input": to_drive.end[1], "reaction_force": to_force.start[1], "force_sign": -1}
+        )
+        joints.append({"between": [force_side, drive], "decomposition": "fd"})
+    for name, extra in subs.items():
+        start = {**subsystems[name].get("start", {}), **(extra.get("start") or {})}
+        subsystems[name].update(extra)
+        subsystems[name]["start"] = start
+    for name, sub in subsystems.items():
+        if not sub["start"]:
+            del sub["start"]
+        # a drive without an acceleration input cannot be stood at a communication point for reading (the FMU
+        # problem sets its coupling input there): its connectors are the joint's, in joint_force and the motion
+        if "velocity_input" not in sub or "acceleration_input" in sub:
+            sub.setdefault("record", [c.name for c in system.components[name].connectors if _recordable(c)])
+    data = {k: v for k, v in overlay.items() if k != "subsystems"}
+    data["subsystems"] = subsystems
+    if "joints" not in data and joints:
+        data["joints"] = joints
+    if "coupling" not in data:
+        if system.step_size is None:
+            _fail(shown, "coupling", f"{system.format} gives no step size: a scene naming the system needs coupling "
+                  "(method, k, H)")  # fmt: skip
+        data["coupling"] = default_coupling(system.step_size)
+    if "t_start" not in data and system.start_time:
+        data["t_start"] = system.start_time
+    if "t_end" not in data:
+        t0 = float(data.get("t_start", 0.0))
+        data["t_end"] = system.stop_time if system.stop_time is not None else t0 + DEFAULT_T_END
+        if system.stop_time is None:
+            system.notes.append(f"the file gives no end time: the run ends {DEFAULT_T_END:g} s after its start")
+    if system.algorithm == "ecco" and "control" not in data["coupling"]:
+        system.notes.append("the file asks for libcosim's ECCO step control: read and kept (system_json), not "
+                            f"used; icosim couples at the fixed H = {data['coupling']['H']:g} s")  # fmt: skip
+    return data, system
+
+
+def _recordable(connector) -> bool:
+    """Connectors read at communication points: inputs and outputs of a numeric type."""
+    return connector.kind in ("input", "output", "inout", None) and connector.type in (
+        None, "Real", "Integer", "Boolean", "Enumeration")  # fmt: skip
+
+
+def _variables(label, path) -> dict:
+    from ..description import read_description
+
+    return {v.name: v for v in read_description(label, path)[0].modelVariables}
+
+
+def _quantity(variable) -> str | None:
+    """``velocity`` or ``force`` where the variable's declared unit says so, else None."""
+    from ..measures import ROLE_QUANTITIES, parse
+
+    unit = variable.unit or (variable.declaredType.unit if variable.declaredType is not None else None)
+    dims = parse(unit)[0] if unit and parse(unit) else None
+    for key in ("velocity", "force"):
+        if dims is not None and dims == ROLE_QUANTITIES[key][1]:
+            return key
+    return None
+
+
+def _sides(system, bond, a, b) -> tuple[str, str]:
+    """(force-driven unit, velocity drive) of a bond: by the declared units of the bond's variables where they
+    declare a velocity or a force, else the unit whose bond output is its output ``velocity``; the force side must
+    have outputs ``position`` and ``acceleration``."""
+    variables = {c.start[0]: _variables(c.start[0], system.components[c.start[0]].source) for c in (a, b)}
+    said = {}
+    for c in (a, b):
+        for unit, name in (c.start, c.end):
+            q = _quantity(variables[unit][name])
+            if q is not None:
+                said.setdefault(c.label, set()).add(q)
+    fits = []
+    for c in (a, b):
+        unit = c.start[0]
+        outputs = {n for n, v in variables[unit].items() if v.causality == "output"}
+        by_units = said.get(c.label) == {"velocity"} and said.get((b if c is a else a).label, {"force"}) == {"force"}
+        by_name = not said and c.start[1] == "velocity"
+        if (by_units or by_name) and {"position", "acceleration"} <= outputs:
+            fits.append((unit, c.end[0]))
+    if len(fits) != 1:
+        _fail(system.path, f"powerBond {bond} ({a.label}, {b.label})", "cannot tell which side is force driven "
+              "(the unit whose bond output is a velocity, by its declared unit or else its name 'velocity', beside "
+              "outputs 'position' and 'acceleration'); name the roles in a scene: system: FILE, subsystems: "
+              "{<unit>: {force, position, velocity, acceleration, force_sign}, <drive>: {velocity_input, "
+              "reaction_force, force_sign}}, with joints or coupling.decomposition")  # fmt: skip
+    return fits[0]
+
+
+def scene_data(path) -> tuple[dict, System | None]:
+    """The data of a scene file (YAML) or of a system file (or its folder), and the system read (``None`` for a
+    scene without ``system``): a scene naming a system has it applied (:func:`system_scene_data`)."""
+    import yaml
+
+    from ....io.yamlio import load_yaml
+
+    path = Path(path)
+    if is_system_file(path):
+        return system_scene_data(path)
+    try:
+        data = load_yaml(path.read_text())
+    except FileNotFoundError:
+        raise SceneError(f"{path}: no such scene file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneError(f"{path}: cannot read the scene: {exc}") from None
+    except yaml.YAMLError as exc:
+        raise SceneError(f"{path}: not valid YAML: {' '.join(str(exc).split())}") from None
+    if not isinstance(data, dict) or "system" not in data:
+        return data, None
+    if not isinstance(data["system"], str) or not data["system"]:
+        _fail(path, "system", f"must name a system file (or its folder), got {data['system']!r}")
+    overlay = {k: v for k, v in data.items() if k != "system"}
+    target = (path.parent / data["system"]).resolve()
+    if not target.exists():
+        _fail(path, "system", f"{data['system']} does not exist (resolved to {target})")
+    return system_scene_data(find_system_file(target), overlay, where=path)
