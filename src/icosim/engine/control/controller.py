@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -152,9 +153,11 @@ def ecco_controller(*, safety, fac_min, fac_max, proportional_gain, integral_gai
     )
 
 
-#: The error estimates of a controlled run: name -> what it measures.
-ESTIMATES = {
-    "predictor-corrector": "the corrector's coupling variables against the predictor's (pc_estimate), "
-    "of order k + 1 in H",
-    "power-residual": "ECCO's: the power residual of each joint at the step's end times H (power_residual_estimate)",
-}
+#: The error estimates of a controlled run: name -> what it measures (read-only).
+ESTIMATES = MappingProxyType(
+    {
+        "predictor-corrector": "the corrector's coupling variables against the predictor's (pc_estimate), "
+        "of order k + 1 in H",
+        "power-residual": "ECCO's: the power residual of each joint at the step's end times H (power_residual_estimate)",
+    }
+)

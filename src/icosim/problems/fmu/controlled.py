@@ -8,8 +8,8 @@ them) from the predictor-corrector estimate of the coupling variables (SI) scale
 step is retried from the problem's checkpoint (the units' saved FMU states at ``T_N``).  The starting history at
 any spacing is the consistent start's coupling variables held; a method whose parameters are given in seconds
 (``mu``, ``beta``, ``gamma``) is rebuilt for each step's size.  The dataset's ``time`` is the accepted macro nodes,
-``macro_step_size(time)`` the step that reached each (NaN at the start), and the attributes count the rejected
-steps.
+``macro_step_size(time)`` the step that reached each (NaN at the start), ``control_error(time)`` its error norm,
+and the attributes count the rejected steps.
 
 ``estimate`` chooses the error estimate (:data:`icosim.engine.control.controller.ESTIMATES`): the
 predictor-corrector difference above (``predictor-corrector``, the default) or ECCO's power residual
@@ -19,8 +19,8 @@ optional, defaults as libcosim's configuration of OSP's quarter truck gives them
 bond: per joint ``r_j = f_a . v_a + f_b . v_b`` from the two sides' coupling forces and velocities at the step's
 end, normed by :func:`~icosim.engine.control.controller.power_residual_estimate` and sized by ECCO's PI
 controller (:func:`~icosim.engine.control.controller.ecco_controller`).  Such a run's dataset adds
-``coupling_force(subsystem, time)``, ``power_residual(joint, time)`` and ``control_error(time)`` (docs/fmi.md,
-"Step control by the power residual (ECCO)").
+``coupling_force(subsystem, time)`` and ``power_residual(joint, time)`` (docs/fmi.md, "Step control by the power
+residual (ECCO)").
 """
 
 from __future__ import annotations
