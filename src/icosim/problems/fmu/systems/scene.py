@@ -22,7 +22,6 @@ never dropped.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from ..errors import SceneError
@@ -123,9 +122,11 @@ def system_scene_data(path, overlay: dict | None = None, *, where=None) -> tuple
         if system.algorithm == "ecco" and system.ecco is not None:
             data["coupling"]["H"] = system.ecco["StepSize"]
             data["coupling"]["control"] = ecco_control(system.ecco)
-            system.notes.append("the file asks for libcosim's ECCO step control: run as coupling.control "
-                                f"{json.dumps(data['coupling']['control'])} from the first step H = "
-                                f"{data['coupling']['H']:g} s (docs/fmi.md, 'Step control by the power residual')")  # fmt: skip
+            given = ", ".join(f"{k}: {v if isinstance(v, str) else format(v, 'g')}"
+                              for k, v in data["coupling"]["control"].items())  # fmt: skip
+            system.notes.append(f"the file asks for libcosim's ECCO step control: run as coupling.control {{{given}}} "
+                                f"from the first step H = {data['coupling']['H']:g} s (docs/fmi.md, 'Step control by "
+                                "the power residual (ECCO)')")  # fmt: skip
     if "t_start" not in data and system.start_time:
         data["t_start"] = system.start_time
     if "t_end" not in data:
