@@ -256,3 +256,11 @@ def test_icosim_s_and_libcosim_s_references_agree_and_resolve_both_ecco_runs(tmp
     )
     # the steps: icosim's residual is its units' Euler over a sub-step (H/16), libcosim's the held inputs' over H
     assert np.median(ours.steps.H) > np.median(np.diff(T))
+
+
+def test_a_scene_s_own_coupling_replaces_the_file_s_ecco_control(tmp_path):
+    scene = load_scene(overlay(tmp_path, "own.yaml", coupling=fixed(1e-4)))
+    assert scene.data["coupling"].get("control") is None
+    assert "ECCO step control and the scene's coupling replaces it: icosim couples at the fixed H = 0.0001 s" in (
+        " ".join(scene.system.notes)
+    )

@@ -135,8 +135,9 @@ def system_scene_data(path, overlay: dict | None = None, *, where=None) -> tuple
         if system.stop_time is None:
             system.notes.append(f"the file gives no end time: the run ends {DEFAULT_T_END:g} s after its start")
     if system.algorithm == "ecco" and "control" not in data["coupling"]:
-        system.notes.append("the file asks for libcosim's ECCO step control: read and kept (system_json), not "
-                            f"used; icosim couples at the fixed H = {data['coupling']['H']:g} s")  # fmt: skip
+        why = "without an EccoConfiguration" if system.ecco is None else "and the scene's coupling replaces it"
+        system.notes.append(f"the file asks for libcosim's ECCO step control {why}: icosim couples at the fixed "
+                            f"H = {data['coupling']['H']:g} s")  # fmt: skip
     return data, system
 
 
