@@ -6,12 +6,12 @@ truck (../shared/outside/osp-quarter-truck: libcosim's test data, its ``OspSyste
 * the controlled run accepts and rejects steps, keeps them within the file's bounds, and the power residual and
   the error norm it reports are recomputed here from the dataset's forces and velocities;
 * the residual icosim sees is the units' own integration (the chassis's explicit Euler: its velocity output runs
-  ahead of the velocity its position moves with), not the coupling: it halves with the units' step;
+  ahead of the velocity its position moves with by ``h a / 2``), not the coupling: it halves with the units' step;
 * its error against a reference (icosim at fixed H = 2e-6 s, whose own error is bounded by halving it) shrinks as
   the power tolerance tightens;
 * libcosim's ECCO run of the same file (libcosimpy, the ``test`` extra): its step sizes are those icosim's
-  controller gives from libcosim's own residuals (to libcosim's nanosecond clock), and its chassis position and
-  icosim's agree within the two masters' errors, each estimated from its own fixed-step runs.
+  controller gives from libcosim's own residuals (to libcosim's nanosecond clock); the two masters' fixed-step
+  references agree within their own errors (each bounded by halving its step) and resolve both ECCO runs' errors.
 """
 
 import json
@@ -127,16 +127,21 @@ def test_the_residual_icosim_sees_is_the_chassis_s_own_euler(tmp_path):
     """The implicit joint makes the multiplier the wheel's reaction at every communication point and keeps the two
     positions together (gap ~ 1e-9 m), so what remains of ``f_a v_a + f_b v_b`` is ``lambda (v_a - v_b)``: the
     chassis's velocity output against the driven point's, which follows the chassis's position.  Explicit Euler at
-    the unit's step ``h`` moves the position with the velocity of the step's start, so its velocity output leads by
-    about ``h a``: halving the chassis's ``timeStep`` (at sub-steps longer than it) halves the residual."""
-    H, t_end, r = 4e-4, 0.02, {}
+    the unit's step ``h`` moves the position with the velocity of each step's start, so over a step the position
+    moves with the mean of the two ends' velocities less ``h a / 2``: the velocity output leads by ``h a / 2``.  At
+    a sub-step of 2e-5 s (H = 3.2e-4 s, 16 sub-steps: a whole number of the unit's steps) that holds for
+    ``timeStep`` 1e-5 and 5e-6 s, and the residual halves with it."""
+    H, t_end, r = 3.2e-4, 0.0192, {}
     for h in (1e-5, 5e-6):
         subs = {"chassis": {"start": {"timeStep": h}}}
         data = run_dataset_data(run_scene(overlay(tmp_path, f"h{h:g}.yaml", t_end=t_end, coupling=fixed(H, mu=H),
                                                   subsystems=subs)))  # fmt: skip
         lam, v = np.ravel(data.array("joint_force")), np.asarray(data.array("velocity"))
-        r[h] = lam[-1] * (v[0, -1] - v[1, -1])
-    assert 1.8 < r[1e-5] / r[5e-6] < 2.2, r
+        a = np.asarray(data.array("acceleration"))[0, -1]
+        lead = v[0, -1] - v[1, -1]
+        assert abs(lead / (h * a / 2) - 1) < 0.05, (h, lead, h * a / 2)
+        r[h] = lam[-1] * lead
+    assert abs(r[1e-5] / r[5e-6] - 2) < 0.04, r
 
 
 @pytest.fixture(scope="module")
