@@ -235,3 +235,27 @@ def test_a_step_rejected_at_h_min_ends_the_run(tmp_path):
     run = run_scene(scene_file(tmp_path, "chain3.yaml", control=control, t_end=0.01, H=1e-4))
     assert run.status == "diverged" and len(run.times) == 1
     assert "> 1 at H_min = 1e-07 s" in run.reason and run.steps.n_rejected > 0
+
+
+# -- ECCO's power residual as the estimate (tests/problems/fmu/test_ecco_steps.py: on OSP's quarter truck) ----------
+def power_control(atol, H_min=1e-7):
+    return {"estimate": "power-residual", "absolute_tolerance": atol, "H_min": H_min, "H_max": 1e-2}
+
+
+def test_the_error_falls_as_the_power_tolerance_tightens_on_the_exact_two_unit_system(tmp_path):
+    """The two-unit scene's units integrate their linear equations, so the joint's power residual
+    ``f_a v_a + f_b v_b`` is the coupling's own (the drive's velocity against the force side's): each tighter decade
+    of ``absolute_tolerance`` takes more steps and gives a smaller error against the exact solution."""
+    errors, steps = [], []
+    for atol in (1e-3, 1e-5, 1e-7, 1e-9):
+        run = run_scene(scene_file(tmp_path, "two_mass_fd.yaml", control=power_control(atol), t_end=0.1, H=1e-4))
+        assert run.status == "completed"
+        errors.append(error(run))
+        steps.append(len(run.steps.H))
+    assert np.all(np.diff(errors) < 0) and np.all(np.diff(steps) > 0), (errors, steps)
+
+
+def test_the_power_residual_needs_each_unit_in_one_joint(tmp_path):
+    with pytest.raises(SceneError, match=r"coupling.control.estimate: power-residual needs each unit in one joint; "
+                                         r"b is in joints 1 and 2"):  # fmt: skip
+        load_scene(scene_file(tmp_path, "chain3.yaml", control=power_control(1e-6)))

@@ -9,8 +9,9 @@ solver, step-size controller and terms apart:
 ==========================  ===================================================
 module                      holds
 ==========================  ===================================================
-:mod:`.controller`          the error estimate (predictor against corrector)
-                            and the PI step-size controller with rejection
+:mod:`.controller`          the error estimates (predictor against corrector;
+                            ECCO's power residual) and the PI step-size
+                            controller with rejection
 :mod:`.driver`              the adaptive loop: macro steps of varying size up
                             to an end time, for any problem that can change
                             its macro step (``set_macro_step``)

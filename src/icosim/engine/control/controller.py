@@ -17,12 +17,28 @@ with ``p = k + 1``, limited to ``[fac_min, fac_max] H`` and to
 ``[H_min, H_max]``; no growth right after a rejection; a rejected step is
 retried with ``H * max(fac_min, safety * err^(-1/p))``.  How the two drive a
 run: :mod:`icosim.engine.control.driver`.
+
+**Power residual (ECCO).**  For a power bond -- a joint whose two sides
+exchange a force and a velocity -- energy conservation says that the power one
+side receives is the power the other gives: ``f_a . v_a + f_b . v_b = 0`` with
+``f`` the coupling force on each side and ``v`` its velocity at the joint.  Its
+residual at a communication point, times the step, is the energy residual
+``E_j = |f_a . v_a + f_b . v_b| H`` of bond ``j``; Sadjina et al. (2016/2019,
+"Energy conservation and power bonds in co-simulations") size the steps by it
+(ECCO).  :func:`power_residual_estimate` is its norm as libcosim computes it
+(``ecco_algorithm.cpp``): ``sqrt(mean_j (E_j / (atol + rtol max_j E_j))^2)``.
+ECCO's PI controller ``H_new = H * safety * err^-(k_I + k_P) * err_prev^k_P``
+is :class:`StepController` with ``order = 1``, ``beta1 = k_I + k_P`` and
+``beta2 = k_P`` (:func:`ecco_controller`).
+
+The estimates a controlled run may use are :data:`ESTIMATES`.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -32,7 +48,7 @@ from ...errors import ParameterError
 if TYPE_CHECKING:
     import numpy.typing as npt
 
-__all__ = ["StepController", "pc_estimate"]
+__all__ = ["ESTIMATES", "StepController", "ecco_controller", "pc_estimate", "power_residual_estimate"]
 
 
 @dataclass(frozen=True)
@@ -100,3 +116,48 @@ def pc_estimate(e_corrected: npt.ArrayLike, e_predicted: npt.ArrayLike, tol: flo
     e_c = np.asarray(e_corrected, float)
     d = np.abs(e_c - np.asarray(e_predicted, float))
     return float(np.max(d / (tol * (1.0 + np.abs(e_c)))))
+
+
+def power_residual_estimate(residuals: npt.ArrayLike, H: float, absolute: float, relative: float) -> float:
+    """ECCO's error norm of power residuals ``r_j`` (W) over a step ``H``: the energy residuals ``E_j = |r_j| H``
+    scaled as libcosim scales them, ``sqrt(mean_j (E_j / (absolute + relative max_j E_j))^2)`` (``absolute`` in J).
+
+    >>> power_residual_estimate([2.0, -1.0], 0.5, 0.5, 0.0)  # E = 1, 0.5 against 0.5 J
+    1.5811388300841898
+    """
+    E = np.abs(np.asarray(residuals, float)) * float(H)
+    level = float(np.max(E))
+    return float(np.sqrt(np.mean((E / (absolute + relative * level)) ** 2)))
+
+
+def ecco_controller(*, safety, fac_min, fac_max, proportional_gain, integral_gain, H_min, H_max) -> StepController:
+    """ECCO's PI controller (``safety * err^-(k_I + k_P) * err_prev^k_P``, the factor limited to
+    ``[fac_min, fac_max]``) as a :class:`StepController` of order 1.
+
+    >>> c = ecco_controller(safety=0.99, fac_min=0.2, fac_max=1.5, proportional_gain=0.2, integral_gain=0.15,
+    ...                     H_min=1e-5, H_max=1e-2)
+    >>> (c.order, c.beta1, c.beta2)
+    (1, 0.35, 0.2)
+    >>> round(c.after_accept(1e-4, 0.5, 0.8), 12) == round(1e-4 * 0.99 * 0.5 ** -0.35 * 0.8**0.2, 12)
+    True
+    """
+    return StepController(
+        order=1,
+        safety=safety,
+        fac_min=fac_min,
+        fac_max=fac_max,
+        beta1=integral_gain + proportional_gain,
+        beta2=proportional_gain,
+        H_min=H_min,
+        H_max=H_max,
+    )
+
+
+#: The error estimates of a controlled run: name -> what it measures (read-only).
+ESTIMATES = MappingProxyType(
+    {
+        "predictor-corrector": "the corrector's coupling variables against the predictor's (pc_estimate), "
+        "of order k + 1 in H",
+        "power-residual": "ECCO's: the power residual of each joint at the step's end times H (power_residual_estimate)",
+    }
+)

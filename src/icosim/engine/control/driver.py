@@ -22,8 +22,10 @@ candidate step and restores it when the step is rejected, so the retry starts
 from the state the rejected step started from, also for a problem that holds
 state of its own (FMU units).
 
-**Acceptance.**  A step's error norm is the larger of the predictor-corrector
-estimate (:func:`~.controller.pc_estimate`) and the problem's own part
+**Acceptance.**  A step's error norm is the larger of the estimate -- the
+predictor-corrector difference (:func:`~.controller.pc_estimate`) unless the
+caller passes another (``estimate``, e.g. ECCO's power residual,
+:func:`~.controller.power_residual_estimate`) -- and the problem's own part
 ``extra_error(state)`` (e.g. the pendulum's joint drift over its tolerance); a step
 is accepted when it is at most 1.  A step that the observer calls diverged (it
 returns a reason) or that cannot be computed (a
@@ -86,6 +88,7 @@ def adaptive_macro_steps(
     method_at: Callable | None = None,
     observe: Callable | None = None,
     extra_error: Callable | None = None,
+    estimate: Callable | None = None,
     on_accept: Callable | None = None,
     scheme: str | Scheme = JACOBI,
     iterations: int = 1,
@@ -99,7 +102,8 @@ def adaptive_macro_steps(
     ``H`` (default: ``method`` for every size; a method with dimensional parameters is rebuilt per size);
     ``observe(n, state, history, y)`` a reason why the candidate step ``n`` diverged, or None (the observer
     of :func:`icosim.engine.run.simulate`); ``extra_error(state)`` the problem's
-    part of the error norm at an accepted candidate (default: none);
+    part of the error norm at an accepted candidate (default: none); ``estimate(H, history, e_p, y)`` the
+    estimate's norm of a computed candidate (default: the predictor-corrector difference scaled by ``tol``);
     ``on_accept(state, history, y)`` is called after each accepted step (to store
     series).  ``tol`` scales the predictor-corrector estimate; ``iterations``,
     ``corrector_tol`` and ``scheme`` go to :func:`~icosim.engine.macrostep.macro_step`.
@@ -142,7 +146,7 @@ def adaptive_macro_steps(
             if failure or diverged:
                 est = extra = err = math.inf
             else:
-                est = pc_estimate(hist_new[0], e_p, tol)
+                est = pc_estimate(hist_new[0], e_p, tol) if estimate is None else estimate(H, hist_new, e_p, y)
                 extra = extra_error(state_new) if extra_error is not None else 0.0
                 err = max(est, extra)
             if not controller.accepts(err):

@@ -8,8 +8,19 @@ them) from the predictor-corrector estimate of the coupling variables (SI) scale
 step is retried from the problem's checkpoint (the units' saved FMU states at ``T_N``).  The starting history at
 any spacing is the consistent start's coupling variables held; a method whose parameters are given in seconds
 (``mu``, ``beta``, ``gamma``) is rebuilt for each step's size.  The dataset's ``time`` is the accepted macro nodes,
-``macro_step_size(time)`` the step that reached each (NaN at the start), and the attributes count the rejected
-steps.
+``macro_step_size(time)`` the step that reached each (NaN at the start), ``control_error(time)`` its error norm,
+and the attributes count the rejected steps.
+
+``estimate`` chooses the error estimate (:data:`icosim.engine.control.controller.ESTIMATES`): the
+predictor-corrector difference above (``predictor-corrector``, the default) or ECCO's power residual
+(``power-residual``: ``{estimate: power-residual, absolute_tolerance: 1.0e-6, H_min: 1.0e-5, H_max: 1.0e-2}``,
+with ``relative_tolerance``, ``proportional_gain``, ``integral_gain``, ``safety``, ``fac_min`` and ``fac_max``
+optional, defaults as libcosim's configuration of OSP's quarter truck gives them), where every joint is a power
+bond: per joint ``r_j = f_a . v_a + f_b . v_b`` from the two sides' coupling forces and velocities at the step's
+end, normed by :func:`~icosim.engine.control.controller.power_residual_estimate` and sized by ECCO's PI
+controller (:func:`~icosim.engine.control.controller.ecco_controller`).  Such a run's dataset adds
+``coupling_force(subsystem, time)`` and ``power_residual(joint, time)`` (docs/fmi.md, "Step control by the power
+residual (ECCO)").
 """
 
 from __future__ import annotations
@@ -18,45 +29,107 @@ import math
 
 import numpy as np
 
-from ...engine.control.controller import StepController
+from ...engine.control.controller import ESTIMATES, StepController, ecco_controller, power_residual_estimate
 from ...engine.control.driver import adaptive_macro_steps
 from ...engine.methods import engine_method, get_spec
 from ...engine.run import Trajectory, simulate
 from ...errors import ParameterError
 from .errors import SceneError, UnitStepError
 
-__all__ = ["CONTROL_KEYS", "control_schema", "check_control", "scene_steps", "controlled_entries"]
+__all__ = [
+    "CONTROL_KEYS",
+    "ESTIMATE_KEYS",
+    "control_schema",
+    "check_control",
+    "control_settings",
+    "power_residuals",
+    "scene_steps",
+    "controlled_entries",
+]
 
-#: Keys of ``coupling.control`` and what they hold (the first three required).
-CONTROL_KEYS = {
-    "tolerance": "scales the predictor-corrector estimate: max |e_c - e_p| / (tolerance (1 + |e_c|)) <= 1",
+#: The estimate a control uses where it names none.
+DEFAULT_ESTIMATE = "predictor-corrector"
+
+#: Keys of ``coupling.control`` for every estimate, and what they hold (``H_min``, ``H_max`` required).
+COMMON_KEYS = {
+    "estimate": f"the error estimate: {', '.join(ESTIMATES)} (default {DEFAULT_ESTIMATE})",
     "H_min": "the smallest macro step (s): a step rejected there ends the run",
     "H_max": "the largest macro step (s)",
-    "safety": "the controller's safety factor (default 0.9)",
-    "fac_min": "the smallest factor of one change of H (default 0.2)",
-    "fac_max": "the largest factor of one change of H (default 2)",
-    "beta1": "the PI controller's exponent of the error (default 0.7)",
-    "beta2": "the PI controller's exponent of the previous error (default 0.4)",
+    "safety": "the controller's safety factor",
+    "fac_min": "the smallest factor of one change of H",
+    "fac_max": "the largest factor of one change of H",
 }
+
+#: Per estimate: its own keys and what they hold, and the defaults of the optional keys (a key without one is
+#: required).
+ESTIMATE_KEYS = {
+    "predictor-corrector": (
+        {
+            "tolerance": "scales the predictor-corrector estimate: max |e_c - e_p| / (tolerance (1 + |e_c|)) <= 1",
+            "beta1": "the PI controller's exponent of the error",
+            "beta2": "the PI controller's exponent of the previous error",
+        },
+        {"safety": 0.9, "fac_min": 0.2, "fac_max": 2.0, "beta1": 0.7, "beta2": 0.4},
+    ),
+    "power-residual": (
+        {
+            "absolute_tolerance": "ECCO's absolute tolerance of each joint's energy residual |r_j| H (J)",
+            "relative_tolerance": "ECCO's relative tolerance (of the largest energy residual)",
+            "proportional_gain": "ECCO's proportional gain k_P (the exponent of the previous error)",
+            "integral_gain": "ECCO's integral gain k_I (the error's exponent is k_I + k_P)",
+        },
+        # libcosim's configuration of the quarter truck (OspSystemStructure.xml and ecco_algorithm_test.cpp)
+        {
+            "safety": 0.99,
+            "fac_min": 0.2,
+            "fac_max": 1.5,
+            "relative_tolerance": 1e-6,
+            "proportional_gain": 0.2,
+            "integral_gain": 0.15,
+        },  # fmt: skip
+    ),
+}
+
+#: Every key of ``coupling.control`` and what it holds.
+CONTROL_KEYS = {**COMMON_KEYS, **{k: v for own, _ in ESTIMATE_KEYS.values() for k, v in own.items()}}
 
 
 def control_schema() -> dict:
-    """The JSON schema of ``coupling.control``."""
+    """The JSON schema of ``coupling.control`` (which keys each estimate takes: :func:`check_control`)."""
     positive = {"type": "number", "exclusiveMinimum": 0}
-    return {
-        "type": "object",
-        "additionalProperties": False,
-        "required": ["tolerance", "H_min", "H_max"],
-        "properties": {key: positive for key in CONTROL_KEYS},
-    }
+    properties = {key: positive for key in CONTROL_KEYS}
+    properties["estimate"] = {"enum": list(ESTIMATES)}
+    properties["relative_tolerance"] = {"type": "number", "minimum": 0}
+    return {"type": "object", "additionalProperties": False, "required": ["H_min", "H_max"], "properties": properties}
+
+
+def control_settings(path, control) -> tuple[str, dict]:
+    """The control's estimate and its settings with the defaults filled in; a :class:`SceneError` names a key the
+    estimate does not take or lacks."""
+    estimate = control.get("estimate", DEFAULT_ESTIMATE)
+    own, defaults = ESTIMATE_KEYS[estimate]
+    allowed = [k for k in CONTROL_KEYS if k in COMMON_KEYS or k in own]
+    for key in control:
+        if key not in allowed:
+            raise SceneError(
+                f"{path}: coupling.control.{key}: not a key of the {estimate} estimate; its keys: {', '.join(allowed)}"
+            )
+    missing = [k for k in own if k not in control and k not in defaults]
+    if missing:
+        raise SceneError(f"{path}: coupling.control: the {estimate} estimate needs {', '.join(missing)}")
+    return estimate, {**defaults, **{k: v for k, v in control.items() if k != "estimate"}}
 
 
 def controller(path, coupling) -> StepController:
     """The scene's controller; a :class:`SceneError` names ``coupling.control`` and what is wrong."""
-    control = dict(coupling["control"])
-    control.pop("tolerance")
+    estimate, control = control_settings(path, coupling["control"])
     try:
-        ctl = StepController(order=int(coupling["k"]) + 1, **control)
+        if estimate == "power-residual":
+            ctl = ecco_controller(**{k: control[k] for k in ("safety", "fac_min", "fac_max", "proportional_gain",
+                                                             "integral_gain", "H_min", "H_max")})  # fmt: skip
+        else:
+            control.pop("tolerance")
+            ctl = StepController(order=int(coupling["k"]) + 1, **control)
     except ParameterError as exc:
         raise SceneError(f"{path}: coupling.control: {exc}") from None
     H = float(coupling["H"])
@@ -68,10 +141,35 @@ def controller(path, coupling) -> StepController:
     return ctl
 
 
-def check_control(path, coupling) -> None:
-    """Refuse a ``coupling.control`` that cannot run (before any unit is opened)."""
+def power_bonds(path, joints, names) -> list:
+    """The joints as power bonds: ``(first, second)`` unit per joint; a :class:`SceneError` where a unit is in
+    more than one joint (its coupling force is then the sum of several joints', and no joint's own)."""
+    seen = {}
+    for j, joint in enumerate(joints):
+        for i in (joint.first, joint.second):
+            if i in seen:
+                raise SceneError(
+                    f"{path}: coupling.control.estimate: power-residual needs each unit in one joint; "
+                    f"{names[i]} is in joints {seen[i] + 1} and {j + 1}"
+                )
+            seen[i] = j
+    return [(jt.first, jt.second) for jt in joints]
+
+
+def power_residuals(bonds, y) -> np.ndarray:
+    """Each joint's power residual ``f_a . v_a + f_b . v_b`` (W) from the outputs ``y`` at a step's end
+    (``y[i] = (x_i, v_i, a_i, f_i)``, the coupling force ``f_i`` in the graph's sense)."""
+    y = np.asarray(y, float)
+    return np.array([float(y[a, 3] @ y[a, 1] + y[b, 3] @ y[b, 1]) for a, b in bonds])
+
+
+def check_control(path, coupling, joints=None, names=()) -> None:
+    """Refuse a ``coupling.control`` that cannot run (before any unit is opened); ``joints``: the scene's
+    (:class:`~icosim.engine.graph.Joint` s), checked for the power residual."""
     if coupling.get("control") is not None:
         controller(path, coupling)
+        if joints is not None and control_settings(path, coupling["control"])[0] == "power-residual":
+            power_bonds(path, joints, names)
 
 
 def scene_steps(scene, problem, start, bound, accepted):
@@ -94,6 +192,15 @@ def scene_steps(scene, problem, start, bound, accepted):
         )
         return traj, problem.t0 + c["H"] * np.arange(len(traj.states)), None
     ctl = controller(scene.path, c)
+    name, settings = control_settings(scene.path, c["control"])
+    estimate, tol = None, settings.get("tolerance", math.nan)
+    if name == "power-residual":
+        bonds = power_bonds(scene.path, problem.graph.joints, scene.names)
+        atol, rtol = float(settings["absolute_tolerance"]), float(settings["relative_tolerance"])
+
+        def estimate(H, history, e_p, y):
+            return power_residual_estimate(power_residuals(bonds, y), H, atol, rtol)
+
     given = {k: v for k, v in scene.data["coupling"].items() if k in get_spec(c["method"]).arguments}
     dimensional = get_spec(c["method"]).make(**given)
     states, coupling, outputs = [start.state], [start.history[0]], [None]
@@ -118,7 +225,8 @@ def scene_steps(scene, problem, start, bound, accepted):
         t_end=float(scene.data["t_end"]) - problem.t0,
         H0=float(c["H"]),
         controller=ctl,
-        tol=float(c["control"]["tolerance"]),
+        tol=float(tol),
+        estimate=estimate,
         restart=lambda H: start.history,  # the consistent start's coupling variables, held
         method_at=lambda H: engine_method(dimensional, H),
         observe=observe,
@@ -148,9 +256,28 @@ def controlled_entries(run) -> tuple[dict, dict]:
     H = np.concatenate([[np.nan], steps.H])
     entry = {"macro_step_size": (("time",), H, {"units": "s", "comment": "the accepted step that reached each "
                                                  "time (NaN at the start)"})}  # fmt: skip
+    name, settings = control_settings(run.scene.path, run.scene.coupling["control"])
     attrs = {
+        "control_estimate": name,
         "control_accepted_steps": len(steps.H),
         "control_rejected_steps": int(steps.n_rejected),
         "control_status": steps.status,
     }
+    entry["control_error"] = (("time",), np.concatenate([[np.nan], steps.estimate]), {
+        "units": "1", "comment": f"the {name} estimate's norm of each accepted step (<= 1; NaN at the start)"})  # fmt: skip
+    if name == "power-residual":
+        bonds = power_bonds(run.scene.path, run.scene.graph().joints, run.scene.names)
+        nan = np.full(len(bonds), np.nan)
+        residual = np.array([nan] + [power_residuals(bonds, y) for y in run.outputs[1:]])
+        squeeze = (lambda a: a[..., 0]) if run.outputs.shape[-1] == 1 else (lambda a: a)
+        entry["coupling_force"] = (
+            ("subsystem", "time") + (() if run.outputs.shape[-1] == 1 else ("component",)),
+            squeeze(np.moveaxis(run.outputs[:, :, 3, :], 0, 1)),
+            {"units": "N", "comment": "the coupling force on each unit at the end of each macro step, in the "
+             "joints' sense (+lambda on a joint's first side, force_sign times its reaction force on a drive); "
+             "NaN at the start"},
+        )  # fmt: skip
+        entry["power_residual"] = (("joint", "time"), residual.T, {"units": "W", "comment": "f_a . v_a + f_b . v_b "
+                                   "of each joint's two sides at the end of each macro step (NaN at the start)"})  # fmt: skip
+        attrs |= {f"control_{k}": float(settings[k]) for k in ESTIMATE_KEYS[name][0]}
     return entry, attrs

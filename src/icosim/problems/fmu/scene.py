@@ -339,7 +339,7 @@ def load_scene(path) -> Scene:
         method = engine_method(method, c["H"])
     except ParameterError as exc:
         _fail(path, "coupling", str(exc))
-    check_control(path, c)
+    check_control(path, c, joints or (Joint(0, 1, c["decomposition"]),), names)
     t0, t_end, H = float(data.get("t_start", 0.0)), float(data["t_end"]), float(c["H"])
     steps = (t_end - t0) / H
     if not steps >= 1 or abs(steps - round(steps)) > 1e-6 * max(1.0, steps):

@@ -12,6 +12,10 @@ be the unit whose bond output is a velocity (by its declared unit, or where the 
 so (``moves``, ``direction``, ``role``).  A scene naming the system
 (``system:``) may give the roles itself in ``subsystems``.
 
+OSP's ``Algorithm`` ecco with its ``EccoConfiguration`` runs with controlled macro steps sized by ECCO's power
+residual (``coupling.control: {estimate: power-residual, ...}``, :func:`ecco_control`) unless the scene gives its
+own coupling.
+
 Any other connection is a signal connection, which the engine does not yet run: refused by name before any work,
 never dropped.
 """
@@ -24,7 +28,7 @@ from ..errors import SceneError
 from .description import System
 from .read import find_system_file, is_system_file, read_system
 
-__all__ = ["scene_data", "system_scene_data", "DEFAULT_T_END", "ROLE_KEYS"]
+__all__ = ["scene_data", "system_scene_data", "ecco_control", "DEFAULT_T_END", "ECCO_KEYS", "ROLE_KEYS"]
 
 #: The interval a system runs where neither the file nor the scene gives an end time (s).
 DEFAULT_T_END = 1.0
@@ -115,6 +119,14 @@ def system_scene_data(path, overlay: dict | None = None, *, where=None) -> tuple
             _fail(shown, "coupling", f"{system.format} gives no step size: a scene naming the system needs coupling "
                   "(method, k, H)")  # fmt: skip
         data["coupling"] = default_coupling(system.step_size)
+        if system.algorithm == "ecco" and system.ecco is not None:
+            data["coupling"]["H"] = system.ecco["StepSize"]
+            data["coupling"]["control"] = ecco_control(system.ecco)
+            given = ", ".join(f"{k}: {v if isinstance(v, str) else format(v, 'g')}"
+                              for k, v in data["coupling"]["control"].items())  # fmt: skip
+            system.notes.append(f"the file asks for libcosim's ECCO step control: run as coupling.control {{{given}}} "
+                                f"from the first step H = {data['coupling']['H']:g} s (docs/fmi.md, 'Step control by "
+                                "the power residual (ECCO)')")  # fmt: skip
     if "t_start" not in data and system.start_time:
         data["t_start"] = system.start_time
     if "t_end" not in data:
@@ -123,9 +135,28 @@ def system_scene_data(path, overlay: dict | None = None, *, where=None) -> tuple
         if system.stop_time is None:
             system.notes.append(f"the file gives no end time: the run ends {DEFAULT_T_END:g} s after its start")
     if system.algorithm == "ecco" and "control" not in data["coupling"]:
-        system.notes.append("the file asks for libcosim's ECCO step control: read and kept (system_json), not "
-                            f"used; icosim couples at the fixed H = {data['coupling']['H']:g} s")  # fmt: skip
+        why = "without an EccoConfiguration" if system.ecco is None else "and the scene's coupling replaces it"
+        system.notes.append(f"the file asks for libcosim's ECCO step control {why}: icosim couples at the fixed "
+                            f"H = {data['coupling']['H']:g} s")  # fmt: skip
     return data, system
+
+
+#: OSP's EccoConfiguration elements -> the keys of ``coupling.control`` they set (StepSize: ``coupling.H``).
+ECCO_KEYS = {"MinimumStepSize": "H_min", "MaximumStepSize": "H_max", "SafetyFactor": "safety",
+             "MinimumChangeRate": "fac_min", "MaximumChangeRate": "fac_max", "ProportionalGain": "proportional_gain",
+             "IntegralGain": "integral_gain", "RelativeTolerance": "relative_tolerance",
+             "AbsoluteTolerance": "absolute_tolerance"}  # fmt: skip
+
+
+def ecco_control(ecco: dict) -> dict:
+    """``coupling.control`` for an OSP ``EccoConfiguration`` (element -> value): ECCO's power residual.
+
+    >>> ecco_control({"MinimumStepSize": 1e-5, "MaximumStepSize": 0.01, "SafetyFactor": 0.99, "StepSize": 1e-4,
+    ...               "MinimumChangeRate": 0.2, "MaximumChangeRate": 1.5, "ProportionalGain": 0.2,
+    ...               "IntegralGain": 0.15, "RelativeTolerance": 1e-6, "AbsoluteTolerance": 1e-6})["estimate"]
+    'power-residual'
+    """
+    return {"estimate": "power-residual", **{key: float(ecco[element]) for element, key in ECCO_KEYS.items()}}
 
 
 def _recordable(connector) -> bool:
