@@ -24,6 +24,7 @@ Ecos also needs TBB's shared library (Debian: libtbb12).  No timing is asserted.
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import os
 import re
 import sys
@@ -105,27 +106,55 @@ def truck_osp(
     return folder
 
 
-def libcosim_truck(folder: Path, t_end: float, *, count: bool = False) -> dict:
-    """libcosim on an OspSystemStructure.xml of the quarter truck: the chassis's position, velocity and
-    acceleration at the end (libcosim's ECCO ends at the first step past ``t_end``) and, with ``count``, the
-    doStep calls (one per unit and step; the run then steps one macro step per call)."""
+def libcosim(folder: Path, t_end: float, read: dict, expose: dict | None = None) -> dict:
+    """libcosim on the OspSystemStructure.xml in ``folder`` to ``t_end`` (ECCO ends at the first step past it):
+    the time, the last value of each of ``read`` (key -> (unit, variable)) and the doStep calls (one per unit and
+    macro step).  A time-series observer of those variables alone (libcosim's last-value observer reads every
+    variable of every unit after each step: on OMSimulator's units that is most of the run's time), and of
+    ``expose`` (unit -> variables): ECCO reads the power bonds' variables through the observed ones only."""
+    from libcosimpy._internal import libcosimc, wrap_function
+    from libcosimpy.CosimEnums import CosimVariableType
     from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
     from libcosimpy.CosimObserver import CosimObserver
 
+    step_numbers = wrap_function(lib=libcosimc(), funcname="cosim_observer_get_step_numbers", restype=ctypes.c_int,
+                                 argtypes=[ctypes.POINTER(CosimObserver), ctypes.c_int, ctypes.c_int64,
+                                           ctypes.c_int64, ctypes.c_int64 * 2])  # fmt: skip
+    log_output_level(CosimLogLevel.ERROR)
     execution = CosimExecution.from_osp_config_file(osp_path=str(folder))
-    observer = CosimObserver.create_last_value()
+    observer = CosimObserver.create_time_series(buffer_size=2)
     execution.add_observer(observer)
-    chassis = execution.slave_index_from_instance_name("chassis")
-    refs = {v.name.decode(): v.reference for v in execution.slave_variables(chassis)}
-    steps = 0
-    if count:
-        while execution.status().current_time < round(t_end * NS):
-            execution.step(1)
-            steps += 1
-    else:
-        execution.simulate_until(round(t_end * NS))
-    x, v, a = observer.last_real_values(chassis, [refs["position"], refs["velocity"], refs["acceleration"]])
-    return {"t": execution.status().current_time / NS, "x": x, "v": v, "a": a, "do_steps": 2 * steps}
+    index = {u.name.decode(): u.index for u in execution.slave_infos()}
+    refs = {u: {v.name.decode(): v.reference for v in execution.slave_variables(i)} for u, i in index.items()}
+    observed = {(unit, name) for unit, name in read.values()}
+    observed |= {(unit, name) for unit, names in (expose or {}).items() for name in names}
+    for unit, name in sorted(observed):
+        observer.start_time_series(index[unit], refs[unit][name], CosimVariableType.REAL)
+    if not execution.simulate_until(round(t_end * NS)):
+        from libcosimpy._internal import get_last_error_message
+
+        raise RuntimeError(f"libcosim: {get_last_error_message()}")
+    now = execution.status().current_time
+    out = {"t": now / NS}
+    for key, (unit, name) in read.items():
+        steps = (ctypes.c_int64 * 2)()
+        step_numbers(observer.ptr(), index[unit], 0, now, steps)
+        _, numbers, values = observer.time_series_real_samples(index[unit], refs[unit][name], steps[1], 1)
+        out[key] = values[0]
+        out["do_steps"] = len(index) * numbers[0]
+    return out
+
+
+#: The quarter truck's power bond (the file's two connections), which ECCO reads.
+TRUCK_BOND = {"chassis": ["velocity", "force"], "wheel": ["in_vel", "out_spring_damper_f"]}
+
+
+def libcosim_truck(folder: Path, t_end: float) -> dict:
+    """libcosim on an OspSystemStructure.xml of the quarter truck: the chassis's position, velocity and
+    acceleration at the end."""
+    read = {"x": ("chassis", "position"), "v": ("chassis", "velocity"), "a": ("chassis", "acceleration")}
+    return libcosim(folder, t_end, read, TRUCK_BOND)
 
 
 def ecos_truck(step: float, t_end: float, solver: str = "Euler", time_step: float = 1e-5) -> dict:
@@ -189,11 +218,15 @@ def truck_scene(
 
 def icosim_run(path: Path, body: int = 0) -> dict:
     """A scene's run as :func:`icosim.problems.fmu.run.run_scene` does it (units opened and checked): the end
-    time, position and velocity of the subsystem ``body``, its doStep calls (the checks' probing steps apart)."""
+    time, position and velocity of the subsystem ``body``, the recorded variables' last values (``<subsystem>.<name>``),
+    its doStep calls and, apart, the checks' probing steps."""
     run = run_scene(path)
     attrs = run_dataset_data(run).attrs
     out = {"t": float(run.times[-1]), "x": float(run.states[-1, body, 0]), "v": float(run.states[-1, body, 1])}
-    out |= {"do_steps": int(attrs["do_step_calls"]), "status": run.status, "reason": run.reason}
+    checks = sum(int(v) for k, v in attrs.items() if k.endswith("_checks_do_step_calls"))
+    out |= {"do_steps": int(attrs["do_step_calls"]), "check_steps": checks, "status": run.status, "reason": run.reason}
+    for label, (names, _, values) in run.recorded.items():
+        out |= {f"{label}.{name}": float(values[-1, j]) for j, name in enumerate(names)}
     if run.steps is not None:
         out |= {"accepted": int(attrs["control_accepted_steps"]), "rejected": int(attrs["control_rejected_steps"])}
     return out
@@ -230,19 +263,7 @@ def dmo_osp(folder: Path, step: float) -> Path:
 
 
 def libcosim_dmo(folder: Path, t_end: float) -> dict:
-    from libcosimpy.CosimExecution import CosimExecution
-    from libcosimpy.CosimObserver import CosimObserver
-
-    execution = CosimExecution.from_osp_config_file(osp_path=str(folder))
-    observer = CosimObserver.create_last_value()
-    execution.add_observer(observer)
-    execution.simulate_until(round(t_end * NS))
-    out = {"t": execution.status().current_time / NS}
-    for key, (unit, name) in DMO_READ.items():
-        index = execution.slave_index_from_instance_name(unit)
-        ref = next(v.reference for v in execution.slave_variables(index) if v.name.decode() == name)
-        out[key] = observer.last_real_values(index, [ref])[0]
-    return out
+    return libcosim(folder, t_end, DMO_READ)
 
 
 def dmo_ssp(path: Path) -> Path:
@@ -350,7 +371,7 @@ def test_ecco_keeps_the_file_step_bounds_and_ends_past_the_stop_time(tmp_path):
     """The file's own ECCO configuration: at least one step per MaximumStepSize, at most one per
     MinimumStepSize, the last step ending at or past the stop time."""
     with quiet():
-        r = libcosim_truck(truck_osp(tmp_path, 1e-4, algorithm="ecco"), 0.2, count=True)
+        r = libcosim_truck(truck_osp(tmp_path, 1e-4, algorithm="ecco"), 0.2)
     steps = r["do_steps"] // 2
     assert 0.2 <= r["t"] < 0.2 + 1e-2
     assert 0.2 / 1e-2 <= steps <= 0.2 / 1e-5 + 1, steps
