@@ -198,9 +198,10 @@ def truck_scene(
     force: ``force_sign`` -1 as the second unit's would), the Wheel a drive through its velocity (``velocity_input:
     in_vel``, ``reaction_force: out_spring_damper_f``), fd (docs/fmi.md, units of other tools).  The Wheel's own
     position, velocity and acceleration are its body's, not the driven point's: the scene names none of them, so
-    the driven point's motion is the prescribed one.  The units' settings as in the file."""  # fmt: skip
+    the driven point's motion is the prescribed one.  The units' settings as in the file; Baumgarte's ``mu`` is
+    ``10 H`` by default (with ``mu = 1e-3`` s it diverges at ``H = 4e-3`` s)."""  # fmt: skip
     units = {name: {**start, "solverType": solver, "timeStep": time_step} for name, start in TRUCK_UNITS.items()}
-    params = {"index": 1, "mu": 1e-3} if params is None and method == "baumgarte" else (params or {})
+    params = {"index": 1, "mu": 10 * H} if params is None and method == "baumgarte" else (params or {})
     data = {
         "subsystems": {
             "chassis": {"fmu": str(TRUCK / "Chassis.fmu"), "start": units["chassis"], "position": "position",
