@@ -73,10 +73,11 @@ def available(versions, master) -> bool:
     return not str(versions[master]).startswith("missing")
 
 
-def measure(run, t_end, repeat, budget):
-    """(outcome of the last run, the minimum wall time, the number of timed runs) after a warm-up over a tenth."""
+def measure(run, t_end, repeat, budget, H=None):
+    """(outcome of the last run, the minimum wall time, the number of timed runs) after a warm-up over a tenth
+    (rounded up to whole macro steps of ``H``)."""
     with P.quiet():
-        run(t_end / 10)
+        run(t_end / 10 if H is None else math.ceil(t_end / 10 / H - 1e-9) * H)
         walls, outcome = [], None
         for _ in range(repeat):
             clock = time.perf_counter()
@@ -93,10 +94,10 @@ def row(system, master, setting, units="", group=None):
             "group": units if group is None else group}  # fmt: skip
 
 
-def attempt(base, run, t_end, args, error):
+def attempt(base, run, t_end, args, error, H=None):
     """A row with the measured error, wall time, runs and doSteps; a run that fails or diverges is a row too."""
     try:
-        outcome, wall, runs = measure(run, t_end, args.repeat, args.budget)
+        outcome, wall, runs = measure(run, t_end, args.repeat, args.budget, H)
     except Exception as exc:  # a peer's or a scene's failure is reported by name, never dropped
         return base | {"status": f"failed: {type(exc).__name__}: {str(exc).splitlines()[0][:200]}"}
     if outcome.get("status", "completed") != "completed":
@@ -153,8 +154,8 @@ def truck_rows(tmp: Path, args, versions) -> tuple[list, dict | None]:
     quick = args.quick
     solvers = ["Euler", "RK4"]
 
-    def add(base, run):
-        rows.append(attempt(base, run, T_TRUCK, args, error))
+    def add(base, run, H=None):
+        rows.append(attempt(base, run, T_TRUCK, args, error, H))
         r = rows[-1]
         print(f"  {r['master']:9s} {r['setting']:42s} {r['units']:5s} "
               + (f"err x {r['error_x']:.2e}  wall {r['wall']:.3f} s  doSteps {r['do_steps']}"
@@ -196,7 +197,8 @@ def truck_rows(tmp: Path, args, versions) -> tuple[list, dict | None]:
             label += "" if sens == "each-step" else ", first-step sensitivities"
             coupling = {"substeps": n, "sensitivities": sens}
             add(row(system, "icosim", label, solver),
-                lambda t, H=H, k=k, c=coupling, s=solver: P.icosim_run(P.truck_scene(tmp, H, k, t, solver=s, coupling=c)))  # fmt: skip
+                lambda t, H=H, k=k, c=coupling, s=solver: P.icosim_run(P.truck_scene(tmp, H, k, t, solver=s, coupling=c)),
+                H)  # fmt: skip
         if solver == "Euler":
             add(
                 row(system, "icosim", "projection, k = 1, H = 0.001", solver),
@@ -232,8 +234,8 @@ def dmo_rows(tmp: Path, args, versions) -> list:
     quick = args.quick
     cs = {"units": "co-simulation", "group": ""}
 
-    def add(base, run):
-        rows.append(attempt(base, run, T_DMO, args, dmo_error))
+    def add(base, run, H=None):
+        rows.append(attempt(base, run, T_DMO, args, dmo_error, H))
         r = rows[-1]
         print(f"  {r['master']:11s} {r['setting']:50s} "
               + (f"err x1 {r['error_x']:.2e} x2 {r['error_x2']:.2e}  wall {r['wall']:.3f} s  doSteps {r['do_steps']}"
@@ -272,7 +274,13 @@ def dmo_rows(tmp: Path, args, versions) -> list:
         label = f"Baumgarte 1, k = {k}, H = {H:g}, integrator tolerance {tol:g}, {sens} sensitivities"
         coupling = {"mu": 10 * H, "sensitivities": sens}
         add(row(system, "icosim", label, "model exchange", ""),
-            lambda t, k=k, H=H, tol=tol, c=coupling: icosim_dmo(tmp, k, H, t, tol, c))  # fmt: skip
+            lambda t, k=k, H=H, tol=tol, c=coupling: icosim_dmo(tmp, k, H, t, tol, c), H)  # fmt: skip
+    for tol in [1e-4, 1e-6] if quick else [1e-4, 1e-5, 1e-6, 1e-7]:
+        label = f"Baumgarte 1 (mu = 0.02), k = 2, controlled, tolerance {tol:g}, H_max = 0.005"
+        coupling = {"mu": 2e-2, "sensitivities": "first-step",
+                    "control": {"tolerance": tol, "H_min": 1e-7, "H_max": 5e-3}}  # fmt: skip
+        add(row(system, "icosim", label, "model exchange", ""),
+            lambda t, c=coupling: icosim_dmo(tmp, 2, 1e-3, t, 1e-8, c), 1e-3)  # fmt: skip
     return rows
 
 
