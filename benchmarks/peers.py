@@ -191,7 +191,9 @@ def truck_rows(tmp: Path, args, versions) -> tuple[list, dict | None]:
         variants = [(k, H, 16, "each-step") for k in ([0, 1, 2] if solver == "Euler" else [1]) for H in Hs]
         variants += [(1, H, 4, "each-step") for H in ([2e-3] if quick else [4e-3, 2e-3, 1e-3, 5e-4])]
         variants += [(1, H, 64, "each-step") for H in ([1e-3] if quick else [1e-3, 5e-4])]
-        variants += [(1, H, n, "first-step") for H, n in [(2e-3, 4), (1e-3, 16)]]
+        variants += [(1, H, n, "first-step") for H, n in [(8e-3, 4), (4e-3, 4), (2e-3, 4), (1e-3, 4), (5e-4, 4),
+                                                           (1e-3, 16)]]  # fmt: skip
+        variants += [(2, 4e-3, 4, "first-step")]
         for k, H, n, sens in variants:
             label = f"Baumgarte 1, k = {k}, H = {H:g}" + ("" if n == 16 else f", {n} sub-steps")
             label += "" if sens == "each-step" else ", first-step sensitivities"
