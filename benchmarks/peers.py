@@ -99,7 +99,7 @@ def attempt(base, run, t_end, args, error, H=None):
     try:
         outcome, wall, runs = measure(run, t_end, args.repeat, args.budget, H)
     except Exception as exc:  # a peer's or a scene's failure is reported by name, never dropped
-        return base | {"status": f"failed: {type(exc).__name__}: {str(exc).splitlines()[0][:200]}"}
+        return base | {"status": f"failed: {type(exc).__name__}: {str(exc).splitlines()[0][:400]}"}
     if outcome.get("status", "completed") != "completed":
         return base | {"status": f"{outcome['status']}: {outcome.get('reason', '')[:200]}", "wall": wall}
     return base | {"status": "completed", "wall": wall, "runs": runs, "t": outcome["t"],
