@@ -109,7 +109,7 @@ def libcosim(folder: Path, t_end: float, read: dict, expose: dict | None = None)
     """libcosim on the OspSystemStructure.xml in ``folder`` to ``t_end`` (ECCO ends at the first step past it):
     the time, the last value of each of ``read`` (key -> (unit, variable)) and the doStep calls (one per unit and
     macro step).  A time-series observer of those variables alone (libcosim's last-value observer reads every
-    variable of every unit after each step: on OMSimulator's units that is most of the run's time), and of
+    variable of every unit after each step), and of
     ``expose`` (unit -> variables): ECCO reads the power bonds' variables through the observed ones only."""
     from libcosimpy._internal import libcosimc, wrap_function
     from libcosimpy.CosimEnums import CosimVariableType
