@@ -1,5 +1,7 @@
 """The toolchain markers: tests that need a C compiler, CMake and fmpy (``fmu``), a SLURM cluster (``slurm``),
-headless Chromium (``browser``) or the units and systems of other tools in ``../shared/outside`` (``outside``).  A pytest plugin, loaded by tests/conftest.py.
+headless Chromium (``browser``) or the units and systems of other tools in ``../shared/outside`` (``outside``), with
+the other masters run on them (``peers``: libcosim and Ecos as well; a test marked ``peers`` is not marked
+``outside`` too: in CI a skip counts against every marker of a test).  A pytest plugin, loaded by tests/conftest.py.
 
 A marked test runs where its toolchain is present and is skipped where it is not, with a reason naming what is
 missing.  ``ICOSIM_REQUIRE_TOOLCHAINS`` (marker names, comma-separated) makes a missing toolchain fail those tests
@@ -63,8 +65,24 @@ def _outside_missing() -> list[str]:
     return missing
 
 
+#: The other masters the peers tests run (the ``peers`` extra) -> the package that brings each.
+PEER_PACKAGES = {"libcosimpy": "libcosim", "ecospy": "Ecos"}
+
+
+def _peers_missing() -> list[str]:
+    """The outside units and fmpy, and each peer package, importable (Ecos loads TBB's shared library on import)."""
+    missing = _outside_missing()
+    for package, master in PEER_PACKAGES.items():
+        try:
+            importlib.import_module(package)
+        except (ImportError, OSError) as exc:
+            missing.append(f"{master} ({package}, the peers extra: {exc})")
+    return missing
+
+
 #: Marker -> what its toolchain lacks on this machine (an empty list: present).
-TOOLCHAINS = {"fmu": _fmu_missing, "slurm": _slurm_missing, "browser": _browser_missing, "outside": _outside_missing}
+TOOLCHAINS = {"fmu": _fmu_missing, "slurm": _slurm_missing, "browser": _browser_missing, "outside": _outside_missing,
+              "peers": _peers_missing}  # fmt: skip
 REQUIRE = "ICOSIM_REQUIRE_TOOLCHAINS"
 
 
