@@ -203,8 +203,9 @@ class CosimulationProblem:
         """Outputs of several subsystems, port after port: ``(..., ports, 4, n_c)``."""
         if len(ys) == 1:
             return ys[0]
-        lead = np.broadcast_shapes(*(np.shape(y)[:-3] for y in ys))  # the ports' axis is not broadcast
-        return layout.concatenate([np.broadcast_to(y, lead + np.shape(y)[-3:]) for y in ys], axis=-3)
+        ys = [np.asarray(y) for y in ys]
+        lead = _lead([y.shape[:-3] for y in ys])  # the ports' axis is not broadcast
+        return layout.concatenate([_to_lead(y, lead, 3) for y in ys], axis=-3)
 
     def residuals(self, y: Any, e: Any, conditions: Conditions | None = None, e_held: Any = None) -> dict[str, Any]:
         """The coupling conditions at ``T_N+1`` (:class:`icosim.engine.residuals.Conditions`): ``pos``, ``vel``,
@@ -335,6 +336,16 @@ def _output_derivatives(S_all: np.ndarray, B_all: np.ndarray) -> np.ndarray:
 
 def _prepend(e_new: np.ndarray, older: np.ndarray) -> np.ndarray:
     """Stack ``e_new`` in front of older samples (leading axes broadcast)."""
-    lead = np.broadcast_shapes(e_new.shape[:-1], older.shape[:-2])
-    older = np.broadcast_to(older, lead + older.shape[-2:])
-    return layout.concatenate([np.broadcast_to(e_new, lead + e_new.shape[-1:])[..., None, :], older], axis=-2)
+    lead = _lead([e_new.shape[:-1], older.shape[:-2]])
+    return layout.concatenate([_to_lead(e_new, lead, 1)[..., None, :], _to_lead(older, lead, 2)], axis=-2)
+
+
+def _lead(shapes: list[tuple]) -> tuple:
+    """The leading axes the arrays of these leading shapes broadcast to."""
+    first = shapes[0]
+    return first if all(shape == first for shape in shapes) else np.broadcast_shapes(*shapes)
+
+
+def _to_lead(a: np.ndarray, lead: tuple, trailing: int) -> np.ndarray:
+    """``a`` broadcast to the leading axes ``lead`` before its last ``trailing`` axes (itself where it has them)."""
+    return a if a.shape[:-trailing] == lead else np.broadcast_to(a, lead + a.shape[-trailing:])

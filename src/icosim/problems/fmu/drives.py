@@ -215,4 +215,4 @@ class DrivenPoints:
             "drive", rows, self.time, h, step_index=step_index, restore=restore, read=self._output_keys(i)
         )
         end = prescribed_end(coef, x0, v0, h)
-        return self._outputs(i, end[2], self._merged(i, values, *end))
+        return self._outputs(i, end[2], self._merged(i, values.ravel().tolist(), *end))

@@ -46,16 +46,24 @@ class Fmi2:
 
     def __init__(self, unit, fmu):
         self.unit, self.fmu = unit, fmu
+        self._refs = {}  # scene key -> the value references of its variables
+
+    def refs(self, key) -> list:
+        """The value references of the variables ``unit`` names under the scene key ``key``."""
+        refs = self._refs.get(key)
+        if refs is None:
+            refs = self._refs[key] = [el.value_reference for el in self.unit.elements[key]]
+        return refs
 
     def get(self, refs, total) -> list:
         """The values of the variables ``refs`` (``total`` values in all: a scalar each in FMI 2.0)."""
         with guard.call(self.unit, self.GET, self.unit.t):
             return self.fmu.getReal(refs)
 
-    def set(self, els, values):
-        """Set the variable elements ``els`` to ``values`` (floats, the unit's own units)."""
+    def set(self, key, values):
+        """Set the variables named under the scene key ``key`` to ``values`` (floats, the unit's own units)."""
         with guard.call(self.unit, self.SET, self.unit.t):
-            self.fmu.setReal([el.value_reference for el in els], values)
+            self.fmu.setReal(self.refs(key), values)
 
     def started(self, variable, value):
         """A start value set before the run (FMI 2.0 has no arrays: nothing to keep)."""
@@ -71,17 +79,19 @@ class Fmi2:
         with guard.call(self.unit, self.DO_STEP, t, step_index):
             self.fmu.doStep(t, h, noSetFMUStatePriorToCurrentPoint=final)
 
+    # the FMU state's calls: fmpy names them getFMUState, setFMUState, freeFMUState in both versions (in FMI 2.0
+    # the aliases of getFMUstate, setFMUstate, freeFMUstate), so both adapters share them, under their own names
     def get_state(self):
         with guard.call(self.unit, self.GET_STATE, self.unit.t):
-            return self.fmu.getFMUstate()
+            return self.fmu.getFMUState()
 
     def set_state(self, state):
         with guard.call(self.unit, self.SET_STATE, self.unit.t):
-            self.fmu.setFMUstate(state)
+            self.fmu.setFMUState(state)
 
     def free_state(self, state):
         with guard.call(self.unit, self.FREE_STATE, self.unit.t):
-            self.fmu.freeFMUstate(state)
+            self.fmu.freeFMUState(state)
 
     def terminate(self):
         with guard.call(self.unit, self.TERMINATE, self.unit.t):
@@ -108,10 +118,11 @@ class Fmi3(Fmi2):
         with guard.call(self.unit, self.GET, self.unit.t):
             return self.fmu.getFloat64(refs, total)
 
-    def set(self, els, values):
+    def set(self, key, values):
+        els = self.unit.elements[key]
         with guard.call(self.unit, self.SET, self.unit.t):
             if all(el.size == 1 for el in els):
-                self.fmu.setFloat64([el.value_reference for el in els], values)
+                self.fmu.setFloat64(self.refs(key), values)
                 return
             for el, v in zip(els, values):
                 if el.size == 1:
@@ -140,15 +151,3 @@ class Fmi3(Fmi2):
         if early:
             return f"returned early at t = {last:.12g} s"
         return None
-
-    def get_state(self):
-        with guard.call(self.unit, self.GET_STATE, self.unit.t):
-            return self.fmu.getFMUState()
-
-    def set_state(self, state):
-        with guard.call(self.unit, self.SET_STATE, self.unit.t):
-            self.fmu.setFMUState(state)
-
-    def free_state(self, state):
-        with guard.call(self.unit, self.FREE_STATE, self.unit.t):
-            self.fmu.freeFMUState(state)

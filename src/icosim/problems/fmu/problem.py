@@ -130,6 +130,7 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
         # the units' masses for the projection (a drive without its own position has no inertia there: its point
         # follows the joint)
         self._masses = np.array([0.0 if c.mass is None else float(c.mass) for c in self.couplings])
+        self._corrector_rows: tuple = (None, None, None)  # (history, e_new, their corrector samples), the last
         self._drives = self._drive_entries()
 
     # -- time and the initial point -----------------------------------------------------------------
@@ -183,7 +184,7 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
             self.couplings[i].input_key, self._scale[i] * coef, self.time, self.H, step_index=self.step_index + 1,
             restore=restore, read=self._output_keys(i), final=final and self._kept is None,
         )  # fmt: skip
-        return self._outputs(i, coef.sum(axis=0), values)
+        return self._outputs(i, np.add.reduce(coef), values)  # the input at T_N+1: u(1)
 
     def _output_keys(self, i):
         if self._drives[i] is not None:
@@ -195,13 +196,14 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
         input ``u1`` at ``T_N+1``.  A unit that returns a value that is not finite for finite inputs is at fault
         (:class:`UnitStepError`)."""
         c, n = self.couplings[i], self.n_dim
-        values = np.asarray(self.units[i].read(self._output_keys(i)) if values is None else values, dtype=float)
-        u1 = np.asarray(u1, dtype=float)
+        values = self.units[i].get(self._output_keys(i)) if values is None else np.asarray(values, dtype=float)
+        values = values.ravel()
+        y = np.empty(4 * n)
         if c.kind == "force":
-            y = np.concatenate([values, u1])
+            y[: 3 * n], y[3 * n :] = values, u1
         else:
-            y = np.concatenate([values[: 3 * n], c.force_sign * values[3 * n :]])
-        if not np.isfinite(values).all() and np.isfinite(u1).all():
+            y[: 3 * n], y[3 * n :] = values[: 3 * n], c.force_sign * values[3 * n :]
+        if not np.isfinite(y).all() and np.isfinite(u1).all() and not np.isfinite(values).all():
             self._not_finite(i, values.reshape(-1, n))
         end, y.shape = y[: 2 * n], (1, 4, n)  # the end: a view of the outputs' first two rows
         return end, y
@@ -235,8 +237,13 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
     def _samples(self, i, e_new, history):
         """Unit ``i``'s input samples: :meth:`inputs` of ``history`` (``e_new`` None) or of
         :meth:`corrector_samples`, ``(k + 1, n_dim)``."""
-        history = history[..., : self.k + 1, :]  # (a longer history's older samples take no part)
-        rows = history if e_new is None else self.corrector_samples(history, np.asarray(e_new, dtype=float))
+        if e_new is None:
+            rows = history[..., : self.k + 1, :]  # (a longer history's older samples take no part)
+        else:  # the same for every unit of the macro step: formed once
+            last_history, last_e, rows = self._corrector_rows
+            if last_history is not history or last_e is not e_new:
+                rows = self.corrector_samples(history, np.asarray(e_new, dtype=float))
+                self._corrector_rows = (history, e_new, rows)
         return np.asarray(self.inputs(i, rows), dtype=float)
 
     def predict(self, i, state, history, *, final=False):

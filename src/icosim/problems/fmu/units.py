@@ -332,7 +332,7 @@ class Unit:
 
     def _set_values(self, key, values):
         """Set ``key``'s variables to ``values`` (floats in the unit's own units, one per component)."""
-        self.fmi.set(self.elements[key], values)
+        self.fmi.set(key, values)
 
     def get_named(self, name) -> float:
         """The value of a scalar Real/Float64 variable (or array element) named ``name``, as the unit holds it."""
@@ -360,11 +360,11 @@ class Unit:
     # -- stepping -----------------------------------------------------------------------------
     def advance(self, key, rows, t, H, *, step_index, restore=None, read=None, final=False):
         """:meth:`step` after :meth:`restore` of ``restore`` where given; the variables of ``read`` read at the end
-        and returned (:meth:`read`; None: nothing read)."""
+        and returned (:meth:`get`; None: nothing read)."""
         if restore is not None:
             self.restore(restore)
         self.step(key, rows, t, H, step_index=step_index, final=final)
-        return None if read is None else self.read(read)
+        return None if read is None else self.get(read)
 
     def step(self, key, coefficients, t, H, *, step_index, final=False):
         """Advance ``[t, t + H]`` with the input(s) ``key`` following ``u(tau) = sum_m coefficients[m] tau^m``
@@ -384,7 +384,7 @@ class Unit:
                 tau = (j + 0.5) / n
                 self._set_values(key, [float(np.polyval(c[::-1, q], tau)) for q in range(c.shape[1])])
                 self._do_step(t + j * H / n, H / n, step_index, final)
-        self._set_values(key, c.sum(axis=0).tolist())
+        self._set_values(key, np.add.reduce(c).tolist())  # u(1)
         self.t = t + H
 
     def _derivative_plan(self, key, rows, H):
@@ -392,7 +392,7 @@ class Unit:
         orders, order after order, and the scales ``m! / H^m`` of the coefficients (``(rows - 1, 1)``)."""
         plan = self._derivatives.get((key, rows, H))
         if plan is None:
-            refs = [el.value_reference for el in self.elements[key]]
+            refs = self.fmi.refs(key)
             scales = np.array([[math.factorial(m) / H**m] for m in range(1, rows)])
             plan = (refs * (rows - 1), [m for m in range(1, rows) for _ in refs], scales)
             self._derivatives[key, rows, H] = plan
