@@ -313,9 +313,9 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
         n = self.n_dim
         for i, unit in enumerate(self.units):
             self._to_start(i)
-            for key, values in (("set_position", rows[i][:n]), ("set_velocity", rows[i][n:])):
-                if key in unit.elements:  # a drive's point without its outputs is the committed state
-                    unit.set(key, values)
+            if unit.projected_keys:  # one call; a drive's point without its outputs is the committed state
+                parts = {"set_position": rows[i][:n], "set_velocity": rows[i][n:]}
+                unit.set("projected", np.concatenate([parts[k] for k in unit.projected_keys]))
             self._free_start(i)
             self._start[i] = unit.save()
         self._committed = np.array(rows)

@@ -96,6 +96,11 @@ class Unit:
         if self.drive_keys:
             self.elements["drive"] = [el for k in self.drive_keys for el in self.elements[k]]
             self.factors["drive"] = np.concatenate([self.factors[k] for k in self.drive_keys])
+        #: the projection's inputs (position and velocity, those it names), set together as the entry ``projected``
+        self.projected_keys = tuple(k for k in ("set_position", "set_velocity") if k in self.elements)
+        if self.projected_keys:
+            self.elements["projected"] = [el for k in self.projected_keys for el in self.elements[k]]
+            self.factors["projected"] = np.concatenate([self.factors[k] for k in self.projected_keys])
         self.interpolates = bool(getattr(md.coSimulation, "canInterpolateInputs", False)) and not self.fmi3
         if inputs == "derivatives" and not self.interpolates:
             raise FmuError(
@@ -106,7 +111,7 @@ class Unit:
         self.substeps = int(substeps)
         self.names = dict(names)
         self._plans = {}  # keys -> how to read them (:meth:`_plan`)
-        self._derivatives = {}  # (key, k + 1, H) -> the input derivatives' references, orders and scales
+        self._inputs = {}  # (route, key, k + 1, H) -> how the input is handed to the unit (:meth:`_input_plan`)
         self.do_steps = self.saved = self.restored = self.warnings = self.check_steps = 0
         #: doStep's noSetFMUStatePriorToCurrentPoint on every step, not only on the final ones: a unit whose step
         #: depends on the flag (the inspection finds it) is stepped as it needs
@@ -372,48 +377,51 @@ class Unit:
         outputs that depend on them directly are those at ``t + H``).  ``final``: no state before ``t + H`` will
         be restored (doStep's ``noSetFMUStatePriorToCurrentPoint``)."""
         c = np.asarray(coefficients, dtype=float).reshape(len(coefficients), -1) / self.factors[key]
+        refs, orders, values_of = self._input_plan(key, len(c), H)
+        values = (values_of @ c).tolist()  # what the input is set to, row after row; the last: u(1)
         if self.exact_inputs:
-            self._set_values(key, c[0].tolist())
-            if len(c) > 1:  # every order up to k, zeros too: a unit may keep the derivatives of the step before
-                refs, orders, scales = self._derivative_plan(key, len(c), H)
-                self.fmi.set_input_derivatives(refs, orders, (c[1:] * scales).ravel().tolist())
+            self._set_values(key, values[0])
+            if orders:  # every order up to k, zeros too: a unit may keep the derivatives of the step before
+                self.fmi.set_input_derivatives(refs, orders, [v for row in values[1:-1] for v in row])
             self._do_step(t, H, step_index, final)
         else:
             n = self.substeps
             for j in range(n):
-                tau = (j + 0.5) / n
-                self._set_values(key, [float(np.polyval(c[::-1, q], tau)) for q in range(c.shape[1])])
+                self._set_values(key, values[j])
                 self._do_step(t + j * H / n, H / n, step_index, final)
-        self._set_values(key, np.add.reduce(c).tolist())  # u(1)
+        self._set_values(key, values[-1])
         self.t = t + H
 
-    def _derivative_plan(self, key, rows, H):
-        """The input derivatives of ``key`` for ``rows`` coefficients over a step ``H``: value references and
-        orders, order after order, and the scales ``m! / H^m`` of the coefficients (``(rows - 1, 1)``)."""
-        plan = self._derivatives.get((key, rows, H))
+    def _input_plan(self, key, rows, H):
+        """How ``key`` takes a polynomial of ``rows`` coefficients over ``H``: the input derivatives' references and
+        orders, and the matrix of the values set from the coefficients (the value at ``T_N`` and ``m! c_m / H^m``,
+        ``m = 1 .. k``; or the value at each sub-step's midpoint), ``u(1)`` last.  Made once per route."""
+        route = (self.exact_inputs, self.substeps, key, rows, H)
+        plan = self._inputs.get(route)
         if plan is None:
-            refs = self.fmi.refs(key)
-            scales = np.array([[math.factorial(m) / H**m] for m in range(1, rows)])
-            plan = (refs * (rows - 1), [m for m in range(1, rows) for _ in refs], scales)
-            self._derivatives[key, rows, H] = plan
+            if self.exact_inputs:
+                refs = self.fmi.refs(key)
+                scales = np.array([math.factorial(m) / H**m for m in range(1, rows)])
+                matrix = np.vstack([np.eye(rows)[:1], np.eye(rows)[1:] * scales[:, None]])
+                plan = (refs * (rows - 1), [m for m in range(1, rows) for _ in refs], matrix)
+            else:
+                tau = (np.arange(self.substeps) + 0.5) / self.substeps
+                plan = ([], [], tau[:, None] ** np.arange(rows))
+            plan = self._inputs[route] = (*plan[:2], np.vstack([plan[2], np.ones(rows)]))
         return plan
-
-    def _steprefused(self, code, t, step_index):
-        """A doStep that returned ``code`` (more than a warning; None: it raised without one) ends the run."""
-        status = _STATUS.get(code, "failure")
-        self.failed = code if code in (3, 4) else 0
-        raise UnitStepError(
-            f"unit {self.label} refused macro step {step_index} at t = {t:.12g} s (doStep returned {status})"
-            f"{self.said()}"
-        ) from None
 
     def _do_step(self, t, h, step_index, final=False):
         self.do_steps += 1
         self.messages.clear()
         try:
             stopped = self.fmi.do_step(t, h, bool(final or self.always_final), step_index)
-        except Exception as exc:
-            self._steprefused(getattr(exc, "status", None), t, step_index)
+        except Exception as exc:  # more than a warning (None: raised without a status) ends the run
+            code = getattr(exc, "status", None)
+            self.failed = code if code in (3, 4) else 0
+            raise UnitStepError(
+                f"unit {self.label} refused macro step {step_index} at t = {t:.12g} s (doStep returned "
+                f"{_STATUS.get(code, 'failure')}){self.said()}"
+            ) from None
         if stopped:  # FMI 3.0: terminateSimulation or earlyReturn
             raise UnitStepError(f"unit {self.label} {stopped} in macro step {step_index} (from t = {t:.12g} s)")
 
