@@ -206,7 +206,7 @@ def strict_jobs(s, counts):
                 if k in u.elements for el in u.elements[k]]  # fmt: skip
         k = s.problem.k
         orders = [m for m in range(1, k + 1) for _ in ins] if u.exact_inputs else []
-        jobs.append((u.fmu, ins, [0.0] * len(ins), orders, [0.0] * len(orders), outs, steps, saved, restored,
+        jobs.append((u.fmu, ins, [0.0] * len(ins), (ins * k, orders), [0.0] * len(orders), outs, steps, saved, restored,
                      u.t, s.problem.H / (1 if u.exact_inputs else u.substeps)))  # fmt: skip
     return [(job, job[0].getFMUstate()) for job in jobs]
 
@@ -216,13 +216,13 @@ def run_strict(jobs):
     set the input and its derivatives, doStep, read the outputs), then its saves (save and free), through fmpy's
     own ``FMU2Slave`` methods; every unit's saved state freed after the clock stops."""
     t = time.perf_counter()
-    for (fmu, ins, values, orders, derivatives, outs, steps, saved, restored, t0, h), state in jobs:
+    for (fmu, ins, values, which, derivatives, outs, steps, saved, restored, t0, h), state in jobs:
         for j in range(steps):
             if j < restored:
                 fmu.setFMUstate(state)
             fmu.setReal(ins, values)
-            if orders:
-                fmu.setRealInputDerivatives(ins, orders, derivatives)
+            if which[1]:  # (value references, orders) of the derivatives
+                fmu.setRealInputDerivatives(*which, derivatives)
             fmu.doStep(t0 if j < restored else t0 + (j - restored + 1) * h, h, False)
             fmu.getReal(outs)
         for _ in range(restored - steps):
