@@ -9,7 +9,7 @@ of its loaded library (``fmu.dll``, which the master calls itself), so nothing t
 count.  From that record a **bare fmpy loop** is built that makes exactly the same calls on fresh instances of
 the same units, in the same order, with the same value references and values: the floor.  A second, untimed
 pass of the bare loop under the same wrappers checks that it makes the same calls per kind with the same value
-sizes.  Two floors are timed:
+sizes.  Three floors are timed:
 
 * ``api``: fmpy's documented methods (``setReal(vrs, values)``, ``getReal``, ``setRealInputDerivatives``,
   ``doStep``, ``getFMUstate``, ``setFMUstate``, ``freeFMUstate``), the loop a user would write -- the floor the
@@ -17,6 +17,15 @@ sizes.  Two floors are timed:
 * ``raw``: the same calls to the functions of the units' libraries as fmpy loaded them (``fmu.dll.fmi2*``,
   which the master calls too) with every ctypes argument built before the clock starts and no status looked
   at (reported for honesty: it is what is left when Python builds and checks nothing).
+
+* ``strict``: counted from what the run reports rather than recorded: per
+  unit, as many integrations as its ``doStep`` calls in the run, each through fmpy's own ``FMU2Slave`` methods
+  in a bare loop on the same unit -- restore (as many as the run restored), set the input and its derivatives,
+  ``doStep``, read the outputs -- and as many saves (save and free) as the run saved; the smallest of a timing
+  before the runs (fresh units) and one after each run (on the run's units).  It leaves out the calls the
+  master makes beyond an integration (the input set to ``u(1)`` after each step so the outputs read are those at
+  ``T_N+1``; a finished unit's outputs re-evaluated at its end state, a set and a read without a step), and it
+  makes no per-call Python work of a recorded replay (no list of operations in memory).  The lowest floor.
 
 The master is timed twice: in the process itself (``engine``: the bare engine loop, no records) and as users run
 it (``cosim``): inside :func:`icosim.problems.fmu.guard.supervised`, the forked child of ``icosim cosim`` whose
@@ -36,8 +45,12 @@ With ``--old COMMIT`` the same measurement runs for that commit too (a ``git wor
 ``PYTHONPATH``), in a fresh process per tree, old - this tree - old; the JSON has both.  Never a timed assertion:
 a measurement to quote (docs/benchmarks.md).
 
-    python benchmarks/fmu_master.py [--steps 200] [--repeat 5] [--only scenes,pair,chain10,scaling] [--old COMMIT]
-                                    [--sizes 2,4,8,16,32,64] [--json FILE]
+    python benchmarks/fmu_master.py [--steps 200 | --simulated 30] [--repeat 5] [--only scenes,pair,chain10,scaling]
+                                    [--floors api,raw,strict] [--old COMMIT] [--sizes 2,4,8,16,32,64] [--json FILE]
+
+``--simulated SECONDS`` runs each configuration over that much simulated time (30 s: 30000 macro steps of the
+pair), so that one-off work does not count; a recorded floor of so many calls needs much memory, so such a run
+is best made with ``--floors strict``.
 """
 
 from __future__ import annotations
@@ -154,6 +167,7 @@ class Setup:
         if as_users:
             bound = self.bound if self.bound is not None else 1e10 * (1.0 + float(np.max(np.abs(self.state))))
             kw.update(bound=bound, observe=lambda n, state, history, y: None)
+        before = counters(self.units)
         t = time.perf_counter()
         with np.errstate(over="ignore", invalid="ignore"):
             traj = simulate(self.problem, self.method, self.state, self.history, steps, **kw)
@@ -161,12 +175,64 @@ class Setup:
         if traj.steps != steps:
             raise SystemExit(f"{label(self.cfg)}: the run stopped at step {traj.steps}: {traj.reason}")
         self.last = traj.states[-1]
+        #: per unit, the run's doStep calls, saved and restored states, as the unit reports them
+        self.counts = [tuple(b - a for a, b in zip(x, y)) for x, y in zip(before, counters(self.units))]
         return wall
 
     def close(self):
         self.problem.close()
         for u in self.units:
             u.close()
+
+
+def counters(units):
+    """Per unit: doStep calls, states saved, states restored, as the unit counts them."""
+    return [(u.do_steps, u.saved, u.restored) for u in units]
+
+
+# -- the strict floor: the run's integrations as a bare fmpy loop on the same units ------------------------------
+
+
+def strict_jobs(s, counts):
+    """Per unit of the setup ``s`` (opened, at any point of a run) the bare loop's work for the run's ``counts``
+    (:attr:`Setup.counts`): its input and output value references, input derivatives of the run's order, and a
+    saved state to restore (saved before the clock starts)."""
+    jobs = []
+    for i, (u, (steps, saved, restored)) in enumerate(zip(s.units, counts)):
+        key = s.problem.couplings[i].input_key
+        key = key if key in u.elements else "drive"
+        ins = [el.value_reference for el in u.elements[key]]
+        outs = [el.value_reference for k in ("position", "velocity", "acceleration", "reaction_force")
+                if k in u.elements for el in u.elements[k]]  # fmt: skip
+        k = s.problem.k
+        orders = [m for m in range(1, k + 1) for _ in ins] if u.exact_inputs else []
+        jobs.append((u.fmu, ins, [0.0] * len(ins), (ins * k, orders), [0.0] * len(orders), outs, steps, saved, restored,
+                     u.t, s.problem.H / (1 if u.exact_inputs else u.substeps)))  # fmt: skip
+    return [(job, job[0].getFMUstate()) for job in jobs]
+
+
+def run_strict(jobs):
+    """The strict floor, timed: per unit, as many integrations as the run made (restore where the run restored,
+    set the input and its derivatives, doStep, read the outputs), then its saves (save and free), through fmpy's
+    own ``FMU2Slave`` methods; every unit's saved state freed after the clock stops."""
+    t = time.perf_counter()
+    for (fmu, ins, values, which, derivatives, outs, steps, saved, restored, t0, h), state in jobs:
+        for j in range(steps):
+            if j < restored:
+                fmu.setFMUstate(state)
+            fmu.setReal(ins, values)
+            if which[1]:  # (value references, orders) of the derivatives
+                fmu.setRealInputDerivatives(*which, derivatives)
+            fmu.doStep(t0 if j < restored else t0 + (j - restored + 1) * h, h, False)
+            fmu.getReal(outs)
+        for _ in range(restored - steps):
+            fmu.setFMUstate(state)
+        for _ in range(saved):
+            fmu.freeFMUstate(fmu.getFMUstate())
+    wall = time.perf_counter() - t
+    for job, state in jobs:
+        job[0].freeFMUstate(state)
+    return wall
 
 
 # -- recording FMI calls at the fmpy level -------------------------------------------------------------------------
@@ -331,15 +397,17 @@ def run_ops(ops):
 # -- one configuration --------------------------------------------------------------------------------------------
 
 
-def record(fmu, cfg, steps):
-    """The master's FMI calls over ``steps`` macro steps (untimed), and its end state."""
+def record(fmu, cfg, steps, recorded=True):
+    """The master's FMI calls over ``steps`` macro steps (untimed; ``recorded`` False: not recorded), its end state
+    and its units' counts (:attr:`Setup.counts`)."""
     s = Setup(fmu, cfg)
-    rec = Recorder(fmus_of(s.units))
+    rec = Recorder(fmus_of(s.units)) if recorded else None
     s.run(steps)
-    rec.unwrap()
-    end = s.last
+    if rec is not None:
+        rec.unwrap()
+    end, counts = s.last, s.counts
     s.close()
-    return rec, end
+    return rec, end, counts
 
 
 def bare_setup(fmu, cfg, rec, kind, *, recorded=False):
@@ -391,38 +459,61 @@ def time_cosim(fmu, cfg, steps):
         return float(Path(out.name).read_text())
 
 
-def measure(fmu, cfg, steps, repeat):
+def measure(fmu, cfg, steps, repeat, floors):
     import numpy as np
 
-    rec, end = record(fmu, cfg, steps)
-    verify(fmu, cfg, rec, steps)
-    best = dict(engine=float("inf"), cosim=float("inf"), api=float("inf"), raw=float("inf"))
+    recorded = "api" in floors or "raw" in floors
+    rec, end, counts = record(fmu, cfg, steps, recorded)
+    if recorded:
+        verify(fmu, cfg, rec, steps)
+    best = dict(engine=float("inf"), cosim=float("inf"), **{kind: float("inf") for kind in floors})
+    if "strict" in floors:  # before the runs: fresh units at the master's start
+        s = Setup(fmu, cfg)
+        best["strict"] = run_strict(strict_jobs(s, counts))
+        s.close()
     for _ in range(repeat):
         s = Setup(fmu, cfg)
         best["engine"] = min(best["engine"], s.run(steps))
         if not np.array_equal(s.last, end):
             raise SystemExit(f"{label(cfg)}: the master's end state changed between runs")
+        if "strict" in floors:  # after a run: on the same units
+            best["strict"] = min(best["strict"], run_strict(strict_jobs(s, counts)))
         s.close()
         for kind in ("api", "raw"):
-            s, ops, _ = bare_setup(fmu, cfg, rec, kind)
-            best[kind] = min(best[kind], run_ops(ops))
-            s.close()
+            if kind in floors:
+                s, ops, _ = bare_setup(fmu, cfg, rec, kind)
+                best[kind] = min(best[kind], run_ops(ops))
+                s.close()
         best["cosim"] = min(best["cosim"], time_cosim(fmu, cfg, steps))
     per_step = {k: 1e3 * v / steps for k, v in best.items()}  # ms per macro step
-    counts, sizes = rec.counts(steps)
-    return dict(
+    out = dict(
         cfg,
         label=label(cfg),
+        steps=steps,
         ms_per_step=per_step,
-        ratio_engine=best["engine"] / best["api"],
-        ratio_cosim=best["cosim"] / best["api"],
-        ratio_engine_raw=best["engine"] / best["raw"],
-        ratio_cosim_raw=best["cosim"] / best["raw"],
-        calls_per_step=counts,
-        value_sizes=sizes,
-        calls_match=True,
+        unit_counts=counts,
         end_state=[[float(v) for v in row] for row in end],
     )
+    for kind in floors:
+        suffix = "" if kind == "api" else f"_{kind}"
+        out[f"ratio_engine{suffix}"] = best["engine"] / best[kind]
+        out[f"ratio_cosim{suffix}"] = best["cosim"] / best[kind]
+    if recorded:
+        out["calls_per_step"], out["value_sizes"] = rec.counts(steps)
+        out["calls_match"] = True
+    return out
+
+
+def steps_of(cfg, steps, simulated):
+    """Macro steps of a configuration: ``steps``, or as many as ``simulated`` seconds take at its step size."""
+    if simulated is None:
+        return steps
+    h = H
+    if "scene" in cfg:
+        from icosim.problems.fmu.scene import load_scene
+
+        h = load_scene(ROOT / "config" / "scenes" / f"{cfg['scene']}.yaml").coupling["H"]
+    return int(round(simulated / h))
 
 
 def exponents(results):
@@ -434,7 +525,7 @@ def exponents(results):
         n = np.log([r["n"] for r in rows])
         out[group] = {
             key: float(np.polyfit(n, np.log([r["ms_per_step"][key] for r in rows]), 1)[0])
-            for key in ("engine", "cosim", "api", "raw")
+            for key in rows[0]["ms_per_step"]
         }
     return out
 
@@ -449,16 +540,14 @@ def child(args):
     fmu = build_unit(ROOT / "fmus" / "msd", ROOT / "build" / "fmus")
     sizes = [int(v) for v in args.sizes.split(",")]
     results = []
+    floors = args.floors.split(",")
     for cfg in configurations(args.only.split(","), sizes):
-        r = measure(fmu, cfg, args.steps, args.repeat)
+        r = measure(fmu, cfg, steps_of(cfg, args.steps, args.simulated), args.repeat, floors)
         results.append(r)
         ms = r["ms_per_step"]
-        print(
-            f"{r['label']:<52} engine {ms['engine']:7.3f} cosim {ms['cosim']:7.3f} floor api {ms['api']:7.3f} "
-            f"raw {ms['raw']:7.3f} ms/step; cosim/api {r['ratio_cosim']:5.2f} engine/api {r['ratio_engine']:5.2f}",
-            file=sys.stderr,
-            flush=True,
-        )
+        print(f"{r['label']:<52} " + " ".join(f"{k} {v:7.4f}" for k, v in ms.items()) + " ms/step; "
+              + " ".join(f"{k} {v:5.2f}" for k, v in r.items() if k.startswith("ratio_")),
+              file=sys.stderr, flush=True)  # fmt: skip
     print(json.dumps(dict(results=results, exponents=exponents(results))))
 
 
@@ -467,8 +556,25 @@ def child(args):
 
 def run_tree(src_root: Path, args, tag: str) -> dict:
     env = dict(os.environ, PYTHONPATH=str(src_root / "src"), OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
-    cmd = [sys.executable, __file__, "--child", "--src", str(src_root / "src"), "--steps", str(args.steps),
-           "--repeat", str(args.repeat), "--only", args.only, "--sizes", args.sizes]  # fmt: skip
+    cmd = [
+        sys.executable,
+        __file__,
+        "--child",
+        "--src",
+        str(src_root / "src"),
+        "--steps",
+        str(args.steps),
+        "--repeat",
+        str(args.repeat),
+        "--only",
+        args.only,
+        "--sizes",
+        args.sizes,
+        "--floors",
+        args.floors,
+    ]
+    if args.simulated is not None:
+        cmd += ["--simulated", str(args.simulated)]  # fmt: skip
     print(f"== {tag} ({src_root})", file=sys.stderr, flush=True)
     proc = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, text=True, check=True)
     return json.loads(proc.stdout.strip().splitlines()[-1])
@@ -480,6 +586,8 @@ def main():
     ap.add_argument("--repeat", type=int, default=5, help="timed runs per kind (best taken)")
     ap.add_argument("--only", default="scenes,pair,chain10,scaling", help="groups: scenes, pair, chain10, scaling")
     ap.add_argument("--sizes", default="2,4,8,16,32,64", help="chain sizes of the scaling fit")
+    ap.add_argument("--simulated", type=float, help="simulated seconds per timed run (instead of --steps)")
+    ap.add_argument("--floors", default="api,raw,strict", help="floors timed: api, raw (recorded calls), strict")
     ap.add_argument("--old", help="another commit, measured before and after this tree")
     ap.add_argument("--json", help="write the numbers to this file")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
@@ -487,7 +595,7 @@ def main():
     args = ap.parse_args()
     if args.child:
         return child(args)
-    out = {"steps": args.steps, "repeat": args.repeat, "load": os.getloadavg()}
+    out = {"steps": args.steps, "simulated": args.simulated, "repeat": args.repeat, "load": os.getloadavg()}
     if args.old:
         sys.path.insert(0, str(ROOT / "benchmarks"))
         from _workflow import tree
@@ -511,8 +619,8 @@ def summarise(out):
         print(f"\n{name}:")
         for r in out[key]["results"]:
             ms = r["ms_per_step"]
-            print(f"  {r['label']:<52} cosim/floor {r['ratio_cosim']:5.2f}  engine/floor {r['ratio_engine']:5.2f}  "
-                  f"(floor {ms['api']:.3f} ms/step; raw floor {ms['raw']:.3f})")  # fmt: skip
+            print(f"  {r['label']:<52} " + "  ".join(f"{k} {v:5.2f}" for k, v in r.items() if k.startswith("ratio_"))
+                  + "  (ms/step: " + ", ".join(f"{k} {v:.4f}" for k, v in ms.items()) + ")")  # fmt: skip
         for group, fit in out[key]["exponents"].items():
             print(f"  exponent of time over N, {group}: " + ", ".join(f"{k} {v:.2f}" for k, v in fit.items()))
     if "old" in out:

@@ -28,6 +28,7 @@ True
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from typing import Any
 
@@ -73,7 +74,7 @@ def concatenate(arrays: Iterable[Any], axis: int = 0) -> np.ndarray:
     if not all(a.shape[:ax] + a.shape[ax + 1 :] == first.shape[:ax] + first.shape[ax + 1 :] for a in arrays):
         return np.concatenate(arrays, axis=axis)  # NumPy raises its own error
     shape = first.shape[:ax] + (sum(a.shape[ax] for a in arrays),) + first.shape[ax + 1 :]
-    if int(np.prod(shape)) < BATCH_SIZE:
+    if math.prod(shape) < BATCH_SIZE:
         return np.concatenate(arrays, axis=axis)
     out = np.empty(shape, dtype=np.result_type(*arrays), order="F")
     return np.concatenate(arrays, axis=axis, out=out)

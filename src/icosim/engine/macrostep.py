@@ -135,10 +135,6 @@ def macro_step(
 
 def _with_columns(e: Any, cols: slice | np.ndarray, values: Any) -> Any:
     """``e`` with the entries ``cols`` of its last axis replaced by ``values`` (leading axes broadcast)."""
-    if e.ndim == 1 and values.ndim == 1:  # one point (an FMU step): nothing to broadcast
-        out = e.copy()
-        out[cols] = values
-        return out
     lead = np.broadcast_shapes(e.shape[:-1], values.shape[:-1])
     out = np.array(np.broadcast_to(e, lead + e.shape[-1:]), copy=True)
     out[..., cols] = values

@@ -25,8 +25,7 @@ from .decompositions import Decomposition
 from .graph import CouplingGraph
 from .lagrange import corrector_nodes, predictor_nodes, weights_at
 from .methods.solve import KeptFactors
-from .point_jacobian import MAX_ENTRIES, PointJacobian
-from .residuals import level_factors, plain_factors
+from .residuals import level_factors
 from .schemes import get_scheme
 
 if TYPE_CHECKING:
@@ -143,12 +142,10 @@ class CosimulationProblem:
         self.w_pred = np.array([be.const(w) for w in weights_at(self.pred_nodes, 1)], dtype=be.dtype)
         self.work = Work()
         self._extrapolated: tuple = (None, None, None)  # (history, weights, e_p) of the last extrapolation
-        self._weights_as_floats: tuple = (None, [])  # (weights, as floats) of the last extrapolation in floats
         self._plans: dict = {}  # scheme -> its stages on the graph (the kept Jacobians below are per stage)
         self._jacobians: dict = {}  # (stage, algebraic) -> (the kept Jacobians, their factors): constant ones
         self._level_factors: tuple = (None, None, None)  # (scale, dtype, its levels' factors) last formed
         self._assembly: dict = {}  # (stage, algebraic) -> what jacobians() needs of the stage every time
-        self._point_jacobians: dict = {}  # (stage, algebraic) -> its sparse map at one float64 point, or None
 
     @property
     def decomposition(self) -> Decomposition:
@@ -185,29 +182,9 @@ class CosimulationProblem:
         if last_history is history and last_weights is self.w_pred:
             return e_p
         w = self.w_pred
-        if w.dtype == np.float64 and getattr(history, "dtype", None) == np.float64:
-            # the same terms, summed in the same order from the first (sum() starts from 0: only -0 differs)
-            weights = self._float_weights(w)
-            if history.ndim == 2:  # one point: the same products and sums in Python floats (IEEE doubles too)
-                rows = history.tolist()
-                sums = [weights[0] * v for v in rows[0]]
-                for j in range(1, self.k + 1):
-                    sums = [acc + weights[j] * v for acc, v in zip(sums, rows[j])]
-                e_p = np.array(sums)
-            else:
-                e_p = weights[0] * history[..., 0, :]
-                for j in range(1, self.k + 1):
-                    e_p = e_p + weights[j] * history[..., j, :]
-        else:
-            e_p = sum(w[j] * history[..., j, :] for j in range(self.k + 1))
+        e_p = sum(w[j] * history[..., j, :] for j in range(self.k + 1))
         self._extrapolated = (history, self.w_pred, e_p)
         return e_p
-
-    def _float_weights(self, w: np.ndarray) -> list[float]:
-        kept = self._weights_as_floats
-        if kept[0] is not w:
-            kept = self._weights_as_floats = (w, w.tolist())
-        return kept[1]
 
     def corrector_samples(self, history: np.ndarray, e_new: np.ndarray) -> np.ndarray:
         """Samples of the interpolation polynomial (Eq. 11): ``e_new`` at ``T_N+1``, then ``e_N ... e_N-k+1``."""
@@ -226,11 +203,9 @@ class CosimulationProblem:
         """Outputs of several subsystems, port after port: ``(..., ports, 4, n_c)``."""
         if len(ys) == 1:
             return ys[0]
-        first = ys[0]
-        if first.ndim == 3 and all(y.shape[:-3] == () for y in ys):  # one point (an FMU step): no axes to lay out
-            return np.concatenate(ys, axis=-3)
-        lead = np.broadcast_shapes(*(np.shape(y)[:-3] for y in ys))  # the ports' axis is not broadcast
-        return layout.concatenate([np.broadcast_to(y, lead + np.shape(y)[-3:]) for y in ys], axis=-3)
+        ys = [np.asarray(y) for y in ys]
+        lead = _lead([y.shape[:-3] for y in ys])  # the ports' axis is not broadcast
+        return layout.concatenate([_to_lead(y, lead, 3) for y in ys], axis=-3)
 
     def residuals(self, y: Any, e: Any, conditions: Conditions | None = None, e_held: Any = None) -> dict[str, Any]:
         """The coupling conditions at ``T_N+1`` (:class:`icosim.engine.residuals.Conditions`): ``pos``, ``vel``,
@@ -286,18 +261,11 @@ class CosimulationProblem:
                 S = 0 * self.sensitivity(i, state, history, e, ends[i], ys[i])
             Ss.append(S)
         first = Ss[0]
-        if first.dtype == np.float64 and all(S.dtype == np.float64 and S.shape == first.shape for S in Ss):
+        if B_all is not None and all(S.dtype == np.float64 and S.shape == first.shape for S in Ss):
             # every responder at once: (..., R, inputs, ports, 4, n_c) x (R, inputs, cols) -> (..., cols, R ports,
             # 4, n_c).  A column reaches one input of a responder (a joint attaches to one port of it), so each
             # entry is one product by 0 or +-1, as the tensor product of one responder at a time had it.
-            S_all = np.array(Ss) if first.ndim == 4 else np.stack(Ss, axis=-5)
-            at_point = self._point_jacobian(key, stage, S_all, B_all, dE, held) if first.ndim == 4 else None
-            if at_point is not None:
-                jac = at_point[0](S_all.ravel().tolist(), at_point[1])
-                if self.constant_sensitivities:
-                    self._jacobians[key] = (jac, KeptFactors())
-                return jac
-            dY = _output_derivatives(S_all, B_all)
+            dY = _output_derivatives(np.stack(Ss, axis=-5), B_all)
         else:
             blocks = []
             for S, B in zip(Ss, Bs):
@@ -318,28 +286,6 @@ class CosimulationProblem:
         :meth:`~icosim.engine.methods.base.CouplingMethod.corrected_coupling`; else None."""
         kept = self._jacobians.get((stage, algebraic))
         return None if kept is None else kept[1]
-
-    def _point_jacobian(self, key: tuple, stage: Stage, S_all: Any, B_all: Any, dE: Any, held: Any) -> tuple | None:
-        """The stage's Jacobians at one float64 point as a sparse map in floats and the levels' factors
-        (:mod:`icosim.engine.point_jacobian`), made once per stage; None where the general assembly serves."""
-        factors = plain_factors(self.condition_scale)
-        if factors is None or B_all is None:
-            return None
-        maps = self._point_jacobians
-        if key not in maps:
-            shape = S_all.shape
-            conditions = stage.conditions if stage.conditions is not None else self.every_condition
-            if sum(conditions.n_rows.values()) * len(conditions.columns) > MAX_ENTRIES:
-                maps[key] = None  # too large for the map: not even looked for (its search grows as the square)
-                return None
-
-            def general(z: np.ndarray) -> dict[str, np.ndarray]:
-                dY = _output_derivatives(z.reshape((-1,) + shape), B_all)
-                return {k: v.swapaxes(-1, -2) for k, v in conditions(dY, dE, e_held=held).items()}
-
-            maps[key] = PointJacobian.make(general, S_all.size)
-        point = maps[key]
-        return None if point is None else (point, factors)
 
     def _assemble(self, stage: Stage) -> tuple:
         """What :meth:`jacobians` of ``stage`` needs every time: the responders' input matrices (apart, and
@@ -390,8 +336,16 @@ def _output_derivatives(S_all: np.ndarray, B_all: np.ndarray) -> np.ndarray:
 
 def _prepend(e_new: np.ndarray, older: np.ndarray) -> np.ndarray:
     """Stack ``e_new`` in front of older samples (leading axes broadcast)."""
-    if e_new.ndim == 1 and older.ndim == 2:  # one point (the pendulum's every macro step): no broadcasting
-        return np.concatenate([e_new[None, :], older])
-    lead = np.broadcast_shapes(e_new.shape[:-1], older.shape[:-2])
-    older = np.broadcast_to(older, lead + older.shape[-2:])
-    return layout.concatenate([np.broadcast_to(e_new, lead + e_new.shape[-1:])[..., None, :], older], axis=-2)
+    lead = _lead([e_new.shape[:-1], older.shape[:-2]])
+    return layout.concatenate([_to_lead(e_new, lead, 1)[..., None, :], _to_lead(older, lead, 2)], axis=-2)
+
+
+def _lead(shapes: list[tuple]) -> tuple:
+    """The leading axes the arrays of these leading shapes broadcast to."""
+    first = shapes[0]
+    return first if all(shape == first for shape in shapes) else np.broadcast_shapes(*shapes)
+
+
+def _to_lead(a: np.ndarray, lead: tuple, trailing: int) -> np.ndarray:
+    """``a`` broadcast to the leading axes ``lead`` before its last ``trailing`` axes (itself where it has them)."""
+    return a if a.shape[:-trailing] == lead else np.broadcast_to(a, lead + a.shape[-trailing:])

@@ -56,8 +56,10 @@ def joined_clusters(graph: CouplingGraph, body_of_port: Sequence[int]) -> tuple[
 def mass_weighted_projection(clusters: Sequence[Sequence[int]], masses: Any, x: Any) -> Any:
     """``x`` (``(..., n_bodies, d)``) with every cluster's bodies moved to their mass-weighted mean
     (``masses``: ``(..., n_bodies)``, broadcast); in the arithmetic of the arrays."""
-    lead = np.broadcast_shapes(x.shape[:-2], masses.shape[:-1])
-    rows = list(np.broadcast_to(x, lead + x.shape[-2:])[..., b, :] for b in range(x.shape[-2]))
+    lead = x.shape[:-2] if x.shape[:-2] == masses.shape[:-1] else np.broadcast_shapes(x.shape[:-2], masses.shape[:-1])
+    if x.shape[:-2] != lead:
+        x = np.broadcast_to(x, lead + x.shape[-2:])
+    rows = [x[..., b, :] for b in range(x.shape[-2])]  # every one, a cluster's mean too, of shape lead + (d,)
     for cluster in clusters:
         weighted: Any = None
         total: Any = None
@@ -69,4 +71,4 @@ def mass_weighted_projection(clusters: Sequence[Sequence[int]], masses: Any, x: 
         mean = weighted / total
         for b in cluster:
             rows[b] = mean
-    return layout.stack(np.broadcast_arrays(*rows), axis=-2)
+    return layout.stack(rows, axis=-2)

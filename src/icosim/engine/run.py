@@ -91,7 +91,7 @@ def simulate(
             if rollback:
                 problem.restore(checkpoint)
             break
-        mag = _magnitude(state)
+        mag = float(np.max(np.abs(np.asarray(state, dtype=float)), initial=0.0))  # not finite where an entry is not
         if not math.isfinite(mag):
             diverged, reason = n, "state not finite"
         elif bound is not None and mag > bound:
@@ -110,15 +110,3 @@ def simulate(
         outputs.append(y)
         done = n
     return Trajectory(states, coupling, outputs, diverged, failed, reason, error, done)
-
-
-def _magnitude(state: Any) -> float:
-    """``max |state|``; not finite where any entry is not (a few values as floats: numpy's reductions cost more
-    than the loop there)."""
-    state = np.asarray(state, dtype=float)
-    if state.size > 16:
-        return float(np.abs(state).max())  # the method: np.max's dispatch costs more
-    values = state.ravel().tolist()
-    if not all(map(math.isfinite, values)):
-        return math.inf
-    return max(map(abs, values), default=0.0)

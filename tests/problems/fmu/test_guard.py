@@ -54,17 +54,6 @@ def test_a_call_that_raises_leaves_no_record_and_the_child_is_not_stopped(capfd)
                         raise RuntimeError("refused")
                 assert guard.under_way() == ("body", "fmi2DoStep", 0.5, 4)
             assert guard.under_way() is None
-            with guard.call(unit, "fmi2DoStep", 0.75, 5):  # a sequence of calls that raises, inside another call
-                sequence = guard.calls(unit, 0.75, 5)
-                with pytest.raises(RuntimeError):
-                    try:
-                        sequence.now("fmi2SetReal")
-                        assert guard.under_way() == ("body", "fmi2SetReal", 0.75, 5)
-                        raise RuntimeError("refused")
-                    finally:
-                        sequence.end()
-                assert guard.under_way() == ("body", "fmi2DoStep", 0.75, 5)
-            assert guard.under_way() is None
             unit.step("force", [[1.0], [0.5]], 0.0, 1e-3, step_index=0)  # real calls, each left
             assert guard.under_way() is None
         finally:

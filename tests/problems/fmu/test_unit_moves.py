@@ -199,8 +199,8 @@ def test_a_unit_that_needs_the_flag_and_then_cannot_roll_back_is_refused_naming_
 
 def test_the_flag_is_true_on_the_final_integration_of_each_macro_step(monkeypatch):
     """Jacobi with one corrector step: per macro step and unit, the prediction and the sensitivity's step are
-    rolled back (false), the corrector's integration is final (true).  The calls are counted on the units' own
-    library function, which the fast path calls."""
+    rolled back (false), the corrector's integration is final (true).  The calls are counted on each unit's fmpy
+    instance (its ``fmi2DoStep``, which fmpy's ``doStep`` calls)."""
     import collections
 
     from icosim.problems.fmu import run as run_module
@@ -210,13 +210,13 @@ def test_the_flag_is_true_on_the_final_integration_of_each_macro_step(monkeypatc
     def counted(*args, **kwargs):
         units, couplings = opened(*args, **kwargs)
         for unit in units:
-            library, step = unit.fmu.dll, unit.fmu.dll.fmi2DoStep
+            fmu, step = unit.fmu, unit.fmu.fmi2DoStep
 
             def recorded(c, t, h, flag, step=step, name=unit.label):
                 flags[name, bool(flag)] += 1
                 return step(c, t, h, flag)
 
-            library.fmi2DoStep = recorded
+            fmu.fmi2DoStep = recorded
         return units, couplings
 
     monkeypatch.setattr(run_module, "open_units", counted)

@@ -30,7 +30,7 @@ import numpy as np
 from ...errors import ParameterError
 from .. import layout
 from ..decompositions import DECOMPOSITIONS, Decomposition
-from .solve import Factored, KeptFactors, solve_float, solve_small
+from .solve import Factored, KeptFactors, solve_small
 
 if TYPE_CHECKING:
     from ..backends import Backend
@@ -108,11 +108,9 @@ class CouplingMethod:
                 if factor is None:
                     factor = kept.by_levels[levels] = Factored(_conditions(levels, jacobians, axis=-2, const=const))
                 de = factor.solve(-r)
-            elif plain:
+            else:
                 if kept is not None:
                     kept.used = True
-                de = solve_float(_conditions(levels, jacobians, axis=-2, const=const), -r)
-            else:
                 de = solve_small(_conditions(levels, jacobians, axis=-2, const=const), -r)
             term: np.ndarray = de if weight == 1 else const(weight) * de
             total = term if total is None else total + term

@@ -1,7 +1,6 @@
 """The coupling solves of small systems (:meth:`icosim.engine.methods.base.CouplingMethod.corrected_coupling`):
-closed forms for sizes 1 and 2, LU for larger ones, a banded solve for a large banded float64 system, and a float64
-matrix factored once for many right-hand sides (:class:`KeptFactors`: held by the problem whose Jacobians they
-are)."""
+closed forms for sizes 1 and 2, LU for larger ones, and a float64 matrix factored once for many right-hand sides
+(:class:`KeptFactors`: held by the problem whose Jacobians they are)."""
 
 from __future__ import annotations
 
@@ -11,34 +10,7 @@ import numpy as np
 
 from .. import layout
 
-__all__ = ["solve_small", "solve_float", "Factored", "KeptFactors", "BANDED_FROM"]
-
-
-#: A float64 system of at least this size whose matrix is banded, with no more than a quarter of its diagonals
-#: occupied, is solved as a banded system (a chain's joints: tridiagonal): work linear in its size.
-BANDED_FROM = 16
-
-
-def solve_float(J: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """:func:`solve_small` for float64, a large banded system of one point by its band (LAPACK ``gbsv``)."""
-    n = J.shape[-1]
-    if J.ndim != 2 or n < BANDED_FROM or b.ndim != 1:
-        return solve_small(J, b)
-    rows, cols = np.nonzero(J)
-    lower = int(np.max(rows - cols, initial=0))
-    upper = int(np.max(cols - rows, initial=0))
-    if 4 * (lower + upper + 1) > n:
-        return solve_small(J, b)
-    from scipy.linalg import solve_banded
-
-    band = np.zeros((lower + upper + 1, n))
-    for d in range(-lower, upper + 1):  # band[upper + i - j, j] = J[i, j]
-        diagonal = np.diagonal(J, d)
-        if d >= 0:
-            band[upper - d, d:] = diagonal
-        else:
-            band[upper - d, : n + d] = diagonal
-    return solve_banded((lower, upper), band, b, check_finite=False)
+__all__ = ["solve_small", "Factored", "KeptFactors"]
 
 
 class Factored:
@@ -49,18 +21,12 @@ class Factored:
     def __init__(self, J: np.ndarray) -> None:
         self.J = J
         self.lu = None
-        #: one point of size 1 or 2: its entries as floats, for the closed forms (:func:`_solve_point`)
-        self.rows = J.tolist() if J.shape[-1] <= 2 and J.ndim == 2 and J.dtype == np.float64 else None
         if J.shape[-1] > 2 and J.ndim == 2:
             from scipy.linalg import lu_factor
 
             self.lu = lu_factor(J, check_finite=False)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        if self.rows is not None and b.ndim == 1 and b.dtype == np.float64:
-            x = _solve_point(self.rows, b.tolist())
-            if x is not None:
-                return x
         if self.lu is None or b.ndim != 1:
             return solve_small(self.J, b)
         from scipy.linalg import lu_solve
@@ -92,10 +58,6 @@ def solve_small(J: np.ndarray, b: np.ndarray) -> np.ndarray:
     catches it).  Larger systems use LU (numpy) or mpmath's ``lu_solve``.
     """
     n = J.shape[-1]
-    if n <= 2 and J.ndim == 2 and b.ndim == 1 and J.dtype == np.float64 and b.dtype == np.float64:
-        x = _solve_point(J.tolist(), b.tolist())
-        if x is not None:
-            return x
     if J.shape[:-1] != b.shape:  # (a single point's shapes agree: no broadcast to pay for)
         J, b = np.broadcast_arrays(J, b[..., None])
         b = b[..., 0]
@@ -115,19 +77,6 @@ def solve_small(J: np.ndarray, b: np.ndarray) -> np.ndarray:
     for idx in np.ndindex(b.shape[:-1]):
         out[idx] = _gauss(J[idx].tolist(), b[idx].tolist())
     return out
-
-
-def _solve_point(J: list[list[float]], b: list[float]) -> np.ndarray | None:
-    """The closed forms of :func:`solve_small` for one float64 point of size 1 or 2, in Python floats (the same
-    IEEE operations in the same order as on numpy's scalars, without their overhead).  None where a divisor is
-    zero: numpy's scalars make that point inf/nan (under its error state), Python's floats would raise."""
-    if len(b) == 1:
-        return np.array([b[0] / J[0][0]]) if J[0][0] != 0.0 else None
-    (a, bb), (c, d) = J
-    det = a * d - bb * c
-    if det == 0.0:
-        return None
-    return np.array([(d * b[0] - bb * b[1]) / det, (a * b[1] - c * b[0]) / det])
 
 
 def _gauss(A: list[list[Any]], y: list[Any]) -> list[Any]:

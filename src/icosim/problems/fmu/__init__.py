@@ -8,6 +8,7 @@ module                holds
 :mod:`.variables`     typed variables, array elements, start values by the standard's rules
 :mod:`.measures`      units of measure of the coupling variables, converted to SI
 :mod:`.units`         one FMU instance: opened, stepped with a polynomial input, saved, restored
+:mod:`.fmi`           a unit's FMI calls: one adapter per version (2.0, 3.0) over fmpy's documented API
 :mod:`.exchange`      a model exchange unit integrated by icosim, its states kept by icosim
 :mod:`.drives`        a kinematic drive's position, velocity and acceleration inputs over a macro step
 :mod:`.findings`      a check's finding

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from ...engine.lagrange import variable_step_polynomials
 from ...errors import StepFailure
 
@@ -51,10 +53,9 @@ class Checkpoints:
             return
         self._clock = (self.time, self.step_index)  # the time from here on: T_N + (N' - N) H
         self._steps, self.H = steps, H
-        self.w_pred, self.C_pred, self.C_corr = w_pred, C_pred.tolist(), C_corr.tolist()
+        self.w_pred, self.C_pred, self.C_corr = w_pred, np.asarray(C_pred, dtype=float), np.asarray(C_corr, dtype=float)
         self.condition_scale = (1.0, H, H**2)
         self._jacobians.clear()
-        self._negatives.clear()
 
     def checkpoint(self):
         """The problem at ``T_N``, between macro steps (module docstring)."""

@@ -166,7 +166,7 @@ class DrivenPoints:
                     point.append(self.units[other].get((key,)).ravel())
             rows[i] = np.concatenate(point)
             self._to_start(i)
-            self.units[i].put("drive", self._drive_values(i, point[0].tolist(), point[1].tolist(), [0.0] * n))
+            self.units[i].set("drive", self._drive_values(i, point[0].tolist(), point[1].tolist(), [0.0] * n))
             self.units[i].free(self._start[i])
             self._start[i] = self.units[i].save()
         return rows
@@ -198,7 +198,7 @@ class DrivenPoints:
     def _drive_outputs(self, i, x, v, a):
         """A drive at its present state with its point at ``x``, ``v`` and acceleration ``a`` (no step): its end
         and outputs (``_outputs``)."""
-        self.units[i].put("drive", self._drive_values(i, x, v, a))
+        self.units[i].set("drive", self._drive_values(i, x, v, a))
         return self._outputs(i, a, self._merged(i, self.units[i].read(self._output_keys(i)), x, v, a))
 
     def _drive_at_start(self, i, start, u):
@@ -215,4 +215,4 @@ class DrivenPoints:
             "drive", rows, self.time, h, step_index=step_index, restore=restore, read=self._output_keys(i)
         )
         end = prescribed_end(coef, x0, v0, h)
-        return self._outputs(i, end[2], self._merged(i, values, *end))
+        return self._outputs(i, end[2], self._merged(i, values.ravel().tolist(), *end))

@@ -2,7 +2,7 @@
 and restores the continuous states and the time, and no ``fmi2GetFMUstate`` is needed.
 
 :class:`ExchangeUnit` has the interface of :class:`~icosim.problems.fmu.units.Unit` (``advance``, ``step``,
-``save``, ``restore``, ``free``, ``get``, ``read``, ``set``, ``put``): the problem, the inspection, the check and
+``save``, ``restore``, ``free``, ``get``, ``read``, ``set``): the problem, the inspection, the check and
 the identification do not know which interface a unit has.  Over ``[T_N, T_N + H]`` the coupling input follows
 the coupling polynomial ``u(tau) = sum_m c_m tau^m``, ``tau = (t - T_N)/H``, set at every evaluation of the
 right-hand side; at the end the unit holds the end state, the time ``T_N + H`` and the input ``u(1)``, so the
@@ -37,7 +37,7 @@ import numpy as np
 from . import guard
 from .description import read_description
 from .errors import FmuError, UnitStepError
-from .fmi2_calls import refused
+from .fmi import refused
 from .units import Unit
 
 __all__ = ["ExchangeUnit", "open_fmu_unit", "DEFAULT_TOLERANCE", "INTERFACES", "check_exchange"]
@@ -224,14 +224,9 @@ class ExchangeUnit(Unit):
         return out
 
     # -- the inputs the macro step keeps with the state -----------------------------------------------
-    def _write(self, key, values):
+    def _set_values(self, key, values):
         self._held[key] = list(values)
-        super()._write(key, values)
-
-    def _set_elements(self, key, values):
-        if self.fmi3:
-            self._held[key] = [float(v) for v in values]
-        return super()._set_elements(key, values)
+        super()._set_values(key, values)
 
     # -- states: the continuous states, the time and the inputs ----------------------------------------
     def save(self):
@@ -247,7 +242,7 @@ class ExchangeUnit(Unit):
         self._set_state(t, self._x)
         for key, values in held.items():
             if self._held.get(key) != values:
-                self._set_elements(key, values)
+                self._set_values(key, values)
         self.t = t
 
     def free(self, state):
@@ -261,15 +256,6 @@ class ExchangeUnit(Unit):
             self._check(f"{prefix}SetContinuousStates", self._calls[1](self._component, self._xbuf, self._nx))
 
     # -- stepping -------------------------------------------------------------------------------
-    def advance(self, key, rows, t, H, *, step_index, restore=None, read=None, final=False):
-        """:meth:`step` with the coefficients as rows of floats, after :meth:`restore` of ``restore`` where given;
-        the variables of ``read`` read at the end and returned (:meth:`read`).  ``final`` changes nothing: the
-        states are the master's, restored by it."""
-        if restore is not None:
-            self.restore(restore)
-        self.step(key, rows, t, H, step_index=step_index)
-        return None if read is None else self.read(read)
-
     def step(self, key, coefficients, t, H, *, step_index, final=False):
         """Integrate ``[t, t + H]`` with the input(s) ``key`` following ``u(tau) = sum_m coefficients[m] tau^m``
         (SI; ``(k + 1,)`` or ``(k + 1, components)``; ``key`` None: a unit without a coupling input, its inputs
@@ -343,7 +329,7 @@ class ExchangeUnit(Unit):
         if key is None:
             return lambda tt: None
         c = (np.asarray(coefficients, dtype=float).reshape(len(coefficients), -1) / self.factors[key]).tolist()
-        write = self._set_elements if self.fmi3 else self._write
+        write = self._set_values
         if len(c) == 1:
             write(key, c[0])
             return lambda tt: None

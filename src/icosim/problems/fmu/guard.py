@@ -5,8 +5,7 @@ limit and reports a child that died, naming the unit, the call and the macro ste
 Every FMI call a unit makes is a ``with`` block, :func:`call`: the record is written on entering and cleared on
 leaving, whatever happens inside (an exception, a refusal raised by the caller), so no record outlives its call
 and a live child is never stopped for a call that returned.  A call made inside another one (a Model Exchange
-unit's input written within its integration) restores the outer record when it returns.  A hot path's calls made
-one after another may be one sequence instead (:func:`calls`), ended in a ``finally``.  A unit takes a slot
+unit's input written within its integration) restores the outer record when it returns.  A unit takes a slot
 when it opens (:func:`register`) and gives it back when it closes (:func:`unregister`; a later unit reuses it);
 the slots' labels are written to a file of the scratch directory, which grows with them, so any number of units
 may be open in one child.
@@ -36,7 +35,6 @@ from pathlib import Path
 
 __all__ = [
     "call",
-    "calls",
     "register",
     "unregister",
     "under_way",
@@ -89,13 +87,13 @@ _labels = None  # the file descriptor of the slots' labels, in the supervised ch
 _free = []  # the slots given back, reused first
 _taken = 0  # the slots ever taken in this child
 _number = 0.0  # the last call's number
-#: per call or sequence under way, innermost last: the record it interrupted (a call inside another), or None
+#: per call under way, innermost last: the record it interrupted (a call inside another), or None
 _open = []
 _scratch = None
 
 
 class _Nothing:
-    """The context manager (and sequence, :func:`calls`) of calls that are not recorded."""
+    """The context manager of calls that are not recorded."""
 
     __slots__ = ()
 
@@ -104,12 +102,6 @@ class _Nothing:
 
     def __exit__(self, kind, value, trace):
         return False
-
-    def now(self, name):
-        pass
-
-    def end(self):
-        pass
 
 
 class _Call:
@@ -138,27 +130,8 @@ class _Call:
         return False
 
 
-class _Calls:
-    """The FMI calls of one unit made one after another (:func:`calls`)."""
-
-    __slots__ = ()
-
-    def now(self, name: str):
-        """The call ``name`` starts now (the one before has returned)."""
-        global _number
-        r = _record
-        _number = number = _number + 1.0
-        r[2] = _CODE[name]
-        r[0] = number
-
-    def end(self):
-        """The sequence is over: no call of it is under way (the call it was made in, if any, again)."""
-        _CALL.__exit__(None, None, None)
-
-
 _NOTHING = _Nothing()
 _CALL = _Call()
-_CALLS = _Calls()
 
 
 def call(unit, name: str, t: float, step: int = -1):
@@ -171,31 +144,6 @@ def call(unit, name: str, t: float, step: int = -1):
         return _NOTHING
     _CALL.args = (slot, _CODE[name], t, step)
     return _CALL
-
-
-def calls(unit, t: float, step: int = -1):
-    """The FMI calls ``unit`` makes one after another at ``t`` (macro step ``step``), a hot path's record without a
-    ``with`` block per call::
-
-        sequence = guard.calls(unit, t, step)
-        try:
-            sequence.now("fmi2SetReal")
-            ...  # the call
-            sequence.now("fmi2DoStep")
-            ...
-        finally:
-            sequence.end()
-
-    Each call is recorded from its ``now`` to the next ``now`` or to ``end``; ``end`` in a ``finally`` ends the
-    record however the sequence is left, as a ``with`` block would.  Nothing is recorded where :func:`call`
-    records nothing."""
-    slot = unit.index
-    if slot < 0 or _record is None:
-        return _NOTHING
-    _CALL.args = (slot, 0, t, step)
-    _CALL.__enter__()
-    _record[0] = 0.0  # no call of it under way before its first now()
-    return _CALLS
 
 
 def under_way():

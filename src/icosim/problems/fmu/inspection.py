@@ -130,7 +130,7 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=ROLLBA
     def put(u):
         if drive:
             values = {"position_input": rest, "velocity_input": rest, "acceleration_input": list(u)}
-            unit.put("drive", [q for k in unit.drive_keys for q in values[k]])
+            unit.set("drive", [q for k in unit.drive_keys for q in values[k]])
         else:
             unit.set(key, u)
 
@@ -168,7 +168,7 @@ def inspect_unit(unit, *, kind, force_sign, H, t0=0.0, rollback_tolerance=ROLLBA
         for moved in ("position_input", "velocity_input") if drive else ():
             if moved in unit.drive_keys:
                 values = {"position_input": rest, "velocity_input": rest, "acceleration_input": rest, moved: [1.0] * n}
-                unit.put("drive", [q for k in unit.drive_keys for q in values[k]])
+                unit.set("drive", [q for k in unit.drive_keys for q in values[k]])
                 point = max(point, float(np.max(np.abs(unit.get((out,))[0] - base[2]))))
         put(zero)
 

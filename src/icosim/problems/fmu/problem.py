@@ -26,22 +26,17 @@ parameters mean what they mean for the built-in models (:func:`icosim.engine.met
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ...engine.graph import CouplingGraph
 from ...engine.lagrange import monomial_coefficients
 from ...engine.problem import CosimulationProblem
-from ...engine.projection import joined_clusters
+from ...engine.projection import joined_clusters, mass_weighted_projection
 from ...errors import StepFailure
 from .checkpoint import Checkpoints
 from .consistent import ConsistentStart
 from .drives import DrivenPoints
 from .errors import UnitStepError
-from .floats import gathered as _gathered
-from .floats import projected as _projected
-from .floats import summed as _summed
 
 __all__ = ["FmuCosimulation", "Coupling"]
 
@@ -123,8 +118,8 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
         self.step_index = 0  # macro steps completed
         self.iterations = int(iterations)
         self._corrections = [0] * len(self.units)  # corrector integrations of each unit in this macro step
-        self.C_pred = np.array(monomial_coefficients(self.pred_nodes), dtype=float).tolist()
-        self.C_corr = np.array(monomial_coefficients(self.corr_nodes), dtype=float).tolist()
+        self.C_pred = np.array(monomial_coefficients(self.pred_nodes), dtype=float)
+        self.C_corr = np.array(monomial_coefficients(self.corr_nodes), dtype=float)
         self._scale = [c.force_sign if c.kind == "force" else 1.0 for c in self.couplings]
         self._start = [u.save() for u in self.units]  # the FMU states at T_N
         self._holds = ["start"] * n  # what each unit holds now: "start", id of an end array, or "scratch"
@@ -132,20 +127,10 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
         self._committed = None
         self._clock, self._steps, self._kept = (self.t0, 0), None, None  # Checkpoints: T_N's origin, sizes, latest
         self._clusters = joined_clusters(graph, range(n))  # each unit is one body
-        self._negatives = {}  # id of a coefficient matrix -> (it, its negative)
-        self._masses = None  # the units' masses for the projection, as floats once asked
-        # per unit, per input: the (column of e, sign) it sums (None: no joint, the graph's zeros)
-        self._terms = [graph.input_terms(i) if all(graph.input_terms(i)) else None for i in range(n)]
-        # where every input is one column of e as it is: those columns
-        self._picks = [
-            None if t is None or any(len(x) != 1 or x[0][1] != 1 for x in t) else [x[0][0] for x in t]
-            for t in self._terms
-        ]
-        self._signed = [None if t is None or any(len(x) != 1 for x in t) else [x[0] for x in t] for t in self._terms]
-        self._pairs = [
-            None if t is None or len(t) != 1 or len(t[0]) != 2 else (*t[0][0], *t[0][1]) for t in self._terms
-        ]
-        self._history_rows: tuple = (None, None)  # the last coupling history and its rows of floats
+        # the units' masses for the projection (a drive without its own position has no inertia there: its point
+        # follows the joint)
+        self._masses = np.array([0.0 if c.mass is None else float(c.mass) for c in self.couplings])
+        self._corrector_rows: tuple = (None, None, None)  # (history, e_new, their corrector samples), the last
         self._drives = self._drive_entries()
 
     # -- time and the initial point -----------------------------------------------------------------
@@ -186,49 +171,20 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
             )
 
     def _integrate(self, i, U, C, final=False):
-        """Unit ``i`` over ``[T_N, T_N+1]`` from its start, its input through the samples ``U`` (``(k+1, n_dim)``, an
-        array or rows of floats) with the monomial coefficients ``C`` (rows of floats); returns its end ``(x, v)`` and outputs
-        ``(1, 4, n_dim)``.  The polynomial's coefficients are formed in floats (k + 1 terms, summed in order).
-        ``final``: the macro step will not integrate the unit again from ``T_N`` (the unit is told so)."""
-        unit = self.units[i]
+        """Unit ``i`` over ``[T_N, T_N+1]`` from its start, its input through the samples ``U`` (``(k+1, n_dim)``)
+        with the monomial coefficients ``C``; returns its end ``(x, v)`` and outputs ``(1, 4, n_dim)``.  ``final``:
+        the macro step will not integrate the unit again from ``T_N`` (the unit is told so)."""
         restore = None if self._holds[i] == "start" else self._start[i]
-        samples = U.tolist() if isinstance(U, np.ndarray) else U
-        s = self._scale[i]
-        # the input's coefficients s * (C @ U); s is +-1, whose product is exact, so it goes into the weights
-        C_s = C if s == 1.0 else self._negated(C) if s == -1.0 else None
-        if len(samples) == 2:  # k = 1
-            a, b = samples
-            if len(a) == 1:  # one component: the same products and sums without the inner lists' loops
-                x, y = a[0], b[0]
-                coef = [[w0 * x + w1 * y] for w0, w1 in (C if C_s is None else C_s)]
-            else:
-                coef = [[w0 * x + w1 * y for x, y in zip(a, b)] for w0, w1 in (C if C_s is None else C_s)]
-        else:
-            coef = []
-            for weights in C if C_s is None else C_s:
-                row = [weights[0] * u for u in samples[0]]
-                for w, sample in zip(weights[1:], samples[1:]):
-                    row = [acc + w * u for acc, u in zip(row, sample)]
-                coef.append(row)
+        coef = C @ U  # the input polynomial's monomial coefficients, rows m
         self._holds[i] = "scratch"  # from here on: a refused call leaves the unit in no known state
-        if self._drives[i] is not None:
-            self.work.subsystem_integrations += 1
-            return self._drive_step(i, coef, self.H, self.step_index + 1, restore)
-        values = unit.advance(
-            self.couplings[i].input_key, coef if C_s is not None else [[s * v for v in row] for row in coef],
-            self.time, self.H, step_index=self.step_index + 1, restore=restore, read=self._output_keys(i),
-            final=final and self._kept is None,
-        )  # fmt: skip
         self.work.subsystem_integrations += 1
-        return self._outputs(i, _summed(coef, s == -1.0), values)
-
-    def _negated(self, C):
-        """``-C`` (rows of floats), made once per matrix."""
-        key = id(C)
-        kept = self._negatives.get(key)
-        if kept is None or kept[0] is not C:
-            kept = self._negatives[key] = (C, [[-w for w in row] for row in C])
-        return kept[1]
+        if self._drives[i] is not None:
+            return self._drive_step(i, coef.tolist(), self.H, self.step_index + 1, restore)
+        values = self.units[i].advance(
+            self.couplings[i].input_key, self._scale[i] * coef, self.time, self.H, step_index=self.step_index + 1,
+            restore=restore, read=self._output_keys(i), final=final and self._kept is None,
+        )  # fmt: skip
+        return self._outputs(i, np.add.reduce(coef), values)  # the input at T_N+1: u(1)
 
     def _output_keys(self, i):
         if self._drives[i] is not None:
@@ -237,19 +193,18 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
 
     def _outputs(self, i, u1, values=None):
         """Unit ``i``'s end ``(x, v)`` and outputs ``(1, 4, n_dim)`` as it stands (``values``: as just read), its
-        input ``u1`` (floats) at ``T_N+1``.  A unit that returns a value that is not finite for finite inputs is
-        at fault (:class:`UnitStepError`)."""
+        input ``u1`` at ``T_N+1``.  A unit that returns a value that is not finite for finite inputs is at fault
+        (:class:`UnitStepError`)."""
         c, n = self.couplings[i], self.n_dim
-        if values is None:
-            values = self.units[i].read(self._output_keys(i))
+        values = self.units[i].get(self._output_keys(i)) if values is None else np.asarray(values, dtype=float)
+        values = values.ravel()
+        y = np.empty(4 * n)
         if c.kind == "force":
-            flat = values + u1
+            y[: 3 * n], y[3 * n :] = values, u1
         else:
-            flat = values[: 3 * n] + [c.force_sign * r for r in values[3 * n :]]
-        total = sum(values)  # finite if every value is (else inf or nan; an overflow only asks the long way)
-        if total - total != 0.0 and not all(map(math.isfinite, values)) and all(map(math.isfinite, u1)):
-            self._not_finite(i, np.array(values).reshape(-1, n))
-        y = np.array(flat)
+            y[: 3 * n], y[3 * n :] = values[: 3 * n], c.force_sign * values[3 * n :]
+        if not np.isfinite(y).all() and np.isfinite(u1).all() and not np.isfinite(values).all():
+            self._not_finite(i, values.reshape(-1, n))
         end, y.shape = y[: 2 * n], (1, 4, n)  # the end: a view of the outputs' first two rows
         return end, y
 
@@ -269,46 +224,27 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
         self._holds[i] = id(end)
 
     def _at_end(self, i, end, u1):
-        """Unit ``i``'s outputs at its end state ``end`` with the input ``u1`` (floats) at ``T_N+1`` (no step)."""
+        """Unit ``i``'s outputs at its end state ``end`` with the input ``u1`` at ``T_N+1`` (no step)."""
         if self._holds[i] != id(end):
             self.units[i].restore(self._ends[i][id(end)][1])
             self._holds[i] = id(end)
         if self._drives[i] is not None:  # the point stands where the end state has it; its acceleration is u1
-            return self._drive_outputs(i, list(end[: self.n_dim]), list(end[self.n_dim :]), u1)[1]
-        s = self._scale[i]
-        self.units[i].put(self.couplings[i].input_key, u1 if s == 1.0 else [s * v for v in u1])  # 1 * v is v
+            return self._drive_outputs(i, list(end[: self.n_dim]), list(end[self.n_dim :]), list(u1))[1]
+        self.units[i].set(self.couplings[i].input_key, self._scale[i] * np.asarray(u1))
         return self._outputs(i, u1)[1]
 
     # -- the problem interface -------------------------------------------------------------------------
     def _samples(self, i, e_new, history):
-        """Unit ``i``'s input samples (rows of floats): :meth:`inputs` of ``history`` (``e_new`` None) or of
-        :meth:`corrector_samples` -- the same sums of the same terms, in floats."""
-        terms = self._terms[i]
-        if terms is None or not isinstance(history, np.ndarray) or history.ndim != 2:
-            rows = history if e_new is None else self.corrector_samples(history, np.asarray(e_new, dtype=float))
-            return np.asarray(self.inputs(i, rows), dtype=float).tolist()
-        kept, rows = self._history_rows
-        if kept is not history:
-            rows = history.tolist()
-            self._history_rows = (history, rows)
-        if e_new is not None:
-            rows = [np.asarray(e_new, dtype=float).tolist()] + rows[: self.k]
-        return self._gather(i, rows)
-
-    def _gather(self, i, rows):
-        """Unit ``i``'s inputs from rows of coupling variables (floats): the graph's sums of signed columns."""
-        picks = self._picks[i]
-        if picks is not None:
-            return [[row[c] for c in picks] for row in rows]
-        signed = self._signed[i]
-        if signed is not None:  # one column each, some negated (x * -1 is -x)
-            return [[row[c] * sign for c, sign in signed] for row in rows]
-        pair = self._pairs[i]
-        if pair is not None:  # one input, two terms (a unit between two joints of a chain)
-            a, sign_a, b, sign_b = pair
-            return [[row[a] * sign_a + row[b] * sign_b] for row in rows]
-        terms = self._terms[i]
-        return [_gathered(row, terms) for row in rows]
+        """Unit ``i``'s input samples: :meth:`inputs` of ``history`` (``e_new`` None) or of
+        :meth:`corrector_samples`, ``(k + 1, n_dim)``."""
+        if e_new is None:
+            rows = history[..., : self.k + 1, :]  # (a longer history's older samples take no part)
+        else:  # the same for every unit of the macro step: formed once
+            last_history, last_e, rows = self._corrector_rows
+            if last_history is not history or last_e is not e_new:
+                rows = self.corrector_samples(history, np.asarray(e_new, dtype=float))
+                self._corrector_rows = (history, e_new, rows)
+        return np.asarray(self.inputs(i, rows), dtype=float)
 
     def predict(self, i, state, history, *, final=False):
         """Unit ``i`` with the extrapolation polynomials; its FMU state is saved only where the end is ``final``
@@ -330,10 +266,7 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
 
     def reevaluate(self, i, end, y, e_old, e_new):
         """Outputs at the fixed end state with the input at ``T_N+1`` set from ``e_new`` (``fmi2SetReal``, no step)."""
-        e_new = np.asarray(e_new, dtype=float)
-        if self._terms[i] is None or e_new.ndim != 1:
-            return self._at_end(i, end, np.asarray(self.inputs(i, e_new), dtype=float).tolist())
-        return self._at_end(i, end, self._gather(i, [e_new.tolist()])[0])
+        return self._at_end(i, end, np.asarray(self.inputs(i, np.asarray(e_new, dtype=float)), dtype=float))
 
     def join(self, ends):
         """The macro step's end: each unit's FMU state of ``ends[i]`` becomes the next start; the rest are freed."""
@@ -355,40 +288,34 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
         ``i`` repeats its corrector step with each input component perturbed at ``T_N+1`` (restored start state,
         one ``doStep`` each) or, at its fixed end state, is re-evaluated with it (no step)."""
         rows = self._samples(i, e, history)  # (k + 1, n_dim); row 0 at T_N+1
-        u1 = rows[0]  # floats; re-evaluated at the end state only where ``end`` is given
-        h = [self.perturbation * max(1.0, abs(u)) for u in rows[0]]
+        u1 = rows[0]  # re-evaluated at the end state only where ``end`` is given
+        h = self.perturbation * np.maximum(1.0, np.abs(u1))
         if y is not None:
             base = y
         else:
             base = self._at_end(i, end, u1) if end is not None else self._integrate(i, rows, self.C_corr)[1]
-        if self.n_dim == 1 and end is None:  # one input: one corrector step repeated, no array to fill
-            Up = [[rows[0][0] + h[0]]] + rows[1:]
-            return ((self._integrate(i, Up, self.C_corr)[1] - base) / h[0])[None]
         out = np.empty((self.n_dim,) + base.shape)
         for c in range(self.n_dim):
             if end is not None:
-                up = list(u1)
+                up = u1.copy()
                 up[c] += h[c]
                 yp = self._at_end(i, end, up)
             else:
-                Up = [rows[0][:]] + rows[1:]  # the rows after the first are not changed
-                Up[0][c] += h[c]
+                Up = rows.copy()  # the rows after the first are not changed
+                Up[0, c] += h[c]
                 yp = self._integrate(i, Up, self.C_corr)[1]
             out[c] = (yp - base) / h[c]
         return out
 
     def project(self, state):
         """Mass-weighted projection of positions and velocities (Eq. 30), written into the units."""
-        m = self._masses
-        if m is None:  # a drive without its own position has no inertia there: its point follows the joint
-            m = self._masses = [0.0 if c.mass is None else float(c.mass) for c in self.couplings]
-        rows = _projected(self._clusters, m, np.asarray(state, dtype=float).tolist())
+        rows = mass_weighted_projection(self._clusters, self._masses, np.asarray(state, dtype=float))
         n = self.n_dim
         for i, unit in enumerate(self.units):
             self._to_start(i)
-            for key, values in (("set_position", rows[i][:n]), ("set_velocity", rows[i][n:])):
-                if key in unit.elements:  # a drive's point without its outputs is the committed state
-                    unit.put(key, values)
+            if unit.projected_keys:  # one call; a drive's point without its outputs is the committed state
+                parts = {"set_position": rows[i][:n], "set_velocity": rows[i][n:]}
+                unit.set("projected", np.concatenate([parts[k] for k in unit.projected_keys]))
             self._free_start(i)
             self._start[i] = unit.save()
         self._committed = np.array(rows)

@@ -1,8 +1,9 @@
 """One FMU instance of a scene: checked against what the scene asks of it, opened the way the FMI standard says,
 stepped, saved and restored.
 
-Only fmpy talks to the FMU (imported when a unit is opened; the macro step's FMI 2.0 calls go to the library
-functions it loaded: :mod:`icosim.problems.fmu.fmi2_calls`).  A unit reads and writes only the variables its
+Only fmpy talks to the FMU (imported when a unit is opened), through one adapter per version of the standard
+(:mod:`icosim.problems.fmu.fmi`: FMI 2.0 and FMI 3.0 over fmpy's documented methods), every call inside the
+supervisor's record (:mod:`icosim.problems.fmu.guard`).  A unit reads and writes only the variables its
 scene names (:data:`ROLES`), each with the setter and getter of its own type, in SI (:mod:`icosim.problems.fmu.measures`
 converts declared units).  Start values are checked before any call and set with fmpy's
 ``apply_start_values`` in the state the standard allows (:mod:`icosim.problems.fmu.variables`).  Over a macro step the
@@ -29,9 +30,9 @@ from . import guard, pythonfmu
 from .description import check_kind, read_description
 from .drives import DRIVE_KEYS
 from .errors import FmuError, UnitStepError
-from .fmi2_calls import Fmi2Calls, refused
+from .fmi import adapter
 from .measures import measure
-from .variables import VariableTable, declared_start, family
+from .variables import VariableTable
 
 __all__ = ["Unit", "ROLES"]
 
@@ -57,7 +58,7 @@ def _listed(names) -> list:
     return list(names) if isinstance(names, (list, tuple)) else [names]
 
 
-class Unit(Fmi2Calls):
+class Unit:
     """One instance of an FMU, checked and opened with its start values at ``t0``.
 
     Parameters
@@ -95,6 +96,11 @@ class Unit(Fmi2Calls):
         if self.drive_keys:
             self.elements["drive"] = [el for k in self.drive_keys for el in self.elements[k]]
             self.factors["drive"] = np.concatenate([self.factors[k] for k in self.drive_keys])
+        #: the projection's inputs (position and velocity, those it names), set together as the entry ``projected``
+        self.projected_keys = tuple(k for k in ("set_position", "set_velocity") if k in self.elements)
+        if self.projected_keys:
+            self.elements["projected"] = [el for k in self.projected_keys for el in self.elements[k]]
+            self.factors["projected"] = np.concatenate([self.factors[k] for k in self.projected_keys])
         self.interpolates = bool(getattr(md.coSimulation, "canInterpolateInputs", False)) and not self.fmi3
         if inputs == "derivatives" and not self.interpolates:
             raise FmuError(
@@ -104,10 +110,8 @@ class Unit(Fmi2Calls):
         self.exact_inputs = self.interpolates and inputs != "substeps"
         self.substeps = int(substeps)
         self.names = dict(names)
-        self._plans = {}
-        self._reads, self._writes, self._drives, self._states = {}, {}, {}, {}  # FMI 2.0: the macro step's calls
-        self._si = {}  # key -> its variables are in SI units (factors 1)
-        self._arrays = {}  # FMI 3.0 arrays written element-wise: their whole value, as last set
+        self._plans = {}  # keys -> how to read them (:meth:`_plan`)
+        self._inputs = {}  # (route, key, k + 1, H) -> how the input is handed to the unit (:meth:`_input_plan`)
         self.do_steps = self.saved = self.restored = self.warnings = self.check_steps = 0
         #: doStep's noSetFMUStatePriorToCurrentPoint on every step, not only on the final ones: a unit whose step
         #: depends on the flag (the inspection finds it) is stepped as it needs
@@ -151,19 +155,15 @@ class Unit(Fmi2Calls):
 
                 # fmpy keeps the instantiation token as guid
                 self.fmu = getattr(fmi3, self._classes[1])(guid=md.guid, **common)
+                self.fmi = adapter(self, self.fmu)
                 self._register_release()
                 self.fmu.instantiate(logMessage=self._log3)
             else:
                 from fmpy import fmi2
-                from fmpy.fmi2 import (
-                    defaultCallbacks,
-                    fmi2CallbackFunctions,
-                    fmi2CallbackLoggerTYPE,
-                    fmi2FMUstate,
-                )
+                from fmpy.fmi2 import defaultCallbacks, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 
                 self.fmu = getattr(fmi2, self._classes[0])(guid=md.guid, **common)
-                self._new_state = fmi2FMUstate
+                self.fmi = adapter(self, self.fmu)
                 self._register_release()
                 cb = fmi2CallbackFunctions()
                 cb.logger = fmi2CallbackLoggerTYPE(self._log2)
@@ -231,10 +231,7 @@ class Unit(Fmi2Calls):
                 f"{self.label}: start: {s.name}: {s.setter} refused {s.text} ({s.variable.type}, set in state "
                 f"{s.state}): {_call_text(exc)}{self.said()}"
             ) from None
-        if s.variable.shape:
-            self._arrays[s.variable.name] = (
-                np.asarray(s.value, dtype=float) if family(s.variable.type) == "real" else None
-            )
+        self.fmi.started(s.variable, s.value)
 
     def _log2(self, env, instance, status, category, message):
         self._logged(status, message)
@@ -257,20 +254,18 @@ class Unit(Fmi2Calls):
     def close(self):
         """Terminate and free the instance, remove its unpacked files.  A pythonfmu unit's library is released
         before fmpy closes it (:mod:`icosim.problems.fmu.pythonfmu`), also after a fatal status, which leaves it loaded."""
-        fmu, self.fmu = getattr(self, "fmu", None), None
+        fmi, self.fmu, self.fmi = getattr(self, "fmi", None), None, None
         release = pythonfmu.take(self)
-        if fmu is not None and not self.failed:
+        if fmi is not None and not self.failed:
             try:
-                with guard.call(self, "fmi3Terminate" if self.fmi3 else "fmi2Terminate", self.t):
-                    fmu.terminate()
+                fmi.terminate()
             except Exception:
                 pass
         if release is not None:
             release()  # while the library is loaded: fmpy's dlclose may unload it
-        if fmu is not None and self.failed < 4:
+        if fmi is not None and self.failed < 4:
             try:
-                with guard.call(self, "fmi3FreeInstance" if self.fmi3 else "fmi2FreeInstance", self.t):
-                    fmu.freeInstance()  # fmi2FreeInstance, then dlclose
+                fmi.free_instance()
             except Exception:
                 pass
         guard.unregister(self)
@@ -325,102 +320,110 @@ class Unit(Fmi2Calls):
         if plan is None:
             plan = self._plans[keys] = self._plan(keys)
         refs, total, pick, factors = plan
-        with guard.call(self, "fmi3GetFloat64" if self.fmi3 else "fmi2GetReal", self.t):
-            values = np.array(self.fmu.getFloat64(refs, total) if self.fmi3 else self.fmu.getReal(refs), dtype=float)
+        values = np.array(self.fmi.get(refs, total))
         if pick is not None:
             values = values[pick]
         if factors is not None:
             values = values * factors
         return values.reshape(len(keys), -1)
 
+    def read(self, keys) -> list:
+        """:meth:`get` as a flat list of floats (key after key, component after component)."""
+        return self.get(keys).ravel().tolist()
+
     def set(self, key, value):
         """Set the variable(s) named under the scene key ``key`` (a number per component, SI)."""
-        self._set_elements(key, np.atleast_1d(np.asarray(value, dtype=float)) / self.factors[key])
+        self._set_values(key, (np.atleast_1d(np.asarray(value, dtype=float)) / self.factors[key]).tolist())
 
-    def _set_elements(self, key, values):
-        els = self.elements[key]
-        if not self.fmi3:
-            return self._write(key, [float(v) for v in values])
-        with guard.call(self, "fmi3SetFloat64", self.t):
-            self._set_float64(els, values)
-
-    def _set_float64(self, els, values):
-        if self.fmi3 and any(el.size > 1 for el in els):
-            for el, v in zip(els, values):
-                if el.size == 1:
-                    self.fmu.setFloat64([el.value_reference], [float(v)])
-                    continue
-                whole = self._arrays.get(el.variable.name)
-                if whole is None:
-                    whole = self._arrays[el.variable.name] = declared_start(el.variable, el.size)
-                whole[el.index] = v
-                self.fmu.setFloat64([el.value_reference], whole.tolist())
-        else:
-            self.fmu.setFloat64([el.value_reference for el in els], [float(v) for v in values])
+    def _set_values(self, key, values):
+        """Set ``key``'s variables to ``values`` (floats in the unit's own units, one per component)."""
+        self.fmi.set(key, values)
 
     def get_named(self, name) -> float:
         """The value of a scalar Real/Float64 variable (or array element) named ``name``, as the unit holds it."""
         el = self.table.element("mass", name)
-        ref = [el.value_reference]
-        with guard.call(self, "fmi3GetFloat64" if self.fmi3 else "fmi2GetReal", self.t):
-            values = self.fmu.getFloat64(ref, el.size) if self.fmi3 else self.fmu.getReal(ref)
-        return float(values[el.index])
+        return float(self.fmi.get([el.value_reference], el.size)[el.index])
+
+    # -- states: a macro step's rollback -----------------------------------------------------------------
+    def save(self):
+        """The unit's FMU state, saved, and its time."""
+        self.saved += 1
+        return (self.fmi.get_state(), self.t)
+
+    def restore(self, state):
+        """Back to a state :meth:`save` returned, and its time."""
+        self.restored += 1
+        self.fmi.set_state(state[0])
+        self.t = state[1]
+
+    def free(self, state):
+        """Free a state :meth:`save` returned."""
+        if self.failed or self.fmu is None:
+            return  # a refused step leaves only freeing the instance allowed (fmi2Error) or nothing (fmi2Fatal)
+        self.fmi.free_state(state[0])
 
     # -- stepping -----------------------------------------------------------------------------
+    def advance(self, key, rows, t, H, *, step_index, restore=None, read=None, final=False):
+        """:meth:`step` after :meth:`restore` of ``restore`` where given; the variables of ``read`` read at the end
+        and returned (:meth:`get`; None: nothing read)."""
+        if restore is not None:
+            self.restore(restore)
+        self.step(key, rows, t, H, step_index=step_index, final=final)
+        return None if read is None else self.get(read)
+
     def step(self, key, coefficients, t, H, *, step_index, final=False):
         """Advance ``[t, t + H]`` with the input(s) ``key`` following ``u(tau) = sum_m coefficients[m] tau^m``
         (SI; ``coefficients`` ``(k + 1,)``, or ``(k + 1, components)``); afterwards the inputs hold ``u(1)`` (the
         outputs that depend on them directly are those at ``t + H``).  ``final``: no state before ``t + H`` will
         be restored (doStep's ``noSetFMUStatePriorToCurrentPoint``)."""
-        if self.exact_inputs and not self.fmi3:
-            rows = np.asarray(coefficients, dtype=float).reshape(len(coefficients), -1).tolist()
-            return self.advance(key, rows, t, H, step_index=step_index, final=final)
         c = np.asarray(coefficients, dtype=float).reshape(len(coefficients), -1) / self.factors[key]
+        refs, orders, values_of = self._input_plan(key, len(c), H)
+        values = (values_of @ c).tolist()  # what the input is set to, row after row; the last: u(1)
         if self.exact_inputs:
-            refs = [el.value_reference for el in self.elements[key]]
-            self._set_elements(key, c[0])
-            # every order up to k, zeros too: a unit may keep the derivatives of the step before
-            orders = [(q, m) for m in range(1, c.shape[0]) for q in range(len(refs))]
-            if orders:
-                values = [math.factorial(m) * float(c[m, q]) / H**m for q, m in orders]
-                with guard.call(self, "fmi2SetRealInputDerivatives", t):
-                    self.fmu.setRealInputDerivatives([refs[q] for q, _ in orders], [m for _, m in orders], values)
+            self._set_values(key, values[0])
+            if orders:  # every order up to k, zeros too: a unit may keep the derivatives of the step before
+                self.fmi.set_input_derivatives(refs, orders, [v for row in values[1:-1] for v in row])
             self._do_step(t, H, step_index, final)
         else:
             n = self.substeps
             for j in range(n):
-                tau = (j + 0.5) / n
-                self._set_elements(key, [float(np.polyval(c[::-1, q], tau)) for q in range(c.shape[1])])
+                self._set_values(key, values[j])
                 self._do_step(t + j * H / n, H / n, step_index, final)
-        self._set_elements(key, c.sum(axis=0))
+        self._set_values(key, values[-1])
         self.t = t + H
 
-    def _steprefused(self, code, t, step_index):
-        """A doStep that returned ``code`` (more than a warning; None: it raised without one) ends the run."""
-        status = _STATUS.get(code, "failure")
-        self.failed = code if code in (3, 4) else 0
-        raise UnitStepError(
-            f"unit {self.label} refused macro step {step_index} at t = {t:.12g} s (doStep returned {status})"
-            f"{self.said()}"
-        ) from None
+    def _input_plan(self, key, rows, H):
+        """How ``key`` takes a polynomial of ``rows`` coefficients over ``H``: the input derivatives' references and
+        orders, and the matrix of the values set from the coefficients (the value at ``T_N`` and ``m! c_m / H^m``,
+        ``m = 1 .. k``; or the value at each sub-step's midpoint), ``u(1)`` last.  Made once per route."""
+        route = (self.exact_inputs, self.substeps, key, rows, H)
+        plan = self._inputs.get(route)
+        if plan is None:
+            if self.exact_inputs:
+                refs = self.fmi.refs(key)
+                scales = np.array([math.factorial(m) / H**m for m in range(1, rows)])
+                matrix = np.vstack([np.eye(rows)[:1], np.eye(rows)[1:] * scales[:, None]])
+                plan = (refs * (rows - 1), [m for m in range(1, rows) for _ in refs], matrix)
+            else:
+                tau = (np.arange(self.substeps) + 0.5) / self.substeps
+                plan = ([], [], tau[:, None] ** np.arange(rows))
+            plan = self._inputs[route] = (*plan[:2], np.vstack([plan[2], np.ones(rows)]))
+        return plan
 
     def _do_step(self, t, h, step_index, final=False):
-        final = bool(final or self.always_final)
         self.do_steps += 1
         self.messages.clear()
         try:
-            with guard.call(self, "fmi3DoStep" if self.fmi3 else "fmi2DoStep", t, step_index):
-                if self.fmi3:
-                    result = self.fmu.doStep(t, h, noSetFMUStatePriorToCurrentPoint=final)
-                else:
-                    status = self.fmu.dll.fmi2DoStep(self.fmu.component, t, h, final)  # what fmpy's doStep calls
-            if not self.fmi3 and status > 1:
-                refused("fmi2DoStep", status)
-        except Exception as exc:
-            self._steprefused(getattr(exc, "status", None), t, step_index)
-        if self.fmi3 and (result[1] or result[2]):  # terminateSimulation, earlyReturn
-            what = "asked to terminate the simulation" if result[1] else f"returned early at t = {result[3]:.12g} s"
-            raise UnitStepError(f"unit {self.label} {what} in macro step {step_index} (from t = {t:.12g} s)")
+            stopped = self.fmi.do_step(t, h, bool(final or self.always_final), step_index)
+        except Exception as exc:  # more than a warning (None: raised without a status) ends the run
+            code = getattr(exc, "status", None)
+            self.failed = code if code in (3, 4) else 0
+            raise UnitStepError(
+                f"unit {self.label} refused macro step {step_index} at t = {t:.12g} s (doStep returned "
+                f"{_STATUS.get(code, 'failure')}){self.said()}"
+            ) from None
+        if stopped:  # FMI 3.0: terminateSimulation or earlyReturn
+            raise UnitStepError(f"unit {self.label} {stopped} in macro step {step_index} (from t = {t:.12g} s)")
 
 
 def _check_role(label, key, var):
