@@ -232,6 +232,11 @@ def test_the_quarter_truck_from_its_osp_file_runs_as_its_yaml_joint_scene(tmp_pa
     np.testing.assert_array_equal(data.array("chassis.velocity"), run.states[:, 0, 1])
     force, joint = data.array("chassis.force"), data.array("joint_force")
     np.testing.assert_allclose(force[1:], np.ravel(joint)[1:], rtol=1e-12)
+    # the wheel's: a drive stood at each communication point, its velocity input the driven point's velocity, and
+    # its force output the chassis's force input, as the bond says, where the corrector has balanced them
+    np.testing.assert_array_equal(data.array("wheel.in_vel"), run.states[:, 1, 1])
+    spring = data.array("wheel.out_spring_damper_f")
+    np.testing.assert_allclose(spring[1:], force[1:], rtol=1e-9, atol=1e-9 * np.max(np.abs(force)))
     system = json.loads(data.attrs["system_json"])
     assert system["format"] == "OSP" and system["algorithm"] == "ecco" and system["ecco"]["SafetyFactor"] == 0.99
 

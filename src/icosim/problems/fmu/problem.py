@@ -154,8 +154,11 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
         """Unit ``i`` at the communication point ``T_N`` (its saved state restored where it holds another) with its
         input from the coupling variables ``e`` there (``(n_e,)``), as the outputs at ``T_N`` are read."""
         self._to_start(i)
-        c = self.couplings[i]
-        self.units[i].set(c.input_key, self._scale[i] * np.asarray(self.inputs(i, np.asarray(e, dtype=float))))
+        u = self._scale[i] * np.asarray(self.inputs(i, np.asarray(e, dtype=float)))
+        if self._drives[i] is None:
+            self.units[i].set(self.couplings[i].input_key, u)
+        else:  # a drive's inputs: its point at T_N with the acceleration u
+            self.units[i].set("drive", self._drive_values(i, *self._point(i), u.tolist()))
 
     # -- one unit integrated --------------------------------------------------------------------------
     def _to_start(self, i):

@@ -106,10 +106,7 @@ def system_scene_data(path, overlay: dict | None = None, *, where=None) -> tuple
     for name, sub in subsystems.items():
         if not sub["start"]:
             del sub["start"]
-        # a drive without an acceleration input cannot be stood at a communication point for reading (the FMU
-        # problem sets its coupling input there): its connectors are the joint's, in joint_force and the motion
-        if "velocity_input" not in sub or "acceleration_input" in sub:
-            sub.setdefault("record", [c.name for c in system.components[name].connectors if _recordable(c)])
+        sub.setdefault("record", [c.name for c in system.components[name].connectors if _recordable(c)])
     data = {k: v for k, v in overlay.items() if k != "subsystems"}
     data["subsystems"] = subsystems
     if "joints" not in data and joints:
