@@ -115,15 +115,18 @@ class _PointNoise:
         return np.broadcast_to(self.rng.standard_normal(shape[n:]), shape)
 
 
-def _frobenius(M: np.ndarray, batch: tuple, pointwise: bool) -> np.ndarray:
-    """``||M||_F`` of every matrix; ``pointwise``: each summed as alone (a reduction over a batch follows its
-    memory layout, which changes the order of the sums)."""
-    if not pointwise:
-        return np.linalg.norm(M, axis=(-2, -1))
-    out = np.empty(batch)
+def _each_alone(f, M: np.ndarray, batch: tuple) -> tuple[np.ndarray, ...]:
+    """``f`` (returning arrays over a batch) of every matrix of ``M`` as a batch of one, laid out as a matrix
+    alone (column after column): the reductions after LAPACK follow a batch's memory layout, which orders
+    their sums, so the same matrix in another batch could get other last bits."""
+    outs = None
     for idx in np.ndindex(*batch):
-        out[idx] = np.linalg.norm(M[idx][None], axis=(-2, -1))[0]
-    return out
+        parts = f(np.asfortranarray(M[idx])[None])
+        if outs is None:
+            outs = [np.empty(batch, dtype=np.asarray(q).dtype) for q in parts]
+        for out, q in zip(outs, parts):
+            out[idx] = q[0]
+    return tuple(outs)
 
 
 def _disturbed_spread(
@@ -198,7 +201,9 @@ def spectral_radius_float64(
         M_safe = np.where(finite[..., None, None], M, 0.0)
         if not error_estimate:
             return np.where(finite, _spectral_radius_of(M_safe, be), np.nan), None
-        rho, kappa = _radius_and_condition(M_safe)
+        rho, kappa = (
+            _each_alone(_radius_and_condition, M_safe, family.shape) if pointwise else _radius_and_condition(M_safe)
+        )
         rho = np.where(finite, rho, np.nan)
         rng = np.random.default_rng(seed)
         noise = _PointNoise(rng, family.shape) if pointwise else rng
@@ -206,7 +211,9 @@ def spectral_radius_float64(
         spread = _disturbed_spread(problem, method, scheme, rho, noise, rel)
         # the second disturbed run only where the first one's estimate, ``doubt`` times over, reaches |rho - 1|:
         # elsewhere no second spread seen on the project's grids came near deciding (docs/engine.md)
-        amplified = kappa * problem.generator_norm() * _frobenius(M_safe, family.shape, pointwise)  # kappa nu ||M||_F
+        frobenius = lambda M: (np.linalg.norm(M, axis=(-2, -1)),)  # noqa: E731
+        (norm,) = _each_alone(frobenius, M_safe, family.shape) if pointwise else frobenius(M_safe)
+        amplified = kappa * problem.generator_norm() * norm  # kappa nu ||M||_F
         floor = FLOOR * be.eps * np.maximum(amplified, 1.0)
         twice = np.isfinite(rho) & np.isfinite(spread) & ~(doubt * (SAFETY * spread + floor) < np.abs(rho - 1))
         if twice.any():
