@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-__all__ = ["Limit", "stability_limit", "LIMIT_STATUSES"]
+__all__ = ["Limit", "stability_limit", "halvings", "LIMIT_STATUSES"]
 
 #: ``bisected``: a bracket refined to the resolution; ``stable up to the cap``: no unstable scan
 #: point (H_max censored); ``no stable step size``: every scan point unstable.
@@ -46,18 +46,45 @@ class Limit:
         return len(self.evaluations)
 
 
-def stability_limit(stable, scan, *, resolution: float = 0.02) -> Limit:
+def halvings(lo: float, hi: float, depth: int, resolution: float) -> list[float]:
+    """The step sizes the next ``depth`` halvings of the bracket ``(lo, hi)`` can check, whichever way each goes:
+    the midpoint, then those of both halves, formed as the bisection forms them (the same floats).
+
+    >>> [round(h, 4) for h in halvings(0.01, 0.04, 2, resolution=0.02)]
+    [0.02, 0.0141, 0.0283]
+    """
+    if depth <= 0 or not hi / lo > 1 + resolution:
+        return []
+    mid = math.sqrt(lo * hi)
+    return [mid] + halvings(lo, mid, depth - 1, resolution) + halvings(mid, hi, depth - 1, resolution)
+
+
+def stability_limit(stable, scan, *, resolution: float = 0.02, batch=None, ahead: int = 2) -> Limit:
     """Upper edge of the first stable band of ``stable(H)`` at or above ``scan[0]`` (module docstring).
 
-    ``stable(H)`` returns a bool or ``(bool, info)``.
+    ``stable(H)`` returns a bool or ``(bool, info)``.  ``batch(Hs)``, if given, returns those outcomes for a
+    list of step sizes at once (``stable`` is then not called): the scan in one call, and the bisection the step
+    sizes of its next ``ahead`` halvings in one call (:func:`halvings`), checking only those on its path, so the
+    step sizes checked and the result are those of ``stable`` one at a time -- if an outcome does not depend on
+    the other step sizes of its batch.
+
+    >>> one = stability_limit(lambda H: H <= 0.0123, [1e-3, 1e-2, 1e-1], resolution=0.02)
+    >>> many = stability_limit(None, [1e-3, 1e-2, 1e-1], resolution=0.02, batch=lambda Hs: [H <= 0.0123 for H in Hs])
+    >>> one.evaluations == many.evaluations
+    True
     """
     if not resolution > 0:
         raise ValueError(f"resolution must be > 0, got {resolution!r}")
     scan = sorted(float(h) for h in scan)
     evals = []
+    known = {}
 
-    def check(H):
-        out = stable(H)
+    def check(H, ahead_of=None):
+        if H not in known:
+            todo = [H] if batch is None else [h for h in (ahead_of or [H]) if h not in known]
+            outs = [stable(H)] if batch is None else list(batch(todo))
+            known.update(zip(todo, outs))
+        out = known[H]
         ok, info = out if isinstance(out, tuple) else (out, None)
         evals.append((H, bool(ok), info))
         return bool(ok)
@@ -66,7 +93,7 @@ def stability_limit(stable, scan, *, resolution: float = 0.02) -> Limit:
     first_stable = None
     lo = hi = None
     for H in scan:
-        ok = check(H)
+        ok = check(H, scan)
         if first_stable is None:
             if ok:
                 first_stable = lo = H
@@ -82,7 +109,7 @@ def stability_limit(stable, scan, *, resolution: float = 0.02) -> Limit:
         return Limit(lo, nan, first_stable, "stable up to the cap", evals)
     while hi / lo > 1 + resolution:
         mid = math.sqrt(lo * hi)
-        if check(mid):
+        if check(mid, halvings(lo, hi, ahead, resolution)):
             lo = mid
         else:
             hi = mid

@@ -98,8 +98,39 @@ def _radius_and_condition(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.abs(lam[..., 0]), np.fmin(kappa, 1 / np.sqrt(np.finfo(float).eps))
 
 
+class _PointNoise:
+    """Draws of ``rng`` broadcast over the batch's leading axes ``batch``: every point gets the draws it would
+    get alone, so its estimate does not depend on the batch it is computed in.  A bare matrix (two axes: a
+    block the same at every point, such as a kinematically driven mass's) is drawn whole, in any batch."""
+
+    def __init__(self, rng: np.random.Generator, batch: tuple):
+        self.rng, self.batch = rng, tuple(batch)
+
+    def standard_normal(self, shape) -> np.ndarray:
+        shape, n = tuple(shape), len(self.batch)
+        if len(shape) <= 2:
+            return self.rng.standard_normal(shape)
+        if shape[:n] != self.batch and shape[:n] != (1,) * n:
+            raise ValueError(f"pointwise draws of shape {shape} do not lead with the batch's axes {self.batch}")
+        return np.broadcast_to(self.rng.standard_normal(shape[n:]), shape)
+
+
+def _each_alone(f, M: np.ndarray, batch: tuple) -> tuple[np.ndarray, ...]:
+    """``f`` (returning arrays over a batch) of every matrix of ``M`` as a batch of one, laid out as a matrix
+    alone (column after column): the reductions after LAPACK follow a batch's memory layout, which orders
+    their sums, so the same matrix in another batch could get other last bits."""
+    outs = None
+    for idx in np.ndindex(*batch):
+        parts = f(np.asfortranarray(M[idx])[None])
+        if outs is None:
+            outs = [np.empty(batch, dtype=np.asarray(q).dtype) for q in parts]
+        for out, q in zip(outs, parts):
+            out[idx] = q[0]
+    return tuple(outs)
+
+
 def _disturbed_spread(
-    problem: Any, method: CouplingMethod, scheme: Scheme, rho: np.ndarray, rng: np.random.Generator, rel: float
+    problem: Any, method: CouplingMethod, scheme: Scheme, rho: np.ndarray, rng: Any, rel: float
 ) -> np.ndarray:
     """``|rho_d - rho|`` of one disturbed run (exponential blocks and amplification matrix; inf where the
     disturbed matrix is not finite)."""
@@ -124,6 +155,7 @@ def spectral_radius_float64(
     seed: int = ...,
     scheme: str | Scheme = ...,
     doubt: float = ...,
+    pointwise: bool = ...,
 ) -> tuple[np.ndarray, np.ndarray]: ...
 
 
@@ -136,6 +168,7 @@ def spectral_radius_float64(
     seed: int = ...,
     scheme: str | Scheme = ...,
     doubt: float = ...,
+    pointwise: bool = ...,
 ) -> tuple[np.ndarray, np.ndarray | None]: ...
 
 
@@ -147,12 +180,15 @@ def spectral_radius_float64(
     seed: int = 0,
     scheme: str | Scheme = JACOBI,
     doubt: float = DOUBT,
+    pointwise: bool = False,
 ) -> tuple[np.ndarray, np.ndarray | None]:
     """Spectral radius in float64 at every point of ``family`` (:mod:`icosim.engine.spectral.family`).
 
     Returns ``(rho, err)``; ``err`` is the error estimate described in the
     module docstring (``None`` if not requested; ``doubt=np.inf`` makes the
-    second disturbed run on every point).  Non-finite values are
+    second disturbed run on every point; ``pointwise``: every point's disturbances are those it gets alone,
+    the same draws for every point of the grid, so its ``(rho, err)`` is the same bit for bit in any batch
+    -- else the draws are independent over the grid and follow its shape).  Non-finite values are
     returned as they are (never raised), so one bad point cannot spoil a grid.
     """
     be = Float64()
@@ -165,18 +201,25 @@ def spectral_radius_float64(
         M_safe = np.where(finite[..., None, None], M, 0.0)
         if not error_estimate:
             return np.where(finite, _spectral_radius_of(M_safe, be), np.nan), None
-        rho, kappa = _radius_and_condition(M_safe)
+        rho, kappa = (
+            _each_alone(_radius_and_condition, M_safe, family.shape) if pointwise else _radius_and_condition(M_safe)
+        )
         rho = np.where(finite, rho, np.nan)
         rng = np.random.default_rng(seed)
+        noise = _PointNoise(rng, family.shape) if pointwise else rng
         rel = DISTURBANCE * be.eps
-        spread = _disturbed_spread(problem, method, scheme, rho, rng, rel)
+        spread = _disturbed_spread(problem, method, scheme, rho, noise, rel)
         # the second disturbed run only where the first one's estimate, ``doubt`` times over, reaches |rho - 1|:
         # elsewhere no second spread seen on the project's grids came near deciding (docs/engine.md)
-        amplified = kappa * problem.generator_norm() * np.linalg.norm(M_safe, axis=(-2, -1))  # kappa nu ||M||_F
+        frobenius = lambda M: (np.linalg.norm(M, axis=(-2, -1)),)  # noqa: E731
+        (norm,) = _each_alone(frobenius, M_safe, family.shape) if pointwise else frobenius(M_safe)
+        amplified = kappa * problem.generator_norm() * norm  # kappa nu ||M||_F
         floor = FLOOR * be.eps * np.maximum(amplified, 1.0)
         twice = np.isfinite(rho) & np.isfinite(spread) & ~(doubt * (SAFETY * spread + floor) < np.abs(rho - 1))
         if twice.any():
-            again = _disturbed_spread(family.subset(twice).problem(be), method, scheme, rho[twice], rng, rel)
+            subset = family.subset(twice)
+            rerun = _PointNoise(rng, subset.shape) if pointwise else rng
+            again = _disturbed_spread(subset.problem(be), method, scheme, rho[twice], rerun, rel)
             spread[twice] = np.fmax(spread[twice], again)
             spread[twice] = np.where(np.isfinite(again), spread[twice], np.inf)
         err = SAFETY * spread + floor

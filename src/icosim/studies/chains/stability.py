@@ -2,11 +2,13 @@
 stable macro step, per unit kind, decomposition pattern, method, ``k`` and scheme.
 
 The spectral radius ``rho`` of a whole chain (``docs/chains.md``, section 6) is computed in float64 with its
-error estimate over a geometric scan of ``H`` (one batched call per configuration).  A step size is **stable**
-where ``rho + error < 1``: a point float64 cannot decide counts as not stable.  The largest stable ``H`` is the
-upper edge of the first stable band at or above the scan's first point, bisected to the configured resolution
-(:func:`icosim.step_limit.stability_limit`), so ``rho < 1`` holds at ``H_max`` and not at ``H_unstable``, its
-neighbour above.
+error estimate over a geometric scan of ``H`` (one batched call per configuration), every point as it is alone:
+the estimate's disturbances are the same for every point of a batch, so no verdict depends on the other step
+sizes computed with it.  A step size is **stable** where ``rho + error < 1``: a point float64 cannot decide
+counts as not stable.  The largest stable ``H`` is the upper edge of the first stable band at or above the
+scan's first point, bisected to the configured resolution (:func:`icosim.step_limit.stability_limit`, the step
+sizes of the next two halvings in one batched call), so ``rho < 1`` holds at ``H_max`` and not at
+``H_unstable``, its neighbour above.
 
 For two units of single masses the chain is the paper's two-mass model: the dataset holds that model's ``rho``
 computed from its own parameters (:class:`~icosim.problems.linear.model.PhysicalModel`), the comparison the
@@ -41,26 +43,29 @@ def scan_steps(scan: dict) -> np.ndarray:
 
 
 def rho_over_H(chain, method, k: int, scheme: str):
-    """``(rho, error)`` of the chain at each of its ``H`` (an array)."""
-    rho, err = spectral_radius_float64(ChainFamily(chain, k), method, scheme=scheme)
+    """``(rho, error)`` of the chain at each of its ``H`` (an array), each point's as alone (``pointwise``: the
+    same in any batch)."""
+    rho, err = spectral_radius_float64(ChainFamily(chain, k), method, scheme=scheme, pointwise=True)
     return np.asarray(rho, dtype=float), np.asarray(err, dtype=float)
 
 
-def largest_stable_H(chain, method, k: int, scheme: str, scan, resolution: float):
+def largest_stable_H(chain, method, k: int, scheme: str, scan, resolution: float, *, ahead: int = 2):
     """The :class:`~icosim.step_limit.Limit` of ``rho + error < 1`` over ``H``, and ``(rho, error)`` over the
-    scan.  The scan's points are computed in one batch; the bisection's one at a time."""
+    scan.  The scan's points are computed in one batch, the bisection's ``ahead`` halvings at a time
+    (:func:`~icosim.step_limit.stability_limit`'s ``batch``; ``ahead=1``: one point at a time, the same
+    result)."""
     scan = np.asarray(scan, dtype=float)
     rho, err = rho_over_H(chain.with_H(scan), method, k, scheme)
     known = {float(H): (float(r), float(e)) for H, r, e in zip(scan, rho, err)}
 
-    def stable(H):
-        if H not in known:
-            r, e = rho_over_H(chain.with_H(np.array([H])), method, k, scheme)
-            known[H] = (float(r[0]), float(e[0]))
-        r, e = known[H]
-        return bool(r + e < 1), {"rho": r, "error": e}
+    def batch(Hs):
+        todo = [H for H in Hs if H not in known]
+        if todo:
+            r, e = rho_over_H(chain.with_H(np.array(todo)), method, k, scheme)
+            known.update({H: (float(ri), float(ei)) for H, ri, ei in zip(todo, r, e)})
+        return [(bool(known[H][0] + known[H][1] < 1), {"rho": known[H][0], "error": known[H][1]}) for H in Hs]
 
-    return stability_limit(stable, scan, resolution=resolution), rho, err
+    return stability_limit(None, scan, resolution=resolution, batch=batch, ahead=ahead), rho, err
 
 
 def two_mass_rho(kind: list, decomposition: str, method, k: int, scheme: str, H) -> np.ndarray:
