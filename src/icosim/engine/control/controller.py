@@ -130,7 +130,16 @@ def power_residual_estimate(residuals: npt.ArrayLike, H: float, absolute: float,
     return float(np.sqrt(np.mean((E / (absolute + relative * level)) ** 2)))
 
 
-def ecco_controller(*, safety, fac_min, fac_max, proportional_gain, integral_gain, H_min, H_max) -> StepController:
+def ecco_controller(
+    *,
+    safety: float,
+    fac_min: float,
+    fac_max: float,
+    proportional_gain: float,
+    integral_gain: float,
+    H_min: float,
+    H_max: float,
+) -> StepController:
     """ECCO's PI controller (``safety * err^-(k_I + k_P) * err_prev^k_P``, the factor limited to
     ``[fac_min, fac_max]``) as a :class:`StepController` of order 1.
 
