@@ -37,6 +37,7 @@ one point with every derived quantity formed at ``digits`` significant digits.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any, Literal, overload
 
 import numpy as np
@@ -106,7 +107,7 @@ class _PointNoise:
     def __init__(self, rng: np.random.Generator, batch: tuple):
         self.rng, self.batch = rng, tuple(batch)
 
-    def standard_normal(self, shape) -> np.ndarray:
+    def standard_normal(self, shape: tuple[int, ...]) -> np.ndarray:
         shape, n = tuple(shape), len(self.batch)
         if len(shape) <= 2:
             return self.rng.standard_normal(shape)
@@ -115,17 +116,18 @@ class _PointNoise:
         return np.broadcast_to(self.rng.standard_normal(shape[n:]), shape)
 
 
-def _each_alone(f, M: np.ndarray, batch: tuple) -> tuple[np.ndarray, ...]:
+def _each_alone(f: Callable[[np.ndarray], Sequence[Any]], M: np.ndarray, batch: tuple) -> tuple[np.ndarray, ...]:
     """``f`` (returning arrays over a batch) of every matrix of ``M`` as a batch of one, laid out as a matrix
     alone (column after column): the reductions after LAPACK follow a batch's memory layout, which orders
     their sums, so the same matrix in another batch could get other last bits."""
-    outs = None
+    outs: list[np.ndarray] | None = None
     for idx in np.ndindex(*batch):
         parts = f(np.asfortranarray(M[idx])[None])
         if outs is None:
             outs = [np.empty(batch, dtype=np.asarray(q).dtype) for q in parts]
         for out, q in zip(outs, parts):
             out[idx] = q[0]
+    assert outs is not None  # a batch has at least one point
     return tuple(outs)
 
 
