@@ -7,9 +7,10 @@ What the tests compare follows from the methods, not from numbers of the code un
 
 * explicit Jacobi with held inputs is libcosim's fixed-step algorithm (every unit stepped once per macro step with
   the outputs of the point before, the inputs set from the outputs at the start), so on the same Co-Simulation
-  units the two runs agree to rounding: each step's values may differ by the last bit where the two masters hand
-  the same numbers to the units through different calls, and such a difference is carried along, at most ``N eps``
-  of the amplitude after ``N`` steps;
+  units the two runs agree to rounding.  Not bit for bit: libcosim counts time in nanoseconds and hands a unit
+  ``t_n = n ns / 1e9`` and the step ``t_n+1 - t_n``, icosim ``t_0 + n H`` and ``H``; these units' Euler steps
+  follow those roundings (with libcosim's time points icosim's run is libcosim's bit for bit), and a last-bit
+  difference per step is carried along: at most ``N eps`` of the amplitude after ``N`` steps;
 * OMSimulator's published result of its test is explicit Jacobi with the inputs extrapolated at first order (it
   sets the units' input derivatives);
 * on the Model Exchange units (integrated by icosim far below the coupling's error) the error against the exact
