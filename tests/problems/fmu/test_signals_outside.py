@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 import yaml
 from test_drives import AMPLITUDE, C1, C2, K1, K2, M1, exact
-from test_peers import DMO_UNITS, OMSIMULATOR_CS, dmo_osp, libcosim_dmo, quiet
+from test_peers import DMO_UNITS, OMSIMULATOR_CS, dmo_osp, dmo_ssp, libcosim_dmo, quiet
 from toolchains import OUTSIDE
 
 from icosim.engine.run import simulate
@@ -165,3 +165,17 @@ def test_an_osp_file_of_signal_connections_runs_as_libcosim_runs_it(tmp_path):
         run.series["system1.x1"][-1],
         peer,
     )
+
+
+def test_an_ssp_archive_of_signal_connections_records_its_other_connectors(tmp_path):
+    """test_peers' SSP of the DualMassOscillator (System2's ``mass2.s`` an unconnected output connector), named by a
+    scene that gives the step: the same run as libcosim's at that step."""
+    ssp = dmo_ssp(tmp_path / "DualMassOscillator.ssp")
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(yaml.safe_dump({"system": str(ssp), "coupling": {"H": 1e-3}, "t_end": 1.0}))
+    run = run_signal_scene(load_scene(scene))
+    with quiet():
+        peer = libcosim_dmo(dmo_osp(tmp_path / "lc", 1e-3), 1.0)
+    ours = run.series["system1.x1"][-1], run.series["system2.mass2.s"][-1]
+    for a, b in zip(ours, (peer["x1"], peer["x2"])):
+        assert abs(a - b) <= 1000 * EPS * AMPLITUDE, (ours, peer)

@@ -151,6 +151,13 @@ def signal_system_data(system: System, overlay: dict, shown) -> dict:
         sub = {"fmu": str(comp.source), "start": dict(comp.start)}
         if comp.implementation in _INTERFACES and comp.implementation != "any":
             sub["interface"] = _INTERFACES[comp.implementation]
+        connected = {c.start[1] for c in system.connections if c.start[0] == name}
+        connected |= {c.end[1] for c in system.connections if c.end[0] == name}
+        # the other Real connectors the file declares, read as the connected ones are
+        sub["record"] = [c.name for c in comp.connectors if c.type == "Real" and c.kind in ("input", "output")
+                         and c.name not in connected]  # fmt: skip
+        if not sub["record"]:
+            del sub["record"]
         extra = dict(subs.get(name, {}))
         sub["start"] = {**sub["start"], **(extra.pop("start", None) or {})}
         sub.update(extra)
