@@ -1,5 +1,6 @@
 """``icosim cosim`` on system files other tools wrote: OSP's quarter truck (its folder and its file) checked and
-run, an SSP with a signal connection refused with status 2 naming the connection."""
+run; OMSimulator's DualMassOscillator by signal connections from an OSP file run; an SSP of signals without a
+step size refused with status 2, and --predict on a scene of signals."""
 
 import re
 
@@ -13,12 +14,37 @@ from icosim.io.netcdf import open_dataset
 OSP = OUTSIDE / "osp-quarter-truck"
 
 
-def test_an_ssp_system_with_a_signal_connection_is_refused_with_status_2(capsys):
+def test_an_ssp_system_of_signal_connections_without_a_step_or_with_check_is_refused_with_status_2(capsys, tmp_path):
     path = ROOT / "tests" / "data" / "omsimulator_ssp" / "LinearTransformation" / "SystemStructure.ssd"
     assert main(["cosim", str(path), "--check"]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("icosim cosim: error: ") and "connection Gain1.y -> Add1.u1" in err
-    assert "signal connections" in err
+    assert err.startswith("icosim cosim: error: ") and "coupling: SSP 2.0 gives no step size" in err
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(f"system: {path}\ncoupling: {{H: 0.1}}\nt_end: 1\n")
+    assert main(["cosim", str(scene), "--predict"]) == 2
+    assert "--predict: not yet supported for a scene with signal connections" in capsys.readouterr().err
+
+
+@pytest.mark.outside
+def test_the_dual_mass_oscillator_by_signals_runs_from_a_scene(tmp_path):
+    """OMSimulator's units and its test's four connections, held inputs, Jacobi, 1000 steps."""
+    om = OUTSIDE / "omsimulator"
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(
+        f"subsystems:\n  system1: {{fmu: {om / 'DualMassOscillator.System1.fmu'}}}\n"
+        f"  system2: {{fmu: {om / 'DualMassOscillator.System2.fmu'}, record: [mass2.s]}}\n"
+        "connections:\n  - {from: system2.F, to: system1.F}\n  - {from: system1.x1, to: system2.x1}\n"
+        "  - {from: system1.v1, to: system2.v1}\n  - {from: system1.a1, to: system2.a1}\n"
+        "coupling: {H: 1.0e-3}\nt_end: 1\n"
+    )
+    out = tmp_path / "run.nc"
+    assert main(["cosim", str(scene), "--out", str(out)]) == 0
+    with open_dataset(out) as ds:
+        assert ds.attrs["status"] == "completed" and ds.attrs["coupling"] == "explicit" and ds.sizes["time"] == 1001
+        for name in ("system1.F", "system2.F", "system1.x1", "system2.x1", "system1.a1", "system2.mass2.s"):
+            assert name in ds.data_vars, name
+        assert float(ds["system1.x1"][0]) == 0.0 and float(ds["system2.mass2.s"][0]) == 0.5
+        assert float(ds["system1.F"][0]) == float(ds["system2.F"][0]) == 5.0  # k2 x2_start at the start
 
 
 @pytest.mark.outside

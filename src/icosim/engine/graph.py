@@ -30,6 +30,16 @@ the force its drive exerts on it (the reaction), for a force-driven one its inpu
 (((2, 1),),)
 >>> CouplingGraph(2, [Joint(0, 1, "ff", ports=(0, 1))]).ports  # unit 2 has a free port 0
 (1, 2)
+
+**Signal connections.**  A :class:`Connection` feeds output ``output`` of one subsystem, transformed
+(``u = factor * y + offset``), into input ``input`` of another: the condition ``u_in = T(y_out)``.  Each is one
+coupling variable after the joints' (the input's value, :meth:`CouplingGraph.connection_column`); the problem
+says what its subsystems' signal outputs are (:meth:`~icosim.engine.problem.CosimulationProblem.signal_output`).
+A graph may hold joints, connections or both; every subsystem takes part in one of them.
+
+>>> s = CouplingGraph(2, (), connections=[Connection(1, 0, 0, 0), Connection(0, 0, 1, 0, factor=2.0)])
+>>> s.n_coupling, s.connection_column(1), s.signal_inputs(1)
+(2, 1, ((0, 1),))
 """
 
 from __future__ import annotations
@@ -44,7 +54,7 @@ import numpy as np
 from ..errors import ParameterError
 from .decompositions import Decomposition, get_decomposition
 
-__all__ = ["Joint", "CouplingGraph", "POSITION", "VELOCITY", "ACCELERATION", "FORCE", "OUTPUTS"]
+__all__ = ["Joint", "Connection", "CouplingGraph", "POSITION", "VELOCITY", "ACCELERATION", "FORCE", "OUTPUTS"]
 
 #: The rows of a port's outputs.
 POSITION, VELOCITY, ACCELERATION, FORCE = range(4)
@@ -79,6 +89,30 @@ class Joint:
 
 
 @dataclass(frozen=True)
+class Connection:
+    """A signal connection: output ``output`` of subsystem ``source`` feeds input ``input`` of ``target``
+    (0-based; the indices are the problem's, per subsystem), ``u = factor * y + offset``."""
+
+    source: int
+    output: int
+    target: int
+    input: int
+    factor: float = 1.0
+    offset: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("source", "output", "target", "input"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+                raise ParameterError(f"connection {name} must be an index >= 0, got {value!r}")
+        if self.source == self.target:
+            raise ParameterError(f"a connection joins two different subsystems, got {self.source} twice")
+        for name in ("factor", "offset"):
+            if not np.isfinite(getattr(self, name)):
+                raise ParameterError(f"connection {name} must be finite, got {getattr(self, name)!r}")
+
+
+@dataclass(frozen=True)
 class CouplingGraph:
     """``n_subsystems`` subsystems and their joints; ``n_components`` per joint (1: a line, 2: the plane).
 
@@ -93,14 +127,16 @@ class CouplingGraph:
     n_components: int = 1
     ports: tuple[int, ...] = ()
     names: tuple[str, ...] = ()
+    connections: tuple[Connection, ...] = ()
 
     def __post_init__(self) -> None:
         n = self.n_subsystems
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
             raise ParameterError(f"a coupling graph has at least 2 subsystems, got {n!r}")
         object.__setattr__(self, "joints", tuple(self.joints))
-        if not self.joints:
-            raise ParameterError("a coupling graph has at least one joint")
+        object.__setattr__(self, "connections", tuple(self.connections))
+        if not self.joints and not self.connections:
+            raise ParameterError("a coupling graph has at least one joint or connection")
         if isinstance(self.n_components, bool) or self.n_components not in (1, 2, 3):
             raise ParameterError(f"n_components must be 1, 2 or 3, got {self.n_components!r}")
         names = tuple(self.names) or tuple(str(i + 1) for i in range(n))
@@ -111,6 +147,14 @@ class CouplingGraph:
             for i in (joint.first, joint.second):
                 if i >= n:
                     raise ParameterError(f"joint {j + 1} names subsystem {i + 1}, but there are {n}")
+        fed: dict = {}
+        for c, con in enumerate(self.connections):
+            if max(con.source, con.target) >= n:
+                raise ParameterError(f"connection {c + 1} names subsystem {max(con.source, con.target) + 1}, "
+                                     f"but there are {n}")  # fmt: skip
+            if fed.setdefault((con.target, con.input), c) != c:
+                raise ParameterError(f"input {con.input + 1} of subsystem {names[con.target]} is fed by connections "
+                                     f"{fed[(con.target, con.input)] + 1} and {c + 1}: an input takes one")  # fmt: skip
         used = [0] * n
         for joint in self.joints:
             for i, p in joint.sides:
@@ -119,9 +163,10 @@ class CouplingGraph:
         if len(ports) != n or any(p < u for p, u in zip(ports, used)):
             raise ParameterError(f"ports {ports!r}: the joints use {tuple(used)} ports per subsystem")
         object.__setattr__(self, "ports", ports)
-        alone = [names[i] for i in range(n) if used[i] == 0]
+        signalled = {i for con in self.connections for i in (con.source, con.target)}
+        alone = [names[i] for i in range(n) if used[i] == 0 and i not in signalled]
         if alone:
-            raise ParameterError(f"subsystem(s) {', '.join(alone)} take part in no joint")
+            raise ParameterError(f"subsystem(s) {', '.join(alone)} take part in no joint or connection")
         self._check_connected()
         self._check_kinematic_ports()
 
@@ -151,19 +196,21 @@ class CouplingGraph:
         return cls(len(joints) + 1, joints, n_components)
 
     def _check_connected(self) -> None:
+        pairs = [(jt.first, jt.second) for jt in self.joints] + [(c.source, c.target) for c in self.connections]
         reached, frontier = {0}, [0]
         while frontier:
             i = frontier.pop()
-            for joint in self.joints:
-                if i in (joint.first, joint.second):
-                    other = joint.second if i == joint.first else joint.first
+            for a, b in pairs:
+                if i in (a, b):
+                    other = b if i == a else a
                     if other not in reached:
                         reached.add(other)
                         frontier.append(other)
         if len(reached) < self.n_subsystems:
             apart = [self.names[i] for i in range(self.n_subsystems) if i not in reached]
             raise ParameterError(
-                f"the joints do not connect every subsystem: {', '.join(apart)} not joined to {self.names[0]}"
+                f"the joints and connections do not connect every subsystem: {', '.join(apart)} not coupled to "
+                f"{self.names[0]}"
             )
 
     def _check_kinematic_ports(self) -> None:
@@ -227,8 +274,21 @@ class CouplingGraph:
 
     @property
     def n_coupling(self) -> int:
-        """Number of coupling variables ``e`` (per time point)."""
-        return sum(len(c) for c in self._columns)
+        """Number of coupling variables ``e`` (per time point): the joints', then one per connection."""
+        return sum(len(c) for c in self._columns) + len(self.connections)
+
+    def connection_column(self, c: int) -> int:
+        """The entry of ``e`` that is connection ``c``'s input value."""
+        return sum(len(col) for col in self._columns) + c
+
+    def signal_inputs(self, i: int) -> tuple[tuple[int, int], ...]:
+        """Subsystem ``i``'s inputs fed by connections: ``(input, column of e)`` pairs, by input."""
+        return tuple(sorted((con.input, self.connection_column(c)) for c, con in enumerate(self.connections)
+                            if con.target == i))  # fmt: skip
+
+    def describe_connection(self, c: int) -> str:
+        con = self.connections[c]
+        return f"connection {c + 1} ({self.names[con.source]} -> {self.names[con.target]})"
 
     def variable_names(self) -> tuple[str, ...]:
         """Names of the entries of ``e``: the decomposition's (two subsystems, one component), else with the
@@ -239,7 +299,7 @@ class CouplingGraph:
             tag = f"[{j + 1}]" if self.n_joints > 1 else ""
             for var in joint.decomposition.variables:
                 names += [f"{var}{tag}" + (f".{c}" if c else "") for c in comps]
-        return tuple(names)
+        return tuple(names) + tuple(f"u[{c + 1}]" for c in range(len(self.connections)))
 
     def _variable(self, j: int, kind: str) -> int:
         """Index of joint ``j``'s force (``lambda``) or acceleration (``a_tilde``) variable."""

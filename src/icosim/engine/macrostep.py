@@ -9,6 +9,13 @@ supplies the subsystems, the coupling conditions and their sensitivities; the *m
 from ``e_p``, residuals and Jacobians; the scheme's *stages* (:mod:`icosim.engine.stages`) say which
 subsystems advance, which joints close and who responds how.  The step counts its coupling solves and
 projections in the problem's :attr:`~icosim.engine.problem.CosimulationProblem.work`.
+
+Signal connections (:class:`~icosim.engine.graph.Connection`, the condition ``u_in = T(y_out)``) are coupled
+explicitly: after a stage's subsystems advanced, the connections out of them take ``T`` of their outputs at
+``T_N+1`` as their variables' new samples (:meth:`~icosim.engine.problem.CosimulationProblem.connect`); a
+subsystem of a later stage with an input so fed integrates with the interpolation polynomial through the new
+sample (Gauss-Seidel), the others with the extrapolation polynomial (Jacobi: every input extrapolated; ``k = 0``
+held).  ``method=None`` is explicit coupling: no corrector, so a graph with joints needs a method.
 """
 
 from __future__ import annotations
@@ -18,6 +25,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
+from ..errors import ParameterError
 from .schemes import JACOBI, Scheme
 from .stages import Plan
 
@@ -51,7 +59,7 @@ class CouplingRule(Protocol):
 
 def macro_step(
     problem: CosimulationProblem,
-    method: CouplingRule,
+    method: CouplingRule | None,
     state: np.ndarray,
     history: np.ndarray,
     *,
@@ -63,6 +71,8 @@ def macro_step(
 
     Parameters
     ----------
+    method : the coupling method of the joints; None: explicit coupling (no corrector), for a graph of
+        connections only.
     scheme : :class:`icosim.engine.schemes.Scheme` (or its name): the order of the subsystems, as stages
         (:mod:`icosim.engine.stages`), the problem's plan of it
         (:meth:`~icosim.engine.problem.CosimulationProblem.plan`); or a :class:`~icosim.engine.stages.Plan` on
@@ -95,16 +105,27 @@ def macro_step(
         p = problem.plan(scheme.scheme if isinstance(scheme, Plan) else scheme)
     stages = p.stages
     algebraic = p.scheme.reevaluates_leading
+    if method is None and any(stage.conditions is not None for stage in stages):
+        raise ParameterError("joints are coupled implicitly: a graph with joints needs a coupling method")
     e = problem.extrapolate(history)
     ends: list[Any] = [None] * graph.n_subsystems
     ys: list[Any] = [None] * graph.n_subsystems
-    n_solves = method.n_solves
+    n_solves = 0 if method is None else method.n_solves
+    fresh: set[int] = set()  # the columns of e that connections set in this macro step
     for stage in stages:
-        # step 1: the stage's subsystems with the extrapolation polynomials; those in no closed joint are final
+        # step 1: the stage's subsystems with the extrapolation polynomials; those in no closed joint are final.
+        # One fed by a connection out of an earlier stage: the interpolation polynomial through its new sample.
         for i in stage.units:
-            ends[i], ys[i] = problem.predict(i, state, history, final=i not in stage.corrected)
+            if fresh and any(col in fresh for _, col in graph.signal_inputs(i)):
+                ends[i], ys[i] = problem.correct(i, state, history, e)
+            else:
+                ends[i], ys[i] = problem.predict(i, state, history, final=i not in stage.corrected)
+        if graph.connections:  # the connections out of the stage's subsystems: their new samples
+            e, cols = problem.connect(e, ys, stage.units)
+            fresh.update(cols)
         if stage.conditions is None:
             continue
+        assert method is not None
         cols = stage.column_index
         every = len(stage.columns) == graph.n_coupling  # the stage closes every joint: e itself, in its order
         e_held = e if every else e[..., cols]  # as the stage's predictors and the finished subsystems saw it
@@ -127,7 +148,7 @@ def macro_step(
                     ys[i] = problem.reevaluate(i, ends[i], ys[i], e_old, e)
     y = problem.stack(ys)
     state_new = problem.join(ends)
-    if method.projection:  # step 4
+    if method is not None and method.projection:  # step 4
         state_new = problem.project(state_new)
         problem.work.projections += 1
     return state_new, problem.shift(history, e), y

@@ -93,6 +93,10 @@ class CosimulationProblem:
 
     and, for the whole,
 
+    ``signal_output(i, y_i, output) -> value``
+        output ``output`` of subsystem ``i`` in its outputs ``y_i``, where a connection reads it (a problem whose
+        graph has connections).
+
     ``join(ends) -> state``
         the subsystems' end states as one state.
     ``project(state) -> state``
@@ -299,6 +303,22 @@ class CosimulationProblem:
             dE[c, c] = be.const(1)
         return Bs, B_all, dE, 0 * dE
 
+    def connect(self, e: Any, ys: Sequence[Any], units: Sequence[int]) -> tuple[Any, list[int]]:
+        """``e`` with the variables of the connections out of ``units`` set to ``factor * y + offset`` of their
+        outputs (:meth:`signal_output`) at ``T_N+1``, and the columns set."""
+        graph, cols, values = self.graph, [], []
+        for c, con in enumerate(graph.connections):
+            if con.source in units:
+                y = self.signal_output(con.source, ys[con.source], con.output)
+                cols.append(graph.connection_column(c))
+                values.append(con.factor * y + con.offset)
+        if not cols:
+            return e, cols
+        out = np.array(np.broadcast_to(e, np.broadcast_shapes(e.shape, np.shape(values[0]) + e.shape[-1:])))
+        for col, value in zip(cols, values):
+            out[..., col] = value
+        return out, cols
+
     def checkpoint(self) -> Any:
         """The problem's state at ``T_N`` beyond the arrays (class docstring): None, the arrays are all of it."""
         return None
@@ -318,6 +338,9 @@ class CosimulationProblem:
 
     def sensitivity(self, i: int, state: Any, history: Any, e: Any, end: Any = None, y: Any = None) -> Any:
         raise NotImplementedError  # pragma: no cover - contract
+
+    def signal_output(self, i: int, y: Any, output: int) -> Any:  # pragma: no cover - contract
+        raise NotImplementedError(f"{type(self).__name__} has no signal outputs")
 
     def join(self, ends: Sequence[Any]) -> Any:  # pragma: no cover - contract
         raise NotImplementedError

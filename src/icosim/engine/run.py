@@ -50,7 +50,7 @@ class Trajectory:
 
 def simulate(
     problem: CosimulationProblem,
-    method: CouplingRule,
+    method: CouplingRule | None,
     state: np.ndarray,
     history: np.ndarray,
     n_steps: int,

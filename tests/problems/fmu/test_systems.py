@@ -97,13 +97,17 @@ def test_an_invalid_parameter_file_is_refused_naming_it_as_omsimulator_does():
     assert "'type' attribute not allowed" in text
 
 
-def test_a_signal_connection_is_refused_naming_it_before_any_unit_is_opened():
-    path = OMS / "LinearTransformation" / "SystemStructure.ssd"  # its FMUs are not here: nothing is opened
-    with pytest.raises(SceneError) as refused:
+def test_a_system_of_signal_connections_is_a_signal_scene_with_its_transformations(tmp_path):
+    """OMSimulator's LinearTransformation (``y -> u1`` with factor 2, offset 3) read before any unit is opened (its
+    FMUs are not here): without a step size in the file the scene must give the coupling, and it may."""
+    path = OMS / "LinearTransformation" / "SystemStructure.ssd"
+    with pytest.raises(SceneError, match="SSP 2.0 gives no step size: a scene naming the system needs coupling"):
         load_scene(path)
-    text = str(refused.value)
-    assert "connection Gain1.y -> Add1.u1" in text and "LinearTransformation/SystemStructure.ssd" in text
-    assert "signal connections" in text and "not yet supported" in text
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(yaml.safe_dump({"system": str(path), "coupling": {"H": 0.1}, "t_end": 1.0}))
+    loaded = load_scene(scene)
+    assert ("Gain1", "y", "Add1", "u1", 2.0, 3.0) in loaded.connections
+    assert loaded.coupling["k"] == 0 and loaded.scheme.name == "jacobi" and loaded.n_steps == 10
 
 
 def test_a_scene_naming_a_missing_system_is_refused_naming_its_key(tmp_path):

@@ -49,8 +49,9 @@ def read_description(label: str, path: Path):
     raise FmuError(f"{label}: {path} has no readable modelDescription.xml ({first})") from None
 
 
-def check_kind(label: str, path: Path, md):
-    """Refuse a unit that is not an FMI 2.0/3.0 co-simulation unit that saves and restores its state."""
+def check_kind(label: str, path: Path, md, *, saves_state: bool = True):
+    """Refuse a unit that is not an FMI 2.0/3.0 co-simulation unit that saves and restores its state (without
+    ``saves_state``: a co-simulation unit, stepped forward only)."""
     if md.fmiVersion not in ("2.0",) and not md.fmiVersion.startswith("3."):
         raise FmuError(f"{label}: {path} is FMI {md.fmiVersion}; FMI 2.0 or 3.0 co-simulation units are supported")
     if md.coSimulation is None:
@@ -62,7 +63,7 @@ def check_kind(label: str, path: Path, md):
             "co-simulation a unit brings its own solver"
             + ("; use interface: model-exchange (or auto)" if md.modelExchange is not None else "")
         )
-    if not md.coSimulation.canGetAndSetFMUstate:
+    if saves_state and not md.coSimulation.canGetAndSetFMUstate:
         flag = "canGetAndSetFMUState" if md.fmiVersion.startswith("3.") else "canGetAndSetFMUstate"
         other = "; its model exchange leaves the state with icosim: use interface: model-exchange (or auto)"
         raise FmuError(f"{label}: {path} declares {flag}=false; {STATE_REASON}{other if md.modelExchange else ''}")

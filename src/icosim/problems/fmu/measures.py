@@ -141,6 +141,8 @@ def measure(label: str, md, key: str, variable) -> Measure:
     it is not the role's quantity (a velocity as a force or acceleration input: a compliant unit's, refused)."""
     velocity_input(label, key, variable)
     unit = _declared(variable)
+    if key not in ROLE_QUANTITIES:  # a connection's variable: in its own unit (the connection converts)
+        return Measure(unit, 1.0, "the connection's")
     if unit is None:
         return Measure(None, 1.0, "not declared")
     definitions = {u.name: u for u in md.unitDefinitions}

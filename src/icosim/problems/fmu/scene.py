@@ -309,10 +309,13 @@ def _fail(path, where, message):
 def load_scene(path) -> Scene:
     """Read and check a scene file, or an SSP or OSP system file as a scene (:mod:`icosim.problems.fmu.systems`; no
     unit is loaded): :class:`~icosim.problems.fmu.errors.SceneError` names the file, the key and what is allowed."""
+    from .signal_scene import is_signal_scene, signal_scene
     from .systems.scene import scene_data
 
     path = Path(path)
     data, system = scene_data(path)
+    if is_signal_scene(data):  # units coupled by connections (icosim.problems.fmu.signal_scene)
+        return signal_scene(path, data, system)
     _validate(path, data)
     c = {**COUPLING_KEYS, **data["coupling"]}
     names = list(data["subsystems"])

@@ -50,7 +50,7 @@ ROLES = {
     "reaction_force": ("the output of the force the drive exerts", ("output",)),
     "set_position": ("a tunable parameter or input that sets the position (projection)", ("parameter", "input")),
     "set_velocity": ("a tunable parameter or input that sets the velocity (projection)", ("parameter", "input")),
-}
+    "signal_input": ("a connection's input", ("input",)), "signal_output": ("a connection's output", ("output",))}  # fmt: skip
 
 
 def _listed(names) -> list:

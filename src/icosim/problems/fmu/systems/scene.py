@@ -16,8 +16,9 @@ OSP's ``Algorithm`` ecco with its ``EccoConfiguration`` runs with controlled mac
 residual (``coupling.control: {estimate: power-residual, ...}``, :func:`ecco_control`) unless the scene gives its
 own coupling.
 
-Any other connection is a signal connection, which the engine does not yet run: refused by name before any work,
-never dropped.
+Any other connection is a signal connection: a system of signal connections alone is a signal scene
+(:func:`signal_system_data`, :mod:`icosim.problems.fmu.signal_scene`), coupled explicitly; signals beside power
+bonds or joints are refused by name before any work, never dropped.
 """
 
 from __future__ import annotations
@@ -62,10 +63,12 @@ def system_scene_data(path, overlay: dict | None = None, *, where=None) -> tuple
         _fail(shown, f"subsystems.{unknown[0]}", f"the system has no component {unknown[0]!r}; its components: "
               f"{', '.join(system.components)}")  # fmt: skip
     bonds = system.power_bonds()
-    for c in system.connections:
-        if c.power_bond is None:
-            _fail(system.path, f"connection {c.label}", "signal connections (an output feeding an input) are not yet "
-                  "supported: icosim runs power bonds between a force-driven unit and a velocity drive as joints")  # fmt: skip
+    signals = [c for c in system.connections if c.power_bond is None]
+    if signals and (bonds or "joints" in overlay):
+        _fail(system.path, f"connection {signals[0].label}", "signal connections beside power bonds or joints need "
+              "implicit coupling, not yet supported: a system is coupled by signals alone or by joints alone")  # fmt: skip
+    if signals:
+        return signal_system_data(system, overlay, shown), system
     subsystems, joints, bonded = {}, [], {}
     for name, comp in system.components.items():
         subsystems[name] = {"fmu": str(comp.source), "start": dict(comp.start)}
@@ -136,6 +139,56 @@ def system_scene_data(path, overlay: dict | None = None, *, where=None) -> tuple
         system.notes.append(f"the file asks for libcosim's ECCO step control {why}: icosim couples at the fixed "
                             f"H = {data['coupling']['H']:g} s")  # fmt: skip
     return data, system
+
+
+def signal_system_data(system: System, overlay: dict, shown) -> dict:
+    """The signal scene (:mod:`icosim.problems.fmu.signal_scene`) of a system whose connections are all signals:
+    each connection's transformation and unit conversion as one ``factor`` and ``offset``; explicit Jacobi coupling
+    with held inputs at the file's step (the peers' fixed-step algorithm) unless the scene gives its coupling."""
+    subs = overlay.get("subsystems", {}) or {}
+    subsystems = {}
+    for name, comp in system.components.items():
+        sub = {"fmu": str(comp.source), "start": dict(comp.start)}
+        if comp.implementation in _INTERFACES and comp.implementation != "any":
+            sub["interface"] = _INTERFACES[comp.implementation]
+        connected = {c.start[1] for c in system.connections if c.start[0] == name}
+        connected |= {c.end[1] for c in system.connections if c.end[0] == name}
+        # the other Real connectors the file declares, read as the connected ones are
+        sub["record"] = [c.name for c in comp.connectors if c.type == "Real" and c.kind in ("input", "output")
+                         and c.name not in connected]  # fmt: skip
+        if not sub["record"]:
+            del sub["record"]
+        extra = dict(subs.get(name, {}))
+        sub["start"] = {**sub["start"], **(extra.pop("start", None) or {})}
+        sub.update(extra)
+        if not sub["start"]:
+            del sub["start"]
+        subsystems[name] = sub
+    connections = [
+        {
+            "from": ".".join(c.start),
+            "to": ".".join(c.end),
+            "factor": c.unit_factor * c.factor,
+            "offset": c.unit_factor * c.offset + c.unit_offset,
+        }  # fmt: skip
+        for c in system.connections
+    ]
+    data = {k: v for k, v in overlay.items() if k != "subsystems"} | {"subsystems": subsystems}
+    data["connections"] = connections
+    if "coupling" not in data:
+        if system.step_size is None:
+            _fail(shown, "coupling", f"{system.format} gives no step size: a scene naming the system needs coupling "
+                  "(H, and k, scheme)")  # fmt: skip
+        data["coupling"] = {"k": 0, "scheme": "jacobi", "H": system.step_size}
+    if "t_start" not in data and system.start_time:
+        data["t_start"] = system.start_time
+    if "t_end" not in data:
+        t0 = float(data.get("t_start", 0.0))
+        data["t_end"] = system.stop_time if system.stop_time is not None else t0 + DEFAULT_T_END
+    if system.algorithm == "ecco":
+        system.notes.append("the file asks for libcosim's ECCO step control, which signal connections do not yet "
+                            f"have: icosim couples at the fixed H = {data['coupling']['H']:g} s")  # fmt: skip
+    return data
 
 
 #: OSP's EccoConfiguration elements -> the keys of ``coupling.control`` they set (StepSize: ``coupling.H``).

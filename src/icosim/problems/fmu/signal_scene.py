@@ -1,0 +1,294 @@
+"""A scene of FMU units coupled by signal connections: checked, run by the one macro step, written as a dataset.
+
+A YAML scene (or a system file whose connections are signals, :mod:`icosim.problems.fmu.systems.scene`)::
+
+    subsystems:
+      system1: {fmu: DualMassOscillator.System1.fmu, start: {x1_start: 0.0}}
+      system2: {fmu: DualMassOscillator.System2.fmu, start: {x2_start: 0.5}, record: [mass2.s]}
+    connections:
+      - {from: system2.F, to: system1.F}
+      - {from: system1.x1, to: system2.x1, factor: 1.0, offset: 0.0}
+    coupling: {k: 0, scheme: jacobi, H: 1.0e-4}
+    t_end: 10
+
+Coupling is explicit (:mod:`icosim.problems.fmu.signals`): ``k`` the order of the inputs' extrapolation (0: held),
+``scheme`` jacobi or gauss-seidel with ``order`` (every subsystem once), ``implicit`` false only.  Bad input is
+refused naming the key and what is allowed, before any unit is opened.
+"""
+
+from __future__ import annotations
+
+import time as clock
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ...engine.bounds import MAX_K
+from ...engine.schemes import GaussSeidel, get_scheme
+from .errors import SceneError
+
+__all__ = ["SignalScene", "SignalRun", "signal_scene", "run_signal_scene", "signal_dataset", "is_signal_scene",
+           "SIGNAL_SCENE_KEYS", "SIGNAL_SUBSYSTEM_KEYS", "CONNECTION_KEYS", "SIGNAL_COUPLING_KEYS"]  # fmt: skip
+
+#: Top-level keys of a signal scene.
+SIGNAL_SCENE_KEYS = ("subsystems", "system", "connections", "coupling", "t_start", "t_end", "limits")
+#: Keys of one subsystem.
+SIGNAL_SUBSYSTEM_KEYS = ("fmu", "start", "interface", "tolerance", "record")
+#: Keys of one connection.
+CONNECTION_KEYS = ("from", "to", "factor", "offset")
+#: Coupling keys and their defaults (``H`` required).
+SIGNAL_COUPLING_KEYS = {"k": 0, "scheme": "jacobi", "order": None, "H": None, "implicit": False, "inputs": "auto",
+                        "substeps": 1}  # fmt: skip
+_INTERFACES = ("co-simulation", "model-exchange")
+
+
+def is_signal_scene(data) -> bool:
+    """A scene whose units are coupled by connections."""
+    return isinstance(data, dict) and "connections" in data
+
+
+def _fail(path, where, message):
+    raise SceneError(f"{path}: {where}: {message}")
+
+
+def _number(path, where, value, *, positive=False):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+        _fail(path, where, f"must be a finite number, got {value!r}")
+    if positive and value <= 0:
+        _fail(path, where, f"must be > 0, got {value!r}")
+    return float(value)
+
+
+@dataclass
+class SignalScene:
+    """A checked signal scene: ``connections`` as ``(source, output, target, input, factor, offset)`` by name."""
+
+    path: Path
+    data: dict
+    subsystems: dict
+    connections: list
+    coupling: dict
+    t0: float
+    t_end: float
+    system: object = None
+
+    @property
+    def names(self) -> tuple:
+        return tuple(self.subsystems)
+
+    @property
+    def n_steps(self) -> int:
+        return int(round((self.t_end - self.t0) / self.coupling["H"]))
+
+    @property
+    def scheme(self):
+        c = self.coupling
+        if c["scheme"] == "gauss-seidel":
+            return GaussSeidel([self.names.index(n) + 1 for n in c["order"]])
+        return get_scheme("jacobi")
+
+
+def signal_scene(path, data, system=None) -> SignalScene:
+    """Check a signal scene's ``data`` (from ``path``): every key, unit, variable and number, before any unit is
+    opened (the variables' causalities are checked when the units open)."""
+    path = Path(path)
+    for key in data:
+        if key not in SIGNAL_SCENE_KEYS:
+            allowed = ", ".join(SIGNAL_SCENE_KEYS)
+            why = (
+                " (joints and connections together need implicit coupling, not yet supported)"
+                if key == "joints"
+                else ""
+            )
+            _fail(path, key, f"not a key of a scene with connections{why}; allowed: {allowed}")
+    subs = data.get("subsystems")
+    if not isinstance(subs, dict) or len(subs) < 2:
+        _fail(path, "subsystems", "must map at least two subsystem names to their settings")
+    for name, sub in subs.items():
+        if not isinstance(sub, dict) or "fmu" not in sub:
+            _fail(path, f"subsystems.{name}", "must be a mapping with fmu (the unit's .fmu file)")
+        for key in sub:
+            if key not in SIGNAL_SUBSYSTEM_KEYS:
+                _fail(path, f"subsystems.{name}.{key}", f"not a key of a subsystem coupled by connections; allowed: "
+                      f"{', '.join(SIGNAL_SUBSYSTEM_KEYS)}")  # fmt: skip
+        if sub.get("interface", "co-simulation") not in _INTERFACES + ("auto",):
+            _fail(path, f"subsystems.{name}.interface", f"{sub['interface']!r} is not allowed; allowed: "
+                  f"{', '.join(_INTERFACES)}, auto")  # fmt: skip
+        if not isinstance(sub.get("record", []), list) or not all(isinstance(r, str) for r in sub.get("record", [])):
+            _fail(path, f"subsystems.{name}.record", "must be a list of variable names")
+    cons = data["connections"]
+    if not isinstance(cons, list) or not cons:
+        _fail(path, "connections", "must be a non-empty list of {from: unit.output, to: unit.input}")
+    specs, fed = [], {}
+    for n, con in enumerate(cons):
+        where = f"connections[{n}]"
+        if not isinstance(con, dict) or not {"from", "to"} <= set(con):
+            _fail(path, where, "must be a mapping with from (unit.output) and to (unit.input)")
+        for key in con:
+            if key not in CONNECTION_KEYS:
+                _fail(path, f"{where}.{key}", f"not a key of a connection; allowed: {', '.join(CONNECTION_KEYS)}")
+        ends = []
+        for key in ("from", "to"):
+            ref = con[key]
+            unit, _, var = ref.partition(".") if isinstance(ref, str) else ("", "", "")
+            if unit not in subs or not var:
+                _fail(path, f"{where}.{key}", f"{ref!r} must be <subsystem>.<variable> with a subsystem of "
+                      f"{', '.join(subs)}")  # fmt: skip
+            ends.append((unit, var))
+        if ends[0][0] == ends[1][0]:
+            _fail(path, where, f"connects {ends[0][0]} to itself: a connection joins two subsystems")
+        if ends[1] in fed:
+            _fail(path, f"{where}.to", f"{'.'.join(ends[1])} is fed already by connections[{fed[ends[1]]}]; an input "
+                  "takes one connection")  # fmt: skip
+        fed[ends[1]] = n
+        factor = _number(path, f"{where}.factor", con.get("factor", 1.0))
+        offset = _number(path, f"{where}.offset", con.get("offset", 0.0))
+        specs.append((ends[0][0], ends[0][1], ends[1][0], ends[1][1], factor, offset))
+    coupling = data.get("coupling")
+    if not isinstance(coupling, dict):
+        _fail(path, "coupling", "must be a mapping with H (and k, scheme, order)")
+    for key in coupling:
+        if key not in SIGNAL_COUPLING_KEYS:
+            why = " (a method couples joints; connections are coupled explicitly)" if key == "method" else ""
+            _fail(path, f"coupling.{key}", f"not a key of the coupling of connections{why}; allowed: "
+                  f"{', '.join(SIGNAL_COUPLING_KEYS)}")  # fmt: skip
+    c = {**SIGNAL_COUPLING_KEYS, **coupling}
+    if c["implicit"] is not False:
+        _fail(path, "coupling.implicit", f"{c['implicit']!r}: implicit coupling of connections (the corrector solving "
+              "every condition) is not yet supported; allowed: false")  # fmt: skip
+    if isinstance(c["k"], bool) or not isinstance(c["k"], int) or not 0 <= c["k"] <= MAX_K:
+        _fail(path, "coupling.k", f"must be an integer 0 .. {MAX_K}, got {c['k']!r}")
+    if c["scheme"] not in ("jacobi", "gauss-seidel"):
+        _fail(path, "coupling.scheme", f"{c['scheme']!r} is not allowed; allowed: jacobi, gauss-seidel (with order)")
+    if c["scheme"] == "gauss-seidel":
+        if not isinstance(c["order"], list) or sorted(map(str, c["order"])) != sorted(subs):
+            _fail(path, "coupling.order", f"gauss-seidel needs every subsystem once, e.g. {list(subs)}; got "
+                  f"{c['order']!r}")  # fmt: skip
+    elif c["order"] is not None:
+        _fail(path, "coupling.order", "an order belongs to scheme gauss-seidel")
+    if c["inputs"] not in ("auto", "derivatives", "substeps"):
+        _fail(path, "coupling.inputs", f"{c['inputs']!r} is not allowed; allowed: auto, derivatives, substeps")
+    if isinstance(c["substeps"], bool) or not isinstance(c["substeps"], int) or c["substeps"] < 1:
+        _fail(path, "coupling.substeps", f"must be an integer >= 1, got {c['substeps']!r}")
+    if c["H"] is None:
+        _fail(path, "coupling.H", "required: the macro-step size (s)")
+    c["H"] = _number(path, "coupling.H", c["H"], positive=True)
+    t0 = _number(path, "t_start", data.get("t_start", 0.0))
+    if "t_end" not in data:
+        _fail(path, "t_end", "required: the end time (s)")
+    t_end = _number(path, "t_end", data["t_end"])
+    steps = (t_end - t0) / c["H"]
+    if not steps >= 1 or abs(steps - round(steps)) > 1e-6 * max(1.0, steps):
+        _fail(path, "t_end", f"t_end - t_start = {t_end - t0:g} s must be a whole number (>= 1) of macro steps "
+              f"H = {c['H']:g} s")  # fmt: skip
+    used = {u for s in specs for u in (s[0], s[2])}
+    alone = [n for n in subs if n not in used]
+    if alone:
+        _fail(path, f"subsystems.{alone[0]}", "takes part in no connection")
+    return SignalScene(path, data, dict(subs), specs, c, t0, t_end, system)
+
+
+@dataclass
+class SignalRun:
+    """A signal scene's run: the times, each unit's connected variables and recorded ones over them, its status."""
+
+    scene: SignalScene
+    times: list = field(default_factory=list)
+    series: dict = field(default_factory=dict)  # "<unit>.<variable>" -> values over times
+    units: dict = field(default_factory=dict)
+    status: str = "completed"
+    reason: str = ""
+    wall_time: float = 0.0
+
+
+def _fmu_path(scene, sub) -> Path:
+    p = Path(sub["fmu"])
+    return p if p.is_absolute() else (scene.path.parent / p).resolve()
+
+
+def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
+    """Open the units, refuse an algebraic loop, run the macro steps (explicit coupling), close the units;
+    ``progress(n_done)`` is called after each step."""
+    from ...engine.run import simulate
+    from .exchange import open_fmu_unit
+    from .signals import INPUTS, OUTPUTS, ForwardUnit, SignalCosimulation, connections_of
+
+    names, c = list(scene.names), scene.coupling
+    cons, inputs, outputs = connections_of(scene.connections, names)
+    units = []
+    run = SignalRun(scene)
+    started = clock.perf_counter()
+    try:
+        for i, name in enumerate(names):
+            sub = scene.subsystems[name]
+            keys = {k: v for k, v in ((INPUTS, inputs[i]), (OUTPUTS, outputs[i])) if v}
+            start, path = dict(sub.get("start") or {}), _fmu_path(scene, sub)
+            if sub.get("interface", "co-simulation") == "co-simulation":  # stepped forward only: no saved state
+                units.append(ForwardUnit(name, path, keys, start, inputs=c["inputs"], substeps=c["substeps"],
+                                         t0=scene.t0))  # fmt: skip
+            else:
+                units.append(open_fmu_unit(name, path, keys, start, interface=sub["interface"],
+                                           tolerance=sub.get("tolerance"), inputs=c["inputs"],
+                                           substeps=c["substeps"], t0=scene.t0))  # fmt: skip
+        problem = SignalCosimulation(units, inputs, outputs, cons, c["k"], c["H"], t0=scene.t0)
+        history = problem.initial_history()
+        recorded = [
+            (u, v) for u, sub in zip(units, (scene.subsystems[n] for n in names)) for v in sub.get("record", [])
+        ]
+
+        def observe(n, state, hist, y):
+            run.times.append(problem.time)
+            _append(run, problem, hist[0], recorded)
+            if progress is not None:
+                progress(n)
+
+        run.times.append(scene.t0)
+        _append(run, problem, history[0], recorded)
+        traj = simulate(problem, None, problem.initial_state(), history, scene.n_steps, scheme=scene.scheme,
+                        observe=observe, record=False)  # fmt: skip
+        if traj.failed_at is not None and traj.error is not None:
+            raise traj.error  # a unit that refused a step: named, no dataset
+        if traj.diverged_at is not None:
+            run.status, run.reason = "diverged", f"macro step {traj.diverged_at}: {traj.reason}"
+        run.units = {u.label: u.info() for u in units}
+    finally:
+        for unit in units:
+            unit.close()
+    run.wall_time = clock.perf_counter() - started
+    return run
+
+
+def _append(run, problem, e, recorded):
+    """The connected variables at the point the problem stands (an input: the value its connection gives there,
+    the sample it is held at over the next step with k 0) and the recorded ones."""
+    graph = problem.graph
+    for c, con in enumerate(graph.connections):
+        src = f"{graph.names[con.source]}.{problem.output_names[con.source][con.output]}"
+        dst = f"{graph.names[con.target]}.{problem.input_names[con.target][con.input]}"
+        value = float(e[graph.connection_column(c)])
+        raw = (value - con.offset) / con.factor if con.factor else np.nan
+        run.series.setdefault(dst, []).append(value)
+        if len(run.series.setdefault(src, [])) < len(run.series[dst]):
+            run.series[src].append(raw if con.factor else float(problem.outputs(con.source)[con.output]))
+    for unit, name in recorded:
+        run.series.setdefault(f"{unit.label}.{name}", []).append(unit.get_named(name))
+
+
+def signal_dataset(run: SignalRun, *, command: str = ""):
+    """The run as an :class:`xarray.Dataset`: ``<unit>.<variable>(time)`` for every connected and recorded
+    variable, the scene and the units' counters as attributes."""
+    from ...io.dataset import DatasetDict
+    from ...io.netcdf import provenance_attrs
+
+    data = {key: (("time",), np.asarray(values, dtype=float)) for key, values in run.series.items()}
+    ds = DatasetDict(data, coords={"time": ("time", np.asarray(run.times), {"units": "s"})})
+    attrs = provenance_attrs(run.scene.data, title=f"FMU scene {run.scene.path.name}", command=command)
+    attrs["scene_json"] = attrs["config_json"]
+    attrs |= {"status": run.status, "reason": run.reason, "scheme": run.scene.scheme.name, "coupling": "explicit",
+              "k": run.scene.coupling["k"], "wall_time_s": run.wall_time}  # fmt: skip
+    for name, info in run.units.items():
+        for key, value in info.items():
+            attrs[f"{name}_{key}"] = value
+    ds.attrs.update(attrs)
+    return ds.to_xarray()

@@ -1,0 +1,225 @@
+"""FMU units coupled by signal connections as a co-simulation problem, coupled explicitly by the one macro step.
+
+Each connection is a condition ``u_in = T(y_out)`` of the coupling graph (:class:`~icosim.engine.graph.Connection`,
+``T`` the connection's linear transformation and unit conversion); its coupling variable is the input's value.
+:func:`icosim.engine.macrostep.macro_step` with ``method=None`` steps each unit once per macro step with its inputs
+held (``k = 0``) or extrapolated by the Lagrange polynomial through the last ``k + 1`` samples (Jacobi), or
+interpolated through the sample a unit of an earlier stage has just given (Gauss-Seidel), and takes the units'
+outputs at ``T_N+1`` as the connections' new samples.  No unit is stepped twice from one point, so units that
+cannot save their state (``canGetAndSetFMUstate`` false) take part.
+
+The arrays the macro step sees: a unit's outputs ``y_i`` are its connected outputs at ``T_N+1`` (in the unit's
+own units of measure), its end state the same values; the state is their concatenation.  The units hold their
+states.  The inputs a unit is handed over a step follow :meth:`icosim.problems.fmu.units.Unit.step`.
+
+An algebraic loop (a cycle of connections each into an input its unit's output depends on directly, by the
+units' ``ModelStructure``) is refused by name (:func:`feedthrough_loop`): the explicit coupling would hand each
+unit a value of the loop that the others' outputs at the same point contradict, and no loop solver runs yet.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...engine.graph import Connection, CouplingGraph
+from ...engine.lagrange import monomial_coefficients
+from ...engine.problem import CosimulationProblem
+from .description import check_kind
+from .errors import SceneError
+from .units import Unit
+
+__all__ = ["SignalCosimulation", "ForwardUnit", "feedthrough_loop", "depends_directly"]
+
+#: The unit keys (:data:`icosim.problems.fmu.units.ROLES`) of a unit's connected inputs and outputs.
+INPUTS, OUTPUTS = "signal_input", "signal_output"
+
+
+def depends_directly(md, output: str, input_: str) -> bool:
+    """Whether ``output`` depends on ``input_`` without a step, by the unit's ``ModelStructure`` (``md``, fmpy's
+    model description): listed in its dependencies, or the dependencies not given (FMI: then it may depend on
+    every input)."""
+    for unknown in md.outputs:
+        if unknown.variable.name == output:
+            deps = unknown.dependencies
+            return deps is None or any(v.name == input_ for v in deps)
+    return True  # an output the structure does not list: it may depend on anything
+
+
+def feedthrough_loop(graph: CouplingGraph, inputs, outputs, descriptions) -> list[int] | None:
+    """A cycle of connections (their indices) each into an input that an output of its target unit fed by the next
+    connection depends on directly, or None.  ``inputs[i]``, ``outputs[i]``: unit ``i``'s connected variables by
+    index; ``descriptions[i]``: its model description."""
+    cons = graph.connections
+    after = {
+        c: [
+            d
+            for d, nxt in enumerate(cons)
+            if nxt.source == con.target
+            and depends_directly(
+                descriptions[con.target], outputs[con.target][nxt.output], inputs[con.target][con.input]
+            )
+        ]  # fmt: skip
+        for c, con in enumerate(cons)
+    }
+    state: dict[int, int] = {}  # 1: on the path, 2: done
+
+    def visit(c, path):
+        state[c] = 1
+        path.append(c)
+        for d in after[c]:
+            if state.get(d) == 1:
+                return path[path.index(d) :]
+            if d not in state:
+                found = visit(d, path)
+                if found:
+                    return found
+        path.pop()
+        state[c] = 2
+        return None
+
+    for c in range(len(cons)):
+        if c not in state:
+            found = visit(c, [])
+            if found:
+                return found
+    return None
+
+
+class ForwardUnit(Unit):
+    """A co-simulation unit stepped forward only, once per macro step (explicit coupling): it need not save and
+    restore its state."""
+
+    opened = "co-simulation, stepped forward only"
+
+    def _check_kind(self, md):
+        check_kind(self.label, self.path, md, saves_state=False)
+
+
+class SignalCosimulation(CosimulationProblem):
+    """Units (:class:`~icosim.problems.fmu.units.Unit`, opened with their connected inputs under
+    :data:`INPUTS` and outputs under :data:`OUTPUTS`) coupled by ``connections``.
+
+    Parameters
+    ----------
+    units : the opened units, at ``t0``.
+    inputs, outputs : per unit, its connected input and output names (the connections' ``input`` and ``output``
+        index them).
+    connections : the :class:`~icosim.engine.graph.Connection` s.
+    k : the order of the inputs' extrapolation (0: held).
+    H : macro-step size in s.
+    """
+
+    def __init__(self, units, inputs, outputs, connections, k, H, *, t0=0.0):
+        self.units = tuple(units)
+        self.input_names, self.output_names = tuple(map(tuple, inputs)), tuple(map(tuple, outputs))
+        graph = CouplingGraph(len(self.units), (), names=tuple(u.label for u in self.units), connections=connections)
+        super().__init__(graph, k)
+        loop = feedthrough_loop(graph, self.input_names, self.output_names, [u.md for u in self.units])
+        if loop:
+            text = ", ".join(self.label(c) for c in loop)
+            raise SceneError(
+                f"connections: an algebraic loop (each input feeds an output of its unit directly, by the units' "
+                f"ModelStructure): {text}; explicit coupling does not solve it and loop solving is not yet supported"
+            )
+        self.H, self.t0 = float(H), float(t0)
+        self.step_index = 0
+        self.C_pred = np.array(monomial_coefficients(self.pred_nodes), dtype=float)
+        self.C_corr = np.array(monomial_coefficients(self.corr_nodes), dtype=float)
+
+    def label(self, c: int) -> str:
+        """Connection ``c`` as ``unit.output -> unit.input``."""
+        con, names = self.graph.connections[c], self.graph.names
+        return (f"{names[con.source]}.{self.output_names[con.source][con.output]} -> "
+                f"{names[con.target]}.{self.input_names[con.target][con.input]}")  # fmt: skip
+
+    @property
+    def time(self) -> float:
+        return self.t0 + self.step_index * self.H
+
+    def outputs(self, i: int) -> np.ndarray:
+        """Unit ``i``'s connected outputs as it stands."""
+        if not self.output_names[i]:
+            return np.zeros(0)
+        return self.units[i].get((OUTPUTS,)).ravel()
+
+    def _set_inputs(self, i: int, e: np.ndarray) -> None:
+        cols = [col for _, col in self.graph.signal_inputs(i)]
+        if cols:
+            self.units[i].set(INPUTS, np.asarray(e, dtype=float)[cols])
+
+    def initial_history(self, rows=None) -> np.ndarray:
+        """The coupling history at ``t0``: ``rows`` (``(k + 1, n_e)``, from ``T_0`` back) where given, else the
+        connections' values at ``t0`` at every node.  Those are found by handing the outputs to the inputs until
+        they settle: without an algebraic loop, within as many passes as there are connections."""
+        if rows is not None:
+            rows = np.asarray(rows, dtype=float)
+            for i in range(self.graph.n_subsystems):
+                self._set_inputs(i, rows[0])
+            return rows
+        e = np.zeros(self.n_coupling)
+        for _ in range(len(self.graph.connections) + 1):
+            e_new, _ = self.connect(
+                e, [self.outputs(i) for i in range(self.graph.n_subsystems)], range(len(self.units))
+            )
+            for i in range(self.graph.n_subsystems):
+                self._set_inputs(i, e_new)
+            if np.array_equal(e_new, e):
+                break
+            e = e_new
+        return np.tile(e, (self.k + 1, 1))
+
+    def initial_state(self) -> np.ndarray:
+        return np.concatenate([self.outputs(i) for i in range(self.graph.n_subsystems)])
+
+    def _step(self, i, rows, C):
+        """Unit ``i`` over ``[T_N, T_N+1]``, its inputs the polynomial through the samples ``rows`` (``(k + 1,
+        n_e)``) with the monomial coefficients ``C``."""
+        unit = self.units[i]
+        cols = [col for _, col in self.graph.signal_inputs(i)]
+        self.work.subsystem_integrations += 1
+        if cols:
+            unit.step(INPUTS, C @ rows[:, cols], self.time, self.H, step_index=self.step_index + 1, final=True)
+        else:  # a unit fed by no connection: nothing to hand it
+            unit._do_step(self.time, self.H, self.step_index + 1, True)
+            unit.t = self.time + self.H
+        y = self.outputs(i)
+        if not np.isfinite(y).all():
+            from .errors import UnitStepError
+
+            bad = int(np.argwhere(~np.isfinite(y))[0, 0])
+            raise UnitStepError(f"unit {unit.label} returned {self.output_names[i][bad]} = {y[bad]!r} in macro step "
+                                f"{self.step_index + 1} (t = {self.time:.12g} s){unit.said()}")  # fmt: skip
+        return y, y
+
+    def predict(self, i, state, history, *, final=False):
+        return self._step(i, history[: self.k + 1], self.C_pred)
+
+    def correct(self, i, state, history, e):
+        return self._step(i, self.corrector_samples(history, np.asarray(e, dtype=float)), self.C_corr)
+
+    def signal_output(self, i, y, output):
+        return y[output]
+
+    def stack(self, ys):
+        return np.concatenate(ys)
+
+    def join(self, ends):
+        self.step_index += 1  # the macro step's last call: every unit stands at T_N+1
+        return np.concatenate(ends)
+
+
+def connections_of(specs, names) -> tuple[list, list, list]:
+    """The engine's connections and each unit's connected inputs and outputs from ``specs``: ``(source unit, output,
+    target unit, input, factor, offset)`` by name; ``names``: the units in order."""
+    index = {n: i for i, n in enumerate(names)}
+    inputs = [[] for _ in names]
+    outputs = [[] for _ in names]
+    cons = []
+    for source, output, target, input_, factor, offset in specs:
+        s, t = index[source], index[target]
+        if output not in outputs[s]:
+            outputs[s].append(output)
+        if input_ not in inputs[t]:
+            inputs[t].append(input_)
+        cons.append(Connection(s, outputs[s].index(output), t, inputs[t].index(input_), factor, offset))
+    return cons, inputs, outputs
