@@ -23,8 +23,9 @@ step sequence:
   an error estimate of exactly 0 (a system at rest) grows the step by the largest factor, as scipy's
   does; rejected Newton iterations halve the step after a fresh Jacobian; the Jacobian is by
   forward differences, fresh every step, the first one optionally given (``jac0``);
-* failures are a status code here, raised as :class:`~.systems.IntegrationError` by the Python side
-  (:mod:`.systems`).
+* failures are a status code here, raised as
+  :class:`~icosim.problems.pendulum.integrator.systems.IntegrationError` by the Python side
+  (:mod:`icosim.problems.pendulum.integrator.systems`).
 
 Sharing the steps makes the end state a *smooth* function of each member's initial value and
 input: finite differences between members (the co-simulation's sensitivities) see the derivative
@@ -32,8 +33,9 @@ of one fixed discrete map, not the noise of different step sequences.
 
 The systems are the links' right-hand sides (:mod:`icosim.problems.pendulum.integrator.compiled_links`),
 which the co-simulation integrates through :mod:`.compiled_step` (one call per link integration),
-and the whole pendulum in minimal coordinates (:func:`~.systems.monolithic_radau`, the monolithic
-baseline of the speed-accuracy study).  The matrix inverses are an LU solve written out
+and the whole pendulum in minimal coordinates
+(:func:`~icosim.problems.pendulum.integrator.systems.monolithic_radau`, the monolithic baseline of the
+speed-accuracy study).  The matrix inverses are an LU solve written out
 (:mod:`~icosim.problems.pendulum.integrator.compiled_algebra`).  tests/reference_radau.py is the same
 algorithm in numpy, the reference the tests compare this module with (the same step sequence and
 counters, the numbers up to round-off).
