@@ -121,8 +121,8 @@ def macro_step(
             else:
                 ends[i], ys[i] = problem.predict(i, state, history, final=i not in stage.corrected)
         if graph.connections:  # the connections out of the stage's subsystems: their new samples
-            e, cols = problem.connect(e, ys, stage.units)
-            fresh.update(cols)
+            e, fed = problem.connect(e, ys, stage.units)
+            fresh.update(fed)
         if stage.conditions is None:
             continue
         assert method is not None
