@@ -51,7 +51,8 @@ class ConsistentStart:
         """The rate ``e'`` of the coupling variables at ``T_0`` (SI per s, ``(n_e,)``) on the start ``e0``: the
         time derivative of the conditions :meth:`consistent_coupling` meets, ``R_t + J e' = 0``, with ``J`` their
         Jacobian in ``e`` at ``e0`` and ``R_t`` their rate with ``e`` held (each unit's outputs along held steps of
-        ``h``, ``2 h`` and ``3 h`` from its start, the slope of their quadratic at ``T_0``).  A history
+        ``h``, ``2 h`` and ``3 h`` from its start, the slope of their quadratic at ``T_0``; ``h`` a sixteenth of
+        the step of the start's extrapolation).  A history
         ``e0 - m H e'`` before ``T_0`` is then the solution's to first order (a held one only to zeroth order).
         The units are left at their start."""
         e0 = np.asarray(e0, dtype=float)
@@ -71,7 +72,7 @@ class ConsistentStart:
         ys, slopes = [], []
         for i in range(len(self.units)):
             u = self.inputs(i, e0)
-            step = self._start_h[i] or self.H
+            step = (self._start_h[i] or self.H) / 16  # the slope's error falls as step^2, rounding's as 1/step
             y1, y2, y3 = (self._held_step(i, u, m * step) for m in (1, 2, 3))
             slope = (-2.5 * y1 + 4.0 * y2 - 1.5 * y3) / step
             y0 = 3 * y1 - 3 * y2 + y3
