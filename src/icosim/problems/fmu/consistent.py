@@ -128,19 +128,22 @@ class ConsistentStart:
         wide = self._held_step(i, u, 2 * h)
         narrow = self._held_step(i, u, h)
         y = 2 * narrow - wide
+        best = (h, y)  # the step and its extrapolation kept; without agreement, the smallest step's
         for _ in range(halvings):
+            if h / 2 <= 1e-12 * max(1.0, abs(self.time)):  # a step the clock can no longer tell from none
+                break
             h /= 2
             wide, narrow = narrow, self._held_step(i, u, h)
             y_half = 2 * narrow - wide
             scale = max(1.0, float(np.max(np.abs(y_half[0, 2:]))))
-            converged = float(np.max(np.abs(y_half[0, 2:] - y[0, 2:]))) <= rtol * scale
-            if converged:
-                # keep the larger step where it already agreed: a smooth unit starts as it did at H
-                h, y_half = (2 * h, y) if h * 2 == self.H else (h, y_half)
+            if float(np.max(np.abs(y_half[0, 2:] - y[0, 2:]))) <= rtol * scale:
+                # where the first halving already agrees, the step stays H: a smooth unit starts as it did
+                best = (2 * h, y) if 2 * h == self.H else (h, y_half)
                 break
             y = y_half
-        self._start_h[i] = h
-        return y_half
+            best = (h, y)
+        self._start_h[i] = best[0]
+        return best[1]
 
     def _held_step(self, i, u, h):
         """Unit ``i``'s outputs after a step of ``h`` from its start with the input held at ``u``."""
