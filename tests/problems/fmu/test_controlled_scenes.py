@@ -22,6 +22,7 @@ from icosim.engine.macrostep import macro_step
 from icosim.engine.methods import engine_method, get_spec
 from icosim.engine.run import simulate
 from icosim.errors import StepFailure
+from icosim.problems.fmu.controlled import start_history
 from icosim.problems.fmu.errors import SceneError
 from icosim.problems.fmu.problem import FmuCosimulation
 from icosim.problems.fmu.run import consistent_start, open_units, run_dataset_data, run_scene
@@ -191,7 +192,8 @@ def test_a_retry_starts_from_the_checkpoint(tmp_path):
         c = scene.coupling
         given = {k: v for k, v in scene.data["coupling"].items() if k in get_spec(c["method"]).arguments}
         dimensional = get_spec(c["method"]).make(**given)
-        state, history, past = opened.start.state, opened.start.history, [float(c["H"])] * c["k"]
+        state, past = opened.start.state, [float(c["H"])] * c["k"]
+        history = start_history(problem, opened.start)(float(run.steps.H[0]))  # as the driver restarts it
         states = [state]
         for H in run.steps.H:
             problem.set_macro_step(float(H), past)
@@ -203,7 +205,9 @@ def test_a_retry_starts_from_the_checkpoint(tmp_path):
 
 
 def test_the_dataset_holds_the_accepted_steps(tmp_path):
-    run = controlled(tmp_path, "two_mass_fd.yaml", 1e-5, t_end=0.01)
+    """A first step of H_max, too large for the tolerance: rejected, then smaller steps that grow."""
+    control = {"tolerance": 1e-5, "H_min": 1e-10, "H_max": 1e-2}
+    run = run_scene(scene_file(tmp_path, "two_mass_fd.yaml", control=control, t_end=0.01, H=1e-2))
     ds = run_dataset_data(run)
     H = np.asarray(ds["data_vars"]["macro_step_size"]["data"])
     times = np.asarray(ds["coords"]["time"]["data"])
@@ -229,12 +233,46 @@ def test_a_control_that_cannot_run_is_refused(tmp_path, control, match):
 
 
 def test_a_step_rejected_at_h_min_ends_the_run(tmp_path):
-    """The start's held history is first order: at a tolerance of 1e-6 the chain's first step needs H ~ 1e-8 (its
-    lambda changes by about 100 N/s), so H_min = 1e-7 ends the run at the first step, saying why."""
-    control = {"tolerance": 1e-6, "H_min": 1e-7, "H_max": 1e-2}
+    """At a tolerance of 1e-9 the chain's first step needs H below 1e-5 s, so H_min = 1e-5 ends the run at the first
+    step, saying why: the error norm at H_min and how it fell over the retries (as H^2, k = 1)."""
+    control = {"tolerance": 1e-9, "H_min": 1e-5, "H_max": 1e-2}
     run = run_scene(scene_file(tmp_path, "chain3.yaml", control=control, t_end=0.01, H=1e-4))
     assert run.status == "diverged" and len(run.times) == 1
-    assert "> 1 at H_min = 1e-07 s" in run.reason and run.steps.n_rejected > 0
+    assert "> 1 at H_min = 1e-05 s" in run.reason and run.steps.n_rejected > 0
+    order = float(run.reason.split("it falls as H^")[1].split(")")[0].split(",")[0])
+    assert 1.5 < order < 2.5, run.reason
+
+
+def first_estimates(opened, history_at, sizes):
+    """The predictor-corrector difference of the first macro step (max over the coupling variables, SI) at each
+    size, from the start with the history ``history_at(H)``."""
+    scene, problem, start = opened.scene, opened.problem, opened.start
+    c = scene.coupling
+    given = {k: v for k, v in scene.data["coupling"].items() if k in get_spec(c["method"]).arguments}
+    dimensional = get_spec(c["method"]).make(**given)
+    out = []
+    for H in sizes:
+        problem.set_macro_step(H, [H] * c["k"])
+        history = history_at(H)
+        e_p = problem.extrapolate(history)
+        checkpoint = problem.checkpoint()
+        _, hist, _ = macro_step(problem, engine_method(dimensional, H), start.state, history, scheme=scene.scheme)
+        problem.restore(checkpoint)
+        out.append(float(np.max(np.abs(hist[0] - e_p))))
+    return np.array(out)
+
+
+def test_the_first_step_s_estimate_is_of_second_order_from_the_start_s_rate(tmp_path):
+    """k = 1: the predictor extrapolates the history linearly, so with the history ``e_0 - m H e'_0`` the first
+    step's estimate is ``H^2 e''/2`` to leading order (a quarter per halving of H); with ``e_0`` held it is
+    ``H e'_0`` (a half per halving), the first-order start a tight tolerance pays for in tiny first steps."""
+    sizes = [4e-4, 2e-4, 1e-4, 5e-5]
+    with Opened(scene_file(tmp_path, "chain3.yaml")) as opened:
+        moved = first_estimates(opened, start_history(opened.problem, opened.start), sizes)
+        held = first_estimates(opened, lambda H: opened.start.history, sizes)
+    np.testing.assert_allclose(moved[1:] / moved[:-1], 0.25, rtol=0.1)
+    np.testing.assert_allclose(held[1:] / held[:-1], 0.5, rtol=0.1)
+    assert moved[-1] < 0.05 * held[-1]
 
 
 # -- ECCO's power residual as the estimate (tests/problems/fmu/test_ecco_steps.py: on OSP's quarter truck) ----------

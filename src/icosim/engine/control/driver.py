@@ -31,7 +31,10 @@ is accepted when it is at most 1.  A step that the observer calls diverged (it
 returns a reason) or that cannot be computed (a
 :class:`~icosim.errors.StepFailure` or a singular linear solve) counts as
 rejected (err = inf); at ``H_min`` the run stops (status ``diverged`` or
-``failed``).
+``failed``); the reason then says how the error norm fell over the retries
+(:func:`_shrinkage`): one that does not shrink with H says the estimate cannot
+decide at any step size (a start off the units, or coupling variables a unit
+reports that jump with the step's size), not that the tolerance is tight.
 """
 
 from __future__ import annotations
@@ -72,6 +75,28 @@ class AdaptiveSteps:
     n_rejected: int
     cpu_seconds: float
     rejected_H: list = field(default_factory=list)
+
+
+def _shrinkage(retries) -> str:
+    """How the error norm fell over the last two of a step's rejected retries ``(H, err)``, for the reason a run
+    ends at ``H_min``.
+
+    >>> _shrinkage([(1e-4, 4.0), (1e-6, 3.9)])
+    ' (4 at H = 0.0001 s: it falls as H^0.0055, so no step size meets the tolerance: the estimate does not shrink \
+with H, a start off the units or coupling variables a unit reports that jump with the step size)'
+    """
+    finite = [(H, e) for H, e in retries if math.isfinite(e) and e > 0]
+    if len(finite) < 2 or finite[-2][0] <= finite[-1][0]:
+        return ""
+    (H1, e1), (H2, e2) = finite[-2], finite[-1]
+    order = math.log(e1 / e2) / math.log(H1 / H2)
+    text = f" ({e1:.3g} at H = {H1:g} s: it falls as H^{order:.2g}"
+    if order < 0.5:
+        text += (
+            ", so no step size meets the tolerance: the estimate does not shrink with H, a start off the units "
+            "or coupling variables a unit reports that jump with the step size"
+        )
+    return text + ")"
 
 
 def adaptive_macro_steps(
@@ -117,6 +142,7 @@ def adaptive_macro_steps(
     rejected_H: list[float]
     times, steps, estimates, extras, rejected_H = [0.0], [], [], [], []
     t, H, err_prev, after_reject = 0.0, float(H0), None, False
+    retries: list[tuple[float, float]] = []  # (H, error norm) of the rejected tries since the last accepted step
     status, reason = "stable", ""
     c0 = time.process_time()
     with np.errstate(all="ignore"):
@@ -152,9 +178,14 @@ def adaptive_macro_steps(
             if not controller.accepts(err):
                 problem.restore(checkpoint)
                 rejected_H.append(H)
+                retries.append((H, err))
                 if H <= controller.H_min * (1 + 1e-9):
                     status = "failed" if failure else "diverged"
-                    reason = failure or diverged or f"error norm {err:.3g} > 1 at H_min = {controller.H_min:g} s"
+                    reason = (
+                        failure
+                        or diverged
+                        or (f"error norm {err:.3g} > 1 at H_min = {controller.H_min:g} s" + _shrinkage(retries))
+                    )
                     break
                 H = controller.after_reject(H, err)
                 after_reject = True
@@ -162,6 +193,7 @@ def adaptive_macro_steps(
                     history, past = restart(H), [H] * k
                 continue
             state, history = state_new, hist_new
+            retries.clear()
             t += H
             times.append(t)
             steps.append(H)

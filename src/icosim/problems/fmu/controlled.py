@@ -6,7 +6,9 @@ size, each next one is sized by the PI controller (:class:`icosim.engine.control
 ``k + 1``; ``safety``, ``fac_min``, ``fac_max``, ``beta1`` and ``beta2`` optional, as the pendulum study names
 them) from the predictor-corrector estimate of the coupling variables (SI) scaled by ``tolerance``.  A rejected
 step is retried from the problem's checkpoint (the units' saved FMU states at ``T_N``).  The starting history at
-any spacing is the consistent start's coupling variables held; a method whose parameters are given in seconds
+any spacing ``H`` is the start's coupling variables ``e_0`` moved back along their rate at ``t_start``,
+``e_0 - m H e'_0`` (:func:`start_history`), so that the first step's estimate is of second order in ``H`` as the
+next ones are (a held history makes it first order); a method whose parameters are given in seconds
 (``mu``, ``beta``, ``gamma``) is rebuilt for each step's size.  The dataset's ``time`` is the accepted macro nodes,
 ``macro_step_size(time)`` the step that reached each (NaN at the start), ``control_error(time)`` its error norm,
 and the attributes count the rejected steps.
@@ -45,6 +47,7 @@ __all__ = [
     "power_residuals",
     "scene_steps",
     "controlled_entries",
+    "start_history",
 ]
 
 #: The estimate a control uses where it names none.
@@ -172,6 +175,16 @@ def check_control(path, coupling, joints=None, names=()) -> None:
             power_bonds(path, joints, names)
 
 
+def start_history(problem, start):
+    """The controlled run's starting history at a spacing ``H``, as a function of ``H``: the rows
+    ``e_0 - m H e'_0`` (``m = 0 .. k``) from the start's coupling variables and their rate
+    (:meth:`~icosim.problems.fmu.problem.FmuCosimulation.coupling_rate`; the units are left at their start)."""
+    e0 = np.asarray(start.history[0], dtype=float)
+    rate = problem.coupling_rate(e0)
+    back = np.arange(problem.k + 1, dtype=float)[:, None]
+    return lambda H: e0 - back * float(H) * rate
+
+
 def scene_steps(scene, problem, start, bound, accepted):
     """The scene's macro steps from its start: the run as a :class:`~icosim.engine.run.Trajectory`, its times and,
     for a controlled run, the driver's :class:`~icosim.engine.control.driver.AdaptiveSteps` (else None).  Fixed
@@ -203,6 +216,7 @@ def scene_steps(scene, problem, start, bound, accepted):
 
     given = {k: v for k, v in scene.data["coupling"].items() if k in get_spec(c["method"]).arguments}
     dimensional = get_spec(c["method"]).make(**given)
+    restart = start_history(problem, start)
     states, coupling, outputs = [start.state], [start.history[0]], [None]
 
     def observe(n, state, history, y):
@@ -221,13 +235,13 @@ def scene_steps(scene, problem, start, bound, accepted):
         problem,
         scene.method,
         start.state,
-        start.history,
+        restart(float(c["H"])),
         t_end=float(scene.data["t_end"]) - problem.t0,
         H0=float(c["H"]),
         controller=ctl,
         tol=float(tol),
         estimate=estimate,
-        restart=lambda H: start.history,  # the consistent start's coupling variables, held
+        restart=restart,
         method_at=lambda H: engine_method(dimensional, H),
         observe=observe,
         on_accept=on_accept,
