@@ -77,7 +77,7 @@ class AdaptiveSteps:
     rejected_H: list = field(default_factory=list)
 
 
-def _shrinkage(retries) -> str:
+def _shrinkage(retries: list[tuple[float, float]]) -> str:
     """How the error norm fell over the last two of a step's rejected retries ``(H, err)``, for the reason a run
     ends at ``H_min``.
 
