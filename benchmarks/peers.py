@@ -107,6 +107,14 @@ def attempt(base, run, t_end, args, error, H=None):
                    **error(outcome)}  # fmt: skip
 
 
+def added(rows: list, r: dict, label: str, errors) -> None:
+    """Append the row ``r`` and print it: ``label``, then its errors (``errors(r)``), wall time and doSteps, or why
+    it did not complete."""
+    rows.append(r)
+    measured = f"{errors(r)}  wall {r['wall']:.3f} s  doSteps {r['do_steps']}" if r["status"] == "completed" else None
+    print(f"  {label} {measured or r['status']}", flush=True)
+
+
 # -- the quarter truck ------------------------------------------------------------------------------------------
 
 
@@ -155,11 +163,8 @@ def truck_rows(tmp: Path, args, versions) -> tuple[list, dict | None]:
     solvers = ["Euler", "RK4"]
 
     def add(base, run, H=None):
-        rows.append(attempt(base, run, T_TRUCK, args, error, H))
-        r = rows[-1]
-        print(f"  {r['master']:9s} {r['setting']:42s} {r['units']:5s} "
-              + (f"err x {r['error_x']:.2e}  wall {r['wall']:.3f} s  doSteps {r['do_steps']}"
-                 if r["status"] == "completed" else r["status"]), flush=True)  # fmt: skip
+        added(rows, attempt(base, run, T_TRUCK, args, error, H), f"{base['master']:9s} {base['setting']:42s} "
+              f"{base['units']:5s}", lambda r: f"err x {r['error_x']:.2e}")  # fmt: skip
 
     for solver in solvers:
         # libcosim fixed step and ECCO
@@ -237,11 +242,8 @@ def dmo_rows(tmp: Path, args, versions) -> list:
     cs = {"units": "co-simulation", "group": ""}
 
     def add(base, run, H=None):
-        rows.append(attempt(base, run, T_DMO, args, dmo_error, H))
-        r = rows[-1]
-        print(f"  {r['master']:11s} {r['setting']:50s} "
-              + (f"err x1 {r['error_x']:.2e} x2 {r['error_x2']:.2e}  wall {r['wall']:.3f} s  doSteps {r['do_steps']}"
-                 if r["status"] == "completed" else r["status"]), flush=True)  # fmt: skip
+        added(rows, attempt(base, run, T_DMO, args, dmo_error, H), f"{base['master']:11s} {base['setting']:50s}",
+              lambda r: f"err x1 {r['error_x']:.2e} x2 {r['error_x2']:.2e}")  # fmt: skip
 
     steps = [1e-3, 1e-4] if quick else [1e-3, 1e-4, 1e-5]
     if available(versions, "libcosim"):
