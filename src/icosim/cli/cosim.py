@@ -98,7 +98,7 @@ def run(args, parser) -> int:
         )
     if signals:
         out = Path(args.out)
-        target = lambda: _run_signals(scene, args, out)
+        target = lambda: _run(scene, args, out, signals=True)
         leftovers = (out.parent / f".{out.name}.*.part", out.parent / f".{out.name}.sha256.*.part")
     elif args.predict:
         target, leftovers = (lambda: _predict(scene, args)), ()
@@ -115,53 +115,43 @@ def run(args, parser) -> int:
     return outcome.status
 
 
-def _run(scene, args, out) -> int:
+def _run(scene, args, out, signals=False) -> int:
+    """A scene's run, its dataset written and its summary printed; ``signals``: a scene of signal connections."""
     from ..advise.output import Progress
     from ..io.jsonio import dumps
     from ..io.netcdf import write_netcdf
     from ..problems.fmu.errors import SceneError, UnitStepError
-    from ..problems.fmu.run import run_dataset, run_scene, run_summary
 
+    if signals:
+        from ..problems.fmu.signal_scene import run_signal_scene as run
+        from ..problems.fmu.signal_scene import signal_dataset as dataset
+    else:
+        from ..problems.fmu.run import run_dataset as dataset
+        from ..problems.fmu.run import run_scene as run
     try:
         bar = Progress(scene.n_steps, label="macro steps")
         try:
-            result = run_scene(scene, progress=bar)
+            result = run(scene, progress=bar)
         finally:
             bar.close()
     except SceneError as exc:
         return _error(str(exc))
     except UnitStepError as exc:
         return _error(f"{exc}; no dataset written")
-    write_netcdf(run_dataset(result, command=f"icosim cosim {args.scene} --out {args.out}"), out)
-    summary = {**run_summary(result), "out": str(out)}
-    warning = (summary["initial"] or {}).get("warning")
-    if warning:
-        print(f"icosim cosim: warning: {warning}", file=sys.stderr)
-    print(dumps(summary) if args.json else _text(summary))
-    return 0 if result.status == "completed" else 1
+    write_netcdf(dataset(result, command=f"icosim cosim {args.scene} --out {args.out}"), out)
+    if signals:
+        last = {key: values[-1] for key, values in result.series.items()}
+        summary = {"status": result.status, "reason": result.reason, "t": result.times[-1], "out": str(out), **last}
+        text = "\n".join(f"{k}: {v}" for k, v in summary.items())
+    else:
+        from ..problems.fmu.run import run_summary
 
-
-def _run_signals(scene, args, out) -> int:
-    from ..advise.output import Progress
-    from ..io.jsonio import dumps
-    from ..io.netcdf import write_netcdf
-    from ..problems.fmu.errors import SceneError, UnitStepError
-    from ..problems.fmu.signal_scene import run_signal_scene, signal_dataset
-
-    try:
-        bar = Progress(scene.n_steps, label="macro steps")
-        try:
-            result = run_signal_scene(scene, progress=bar)
-        finally:
-            bar.close()
-    except SceneError as exc:
-        return _error(str(exc))
-    except UnitStepError as exc:
-        return _error(f"{exc}; no dataset written")
-    write_netcdf(signal_dataset(result, command=f"icosim cosim {args.scene} --out {args.out}"), out)
-    last = {key: values[-1] for key, values in result.series.items()}
-    summary = {"status": result.status, "reason": result.reason, "t": result.times[-1], "out": str(out), **last}
-    print(dumps(summary) if args.json else "\n".join(f"{k}: {v}" for k, v in summary.items()))
+        summary = {**run_summary(result), "out": str(out)}
+        warning = (summary["initial"] or {}).get("warning")
+        if warning:
+            print(f"icosim cosim: warning: {warning}", file=sys.stderr)
+        text = _text(summary)
+    print(dumps(summary) if args.json else text)
     return 0 if result.status == "completed" else 1
 
 
