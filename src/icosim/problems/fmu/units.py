@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import collections
 import math
-import shutil
 import tempfile
 from pathlib import Path
 
@@ -124,7 +123,8 @@ class Unit:
         self.messages = collections.deque(maxlen=20)
         self.first_warning = ""
         self.t = float(t0)
-        self._tmp = tempfile.mkdtemp(prefix=f"icosim-{label}-", dir=guard.scratch_dir())
+        # removed on close, or at exit for a unit nobody closed
+        self._unpacked = tempfile.TemporaryDirectory(prefix=f"icosim-{label}-", dir=guard.scratch_dir())
         self.index = guard.register(self)
         try:
             self._open(t0)
@@ -139,7 +139,7 @@ class Unit:
 
         md = self.md
         try:
-            unzipdir = extract(str(self.path), unzipdir=self._tmp)
+            unzipdir = extract(str(self.path), unzipdir=self._unpacked.name)
         except Exception as exc:
             raise FmuError(f"{self.label}: cannot unpack {self.path}: {exc}") from None
         for var in md.modelVariables:  # arrays sized by the scene's structural parameters (fmpy reads .shape)
@@ -269,7 +269,7 @@ class Unit:
             except Exception:
                 pass
         guard.unregister(self)
-        shutil.rmtree(self._tmp, ignore_errors=True)
+        self._unpacked.cleanup()
 
     def checked(self):
         """The checks before the run are done: the counters start again (their steps are kept apart)."""
