@@ -83,7 +83,7 @@ class LinearFamily(ABC):
         """Single points (their exact parameters in ``backend``) as one grid: a leading axis of object arrays,
         on which the backend does for every point what it does for that point alone."""
 
-    def check(self, method: CouplingMethod, scheme: Scheme) -> None:
+    def check(self, method: CouplingMethod | None, scheme: Scheme) -> None:
         """Refuse (:class:`~icosim.errors.ParameterError`) a method or scheme the graph cannot take."""
         from ..stages import plan
 

@@ -27,9 +27,9 @@ if TYPE_CHECKING:
 __all__ = ["amplification_matrix", "matrix_of"]
 
 
-def matrix_of(problem: Any, method: CouplingRule, scheme: str | Scheme = JACOBI) -> np.ndarray:
+def matrix_of(problem: Any, method: CouplingRule | None, scheme: str | Scheme = JACOBI) -> np.ndarray:
     """``M`` of ``problem`` (a linear problem with a trailing axis for the basis vectors): the macro step of every
-    unit vector of its packed state, the images as columns."""
+    unit vector of its packed state, the images as columns; ``method`` None: explicit coupling (connections only)."""
     be = problem.backend
     n = problem.n_state
     eye = np.full((n, n), be.const(0), dtype=be.dtype)
@@ -43,7 +43,7 @@ def matrix_of(problem: Any, method: CouplingRule, scheme: str | Scheme = JACOBI)
 
 def amplification_matrix(
     family: LinearFamily,
-    method: CouplingMethod,
+    method: CouplingMethod | None,
     *,
     backend: Backend | None = None,
     scheme: str | Scheme = JACOBI,

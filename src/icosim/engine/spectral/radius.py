@@ -132,7 +132,7 @@ def _each_alone(f: Callable[[np.ndarray], Sequence[Any]], M: np.ndarray, batch: 
 
 
 def _disturbed_spread(
-    problem: Any, method: CouplingMethod, scheme: Scheme, rho: np.ndarray, rng: Any, rel: float
+    problem: Any, method: CouplingMethod | None, scheme: Scheme, rho: np.ndarray, rng: Any, rel: float
 ) -> np.ndarray:
     """``|rho_d - rho|`` of one disturbed run (exponential blocks and amplification matrix; inf where the
     disturbed matrix is not finite)."""
@@ -151,7 +151,7 @@ def _disturbed_spread(
 @overload
 def spectral_radius_float64(
     family: LinearFamily,
-    method: CouplingMethod,
+    method: CouplingMethod | None,
     *,
     error_estimate: Literal[True] = ...,
     seed: int = ...,
@@ -164,7 +164,7 @@ def spectral_radius_float64(
 @overload
 def spectral_radius_float64(
     family: LinearFamily,
-    method: CouplingMethod,
+    method: CouplingMethod | None,
     *,
     error_estimate: bool,
     seed: int = ...,
@@ -176,7 +176,7 @@ def spectral_radius_float64(
 
 def spectral_radius_float64(
     family: LinearFamily,
-    method: CouplingMethod,
+    method: CouplingMethod | None,
     *,
     error_estimate: bool = True,
     seed: int = 0,
