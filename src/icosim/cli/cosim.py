@@ -90,13 +90,14 @@ def run(args, parser) -> int:
         print(f"icosim cosim: note: {note}", file=sys.stderr)
     limit = float(scene.data.get("limits", {}).get("call_seconds", CALL_SECONDS))
     signals = getattr(scene, "connections", None) is not None  # units coupled by signal connections
-    if signals and (args.predict or args.check):
-        flag = "--predict" if args.predict else "--check"
+    if signals and args.check:
         return _error(
-            f"{args.scene}: {flag}: not yet supported for a scene with signal connections (stability "
-            f"predicted for signals and their checks are to come); run it without {flag}"
+            f"{args.scene}: --check: not yet supported for a scene with signal connections (their checks are to "
+            "come); run it without --check"
         )
-    if signals:
+    if signals and args.predict:
+        target, leftovers = (lambda: _predict(scene, args, signals=True)), ()
+    elif signals:
         out = Path(args.out)
         target = lambda: _run(scene, args, out, signals=True)
         leftovers = (out.parent / f".{out.name}.*.part", out.parent / f".{out.name}.sha256.*.part")
@@ -155,16 +156,20 @@ def _run(scene, args, out, signals=False) -> int:
     return 0 if result.status == "completed" else 1
 
 
-def _predict(scene, args) -> int:
+def _predict(scene, args, signals=False) -> int:
     from ..io.jsonio import dumps
     from ..problems.fmu.errors import SceneError, UnitStepError
-    from ..problems.fmu.predict import predict_scene
 
+    if signals:
+        from ..problems.fmu.predict_signals import predict_signal_scene as predict
+    else:
+        from ..problems.fmu.predict import predict_scene as predict
     try:
-        answer = predict_scene(scene)
+        answer = predict(scene)
     except (SceneError, UnitStepError) as exc:
         return _error(str(exc))
-    print(dumps(answer) if args.json else _prediction_text(answer))
+    text = _signal_prediction_text if signals else _prediction_text
+    print(dumps(answer) if args.json else text(answer))
     return 0
 
 
@@ -214,6 +219,38 @@ def _prediction_text(a: dict) -> str:
                 f"  {mark} {row['label']:<32} rho = {row['rho']:.10g} (+- {row['rho_error']:.1e})  {row['verdict']}"
             )
     lines.append("  (* the scene's scheme)")
+    return "\n".join(lines)
+
+
+def _signal_prediction_text(a: dict) -> str:
+    lines = [f"scene {a['scene']}: {a['coupling']}"]
+    for name, u in a["units"].items():
+        if "undecided" in u:
+            lines.append(f"  {name} ({u['interface']}): not identified, because {u['undecided']}")
+            continue
+        how = f"{u['evaluations']} evaluations" if "evaluations" in u else f"{u['probe_do_step_calls']} probing steps"
+        lines.append(f"  {name} identified ({u['interface']}, {u['model']}; states {', '.join(u['states'])}; "
+                     f"misfit of the linear model {u['misfit']:.1e}, {how}):")  # fmt: skip
+        for key in "ABCD":
+            rows = "; ".join(" ".join(f"{v:.6g}" for v in row) for row in u[key])
+            lines.append(f"    {key} = [{rows}]")
+        if u["misfit"] > 1e-6:
+            lines.append(f"    {name} is not linear: the prediction is that of a linear fit about its start")
+    lines.append("spectral radius per macro step (float64, error estimate):")
+    for row in a["schemes"]:
+        mark = "*" if row["scene"] else " "
+        if row["rho"] is None:
+            lines.append(f"  {mark} {row['label']:<40} undecided, because {row['reason']}")
+        else:
+            lines.append(
+                f"  {mark} {row['label']:<40} rho = {row['rho']:.10g} (+- {row['rho_error']:.1e})  {row['verdict']}"
+            )
+    lines.append("  (* the scene's scheme)")
+    limit = a["largest_stable_H"]
+    if limit["H_max"] is None:
+        lines.append(f"largest stable H: undecided, because {limit['reason']}")
+    else:
+        lines.append(f"largest stable H of the scene's scheme: {limit['H_max']:.6g} s ({limit['status']})")
     return "\n".join(lines)
 
 

@@ -255,6 +255,21 @@ class ExchangeUnit(Unit):
             self._xview[:] = x
             self._check(f"{prefix}SetContinuousStates", self._calls[1](self._component, self._xbuf, self._nx))
 
+    def derivatives(self, x, read=None) -> tuple[np.ndarray, np.ndarray | None]:
+        """The derivatives of the continuous states at the states ``x``, with the unit's time and inputs as they
+        stand, and the variables under the keys ``read`` there (:meth:`get`; read first: a unit may update its
+        outputs only when they are asked for before its derivatives); the unit is left at ``x`` (restore it
+        after).  The identification's differences."""
+        prefix = "fmi3" if self.fmi3 else "fmi2"
+        self.evaluations += 1
+        with guard.call(self, f"{prefix}DoStep", self.t, 0):  # recorded as a step from the start
+            self._x = np.array(x, dtype=float)
+            self._set_state(self.t, self._x)
+            values = None if read is None else self.get(read)
+            if self.nx:
+                self._check(f"{prefix}GetDerivatives", self._calls[4](self._component, self._dxbuf, self._nx))
+        return self._dxview.copy(), values
+
     # -- stepping -------------------------------------------------------------------------------
     def step(self, key, coefficients, t, H, *, step_index, final=False):
         """Integrate ``[t, t + H]`` with the input(s) ``key`` following ``u(tau) = sum_m coefficients[m] tau^m``

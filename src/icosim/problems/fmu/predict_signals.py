@@ -1,0 +1,215 @@
+"""Before a run of a signal scene: identify each unit's linear input/output model at its start and predict the
+spectral radius of the explicit coupling (``icosim cosim --predict``; docs/signals.md).
+
+The identified units, coupled as the scene's connections couple them, are the built-in signal-coupled model
+(:mod:`icosim.problems.linear.signals`), whose recurrence is the macro step's own (by linearity).  Its inputs and
+outputs are the unit's connected ones, in SI, in the order :func:`~icosim.problems.fmu.signals.connections_of`
+gives them.
+
+* A Model Exchange unit: ``x' = A x + B u``, ``y = C x + D u`` by central differences of its derivatives and
+  outputs in its continuous states and inputs at its start.  The difference step of each variable is
+  :data:`DIFFERENCE` times its size (at least one); the matrices are formed again with steps a hundred times larger,
+  and their largest change relative to their largest entry is the ``misfit`` of the linear model.
+* A Co-Simulation unit: the one-step map over the scene's ``H`` with held inputs, ``x_n+1 = Phi x_n + Gamma u_n``,
+  ``y_n+1 = C x_n+1 + D u_n`` (a constant beside), by least squares from :data:`CS_PROBES` rows of forward
+  probing steps from its start with inputs drawn at random (seeded) in ``+-max(1, |u_start|)``; ``x_n`` are the
+  variables its ModelStructure's ``<Derivatives>`` name as derivatives of, read after each step.  The fit's largest
+  residual, and that of a last step predicted from it, relative to the largest value fitted, is the ``misfit``.
+  Where those variables cannot be read, the unit is "undecided"; with ``k > 0`` the recurrence needs the response
+  to an input that changes over the step, which the map over held inputs does not hold: "undecided" too.
+
+The answer: the spectral radius for the scene's scheme and ``k``, for Jacobi and for the Gauss-Seidel orders of the
+units in the file's order and its reverse (float64 with its error estimate); and, where every unit is continuous,
+the largest stable ``H`` of the scene's scheme (:func:`~icosim.problems.linear.signals.signal_limit`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...engine.schemes import JACOBI, GaussSeidel
+from ...errors import ParameterError
+from ..linear.signals import StateSpaceUnit, signal_limit, signal_radius
+from .errors import FmuError, SceneError
+
+__all__ = ["predict_signal_scene", "identify_exchange", "identify_stepped", "DIFFERENCE", "CS_PROBES"]
+
+#: The relative difference step of the Model Exchange identification.
+DIFFERENCE = 1e-6
+
+#: Probing rows of a co-simulation unit, per unknown of one fitted row (its states, inputs and the constant).
+CS_PROBES = 3
+
+
+def _jacobians(unit, x0, u0, rel, inputs, outputs):
+    """``A, B, C, D`` by central differences with steps ``rel`` times each variable's size (at least ``rel``)."""
+    from .signals import INPUTS, OUTPUTS
+
+    def at(x, u):
+        if inputs:
+            unit.set(INPUTS, u)
+        dx, y = unit.derivatives(x, (OUTPUTS,) if outputs else None)
+        return np.concatenate([dx, np.zeros(0) if y is None else y.ravel()])
+
+    nx, nu = len(x0), len(u0)
+    cols = []
+    for j in range(nx + nu):
+        h = rel * max(1.0, abs(x0[j] if j < nx else u0[j - nx]))
+        e = np.zeros(nx + nu)
+        e[j] = h
+        cols.append((at(x0 + e[:nx], u0 + e[nx:]) - at(x0 - e[:nx], u0 - e[nx:])) / (2 * h))
+    J = np.array(cols).T if cols else np.zeros((nx + len(outputs), 0))
+    return J[:nx, :nx], J[:nx, nx:], J[nx:, :nx], J[nx:, nx:]
+
+
+def identify_exchange(unit, inputs, outputs) -> dict:
+    """A Model Exchange unit's ``A, B, C, D`` at its start (module docstring); the unit is left at its start."""
+    from .signals import INPUTS
+
+    start = unit.save()
+    x0 = np.array(start[0], dtype=float)
+    u0 = unit.get((INPUTS,)).ravel() if inputs else np.zeros(0)
+    try:
+        fine = _jacobians(unit, x0, u0, DIFFERENCE, inputs, outputs)
+        coarse = _jacobians(unit, x0, u0, 100 * DIFFERENCE, inputs, outputs)
+    finally:
+        unit.restore(start)
+    scale = max([float(np.max(np.abs(m))) for m in fine if m.size] + [1e-300])
+    misfit = max(float(np.max(np.abs(a - b))) for a, b in zip(fine, coarse) if a.size) / scale
+    names = [d.variable.derivative.name if d.variable.derivative else d.variable.name for d in unit.md.derivatives]
+    return {"interface": "model-exchange", "model": "continuous", "states": names, "A": fine[0], "B": fine[1],
+            "C": fine[2], "D": fine[3], "misfit": misfit, "evaluations": 4 * (len(x0) + len(u0))}  # fmt: skip
+
+
+def identify_stepped(unit, inputs, outputs, H, *, seed=0) -> dict:
+    """A Co-Simulation unit's one-step map over ``H`` with held inputs (module docstring), from forward steps of the
+    unit from its start (it is left where they end: close it after)."""
+    from .signals import INPUTS, OUTPUTS
+
+    names = [d.variable.derivative.name if d.variable.derivative else None for d in unit.md.derivatives]
+    found = {"interface": "co-simulation", "model": f"one-step map over H = {H:g} s", "states": names}
+    if not names or None in names:
+        return found | {"undecided": "its ModelStructure names no state variables (no <Derivatives> with their "
+                        "states), so its one-step map cannot be read"}  # fmt: skip
+    try:
+        x = np.array([unit.get_named(n) for n in names])
+    except (FmuError, KeyError, ValueError) as exc:
+        return found | {"undecided": f"its state variables {', '.join(names)} cannot be read ({exc})"}
+    nx, nu = len(names), len(inputs)
+    u0 = unit.get((INPUTS,)).ravel() if inputs else np.zeros(0)
+    scale = np.maximum(1.0, np.abs(u0))
+    rng = np.random.default_rng(seed)
+    rows = CS_PROBES * (nx + nu + 1) + 1  # the last one checks the fit
+    before, after, ins, outs = [], [], [], []
+    for n in range(rows):
+        u = scale * rng.uniform(-1.0, 1.0, nu)
+        if inputs:
+            unit.step(INPUTS, u[None], unit.t, H, step_index=n + 1, final=True)
+        else:
+            unit._do_step(unit.t, H, n + 1, True)
+            unit.t += H
+        x_new = np.array([unit.get_named(n_) for n_ in names])
+        before.append(x), after.append(x_new), ins.append(u)
+        outs.append(unit.get((OUTPUTS,)).ravel() if outputs else np.zeros(0))
+        x = x_new
+    X0, X1, U, Y = map(np.array, (before, after, ins, outs))
+    one = np.ones((rows, 1))
+    fits, misfit = [], 0.0
+    for basis, target in ((np.hstack([X0, U, one]), X1), (np.hstack([X1, U, one]), Y)):
+        norms = np.linalg.norm(basis[:-1], axis=0)
+        norms[norms == 0] = 1.0
+        coef = np.linalg.lstsq(basis[:-1] / norms, target[:-1], rcond=None)[0] / norms[:, None]
+        fits.append(coef.T)
+        spread = max(float(np.max(np.abs(target))) if target.size else 0.0, 1e-300)
+        misfit = max(misfit, float(np.max(np.abs(basis @ coef - target), initial=0.0)) / spread)
+    (F, G), (Cy, Dy) = ((f[:, :nx], f[:, nx : nx + nu]) for f in fits)
+    if np.max(np.abs(X1 - X0), initial=0.0) == 0.0:
+        return found | {"undecided": f"its state variables {', '.join(names)} do not change over its steps"}
+    return found | {"A": F, "B": G, "C": Cy, "D": Dy, "misfit": misfit, "probe_do_step_calls": rows}
+
+
+def _open(scene, name, keys):
+    from .exchange import ExchangeUnit, open_fmu_unit
+    from .signal_scene import _fmu_path
+    from .signals import ForwardUnit
+
+    sub, c = scene.subsystems[name], scene.coupling
+    start, path = dict(sub.get("start") or {}), _fmu_path(scene, sub)
+    if sub.get("interface", "co-simulation") == "co-simulation":
+        return ForwardUnit(name, path, keys, start, inputs=c["inputs"], substeps=c["substeps"], t0=scene.t0)
+    unit = open_fmu_unit(name, path, keys, start, interface=sub["interface"], tolerance=sub.get("tolerance"),
+                         inputs=c["inputs"], substeps=c["substeps"], t0=scene.t0)  # fmt: skip
+    if not isinstance(unit, ExchangeUnit):  # interface auto chose co-simulation: stepped forward only
+        unit.close()
+        return ForwardUnit(name, path, keys, start, inputs=c["inputs"], substeps=c["substeps"], t0=scene.t0)
+    return unit
+
+
+def predict_signal_scene(scene) -> dict:
+    """The identified units and the spectral radius of the scene's explicit coupling (module docstring)."""
+    from ...engine.graph import CouplingGraph
+    from .exchange import ExchangeUnit
+    from .signals import INPUTS, OUTPUTS, connections_of, feedthrough_loop
+
+    names, c = list(scene.names), scene.coupling
+    H, k = float(c["H"]), int(c["k"])
+    cons, inputs, outputs = connections_of(scene.connections, names)
+    found, models, mds = {}, [], []
+    for i, name in enumerate(names):
+        keys = {key: v for key, v in ((INPUTS, inputs[i]), (OUTPUTS, outputs[i])) if v}
+        unit = _open(scene, name, keys)
+        try:
+            mds.append(unit.md)
+            if isinstance(unit, ExchangeUnit):
+                u = identify_exchange(unit, inputs[i], outputs[i])
+            else:
+                u = identify_stepped(unit, inputs[i], outputs[i], H)
+        finally:
+            unit.close()
+        found[name] = u | {"inputs": list(inputs[i]), "outputs": list(outputs[i])}
+        models.append(None if "undecided" in u else
+                      StateSpaceUnit(u["A"], u["B"], u["C"], u["D"], None if u["model"] == "continuous" else H))  # fmt: skip
+    graph = CouplingGraph(len(names), (), names=tuple(names), connections=tuple(cons))
+    loop = feedthrough_loop(graph, inputs, outputs, mds)
+    if loop:
+        raise SceneError(f"{scene.path}: connections: an algebraic loop (by the units' ModelStructure): explicit "
+                         "coupling does not solve it, and its recurrence is not that of the units' steps")  # fmt: skip
+    mine = scene.scheme
+    order = list(range(1, len(names) + 1))
+    candidates = [mine, JACOBI, GaussSeidel(order), GaussSeidel(order[::-1])]
+    schemes = list({s.name: s for s in candidates}.values())
+    undecided = [(n, u["undecided"]) for n, u in found.items() if "undecided" in u]
+    rows = []
+    for scheme in schemes:
+        seq = getattr(scheme, "order", None)
+        row = {"scheme": scheme.name, "order": None if seq is None else [names[j - 1] for j in seq],
+               "label": "Jacobi" if seq is None else "Gauss-Seidel " + " -> ".join(names[j - 1] for j in seq),
+               "scene": scheme.name == mine.name}  # fmt: skip
+        if undecided:
+            rows.append(row | {"rho": None, "verdict": "undecided", "reason": f"{undecided[0][0]}: {undecided[0][1]}"})
+            continue
+        try:
+            rho, err = signal_radius(models, cons, k, H, scheme)
+        except ParameterError as exc:
+            cs = [n for n, u in found.items() if u["model"] != "continuous"]
+            why = f"{cs[0]} is a co-simulation unit: {exc}" if cs and k > 0 else str(exc)
+            rows.append(row | {"rho": None, "verdict": "undecided", "reason": why})
+            continue
+        verdict = "stable" if rho + err < 1 else "unstable" if rho - err > 1 else "undecided"
+        rows.append(row | {"rho": rho, "rho_error": err, "verdict": verdict})
+    limit: dict = {"H_max": None}
+    if undecided:
+        limit["reason"] = f"{undecided[0][0]}: {undecided[0][1]}"
+    elif any(m.H is not None for m in models):
+        cs = next(n for n, u in found.items() if u["model"] != "continuous")
+        limit["reason"] = f"{cs} is a co-simulation unit: its one-step map is identified at the scene's H only"
+    else:
+        lim = signal_limit(models, cons, k, H, mine)
+        limit = {"H_max": lim.H_max, "H_unstable": lim.H_unstable, "status": lim.status}
+    for u in found.values():
+        for key in "ABCD":
+            if key in u:
+                u[key] = np.asarray(u[key]).tolist()
+    return {"scene": str(scene.path), "units": found, "H": H, "k": k, "connections": len(cons),
+            "coupling": f"explicit, {rows[0]['label']}, k = {k}, H = {H:g} s", "schemes": rows,
+            "largest_stable_H": limit}  # fmt: skip
