@@ -1,0 +1,146 @@
+"""``--predict`` on a signal scene: OMSimulator's DualMassOscillator coupled by its four signal connections
+(tests/DualMassOscillator1.py in ../shared/outside/omsimulator; test_signals_outside's CONNECTIONS).
+
+What the tests compare, and where the numbers come from:
+
+* the identified units against the Modelica equations of DualMassOscillator.mo with its parameters
+  (test_drives' M1, K1, ...): the transfer functions ``C (sI - A)^-1 B + D`` (which do not depend on the
+  coordinates a unit picks for its states: System2's are its ground spring's ``sd3.s_rel = -x2``, ``sd3.v_rel``);
+  the Co-Simulation units' one-step maps against explicit Euler at the communication step (their solver, by the
+  outside README), ``z``-transfer functions of ``x_n+1 = (I + H A) x_n + H B u_n``;
+* the predicted rho against the growth per macro step measured on the run itself (the largest ``|x1|`` in a late
+  window against an earlier one), within 5 % of ``rho - 1`` (the growth exponent), at an H where explicit
+  coupling is unstable; and a run at a stable H stays bounded.
+"""
+
+import numpy as np
+import pytest
+import yaml
+from test_drives import C1, C2, C3, K1, K2, K3, M1, M2
+from test_signals_outside import CONNECTIONS, OM
+
+from icosim.cli import main
+from icosim.problems.fmu.predict_signals import predict_signal_scene
+from icosim.problems.fmu.scene import load_scene
+from icosim.problems.fmu.signal_scene import run_signal_scene
+
+pytestmark = pytest.mark.outside
+
+UNITS = {"system1": "DualMassOscillator.System1.fmu", "system2": "DualMassOscillator.System2.fmu"}
+# DualMassOscillator.mo in the physical coordinates: System1 (x1, v1), input F, outputs x1, v1, a1;
+# System2 (x2, v2), inputs x1, v1, a1, output F = k2 (x2 - x1) + c2 (v2 - v1), m2 a2 = -k3 x2 - c3 v2 - F
+MODELICA = {
+    "system1": (
+        np.array([[0, 1], [-K1 / M1, -C1 / M1]]),
+        np.array([[0], [1 / M1]]),
+        np.array([[1, 0], [0, 1], [-K1 / M1, -C1 / M1]]),
+        np.array([[0], [0], [1 / M1]]),
+    ),
+    "system2": (
+        np.array([[0, 1], [-(K2 + K3) / M2, -(C2 + C3) / M2]]),
+        np.array([[0, 0, 0], [K2 / M2, C2 / M2, 0]]),
+        np.array([[K2, C2]]),
+        np.array([[-K2, -C2, 0]]),
+    ),
+}
+
+
+def scene(tmp_path, H, t_end, interface, **coupling):
+    data = {
+        "subsystems": {
+            n: {"fmu": str(OM / f), "interface": interface, "start": {"x1_start": 0.0} if n == "system1" else {}}
+            for n, f in UNITS.items()
+        },
+        "connections": [{"from": f"{a}.{y}", "to": f"{b}.{u}"} for a, y, b, u, _, _ in CONNECTIONS],
+        "coupling": {"H": H, **coupling},
+        "t_end": t_end,
+    }
+    data["subsystems"]["system2"]["start"] = {"x2_start": 0.5}
+    path = tmp_path / f"dmo_{interface}_{H:g}.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def transfer(A, B, C, D, s):
+    return C @ np.linalg.solve(s * np.eye(len(A)) - A, B) + D
+
+
+def growth(run, steps):
+    """Growth per macro step: the largest |x1| over the last sixth of the run against that over the sixth at its
+    middle, per step between them."""
+    x = np.abs(np.asarray(run.series["system1.x1"]))
+    w = steps // 6
+    return (np.max(x[steps - w + 1 :]) / np.max(x[steps // 2 : steps // 2 + w])) ** (1 / (steps - w + 1 - steps // 2))
+
+
+def test_model_exchange_units_are_identified_as_their_modelica_equations(tmp_path):
+    answer = predict_signal_scene(load_scene(scene(tmp_path, 0.1, 1.0, "model-exchange")))
+    for name, u in answer["units"].items():
+        assert u["interface"] == "model-exchange" and u["misfit"] < 1e-9, u
+        got = [np.array(u[key]) for key in "ABCD"]
+        assert sorted(np.linalg.eigvals(got[0]).tolist(), key=np.imag) == pytest.approx(
+            sorted(np.linalg.eigvals(MODELICA[name][0]).tolist(), key=np.imag), rel=1e-8
+        )
+        for s in (0.0, 1j, 5j, 20j, 2 + 3j):
+            assert transfer(*got, s) == pytest.approx(transfer(*MODELICA[name], s), rel=1e-7, abs=1e-9), (name, s)
+    assert answer["units"]["system2"]["states"] == ["sd3.s_rel", "sd3.v_rel"]
+
+
+def test_co_simulation_units_are_identified_as_euler_steps_of_their_equations(tmp_path):
+    H = 0.1
+    answer = predict_signal_scene(load_scene(scene(tmp_path, H, 1.0, "co-simulation")))
+    for name, u in answer["units"].items():
+        assert u["interface"] == "co-simulation" and u["misfit"] < 1e-9, u
+        A, B, C, D = MODELICA[name]
+        euler = (np.eye(2) + H * A, H * B, C, D)
+        got = [np.array(u[key]) for key in "ABCD"]
+        for z in (np.exp(0.3j), np.exp(2j), -1.0, 2.0):
+            assert transfer(*got, z) == pytest.approx(transfer(*euler, z), rel=1e-7, abs=1e-9), (name, z)
+    assert answer["largest_stable_H"]["H_max"] is None  # a one-step map is that of the scene's H only
+
+
+@pytest.mark.parametrize("coupling", [{"k": 0}, {"k": 0, "scheme": "gauss-seidel", "order": ["system1", "system2"]},
+                                      {"k": 1, "scheme": "gauss-seidel", "order": ["system2", "system1"]}])  # fmt: skip
+def test_an_unstable_run_grows_by_the_predicted_rho(tmp_path, coupling):
+    H, steps = 0.2, 300
+    path = scene(tmp_path, H, steps * H, "model-exchange", **coupling)
+    answer = predict_signal_scene(load_scene(path))
+    mine = next(row for row in answer["schemes"] if row["scene"])
+    rho = mine["rho"]
+    assert mine["verdict"] == "unstable" and rho > 1.01, mine
+    run = run_signal_scene(load_scene(path))
+    assert run.status == "completed"
+    measured = growth(run, steps)
+    assert abs(measured - rho) <= 0.05 * (rho - 1), (measured, rho)
+    limit = answer["largest_stable_H"]
+    assert limit["status"] == "bisected" and limit["H_max"] < H
+
+
+def test_a_run_at_a_stable_step_stays_bounded(tmp_path):
+    probe = predict_signal_scene(load_scene(scene(tmp_path, 0.2, 1.0, "model-exchange")))
+    H = 0.5 * probe["largest_stable_H"]["H_max"]
+    steps = round(20.0 / H)
+    path = scene(tmp_path, H, steps * H, "model-exchange")
+    answer = predict_signal_scene(load_scene(path))
+    assert answer["schemes"][0]["verdict"] == "stable", answer["schemes"][0]
+    run = run_signal_scene(load_scene(path))
+    x = np.abs(np.asarray(run.series["system1.x1"]))
+    assert run.status == "completed" and np.max(x[steps // 2 :]) < np.max(x[: steps // 2])
+
+
+def test_co_simulation_growth_is_the_predicted_rho_and_k_1_is_undecided(tmp_path):
+    H, steps = 0.1, 300
+    path = scene(tmp_path, H, steps * H, "co-simulation")
+    rho = predict_signal_scene(load_scene(path))["schemes"][0]["rho"]
+    assert rho > 1.01
+    measured = growth(run_signal_scene(load_scene(path)), steps)
+    assert abs(measured - rho) <= 0.05 * (rho - 1), (measured, rho)
+    answer = predict_signal_scene(load_scene(scene(tmp_path, H, 1.0, "co-simulation", k=1)))
+    assert all(row["verdict"] == "undecided" and "k = 0 only" in row["reason"] for row in answer["schemes"])
+
+
+def test_the_command_line_prints_the_prediction(tmp_path, capsys):
+    assert main(["cosim", str(scene(tmp_path, 0.2, 1.0, "model-exchange")), "--predict"]) == 0
+    out = capsys.readouterr().out
+    assert "system2 identified (model-exchange" in out and "largest stable H of the scene's scheme" in out
+    assert "* Jacobi" in out and "unstable" in out
