@@ -43,8 +43,8 @@ def add_parser(sub):
     what.add_argument(
         "--predict",
         action="store_true",
-        help="do not run: identify m, c, d of the (linear) units from probing steps and print the spectral "
-        "radius for the scene's scheme and every other one",
+        help="do not run: identify m, c, d of the (linear) units from probing steps (a scene of signals: each "
+        "unit's A, B, C, D) and print the spectral radius for the scene's scheme and every other one",
     )
     what.add_argument(
         "--check",

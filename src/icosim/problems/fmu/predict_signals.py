@@ -11,10 +11,11 @@ gives them.
   :data:`DIFFERENCE` times its size (at least one); the matrices are formed again with steps a hundred times larger,
   and their largest change relative to their largest entry is the ``misfit`` of the linear model.
 * A Co-Simulation unit: the one-step map over the scene's ``H`` with held inputs, ``x_n+1 = Phi x_n + Gamma u_n``,
-  ``y_n+1 = C x_n+1 + D u_n`` (a constant beside), by least squares from :data:`CS_PROBES` rows of forward
-  probing steps from its start with inputs drawn at random (seeded) in ``+-max(1, |u_start|)``; ``x_n`` are the
-  variables its ModelStructure's ``<Derivatives>`` name as derivatives of, read after each step.  The fit's largest
-  residual, and that of a last step predicted from it, relative to the largest value fitted, is the ``misfit``.
+  ``y_n+1 = C x_n+1 + D u_n`` (a constant beside), by least squares from forward probing steps from its start,
+  :data:`CS_PROBES` times as many as a row has unknowns and one more that checks the fit, with inputs drawn at
+  random (seeded) in ``+-max(1, |u_start|)``; ``x_n`` are the variables its ModelStructure's ``<Derivatives>`` are
+  the derivatives of, read after each step.  The fit's largest residual (the last step's included), relative to
+  the largest value fitted, is the ``misfit``.  One unit's probing may take at most ``limits.identify_seconds``.
   Where those variables cannot be read, the unit is "undecided"; with ``k > 0`` the recurrence needs the response
   to an input that changes over the step, which the map over held inputs does not hold: "undecided" too.
 
@@ -31,6 +32,7 @@ from ...engine.schemes import JACOBI, GaussSeidel
 from ...errors import ParameterError
 from ..linear.signals import StateSpaceUnit, signal_limit, signal_radius
 from .errors import FmuError, SceneError
+from .predict import IDENTIFY_SECONDS
 
 __all__ = ["predict_signal_scene", "identify_exchange", "identify_stepped", "DIFFERENCE", "CS_PROBES"]
 
@@ -81,10 +83,14 @@ def identify_exchange(unit, inputs, outputs) -> dict:
             "C": fine[2], "D": fine[3], "misfit": misfit, "evaluations": 4 * (len(x0) + len(u0))}  # fmt: skip
 
 
-def identify_stepped(unit, inputs, outputs, H, *, seed=0) -> dict:
+def identify_stepped(unit, inputs, outputs, H, *, seed=0, limit=IDENTIFY_SECONDS) -> dict:
     """A Co-Simulation unit's one-step map over ``H`` with held inputs (module docstring), from forward steps of the
-    unit from its start (it is left where they end: close it after)."""
+    unit from its start (it is left where they end: close it after); at most ``limit`` seconds."""
+    import time
+
     from .signals import INPUTS, OUTPUTS
+
+    clock = time.perf_counter()
 
     names = [d.variable.derivative.name if d.variable.derivative else None for d in unit.md.derivatives]
     found = {"interface": "co-simulation", "model": f"one-step map over H = {H:g} s", "states": names}
@@ -102,6 +108,9 @@ def identify_stepped(unit, inputs, outputs, H, *, seed=0) -> dict:
     rows = CS_PROBES * (nx + nu + 1) + 1  # the last one checks the fit
     before, after, ins, outs = [], [], [], []
     for n in range(rows):
+        if time.perf_counter() - clock > limit:
+            raise FmuError(f"{unit.label}: --predict: identifying the unit took longer than {limit:g} s (after {n} "
+                           "probing steps); raise limits.identify_seconds in the scene")  # fmt: skip
         u = scale * rng.uniform(-1.0, 1.0, nu)
         if inputs:
             unit.step(INPUTS, u[None], unit.t, H, step_index=n + 1, final=True)
@@ -155,6 +164,7 @@ def predict_signal_scene(scene) -> dict:
     H, k = float(c["H"]), int(c["k"])
     cons, inputs, outputs = connections_of(scene.connections, names)
     found, models, mds = {}, [], []
+    limit = float(scene.data.get("limits", {}).get("identify_seconds", IDENTIFY_SECONDS))
     for i, name in enumerate(names):
         keys = {key: v for key, v in ((INPUTS, inputs[i]), (OUTPUTS, outputs[i])) if v}
         unit = _open(scene, name, keys)
@@ -163,7 +173,7 @@ def predict_signal_scene(scene) -> dict:
             if isinstance(unit, ExchangeUnit):
                 u = identify_exchange(unit, inputs[i], outputs[i])
             else:
-                u = identify_stepped(unit, inputs[i], outputs[i], H)
+                u = identify_stepped(unit, inputs[i], outputs[i], H, limit=limit)
         finally:
             unit.close()
         found[name] = u | {"inputs": list(inputs[i]), "outputs": list(outputs[i])}

@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 from scipy.linalg import expm
 
+from ...engine import graph
 from ...engine.backends import Backend, Float64
 from ...engine.graph import Connection, CouplingGraph
 from ...engine.lagrange import monomial_coefficients
@@ -119,7 +120,7 @@ class SignalLinearCosimulation(CosimulationProblem):
 
     constant_sensitivities = True
 
-    def __init__(self, units: Sequence[StateSpaceUnit], connections: Sequence[Connection], k: int, H: float,
+    def __init__(self, units: Sequence[StateSpaceUnit], connections: Sequence[graph.Connection], k: int, H: float,
                  *, names: Sequence[str] | None = None, backend: Backend | None = None) -> None:  # fmt: skip
         if backend is not None and not isinstance(backend, Float64):
             raise ParameterError("the signal-coupled linear model computes in float64 only")
@@ -131,9 +132,9 @@ class SignalLinearCosimulation(CosimulationProblem):
                 raise ParameterError(f"connection {c + 1}: unit {con.source + 1} has {self.units[con.source].n_outputs} "
                                      f"outputs, unit {con.target + 1} {self.units[con.target].n_inputs} inputs; it "
                                      f"names output {con.output + 1} and input {con.input + 1}")  # fmt: skip
-        graph = CouplingGraph(len(self.units), (), names=() if names is None else tuple(names),
-                              connections=tuple(connections))  # fmt: skip
-        super().__init__(graph, k)
+        coupled = CouplingGraph(len(self.units), (), names=() if names is None else tuple(names),
+                                connections=tuple(connections))  # fmt: skip
+        super().__init__(coupled, k)
         self.H = float(H)
         self.maps = [u.propagators(self.H, k) for u in self.units]
         self.C_pred = np.array(monomial_coefficients(self.pred_nodes), dtype=float)
@@ -203,7 +204,9 @@ class SignalFamily(LinearFamily):
     """The one point ``units``, ``connections`` (their offsets dropped: the recurrence is that of the linear part),
     ``k``, ``H`` of the signal-coupled model, as the spectral analysis asks for it (float64 only)."""
 
-    def __init__(self, units: Sequence[StateSpaceUnit], connections: Sequence[Connection], k: int, H: float) -> None:
+    def __init__(
+        self, units: Sequence[StateSpaceUnit], connections: Sequence[graph.Connection], k: int, H: float
+    ) -> None:
         self.units, self.k, self.H = tuple(units), int(k), float(H)
         self.connections = tuple(Connection(c.source, c.output, c.target, c.input, c.factor, 0.0) for c in connections)
         self.graph = self.problem(Float64()).graph
@@ -237,7 +240,7 @@ class SignalFamily(LinearFamily):
         raise ParameterError("the signal-coupled linear model is one point in float64; it does not stack")
 
 
-def signal_radius(units: Sequence[StateSpaceUnit], connections: Sequence[Connection], k: int, H: float,
+def signal_radius(units: Sequence[StateSpaceUnit], connections: Sequence[graph.Connection], k: int, H: float,
                   scheme: Scheme = JACOBI) -> tuple[float, float]:  # fmt: skip
     """The spectral radius of the co-simulation recurrence and its float64 error estimate
     (:func:`~icosim.engine.spectral.radius.spectral_radius_float64` on :class:`SignalFamily`)."""
@@ -247,7 +250,7 @@ def signal_radius(units: Sequence[StateSpaceUnit], connections: Sequence[Connect
     return float(rho), float(err)
 
 
-def signal_limit(units: Sequence[StateSpaceUnit], connections: Sequence[Connection], k: int, H: float,
+def signal_limit(units: Sequence[StateSpaceUnit], connections: Sequence[graph.Connection], k: int, H: float,
                  scheme: Scheme = JACOBI, *, decades: float = 3.0, resolution: float = 1e-3) -> Any:  # fmt: skip
     """The largest stable macro step (:func:`~icosim.step_limit.stability_limit`: a geometric scan over
     ``decades`` either side of ``H``, then a bisection to ``resolution``) of continuous ``units``: stable where the
