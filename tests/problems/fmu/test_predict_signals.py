@@ -1,10 +1,11 @@
 """``--predict`` on a signal scene: OMSimulator's DualMassOscillator coupled by its four signal connections
-(tests/DualMassOscillator1.py in ../shared/outside/omsimulator; test_signals_outside's CONNECTIONS).
+(tests/DualMassOscillator1.py in ../shared/outside/omsimulator; test_signals_outside's CONNECTIONS), and its
+QuarterCarModel in both splits (tests/QuarterCarModel.py).
 
 What the tests compare, and where the numbers come from:
 
-* the identified units against the Modelica equations of DualMassOscillator.mo with its parameters
-  (test_drives' M1, K1, ...): the transfer functions ``C (sI - A)^-1 B + D`` (which do not depend on the
+* the identified units against the Modelica equations of DualMassOscillator.mo and QuarterCarModel.mo with their
+  parameters (test_drives' M1, K1, ...): the transfer functions ``C (sI - A)^-1 B + D`` (which do not depend on the
   coordinates a unit picks for its states: System2's are its ground spring's ``sd3.s_rel = -x2``, ``sd3.v_rel``);
   the Co-Simulation units' one-step maps against explicit Euler at the communication step (their solver, by the
   outside README), ``z``-transfer functions of ``x_n+1 = (I + H A) x_n + H B u_n``;
@@ -144,3 +145,73 @@ def test_the_command_line_prints_the_prediction(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "system2 identified (model-exchange" in out and "largest stable H of the scene's scheme" in out
     assert "* Jacobi" in out and "unstable" in out
+
+
+# OMSimulator's QuarterCarModel.mo, split across the suspension (tests/QuarterCarModel.py): the chassis reads the
+# wheel's position and velocity and the wheel the chassis's (displacement/displacement), or the wheel returns the
+# suspension's force F = k_c (z_w - z_c) + d_c (v_w - v_c) (displacement/force); the road input z held at 0.1 m
+M_W, M_C, K_W, K_C, D_C = 40.0, 400.0, 150e3, 15e3, 1e3
+QUARTER_CAR = {
+    "DisplacementDisplacement": [("Chassis", "z_c", "Wheel", "z_c"), ("Chassis", "der_z_c", "Wheel", "der_z_c"),
+                                 ("Wheel", "z_w", "Chassis", "z_w"), ("Wheel", "der_z_w", "Chassis", "der_z_w")],
+    "DisplacementForce": [("Wheel", "F", "Chassis", "F"), ("Chassis", "z_c", "Wheel", "z_c"),
+                          ("Chassis", "der_z_c", "Wheel", "der_z_c")],
+}  # fmt: skip
+# the displacement/force split in (z, v): the chassis a free mass driven by F, the wheel on its tyre spring
+QUARTER_CAR_DF = {
+    "Chassis": (np.array([[0, 1], [0, 0]]), np.array([[0], [1 / M_C]]), np.eye(2), np.zeros((2, 1))),
+    "Wheel": (
+        np.array([[0, 1], [-(K_W + K_C) / M_W, -D_C / M_W]]),
+        np.array([[0, 0], [K_C / M_W, D_C / M_W]]),
+        np.array([[K_C, D_C]]),
+        np.array([[-K_C, -D_C]]),
+    ),
+}
+
+
+def quarter_car(tmp_path, split, H, steps):
+    data = {
+        "subsystems": {
+            n: {"fmu": str(OM / f"QuarterCarModel.{split}.{n}.fmu"), "interface": "model-exchange"}
+            for n in ("Chassis", "Wheel")
+        },
+        "connections": [{"from": f"{a}.{y}", "to": f"{b}.{u}"} for a, y, b, u in QUARTER_CAR[split]],
+        "coupling": {"H": H},
+        "t_end": steps * H,
+    }
+    data["subsystems"]["Wheel"]["start"] = {"z": 0.1}
+    path = tmp_path / f"qc_{split}_{H:g}.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def test_the_quarter_car_split_by_force_is_unstable_above_its_predicted_step(tmp_path):
+    probe = predict_signal_scene(load_scene(quarter_car(tmp_path, "DisplacementForce", 1e-3, 1)))
+    for name, u in probe["units"].items():
+        got = [np.array(u[key]) for key in "ABCD"]
+        for s in (0.5, 1j, 60j, 3 + 40j):  # not 0: the chassis is a free mass
+            assert transfer(*got, s) == pytest.approx(transfer(*QUARTER_CAR_DF[name], s), rel=1e-7, abs=1e-9)
+    limit = probe["largest_stable_H"]
+    assert limit["status"] == "bisected"
+    H, steps = 1.5 * limit["H_max"], 300
+    path = quarter_car(tmp_path, "DisplacementForce", H, steps)
+    rho = predict_signal_scene(load_scene(path))["schemes"][0]["rho"]
+    assert rho > 1.01
+    run = run_signal_scene(load_scene(path))
+    x = np.abs(np.asarray(run.series["Chassis.z_c"]))
+    w = steps // 6
+    measured = (np.max(x[steps - w + 1 :]) / np.max(x[steps // 2 : steps // 2 + w])) ** (
+        1 / (steps - w + 1 - steps // 2)
+    )
+    assert abs(measured - rho) <= 0.05 * (rho - 1), (measured, rho)
+
+
+def test_the_quarter_car_split_by_displacements_is_predicted_stable_and_stays_bounded(tmp_path):
+    H, steps = 0.05, 400
+    answer = predict_signal_scene(load_scene(quarter_car(tmp_path, "DisplacementDisplacement", H, steps)))
+    assert (
+        answer["schemes"][0]["verdict"] == "stable" and answer["largest_stable_H"]["status"] == "stable up to the cap"
+    )
+    run = run_signal_scene(load_scene(quarter_car(tmp_path, "DisplacementDisplacement", H, steps)))
+    z = np.asarray(run.series["Chassis.z_c"])
+    assert run.status == "completed" and abs(z[-1] - 0.1) < 1e-3  # settled on the road's 0.1 m

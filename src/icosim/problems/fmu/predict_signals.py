@@ -94,9 +94,9 @@ def identify_stepped(unit, inputs, outputs, H, *, seed=0, limit=IDENTIFY_SECONDS
 
     names = [d.variable.derivative.name if d.variable.derivative else None for d in unit.md.derivatives]
     found = {"interface": "co-simulation", "model": f"one-step map over H = {H:g} s", "states": names}
-    if not names or None in names:
-        return found | {"undecided": "its ModelStructure names no state variables (no <Derivatives> with their "
-                        "states), so its one-step map cannot be read"}  # fmt: skip
+    if None in names or (not names and unit.md.numberOfContinuousStates):
+        return found | {"undecided": "its ModelStructure does not name its state variables (a <Derivatives> entry "
+                        "without the state it is the derivative of), so its one-step map cannot be read"}  # fmt: skip
     try:
         x = np.array([unit.get_named(n) for n in names])
     except (FmuError, KeyError, ValueError) as exc:
@@ -132,7 +132,7 @@ def identify_stepped(unit, inputs, outputs, H, *, seed=0, limit=IDENTIFY_SECONDS
         spread = max(float(np.max(np.abs(target))) if target.size else 0.0, 1e-300)
         misfit = max(misfit, float(np.max(np.abs(basis @ coef - target), initial=0.0)) / spread)
     (F, G), (Cy, Dy) = ((f[:, :nx], f[:, nx : nx + nu]) for f in fits)
-    if np.max(np.abs(X1 - X0), initial=0.0) == 0.0:
+    if nx and np.max(np.abs(X1 - X0), initial=0.0) == 0.0:
         return found | {"undecided": f"its state variables {', '.join(names)} do not change over its steps"}
     return found | {"A": F, "B": G, "C": Cy, "D": Dy, "misfit": misfit, "probe_do_step_calls": rows}
 
@@ -215,7 +215,10 @@ def predict_signal_scene(scene) -> dict:
         limit["reason"] = f"{cs} is a co-simulation unit: its one-step map is identified at the scene's H only"
     else:
         lim = signal_limit(models, cons, k, H, mine)
-        limit = {"H_max": lim.H_max, "H_unstable": lim.H_unstable, "status": lim.status}
+        finite = lambda h: float(h) if np.isfinite(h) else None  # noqa: E731  (none found: the scan's cap)
+        limit = {"H_max": finite(lim.H_max), "H_unstable": finite(lim.H_unstable), "status": lim.status}
+        if limit["H_max"] is None:
+            limit["reason"] = "every step size scanned is unstable"
     for u in found.values():
         for key in "ABCD":
             if key in u:
