@@ -117,3 +117,24 @@ def test_a_one_step_map_serves_held_inputs_at_its_own_step_only():
         signal_radius((unit, lag(A2, B2)), cons, 1, 0.2)
     with pytest.raises(ParameterError, match="cannot take a step"):
         signal_radius((unit, lag(A2, B2)), cons, 0, 0.1)
+
+
+@pytest.mark.parametrize("scheme", ["jacobi", "gauss-seidel-12"])
+def test_a_unit_with_direct_feedthrough_gives_its_output_with_the_input_it_ends_the_step_with(scheme):
+    """``y_2 = x_2 + d u_2``, held inputs: Jacobi reads ``y_2`` with the held ``e_2,N``, Gauss-Seidel (1 then 2)
+    with the new sample ``g_2 x_1'`` it stepped with."""
+    d = 0.7
+    p1, c1, _ = responses(A1, B1, 0.3)
+    p2, c2, _ = responses(A2, B2, 0.3)
+    x1 = np.array([p1, 0, c1, 0])
+    if scheme == "jacobi":
+        x2 = np.array([0, p2, 0, c2])
+        e1 = G1 * (x2 + d * np.array([0, 0, 0, 1]))
+    else:
+        e2 = G2 * x1
+        x2 = np.array([0, p2, 0, 0]) + c2 * e2
+        e1 = G1 * (x2 + d * e2)
+    expected = np.array([x1, x2, e1, G2 * x1])
+    units = (lag(A1, B1), StateSpaceUnit([[-A2]], [[B2]], [[1.0]], [[d]]))
+    M = matrix_of(SignalFamily(units, LOOP, 0, 0.3).problem(Float64()), None, JACOBI if scheme == "jacobi" else GS12)
+    assert np.max(np.abs(M - expected)) <= 100 * EPS * np.max(np.abs(expected))

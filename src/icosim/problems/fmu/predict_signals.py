@@ -157,19 +157,29 @@ def _open(scene, name, keys):
 def predict_signal_scene(scene) -> dict:
     """The identified units and the spectral radius of the scene's explicit coupling (module docstring)."""
     from ...engine.graph import CouplingGraph
+    from .description import read_description
     from .exchange import ExchangeUnit
+    from .signal_scene import _fmu_path
     from .signals import INPUTS, OUTPUTS, connections_of, feedthrough_loop
 
     names, c = list(scene.names), scene.coupling
     H, k = float(c["H"]), int(c["k"])
     cons, inputs, outputs = connections_of(scene.connections, names)
-    found, models, mds = {}, [], []
+    graph = CouplingGraph(len(names), (), names=tuple(names), connections=tuple(cons))
+    mds = [read_description(n, _fmu_path(scene, scene.subsystems[n]))[0] for n in names]
+    loop = feedthrough_loop(graph, inputs, outputs, mds)
+    if loop:
+        text = ", ".join(f"{names[cons[j].source]}.{outputs[cons[j].source][cons[j].output]} -> "
+                         f"{names[cons[j].target]}.{inputs[cons[j].target][cons[j].input]}" for j in loop)  # fmt: skip
+        raise SceneError(f"{scene.path}: connections: an algebraic loop (each input feeds an output of its unit "
+                         f"directly, by the units' ModelStructure): {text}; explicit coupling does not solve it, so "
+                         "--predict has no recurrence of the units' steps to give")  # fmt: skip
+    found, models = {}, []
     limit = float(scene.data.get("limits", {}).get("identify_seconds", IDENTIFY_SECONDS))
     for i, name in enumerate(names):
         keys = {key: v for key, v in ((INPUTS, inputs[i]), (OUTPUTS, outputs[i])) if v}
         unit = _open(scene, name, keys)
         try:
-            mds.append(unit.md)
             if isinstance(unit, ExchangeUnit):
                 u = identify_exchange(unit, inputs[i], outputs[i])
             else:
@@ -179,11 +189,6 @@ def predict_signal_scene(scene) -> dict:
         found[name] = u | {"inputs": list(inputs[i]), "outputs": list(outputs[i])}
         models.append(None if "undecided" in u else
                       StateSpaceUnit(u["A"], u["B"], u["C"], u["D"], None if u["model"] == "continuous" else H))  # fmt: skip
-    graph = CouplingGraph(len(names), (), names=tuple(names), connections=tuple(cons))
-    loop = feedthrough_loop(graph, inputs, outputs, mds)
-    if loop:
-        raise SceneError(f"{scene.path}: connections: an algebraic loop (by the units' ModelStructure): explicit "
-                         "coupling does not solve it, and its recurrence is not that of the units' steps")  # fmt: skip
     mine = scene.scheme
     order = list(range(1, len(names) + 1))
     candidates = [mine, JACOBI, GaussSeidel(order), GaussSeidel(order[::-1])]
