@@ -26,6 +26,8 @@ the largest stable ``H`` of the scene's scheme (:func:`~icosim.problems.linear.s
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from ...engine.schemes import JACOBI, GaussSeidel
@@ -86,12 +88,9 @@ def identify_exchange(unit, inputs, outputs) -> dict:
 def identify_stepped(unit, inputs, outputs, H, *, seed=0, limit=IDENTIFY_SECONDS) -> dict:
     """A Co-Simulation unit's one-step map over ``H`` with held inputs (module docstring), from forward steps of the
     unit from its start (it is left where they end: close it after); at most ``limit`` seconds."""
-    import time
-
     from .signals import INPUTS, OUTPUTS
 
     clock = time.perf_counter()
-
     names = [d.variable.derivative.name if d.variable.derivative else None for d in unit.md.derivatives]
     found = {"interface": "co-simulation", "model": f"one-step map over H = {H:g} s", "states": names}
     if None in names or (not names and unit.md.numberOfContinuousStates):

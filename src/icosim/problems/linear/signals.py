@@ -118,8 +118,6 @@ class SignalLinearCosimulation(CosimulationProblem):
     n_e)``, a unit's outputs ``(..., n_y)`` at ``T_N+1`` with its inputs at ``u(1)``; leading axes broadcast.  An
     input no connection feeds is zero."""
 
-    constant_sensitivities = True
-
     def __init__(self, units: Sequence[StateSpaceUnit], connections: Sequence[graph.Connection], k: int, H: float,
                  *, names: Sequence[str] | None = None, backend: Backend | None = None) -> None:  # fmt: skip
         if backend is not None and not isinstance(backend, Float64):
