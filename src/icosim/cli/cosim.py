@@ -250,7 +250,12 @@ def _signal_prediction_text(a: dict) -> str:
     if limit["H_max"] is None:
         lines.append(f"largest stable H: undecided, because {limit['reason']}")
     else:
-        lines.append(f"largest stable H of the scene's scheme: {limit['H_max']:.6g} s ({limit['status']})")
+        anew = (
+            f"; the co-simulation units identified anew at each step tried, {limit['identifications']} times"
+            if "identifications" in limit
+            else ""
+        )
+        lines.append(f"largest stable H of the scene's scheme: {limit['H_max']:.6g} s ({limit['status']}{anew})")
     return "\n".join(lines)
 
 

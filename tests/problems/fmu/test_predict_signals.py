@@ -100,7 +100,48 @@ def test_co_simulation_units_are_identified_as_euler_steps_of_their_equations(tm
         got = [np.array(u[key]) for key in "ABCD"]
         for z in (np.exp(0.3j), np.exp(2j), -1.0, 2.0):
             assert transfer(*got, z) == pytest.approx(transfer(*euler, z), rel=1e-7, abs=1e-9), (name, z)
-    assert answer["largest_stable_H"]["H_max"] is None  # a one-step map is that of the scene's H only
+
+
+def euler_jacobi_radius(H):
+    """rho of explicit Jacobi with held inputs on the Modelica equations stepped by explicit Euler at H, in the
+    block form of the recurrence on ``(x_1, x_2, e)``: ``x_i' = Phi_i x_i + Gamma_i E_i e``, ``e' = S y'`` with
+    ``y_i' = C_i x_i' + D_i E_i e`` (``E_i`` picks unit i's inputs of e, ``S`` the connections' sources of y)."""
+    names = list(UNITS)
+    inputs = {n: [u for a, y, b, u, _, _ in CONNECTIONS if b == n] for n in names}
+    outputs = {"system1": ["x1", "v1", "a1"], "system2": ["F"]}  # MODELICA's order
+    cols = [f"{b}.{u}" for a, y, b, u, _, _ in CONNECTIONS]
+    rows = [f"{a}.{y}" for a, y, b, u, _, _ in CONNECTIONS]
+    ys = [f"{n}.{y}" for n in names for y in outputs[n]]
+    S = np.array([[1.0 if r == y else 0.0 for y in ys] for r in rows])
+    blocks = []
+    for n in names:
+        A, B, C, D = MODELICA[n]
+        E = np.array([[1.0 if c == f"{n}.{u}" else 0.0 for c in cols] for u in inputs[n]])
+        blocks.append((np.eye(2) + H * A, H * B @ E, C, D @ E))
+    Phi = np.block([[blocks[0][0], np.zeros((2, 2))], [np.zeros((2, 2)), blocks[1][0]]])
+    G = np.vstack([blocks[0][1], blocks[1][1]])
+    C = np.block([[blocks[0][2], np.zeros((3, 2))], [np.zeros((1, 2)), blocks[1][2]]])
+    D = np.vstack([blocks[0][3], blocks[1][3]])
+    M = np.block([[Phi, G], [S @ C @ Phi, S @ (C @ G + D)]])
+    return np.max(np.abs(np.linalg.eigvals(M)))
+
+
+def test_the_largest_stable_step_of_co_simulation_units_is_that_of_their_euler_steps(tmp_path):
+    """Their one-step maps identified anew at each step the search tries; against a bisection of the block-form
+    rho of the Euler steps of the Modelica equations (euler_jacobi_radius); runs either side of it."""
+    limit = predict_signal_scene(load_scene(scene(tmp_path, 0.01, 1.0, "co-simulation")))["largest_stable_H"]
+    lo, hi = 1e-3, 0.1
+    assert euler_jacobi_radius(lo) < 1 < euler_jacobi_radius(hi)
+    while hi / lo > 1 + 1e-6:
+        lo, hi = (np.sqrt(lo * hi), hi) if euler_jacobi_radius(np.sqrt(lo * hi)) < 1 else (lo, np.sqrt(lo * hi))
+    assert limit["status"] == "bisected" and limit["identifications"] > 0
+    assert limit["H_max"] <= hi and lo <= limit["H_unstable"] and limit["H_unstable"] / limit["H_max"] < 1.002
+    for factor, grows in ((0.8, False), (1.25, True)):
+        H = factor * limit["H_max"]
+        steps = round(30.0 / H)
+        x = np.abs(np.asarray(run_signal_scene(load_scene(scene(tmp_path, H, steps * H, "co-simulation"))).series[
+            "system1.x1"]))  # fmt: skip
+        assert (np.max(x[-steps // 4 :]) > np.max(x[: steps // 4])) == grows, (factor, H)
 
 
 @pytest.mark.parametrize("coupling", [{"k": 0}, {"k": 0, "scheme": "gauss-seidel", "order": ["system1", "system2"]},

@@ -20,8 +20,9 @@ gives them.
   to an input that changes over the step, which the map over held inputs does not hold: "undecided" too.
 
 The answer: the spectral radius for the scene's scheme and ``k``, for Jacobi and for the Gauss-Seidel orders of the
-units in the file's order and its reverse (float64 with its error estimate); and, where every unit is continuous,
-the largest stable ``H`` of the scene's scheme (:func:`~icosim.problems.linear.signals.signal_limit`).
+units in the file's order and its reverse (float64 with its error estimate); and the largest stable
+``H`` of the scene's scheme (:func:`~icosim.problems.linear.signals.signal_limit`), a
+co-simulation unit's map identified anew at each step the search tries (``k = 0`` only).
 """
 
 from __future__ import annotations
@@ -173,21 +174,27 @@ def predict_signal_scene(scene) -> dict:
         raise SceneError(f"{scene.path}: connections: an algebraic loop (each input feeds an output of its unit "
                          f"directly, by the units' ModelStructure): {text}; explicit coupling does not solve it, so "
                          "--predict has no recurrence of the units' steps to give")  # fmt: skip
-    found, models = {}, []
-    limit = float(scene.data.get("limits", {}).get("identify_seconds", IDENTIFY_SECONDS))
-    for i, name in enumerate(names):
+    seconds = float(scene.data.get("limits", {}).get("identify_seconds", IDENTIFY_SECONDS))
+
+    def identified(i: int, h: float) -> dict:
+        """Unit ``i`` opened at its start, identified with the macro step ``h``, closed."""
         keys = {key: v for key, v in ((INPUTS, inputs[i]), (OUTPUTS, outputs[i])) if v}
-        unit = _open(scene, name, keys)
+        unit = _open(scene, names[i], keys)
         try:
             if isinstance(unit, ExchangeUnit):
-                u = identify_exchange(unit, inputs[i], outputs[i])
-            else:
-                u = identify_stepped(unit, inputs[i], outputs[i], H, limit=limit)
+                return identify_exchange(unit, inputs[i], outputs[i])
+            return identify_stepped(unit, inputs[i], outputs[i], h, limit=seconds)
         finally:
             unit.close()
+
+    def model(u: dict, h: float) -> StateSpaceUnit:
+        return StateSpaceUnit(u["A"], u["B"], u["C"], u["D"], None if u["model"] == "continuous" else h)
+
+    found, models = {}, []
+    for i, name in enumerate(names):
+        u = identified(i, H)
         found[name] = u | {"inputs": list(inputs[i]), "outputs": list(outputs[i])}
-        models.append(None if "undecided" in u else
-                      StateSpaceUnit(u["A"], u["B"], u["C"], u["D"], None if u["model"] == "continuous" else H))  # fmt: skip
+        models.append(None if "undecided" in u else model(u, H))
     mine = scene.scheme
     order = list(range(1, len(names) + 1))
     candidates = [mine, JACOBI, GaussSeidel(order), GaussSeidel(order[::-1])]
@@ -212,15 +219,31 @@ def predict_signal_scene(scene) -> dict:
         verdict = "stable" if rho + err < 1 else "unstable" if rho - err > 1 else "undecided"
         rows.append(row | {"rho": rho, "rho_error": err, "verdict": verdict})
     limit: dict = {"H_max": None}
+    stepped = [i for i, u in enumerate(found.values()) if u["model"] != "continuous"]
     if undecided:
         limit["reason"] = f"{undecided[0][0]}: {undecided[0][1]}"
-    elif any(m.H is not None for m in models):
-        cs = next(n for n, u in found.items() if u["model"] != "continuous")
-        limit["reason"] = f"{cs} is a co-simulation unit: its one-step map is identified at the scene's H only"
+    elif stepped and k > 0:
+        limit["reason"] = (f"{names[stepped[0]]} is a co-simulation unit: its one-step map over held inputs "
+                           f"serves k = 0 only, not k = {k}")  # fmt: skip
     else:
-        lim = signal_limit(models, cons, k, H, mine)
+        probes = [0]
+
+        def at(h: float) -> list:
+            """The units at the step ``h``: the co-simulation ones identified anew (their map is that of ``h``)."""
+            out = list(models)
+            for i in stepped:
+                probes[0] += 1
+                u = identified(i, h)
+                if "undecided" in u:
+                    raise SceneError(f"{names[i]}: --predict: at H = {h:g} s {u['undecided']}")
+                out[i] = model(u, h)
+            return out
+
+        lim = signal_limit(at if stepped else models, cons, k, H, mine, decades=2.0 if stepped else 3.0)
         finite = lambda h: float(h) if np.isfinite(h) else None  # noqa: E731  (none found: the scan's cap)
         limit = {"H_max": finite(lim.H_max), "H_unstable": finite(lim.H_unstable), "status": lim.status}
+        if stepped:
+            limit["identifications"] = probes[0]  # the co-simulation units identified anew at each step tried
         if limit["H_max"] is None:
             limit["reason"] = "every step size scanned is unstable"
     for u in found.values():

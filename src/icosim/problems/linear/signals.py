@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import copy
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -248,18 +248,21 @@ def signal_radius(units: Sequence[StateSpaceUnit], connections: Sequence[graph.C
     return float(rho), float(err)
 
 
-def signal_limit(units: Sequence[StateSpaceUnit], connections: Sequence[graph.Connection], k: int, H: float,
-                 scheme: Scheme = JACOBI, *, decades: float = 3.0, resolution: float = 1e-3) -> Any:  # fmt: skip
+def signal_limit(units: Sequence[StateSpaceUnit] | Callable[[float], Sequence[StateSpaceUnit]],
+                 connections: Sequence[graph.Connection], k: int, H: float, scheme: Scheme = JACOBI, *,
+                 decades: float = 3.0, resolution: float = 1e-3) -> Any:  # fmt: skip
     """The largest stable macro step (:func:`~icosim.step_limit.stability_limit`: a geometric scan over
-    ``decades`` either side of ``H``, then a bisection to ``resolution``) of continuous ``units``: stable where the
-    spectral radius and its error estimate stay below one.  Each evaluation's info is ``(rho, err)``."""
+    ``decades`` either side of ``H``, then a bisection to ``resolution``): stable where the spectral radius and its
+    error estimate stay below one.  ``units``: continuous units, or a function of the step giving the units at it
+    (one-step maps identified anew at each step).  Each evaluation's info is ``(rho, err)``."""
     from ...step_limit import stability_limit
 
-    if any(u.H is not None for u in units):
+    if not callable(units) and any(u.H is not None for u in units):
         raise ParameterError("the largest stable H needs every unit's continuous model; a one-step map is at one H")
+    at = units if callable(units) else lambda h: units
 
     def stable(h: float) -> tuple[bool, tuple[float, float]]:
-        rho, err = signal_radius(units, connections, k, h, scheme)
+        rho, err = signal_radius(at(h), connections, k, h, scheme)
         return bool(rho + err < 1), (rho, err)
 
     scan = np.geomspace(H * 10.0**-decades, H * 10.0**decades, int(8 * decades) + 1)
