@@ -229,7 +229,7 @@ def _signal_prediction_text(a: dict) -> str:
             lines.append(f"  {name} ({u['interface']}): not identified, because {u['undecided']}")
             continue
         how = f"{u['evaluations']} evaluations" if "evaluations" in u else f"{u['probe_do_step_calls']} probing steps"
-        lines.append(f"  {name} identified ({u['interface']}, {u['model']}; states {', '.join(u['states'])}; "
+        lines.append(f"  {name} identified ({u['interface']}, {u['model']}; states {', '.join(u['states']) or 'none'}; "
                      f"misfit of the linear model {u['misfit']:.1e}, {how}):")  # fmt: skip
         for key in "ABCD":
             rows = "; ".join(" ".join(f"{v:.6g}" for v in row) for row in u[key])

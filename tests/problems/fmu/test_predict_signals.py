@@ -278,3 +278,27 @@ def test_a_loop_of_direct_feedthrough_is_refused_before_a_unit_is_opened(tmp_pat
     monkeypatch.setattr(predict_signals, "_open", lambda *a: pytest.fail("a unit was opened"))
     with pytest.raises(SceneError, match=r"algebraic loop .*a\.Float64_continuous_output -> b\.Float64_continuous_"):
         predict_signal_scene(load_scene(path))
+
+
+def test_units_without_states_are_their_feedthrough(tmp_path):
+    """The Reference-FMUs' Feedthrough (Co-Simulation, no states: its continuous output is its continuous input), a
+    chain with no cycle of feedthrough: ``D`` is 1 where the output follows the input and 0 where it does not, and
+    the recurrence is nilpotent (rho 0, whatever H)."""
+    fmu = OUTSIDE / "reference-fmus" / "fmus2" / "Feedthrough.fmu"
+    data = {
+        "subsystems": {"a": {"fmu": str(fmu)}, "b": {"fmu": str(fmu)}},
+        "connections": [
+            {"from": "a.Float64_continuous_output", "to": "b.Float64_continuous_input", "factor": 2.0},
+            {"from": "b.Float64_continuous_output", "to": "a.Float64_discrete_input"},
+        ],
+        "coupling": {"H": 0.1},
+        "t_end": 1.0,
+    }
+    path = tmp_path / "chain.yaml"
+    path.write_text(yaml.safe_dump(data))
+    answer = predict_signal_scene(load_scene(path))
+    assert answer["units"]["a"]["states"] == [] and answer["units"]["a"]["D"] == [[pytest.approx(0.0, abs=1e-12)]]
+    assert answer["units"]["b"]["D"] == [[pytest.approx(1.0, abs=1e-12)]]
+    for row in answer["schemes"]:
+        assert row["verdict"] == "stable" and row["rho"] <= row["rho_error"], row
+    assert answer["largest_stable_H"]["status"] == "stable up to the cap"

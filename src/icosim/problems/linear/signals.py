@@ -158,8 +158,8 @@ class SignalLinearCosimulation(CosimulationProblem):
     def disturbed(self, rng: Any, rel: float) -> SignalLinearCosimulation:
         """A copy whose propagators carry absolute noise ``rel * max|entry|`` (the size of their rounding)."""
         p = copy.copy(self)
-        p.maps = [(Phi + rel * np.max(np.abs(Phi)) * rng.standard_normal(Phi.shape),
-                   G + rel * max(np.max(np.abs(G)), 1e-300) * rng.standard_normal(G.shape)) for Phi, G in self.maps]  # fmt: skip
+        noise = lambda a: rel * np.max(np.abs(a), initial=1e-300) * rng.standard_normal(a.shape)  # noqa: E731
+        p.maps = [(Phi + noise(Phi), G + noise(G)) for Phi, G in self.maps]
         p._jacobians = {}
         return p
 
