@@ -22,7 +22,9 @@ ROAD = TableSource(np.array([0.0, 0.1, 0.1, 5.0]), np.array([0.0, 0.0, 0.1, 0.1]
 
 def test_a_jump_is_taken_at_its_time_and_ends_hold():
     assert (ROAD.before(0.1), ROAD.after(0.1)) == (0.0, 0.1)
-    assert ROAD.after(3 * 0.1 / 3) == 0.1 and ROAD.after(0.1 - 1e-17) == 0.1  # t0 + n H rounded: still at the jump
+    below, above = np.nextafter(0.1, 0.0), np.nextafter(0.1, 1.0)  # t0 + n H rounded a bit off the jump
+    assert ROAD.after(below) == ROAD.after(above) == 0.1 and ROAD.before(below) == ROAD.before(above) == 0.0
+    assert ROAD.after(0.1 - 1e-9) == 0.0  # not rounding: before the jump
     assert ROAD.after(-1.0) == 0.0 and ROAD.before(7.0) == 0.1
     ramp = TableSource(np.array([0.0, 2.0]), np.array([1.0, 3.0]))
     assert ramp.after(0.5) == ramp.before(0.5) == 1.5
