@@ -36,6 +36,7 @@ from toolchains import OUTSIDE
 
 from icosim.engine.run import simulate
 from icosim.order_fit import asymptotic_order
+from icosim.problems.fmu.errors import SceneError
 from icosim.problems.fmu.exchange import open_fmu_unit
 from icosim.problems.fmu.scene import load_scene
 from icosim.problems.fmu.signal_scene import run_signal_scene
@@ -133,6 +134,17 @@ def test_a_ramp_is_handed_as_its_chord_not_held(tmp_path):
         errors.append(np.max(np.abs(chassis_at_end(run_signal_scene(load_scene(path))) - truth)))
     fit = asymptotic_order(HS[:3], errors)
     assert abs(fit.order - 2) < 0.15, (errors, fit)
+
+
+@pytest.mark.parametrize("target, says", [("wheel.F", "a Real of causality output"),
+                                          ("wheel.zz", "no variable of that name")])  # fmt: skip
+def test_a_source_into_no_input_is_refused_naming_it_and_the_inputs(tmp_path, target, says):
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump(data("DisplacementForce", 1e-2, 0, "co-simulation",
+                                        sources=[{"to": target, "value": 1.0}])))  # fmt: skip
+    with pytest.raises(SceneError, match=rf"bad.yaml: sources\[0\].to: {target} is {says}; a source feeds a Real "
+                       "input, here one of der_z_c, z, z_c"):  # fmt: skip
+        run_signal_scene(load_scene(path))
 
 
 def test_the_road_is_handed_as_its_table_and_recorded(tmp_path):

@@ -218,9 +218,11 @@ def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
     ``progress(n_done)`` is called after each step."""
     from ...engine.run import simulate
     from .exchange import open_fmu_unit
+    from .signal_sources import check_targets
     from .signals import INPUTS, OUTPUTS, ForwardUnit, SignalCosimulation, connections_of
 
     names, c = list(scene.names), scene.coupling
+    check_targets(scene.path, scene.sources, {n: _fmu_path(scene, scene.subsystems[n]) for n in names})
     cons, inputs, outputs = connections_of(scene.connections, names)
     fed: list = [[] for _ in names]  # each unit's inputs fed by a source, after its connected ones
     for unit, var, source in scene.sources:

@@ -31,7 +31,7 @@ import numpy as np
 
 from .errors import SceneError
 
-__all__ = ["TableSource", "SOURCE_KEYS", "sources_of", "SNAP"]
+__all__ = ["TableSource", "SOURCE_KEYS", "sources_of", "check_targets", "SNAP"]
 
 #: Keys of one entry of ``sources``.
 SOURCE_KEYS = ("to", "table", "column", "value")
@@ -175,3 +175,26 @@ def sources_of(path, entries, subsystems, fed) -> list[tuple[str, str, TableSour
             source = _table(path, where, entry)
         out.append((unit, var, source))
     return out
+
+
+def check_targets(path, sources, fmus) -> None:
+    """Refuse a source whose ``to`` is not a Real input of its unit, naming ``sources[n].to`` and the unit's inputs,
+    before any unit is opened; ``fmus``: unit name -> its ``.fmu`` file."""
+    from fmpy import read_model_description
+
+    descriptions: dict = {}
+    for n, (unit, var, _) in enumerate(sources):
+        if unit not in descriptions:
+            try:
+                descriptions[unit] = read_model_description(str(fmus[unit]), validate=False)
+            except Exception:  # no readable unit: opening it says why, naming the unit
+                descriptions[unit] = None
+        if descriptions[unit] is None:
+            continue
+        variables = descriptions[unit].modelVariables
+        inputs = [v.name for v in variables if v.causality == "input" and v.type in ("Real", "Float64")]
+        if var not in inputs:
+            found = next((v for v in variables if v.name == var), None)
+            what = "no variable of that name" if found is None else f"a {found.type} of causality {found.causality}"
+            _fail(path, f"sources[{n}].to", f"{unit}.{var} is {what}; a source feeds a Real input, here one of "
+                  f"{', '.join(inputs) or '(none)'}")  # fmt: skip
