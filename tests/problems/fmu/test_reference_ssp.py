@@ -26,7 +26,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 import yaml
-from helpers import ROOT
+from helpers import FMU_CACHE, ROOT
 from toolchains import OUTSIDE
 
 from icosim.engine.run import simulate
@@ -71,7 +71,7 @@ def write_ssp(path: Path, components: dict, connections: list) -> Path:
 
 @pytest.fixture(scope="module")
 def dahlquist_msd(tmp_path_factory):
-    msd = build_unit(ROOT / "fmus" / "msd", ROOT / "build" / "fmus")
+    msd = build_unit(ROOT / "fmus" / "msd", FMU_CACHE)
     components = {"dahlquist": (REFERENCE / "Dahlquist.fmu", {"x": "output"}),
                   "mass": (msd, {"lambda": "input", "x": "output"})}  # fmt: skip
     path = write_ssp(tmp_path_factory.mktemp("ssp") / "dahlquist_msd.ssp", components, [("dahlquist.x", "mass.lambda")])
@@ -158,8 +158,8 @@ VDP_STARTS = {"control.kp": 100.0, "mass.d": 20.0}
 
 @pytest.fixture(scope="module")
 def vanderpol_control(tmp_path_factory):
-    msd = build_unit(ROOT / "fmus" / "msd", ROOT / "build" / "fmus")
-    control = build_unit(ROOT / "fmus" / "pcontrol", ROOT / "build" / "fmus")
+    msd = build_unit(ROOT / "fmus" / "msd", FMU_CACHE)
+    control = build_unit(ROOT / "fmus" / "pcontrol", FMU_CACHE)
     components = {"vdp": (REFERENCE / "VanDerPol.fmu", {"x0": "output"}),
                   "control": (control, {"r": "input", "y": "input", "u": "output"}),
                   "mass": (msd, {"lambda": "input", "x": "output"})}  # fmt: skip
