@@ -11,6 +11,8 @@ A YAML scene (or a system file whose connections are signals, :mod:`icosim.probl
     coupling: {k: 0, scheme: jacobi, H: 1.0e-4}
     t_end: 10
 
+An input may be fed by a table or a constant instead (``sources``: :mod:`icosim.problems.fmu.signal_sources`).
+
 Coupling is explicit (:mod:`icosim.problems.fmu.signals`): ``k`` the order of the inputs' extrapolation (0: held),
 ``scheme`` jacobi or gauss-seidel with ``order`` (every subsystem once), ``implicit`` false only.  Bad input is
 refused naming the key and what is allowed, before any unit is opened.
@@ -32,7 +34,7 @@ __all__ = ["SignalScene", "SignalRun", "signal_scene", "run_signal_scene", "sign
            "SIGNAL_SCENE_KEYS", "SIGNAL_SUBSYSTEM_KEYS", "CONNECTION_KEYS", "SIGNAL_COUPLING_KEYS"]  # fmt: skip
 
 #: Top-level keys of a signal scene.
-SIGNAL_SCENE_KEYS = ("subsystems", "system", "connections", "coupling", "t_start", "t_end", "limits")
+SIGNAL_SCENE_KEYS = ("subsystems", "system", "connections", "sources", "coupling", "t_start", "t_end", "limits")
 #: Keys of one subsystem.
 SIGNAL_SUBSYSTEM_KEYS = ("fmu", "start", "interface", "tolerance", "record")
 #: Keys of one connection.
@@ -72,6 +74,7 @@ class SignalScene:
     t0: float
     t_end: float
     system: object = None
+    sources: list = field(default_factory=list)  # (unit, input, TableSource)
 
     @property
     def names(self) -> tuple:
@@ -145,6 +148,9 @@ def signal_scene(path, data, system=None) -> SignalScene:
         factor = _number(path, f"{where}.factor", con.get("factor", 1.0))
         offset = _number(path, f"{where}.offset", con.get("offset", 0.0))
         specs.append((ends[0][0], ends[0][1], ends[1][0], ends[1][1], factor, offset))
+    from .signal_sources import sources_of
+
+    sources = sources_of(path, data.get("sources", []), subs, fed)
     coupling = data.get("coupling")
     if not isinstance(coupling, dict):
         _fail(path, "coupling", "must be a mapping with H (and k, scheme, order)")
@@ -182,11 +188,11 @@ def signal_scene(path, data, system=None) -> SignalScene:
     if not steps >= 1 or abs(steps - round(steps)) > 1e-6 * max(1.0, steps):
         _fail(path, "t_end", f"t_end - t_start = {t_end - t0:g} s must be a whole number (>= 1) of macro steps "
               f"H = {c['H']:g} s")  # fmt: skip
-    used = {u for s in specs for u in (s[0], s[2])}
+    used = {u for s in specs for u in (s[0], s[2])} | {s[0] for s in sources}
     alone = [n for n in subs if n not in used]
     if alone:
         _fail(path, f"subsystems.{alone[0]}", "takes part in no connection")
-    return SignalScene(path, data, dict(subs), specs, c, t0, t_end, system)
+    return SignalScene(path, data, dict(subs), specs, c, t0, t_end, system, sources)
 
 
 @dataclass
@@ -212,10 +218,16 @@ def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
     ``progress(n_done)`` is called after each step."""
     from ...engine.run import simulate
     from .exchange import open_fmu_unit
+    from .signal_sources import check_targets
     from .signals import INPUTS, OUTPUTS, ForwardUnit, SignalCosimulation, connections_of
 
     names, c = list(scene.names), scene.coupling
+    check_targets(scene.path, scene.sources, {n: _fmu_path(scene, scene.subsystems[n]) for n in names})
     cons, inputs, outputs = connections_of(scene.connections, names)
+    fed: list = [[] for _ in names]  # each unit's inputs fed by a source, after its connected ones
+    for unit, var, source in scene.sources:
+        inputs[names.index(unit)].append(var)
+        fed[names.index(unit)].append(source)
     units = []
     run = SignalRun(scene)
     started = clock.perf_counter()
@@ -231,7 +243,7 @@ def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
                 units.append(open_fmu_unit(name, path, keys, start, interface=sub["interface"],
                                            tolerance=sub.get("tolerance"), inputs=c["inputs"],
                                            substeps=c["substeps"], t0=scene.t0))  # fmt: skip
-        problem = SignalCosimulation(units, inputs, outputs, cons, c["k"], c["H"], t0=scene.t0)
+        problem = SignalCosimulation(units, inputs, outputs, cons, c["k"], c["H"], t0=scene.t0, sources=fed)
         history = problem.initial_history()
         recorded = [
             (u, v) for u, sub in zip(units, (scene.subsystems[n] for n in names)) for v in sub.get("record", [])
@@ -271,6 +283,9 @@ def _append(run, problem, e, recorded):
         run.series.setdefault(dst, []).append(value)
         if len(run.series.setdefault(src, [])) < len(run.series[dst]):
             run.series[src].append(raw if con.factor else float(problem.outputs(con.source)[con.output]))
+    for i, sources in enumerate(problem.sources):  # the inputs fed by a table: its value just after the point
+        for name, source in zip(problem.input_names[i][len(problem.input_names[i]) - len(sources) :], sources):
+            run.series.setdefault(f"{graph.names[i]}.{name}", []).append(source.after(problem.time))
     for unit, name in recorded:
         run.series.setdefault(f"{unit.label}.{name}", []).append(unit.get_named(name))
 

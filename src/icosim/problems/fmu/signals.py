@@ -107,10 +107,13 @@ class SignalCosimulation(CosimulationProblem):
     connections : the :class:`~icosim.engine.graph.Connection` s.
     k : the order of the inputs' extrapolation (0: held).
     H : macro-step size in s.
+    sources : per unit, the :class:`~icosim.problems.fmu.signal_sources.TableSource` s of its inputs after the
+        connected ones (``inputs[i]`` lists those last), each handed its chord over a step.
     """
 
-    def __init__(self, units, inputs, outputs, connections, k, H, *, t0=0.0):
+    def __init__(self, units, inputs, outputs, connections, k, H, *, t0=0.0, sources=None):
         self.units = tuple(units)
+        self.sources = tuple(map(tuple, sources)) if sources is not None else tuple(() for _ in self.units)
         self.input_names, self.output_names = tuple(map(tuple, inputs)), tuple(map(tuple, outputs))
         graph = CouplingGraph(len(self.units), (), names=tuple(u.label for u in self.units), connections=connections)
         super().__init__(graph, k)
@@ -144,8 +147,9 @@ class SignalCosimulation(CosimulationProblem):
 
     def _set_inputs(self, i: int, e: np.ndarray) -> None:
         cols = [col for _, col in self.graph.signal_inputs(i)]
-        if cols:
-            self.units[i].set(INPUTS, np.asarray(e, dtype=float)[cols])
+        if cols or self.sources[i]:
+            fed = [s.after(self.time) for s in self.sources[i]]
+            self.units[i].set(INPUTS, np.concatenate([np.asarray(e, dtype=float)[cols], fed]))
 
     def initial_history(self, rows=None) -> np.ndarray:
         """The coupling history at ``t0``: ``rows`` (``(k + 1, n_e)``, from ``T_0`` back) where given, else the
@@ -177,8 +181,14 @@ class SignalCosimulation(CosimulationProblem):
         unit = self.units[i]
         cols = [col for _, col in self.graph.signal_inputs(i)]
         self.work.subsystem_integrations += 1
-        if cols:
-            unit.step(INPUTS, C @ rows[:, cols], self.time, self.H, step_index=self.step_index + 1, final=True)
+        if cols or self.sources[i]:
+            coefficients = C @ rows[:, cols]
+            if self.sources[i]:  # a table's chord: linear over the step, whatever k
+                chords = np.array([s.chord(self.time, self.H) for s in self.sources[i]]).T
+                n = max(len(coefficients), 2)
+                coefficients = np.hstack([np.pad(coefficients, ((0, n - len(coefficients)), (0, 0))),
+                                          np.pad(chords, ((0, n - 2), (0, 0)))])  # fmt: skip
+            unit.step(INPUTS, coefficients, self.time, self.H, step_index=self.step_index + 1, final=True)
         else:  # a unit fed by no connection: nothing to hand it
             unit._do_step(self.time, self.H, self.step_index + 1, True)
             unit.t = self.time + self.H
