@@ -19,6 +19,7 @@ from ..errors import ParameterError
 __all__ = [
     "number",
     "decimal",
+    "positive_number",
     "order",
     "digits",
     "bits",
@@ -45,6 +46,14 @@ def number(text):
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
+
+
+def positive_number(text):
+    """A finite float > 0."""
+    value = number(text)
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
     return value
 
 

@@ -10,6 +10,9 @@ crashes the process stops the run the same way, naming the unit, the call and th
 written then.  A run that diverges ends with status 1 and says at which step; its dataset says so too.  The
 dataset (NetCDF, written atomically) holds ``position`` and ``velocity`` per subsystem and time, ``multiplier``
 and ``gap`` per time, the scene as JSON and each unit's provenance and counters (docs/fmi.md).
+``--tolerance TOL`` runs a scene of joints with controlled macro steps at ``TOL``
+(:func:`icosim.problems.fmu.controlled.at_tolerance`); a value that is no positive number, a scene of signal
+connections and a control of another estimate are refused before any unit is opened.
 """
 
 from __future__ import annotations
@@ -17,6 +20,8 @@ from __future__ import annotations
 import os
 import sys
 from pathlib import Path
+
+from .arguments import positive_number
 
 __all__ = ["add_parser", "run"]
 
@@ -51,6 +56,14 @@ def add_parser(sub):
         action="store_true",
         help="do not run: check every unit (types, units of measure, start values, rollback, feedthrough, "
         "direction) and the start, and print a table per unit; exit 2 if one is refused",
+    )
+    p.add_argument(
+        "--tolerance",
+        metavar="TOL",
+        type=positive_number,
+        help="run with controlled macro steps at this tolerance (> 0) of the predictor-corrector estimate: sets "
+        "coupling.control.tolerance, with the scene's other control keys or, without them, H_min = 1e-6 H and "
+        "H_max = t_end - t_start (scenes of joints)",
     )
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
     p.set_defaults(subparser=p)
@@ -90,6 +103,18 @@ def run(args, parser) -> int:
         print(f"icosim cosim: note: {note}", file=sys.stderr)
     limit = float(scene.data.get("limits", {}).get("call_seconds", CALL_SECONDS))
     signals = getattr(scene, "connections", None) is not None  # units coupled by signal connections
+    if args.tolerance is not None:
+        if signals:
+            return _error(
+                f"argument --tolerance: {args.scene} couples its units by signal connections, which run at fixed "
+                "steps; a tolerance applies to a scene of joints (or run it without --tolerance)"
+            )
+        from ..problems.fmu.controlled import at_tolerance
+
+        try:
+            scene = at_tolerance(scene, args.tolerance)
+        except SceneError as exc:
+            return _error(f"argument --tolerance: {exc}")
     if signals and args.check:
         return _error(
             f"{args.scene}: --check: not yet supported for a scene with signal connections (their checks are to "
@@ -139,7 +164,8 @@ def _run(scene, args, out, signals=False) -> int:
         return _error(str(exc))
     except UnitStepError as exc:
         return _error(f"{exc}; no dataset written")
-    write_netcdf(dataset(result, command=f"icosim cosim {args.scene} --out {args.out}"), out)
+    tolerance = "" if args.tolerance is None else f" --tolerance {args.tolerance!r}"
+    write_netcdf(dataset(result, command=f"icosim cosim {args.scene}{tolerance} --out {args.out}"), out)
     if signals:
         last = {key: values[-1] for key, values in result.series.items()}
         summary = {"status": result.status, "reason": result.reason, "t": result.times[-1], "out": str(out), **last}
@@ -148,6 +174,12 @@ def _run(scene, args, out, signals=False) -> int:
         from ..problems.fmu.run import run_summary
 
         summary = {**run_summary(result), "out": str(out)}
+        if result.steps is not None:  # a controlled run: its estimate, tolerance and steps
+            from ..problems.fmu.controlled import controlled_entries
+
+            attrs = controlled_entries(result)[1]
+            tolerance = scene.coupling["control"].get("tolerance")
+            summary["control"] = {k.removeprefix("control_"): v for k, v in attrs.items()} | {"tolerance": tolerance}
         warning = (summary["initial"] or {}).get("warning")
         if warning:
             print(f"icosim cosim: warning: {warning}", file=sys.stderr)
@@ -283,6 +315,11 @@ def _text(s: dict) -> str:
         + (f"({per_step:g} doStep calls per macro step), " if per_step is not None else "")
         + f"max |gap| = {s['max_abs_gap']:.3g} m, {s['wall_time_s']:.2f} s"
     )
+    if s.get("control"):
+        c = s["control"]
+        at = f" at tolerance {c['tolerance']:g}" if c["tolerance"] is not None else ""
+        lines.append(f"  controlled ({c['estimate']}{at}): {c['accepted_steps']} steps accepted, "
+                     f"{c['rejected_steps']} rejected")  # fmt: skip
     if s["reason"]:
         lines.append(f"  {s['reason']}")
     lines.append(f"wrote {s['out']}")

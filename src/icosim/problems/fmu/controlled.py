@@ -12,6 +12,8 @@ next ones are (a held history makes it first order); a method whose parameters a
 (``mu``, ``beta``, ``gamma``) is rebuilt for each step's size.  The dataset's ``time`` is the accepted macro nodes,
 ``macro_step_size(time)`` the step that reached each (NaN at the start), ``control_error(time)`` its error norm,
 and the attributes count the rejected steps.
+``icosim cosim SCENE --tolerance TOL`` is the scene with ``coupling.control.tolerance: TOL`` (:func:`at_tolerance`:
+the scene's other control keys, or ``H_min = 1e-6 H`` and ``H_max = t_end - t_start`` where it has none).
 
 ``estimate`` chooses the error estimate (:data:`icosim.engine.control.controller.ESTIMATES`): the
 predictor-corrector difference above (``predictor-corrector``, the default) or ECCO's power residual
@@ -27,6 +29,7 @@ residual (ECCO)").
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -48,6 +51,7 @@ __all__ = [
     "scene_steps",
     "controlled_entries",
     "start_history",
+    "at_tolerance",
 ]
 
 #: The estimate a control uses where it names none.
@@ -142,6 +146,29 @@ def controller(path, coupling) -> StepController:
             f"[{ctl.H_min:g}, {ctl.H_max:g}] s"
         )
     return ctl
+
+
+def at_tolerance(scene, tolerance):
+    """The scene run with controlled macro steps at ``tolerance`` (the predictor-corrector estimate's): its
+    ``coupling.control`` with ``tolerance`` set, or, where it has none, the defaults ``H_min`` a millionth of the
+    first step ``H`` and ``H_max`` the run's span ``t_end - t_start``, so that the tolerance alone sizes the steps;
+    checked as a scene file's control is.  A :class:`SceneError` says why not: a tolerance that is not a positive
+    finite number, or a control of another estimate (which takes no tolerance)."""
+    if not (isinstance(tolerance, (int, float)) and math.isfinite(tolerance) and tolerance > 0):
+        raise SceneError(f"{scene.path}: coupling.control.tolerance: must be a number > 0, got {tolerance!r}")
+    coupling = scene.data["coupling"]
+    span = float(scene.data["t_end"]) - float(scene.data.get("t_start", 0.0))
+    control = dict(coupling.get("control") or {"H_min": 1e-6 * float(coupling["H"]), "H_max": span})
+    estimate = control.get("estimate", DEFAULT_ESTIMATE)
+    if estimate != DEFAULT_ESTIMATE:
+        raise SceneError(
+            f"{scene.path}: coupling.control.estimate: the scene's control uses the {estimate} estimate, which takes "
+            f"no tolerance (its keys: {', '.join(ESTIMATE_KEYS[estimate][0])}); a tolerance applies to the "
+            f"{DEFAULT_ESTIMATE} estimate"
+        )
+    control["tolerance"] = float(tolerance)
+    check_control(scene.path, {**scene.coupling, "control": control}, scene.graph().joints, scene.names)
+    return dataclasses.replace(scene, data={**scene.data, "coupling": {**coupling, "control": control}})
 
 
 def power_bonds(path, joints, names) -> list:

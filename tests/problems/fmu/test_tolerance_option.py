@@ -1,0 +1,133 @@
+"""``icosim cosim SCENE --tolerance TOL``: a controlled run at the tolerance asked for.
+
+* on the two-unit scene of fmus/ (no ``coupling.control`` in it: the defaults) and on OMSimulator's DualMassOscillator
+  (Model Exchange, ../shared/outside), the error at ``t_end`` against the exact solution -- the rigidly joined
+  masses (test_controlled_scenes.exact), DualMassOscillator.mo (test_drives.exact) -- follows the tolerance: each
+  tenfold tighter tolerance gives an error smaller by between 1 and 100, over two decades and more;
+* ``--tolerance`` sets the tolerance of a scene's own control and keeps its other keys;
+* a tolerance that is no positive number, a scene of signal connections and a control of the power residual are
+  refused with status 2, naming the argument, before any unit is opened.
+"""
+
+import types
+
+import numpy as np
+import pytest
+from test_controlled_scenes import TOLERANCES, error, power_control, scene_file
+from test_drives import AMPLITUDE
+from test_drives import exact as dual_mass_exact
+from test_drives_outside import BAUMGARTE, om_scene
+
+from icosim.cli import main
+from icosim.io.netcdf import open_dataset
+from icosim.problems.fmu.scene import load_scene
+
+pytestmark = pytest.mark.fmu
+
+
+def cosim(path, tolerance, out):
+    """The run of ``icosim cosim PATH --tolerance TOL``: its dataset, opened."""
+    assert main(["cosim", str(path), "--tolerance", repr(tolerance), "--out", str(out)]) == 0
+    return open_dataset(out)
+
+
+def at_end(path, ds):
+    """The run's start and end as test_controlled_scenes.error reads a run (positions ``(time, subsystem, 1)``)."""
+    pick = [0, -1]
+    return types.SimpleNamespace(
+        scene=load_scene(path),
+        times=ds["time"].values[pick],
+        positions=ds["position"].values.T[pick, :, None],
+        velocities=ds["velocity"].values.T[pick, :, None],
+    )
+
+
+def assert_proportional(tolerances, errors):
+    """Each tenfold tighter tolerance gives an error smaller by between 1 and 100 times ten, and over the whole range
+    the ratio follows the tolerances' within a factor of 10."""
+    for (t1, e1), (t2, e2) in zip(zip(tolerances, errors), zip(tolerances[1:], errors[1:])):
+        assert 0.1 < (e1 / e2) / (t1 / t2) < 10, (tolerances, errors)
+    assert 0.1 < (errors[0] / errors[-1]) / (tolerances[0] / tolerances[-1]) < 10, (tolerances, errors)
+
+
+def test_the_error_at_t_end_follows_the_tolerance_on_the_two_unit_scene(tmp_path):
+    path = scene_file(tmp_path, "two_mass_fd.yaml", t_end=0.05, H=1e-4)
+    errors, steps = [], []
+    for n, tol in enumerate(TOLERANCES):
+        ds = cosim(path, tol, tmp_path / f"run{n}.nc")
+        assert ds.attrs["status"] == "completed" and ds.attrs["control_estimate"] == "predictor-corrector"
+        assert float(ds["time"][-1]) == pytest.approx(0.05, abs=1e-12)
+        errors.append(error(at_end(path, ds)))
+        steps.append(int(ds.attrs["control_accepted_steps"]))
+    assert_proportional(TOLERANCES, errors)
+    assert steps[-1] > 3 * steps[0]  # by taking more steps
+
+
+@pytest.mark.outside
+def test_the_error_at_t_end_follows_the_tolerance_on_the_dual_mass_oscillator(tmp_path):
+    """System1 and System2 of OMSimulator as Model Exchange, fd, Baumgarte index 1, k = 1: x1 at 1 s."""
+    path = om_scene(tmp_path, "baumgarte", 1, 1e-3, 1.0, BAUMGARTE)
+    tolerances = (1e-3, 1e-4, 1e-5)
+    errors = []
+    for n, tol in enumerate(tolerances):
+        ds = cosim(path, tol, tmp_path / f"run{n}.nc")
+        assert ds.attrs["status"] == "completed" and ds.attrs["control_accepted_steps"] + 1 == ds.sizes["time"]
+        t_end = float(ds["time"][-1])
+        assert t_end == pytest.approx(1.0, abs=1e-12)
+        errors.append(abs(float(ds["position"][0, -1]) - dual_mass_exact([t_end])[0, 0]) / AMPLITUDE)
+    assert_proportional(tolerances, errors)
+
+
+def test_the_tolerance_replaces_the_scene_s_own_and_keeps_its_other_keys(capsys, tmp_path):
+    control = {"tolerance": 1.0, "H_min": 1e-5, "H_max": 2e-4, "fac_max": 1.5}
+    path = scene_file(tmp_path, "two_mass_fd.yaml", control=control, t_end=0.01, H=1e-4)
+    out = tmp_path / "run.nc"
+    assert main(["cosim", str(path), "--tolerance", "1e-6", "--out", str(out)]) == 0
+    assert "controlled (predictor-corrector at tolerance 1e-06)" in capsys.readouterr().out
+    ds = open_dataset(out)
+    H = ds["macro_step_size"].values[1:]
+    assert H.max() <= 2e-4 * (1 + 1e-12) and np.all(H[1:] <= 1.5 * H[:-1] * (1 + 1e-12))  # the scene's H_max, fac_max
+    fixed = scene_file(tmp_path, "two_mass_fd.yaml", control={**control, "tolerance": 1e-6}, t_end=0.01, H=1e-4)
+    assert main(["cosim", str(fixed), "--out", str(tmp_path / "fixed.nc")]) == 0
+    np.testing.assert_array_equal(open_dataset(tmp_path / "fixed.nc")["position"].values, ds["position"].values)
+
+
+@pytest.fixture
+def no_unit_opens(monkeypatch):
+    """A refusal comes before any unit is opened."""
+
+    def opened(*args, **kwargs):
+        raise AssertionError("a unit was opened")
+
+    monkeypatch.setattr("icosim.problems.fmu.run.open_units", opened)
+
+
+@pytest.mark.parametrize("value", ["0", "-1e-3", "nan", "inf", "abc"])
+def test_a_tolerance_that_is_no_positive_number_is_refused(capsys, tmp_path, no_unit_opens, value):
+    path = scene_file(tmp_path, "two_mass_fd.yaml")
+    with pytest.raises(SystemExit) as exit:
+        main(["cosim", str(path), "--tolerance", value, "--out", str(tmp_path / "run.nc")])
+    assert exit.value.code == 2
+    err = capsys.readouterr().err
+    assert "icosim cosim: error: argument --tolerance: expected a" in err and repr(value) in err
+    assert not (tmp_path / "run.nc").exists()
+
+
+def test_a_scene_of_signal_connections_is_refused(capsys, tmp_path, no_unit_opens):
+    path = tmp_path / "signals.yaml"
+    path.write_text(
+        "subsystems: {a: {fmu: a.fmu}, b: {fmu: b.fmu}}\n"
+        "connections: [{from: a.y, to: b.u}, {from: b.y, to: a.u}]\ncoupling: {H: 0.1}\nt_end: 1.0\n"
+    )
+    assert main(["cosim", str(path), "--tolerance", "1e-6", "--out", str(tmp_path / "run.nc")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("icosim cosim: error: argument --tolerance: ") and "signal connections" in err
+    assert "a tolerance applies to a scene of joints" in err
+
+
+def test_a_control_of_the_power_residual_is_refused(capsys, tmp_path, no_unit_opens):
+    path = scene_file(tmp_path, "two_mass_fd.yaml", control=power_control(1e-6), H=1e-4)
+    assert main(["cosim", str(path), "--tolerance", "1e-6", "--out", str(tmp_path / "run.nc")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("icosim cosim: error: argument --tolerance: ") and "coupling.control.estimate" in err
+    assert "uses the power-residual estimate, which takes no tolerance (its keys: absolute_tolerance" in err
