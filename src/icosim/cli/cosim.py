@@ -241,17 +241,22 @@ def _prediction_text(a: dict) -> str:
             lines.append(
                 f"    {name} is not a linear oscillator: the prediction is that of a linear fit about its start"
             )
-    lines.append("spectral radius per macro step (float64, error estimate):")
-    for row in a["schemes"]:
+    lines += _radius_lines(a["schemes"], 32, "not defined: ")
+    return "\n".join(lines)
+
+
+def _radius_lines(schemes: list, width: int, undefined: str) -> list[str]:
+    """The spectral radius of each scheme as a table's lines, the scene's marked; ``undefined`` heads the reason of
+    a row without one."""
+    lines = ["spectral radius per macro step (float64, error estimate):"]
+    for row in schemes:
         mark = "*" if row["scene"] else " "
         if row["rho"] is None:
-            lines.append(f"  {mark} {row['label']:<32} not defined: {row['reason']}")
+            lines.append(f"  {mark} {row['label']:<{width}} {undefined}{row['reason']}")
         else:
-            lines.append(
-                f"  {mark} {row['label']:<32} rho = {row['rho']:.10g} (+- {row['rho_error']:.1e})  {row['verdict']}"
-            )
-    lines.append("  (* the scene's scheme)")
-    return "\n".join(lines)
+            lines.append(f"  {mark} {row['label']:<{width}} rho = {row['rho']:.10g} (+- {row['rho_error']:.1e})  "
+                         f"{row['verdict']}")  # fmt: skip
+    return lines + ["  (* the scene's scheme)"]
 
 
 def _signal_prediction_text(a: dict) -> str:
@@ -268,16 +273,7 @@ def _signal_prediction_text(a: dict) -> str:
             lines.append(f"    {key} = [{rows}]")
         if u["misfit"] > 1e-6:
             lines.append(f"    {name} is not linear: the prediction is that of a linear fit about its start")
-    lines.append("spectral radius per macro step (float64, error estimate):")
-    for row in a["schemes"]:
-        mark = "*" if row["scene"] else " "
-        if row["rho"] is None:
-            lines.append(f"  {mark} {row['label']:<40} undecided, because {row['reason']}")
-        else:
-            lines.append(
-                f"  {mark} {row['label']:<40} rho = {row['rho']:.10g} (+- {row['rho_error']:.1e})  {row['verdict']}"
-            )
-    lines.append("  (* the scene's scheme)")
+    lines += _radius_lines(a["schemes"], 40, "undecided, because ")
     limit = a["largest_stable_H"]
     if limit["H_max"] is None:
         lines.append(f"largest stable H: undecided, because {limit['reason']}")
