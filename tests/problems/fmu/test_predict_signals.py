@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 import yaml
 from test_drives import C1, C2, C3, K1, K2, K3, M1, M2
-from test_signals_outside import CONNECTIONS, OM
+from test_signals_outside import CONNECTIONS, OM, feedthrough_loop_scene
 from toolchains import OUTSIDE
 
 import icosim.problems.fmu.predict_signals as predict_signals
@@ -263,18 +263,7 @@ def test_the_quarter_car_split_by_displacements_is_predicted_stable_and_stays_bo
 
 def test_a_loop_of_direct_feedthrough_is_refused_before_a_unit_is_opened(tmp_path, monkeypatch):
     """The Reference-FMUs' Feedthrough twice, each fed by the other (as test_signals_outside's run refuses it)."""
-    fmu = OUTSIDE / "reference-fmus" / "fmus2" / "Feedthrough.fmu"
-    data = {
-        "subsystems": {"a": {"fmu": str(fmu)}, "b": {"fmu": str(fmu)}},
-        "connections": [
-            {"from": "a.Float64_continuous_output", "to": "b.Float64_continuous_input"},
-            {"from": "b.Float64_continuous_output", "to": "a.Float64_continuous_input"},
-        ],
-        "coupling": {"H": 0.1},
-        "t_end": 1.0,
-    }
-    path = tmp_path / "loop.yaml"
-    path.write_text(yaml.safe_dump(data))
+    path = feedthrough_loop_scene(tmp_path)
     monkeypatch.setattr(predict_signals, "_open", lambda *a: pytest.fail("a unit was opened"))
     with pytest.raises(SceneError, match=r"algebraic loop .*a\.Float64_continuous_output -> b\.Float64_continuous_"):
         predict_signal_scene(load_scene(path))

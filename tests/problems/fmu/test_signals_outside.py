@@ -135,9 +135,8 @@ def test_extrapolation_of_order_k_gives_error_of_order_k_plus_one(k, scheme):
     assert abs(fit.order - (k + 1)) < 0.2, (errors, fit)
 
 
-def test_a_loop_of_direct_feedthrough_is_refused_naming_it(tmp_path):
-    """The Reference-FMUs' Feedthrough passes its input to its output without a step: two of them fed by each
-    other form an algebraic loop, refused before the first step."""
+def feedthrough_loop_scene(tmp_path):
+    """Two of the Reference-FMUs' Feedthrough, each fed by the other: a scene file of an algebraic loop."""
     fmu = OUTSIDE / "reference-fmus" / "fmus2" / "Feedthrough.fmu"
     data = {
         "subsystems": {"a": {"fmu": str(fmu)}, "b": {"fmu": str(fmu)}},
@@ -150,6 +149,13 @@ def test_a_loop_of_direct_feedthrough_is_refused_naming_it(tmp_path):
     }
     path = tmp_path / "loop.yaml"
     path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def test_a_loop_of_direct_feedthrough_is_refused_naming_it(tmp_path):
+    """The Reference-FMUs' Feedthrough passes its input to its output without a step: two of them fed by each
+    other form an algebraic loop, refused before the first step."""
+    path = feedthrough_loop_scene(tmp_path)
     with pytest.raises(SceneError, match=r"algebraic loop .*a\.Float64_continuous_output -> b\.Float64_continuous_"
                        r"input, b\.Float64_continuous_output -> a\.Float64_continuous_input"):  # fmt: skip
         run_signal_scene(load_scene(path))
