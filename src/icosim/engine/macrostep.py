@@ -26,6 +26,8 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from ..errors import ParameterError
+from .connection_conditions import NotConverged, SignalConditions
+from .methods.newton import NEWTON
 from .schemes import JACOBI, Scheme
 from .stages import Plan
 
@@ -105,12 +107,11 @@ def macro_step(
         p = problem.plan(scheme.scheme if isinstance(scheme, Plan) else scheme)
     stages = p.stages
     algebraic = p.scheme.reevaluates_leading
-    if method is None and any(stage.conditions is not None for stage in stages):
+    if method is None and any(stage.joints for stage in stages):
         raise ParameterError("joints are coupled implicitly: a graph with joints needs a coupling method")
     e = problem.extrapolate(history)
     ends: list[Any] = [None] * graph.n_subsystems
     ys: list[Any] = [None] * graph.n_subsystems
-    n_solves = 0 if method is None else method.n_solves
     fresh: set[int] = set()  # the columns of e that connections set in this macro step
     for stage in stages:
         # step 1: the stage's subsystems with the extrapolation polynomials; those in no closed joint are final.
@@ -121,24 +122,42 @@ def macro_step(
             else:
                 ends[i], ys[i] = problem.predict(i, state, history, final=i not in stage.corrected)
         if graph.connections:  # the connections out of the stage's subsystems: their new samples
-            e, fed = problem.connect(e, ys, stage.units)
+            e, fed = problem.connect(e, ys, stage.units, stage.connections)
             fresh.update(fed)
         if stage.conditions is None:
             continue
-        assert method is not None
+        sc = stage.conditions if isinstance(stage.conditions, SignalConditions) else None  # connections: Newton
+        jc = None if isinstance(stage.conditions, SignalConditions) else stage.conditions
+        signals = sc is not None
+        rule = NEWTON if signals else method
+        assert rule is not None
         cols = stage.column_index
         every = len(stage.columns) == graph.n_coupling  # the stage closes every joint: e itself, in its order
         e_held = e if every else e[..., cols]  # as the stage's predictors and the finished subsystems saw it
-        for it in range(max(1, iterations)):
-            # step 2: corrected coupling variables of the closed joints
+        J, converged = None, False
+        # connections: up to ``iterations`` Newton steps and the test of the last one (no unit steps)
+        passes = iterations + 1 if signals else max(1, iterations)
+        for it in range(passes):
+            # step 2: corrected coupling variables of the closed joints (connections)
             e_s = e if every else e_held if it == 0 else e[..., cols]
-            y_s = problem.stack([ys[i] for i in stage.responders])
-            r = problem.residuals(y_s, e_s, stage.conditions, e_held)
-            J = problem.jacobians(state, history, e, ys, ends, stage, algebraic=algebraic)
-            e_new = method.corrected_coupling(e_s, r, J, problem.backend, problem.kept_factors(stage, algebraic))
-            problem.work.coupling_solves += n_solves
-            if it > 0 and tol is not None and _max_abs(e_new - e_s) <= tol:
-                break  # converged: the corrector already ran with (nearly) e_new
+            factors = None
+            if sc is not None:
+                r = sc.residuals(problem, ys, e_s)
+                if J is None:  # formed once per macro step, at the predictor (perturbed steps of the units)
+                    J = sc.jacobians(problem, state, history, e, ys, problem.implicit_work)
+            else:
+                y_s = problem.stack([ys[i] for i in stage.responders])
+                r = problem.residuals(y_s, e_s, jc, e_held)
+                J = problem.jacobians(state, history, e, ys, ends, stage, algebraic=algebraic)
+                factors = problem.kept_factors(stage, algebraic)
+            e_new = rule.corrected_coupling(e_s, r, J, problem.backend, factors)
+            problem.work.coupling_solves += rule.n_solves
+            if it > 0 and tol is not None:
+                converged = not sc.unconverged(e_new, e_s, tol) if sc is not None else _max_abs(e_new - e_s) <= tol
+                if converged:
+                    break  # converged: the corrector already ran with (nearly) e_new
+            if signals and it == iterations:  # connections: the last pass only tests
+                break
             e_old, e = e, e_new if every else _with_columns(e, cols, e_new)
             # step 3: corrector of the stage's subsystems; the finished ones' outputs follow e algebraically
             for i in stage.corrected:
@@ -146,6 +165,10 @@ def macro_step(
             if algebraic:
                 for i in stage.finished:
                     ys[i] = problem.reevaluate(i, ends[i], ys[i], e_old, e)
+        if sc is not None:
+            problem.implicit_work.iterations.append(it)
+            if tol is not None and not converged:
+                raise _not_converged(problem, sc, e_new, e_s, tol, iterations)
     y = problem.stack(ys)
     state_new = problem.join(ends)
     if method is not None and method.projection:  # step 4
@@ -160,6 +183,19 @@ def _with_columns(e: Any, cols: slice | np.ndarray, values: Any) -> Any:
     out = np.array(np.broadcast_to(e, lead + e.shape[-1:]), copy=True)
     out[..., cols] = values
     return out
+
+
+def _not_converged(
+    problem: CosimulationProblem, conditions: SignalConditions, e_new: Any, e_s: Any, tol: float, n: int
+) -> NotConverged:
+    bad = conditions.unconverged(e_new, e_s, tol)
+    change = np.abs(np.asarray(e_new, dtype=float) - np.asarray(e_s, dtype=float))
+    text = ", ".join(f"{problem.describe_connection(c)} (change {np.max(change[..., conditions.connections.index(c)]):.3g})"
+                     for c in bad)  # fmt: skip
+    return NotConverged(
+        f"implicit coupling: Newton's iteration did not converge in {n} iterations (change of a connection's "
+        f"variable at most tol (1 + |e|), tol = {tol:g}): {text}; raise coupling.iterations or tol, or reduce H"
+    )
 
 
 def _max_abs(values: Any) -> float:

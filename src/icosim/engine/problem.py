@@ -14,13 +14,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
 from . import layout, stages
 from .backends import Backend, Float64
 from .bounds import check_k
+from .connection_conditions import ImplicitWork
 from .decompositions import Decomposition
 from .graph import CouplingGraph
 from .lagrange import corrector_nodes, predictor_nodes, weights_at
@@ -134,6 +135,11 @@ class CosimulationProblem:
     constant_sensitivities: bool = False
     #: factors of the constraint's position, velocity and acceleration levels (None: the engine's time)
     condition_scale: Sequence[Any] | None = None
+    #: the signal connections are closed by their conditions at ``T_N+1`` (:mod:`icosim.engine.connection_conditions`;
+    #: the problem's :meth:`correct` steps a unit again from ``T_N`` each time it is called), not explicitly
+    implicit_connections: bool = False
+    #: the relative step of the implicit connections' difference quotients (times ``max(1, |e_c|)``)
+    connection_perturbation: float = 1e-7
 
     def __init__(self, graph: CouplingGraph | str | Decomposition, k: int, backend: Backend | None = None) -> None:
         k = check_k(k)  # 0 .. icosim.engine.bounds.MAX_K
@@ -145,6 +151,8 @@ class CosimulationProblem:
         #: Lagrange weights of the extrapolation (Eq. 9) at ``T_N+1``, in the backend's arithmetic
         self.w_pred = np.array([be.const(w) for w in weights_at(self.pred_nodes, 1)], dtype=be.dtype)
         self.work = Work()
+        #: the implicit connections' Newton iterations and perturbed steps
+        self.implicit_work = ImplicitWork()
         self._extrapolated: tuple = (None, None, None)  # (history, weights, e_p) of the last extrapolation
         self._plans: dict = {}  # scheme -> its stages on the graph (the kept Jacobians below are per stage)
         self._jacobians: dict = {}  # (stage, algebraic) -> (the kept Jacobians, their factors): constant ones
@@ -174,7 +182,7 @@ class CosimulationProblem:
         whose solves the stages cannot serve."""
         p = self._plans.get(scheme)
         if p is None:
-            p = self._plans[scheme] = stages.plan(get_scheme(scheme), self.graph)
+            p = self._plans[scheme] = stages.plan(get_scheme(scheme), self.graph, implicit=self.implicit_connections)
         if method is not None:
             p.check_method(method)
         return p
@@ -278,7 +286,8 @@ class CosimulationProblem:
                 # (..., inputs, ports, 4, n_c) x (inputs, cols) -> (..., cols, ports, 4, n_c)
                 blocks.append(np.moveaxis(np.tensordot(S, B, axes=([-4], [0])), -1, -4))
             dY = self.stack(blocks)
-        res = self.residuals(dY, dE, stage.conditions, held)  # a held multiplier does not follow e
+        joints = cast("Conditions", stage.conditions)  # a stage of joints (connections: their own Jacobian)
+        res = self.residuals(dY, dE, joints, held)  # a held multiplier does not follow e
         jac = {key_: val.swapaxes(-1, -2) for key_, val in res.items()}
         if self.constant_sensitivities:
             self._jacobians[key] = (jac, KeptFactors())
@@ -303,12 +312,15 @@ class CosimulationProblem:
             dE[c, c] = be.const(1)
         return Bs, B_all, dE, 0 * dE
 
-    def connect(self, e: Any, ys: Sequence[Any], units: Sequence[int]) -> tuple[Any, list[int]]:
+    def connect(
+        self, e: Any, ys: Sequence[Any], units: Sequence[int], closed: Sequence[int] = ()
+    ) -> tuple[Any, list[int]]:
         """``e`` with the variables of the connections out of ``units`` set to ``factor * y + offset`` of their
-        outputs (:meth:`signal_output`) at ``T_N+1``, and the columns set."""
+        outputs (:meth:`signal_output`) at ``T_N+1``, and the columns set; ``closed``: connections left as they
+        are (closed implicitly by their conditions)."""
         graph, cols, values = self.graph, [], []
         for c, con in enumerate(graph.connections):
-            if con.source in units:
+            if con.source in units and c not in closed:
                 y = self.signal_output(con.source, ys[con.source], con.output)
                 cols.append(graph.connection_column(c))
                 values.append(con.factor * y + con.offset)
@@ -318,6 +330,10 @@ class CosimulationProblem:
         for col, value in zip(cols, values):
             out[..., col] = value
         return out, cols
+
+    def describe_connection(self, c: int) -> str:
+        """Connection ``c`` in messages."""
+        return self.graph.describe_connection(c)
 
     def checkpoint(self) -> Any:
         """The problem's state at ``T_N`` beyond the arrays (class docstring): None, the arrays are all of it."""

@@ -23,6 +23,11 @@ work (:func:`plan`):
   do not respond on the position and velocity levels, so those conditions depend on one input -- two
   conditions, one unknown.  Neighbours corrected at the same stage (Jacobi) respond through their own inputs.
 
+Signal connections are coupled explicitly (a connection's new sample is its source's output), or, with
+``implicit``, closed like joints: at the stage in which both their units advance, by their conditions at
+``T_N+1`` (:mod:`icosim.engine.connection_conditions`; ``connections`` the ones closed).  A connection whose units
+advance in different stages is refused there (Jacobi closes every connection in its one stage).
+
 >>> from icosim.engine.graph import CouplingGraph
 >>> from icosim.engine.schemes import get_scheme
 >>> p = plan(get_scheme("gauss-seidel-132"), CouplingGraph.chain(["ff", "ff"], ports="one"))
@@ -41,6 +46,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import ParameterError
+from .connection_conditions import SignalConditions
 from .decompositions import DECOMPOSITIONS
 from .graph import CouplingGraph
 from .residuals import Conditions
@@ -63,7 +69,8 @@ class Stage:
     joints: tuple[int, ...]
     corrected: tuple[int, ...]
     finished: tuple[int, ...]
-    conditions: Conditions | None
+    conditions: Conditions | SignalConditions | None
+    connections: tuple[int, ...] = ()  # the signal connections closed implicitly here
 
     @cached_property
     def responders(self) -> tuple[int, ...]:
@@ -119,12 +126,13 @@ class Plan:
         _check_method(self, method)
 
 
-def plan(scheme: Scheme, graph: CouplingGraph, method: CouplingMethod | None = None) -> Plan:
+def plan(scheme: Scheme, graph: CouplingGraph, method: CouplingMethod | None = None, *, implicit: bool = False) -> Plan:
     """The stages of ``scheme`` on ``graph``; refuses (:class:`~icosim.errors.ParameterError`) what they cannot
     serve -- with ``method``, also a method whose solves they cannot serve -- naming why and what would.  Made
     anew on each call: a problem holds the plans it steps with
-    (:meth:`~icosim.engine.problem.CosimulationProblem.plan`)."""
-    p = _plan(scheme, graph)
+    (:meth:`~icosim.engine.problem.CosimulationProblem.plan`).  ``implicit``: the signal connections are closed
+    by their conditions (module docstring)."""
+    p = _plan(scheme, graph, implicit)
     if not scheme.reevaluates_leading:
         _check_lone_variables(p)
     if method is not None:
@@ -148,7 +156,9 @@ def couples(scheme: Scheme, graph: CouplingGraph | str | Decomposition, method: 
     return True
 
 
-def _plan(scheme: Scheme, graph: CouplingGraph) -> Plan:
+def _plan(scheme: Scheme, graph: CouplingGraph, implicit: bool = False) -> Plan:
+    if implicit and graph.connections:
+        return _implicit_plan(scheme, graph)
     done: list[int] = []
     closed: set[int] = set()
     stages = []
@@ -165,6 +175,28 @@ def _plan(scheme: Scheme, graph: CouplingGraph) -> Plan:
         stages.append(Stage(index, tuple(units), joints, corrected, finished, conditions))
         closed |= set(joints)
         done += list(units)
+    return Plan(scheme, graph, tuple(stages))
+
+
+def _implicit_plan(scheme: Scheme, graph: CouplingGraph) -> Plan:
+    """Each connection closed at the stage its units both advance in; refused where they advance apart."""
+    if graph.joints:
+        raise ParameterError("implicit signal connections together with joints are not supported: couple the "
+                             "connections explicitly (implicit: false)")  # fmt: skip
+    stages = []
+    for index, units in enumerate(scheme.stages(graph.n_subsystems)):
+        here = set(units)
+        cons = tuple(c for c, con in enumerate(graph.connections) if con.source in here and con.target in here)
+        apart = [c for c, con in enumerate(graph.connections) if (con.source in here) != (con.target in here)]
+        if apart:
+            raise ParameterError(
+                f"scheme {scheme.name} cannot couple {graph.describe_connection(apart[0])} implicitly: its units "
+                "advance in different stages, and the condition at T_N+1 needs both stepped with it; use scheme "
+                "jacobi (every connection closed together) or implicit: false"
+            )
+        conditions = SignalConditions(graph, cons) if cons else None
+        corrected = tuple(i for i in units if conditions is not None and i in conditions.units)
+        stages.append(Stage(index, tuple(units), (), corrected, (), conditions, cons))
     return Plan(scheme, graph, tuple(stages))
 
 

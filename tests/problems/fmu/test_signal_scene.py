@@ -33,7 +33,7 @@ def test_a_scene_of_connections_defaults_to_held_inputs_and_jacobi(tmp_path):
 
 
 @pytest.mark.parametrize("changes, where, says", [
-    ({"coupling": {"H": 0.1, "implicit": True}}, "coupling.implicit", "not yet supported; allowed: false"),
+    ({"coupling": {"H": 0.1, "implicit": 1}}, "coupling.implicit", "must be true or false"),
     ({"coupling": {"H": 0.1, "method": "baumgarte"}}, "coupling.method", "allowed: k, scheme, order, H"),
     ({"coupling": {"H": 0.1, "scheme": "gauss-seidel"}}, "coupling.order", "every subsystem once"),
     ({"coupling": {"H": 0.1, "k": -1}}, "coupling.k", "must be an integer 0 .."),

@@ -41,7 +41,9 @@ SIGNAL_SUBSYSTEM_KEYS = ("fmu", "start", "interface", "tolerance", "record")
 CONNECTION_KEYS = ("from", "to", "factor", "offset")
 #: Coupling keys and their defaults (``H`` required).
 SIGNAL_COUPLING_KEYS = {"k": 0, "scheme": "jacobi", "order": None, "H": None, "implicit": False, "inputs": "auto",
-                        "substeps": 1}  # fmt: skip
+                        "substeps": 1, "iterations": None, "tol": None}  # fmt: skip
+#: Newton's iterations and tolerance of implicit coupling by default (docs/signals.md).
+IMPLICIT_DEFAULTS = {"iterations": 10, "tol": 1e-10}
 _INTERFACES = ("co-simulation", "model-exchange")
 
 
@@ -160,13 +162,14 @@ def signal_scene(path, data, system=None) -> SignalScene:
             _fail(path, f"coupling.{key}", f"not a key of the coupling of connections{why}; allowed: "
                   f"{', '.join(SIGNAL_COUPLING_KEYS)}")  # fmt: skip
     c = {**SIGNAL_COUPLING_KEYS, **coupling}
-    if c["implicit"] is not False:
-        _fail(path, "coupling.implicit", f"{c['implicit']!r}: implicit coupling of connections (the corrector solving "
-              "every condition) is not yet supported; allowed: false")  # fmt: skip
+    _implicit_keys(path, c)
     if isinstance(c["k"], bool) or not isinstance(c["k"], int) or not 0 <= c["k"] <= MAX_K:
         _fail(path, "coupling.k", f"must be an integer 0 .. {MAX_K}, got {c['k']!r}")
     if c["scheme"] not in ("jacobi", "gauss-seidel"):
         _fail(path, "coupling.scheme", f"{c['scheme']!r} is not allowed; allowed: jacobi, gauss-seidel (with order)")
+    if c["scheme"] == "gauss-seidel" and c["implicit"]:
+        _fail(path, "coupling.scheme", "gauss-seidel with implicit: true: implicit coupling closes every connection "
+              "at T_N+1 together, with every unit stepped with it; allowed with implicit: jacobi")  # fmt: skip
     if c["scheme"] == "gauss-seidel":
         if not isinstance(c["order"], list) or sorted(map(str, c["order"])) != sorted(subs):
             _fail(path, "coupling.order", f"gauss-seidel needs every subsystem once, e.g. {list(subs)}; got "
@@ -195,6 +198,23 @@ def signal_scene(path, data, system=None) -> SignalScene:
     return SignalScene(path, data, dict(subs), specs, c, t0, t_end, system, sources)
 
 
+def _implicit_keys(path, c):
+    """``implicit`` (true or false) and Newton's ``iterations`` (an integer >= 1) and ``tol`` (> 0: a variable's change
+    at most ``tol (1 + |e|)``), which belong to implicit coupling; their defaults filled in."""
+    if not isinstance(c["implicit"], bool):
+        _fail(path, "coupling.implicit", f"must be true or false, got {c['implicit']!r}")
+    for key in IMPLICIT_DEFAULTS:
+        if c[key] is not None and not c["implicit"]:
+            _fail(path, f"coupling.{key}", "Newton's iterations and tolerance belong to implicit: true")
+    n = c["iterations"]
+    if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 1):
+        _fail(path, "coupling.iterations", f"must be an integer >= 1 (Newton's iterations at most), got {n!r}")
+    if c["tol"] is not None:
+        c["tol"] = _number(path, "coupling.tol", c["tol"], positive=True)
+    if c["implicit"]:
+        c.update({key: value if c[key] is None else c[key] for key, value in IMPLICIT_DEFAULTS.items()})
+
+
 @dataclass
 class SignalRun:
     """A signal scene's run: the times, each unit's connected variables and recorded ones over them, its status."""
@@ -206,6 +226,8 @@ class SignalRun:
     status: str = "completed"
     reason: str = ""
     wall_time: float = 0.0
+    iterations: list = field(default_factory=list)  # implicit: Newton's iterations of each macro step
+    jacobian_steps: int = 0  # implicit: the units' perturbed steps of the Jacobians
 
 
 def _fmu_path(scene, sub) -> Path:
@@ -216,6 +238,7 @@ def _fmu_path(scene, sub) -> Path:
 def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
     """Open the units, refuse an algebraic loop, run the macro steps (explicit coupling), close the units;
     ``progress(n_done)`` is called after each step."""
+    from ...engine.connection_conditions import NotConverged
     from ...engine.run import simulate
     from .exchange import open_fmu_unit
     from .signal_sources import check_targets
@@ -228,6 +251,9 @@ def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
     for unit, var, source in scene.sources:
         inputs[names.index(unit)].append(var)
         fed[names.index(unit)].append(source)
+    if c["implicit"]:  # before any unit opens
+        for name in names:
+            _check_saves_state(scene, name, scene.subsystems[name], _fmu_path(scene, scene.subsystems[name]))
     units = []
     run = SignalRun(scene)
     started = clock.perf_counter()
@@ -236,14 +262,15 @@ def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
             sub = scene.subsystems[name]
             keys = {k: v for k, v in ((INPUTS, inputs[i]), (OUTPUTS, outputs[i])) if v}
             start, path = dict(sub.get("start") or {}), _fmu_path(scene, sub)
-            if sub.get("interface", "co-simulation") == "co-simulation":  # stepped forward only: no saved state
+            if sub.get("interface", "co-simulation") == "co-simulation" and not c["implicit"]:  # no saved state
                 units.append(ForwardUnit(name, path, keys, start, inputs=c["inputs"], substeps=c["substeps"],
                                          t0=scene.t0))  # fmt: skip
             else:
-                units.append(open_fmu_unit(name, path, keys, start, interface=sub["interface"],
+                units.append(open_fmu_unit(name, path, keys, start, interface=sub.get("interface", "co-simulation"),
                                            tolerance=sub.get("tolerance"), inputs=c["inputs"],
                                            substeps=c["substeps"], t0=scene.t0))  # fmt: skip
-        problem = SignalCosimulation(units, inputs, outputs, cons, c["k"], c["H"], t0=scene.t0, sources=fed)
+        problem = SignalCosimulation(units, inputs, outputs, cons, c["k"], c["H"], t0=scene.t0, sources=fed,
+                                     implicit=c["implicit"])  # fmt: skip
         history = problem.initial_history()
         recorded = [
             (u, v) for u, sub in zip(units, (scene.subsystems[n] for n in names)) for v in sub.get("record", [])
@@ -257,9 +284,14 @@ def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
 
         run.times.append(scene.t0)
         _append(run, problem, history[0], recorded)
+        newton = {"iterations": c["iterations"], "tol": c["tol"]} if c["implicit"] else {}
         traj = simulate(problem, None, problem.initial_state(), history, scene.n_steps, scheme=scene.scheme,
-                        observe=observe, record=False)  # fmt: skip
+                        observe=observe, record=False, **newton)  # fmt: skip
+        run.iterations, run.jacobian_steps = problem.implicit_work.iterations, problem.implicit_work.perturbed_steps
         if traj.failed_at is not None and traj.error is not None:
+            if isinstance(traj.error, NotConverged):  # where: the step and its time
+                raise NotConverged(f"{scene.path}: macro step {traj.failed_at} (from t = {problem.time:.12g} s): "
+                                   f"{traj.error}") from None  # fmt: skip
             raise traj.error  # a unit that refused a step: named, no dataset
         if traj.diverged_at is not None:
             run.status, run.reason = "diverged", f"macro step {traj.diverged_at}: {traj.reason}"
@@ -269,6 +301,22 @@ def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
             unit.close()
     run.wall_time = clock.perf_counter() - started
     return run
+
+
+def _check_saves_state(scene, name, sub, path):
+    """Implicit coupling steps each unit again from ``T_N``: a co-simulation unit must save and restore its state."""
+    from .description import read_description
+
+    interface = sub.get("interface", "co-simulation")
+    md, _ = read_description(name, path)
+    if interface == "model-exchange" or (interface == "auto" and md.modelExchange is not None):
+        return
+    if md.coSimulation is not None and md.coSimulation.canGetAndSetFMUstate:
+        return
+    flag = "canGetAndSetFMUState" if md.fmiVersion.startswith("3.") else "canGetAndSetFMUstate"
+    fix = "interface: model-exchange (the unit has it), or" if md.modelExchange is not None else ""
+    _fail(scene.path, f"subsystems.{name}", f"{path.name} declares {flag}=false, and coupling.implicit: true steps "
+          f"each unit again from T_N, restoring its state; use {fix} implicit: false")  # fmt: skip
 
 
 def _append(run, problem, e, recorded):
@@ -300,8 +348,18 @@ def signal_dataset(run: SignalRun, *, command: str = ""):
     ds = DatasetDict(data, coords={"time": ("time", np.asarray(run.times), {"units": "s"})})
     attrs = provenance_attrs(run.scene.data, title=f"FMU scene {run.scene.path.name}", command=command)
     attrs["scene_json"] = attrs["config_json"]
-    attrs |= {"status": run.status, "reason": run.reason, "scheme": run.scene.scheme.name, "coupling": "explicit",
-              "k": run.scene.coupling["k"], "wall_time_s": run.wall_time}  # fmt: skip
+    c = run.scene.coupling
+    attrs |= {"status": run.status, "reason": run.reason, "scheme": run.scene.scheme.name, "k": c["k"],
+              "coupling": "implicit" if c["implicit"] else "explicit", "wall_time_s": run.wall_time}  # fmt: skip
+    if c["implicit"]:
+        its = np.asarray(run.iterations, dtype=float)
+        attrs |= {
+            "newton_tol": c["tol"],
+            "newton_max_iterations": c["iterations"],
+            "jacobian_steps": run.jacobian_steps,
+            "iterations_max": int(its.max(initial=0)),
+            "iterations_mean": float(its.mean()) if its.size else 0.0,
+        }
     for name, info in run.units.items():
         for key, value in info.items():
             attrs[f"{name}_{key}"] = value

@@ -109,14 +109,19 @@ class SignalCosimulation(CosimulationProblem):
     H : macro-step size in s.
     sources : per unit, the :class:`~icosim.problems.fmu.signal_sources.TableSource` s of its inputs after the
         connected ones (``inputs[i]`` lists those last), each handed its chord over a step.
+    implicit : the connections closed by their conditions at ``T_N+1`` (Newton,
+        :mod:`icosim.engine.connection_conditions`): each unit saves its state at ``T_N`` when it is predicted and
+        is restored to it before every further step of the macro step (units that save and restore state).
     """
 
-    def __init__(self, units, inputs, outputs, connections, k, H, *, t0=0.0, sources=None):
+    def __init__(self, units, inputs, outputs, connections, k, H, *, t0=0.0, sources=None, implicit=False):
         self.units = tuple(units)
         self.sources = tuple(map(tuple, sources)) if sources is not None else tuple(() for _ in self.units)
         self.input_names, self.output_names = tuple(map(tuple, inputs)), tuple(map(tuple, outputs))
         graph = CouplingGraph(len(self.units), (), names=tuple(u.label for u in self.units), connections=connections)
         super().__init__(graph, k)
+        self.implicit_connections = bool(implicit)
+        self._saved = [None] * len(self.units)  # implicit: each unit's state at T_N
         loop = feedthrough_loop(graph, self.input_names, self.output_names, [u.md for u in self.units])
         if loop:
             text = ", ".join(self.label(c) for c in loop)
@@ -134,6 +139,8 @@ class SignalCosimulation(CosimulationProblem):
         con, names = self.graph.connections[c], self.graph.names
         return (f"{names[con.source]}.{self.output_names[con.source][con.output]} -> "
                 f"{names[con.target]}.{self.input_names[con.target][con.input]}")  # fmt: skip
+
+    describe_connection = label
 
     @property
     def time(self) -> float:
@@ -188,9 +195,10 @@ class SignalCosimulation(CosimulationProblem):
                 n = max(len(coefficients), 2)
                 coefficients = np.hstack([np.pad(coefficients, ((0, n - len(coefficients)), (0, 0))),
                                           np.pad(chords, ((0, n - 2), (0, 0)))])  # fmt: skip
-            unit.step(INPUTS, coefficients, self.time, self.H, step_index=self.step_index + 1, final=True)
+            unit.step(INPUTS, coefficients, self.time, self.H, step_index=self.step_index + 1,
+                      final=not self.implicit_connections)  # fmt: skip
         else:  # a unit fed by no connection: nothing to hand it
-            unit._do_step(self.time, self.H, self.step_index + 1, True)
+            unit._do_step(self.time, self.H, self.step_index + 1, not self.implicit_connections)
             unit.t = self.time + self.H
         y = self.outputs(i)
         if not np.isfinite(y).all():
@@ -202,9 +210,15 @@ class SignalCosimulation(CosimulationProblem):
         return y, y
 
     def predict(self, i, state, history, *, final=False):
+        if self.implicit_connections:  # the state at T_N, for the corrector's and the Jacobian's steps
+            if self._saved[i] is not None:
+                self.units[i].free(self._saved[i])
+            self._saved[i] = self.units[i].save()
         return self._step(i, history[: self.k + 1], self.C_pred)
 
     def correct(self, i, state, history, e):
+        if self.implicit_connections:
+            self.units[i].restore(self._saved[i])
         return self._step(i, self.corrector_samples(history, np.asarray(e, dtype=float)), self.C_corr)
 
     def signal_output(self, i, y, output):

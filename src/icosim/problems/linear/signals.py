@@ -116,10 +116,15 @@ class SignalLinearCosimulation(CosimulationProblem):
     """``units`` (:class:`StateSpaceUnit`) coupled by ``connections`` at the macro step ``H``, inputs extrapolated
     at order ``k`` (module docstring).  States ``(..., n_x)`` (the units' states in order), history ``(..., k + 1,
     n_e)``, a unit's outputs ``(..., n_y)`` at ``T_N+1`` with its inputs at ``u(1)``; leading axes broadcast.  An
-    input no connection feeds is zero."""
+    input no connection feeds is zero.  ``implicit``: the connections closed by their conditions at ``T_N+1``
+    (:mod:`icosim.engine.connection_conditions`)."""
+
+    #: a linear unit's difference quotient is exact at any step: a unit step rounds least
+    connection_perturbation = 1.0
 
     def __init__(self, units: Sequence[StateSpaceUnit], connections: Sequence[graph.Connection], k: int, H: float,
-                 *, names: Sequence[str] | None = None, backend: Backend | None = None) -> None:  # fmt: skip
+                 *, names: Sequence[str] | None = None, backend: Backend | None = None,
+                 implicit: bool = False) -> None:  # fmt: skip
         if backend is not None and not isinstance(backend, Float64):
             raise ParameterError("the signal-coupled linear model computes in float64 only")
         self.units = tuple(units)
@@ -133,6 +138,7 @@ class SignalLinearCosimulation(CosimulationProblem):
         coupled = CouplingGraph(len(self.units), (), names=() if names is None else tuple(names),
                                 connections=tuple(connections))  # fmt: skip
         super().__init__(coupled, k)
+        self.implicit_connections = bool(implicit)
         self.H = float(H)
         self.maps = [u.propagators(self.H, k) for u in self.units]
         self.C_pred = np.array(monomial_coefficients(self.pred_nodes), dtype=float)

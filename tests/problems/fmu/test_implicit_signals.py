@@ -1,0 +1,177 @@
+"""Implicit coupling of signal connections (``coupling: {implicit: true}``): OMSimulator's DualMassOscillator
+(../shared/outside/omsimulator, test_signals_outside's CONNECTIONS: ``system1.F <- system2.F``, ``system2.{x1, v1,
+a1} <- system1.{x1, v1, a1}``) on its Model Exchange units, integrated by icosim far below the coupling's error.
+
+What the tests compare follows from the method, not from numbers of the code under test:
+
+* the reference is the exact solution of the linear Modelica equations of DualMassOscillator.mo
+  (test_drives.exact, a matrix exponential);
+* the connections' conditions are solved at ``T_N+1``, each unit integrated with the interpolation polynomial of
+  order ``k`` through the new values and the past samples: the error is of order ``k + 1`` in ``H``;
+* at an ``H`` where explicit Jacobi grows without bound (the free oscillation's amplitude exceeded while the
+  physical one decays) the implicit run decays as the physical one does;
+* the units are linear, so Newton from a difference-quotient Jacobian closes the conditions in one step up to the
+  quotient's rounding: a second step at most to meet the tolerance, and the Jacobian costs one perturbed unit step
+  per connection and macro step (it is formed once per step);
+* Co-Simulation units that cannot save their state (these units' ``canGetAndSetFMUstate`` is false), Newton that
+  does not converge, and bad keys are refused by name.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import yaml
+from test_drives import AMPLITUDE, exact
+from test_peers import DMO_UNITS
+from test_signal_scene import load
+from test_signals_outside import CONNECTIONS, OM, exact_history
+
+from icosim.engine.connection_conditions import NotConverged
+from icosim.engine.run import simulate
+from icosim.order_fit import asymptotic_order
+from icosim.problems.fmu.errors import SceneError
+from icosim.problems.fmu.exchange import open_fmu_unit
+from icosim.problems.fmu.scene import load_scene
+from icosim.problems.fmu.signal_scene import run_signal_scene, signal_dataset
+from icosim.problems.fmu.signals import SignalCosimulation, connections_of
+
+
+def dmo_scene(tmp_path, H, t_end, interface="model-exchange", **coupling):
+    subs = {
+        "system1": {"fmu": str(OM / DMO_UNITS["system1"]), "start": {"x1_start": 0.0}},
+        "system2": {"fmu": str(OM / DMO_UNITS["system2"]), "start": {"x2_start": 0.5}, "record": ["mass2.s"]},
+    }
+    for sub in subs.values():
+        if interface is not None:
+            sub["interface"] = interface
+    data = {
+        "subsystems": subs,
+        "connections": [{"from": f"{a}.{y}", "to": f"{b}.{u}"} for a, y, b, u, _, _ in CONNECTIONS],
+        "coupling": {"H": H, **coupling},
+        "t_end": t_end,
+    }
+    path = tmp_path / f"dmo_{H:g}_{len(list(tmp_path.iterdir()))}.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def positions(run):
+    """x1 and x2 over the run, ``(len(times), 2)``."""
+    return np.array([run.series["system1.x1"], run.series["system2.mass2.s"]]).T
+
+
+@pytest.mark.parametrize("k", [0, 1])
+def test_implicit_coupling_decays_where_explicit_jacobi_grows(tmp_path, k):
+    """H = 0.2 s over 20 s: explicit Jacobi's oscillation grows past the start amplitude (the physical one decays:
+    its dampers take energy); the implicit run stays below the start amplitude and decays with it; with k = 1 it
+    stays near the exact solution (with k = 0 its first-order phase error at so large a step is of the amplitude's
+    size)."""
+    H, t_end = 0.2, 20.0
+    explicit = run_signal_scene(load_scene(dmo_scene(tmp_path, H, t_end, k=k)))
+    implicit = run_signal_scene(load_scene(dmo_scene(tmp_path, H, t_end, k=k, implicit=True)))
+    ref = exact(implicit.times)[:, :2]
+    assert np.max(np.abs(positions(explicit)[-10:])) > AMPLITUDE > np.max(np.abs(ref[-10:])) * 10
+    x = positions(implicit)
+    n = len(x) // 4
+    assert np.max(np.abs(x[1:])) < AMPLITUDE and np.max(np.abs(x[-n:])) < 0.2 * AMPLITUDE  # decays
+    if k == 1:
+        assert np.max(np.abs(x - ref)) < 0.1 * AMPLITUDE
+
+
+def model_exchange_error(k, H, t_end):
+    """The implicit run's largest position error at ``t_end`` from the exact coupling history (engine directly)."""
+    names = ["system1", "system2"]
+    cons, inputs, outputs = connections_of(CONNECTIONS, names)
+    starts = {"system1": {"x1_start": 0.0}, "system2": {"x2_start": 0.5}}
+    units = [
+        open_fmu_unit(
+            n,
+            OM / DMO_UNITS[n],
+            {"signal_input": inputs[i], "signal_output": outputs[i]},
+            starts[n],
+            interface="model-exchange",
+            tolerance=1e-12,
+        )  # fmt: skip
+        for i, n in enumerate(names)
+    ]
+    try:
+        problem = SignalCosimulation(units, inputs, outputs, cons, k, H, implicit=True)
+        history = problem.initial_history(exact_history(k, H))
+        traj = simulate(problem, None, problem.initial_state(), history, round(t_end / H), record=False,
+                        iterations=10, tol=1e-10)  # fmt: skip
+        assert traj.failed_at is None, traj.reason
+        x = [units[0].get(("signal_output",)).ravel()[0], units[1].get_named("mass2.s")]
+    finally:
+        for unit in units:
+            unit.close()
+    return np.max(np.abs(np.array(x) - exact([t_end])[0, :2])), problem.implicit_work
+
+
+@pytest.mark.parametrize("k", [0, 1])
+def test_implicit_coupling_has_the_order_of_its_interpolation(k):
+    Hs = [4e-3, 2e-3, 1e-3]
+    results = [model_exchange_error(k, H, 1.0) for H in Hs]
+    errors = [e for e, _ in results]
+    fit = asymptotic_order(Hs, errors)
+    assert abs(fit.order - (k + 1)) < 0.2, (errors, fit)
+    assert errors[-1] < (1e-2 if k == 0 else 1e-5) * AMPLITUDE, errors
+    for H, (_, work) in zip(Hs, results):
+        assert len(work.iterations) == round(1.0 / H) and max(work.iterations) <= 2, work.iterations[:10]
+        assert work.perturbed_steps == len(CONNECTIONS) * round(1.0 / H)
+
+
+def test_the_dataset_says_implicit_and_counts_newton(tmp_path):
+    H, t_end = 1e-2, 1.0
+    run = run_signal_scene(load_scene(dmo_scene(tmp_path, H, t_end, k=1, implicit=True)))
+    ds = signal_dataset(run)
+    n = round(t_end / H)
+    assert ds.attrs["coupling"] == "implicit" and ds.attrs["newton_tol"] == 1e-10
+    assert ds.attrs["newton_max_iterations"] == 10
+    assert 1 <= ds.attrs["iterations_mean"] <= ds.attrs["iterations_max"] <= 2
+    assert ds.attrs["jacobian_steps"] == len(CONNECTIONS) * n
+    # saved once per step (the predictor), restored for the Jacobian's step (system1 takes one input) and the corrector
+    assert ds.attrs["system1_states_saved"] == n and ds.attrs["system1_states_restored"] >= 2 * n
+    explicit = signal_dataset(run_signal_scene(load_scene(dmo_scene(tmp_path, H, t_end, k=1))))
+    assert explicit.attrs["coupling"] == "explicit" and "jacobian_steps" not in explicit.attrs
+
+
+def test_a_unit_that_cannot_save_its_state_is_refused_naming_it_and_the_fix(tmp_path):
+    """These Co-Simulation units declare canGetAndSetFMUstate false: implicit coupling steps them again from T_N."""
+    path = dmo_scene(tmp_path, 1e-2, 1.0, interface=None, implicit=True)
+    with pytest.raises(SceneError) as refused:
+        run_signal_scene(load_scene(path))
+    text = str(refused.value)
+    for says in ("subsystems.system1", "canGetAndSetFMUstate=false", "coupling.implicit", "interface: model-exchange",
+                 "implicit: false"):  # fmt: skip
+        assert says in text, text
+
+
+def test_newton_that_does_not_converge_is_named_with_step_and_time(tmp_path):
+    """One Newton step cannot meet a tolerance below the difference quotient's rounding."""
+    path = dmo_scene(tmp_path, 1e-2, 1.0, implicit=True, iterations=1, tol=1e-15)
+    with pytest.raises(NotConverged, match=r"macro step 1 \(from t = 0 s\).* did not converge in 1 iterations.*"
+                       r"system\d\.\w+ -> system\d\.\w+ \(change"):  # fmt: skip
+        run_signal_scene(load_scene(path))
+
+
+@pytest.mark.parametrize("coupling, where, says", [
+    ({"implicit": "yes"}, "coupling.implicit", "must be true or false"),
+    ({"implicit": True, "iterations": 0}, "coupling.iterations", "integer >= 1"),
+    ({"implicit": True, "iterations": 2.5}, "coupling.iterations", "integer >= 1"),
+    ({"implicit": True, "tol": -1.0}, "coupling.tol", "must be > 0"),
+    ({"implicit": True, "tol": "small"}, "coupling.tol", "finite number"),
+    ({"iterations": 3}, "coupling.iterations", "belong to implicit: true"),
+    ({"tol": 1e-8}, "coupling.tol", "belong to implicit: true"),
+    ({"implicit": True, "scheme": "gauss-seidel", "order": ["a", "b"]}, "coupling.scheme", "allowed with implicit: "
+     "jacobi"),
+])  # fmt: skip
+def test_bad_newton_keys_are_refused_naming_them(tmp_path, coupling, where, says):
+    with pytest.raises(SceneError) as refused:
+        load(tmp_path, coupling={"H": 0.1, **coupling})
+    assert f"scene.yaml: {where}:" in str(refused.value) and says in str(refused.value), str(refused.value)
+
+
+def test_implicit_defaults(tmp_path):
+    c = load(tmp_path, coupling={"H": 0.1, "implicit": True}).coupling
+    assert (c["iterations"], c["tol"]) == (10, 1e-10)
