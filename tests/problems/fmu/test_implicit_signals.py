@@ -13,6 +13,8 @@ What the tests compare follows from the method, not from numbers of the code und
 * the units are linear, so Newton from a difference-quotient Jacobian closes the conditions in one step up to the
   quotient's rounding: a second step at most to meet the tolerance, and the Jacobian costs one perturbed unit step
   per connection and macro step (it is formed once per step);
+* --predict's spectral radius of the implicit recurrence (the built-in linear model on the identified units) is
+  the decay per step the run shows;
 * Co-Simulation units that cannot save their state (these units' ``canGetAndSetFMUstate`` is false), Newton that
   does not converge, and bad keys are refused by name.
 """
@@ -24,6 +26,7 @@ import pytest
 import yaml
 from test_drives import AMPLITUDE, exact
 from test_peers import DMO_UNITS
+from test_predict_signals import growth
 from test_signal_scene import load
 from test_signals_outside import CONNECTIONS, OM, exact_history
 
@@ -32,6 +35,7 @@ from icosim.engine.run import simulate
 from icosim.order_fit import asymptotic_order
 from icosim.problems.fmu.errors import SceneError
 from icosim.problems.fmu.exchange import open_fmu_unit
+from icosim.problems.fmu.predict_signals import predict_signal_scene
 from icosim.problems.fmu.scene import load_scene
 from icosim.problems.fmu.signal_scene import run_signal_scene, signal_dataset
 from icosim.problems.fmu.signals import SignalCosimulation, connections_of
@@ -175,3 +179,20 @@ def test_bad_newton_keys_are_refused_naming_them(tmp_path, coupling, where, says
 def test_implicit_defaults(tmp_path):
     c = load(tmp_path, coupling={"H": 0.1, "implicit": True}).coupling
     assert (c["iterations"], c["tol"]) == (10, 1e-10)
+
+
+@pytest.mark.parametrize("k", [0, 1])
+def test_the_prediction_of_implicit_coupling_is_the_decay_of_its_run(tmp_path, k):
+    """--predict on an implicit scene: the recurrence of the identified units with the connections closed at T_N+1
+    (the built-in linear model's implicit step): at H = 0.2 s stable where explicit Jacobi is not, and the run
+    decays per step by the predicted rho (test_predict_signals' measure of growth, within 5 % of 1 - rho)."""
+    H, steps = 0.2, 150
+    path = dmo_scene(tmp_path, H, steps * H, k=k, implicit=True)
+    answer = predict_signal_scene(load_scene(path))
+    mine = next(row for row in answer["schemes"] if row["scene"])
+    explicit = next(row for row in answer["schemes"] if row["label"] == "Jacobi")
+    assert mine["implicit"] and mine["verdict"] == "stable" and explicit["verdict"] == "unstable", answer["schemes"]
+    assert answer["coupling"].startswith("implicit")
+    rho = mine["rho"]
+    measured = growth(run_signal_scene(load_scene(path)), steps)
+    assert abs(measured - rho) <= 0.05 * (1 - rho), (measured, rho)

@@ -138,3 +138,46 @@ def test_a_unit_with_direct_feedthrough_gives_its_output_with_the_input_it_ends_
     units = (lag(A1, B1), StateSpaceUnit([[-A2]], [[B2]], [[1.0]], [[d]]))
     M = matrix_of(SignalFamily(units, LOOP, 0, 0.3).problem(Float64()), None, JACOBI if scheme == "jacobi" else GS12)
     assert np.max(np.abs(M - expected)) <= 100 * EPS * np.max(np.abs(expected))
+
+
+def derived_implicit(k, H):
+    """Jacobi with the connections closed at ``T_N+1`` (the corrector's interpolation through the new samples:
+    ``k = 0`` holds ``e_N+1``, ``k = 1`` runs from ``e_N`` to ``e_N+1``): ``x_i' = a_i + d_i g_i x_j'`` with ``a_i``
+    what the step gives without the new sample, solved for ``(x_1', x_2')`` with ``q = d_1 d_2 g_1 g_2``."""
+    p1, c1, d1 = responses(A1, B1, H)
+    p2, c2, d2 = responses(A2, B2, H)
+    if k == 0:  # u = e_N+1 over the step: a_i = phi_i x_i, d_i = gamma_i
+        a1, a2, w1, w2 = np.array([p1, 0, 0, 0]), np.array([0, p2, 0, 0]), c1, c2
+    else:  # u = e_N + tau (e_N+1 - e_N): a_i = phi_i x_i + (gamma_i - gamma'_i) e_i,N, d_i = gamma'_i
+        a1, a2, w1, w2 = np.array([p1, 0, c1 - d1, 0, 0, 0]), np.array([0, p2, 0, c2 - d2, 0, 0]), d1, d2
+    q = w1 * w2 * G1 * G2
+    x1 = (a1 + w1 * G1 * a2) / (1 - q)
+    x2 = (a2 + w2 * G2 * a1) / (1 - q)
+    shift = [np.eye(6)[2], np.eye(6)[3]] if k == 1 else []
+    return np.array([x1, x2, G1 * x2, G2 * x1, *shift])
+
+
+@pytest.mark.parametrize("k", [0, 1])
+@pytest.mark.parametrize("H", [0.05, 0.4, 1.3])
+def test_the_implicit_macro_step_matrix_is_the_derived_recurrence(k, H):
+    """One Newton step from the predictor solves the linear conditions exactly (the difference quotients of a linear
+    unit are exact): the macro step's matrix is the recurrence of the conditions at T_N+1."""
+    family = SignalFamily((lag(A1, B1), lag(A2, B2)), LOOP, k, H, implicit=True)
+    M = matrix_of(family.problem(Float64()), None, JACOBI)
+    D = derived_implicit(k, H)
+    # expm's rounding, carried through the residual (a difference of the unit's outputs) and the Newton solve
+    assert np.max(np.abs(M - D)) <= 1000 * EPS * np.max(np.abs(D)), np.max(np.abs(M - D))
+
+
+@pytest.mark.parametrize("H", [0.1, 1.0, 3.0])
+def test_implicit_coupling_of_a_negative_loop_of_equal_lags_is_stable_at_every_step(H):
+    """Equal lags, ``G = g1 g2 = -3``, k = 0: the recurrence on ``(x1, x2)`` is ``phi [[1, g1 gamma], [g2 gamma, 1]]
+    / (1 - G gamma^2)``, eigenvalues ``phi (1 +- i sqrt(3) gamma) / (1 + 3 gamma^2)``, ``|l| = phi / sqrt(1 + 3
+    gamma^2) < 1`` at every H (explicit Jacobi: stable only below ln 2)."""
+    G = 3.0
+    cons = (Connection(1, 0, 0, 0, -G), Connection(0, 0, 1, 0, 1.0))
+    phi = np.exp(-H)
+    expected = phi / np.sqrt(1 + G * (1 - phi) ** 2)
+    rho, err = signal_radius((lag(1, 1), lag(1, 1)), cons, 0, H, implicit=True)
+    assert abs(rho - expected) <= max(err, 4e-16), (rho, expected, err)
+    assert (signal_radius((lag(1, 1), lag(1, 1)), cons, 0, H)[0] < 1) == (H < np.log(2))

@@ -1,5 +1,5 @@
 """Before a run of a signal scene: identify each unit's linear input/output model at its start and predict the
-spectral radius of the explicit coupling (``icosim cosim --predict``; docs/signals.md).
+spectral radius of its coupling (``icosim cosim --predict``; docs/signals.md).
 
 The identified units, coupled as the scene's connections couple them, are the built-in signal-coupled model
 (:mod:`icosim.problems.linear.signals`), whose recurrence is the macro step's own (by linearity).  Its inputs and
@@ -19,8 +19,10 @@ gives them.
   Where those variables cannot be read, the unit is "undecided"; with ``k > 0`` the recurrence needs the response
   to an input that changes over the step, which the map over held inputs does not hold: "undecided" too.
 
-The answer: the spectral radius for the scene's scheme and ``k``, for Jacobi and for the Gauss-Seidel orders of the
-units in the file's order and its reverse (float64 with its error estimate); and the largest stable
+The answer: the spectral radius for the scene's scheme and ``k`` (implicit where the scene couples implicitly: the
+recurrence of its connections' conditions at ``T_N+1``, :mod:`icosim.engine.connection_conditions`), for explicit
+Jacobi and for the Gauss-Seidel orders of the units in the file's order and its reverse (float64 with its error
+estimate); and the largest stable
 ``H`` of the scene's scheme (:func:`~icosim.problems.linear.signals.signal_limit`), a
 co-simulation unit's map identified anew at each step the search tries (``k = 0`` only).
 """
@@ -155,7 +157,8 @@ def _open(scene, name, keys):
 
 
 def predict_signal_scene(scene) -> dict:
-    """The identified units and the spectral radius of the scene's explicit coupling (module docstring)."""
+    """The identified units and the spectral radius of the scene's coupling, explicit or implicit (module
+    docstring)."""
     from ...engine.graph import CouplingGraph
     from .description import read_description
     from .exchange import ExchangeUnit
@@ -195,22 +198,23 @@ def predict_signal_scene(scene) -> dict:
         u = identified(i, H)
         found[name] = u | {"inputs": list(inputs[i]), "outputs": list(outputs[i])}
         models.append(None if "undecided" in u else model(u, H))
-    mine = scene.scheme
+    mine, implicit = scene.scheme, bool(c.get("implicit"))
     order = list(range(1, len(names) + 1))
-    candidates = [mine, JACOBI, GaussSeidel(order), GaussSeidel(order[::-1])]
-    schemes = list({s.name: s for s in candidates}.values())
+    candidates = [(mine, implicit), (JACOBI, False), (GaussSeidel(order), False), (GaussSeidel(order[::-1]), False)]
+    schemes = list({(s.name, imp): (s, imp) for s, imp in candidates}.values())
     undecided = [(n, u["undecided"]) for n, u in found.items() if "undecided" in u]
     rows = []
-    for scheme in schemes:
+    for scheme, imp in schemes:
         seq = getattr(scheme, "order", None)
+        label = "Jacobi" if seq is None else "Gauss-Seidel " + " -> ".join(names[j - 1] for j in seq)
         row = {"scheme": scheme.name, "order": None if seq is None else [names[j - 1] for j in seq],
-               "label": "Jacobi" if seq is None else "Gauss-Seidel " + " -> ".join(names[j - 1] for j in seq),
-               "scene": scheme.name == mine.name}  # fmt: skip
+               "label": f"implicit {label}" if imp else label, "implicit": imp,
+               "scene": (scheme.name, imp) == (mine.name, implicit)}  # fmt: skip
         if undecided:
             rows.append(row | {"rho": None, "verdict": "undecided", "reason": f"{undecided[0][0]}: {undecided[0][1]}"})
             continue
         try:
-            rho, err = signal_radius(models, cons, k, H, scheme)
+            rho, err = signal_radius(models, cons, k, H, scheme, implicit=imp)
         except ParameterError as exc:
             cs = [n for n, u in found.items() if u["model"] != "continuous"]
             why = f"{cs[0]} is a co-simulation unit: {exc}" if cs and k > 0 else str(exc)
@@ -239,7 +243,8 @@ def predict_signal_scene(scene) -> dict:
                 out[i] = model(u, h)
             return out
 
-        lim = signal_limit(at if stepped else models, cons, k, H, mine, decades=2.0 if stepped else 3.0)
+        lim = signal_limit(at if stepped else models, cons, k, H, mine, decades=2.0 if stepped else 3.0,
+                           implicit=implicit)  # fmt: skip
         finite = lambda h: float(h) if np.isfinite(h) else None  # noqa: E731  (none found: the scan's cap)
         limit = {"H_max": finite(lim.H_max), "H_unstable": finite(lim.H_unstable), "status": lim.status}
         if stepped:
@@ -251,5 +256,6 @@ def predict_signal_scene(scene) -> dict:
             if key in u:
                 u[key] = np.asarray(u[key]).tolist()
     return {"scene": str(scene.path), "units": found, "H": H, "k": k, "connections": len(cons),
-            "coupling": f"explicit, {rows[0]['label']}, k = {k}, H = {H:g} s", "schemes": rows,
+            "coupling": f"{'implicit' if implicit else 'explicit'}, {rows[0]['label']}, k = {k}, H = {H:g} s",
+            "schemes": rows,
             "largest_stable_H": limit}  # fmt: skip

@@ -206,12 +206,12 @@ class SignalLinearCosimulation(CosimulationProblem):
 
 class SignalFamily(LinearFamily):
     """The one point ``units``, ``connections`` (their offsets dropped: the recurrence is that of the linear part),
-    ``k``, ``H`` of the signal-coupled model, as the spectral analysis asks for it (float64 only)."""
+    ``k``, ``H`` of the signal-coupled model (``implicit``: the connections closed at ``T_N+1``), as the spectral
+    analysis asks for it (float64 only)."""
 
-    def __init__(
-        self, units: Sequence[StateSpaceUnit], connections: Sequence[graph.Connection], k: int, H: float
-    ) -> None:
-        self.units, self.k, self.H = tuple(units), int(k), float(H)
+    def __init__(self, units: Sequence[StateSpaceUnit], connections: Sequence[graph.Connection], k: int, H: float,
+                 *, implicit: bool = False) -> None:  # fmt: skip
+        self.units, self.k, self.H, self.implicit = tuple(units), int(k), float(H), bool(implicit)
         self.connections = tuple(Connection(c.source, c.output, c.target, c.input, c.factor, 0.0) for c in connections)
         self.graph = self.problem(Float64()).graph
 
@@ -222,7 +222,7 @@ class SignalFamily(LinearFamily):
     def problem(self, backend: Backend, *, exact: bool = False) -> SignalLinearCosimulation:
         if exact or not isinstance(backend, Float64):
             raise ParameterError("the signal-coupled linear model computes in float64 only")
-        return SignalLinearCosimulation(self.units, self.connections, self.k, self.H)
+        return SignalLinearCosimulation(self.units, self.connections, self.k, self.H, implicit=self.implicit)
 
     def point(self, index: tuple[int, ...]) -> SignalFamily:
         return self
@@ -245,18 +245,20 @@ class SignalFamily(LinearFamily):
 
 
 def signal_radius(units: Sequence[StateSpaceUnit], connections: Sequence[graph.Connection], k: int, H: float,
-                  scheme: Scheme = JACOBI) -> tuple[float, float]:  # fmt: skip
+                  scheme: Scheme = JACOBI, *, implicit: bool = False) -> tuple[float, float]:  # fmt: skip
     """The spectral radius of the co-simulation recurrence and its float64 error estimate
-    (:func:`~icosim.engine.spectral.radius.spectral_radius_float64` on :class:`SignalFamily`)."""
+    (:func:`~icosim.engine.spectral.radius.spectral_radius_float64` on :class:`SignalFamily`); ``implicit``: the
+    connections closed at ``T_N+1``."""
     from ...engine.spectral.radius import spectral_radius_float64
 
-    rho, err = spectral_radius_float64(SignalFamily(tuple(units), tuple(connections), k, H), None, scheme=scheme)
+    family = SignalFamily(tuple(units), tuple(connections), k, H, implicit=implicit)
+    rho, err = spectral_radius_float64(family, None, scheme=scheme)
     return float(rho), float(err)
 
 
 def signal_limit(units: Sequence[StateSpaceUnit] | Callable[[float], Sequence[StateSpaceUnit]],
                  connections: Sequence[graph.Connection], k: int, H: float, scheme: Scheme = JACOBI, *,
-                 decades: float = 3.0, resolution: float = 1e-3) -> Any:  # fmt: skip
+                 decades: float = 3.0, resolution: float = 1e-3, implicit: bool = False) -> Any:  # fmt: skip
     """The largest stable macro step (:func:`~icosim.step_limit.stability_limit`: a geometric scan over
     ``decades`` either side of ``H``, then a bisection to ``resolution``): stable where the spectral radius and its
     error estimate stay below one.  ``units``: continuous units, or a function of the step giving the units at it
@@ -268,7 +270,7 @@ def signal_limit(units: Sequence[StateSpaceUnit] | Callable[[float], Sequence[St
     at = units if callable(units) else lambda h: units
 
     def stable(h: float) -> tuple[bool, tuple[float, float]]:
-        rho, err = signal_radius(at(h), connections, k, h, scheme)
+        rho, err = signal_radius(at(h), connections, k, h, scheme, implicit=implicit)
         return bool(rho + err < 1), (rho, err)
 
     scan = np.geomspace(H * 10.0**-decades, H * 10.0**decades, int(8 * decades) + 1)
