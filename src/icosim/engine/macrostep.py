@@ -15,7 +15,12 @@ explicitly: after a stage's subsystems advanced, the connections out of them tak
 ``T_N+1`` as their variables' new samples (:meth:`~icosim.engine.problem.CosimulationProblem.connect`); a
 subsystem of a later stage with an input so fed integrates with the interpolation polynomial through the new
 sample (Gauss-Seidel), the others with the extrapolation polynomial (Jacobi: every input extrapolated; ``k = 0``
-held).  ``method=None`` is explicit coupling: no corrector, so a graph with joints needs a method.
+held).  ``method=None`` is explicit coupling: no corrector, so a graph with joints needs a method.  A problem whose
+connections are implicit (``implicit_connections``) has them closed by the corrector instead: their conditions
+``e_c = T(y(e_c))`` at ``T_N+1`` (:class:`~icosim.engine.connection_conditions.SignalConditions`) by Newton's rule
+(:mod:`icosim.engine.methods.newton`), the Jacobian from perturbed steps formed once per step; ``iterations``
+bounds the Newton iterations, ``tol`` tests them and a step that does not meet it fails
+(:class:`~icosim.engine.connection_conditions.NotConverged`).
 """
 
 from __future__ import annotations
@@ -89,13 +94,15 @@ def macro_step(
     iterations : number of corrector steps.  The paper's scheme is one
         (semi-implicit; exact for the linear model because the sensitivities
         are constant).  More steps re-linearise about the latest coupling
-        variables (fully implicit for nonlinear subsystems).
+        variables (fully implicit for nonlinear subsystems).  Implicit connections: Newton's iterations at
+        most (each one corrector step), the last one tested.
     tol : stop iterating once an iteration changes no coupling variable by
         more than ``tol`` (in the coupling variables' own units).  The change,
         not a residual, is the criterion: the weighted multiplier's corrected
         variables are a weighted mean of three solutions and satisfy none of the
         three conditions on its own; its iteration converges where the weighted
-        correction vanishes.
+        correction vanishes.  Implicit connections: a variable's change at most
+        ``tol (1 + |e_c|)``; not met within ``iterations``: the step fails.
 
     Returns
     -------

@@ -15,6 +15,9 @@ module                    rule                                           paramet
 :mod:`.projection`        acceleration level, then projection (Eq. 30)   --
 ========================  =============================================  ==========
 
+Newton's rule (:mod:`.newton`: ``e - J^-1 r``) closes implicitly coupled signal connections, not joints: it is
+no entry of the table.
+
 >>> sorted(METHODS)
 ['baumgarte', 'projection', 'weighted']
 >>> make_method("baumgarte", index=2, mu=1.0).params

@@ -13,9 +13,13 @@ A YAML scene (or a system file whose connections are signals, :mod:`icosim.probl
 
 An input may be fed by a table or a constant instead (``sources``: :mod:`icosim.problems.fmu.signal_sources`).
 
-Coupling is explicit (:mod:`icosim.problems.fmu.signals`): ``k`` the order of the inputs' extrapolation (0: held),
-``scheme`` jacobi or gauss-seidel with ``order`` (every subsystem once), ``implicit`` false only.  Bad input is
-refused naming the key and what is allowed, before any unit is opened.
+Coupling (:mod:`icosim.problems.fmu.signals`): ``k`` the order of the inputs' extrapolation (0: held), ``scheme``
+jacobi or gauss-seidel with ``order`` (every subsystem once), ``implicit`` false (explicit coupling) or true: the
+connections' conditions solved at ``T_N+1`` by Newton (:mod:`icosim.engine.connection_conditions`; Jacobi only),
+at most ``iterations`` (default 10) iterations until no variable changes by more than ``tol (1 + |e|)`` (``tol``
+default 1e-10); then every unit must save and restore its state (Model Exchange, or Co-Simulation with
+``canGetAndSetFMUstate``), checked before any unit opens.  Bad input is refused naming the key and what is
+allowed, before any unit is opened.
 """
 
 from __future__ import annotations
@@ -236,7 +240,7 @@ def _fmu_path(scene, sub) -> Path:
 
 
 def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
-    """Open the units, refuse an algebraic loop, run the macro steps (explicit coupling), close the units;
+    """Open the units, refuse an algebraic loop, run the macro steps (explicit or implicit coupling), close the units;
     ``progress(n_done)`` is called after each step."""
     from ...engine.connection_conditions import NotConverged
     from ...engine.run import simulate

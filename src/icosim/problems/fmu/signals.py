@@ -1,4 +1,5 @@
-"""FMU units coupled by signal connections as a co-simulation problem, coupled explicitly by the one macro step.
+"""FMU units coupled by signal connections as a co-simulation problem, coupled explicitly or implicitly by the one
+macro step.
 
 Each connection is a condition ``u_in = T(y_out)`` of the coupling graph (:class:`~icosim.engine.graph.Connection`,
 ``T`` the connection's linear transformation and unit conversion); its coupling variable is the input's value.
@@ -6,7 +7,9 @@ Each connection is a condition ``u_in = T(y_out)`` of the coupling graph (:class
 held (``k = 0``) or extrapolated by the Lagrange polynomial through the last ``k + 1`` samples (Jacobi), or
 interpolated through the sample a unit of an earlier stage has just given (Gauss-Seidel), and takes the units'
 outputs at ``T_N+1`` as the connections' new samples.  No unit is stepped twice from one point, so units that
-cannot save their state (``canGetAndSetFMUstate`` false) take part.
+cannot save their state (``canGetAndSetFMUstate`` false) take part.  With ``implicit`` the corrector closes the
+connections' conditions at ``T_N+1`` by Newton (:mod:`icosim.engine.connection_conditions`): each unit saves its
+state when it is predicted and is restored to it before each corrector and perturbed step.
 
 The arrays the macro step sees: a unit's outputs ``y_i`` are its connected outputs at ``T_N+1`` (in the unit's
 own units of measure), its end state the same values; the state is their concatenation.  The units hold their
