@@ -24,7 +24,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import yaml
-from test_drives import AMPLITUDE, exact
+from helpers import FMU_CACHE
+from test_drives import AMPLITUDE, MASS, MOVE, exact
 from test_peers import DMO_UNITS
 from test_predict_signals import growth
 from test_signal_scene import load
@@ -33,6 +34,7 @@ from test_signals_outside import CONNECTIONS, OM, exact_history
 from icosim.engine.connection_conditions import NotConverged
 from icosim.engine.run import simulate
 from icosim.order_fit import asymptotic_order
+from icosim.problems.fmu.build import build_unit
 from icosim.problems.fmu.errors import SceneError
 from icosim.problems.fmu.exchange import open_fmu_unit
 from icosim.problems.fmu.predict_signals import predict_signal_scene
@@ -196,3 +198,39 @@ def test_the_prediction_of_implicit_coupling_is_the_decay_of_its_run(tmp_path, k
     rho = mine["rho"]
     measured = growth(run_signal_scene(load_scene(path)), steps)
     assert abs(measured - rho) <= 0.05 * (1 - rho), (measured, rho)
+
+
+def built_dmo_scene(tmp_path, H, t_end, **coupling):
+    """The DualMassOscillator as two Co-Simulation units built from fmus/ that save their state and step exactly
+    with polynomial inputs: msd (mass 1, its spring and damper to the ground, driven by the force) and
+    move_oscillator (OMSimulator's System2), coupled as OMSimulator's test couples them."""
+    data = {
+        "subsystems": {
+            "mass1": {"fmu": str(build_unit(MASS["fmu"], FMU_CACHE)), "start": MASS["start"]},
+            "system2": {"fmu": str(build_unit(MOVE["fmu"], FMU_CACHE)), "record": ["x2"]},
+        },
+        "connections": [{"from": "system2.F", "to": "mass1.lambda"}]
+        + [{"from": f"mass1.{y}", "to": f"system2.{u}"} for y, u in (("x", "x1"), ("v", "v1"), ("a", "a1"))],
+        "coupling": {"H": H, **coupling},
+        "t_end": t_end,
+    }
+    path = tmp_path / f"built_{H:g}_{len(list(tmp_path.iterdir()))}.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+@pytest.mark.parametrize("k", [0, 1])
+def test_co_simulation_units_that_save_their_state_are_coupled_implicitly(tmp_path, k):
+    """Their FMU states saved at T_N and restored for every further step: the coupling's order k + 1 against the
+    exact solution (the units step exactly), the Jacobian one perturbed step per connection and step."""
+    Hs, t_end = [4e-3, 2e-3, 1e-3], 1.0
+    errors = []
+    for H in Hs:
+        run = run_signal_scene(load_scene(built_dmo_scene(tmp_path, H, t_end, k=k, implicit=True)))
+        x = np.array([run.series["mass1.x"][-1], run.series["system2.x2"][-1]])
+        errors.append(float(np.max(np.abs(x - exact([t_end])[0, :2]))))
+        n = round(t_end / H)
+        assert run.jacobian_steps == len(CONNECTIONS) * n and max(run.iterations) <= 2
+        assert run.units["mass1"]["states_saved"] == n
+    fit = asymptotic_order(Hs, errors)
+    assert abs(fit.order - (k + 1)) < 0.2, (errors, fit)
