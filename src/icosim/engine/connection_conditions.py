@@ -69,10 +69,11 @@ class SignalConditions:
         return tuple(self.graph.connection_column(c) for c in self.connections)
 
     @cached_property
-    def units(self) -> tuple[int, ...]:
-        """The units that the connections feed (whose steps the Jacobian's columns perturb) or read."""
+    def targets(self) -> tuple[int, ...]:
+        """The units the connections feed: those the corrector steps again (and the Jacobian's columns perturb); a
+        unit only read is final after its predictor step."""
         cons = self.graph.connections
-        return tuple(sorted({u for c in self.connections for u in (cons[c].source, cons[c].target)}))
+        return tuple(sorted({cons[c].target for c in self.connections}))
 
     def _transformed(self, problem: Any, ys: Sequence[Any]) -> Any:
         cons = self.graph.connections

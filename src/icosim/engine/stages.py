@@ -195,7 +195,7 @@ def _implicit_plan(scheme: Scheme, graph: CouplingGraph) -> Plan:
                 "jacobi (every connection closed together) or implicit: false"
             )
         conditions = SignalConditions(graph, cons) if cons else None
-        corrected = tuple(i for i in units if conditions is not None and i in conditions.units)
+        corrected = tuple(i for i in units if conditions is not None and i in conditions.targets)
         stages.append(Stage(index, tuple(units), (), corrected, (), conditions, cons))
     return Plan(scheme, graph, tuple(stages))
 

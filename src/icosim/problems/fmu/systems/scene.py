@@ -17,7 +17,8 @@ residual (``coupling.control: {estimate: power-residual, ...}``, :func:`ecco_con
 own coupling.
 
 Any other connection is a signal connection: a system of signal connections alone is a signal scene
-(:func:`signal_system_data`, :mod:`icosim.problems.fmu.signal_scene`), coupled explicitly; signals beside power
+(:func:`signal_system_data`, :mod:`icosim.problems.fmu.signal_scene`), coupled explicitly (implicitly where the
+scene's coupling says ``implicit: true``); signals beside power
 bonds or joints are refused by name before any work, never dropped.
 """
 
