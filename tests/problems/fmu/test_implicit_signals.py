@@ -246,3 +246,19 @@ def test_the_built_units_and_omsimulators_give_one_implicit_run(tmp_path):
     b = positions(theirs)
     error = np.max(np.abs(b - exact(theirs.times)[:, :2]))
     assert np.max(np.abs(a - b)) < 1e-4 * error, (np.max(np.abs(a - b)), error)
+
+
+@pytest.mark.parametrize("k", [0, 1])
+def test_where_the_prediction_finds_implicit_coupling_unstable_the_run_grows_by_its_rho(tmp_path, k):
+    """Implicit coupling with interpolated inputs is not stable at every H: at H = 0.7 s the recurrence of the
+    identified units has rho > 1 (Newton still converges: the conditions hold at every point, the inputs between
+    the points are the interpolation's), and the run grows per step by it."""
+    H, steps = 0.7, 150
+    path = dmo_scene(tmp_path, H, round(steps * H, 10), k=k, implicit=True)
+    mine = next(row for row in predict_signal_scene(load_scene(path))["schemes"] if row["scene"])
+    rho = mine["rho"]
+    assert mine["verdict"] == "unstable" and rho > 1.01, mine
+    run = run_signal_scene(load_scene(path))
+    assert run.status == "completed" and max(run.iterations) <= 3
+    measured = growth(run, steps)
+    assert abs(measured - rho) <= 0.05 * (rho - 1), (measured, rho)
