@@ -218,6 +218,7 @@ def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
     ``progress(n_done)`` is called after each step."""
     from ...engine.run import simulate
     from .exchange import open_fmu_unit
+    from .input_orders import check_input_orders
     from .signal_sources import check_targets
     from .signals import INPUTS, OUTPUTS, ForwardUnit, SignalCosimulation, connections_of
 
@@ -237,8 +238,8 @@ def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
             keys = {k: v for k, v in ((INPUTS, inputs[i]), (OUTPUTS, outputs[i])) if v}
             start, path = dict(sub.get("start") or {}), _fmu_path(scene, sub)
             if sub.get("interface", "co-simulation") == "co-simulation":  # stepped forward only: no saved state
-                units.append(ForwardUnit(name, path, keys, start, inputs=c["inputs"], substeps=c["substeps"],
-                                         t0=scene.t0))  # fmt: skip
+                unit = ForwardUnit(name, path, keys, start, inputs=c["inputs"], substeps=c["substeps"], t0=scene.t0)
+                units.append(check_input_orders(scene.path, unit, c["k"]))  # the orders it takes, before any step
             else:
                 units.append(open_fmu_unit(name, path, keys, start, interface=sub["interface"],
                                            tolerance=sub.get("tolerance"), inputs=c["inputs"],
