@@ -1,6 +1,6 @@
 """``icosim cosim`` on system files other tools wrote: OSP's quarter truck (its folder and its file) checked and
 run; OMSimulator's DualMassOscillator by signal connections from an OSP file run; an SSP of signals without a
-step size refused with status 2, and --check on a scene of signals."""
+step size refused with status 2, and --check on a scene of signals whose units are missing: a row per unit."""
 
 import re
 
@@ -21,8 +21,11 @@ def test_an_ssp_system_of_signal_connections_without_a_step_or_with_check_is_ref
     assert err.startswith("icosim cosim: error: ") and "coupling: SSP 2.0 gives no step size" in err
     scene = tmp_path / "scene.yaml"
     scene.write_text(f"system: {path}\ncoupling: {{H: 0.1}}\nt_end: 1\n")
-    assert main(["cosim", str(scene), "--check"]) == 2
-    assert "--check: not yet supported for a scene with signal connections" in capsys.readouterr().err
+    assert main(["cosim", str(scene), "--check"]) == 2  # each unit's row: its file is not in the test data
+    out = capsys.readouterr().out
+    assert re.search(r"Add1: .*\n +open +refused +FMU file .*Add\.fmu does not exist", out) and out.endswith(
+        "refused\n"
+    )
     assert main(["cosim", str(scene), "--predict"]) == 2  # the system's units are not in the test data
     assert re.search(r"error: Add1: FMU file .*Add\.fmu does not exist", capsys.readouterr().err)
 

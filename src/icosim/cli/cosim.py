@@ -55,7 +55,8 @@ def add_parser(sub):
         "--check",
         action="store_true",
         help="do not run: check every unit (types, units of measure, start values, rollback, feedthrough, "
-        "direction) and the start, and print a table per unit; exit 2 if one is refused",
+        "direction; a scene of signals: the units, the connections and the first step) and the start, and print a "
+        "table per unit; exit 2 if one is refused",
     )
     p.add_argument(
         "--tolerance",
@@ -115,21 +116,16 @@ def run(args, parser) -> int:
             scene = at_tolerance(scene, args.tolerance)
         except SceneError as exc:
             return _error(f"argument --tolerance: {exc}")
-    if signals and args.check:
-        return _error(
-            f"{args.scene}: --check: not yet supported for a scene with signal connections (their checks are to "
-            "come); run it without --check"
-        )
     if signals and args.predict:
         target, leftovers = (lambda: _predict(scene, args, signals=True)), ()
-    elif signals:
+    elif signals and not args.check:
         out = Path(args.out)
         target = lambda: _run(scene, args, out, signals=True)
         leftovers = (out.parent / f".{out.name}.*.part", out.parent / f".{out.name}.sha256.*.part")
     elif args.predict:
         target, leftovers = (lambda: _predict(scene, args)), ()
     elif args.check:
-        target, leftovers = (lambda: _check(scene, args)), ()
+        target, leftovers = (lambda: _check(scene, args, signals=signals)), ()
     else:
         out = Path(args.out)
         target = lambda: _run(scene, args, out)
@@ -205,11 +201,12 @@ def _predict(scene, args, signals=False) -> int:
     return 0
 
 
-def _check(scene, args) -> int:
+def _check(scene, args, *, signals=False) -> int:
     from ..io.jsonio import dumps
     from ..problems.fmu.check import check_scene
+    from ..problems.fmu.check_signals import check_signal_scene
 
-    report = check_scene(scene)
+    report = check_signal_scene(scene) if signals else check_scene(scene)
     print(dumps(report) if args.json else _check_text(report))
     return 2 if report["refused"] else 0
 

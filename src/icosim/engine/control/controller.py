@@ -16,7 +16,11 @@ with step rejection: ``H_new = H * safety * err^(-beta1/p) * err_prev^(beta2/p)`
 with ``p = k + 1``, limited to ``[fac_min, fac_max] H`` and to
 ``[H_min, H_max]``; no growth right after a rejection; a rejected step is
 retried with ``H * max(fac_min, safety * err^(-1/p))``.  How the two drive a
-run: :mod:`icosim.engine.control.driver`.
+run: :mod:`icosim.engine.control.driver`.  The estimate measures accuracy, not
+stability: where the step a tolerance asks for lies beyond the macro step's
+stability limit, the mode that grows there raises the estimate and the
+controller holds the steps about that limit, whatever the tolerance (the error
+is then smaller than the tolerance asks; docs/fmi.md, "Controlled macro steps").
 
 **Power residual (ECCO).**  For a power bond -- a joint whose two sides
 exchange a force and a velocity -- energy conservation says that the power one

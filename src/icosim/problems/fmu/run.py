@@ -12,6 +12,7 @@ from .controlled import controlled_entries, scene_steps
 from .errors import FmuError
 from .exchange import open_fmu_unit
 from .initial import given_coupling_warning
+from .input_orders import check_input_orders
 from .inspection import inspect_unit, joint_direction, refuse, rollback_tolerance
 from .joints import check_scheme
 from .problem import Coupling, FmuCosimulation
@@ -98,17 +99,10 @@ def open_unit(scene: Scene, name: str, kind: str, *, cache=None) -> Unit:
     c, sub = scene.coupling, scene.data["subsystems"][name]
     projects = scene.method.projection or scene.data.get("initial") == "project"
     names = {k: sub[k] for k in ROLES if k in sub and k in _needed(kind, projects)}
-    return open_fmu_unit(
-        name,
-        fmu_file(scene.fmus[name], cache),
-        names,
-        sub.get("start", {}),
-        interface=sub.get("interface", "auto"),
-        tolerance=sub.get("tolerance"),
-        inputs=c["inputs"],
-        substeps=c["substeps"],
-        t0=float(scene.data.get("t_start", 0.0)),
-    )
+    unit = open_fmu_unit(name, fmu_file(scene.fmus[name], cache), names, sub.get("start", {}),
+                         interface=sub.get("interface", "auto"), tolerance=sub.get("tolerance"), inputs=c["inputs"],
+                         substeps=c["substeps"], t0=float(scene.data.get("t_start", 0.0)))  # fmt: skip
+    return check_input_orders(scene.path, unit, c["k"])  # the orders of input derivatives it takes, before any step
 
 
 def open_units(scene: Scene, *, cache=None, inspect=True):

@@ -34,7 +34,7 @@ from ...engine.bounds import MAX_K
 from ...engine.schemes import GaussSeidel, get_scheme
 from .errors import SceneError
 
-__all__ = ["SignalScene", "SignalRun", "signal_scene", "run_signal_scene", "signal_dataset", "is_signal_scene",
+__all__ = ["SignalScene", "SignalRun", "signal_scene", "open_signal_unit", "signal_wiring", "run_signal_scene", "signal_dataset", "is_signal_scene",
            "SIGNAL_SCENE_KEYS", "SIGNAL_SUBSYSTEM_KEYS", "CONNECTION_KEYS", "SIGNAL_COUPLING_KEYS"]  # fmt: skip
 
 #: Top-level keys of a signal scene.
@@ -239,40 +239,60 @@ def _fmu_path(scene, sub) -> Path:
     return p if p.is_absolute() else (scene.path.parent / p).resolve()
 
 
-def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
-    """Open the units, refuse an algebraic loop, run the macro steps (explicit or implicit coupling), close the units;
-    ``progress(n_done)`` is called after each step."""
-    from ...engine.connection_conditions import NotConverged
-    from ...engine.run import simulate
+def open_signal_unit(scene: SignalScene, name, inputs, outputs):
+    """Unit ``name`` opened with its connected ``inputs`` and ``outputs`` (variable names); co-simulation coupled
+    explicitly is stepped forward only (no saved state), its orders of input derivatives checked before any step."""
     from .exchange import open_fmu_unit
-    from .signal_sources import check_targets
-    from .signals import INPUTS, OUTPUTS, ForwardUnit, SignalCosimulation, connections_of
+    from .input_orders import check_input_orders
+    from .signals import INPUTS, OUTPUTS, ForwardUnit
 
-    names, c = list(scene.names), scene.coupling
+    c, sub = scene.coupling, scene.subsystems[name]
+    keys = {k: v for k, v in ((INPUTS, inputs), (OUTPUTS, outputs)) if v}
+    start, path = dict(sub.get("start") or {}), _fmu_path(scene, sub)
+    interface = sub.get("interface", "co-simulation")
+    if interface == "co-simulation" and not c["implicit"]:  # no saved state
+        unit = ForwardUnit(name, path, keys, start, inputs=c["inputs"], substeps=c["substeps"], t0=scene.t0)
+        return check_input_orders(scene.path, unit, c["k"])
+    unit = open_fmu_unit(name, path, keys, start, interface=interface, tolerance=sub.get("tolerance"),
+                         inputs=c["inputs"], substeps=c["substeps"], t0=scene.t0)  # fmt: skip
+    return check_input_orders(scene.path, unit, c["k"]) if interface == "co-simulation" else unit
+
+
+def signal_wiring(scene: SignalScene):
+    """The connections (:class:`~icosim.engine.graph.Connection` s), each unit's inputs (connected, then those a
+    source feeds) and outputs by name, and each unit's sources; the sources' targets checked, and with implicit
+    coupling that every unit saves its state."""
+    from .signal_sources import check_targets
+    from .signals import connections_of
+
+    names = list(scene.names)
     check_targets(scene.path, scene.sources, {n: _fmu_path(scene, scene.subsystems[n]) for n in names})
     cons, inputs, outputs = connections_of(scene.connections, names)
     fed: list = [[] for _ in names]  # each unit's inputs fed by a source, after its connected ones
     for unit, var, source in scene.sources:
         inputs[names.index(unit)].append(var)
         fed[names.index(unit)].append(source)
-    if c["implicit"]:  # before any unit opens
+    if scene.coupling["implicit"]:  # before any unit opens
         for name in names:
             _check_saves_state(scene, name, scene.subsystems[name], _fmu_path(scene, scene.subsystems[name]))
+    return cons, inputs, outputs, fed
+
+
+def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
+    """Open the units, refuse an algebraic loop, run the macro steps (explicit or implicit coupling), close the units;
+    ``progress(n_done)`` is called after each step."""
+    from ...engine.connection_conditions import NotConverged
+    from ...engine.run import simulate
+    from .signals import SignalCosimulation
+
+    names, c = list(scene.names), scene.coupling
+    cons, inputs, outputs, fed = signal_wiring(scene)
     units = []
     run = SignalRun(scene)
     started = clock.perf_counter()
     try:
         for i, name in enumerate(names):
-            sub = scene.subsystems[name]
-            keys = {k: v for k, v in ((INPUTS, inputs[i]), (OUTPUTS, outputs[i])) if v}
-            start, path = dict(sub.get("start") or {}), _fmu_path(scene, sub)
-            if sub.get("interface", "co-simulation") == "co-simulation" and not c["implicit"]:  # no saved state
-                units.append(ForwardUnit(name, path, keys, start, inputs=c["inputs"], substeps=c["substeps"],
-                                         t0=scene.t0))  # fmt: skip
-            else:
-                units.append(open_fmu_unit(name, path, keys, start, interface=sub.get("interface", "co-simulation"),
-                                           tolerance=sub.get("tolerance"), inputs=c["inputs"],
-                                           substeps=c["substeps"], t0=scene.t0))  # fmt: skip
+            units.append(open_signal_unit(scene, name, inputs[i], outputs[i]))
         problem = SignalCosimulation(units, inputs, outputs, cons, c["k"], c["H"], t0=scene.t0, sources=fed,
                                      implicit=c["implicit"])  # fmt: skip
         history = problem.initial_history()
