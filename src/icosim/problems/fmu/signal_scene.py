@@ -213,9 +213,11 @@ def _fmu_path(scene, sub) -> Path:
     return p if p.is_absolute() else (scene.path.parent / p).resolve()
 
 
-def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
+def run_signal_scene(scene: SignalScene, *, progress=None, history=None) -> SignalRun:
     """Open the units, refuse an algebraic loop, run the macro steps (explicit coupling), close the units;
-    ``progress(n_done)`` is called after each step."""
+    ``progress(n_done)`` is called after each step.  ``history``: the connections' values at ``T_0, T_-1, ...
+    T_-k`` (``(k + 1, connections)``, in the scene's order of the connections), else those at ``t_start`` at
+    every point (a start from rest in the past)."""
     from ...engine.run import simulate
     from .exchange import open_fmu_unit
     from .signal_sources import check_targets
@@ -244,7 +246,7 @@ def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
                                            tolerance=sub.get("tolerance"), inputs=c["inputs"],
                                            substeps=c["substeps"], t0=scene.t0))  # fmt: skip
         problem = SignalCosimulation(units, inputs, outputs, cons, c["k"], c["H"], t0=scene.t0, sources=fed)
-        history = problem.initial_history()
+        history = problem.initial_history(None if history is None else _history_rows(scene, problem, history))
         recorded = [
             (u, v) for u, sub in zip(units, (scene.subsystems[n] for n in names)) for v in sub.get("record", [])
         ]
@@ -269,6 +271,19 @@ def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
             unit.close()
     run.wall_time = clock.perf_counter() - started
     return run
+
+
+def _history_rows(scene, problem, history) -> np.ndarray:
+    """``history`` (connections in the scene's order) as rows of the problem's coupling variables."""
+    history = np.asarray(history, dtype=float)
+    want = (scene.coupling["k"] + 1, len(scene.connections))
+    if history.shape != want:
+        raise SceneError(f"{scene.path}: the coupling history must be {want} (k + 1 points, one value per connection), "
+                         f"got {history.shape}")  # fmt: skip
+    rows = np.zeros((want[0], problem.n_coupling))
+    for c in range(want[1]):
+        rows[:, problem.graph.connection_column(c)] = history[:, c]
+    return rows
 
 
 def _append(run, problem, e, recorded):
