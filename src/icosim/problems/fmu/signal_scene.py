@@ -224,6 +224,10 @@ def run_signal_scene(scene: SignalScene, *, progress=None, history=None) -> Sign
     from .signals import INPUTS, OUTPUTS, ForwardUnit, SignalCosimulation, connections_of
 
     names, c = list(scene.names), scene.coupling
+    want = (c["k"] + 1, len(scene.connections))
+    if history is not None and np.shape(history) != want:
+        raise SceneError(f"{scene.path}: the coupling history must be {want} (k + 1 points, one value per connection), "
+                         f"got {np.shape(history)}")  # fmt: skip
     check_targets(scene.path, scene.sources, {n: _fmu_path(scene, scene.subsystems[n]) for n in names})
     cons, inputs, outputs = connections_of(scene.connections, names)
     fed: list = [[] for _ in names]  # each unit's inputs fed by a source, after its connected ones
@@ -276,12 +280,8 @@ def run_signal_scene(scene: SignalScene, *, progress=None, history=None) -> Sign
 def _history_rows(scene, problem, history) -> np.ndarray:
     """``history`` (connections in the scene's order) as rows of the problem's coupling variables."""
     history = np.asarray(history, dtype=float)
-    want = (scene.coupling["k"] + 1, len(scene.connections))
-    if history.shape != want:
-        raise SceneError(f"{scene.path}: the coupling history must be {want} (k + 1 points, one value per connection), "
-                         f"got {history.shape}")  # fmt: skip
-    rows = np.zeros((want[0], problem.n_coupling))
-    for c in range(want[1]):
+    rows = np.zeros((history.shape[0], problem.n_coupling))
+    for c in range(history.shape[1]):
         rows[:, problem.graph.connection_column(c)] = history[:, c]
     return rows
 

@@ -35,7 +35,7 @@ from ...problems.fmu.signal_scene import run_signal_scene
 from .config import CONNECTIONS, case_label, scene_data, unit_paths, write_scene
 from .exact import DualMass
 
-__all__ = ["case_data", "measured_growth", "signal_errors", "joint_errors", "Prediction"]
+__all__ = ["case_data", "case_dataset", "measured_growth", "signal_errors", "joint_errors", "Prediction"]
 
 
 def measured_growth(x) -> float:
@@ -144,8 +144,6 @@ class Prediction:
 def case_data(cfg: dict, case: dict, *, root=".") -> DatasetDict:
     """One case over its ``H`` (module docstring); ``cfg``: the part's configuration (``units_dir``, ``units``,
     ``start``, ``tolerance``, ``t_end``, ``fit``, ``growth_steps``)."""
-    from ...io.netcdf import provenance_attrs
-
     started = time.process_time()
     paths = unit_paths(cfg, root)
     for name, path in paths.items():
@@ -153,75 +151,90 @@ def case_data(cfg: dict, case: dict, *, root=".") -> DatasetDict:
             raise SceneError(f"signals.units.{name}: no unit {path} (signals.units_dir: the other tools' units, "
                              "../shared/outside/README.md)")  # fmt: skip
     dmo = DualMass.from_units(paths["system1"], paths["system2"], cfg["start"])
-    H = np.array(case["H"], dtype=float)
-    t_end = float(cfg["t_end"])
-    errors, finals, rho, rho_err, verdicts = [], [], [], [], []
+    t_end, steps = float(cfg["t_end"]), int(cfg["growth_steps"])
     by_connections = case["by"] == "connections"
     label = case_label(case)
+    runs: dict = {key: [] for key in ("error", "error_end", "predicted_rho", "rho_error", "predicted_verdict")}
+    growth: dict = {key: [] for key in ("growth_rho", "growth_rho_error", "growth_verdict", "measured_growth")}
+    prediction = None
     with tempfile.TemporaryDirectory(prefix="icosim-signals-") as tmp:
-        prediction = None
-        for h in H:
+        for h in case["H"]:
             scene = load_scene(write_scene(tmp, scene_data(cfg, case, h, t_end, root=root), f"{label}_{h:.6e}"))
-            run = signal_errors if by_connections else joint_errors
-            e, e_end = run(scene, dmo)
-            errors.append(e), finals.append(e_end)
+            e, e_end = (signal_errors if by_connections else joint_errors)(scene, dmo)
             if by_connections:
                 prediction = prediction or Prediction(scene)
-                r, err, v = prediction.at(h)
-            else:
-                r, err, v = float("nan"), float("nan"), "undecided"
-            rho.append(r), rho_err.append(err), verdicts.append(v)
-        growth_H = np.array(case.get("growth_H", []), dtype=float)
-        steps = int(cfg["growth_steps"])
-        g_rho, g_err, g_verdict, g_measured = [], [], [], []
-        for h in growth_H:
+            rho = prediction.at(h) if prediction is not None else (float("nan"), float("nan"), "undecided")
+            for key, value in zip(runs, (e, e_end, *rho)):
+                runs[key].append(value)
+        for h in case.get("growth_H", []):
             scene = load_scene(write_scene(tmp, scene_data(cfg, case, h, steps * h, root=root), f"{label}_g{h:.6e}"))
             prediction = prediction or Prediction(scene)
-            r, err, v = prediction.at(h)
             with np.errstate(over="ignore", invalid="ignore"):
                 run = run_signal_scene(scene)
             x = run.series["system1.x1"] if run.status == "completed" else [np.nan]
-            g_rho.append(r), g_err.append(err), g_verdict.append(v), g_measured.append(measured_growth(x))
-    fit = asymptotic_order(H, errors, **dict(cfg["fit"]))
-    data = {
-        "error": (("H",), np.array(errors), {"long_name": "largest displacement error over the run / amplitude"}),
-        "error_end": (("H",), np.array(finals), {"long_name": "displacement error at t_end / amplitude"}),
-        "predicted_rho": (("H",), np.array(rho), {"long_name": "spectral radius predicted from the units"}),
-        "rho_error": (("H",), np.array(rho_err), {"long_name": "float64 error estimate of predicted_rho"}),
-        "predicted_verdict": (("H",), np.array(verdicts, dtype=str)),
+            for key, value in zip(growth, (*prediction.at(h), measured_growth(x))):
+                growth[key].append(value)
+    info = {
+        "scheme": scene.scheme.name,
+        "amplitude": dmo.amplitude,
+        "prediction_reason": prediction.reason if prediction is not None else (
+            "the joint's spectral radius is not predicted here (--predict identifies single-mass oscillators; "
+            "System2 is a drive by position, velocity and acceleration)"),
+        "predicted_H_max": prediction.H_max if prediction is not None else float("nan"),
+        "cpu_seconds": time.process_time() - started,
+        **{f"dmo_{key}": value for key, value in vars(dmo).items()},
+    }  # fmt: skip
+    config = {key: cfg[key] for key in ("units", "start", "tolerance", "t_end", "fit", "growth_steps")}
+    return case_dataset(case, runs, growth, info, fit=cfg["fit"], t_end=t_end, growth_steps=steps, config=config)
+
+
+def case_dataset(case: dict, runs: dict, growth: dict, info: dict, *, fit: dict, t_end: float, growth_steps: int,
+                 config: dict | None = None) -> DatasetDict:  # fmt: skip
+    """The dataset of one case from its numbers: ``runs`` over ``case["H"]`` (``error``, ``error_end``,
+    ``predicted_rho``, ``rho_error``, ``predicted_verdict``), ``growth`` over ``case["growth_H"]``
+    (``growth_rho``, ``growth_rho_error``, ``growth_verdict``, ``measured_growth``), ``info`` attributes
+    (``scheme``, ``amplitude``, ``prediction_reason``, ``predicted_H_max``, ...); the order fitted here."""
+    from ...io.netcdf import provenance_attrs
+
+    H = np.array(case["H"], dtype=float)
+    fitted = asymptotic_order(H, runs["error"], **dict(fit))
+    long = {
+        "error": "largest displacement error over the run / amplitude",
+        "error_end": "displacement error at t_end / amplitude",
+        "predicted_rho": "spectral radius predicted from the units",
+        "rho_error": "float64 error estimate of predicted_rho",
+        "growth_rho": "spectral radius predicted from the units",
+        "measured_growth": "growth per macro step measured on a run",
     }
+
+    def var(dim, key, values):
+        strings = key.endswith("verdict")
+        array = np.array(values, dtype=str if strings else float)
+        return ((dim,), array, {} if strings else {"long_name": long.get(key, key)})
+
+    data = {key: var("H", key, values) for key, values in runs.items()}
     coords = {"H": ("H", H, {"units": "s"})}
+    growth_H = np.array(case.get("growth_H", []), dtype=float)
     if growth_H.size:
-        data |= {
-            "growth_rho": (("growth_H",), np.array(g_rho), {"long_name": "predicted spectral radius"}),
-            "growth_rho_error": (("growth_H",), np.array(g_err)),
-            "growth_verdict": (("growth_H",), np.array(g_verdict, dtype=str)),
-            "measured_growth": (("growth_H",), np.array(g_measured), {"long_name": "growth per macro step"}),
-        }
+        data |= {key: var("growth_H", key, values) for key, values in growth.items()}
         coords["growth_H"] = ("growth_H", growth_H, {"units": "s"})
     ds = DatasetDict(data, coords=coords)
-    config = {key: cfg[key] for key in ("units", "start", "tolerance", "t_end", "fit", "growth_steps")}
-    attrs = provenance_attrs({"case": case, **config}, title=f"DualMassOscillator: {label}")
-    reason = prediction.reason if prediction is not None else "the joint's spectral radius is not predicted here"
+    label = case_label(case)
+    attrs = provenance_attrs({"case": case, **(config or {})}, title=f"DualMassOscillator: {label}")
     attrs.update(
         part="signals",
         dataset="case",
         case=label,
         by=case["by"],
         k=int(case["k"]),
-        scheme=scene.scheme.name,
         implicit="yes" if case.get("implicit") else "no",
         method=case.get("method", "none"),
-        t_end=t_end,
-        amplitude=dmo.amplitude,
-        growth_steps=steps,
-        order=float(fit.order),
-        order_status=fit.status,
-        order_spread=float(fit.spread),
-        prediction_reason=reason,
-        predicted_H_max=float(prediction.H_max) if prediction is not None else float("nan"),
-        cpu_seconds=time.process_time() - started,
-        **{f"dmo_{key}": value for key, value in vars(dmo).items()},
+        t_end=float(t_end),
+        growth_steps=int(growth_steps),
+        order=float(fitted.order),
+        order_status=fitted.status,
+        order_spread=float(fitted.spread),
+        **info,
     )
     attrs.update({f"param_{key}": value for key, value in case.get("params", {}).items()})
     ds.attrs.update(attrs)
