@@ -81,15 +81,17 @@ def undecided_items(cases) -> list:
     joints = [ds for ds in cases if ds.attrs["by"] == "joint"]
     if joints:
         items.append(
-            "the joint's stability: its spectral radius is not predicted ("
-            + esc(joints[0].attrs["prediction_reason"])
-            + "), and no growth run is made for it"
+            "the joint's stability: " + esc(joints[0].attrs["prediction_reason"]) + "; no growth run is made for it"
         )
     if not any(ds.attrs["implicit"] == "yes" for ds in cases):
         items.append("implicit coupling of the connections: no implicit case is configured")
     items.append(
         "cost: a joint's macro step takes more unit steps than a connection's (predictor, corrector, the "
         "perturbed steps of the sensitivities); the errors are compared at equal H, not at equal work"
+    )
+    items.append(
+        "the units as Co-Simulation: not in the study (OpenModelica's explicit Euler at the communication step "
+        "adds an error of the coupling's own order, so the coupling's order cannot be read off them)"
     )
     not_asymptotic = [ds.attrs["case"] for ds in cases if ds.attrs["order_status"] != "asymptotic"]
     if not_asymptotic:
