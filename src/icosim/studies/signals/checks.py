@@ -6,9 +6,9 @@
   if an order is not asymptotic (pre-asymptotic, unstable) or no case is picked;
 * ``signals_growth`` -- every growth run of the cases ``select`` picks whose predicted verdict is ``verdict``:
   ``unstable``: the measured growth per macro step within ``tolerance`` of the predicted rho, relative to
-  ``rho - 1`` (the growth exponent, not rho itself: an error of 5 % of rho would pass any rho near 1);
-  ``stable``: the measured growth below 1.  Undecided if no run has that predicted verdict or a growth is not
-  finite;
+  ``|rho - 1|`` (the growth exponent, not rho itself: an error of 5 % of rho would pass any rho near 1);
+  ``stable``: the measured growth below 1; ``any``: every run predicted stable or unstable within ``tolerance``
+  as under ``unstable``.  Undecided if no run has that predicted verdict or a growth is not finite;
 * ``signals_ratio`` -- the errors of the cases ``select`` picks against those of ``against`` at the same ``k``
   and ``H`` (the step sizes both measured): pass if every ratio is below ``value``, fail if one is not,
   undecided if no ``k`` and ``H`` are common to both.
@@ -59,7 +59,7 @@ def check_order(datasets, *, select: dict, expect: list, tolerance: float):
 
 
 def check_growth(datasets, *, select: dict, verdict: str, tolerance: float | None = None):
-    """Growth runs predicted ``verdict``: grow by the predicted rho (unstable) or decay (stable)."""
+    """Growth runs predicted ``verdict``: grow by the predicted rho (unstable, any) or decay (stable)."""
     rows, holds = [], []
     picked = _cases(datasets, select)
     for ds in picked:
@@ -67,13 +67,13 @@ def check_growth(datasets, *, select: dict, verdict: str, tolerance: float | Non
             continue
         for h, rho, v, g in zip(*(ds[n].values for n in ("growth_H", "growth_rho", "growth_verdict",
                                                            "measured_growth"))):  # fmt: skip
-            if str(v) != verdict:
+            if str(v) != verdict and not (verdict == "any" and str(v) in ("stable", "unstable")):
                 continue
             rho, g = float(rho), float(g)
             if not (math.isfinite(rho) and math.isfinite(g)):
                 ok, dev = None, float("nan")
-            elif verdict == "unstable":
-                dev = abs(g - rho) / (rho - 1)
+            elif verdict != "stable":
+                dev = abs(g - rho) / abs(rho - 1)
                 ok = dev <= tolerance
             else:
                 dev, ok = float("nan"), g < 1
@@ -86,8 +86,8 @@ def check_growth(datasets, *, select: dict, verdict: str, tolerance: float | Non
     parts = []
     for r in rows:
         text = f"{r['case']} at H = {r['H']:g} s: rho {r['rho']:.6f}, measured {r['growth']:.6f}"
-        if verdict == "unstable":
-            text += f" (|growth - rho| / (rho - 1) = {r['deviation']:.3g})"
+        if verdict != "stable":
+            text += f" (|growth - rho| / |rho - 1| = {r['deviation']:.3g})"
         parts.append(text)
     return Outcome(combine_holds(holds), "; ".join(parts), {"rows": rows})
 
@@ -133,7 +133,7 @@ def _validate_order(label, params):
 
 
 def _validate_growth(label, params):
-    if params["verdict"] == "unstable":
+    if params["verdict"] != "stable":
         _positive(label, params, "tolerance")
 
 
@@ -146,9 +146,9 @@ def _describe_order(p):
 
 def _describe_growth(p):
     what = f"growth runs predicted {p['verdict']} of the cases with {selector_text(p['select'])}"
-    if p["verdict"] == "unstable":
+    if p["verdict"] != "stable":
         return what + ", measured growth against predicted rho", (
-            f"|growth - rho| > {p['tolerance']:g} (rho - 1) for a run"
+            f"|growth - rho| > {p['tolerance']:g} |rho - 1| for a run"
         )
     return what, "a run predicted stable grows"
 
@@ -164,7 +164,7 @@ CHECKS = {
     "signals_growth": CheckKind(
         check_growth,
         validate=_validate_growth,
-        choices={"verdict": ("unstable", "stable")},
+        choices={"verdict": ("unstable", "stable", "any")},
         selectors=("select",),
         describe=_describe_growth,
     ),

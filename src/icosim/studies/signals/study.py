@@ -127,6 +127,10 @@ class Prediction:
         self.models = [StateSpaceUnit(*(np.array(u[key]) for key in "ABCD"), None) for u in units]
         self.cons = connections_of(scene.connections, list(scene.names))[0]
         self.k, self.scheme = scene.coupling["k"], scene.scheme
+        self.implicit = bool(scene.coupling.get("implicit"))
+        if self.implicit and not answer["coupling"].startswith("implicit"):
+            self.reason, self.models = f"the prediction is of {answer['coupling'].split(',')[0]} coupling", None
+            return
         self.H_max = float(answer["largest_stable_H"].get("H_max") or np.nan)
         self.misfit = max(float(u["misfit"]) for u in units)
 
@@ -136,7 +140,8 @@ class Prediction:
 
         if self.models is None:
             return float("nan"), float("nan"), "undecided"
-        rho, err = signal_radius(self.models, self.cons, self.k, float(H), self.scheme)
+        implicit = {"implicit": True} if self.implicit else {}  # the implicit recurrence, where the library has it
+        rho, err = signal_radius(self.models, self.cons, self.k, float(H), self.scheme, **implicit)
         verdict = "stable" if rho + err < 1 else "unstable" if rho - err > 1 else "undecided"
         return float(rho), float(err), verdict
 
