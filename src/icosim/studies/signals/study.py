@@ -1,8 +1,9 @@
-"""One case of the signal-coupling study (:mod:`icosim.studies.signals.config`): OMSimulator's DualMassOscillator on its Model Exchange
-units over a list of ``H``, coupled by its signal connections or by a joint, against the exact solution
-(:mod:`icosim.studies.signals.exact`); and for the connections the spectral radius predicted from the identified units at every ``H``
-and, at the case's ``growth_H``, the growth per macro step measured on a run.  A dataset of the workflow's
-``signals`` part, read by its claims (:mod:`icosim.studies.signals.checks`), figure and report section.
+"""One case of the signal-coupling study (:mod:`icosim.studies.signals.config`): OMSimulator's DualMassOscillator
+on its Model Exchange units over a list of ``H``, coupled by its signal connections or by a joint, against the
+exact solution (:mod:`icosim.studies.signals.exact`); and for the connections the spectral radius predicted from
+the identified units at every ``H`` and, at the case's ``growth_H``, the growth per macro step measured on a run.
+A dataset of the workflow's ``signals`` part, read by its claims (:mod:`icosim.studies.signals.checks`), figure
+and report section.
 
 * error: the largest displacement error of either mass over the communication points of ``[0, t_end]``, relative
   to the amplitude (the largest start displacement); the run starts from the exact solution's coupling values at
