@@ -81,7 +81,8 @@ def check_growth(datasets, *, select: dict, verdict: str, tolerance: float | Non
                          "holds": ok})  # fmt: skip
             holds.append(ok)
     if not rows:
-        why = f"no growth run predicted {verdict} among the cases with {selector_text(select)}"
+        what = "with a predicted verdict" if verdict == "any" else f"predicted {verdict}"
+        why = f"no growth run {what} among the cases with {selector_text(select)}"
         return Outcome(None, why + ("" if picked else " (no such case)"), {"rows": []})
     parts = []
     for r in rows:
