@@ -11,6 +11,7 @@ configfile: "config/convergence.yaml"
 configfile: "config/pendulum.yaml"
 configfile: "config/fmi.yaml"
 configfile: "config/chains.yaml"
+configfile: "config/signals.yaml"
 
 
 include: "workflow/rules/common.smk"
@@ -19,6 +20,7 @@ include: "workflow/rules/convergence.smk"
 include: "workflow/rules/pendulum.smk"
 include: "workflow/rules/fmi.smk"
 include: "workflow/rules/chains.smk"
+include: "workflow/rules/signals.smk"
 include: "workflow/rules/report.smk"
 
 

@@ -104,6 +104,7 @@ FLOORS = (
             "icosim.studies.trade",
             "icosim.studies.fmi",
             "icosim.studies.chains",
+            "icosim.studies.signals",
         ),
     ),  # fmt: skip
     ("claims", ("icosim.claims",)),

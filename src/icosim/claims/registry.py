@@ -13,10 +13,11 @@ module                                       check kinds
 :mod:`icosim.studies.pendulum.checks`        ``pendulum_stability``
 :mod:`icosim.studies.fmi.checks`             ``fmi_bound``, ``fmi_orders``
 :mod:`icosim.studies.chains.checks`          ``chain_two_unit``, ``chain_order``, ``chain_trend``, ``chain_placement``
+:mod:`icosim.studies.signals.checks`         ``signals_order``, ``signals_growth``, ``signals_ratio``
 ===========================================  ==========================================================
 
 >>> sorted(CHECKS)
-['chain_order', 'chain_placement', 'chain_trend', 'chain_two_unit', 'compare', 'convergence_order', 'fmi_bound', 'fmi_orders', 'pendulum_stability', 'pointwise', 'stable_fraction', 'trend']
+['chain_order', 'chain_placement', 'chain_trend', 'chain_two_unit', 'compare', 'convergence_order', 'fmi_bound', 'fmi_orders', 'pendulum_stability', 'pointwise', 'signals_growth', 'signals_order', 'signals_ratio', 'stable_fraction', 'trend']
 """
 
 from __future__ import annotations
@@ -26,13 +27,15 @@ from ..studies.chains import checks as _chains
 from ..studies.convergence import checks as _convergence
 from ..studies.fmi import checks as _fmi
 from ..studies.pendulum import checks as _pendulum
+from ..studies.signals import checks as _signals
 from ..studies.stability import checks as _stability
 from ..verdicts import Claim, Verdict
 
 __all__ = ["CHECKS", "DEFAULTS", "parse_claims", "load_claims", "evaluate_claim", "evaluate", "describe_claim"]
 
 #: check kind -> :class:`icosim.verdicts.CheckKind`, for every part.
-CHECKS = {**_stability.CHECKS, **_convergence.CHECKS, **_pendulum.CHECKS, **_fmi.CHECKS, **_chains.CHECKS}
+CHECKS = {**_stability.CHECKS, **_convergence.CHECKS, **_pendulum.CHECKS, **_fmi.CHECKS, **_chains.CHECKS,
+          **_signals.CHECKS}  # fmt: skip
 
 #: A claim is about the paper's coupling scheme, Jacobi, unless a selector names another.
 DEFAULTS = {"scheme": "jacobi"}

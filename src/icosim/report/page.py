@@ -32,6 +32,7 @@ DATASET_PATHS = {
     "pendulum": "results/pendulum/summary.nc",
     "fmi": "results/fmi/validation/",
     "chains": "results/chains/",
+    "signals": "results/signals/",
 }
 #: The report's directory relative to the project directory (links to datasets go up from it).
 REPORT_DIR = "reports"

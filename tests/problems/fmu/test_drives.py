@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 import yaml
 from helpers import ROOT
-from scipy.linalg import expm
 
 from icosim.engine.methods import engine_method, make_method
 from icosim.engine.run import simulate
@@ -24,21 +23,17 @@ from icosim.problems.fmu.scene import load_scene
 from icosim.problems.linear.exact import MonolithicSolution, consistent_start
 from icosim.problems.linear.model import PhysicalModel
 from icosim.problems.linear.problem import LinearCosimulation
+from icosim.studies.signals.exact import DualMass
 
 pytestmark = pytest.mark.fmu
 
 # DualMassOscillator.mo: System1 (m1, k1, c1), System2 (k2, c2 to m2, k3, c3 to the ground), x2_start 0.5
 M1, K1, C1, K2, C2, K3, C3, M2 = 1.0, 10.0, 0.2, 10.0, 0.5, 20.0, 0.3, 1.0
 AMPLITUDE = 0.5  # x2_start: the largest displacement of the free oscillation
-STIFFNESS = np.array([[K1 + K2, -K2], [-K2, K2 + K3]])
-DAMPING = np.array([[C1 + C2, -C2], [-C2, C2 + C3]])
-A = np.block([[np.zeros((2, 2)), np.eye(2)], [-STIFFNESS / [[M1], [M2]], -DAMPING / [[M1], [M2]]]])
-Z0 = np.array([0.0, 0.5, 0.0, 0.0])  # x1, x2, v1, v2
-
-
-def exact(t):
-    """x1, x2, v1, v2 of the monolithic system at the times ``t``, ``(len(t), 4)``."""
-    return np.array([expm(A * float(s)) @ Z0 for s in np.atleast_1d(t)])
+DUAL_MASS = DualMass(m1=M1, k1=K1, c1=C1, m2=M2, k2=K2, c2=C2, k3=K3, c3=C3, x1_start=0.0, x2_start=AMPLITUDE)
+A = DUAL_MASS.matrix
+#: x1, x2, v1, v2 of the monolithic system at the times ``t``, ``(len(t), 4)`` (the library's exact solution).
+exact = DUAL_MASS.exact
 
 
 def exact_coupling(t, decomposition):

@@ -50,3 +50,12 @@ def test_bad_input_is_refused_naming_the_key_and_what_is_allowed(tmp_path, chang
     with pytest.raises(SceneError) as refused:
         load(tmp_path, **changes)
     assert f"scene.yaml: {where}:" in str(refused.value) and says in str(refused.value), str(refused.value)
+
+
+def test_a_coupling_history_of_the_wrong_shape_is_refused_before_a_unit_is_opened(tmp_path):
+    """k + 1 points of every connection (the units named here do not exist: nothing is opened)."""
+    from icosim.problems.fmu.signal_scene import run_signal_scene
+
+    scene = load(tmp_path, coupling={"H": 0.1, "k": 1})
+    with pytest.raises(SceneError, match=r"coupling history must be \(2, 2\) .*got \(1, 2\)"):
+        run_signal_scene(scene, history=[[0.0, 0.0]])

@@ -278,14 +278,20 @@ def signal_wiring(scene: SignalScene):
     return cons, inputs, outputs, fed
 
 
-def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
+def run_signal_scene(scene: SignalScene, *, progress=None, history=None) -> SignalRun:
     """Open the units, refuse an algebraic loop, run the macro steps (explicit or implicit coupling), close the units;
-    ``progress(n_done)`` is called after each step."""
+    ``progress(n_done)`` is called after each step.  ``history``: the connections' values at ``T_0, T_-1, ...
+    T_-k`` (``(k + 1, connections)``, in the scene's order of the connections), else those at ``t_start`` at
+    every point (a start from rest in the past)."""
     from ...engine.connection_conditions import NotConverged
     from ...engine.run import simulate
     from .signals import SignalCosimulation
 
     names, c = list(scene.names), scene.coupling
+    want = (c["k"] + 1, len(scene.connections))
+    if history is not None and np.shape(history) != want:
+        raise SceneError(f"{scene.path}: the coupling history must be {want} (k + 1 points, one value per connection), "
+                         f"got {np.shape(history)}")  # fmt: skip
     cons, inputs, outputs, fed = signal_wiring(scene)
     units = []
     run = SignalRun(scene)
@@ -295,7 +301,7 @@ def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
             units.append(open_signal_unit(scene, name, inputs[i], outputs[i]))
         problem = SignalCosimulation(units, inputs, outputs, cons, c["k"], c["H"], t0=scene.t0, sources=fed,
                                      implicit=c["implicit"])  # fmt: skip
-        history = problem.initial_history()
+        history = problem.initial_history(None if history is None else _history_rows(scene, problem, history))
         recorded = [
             (u, v) for u, sub in zip(units, (scene.subsystems[n] for n in names)) for v in sub.get("record", [])
         ]
@@ -341,6 +347,15 @@ def _check_saves_state(scene, name, sub, path):
     fix = "interface: model-exchange (the unit has it), or" if md.modelExchange is not None else ""
     _fail(scene.path, f"subsystems.{name}", f"{path.name} declares {flag}=false, and coupling.implicit: true steps "
           f"each unit again from T_N, restoring its state; use {fix} implicit: false")  # fmt: skip
+
+
+def _history_rows(scene, problem, history) -> np.ndarray:
+    """``history`` (connections in the scene's order) as rows of the problem's coupling variables."""
+    history = np.asarray(history, dtype=float)
+    rows = np.zeros((history.shape[0], problem.n_coupling))
+    for c in range(history.shape[1]):
+        rows[:, problem.graph.connection_column(c)] = history[:, c]
+    return rows
 
 
 def _append(run, problem, e, recorded):
