@@ -28,7 +28,9 @@ def workflow_copy(tmp_path_factory):
 def test_ci_dry_run_lists_the_signal_jobs(workflow_copy):
     jobs = scheduled_jobs(snakemake(workflow_copy, "-n", "--configfile", *CI), "signals_")
     cases = study_cases(ci_signals_config())
-    assert len(cases) == 8  # Jacobi k = 0, 1, 2; Gauss-Seidel k = 0, 1; the joint k = 0, 1, 2
+    assert (
+        len(cases) == 10
+    )  # Jacobi k = 0, 1, 2; Gauss-Seidel k = 0, 1; implicit Jacobi k = 0, 1; the joint k = 0, 1, 2
     assert sorted(jobs["signals_case"]) == sorted(f"results/signals/{c}.nc" for c in cases)
     assert jobs["signals_figure"] == ["results/signals/figures/signals.png", "results/signals/figures/signals.pdf"]
     assert jobs["signals_claims"][0] == "results/signals/claims.json"

@@ -95,12 +95,13 @@ def test_the_ratio_of_two_couplings_at_their_common_steps():
 
 def theory_datasets():
     """What theory says of the configured cases: order k + 1 for the connections (Jacobi k = 0, 1, 2,
-    Gauss-Seidel k = 0, 1) and the joint (k = 0, 1, 2), growth by the predicted rho, the joint's error below the
-    connections'."""
+    Gauss-Seidel k = 0, 1, implicit Jacobi k = 0, 1) and the joint (k = 0, 1, 2), growth or decay by the predicted
+    rho, the joint's error below the connections'."""
     joint_H = [1.25e-3, 6.25e-4, 3.125e-4]
     out = [case("connections", k, power(k + 1), growth=[(0.2, 1.09, 1.091)]) for k in (0, 1, 2)]
     out += [case("connections", 0, power(1), scheme="gauss-seidel-12", growth=[(0.2, 1.04, 1.0401)])]
     out += [case("connections", 1, power(2), scheme="gauss-seidel-12", growth=[(0.2, 0.98, 0.981)])]
+    out += [case("connections", k, power(k + 1), implicit=True, growth=[(0.2, 0.97, 0.9701)]) for k in (0, 1)]
     out += [case("joint", k, power(k + 1, 0.1, joint_H), H=joint_H, method="baumgarte") for k in (0, 1, 2)]
     return out
 

@@ -25,6 +25,7 @@ def test_the_configured_cases_are_every_k_of_each_setting():
     assert sorted(cases) == sorted(
         [f"connections_jacobi_k{k}" for k in (0, 1, 2)]
         + [f"connections_gauss-seidel-12_k{k}" for k in (0, 1)]
+        + [f"connections_jacobi_k{k}_implicit" for k in (0, 1)]
         + [f"joint_baumgarte_fd_k{k}" for k in (0, 1, 2)]
     )
     assert cases["joint_baumgarte_fd_k2"]["params"] == {"index": 1, "mu": 1e-3}
