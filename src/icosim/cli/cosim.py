@@ -280,7 +280,9 @@ def _signal_prediction_text(a: dict) -> str:
             if "identifications" in limit
             else ""
         )
-        lines.append(f"largest stable H of the scene's scheme: {limit['H_max']:.6g} s ({limit['status']}{anew})")
+        lines.append(f"largest stable H of the scene's scheme: {limit['H_max']:.6g} s ({limit['status']}{anew}; "
+                     f"scanned at a ratio of {limit['scan_ratio']:.3g}: a band of instability narrower than that "
+                     "between two scan points below it would not be seen)")  # fmt: skip
     return "\n".join(lines)
 
 

@@ -277,3 +277,13 @@ def test_where_the_prediction_finds_implicit_coupling_unstable_the_run_grows_by_
     assert run.status == "completed" and max(run.iterations) <= 3
     measured = growth(run, steps)
     assert abs(measured - rho) <= 0.05 * (rho - 1), (measured, rho)
+
+
+@pytest.mark.parametrize("k", [0, 1])
+def test_the_largest_stable_h_stops_below_the_band_where_implicit_coupling_grows(tmp_path, k):
+    """The band of H where implicit coupling of these units is unstable (the run at 0.7 s grows, test above) is
+    narrower than a decade: the largest stable H predicted from a scene at H = 0.01 s is its lower edge, below 0.7 s
+    and above the scene's H, bisected, not censored at the scan's cap."""
+    limit = predict_signal_scene(load_scene(dmo_scene(tmp_path, 0.01, 1.0, k=k, implicit=True)))["largest_stable_H"]
+    assert limit["status"] == "bisected" and 0.01 < limit["H_max"] < limit["H_unstable"] < 0.7, limit
+    assert limit["H_unstable"] / limit["H_max"] < 1.01 and limit["scan_ratio"] < 1.1, limit

@@ -39,13 +39,25 @@ from ..linear.signals import StateSpaceUnit, signal_limit, signal_radius
 from .errors import FmuError, SceneError
 from .predict import IDENTIFY_SECONDS
 
-__all__ = ["predict_signal_scene", "identify_exchange", "identify_stepped", "DIFFERENCE", "CS_PROBES"]
+__all__ = [
+    "predict_signal_scene",
+    "identify_exchange",
+    "identify_stepped",
+    "DIFFERENCE",
+    "CS_PROBES",
+    "SCAN_PER_DECADE",
+    "SCAN_PER_DECADE_STEPPED",
+]
 
 #: The relative difference step of the Model Exchange identification.
 DIFFERENCE = 1e-6
 
 #: Probing rows of a co-simulation unit, per unknown of one fitted row (its states, inputs and the constant).
 CS_PROBES = 3
+
+#: Step sizes a decade of the largest stable H's scan: dense for continuous models (a radius costs an eigenvalue
+#: problem), sparse for co-simulation units (identified anew at each).
+SCAN_PER_DECADE, SCAN_PER_DECADE_STEPPED = 64, 4
 
 
 def _jacobians(unit, x0, u0, rel, inputs, outputs):
@@ -243,10 +255,14 @@ def predict_signal_scene(scene) -> dict:
                 out[i] = model(u, h)
             return out
 
+        # a continuous model's radius is cheap at any H: a dense scan, so that a narrow band of instability is
+        # not stepped over; a co-simulation unit is identified anew at every scan point
+        per_decade = SCAN_PER_DECADE_STEPPED if stepped else SCAN_PER_DECADE
         lim = signal_limit(at if stepped else models, cons, k, H, mine, decades=2.0 if stepped else 3.0,
-                           implicit=implicit)  # fmt: skip
+                           per_decade=per_decade, implicit=implicit)  # fmt: skip
         finite = lambda h: float(h) if np.isfinite(h) else None  # noqa: E731  (none found: the scan's cap)
-        limit = {"H_max": finite(lim.H_max), "H_unstable": finite(lim.H_unstable), "status": lim.status}
+        limit = {"H_max": finite(lim.H_max), "H_unstable": finite(lim.H_unstable), "status": lim.status,
+                 "scan_ratio": float(10.0 ** (1.0 / per_decade))}  # fmt: skip
         if stepped:
             limit["identifications"] = probes[0]  # the co-simulation units identified anew at each step tried
         if limit["H_max"] is None:

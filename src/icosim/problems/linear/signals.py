@@ -258,11 +258,15 @@ def signal_radius(units: Sequence[StateSpaceUnit], connections: Sequence[graph.C
 
 def signal_limit(units: Sequence[StateSpaceUnit] | Callable[[float], Sequence[StateSpaceUnit]],
                  connections: Sequence[graph.Connection], k: int, H: float, scheme: Scheme = JACOBI, *,
-                 decades: float = 3.0, resolution: float = 1e-3, implicit: bool = False) -> Any:  # fmt: skip
-    """The largest stable macro step (:func:`~icosim.step_limit.stability_limit`: a geometric scan over
-    ``decades`` either side of ``H``, then a bisection to ``resolution``): stable where the spectral radius and its
-    error estimate stay below one.  ``units``: continuous units, or a function of the step giving the units at it
-    (one-step maps identified anew at each step).  Each evaluation's info is ``(rho, err)``."""
+                 decades: float = 3.0, per_decade: int = 4, resolution: float = 1e-3,
+                 implicit: bool = False) -> Any:  # fmt: skip
+    """The largest stable macro step (:func:`~icosim.step_limit.stability_limit`: a geometric scan of ``per_decade``
+    step sizes a decade over ``decades`` either side of ``H``, then a bisection to ``resolution``): stable where the
+    spectral radius and its error estimate stay below one.  A band of instability between two neighbouring scan
+    points is not seen, so the scan's ratio ``10**(1/per_decade)`` bounds the narrowest band it finds (implicit
+    coupling of units with their own oscillations has such bands).  ``units``: continuous units, or a function of
+    the step giving the units at it (one-step maps identified anew at each step).  Each evaluation's info is
+    ``(rho, err)``."""
     from ...step_limit import stability_limit
 
     if not callable(units) and any(u.H is not None for u in units):
@@ -273,5 +277,5 @@ def signal_limit(units: Sequence[StateSpaceUnit] | Callable[[float], Sequence[St
         rho, err = signal_radius(at(h), connections, k, h, scheme, implicit=implicit)
         return bool(rho + err < 1), (rho, err)
 
-    scan = np.geomspace(H * 10.0**-decades, H * 10.0**decades, int(8 * decades) + 1)
+    scan = np.geomspace(H * 10.0**-decades, H * 10.0**decades, int(round(2 * decades * per_decade)) + 1)
     return stability_limit(stable, scan, resolution=resolution)
