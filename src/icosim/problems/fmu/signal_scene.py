@@ -14,7 +14,9 @@ A YAML scene (or a system file whose connections are signals, :mod:`icosim.probl
 An input may be fed by a table or a constant instead (``sources``: :mod:`icosim.problems.fmu.signal_sources`).
 
 Coupling is explicit (:mod:`icosim.problems.fmu.signals`): ``k`` the order of the inputs' extrapolation (0: held),
-``scheme`` jacobi or gauss-seidel with ``order`` (every subsystem once), ``implicit`` false only.  Bad input is
+``scheme`` jacobi or gauss-seidel with ``order`` (every subsystem once), ``implicit`` false only.  An algebraic loop
+is solved at each communication point by Newton's method without a step (:mod:`icosim.problems.fmu.loops`; its
+``loop_tolerance``, default 1e-10, and ``loop_iterations``, default 20), or refused naming the loop.  Bad input is
 refused naming the key and what is allowed, before any unit is opened.
 """
 
@@ -41,7 +43,7 @@ SIGNAL_SUBSYSTEM_KEYS = ("fmu", "start", "interface", "tolerance", "record")
 CONNECTION_KEYS = ("from", "to", "factor", "offset")
 #: Coupling keys and their defaults (``H`` required).
 SIGNAL_COUPLING_KEYS = {"k": 0, "scheme": "jacobi", "order": None, "H": None, "implicit": False, "inputs": "auto",
-                        "substeps": 1}  # fmt: skip
+                        "substeps": 1, "loop_tolerance": 1e-10, "loop_iterations": 20}  # fmt: skip
 _INTERFACES = ("co-simulation", "model-exchange")
 
 
@@ -177,6 +179,9 @@ def signal_scene(path, data, system=None) -> SignalScene:
         _fail(path, "coupling.inputs", f"{c['inputs']!r} is not allowed; allowed: auto, derivatives, substeps")
     if isinstance(c["substeps"], bool) or not isinstance(c["substeps"], int) or c["substeps"] < 1:
         _fail(path, "coupling.substeps", f"must be an integer >= 1, got {c['substeps']!r}")
+    from .loops import check_loop_keys
+
+    check_loop_keys(lambda where, message: _fail(path, where, message), c)
     if c["H"] is None:
         _fail(path, "coupling.H", "required: the macro-step size (s)")
     c["H"] = _number(path, "coupling.H", c["H"], positive=True)
@@ -206,6 +211,7 @@ class SignalRun:
     status: str = "completed"
     reason: str = ""
     wall_time: float = 0.0
+    loop: dict = field(default_factory=dict)  # the algebraic loop's solve (LoopSolver.info), empty without one
 
 
 def _fmu_path(scene, sub) -> Path:
@@ -214,7 +220,8 @@ def _fmu_path(scene, sub) -> Path:
 
 
 def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
-    """Open the units, refuse an algebraic loop, run the macro steps (explicit coupling), close the units;
+    """Open the units, solve an algebraic loop at each point (or refuse it), run the macro steps (explicit
+    coupling), close the units;
     ``progress(n_done)`` is called after each step."""
     from ...engine.run import simulate
     from .exchange import open_fmu_unit
@@ -243,7 +250,8 @@ def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
                 units.append(open_fmu_unit(name, path, keys, start, interface=sub["interface"],
                                            tolerance=sub.get("tolerance"), inputs=c["inputs"],
                                            substeps=c["substeps"], t0=scene.t0))  # fmt: skip
-        problem = SignalCosimulation(units, inputs, outputs, cons, c["k"], c["H"], t0=scene.t0, sources=fed)
+        problem = SignalCosimulation(units, inputs, outputs, cons, c["k"], c["H"], t0=scene.t0, sources=fed,
+                                     loop_tolerance=c["loop_tolerance"], loop_iterations=c["loop_iterations"])  # fmt: skip
         history = problem.initial_history()
         recorded = [
             (u, v) for u, sub in zip(units, (scene.subsystems[n] for n in names)) for v in sub.get("record", [])
@@ -264,6 +272,7 @@ def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
         if traj.diverged_at is not None:
             run.status, run.reason = "diverged", f"macro step {traj.diverged_at}: {traj.reason}"
         run.units = {u.label: u.info() for u in units}
+        run.loop = problem.loops.info() if problem.loops is not None else {}
     finally:
         for unit in units:
             unit.close()
@@ -302,6 +311,7 @@ def signal_dataset(run: SignalRun, *, command: str = ""):
     attrs["scene_json"] = attrs["config_json"]
     attrs |= {"status": run.status, "reason": run.reason, "scheme": run.scene.scheme.name, "coupling": "explicit",
               "k": run.scene.coupling["k"], "wall_time_s": run.wall_time}  # fmt: skip
+    attrs |= run.loop
     for name, info in run.units.items():
         for key, value in info.items():
             attrs[f"{name}_{key}"] = value
