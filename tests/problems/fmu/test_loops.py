@@ -177,3 +177,48 @@ def test_a_loop_of_another_tools_feedthrough_units_is_solved(tmp_path):
     }))  # fmt: skip
     np.testing.assert_allclose(run.series["a.Float64_continuous_input"], 2.0, rtol=1e-14)
     np.testing.assert_allclose(run.series["b.Float64_continuous_input"], 1.0, rtol=1e-14)
+
+
+#: OMSimulator's DualMassOscillator.System1 (m1 1 kg, k1 10 N/m, c1 0.2 N s/m; its a1 depends on F directly, by its
+#: ModelStructure) with fmus/pcontrol feeding back a1: the loop F = kp (r - a1), another tool's unit in it.
+M1, K1, C1 = 1.0, 10.0, 0.2
+KP1 = 3.0
+
+
+def om_loop(tmp_path, interface, H, k=0):
+    s1 = {"fmu": str(OUTSIDE / "omsimulator" / "DualMassOscillator.System1.fmu"), "start": {"x1_start": X0},
+          "interface": interface, "record": ["x1"]}  # fmt: skip
+    if interface == "model-exchange":
+        s1["tolerance"] = 1e-12
+    control = str(build_unit(ROOT / "fmus" / "pcontrol", FMU_CACHE))
+    return write(tmp_path, {
+        "subsystems": {"s1": s1, "ctrl": {"fmu": control, "start": {"kp": KP1, "r": R}}},
+        "connections": [{"from": "ctrl.u", "to": "s1.F"}, {"from": "s1.a1", "to": "ctrl.y"}],
+        "coupling": {"H": H, "k": k},
+        "t_end": 2.0,
+    })  # fmt: skip
+
+
+@pytest.mark.parametrize("interface", ["co-simulation", "model-exchange"])
+def test_another_tools_unit_in_a_loop_is_solved_at_t0_as_by_hand(tmp_path, interface):
+    """Both of OpenModelica's interfaces give a1 from F without a step: at t0 F (1 + kp / m1) = kp r + kp / m1 k1 x0."""
+    scene = om_loop(tmp_path, interface, 1e-2)
+    scene.t_end = 1e-2
+    run = run_signal_scene(scene)
+    np.testing.assert_allclose(run.series["s1.F"][0], (KP1 * R + KP1 / M1 * K1 * X0) / (1 + KP1 / M1), rtol=1e-12)
+
+
+@pytest.mark.parametrize("k", [0, 1])
+def test_a_loop_with_a_model_exchange_unit_converges_with_order_k_plus_one(tmp_path, k):
+    """System1 as Model Exchange (integrated by icosim to 1e-12): the loop eliminated by hand, by solve_ivp."""
+
+    def rhs(t, z):
+        x, v = z
+        force = (KP1 * R + KP1 / M1 * (K1 * x + C1 * v)) / (1 + KP1 / M1)
+        return [v, (-K1 * x - C1 * v + force) / M1]
+
+    ref = solve_ivp(rhs, (0.0, 2.0), [X0, 0.0], method="DOP853", rtol=1e-13, atol=1e-15).y[0, -1]
+    Hs = [4e-3, 2e-3, 1e-3]
+    errors = [abs(run_signal_scene(om_loop(tmp_path, "model-exchange", H, k)).series["s1.x1"][-1] - ref) for H in Hs]
+    fit = asymptotic_order(Hs, errors)
+    assert abs(fit.order - (k + 1)) < 0.15, (errors, fit)
