@@ -68,7 +68,7 @@ def map_loop(tmp_path, output="y", start=0.0, **coupling):
     })  # fmt: skip
 
 
-def control_loop(tmp_path, kp, H, k=0, t_end=1.0, source=False):
+def control_loop(tmp_path, kp, H, k=0, t_end=1.0, source=False, scheme="jacobi"):
     """The reference ``r`` a start value, or (``source``) a constant source."""
     msd, control = (str(build_unit(ROOT / "fmus" / n, FMU_CACHE)) for n in ("msd", "pcontrol"))
     return write(tmp_path, {
@@ -76,7 +76,7 @@ def control_loop(tmp_path, kp, H, k=0, t_end=1.0, source=False):
                        "ctrl": {"fmu": control, "start": {"kp": kp, **({} if source else {"r": R})}}},
         "connections": [{"from": "ctrl.u", "to": "mass.lambda"}, {"from": "mass.a", "to": "ctrl.y"}],
         **({"sources": [{"to": "ctrl.r", "value": R}]} if source else {}),
-        "coupling": {"H": H, "k": k},
+        "coupling": {"H": H, "k": k, "scheme": scheme, **({"order": ["mass", "ctrl"]} if scheme != "jacobi" else {})},
         "t_end": t_end,
     })  # fmt: skip
 
@@ -146,11 +146,13 @@ def monolithic_x(t_end):
     return solve_ivp(rhs, (0.0, t_end), [X0, 0.0], method="DOP853", rtol=1e-13, atol=1e-15).y[0, -1]
 
 
-@pytest.mark.parametrize("k", [0, 1])
-def test_a_solved_loop_converges_to_the_monolithic_solution_with_order_k_plus_one(tmp_path, k):
+@pytest.mark.parametrize("k, scheme", [(0, "jacobi"), (1, "jacobi"), (1, "gauss-seidel")])
+def test_a_solved_loop_converges_to_the_monolithic_solution_with_order_k_plus_one(tmp_path, k, scheme):
+    """Gauss-Seidel too: the loop is solved once both units stand at T_N+1, after the second stage."""
     Hs = [4e-3, 2e-3, 1e-3]
     ref = monolithic_x(1.0)
-    errors = [abs(run_signal_scene(control_loop(tmp_path, KP, H, k)).series["mass.x"][-1] - ref) for H in Hs]
+    errors = [abs(run_signal_scene(control_loop(tmp_path, KP, H, k, scheme=scheme)).series["mass.x"][-1] - ref)
+              for H in Hs]  # fmt: skip
     fit = asymptotic_order(Hs, errors)
     assert abs(fit.order - (k + 1)) < 0.15, (errors, fit)
 
@@ -222,3 +224,28 @@ def test_a_loop_with_a_model_exchange_unit_converges_with_order_k_plus_one(tmp_p
     errors = [abs(run_signal_scene(om_loop(tmp_path, "model-exchange", H, k)).series["s1.x1"][-1] - ref) for H in Hs]
     fit = asymptotic_order(Hs, errors)
     assert abs(fit.order - (k + 1)) < 0.15, (errors, fit)
+
+
+def test_the_command_line_says_which_root_it_found_and_the_file_keeps_it(tmp_path, capsys):
+    from icosim.cli import main
+    from icosim.io.netcdf import open_dataset
+
+    scene = map_loop(tmp_path, start=2.5)
+    out = tmp_path / "run.nc"
+    assert main(["cosim", str(scene.path), "--out", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert "loop: the algebraic loop f.y -> g.u, g.y -> f.u is nonlinear and may have several roots" in said
+    with open_dataset(out) as ds:
+        root = fixed_point(2.0, 3.0)
+        np.testing.assert_allclose(json.loads(ds.attrs["loop_root_t0"]), [root, root], atol=within(root))
+        assert json.loads(ds.attrs["loop_start_t0"]) == [0.0, 2.5]
+
+
+def test_the_command_line_refuses_an_ill_posed_loop_naming_it_and_writes_nothing(tmp_path, capsys):
+    from icosim.cli import main
+
+    scene = control_loop(tmp_path, -M, 1e-3)
+    out = tmp_path / "run.nc"
+    assert main(["cosim", str(scene.path), "--out", str(out)]) != 0
+    said = capsys.readouterr().err
+    assert "ctrl.u -> mass.lambda, mass.a -> ctrl.y is ill-posed" in said and not out.exists()
