@@ -220,9 +220,8 @@ def _fmu_path(scene, sub) -> Path:
 
 
 def run_signal_scene(scene: SignalScene, *, progress=None) -> SignalRun:
-    """Open the units, solve an algebraic loop at each point (or refuse it), run the macro steps (explicit
-    coupling), close the units;
-    ``progress(n_done)`` is called after each step."""
+    """Open the units, run the macro steps (explicit coupling; an algebraic loop solved at each point, or refused),
+    close the units; ``progress(n_done)`` is called after each step."""
     from ...engine.run import simulate
     from .exchange import open_fmu_unit
     from .signal_sources import check_targets
