@@ -14,8 +14,9 @@ with the units' states ``x`` fixed: ``e`` is handed to the inputs (FMI set, no `
 unit's direct-feedthrough outputs follow its inputs between steps, a model-exchange unit recomputes them) and the
 outputs are read.  Newton's method starts from the inputs as the units hold them (their start values at ``t0``,
 after a step the extrapolation's value at its end) with the Jacobian ``I - dT(y)/de`` by forward differences, one
-input at a time (only its unit is set and read again).  Every connection's value is an unknown, those on no cycle
-too: they follow in the same Newton step.  The solve converges when every residual ``|F_j|`` is within
+input at a time (only its unit is set and read again), kept from one point to the next while it serves
+(:meth:`LoopSolver.solve`).  Every connection's value is an unknown, those on no cycle too: they follow in the same
+Newton step.  The solve converges when every residual ``|F_j|`` is within
 ``coupling.loop_tolerance`` ``* max(1, |e_j|)``; it is refused (:class:`LoopError`, naming the loop's connections
 and the time) where it has not converged within ``coupling.loop_iterations`` Newton steps, and where ``I - J`` is
 singular (a loop gain of 1: the outputs do not fix the loop's values).
@@ -34,13 +35,15 @@ from ...errors import StepFailure
 from .errors import SceneError
 
 __all__ = ["LOOP_KEYS", "LoopError", "LoopSolver", "check_loop_keys", "depends_directly", "feedthrough_after",
-           "feedthrough_loop", "measured_depends", "loop_connections", "loop_solver", "SINGULAR"]  # fmt: skip
+           "feedthrough_loop", "measured_depends", "loop_connections", "loop_solver", "SINGULAR", "SLOW"]  # fmt: skip
 
 #: The coupling keys of the loop solve and their defaults.
 LOOP_KEYS = {"loop_tolerance": 1e-10, "loop_iterations": 20}
 #: ``I - J`` is singular where its smallest singular value is below this times its largest (the forward
 #: differences are good to about 1e-8).
 SINGULAR = 1e-6
+#: A Newton step with a kept Jacobian that leaves more than this part of the residual takes a fresh one.
+SLOW = 0.1
 
 
 class LoopError(SceneError, StepFailure):
@@ -154,7 +157,8 @@ class LoopSolver:
         self.tolerance, self.iterations = float(tolerance), int(iterations)
         graph = problem.graph
         self.cols = np.array([graph.connection_column(c) for c in range(len(graph.connections))])
-        self.solves = self.newton_steps = self.evaluations = 0
+        self.solves = self.newton_steps = self.evaluations = self.jacobians = 0
+        self._A: np.ndarray | None = None  # I - J as the last solve ended with it
         self.most_steps, self.largest_residual = 0, 0.0
         self.first: dict = {}  # the solve at the first point: time, start, root, steps, nonlinear
 
@@ -221,9 +225,11 @@ class LoopSolver:
     def solve(self, t: float) -> np.ndarray:
         """The connections' values at time ``t`` solving the loop, handed to the units' inputs; Newton from
         :meth:`start`.  The first solve takes the Jacobian at its start whatever the residual there, so a loop of
-        gain 1 is refused even where its start happens to satisfy it."""
+        gain 1 is refused even where its start happens to satisfy it.  A later solve starts with the Jacobian the
+        solve before ended with and takes a fresh one where a step does not cut the residual tenfold (:data:`SLOW`),
+        as Newton's method for a loop whose Jacobian moves with the states."""
         e0 = e = self.start()
-        J0 = None
+        A, J0, before = self._A, None, np.inf
         for step in range(self.iterations + 1):
             g = self.values(e)
             r = e - g
@@ -239,12 +245,14 @@ class LoopSolver:
                     f"converged in coupling.loop_iterations = {self.iterations} steps (relative residual {size:.3g} > "
                     f"coupling.loop_tolerance = {self.tolerance:g}); raise loop_iterations or loosen loop_tolerance"
                 )
-            A = self._newton_matrix(e, g, t)
-            J0 = A if J0 is None else J0
+            if A is None or size > SLOW * before:
+                A = self._newton_matrix(e, g, t)
+                J0 = A if J0 is None else J0
             if size <= self.tolerance:
                 break
-            e = e - np.linalg.solve(A, r)
+            e, before = e - np.linalg.solve(A, r), size
             self.newton_steps += 1
+        self._A = A
         self.solves += 1
         self.most_steps = max(self.most_steps, step)
         self.largest_residual = max(self.largest_residual, size)
@@ -257,6 +265,7 @@ class LoopSolver:
     def _newton_matrix(self, e: np.ndarray, g: np.ndarray, t: float) -> np.ndarray:
         """``I - J`` at ``e`` (:meth:`jacobian`), refused where singular."""
         A = np.eye(len(e)) - self.jacobian(e, g)
+        self.jacobians += 1
         s = np.linalg.svd(A, compute_uv=False)
         if not s[-1] > SINGULAR * max(s[0], 1.0):
             raise LoopError(
@@ -290,6 +299,7 @@ class LoopSolver:
             "loop_most_steps": self.most_steps,
             "loop_largest_residual": self.largest_residual,
             "loop_evaluations": self.evaluations,
+            "loop_jacobians": self.jacobians,
             "loop_tolerance": self.tolerance,
             "loop_iterations": self.iterations,
         }
