@@ -249,3 +249,30 @@ def test_the_command_line_refuses_an_ill_posed_loop_naming_it_and_writes_nothing
     assert main(["cosim", str(scene.path), "--out", str(out)]) != 0
     said = capsys.readouterr().err
     assert "ctrl.u -> mass.lambda, mass.a -> ctrl.y is ill-posed" in said and not out.exists()
+
+
+def test_a_nonlinear_loop_with_a_state_converges_to_the_monolithic_solution_with_order_two(tmp_path):
+    """fmus/msd's acceleration into fmus/static_map, ``lambda = -0.5 a + sin(a)``, back into the force: at each
+    state ``1.5 a - sin(a) = -c x - d v`` (one root: its derivative is at least 0.5), solved by brentq inside
+    solve_ivp; the loop's Jacobian moves with the state, so Newton takes fresh ones along the run.  k = 1: order 2."""
+    msd, unit = (str(build_unit(ROOT / "fmus" / n, FMU_CACHE)) for n in ("msd", "static_map"))
+    x0 = 0.002  # accelerations of order 1, over which sin bends
+
+    def acceleration(x, v):
+        return brentq(lambda q: 1.5 * q - np.sin(q) + CS * x + D * v, -1e4, 1e4, xtol=1e-14)
+
+    ref = solve_ivp(lambda t, z: [z[1], acceleration(*z)], (0.0, 1.0), [x0, 0.0], method="DOP853", rtol=1e-12,
+                    atol=1e-14).y[0, -1]  # fmt: skip
+    Hs, errors = [4e-3, 2e-3, 1e-3], []
+    for H in Hs:
+        run = run_signal_scene(write(tmp_path, {
+            "subsystems": {"mass": {"fmu": msd, "start": {"x0": x0}, "record": ["x"]},
+                           "f": {"fmu": unit, "start": {"a": -0.5, "c": 1.0}}},
+            "connections": [{"from": "f.y", "to": "mass.lambda"}, {"from": "mass.a", "to": "f.u"}],
+            "coupling": {"H": H, "k": 1},
+            "t_end": 1.0,
+        }))  # fmt: skip
+        errors.append(abs(run.series["mass.x"][-1] - ref))
+        assert run.loop["loop_nonlinear"] == 1 and run.loop["loop_jacobians"] > 10
+    fit = asymptotic_order(Hs, errors)
+    assert abs(fit.order - 2) < 0.15, (errors, fit)

@@ -43,7 +43,7 @@ LOOP_KEYS = {"loop_tolerance": 1e-10, "loop_iterations": 20}
 #: differences are good to about 1e-8).
 SINGULAR = 1e-6
 #: A Newton step with a kept Jacobian that leaves more than this part of the residual takes a fresh one.
-SLOW = 0.1
+SLOW = 0.01
 
 
 class LoopError(SceneError, StepFailure):
@@ -225,11 +225,11 @@ class LoopSolver:
     def solve(self, t: float) -> np.ndarray:
         """The connections' values at time ``t`` solving the loop, handed to the units' inputs; Newton from
         :meth:`start`.  The first solve takes the Jacobian at its start whatever the residual there, so a loop of
-        gain 1 is refused even where its start happens to satisfy it.  A later solve starts with the Jacobian the
-        solve before ended with and takes a fresh one where a step does not cut the residual tenfold (:data:`SLOW`),
-        as Newton's method for a loop whose Jacobian moves with the states."""
+        gain 1 is refused even where its start happens to satisfy it.  A later solve steps with the Jacobian the
+        solve before ended with while each step cuts the residual a hundredfold (:data:`SLOW`); from the first step that
+        does not, it takes a fresh Jacobian at every step (Newton's method, for a loop whose Jacobian moves)."""
         e0 = e = self.start()
-        A, J0, before = self._A, None, np.inf
+        A, J0, before, fresh = self._A, None, np.inf, False
         for step in range(self.iterations + 1):
             g = self.values(e)
             r = e - g
@@ -245,8 +245,8 @@ class LoopSolver:
                     f"converged in coupling.loop_iterations = {self.iterations} steps (relative residual {size:.3g} > "
                     f"coupling.loop_tolerance = {self.tolerance:g}); raise loop_iterations or loosen loop_tolerance"
                 )
-            if A is None or size > SLOW * before:
-                A = self._newton_matrix(e, g, t)
+            if A is None or fresh or size > SLOW * before:  # once fresh, fresh at every step: Newton's method
+                A, fresh = self._newton_matrix(e, g, t), True
                 J0 = A if J0 is None else J0
             if size <= self.tolerance:
                 break
