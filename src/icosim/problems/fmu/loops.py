@@ -201,9 +201,9 @@ class LoopSolver:
         J = np.zeros((n, n))
         for c, con in enumerate(graph.connections):
             col = graph.connection_column(c)
-            h = np.sqrt(np.finfo(float).eps) * max(1.0, abs(e[col]))
             moved = e.copy()
-            moved[col] += h
+            moved[col] += np.sqrt(np.finfo(float).eps) * max(1.0, abs(e[col]))
+            h = moved[col] - e[col]  # the step as represented
             self._hand(con.target, moved)
             g_moved = g.copy()
             self._given(con.target, g_moved)
