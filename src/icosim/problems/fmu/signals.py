@@ -15,7 +15,8 @@ states.  The inputs a unit is handed over a step follow :meth:`icosim.problems.f
 An algebraic loop (a cycle of connections each into an input its unit's output depends on directly, by the
 units' ``ModelStructure`` or, where it gives no dependencies, measured: :func:`feedthrough_loop`) is solved at each
 communication point, ``t0`` and every ``T_N+1``, by Newton's method without a step (:mod:`icosim.problems.fmu.loops`):
-the connections' new samples are then the loop's values there, not the outputs as the step left them.
+the connections' new samples are then the loop's values there, not the outputs as the step left them (the state
+the macro step returns keeps those; the units hold the solved inputs).
 """
 
 from __future__ import annotations
