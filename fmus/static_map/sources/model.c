@@ -37,3 +37,17 @@ int model_set(Model *m, unsigned vr, double value) {
 }
 
 void model_step(Model *m, const double *der, int max_order, double h) { m->u = poly_input(der, 0, max_order, h); }
+
+int model_directional(const Model *m, const unsigned *unknowns, size_t n_unknowns, const unsigned *knowns,
+                      size_t n_knowns, const double *seed, double *out) {
+    double dy = m->a + m->c * cos(m->u) + 3.0 * m->q * m->u * m->u;
+    for (size_t j = 0; j < n_unknowns; j++) {
+        out[j] = 0.0;
+        for (size_t k = 0; k < n_knowns; k++) {
+            if (knowns[k] != VR_U) return -1;
+            if (unknowns[j] == VR_Y || unknowns[j] == VR_W) out[j] += dy * seed[k];
+            else if (unknowns[j] != VR_Z) return -1;
+        }
+    }
+    return 0;
+}

@@ -12,5 +12,6 @@ typedef struct {
     double a, b, c, q, u, fail;
 } Model;
 
+#define MODEL_DIRECTIONAL /* the partial derivatives of y, w, z by u: model_directional */
 #include "unit.h"
 #endif

@@ -92,6 +92,7 @@ def test_a_nonlinear_loop_is_solved_to_the_root_brentq_finds_and_says_which(tmp_
         np.testing.assert_allclose(run.series[name], root, rtol=0, atol=within(root))
     ds = signal_dataset(run)
     assert ds.attrs["loop_connections"] == "f.y -> g.u, g.y -> f.u" and ds.attrs["loop_nonlinear"] == 1
+    assert ds.attrs["loop_directional"] == "f, g"  # static_map gives its derivatives: no differences taken
     assert json.loads(ds.attrs["loop_start_t0"]) == [0.0, start]  # g.u starts at 0, f.u at its start value
     np.testing.assert_allclose(json.loads(ds.attrs["loop_root_t0"]), [root, root], atol=within(root))
     assert "nonlinear and may have several roots" in ds.attrs["loop_message"]
@@ -273,6 +274,8 @@ def test_a_nonlinear_loop_with_a_state_converges_to_the_monolithic_solution_with
             "t_end": 1.0,
         }))  # fmt: skip
         errors.append(abs(run.series["mass.x"][-1] - ref))
-        assert run.loop["loop_nonlinear"] == 1 and run.loop["loop_jacobians"] > 10
+        assert (
+            run.loop["loop_nonlinear"] == 1 and run.loop["loop_jacobians"] > 10 and run.loop["loop_directional"] == "f"
+        )
     fit = asymptotic_order(Hs, errors)
     assert abs(fit.order - 2) < 0.15, (errors, fit)

@@ -13,8 +13,9 @@ At a communication point (``t0``, and ``T_N+1`` once every unit stands there) th
 with the units' states ``x`` fixed: ``e`` is handed to the inputs (FMI set, no ``doStep``: an FMI 2.0 co-simulation
 unit's direct-feedthrough outputs follow its inputs between steps, a model-exchange unit recomputes them) and the
 outputs are read.  Newton's method starts from the inputs as the units hold them (their start values at ``t0``,
-after a step the extrapolation's value at its end) with the Jacobian ``I - dT(y)/de`` by forward differences, one
-input at a time (only its unit is set and read again), kept from one point to the next while it serves
+after a step the extrapolation's value at its end) with the Jacobian ``I - dT(y)/de`` from the units' directional
+derivatives where they provide them, else by forward differences, one input at a time (only its unit is set and
+read again), kept from one point to the next while it serves
 (:meth:`LoopSolver.solve`).  Every connection's value is an unknown, those on no cycle too: they follow in the same
 Newton step.  The solve converges when every residual ``|F_j|`` is within
 ``coupling.loop_tolerance`` ``* max(1, |e_j|)``; it is refused (:class:`LoopError`, naming the loop's connections
@@ -35,7 +36,8 @@ from ...errors import StepFailure
 from .errors import SceneError
 
 __all__ = ["LOOP_KEYS", "LoopError", "LoopSolver", "check_loop_keys", "depends_directly", "feedthrough_after",
-           "feedthrough_loop", "measured_depends", "loop_connections", "loop_solver", "SINGULAR", "SLOW"]  # fmt: skip
+           "feedthrough_loop", "measured_depends", "provides_directional", "directional_column", "loop_connections",
+           "loop_solver", "SINGULAR", "SLOW"]  # fmt: skip
 
 #: The coupling keys of the loop solve and their defaults.
 LOOP_KEYS = {"loop_tolerance": 1e-10, "loop_iterations": 20}
@@ -130,6 +132,19 @@ def measured_depends(unit, keys: tuple[str, str], output: int, input_: int) -> b
     return bool(after != before)
 
 
+def provides_directional(unit) -> bool:
+    """Whether ``unit`` gives its partial derivatives (``providesDirectionalDerivative``, FMI 2.0)."""
+    return not unit.fmi3 and bool(getattr(unit._interface(unit.md), "providesDirectionalDerivative", False))
+
+
+def directional_column(unit, keys: tuple[str, str], input_: int) -> np.ndarray:
+    """The derivatives (SI) of ``unit``'s outputs under ``keys[1]`` by its input ``input_`` under ``keys[0]``, by
+    ``fmi2GetDirectionalDerivative``."""
+    key, outputs = keys
+    seed = unit.fmi.directional(unit.fmi.refs(outputs), [unit.fmi.refs(key)[input_]], [1.0])
+    return np.asarray(seed, dtype=float) * unit.factors[outputs] / unit.factors[key][input_]
+
+
 def loop_connections(graph, after) -> list[int]:
     """The connections on a cycle of ``after`` (connection -> the connections it feeds directly), in order."""
     n = len(graph.connections)
@@ -151,9 +166,11 @@ class LoopSolver:
     """Newton's method on ``e = T(y(x, e))`` for a :class:`~icosim.problems.fmu.signals.SignalCosimulation`
     ``problem`` whose connections ``loop`` (their indices) lie on algebraic loops."""
 
-    def __init__(self, problem, key: str, loop, tolerance: float = LOOP_KEYS["loop_tolerance"],
+    def __init__(self, problem, keys: tuple[str, str], loop, tolerance: float = LOOP_KEYS["loop_tolerance"],
                  iterations: int = LOOP_KEYS["loop_iterations"]):  # fmt: skip
-        self.problem, self.key, self.loop = problem, key, list(loop)
+        self.problem, self.keys, self.key, self.loop = problem, keys, keys[0], list(loop)
+        #: the units whose Jacobian columns come from their directional derivatives
+        self.directional = {i for i, u in enumerate(problem.units) if provides_directional(u)}
         self.tolerance, self.iterations = float(tolerance), int(iterations)
         graph = problem.graph
         self.cols = np.array([graph.connection_column(c) for c in range(len(graph.connections))])
@@ -195,12 +212,19 @@ class LoopSolver:
         return g
 
     def jacobian(self, e: np.ndarray, g: np.ndarray) -> np.ndarray:
-        """``dT(y)/de`` by forward differences at ``e`` (``g = T(y(x, e))``, the inputs standing at ``e``): one
-        connection's value moved at a time, only its unit set and read; the unit is set back."""
+        """``dT(y)/de`` at ``e`` (``g = T(y(x, e))``, the inputs standing at ``e``), a connection's value at a time:
+        by the unit's directional derivatives where it provides them (FMI 2.0), else by forward differences (its
+        value moved, only its unit set and read, the unit set back)."""
         graph, n = self.problem.graph, len(e)
         J = np.zeros((n, n))
         for c, con in enumerate(graph.connections):
             col = graph.connection_column(c)
+            if con.target in self.directional:
+                dy = directional_column(self.problem.units[con.target], self.keys, con.input)
+                for d, nxt in enumerate(graph.connections):
+                    if nxt.source == con.target:
+                        J[graph.connection_column(d), col] = nxt.factor * dy[nxt.output]
+                continue
             moved = e.copy()
             moved[col] += np.sqrt(np.finfo(float).eps) * max(1.0, abs(e[col]))
             h = moved[col] - e[col]  # the step as represented
@@ -209,7 +233,7 @@ class LoopSolver:
             self._given(con.target, g_moved)
             J[:, col] = (g_moved - g) / h
             self._hand(con.target, e)
-        self.evaluations += len(graph.connections)
+        self.evaluations += sum(con.target not in self.directional for con in graph.connections)
         return J
 
     # -- the solve ------------------------------------------------------------------------------------------
@@ -299,6 +323,7 @@ class LoopSolver:
             "loop_most_steps": self.most_steps,
             "loop_largest_residual": self.largest_residual,
             "loop_evaluations": self.evaluations,
+            "loop_directional": ", ".join(self.problem.units[i].label for i in sorted(self.directional)),
             "loop_jacobians": self.jacobians,
             "loop_tolerance": self.tolerance,
             "loop_iterations": self.iterations,
@@ -319,4 +344,4 @@ def loop_solver(problem, inputs_key: str, outputs_key: str, tolerance, iteration
         return depends_directly(md, output, input_)
 
     loop = loop_connections(problem.graph, feedthrough_after(problem.graph, ins, outs, depends))
-    return LoopSolver(problem, inputs_key, loop, tolerance, iterations) if loop else None
+    return LoopSolver(problem, (inputs_key, outputs_key), loop, tolerance, iterations) if loop else None

@@ -1,6 +1,6 @@
 """The unit fmus/static_map (y = a u + b + c sin(u) + q u^3, w = y, z = b) through fmpy's low-level API: its outputs
-y and w follow its input at once, z does not move with it, and after a step its input holds its polynomial's value
-at the step end; each value computed by hand."""
+y and w follow its input at once, z does not move with it, its directional derivatives are those of the map, and
+after a step its input holds its polynomial's value at the step end; each value computed by hand."""
 
 import math
 
@@ -26,6 +26,8 @@ def test_the_outputs_follow_the_input_at_once_and_z_does_not(tmp_path):
             fmu.setReal([U], [u])  # no step
             y = 0.5 * u + 0.2 + 2.0 * math.sin(u) + 0.1 * u**3
             assert fmu.getReal([Y, W, Z]) == pytest.approx([y, y, 0.2], rel=1e-15)
+            dy = 0.5 + 2.0 * math.cos(u) + 0.3 * u**2  # its directional derivatives, by hand
+            assert fmu.getDirectionalDerivative([Y, W, Z], [U], [2.0]) == pytest.approx([2 * dy, 2 * dy, 0], rel=1e-15)
         H = 0.5
         fmu.setRealInputDerivatives([U], [1], [2.0])
         fmu.doStep(0.0, H)
