@@ -129,7 +129,11 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte b[], size_t s
 }
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference u[], size_t nu,
                                         const fmi2ValueReference z[], size_t nz, const fmi2Real dz[], fmi2Real du[]) {
+#ifdef MODEL_DIRECTIONAL /* a unit whose model gives its partial derivatives (providesDirectionalDerivative) */
+    return model_directional(&((Instance *)c)->m, u, nu, z, nz, dz, du) ? fmi2Error : fmi2OK;
+#else
     (void)c; (void)u; (void)nu; (void)z; (void)nz; (void)dz; (void)du; return fmi2Error;
+#endif
 }
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n,

@@ -17,4 +17,11 @@ int model_set(Model *m, unsigned vr, double value); /* 0, or -1 for a variable t
 /* the step of size h, der[k * (max_order + 1) + j] the j-th derivative of input k at its start (the 0th: the
  * input's value); afterwards the inputs hold their values at the step end */
 void model_step(Model *m, const double *der, int max_order, double h);
+#ifdef MODEL_DIRECTIONAL
+#include <stddef.h>
+/* out[j] = sum_k d unknowns[j] / d knowns[k] seed[k] at the present values (fmi2GetDirectionalDerivative); 0, or -1
+ * for a pair the model does not give */
+int model_directional(const Model *m, const unsigned *unknowns, size_t n_unknowns, const unsigned *knowns,
+                      size_t n_knowns, const double *seed, double *out);
+#endif
 #endif

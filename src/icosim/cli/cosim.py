@@ -165,6 +165,8 @@ def _run(scene, args, out, signals=False) -> int:
     if signals:
         last = {key: values[-1] for key, values in result.series.items()}
         summary = {"status": result.status, "reason": result.reason, "t": result.times[-1], "out": str(out), **last}
+        if result.loop:  # an algebraic loop: the root its first solve found, and from where
+            summary["loop"] = result.loop["loop_message"]
         text = "\n".join(f"{k}: {v}" for k, v in summary.items())
     else:
         from ..problems.fmu.run import run_summary

@@ -154,10 +154,10 @@ def feedthrough_loop_scene(tmp_path):
 
 def test_a_loop_of_direct_feedthrough_is_refused_naming_it(tmp_path):
     """The Reference-FMUs' Feedthrough passes its input to its output without a step: two of them fed by each
-    other form an algebraic loop, refused before the first step."""
+    other form an algebraic loop of gain 1 (``I - J`` singular), refused as ill-posed before the first step."""
     path = feedthrough_loop_scene(tmp_path)
     with pytest.raises(SceneError, match=r"algebraic loop .*a\.Float64_continuous_output -> b\.Float64_continuous_"
-                       r"input, b\.Float64_continuous_output -> a\.Float64_continuous_input"):  # fmt: skip
+                       r"input, b\.Float64_continuous_output -> a\.Float64_continuous_input is ill-posed"):  # fmt: skip
         run_signal_scene(load_scene(path))
 
 

@@ -73,6 +73,11 @@ class Fmi2:
         with guard.call(self.unit, "fmi2SetRealInputDerivatives", self.unit.t):
             self.fmu.setRealInputDerivatives(refs, orders, values)
 
+    def directional(self, unknowns, knowns, seed) -> list:
+        """``sum_k d unknowns / d knowns[k] seed[k]`` (value references; the unit's own units), without a step."""
+        with guard.call(self.unit, "fmi2GetDirectionalDerivative", self.unit.t):
+            return self.fmu.getDirectionalDerivative(unknowns, knowns, seed)
+
     def do_step(self, t, h, final, step_index):
         """``fmi2DoStep`` over ``[t, t + h]`` (``final``: noSetFMUStatePriorToCurrentPoint); None (FMI 2.0 has no
         early return: a unit that stops says so by its status)."""

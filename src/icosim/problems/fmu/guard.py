@@ -66,6 +66,7 @@ CALLS = (
     "fmi2FreeFMUstate",
     "fmi3FreeFMUState",
     "fmi2SetRealInputDerivatives",
+    "fmi2GetDirectionalDerivative",
     "fmi2DoStep",
     "fmi3DoStep",
     "fmi2Terminate",

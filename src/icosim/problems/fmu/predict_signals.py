@@ -187,8 +187,8 @@ def predict_signal_scene(scene) -> dict:
         text = ", ".join(f"{names[cons[j].source]}.{outputs[cons[j].source][cons[j].output]} -> "
                          f"{names[cons[j].target]}.{inputs[cons[j].target][cons[j].input]}" for j in loop)  # fmt: skip
         raise SceneError(f"{scene.path}: connections: an algebraic loop (each input feeds an output of its unit "
-                         f"directly, by the units' ModelStructure): {text}; explicit coupling does not solve it, so "
-                         "--predict has no recurrence of the units' steps to give")  # fmt: skip
+                         f"directly, by the units' ModelStructure): {text}; a run solves it at each point, "
+                         "but --predict has no recurrence of the units' steps with a loop solved to give")  # fmt: skip
     seconds = float(scene.data.get("limits", {}).get("identify_seconds", IDENTIFY_SECONDS))
 
     def identified(i: int, h: float) -> dict:

@@ -18,8 +18,10 @@ jacobi or gauss-seidel with ``order`` (every subsystem once), ``implicit`` false
 connections' conditions solved at ``T_N+1`` by Newton (:mod:`icosim.engine.connection_conditions`; Jacobi only),
 at most ``iterations`` (default 10) iterations until no variable changes by more than ``tol (1 + |e|)`` (``tol``
 default 1e-10); then every unit must save and restore its state (Model Exchange, or Co-Simulation with
-``canGetAndSetFMUstate``), checked before any unit opens.  Bad input is refused naming the key and what is
-allowed, before any unit is opened.
+``canGetAndSetFMUstate``), checked before any unit opens.  An algebraic loop is solved at each communication point
+by Newton's method without a step (:mod:`icosim.problems.fmu.loops`; its ``loop_tolerance``, default 1e-10, and
+``loop_iterations``, default 20), or refused naming the loop; coupled implicitly, at ``t0`` only (the corrector
+closes it at every ``T_N+1``).  Bad input is refused naming the key and what is allowed, before any unit is opened.
 """
 
 from __future__ import annotations
@@ -45,7 +47,8 @@ SIGNAL_SUBSYSTEM_KEYS = ("fmu", "start", "interface", "tolerance", "record")
 CONNECTION_KEYS = ("from", "to", "factor", "offset")
 #: Coupling keys and their defaults (``H`` required).
 SIGNAL_COUPLING_KEYS = {"k": 0, "scheme": "jacobi", "order": None, "H": None, "implicit": False, "inputs": "auto",
-                        "substeps": 1, "iterations": None, "tol": None}  # fmt: skip
+                        "substeps": 1, "iterations": None, "tol": None, "loop_tolerance": 1e-10,
+                        "loop_iterations": 20}  # fmt: skip
 #: Newton's iterations and tolerance of implicit coupling by default (docs/signals.md).
 IMPLICIT_DEFAULTS = {"iterations": 10, "tol": 1e-10}
 _INTERFACES = ("co-simulation", "model-exchange")
@@ -184,6 +187,9 @@ def signal_scene(path, data, system=None) -> SignalScene:
         _fail(path, "coupling.inputs", f"{c['inputs']!r} is not allowed; allowed: auto, derivatives, substeps")
     if isinstance(c["substeps"], bool) or not isinstance(c["substeps"], int) or c["substeps"] < 1:
         _fail(path, "coupling.substeps", f"must be an integer >= 1, got {c['substeps']!r}")
+    from .loops import check_loop_keys
+
+    check_loop_keys(lambda where, message: _fail(path, where, message), c)
     if c["H"] is None:
         _fail(path, "coupling.H", "required: the macro-step size (s)")
     c["H"] = _number(path, "coupling.H", c["H"], positive=True)
@@ -232,6 +238,7 @@ class SignalRun:
     wall_time: float = 0.0
     iterations: list = field(default_factory=list)  # implicit: Newton's iterations of each macro step
     jacobian_steps: int = 0  # implicit: the units' perturbed steps of the Jacobians
+    loop: dict = field(default_factory=dict)  # the algebraic loop's solve (LoopSolver.info), empty without one
 
 
 def _fmu_path(scene, sub) -> Path:
@@ -279,8 +286,8 @@ def signal_wiring(scene: SignalScene):
 
 
 def run_signal_scene(scene: SignalScene, *, progress=None, history=None) -> SignalRun:
-    """Open the units, refuse an algebraic loop, run the macro steps (explicit or implicit coupling), close the units;
-    ``progress(n_done)`` is called after each step.  ``history``: the connections' values at ``T_0, T_-1, ...
+    """Open the units, run the macro steps (explicit or implicit coupling; an algebraic loop solved, or refused),
+    close the units; ``progress(n_done)`` is called after each step.  ``history``: the connections' values at ``T_0, T_-1, ...
     T_-k`` (``(k + 1, connections)``, in the scene's order of the connections), else those at ``t_start`` at
     every point (a start from rest in the past)."""
     from ...engine.connection_conditions import NotConverged
@@ -300,7 +307,8 @@ def run_signal_scene(scene: SignalScene, *, progress=None, history=None) -> Sign
         for i, name in enumerate(names):
             units.append(open_signal_unit(scene, name, inputs[i], outputs[i]))
         problem = SignalCosimulation(units, inputs, outputs, cons, c["k"], c["H"], t0=scene.t0, sources=fed,
-                                     implicit=c["implicit"])  # fmt: skip
+                                     implicit=c["implicit"], loop_tolerance=c["loop_tolerance"],
+                                     loop_iterations=c["loop_iterations"])  # fmt: skip
         history = problem.initial_history(None if history is None else _history_rows(scene, problem, history))
         recorded = [
             (u, v) for u, sub in zip(units, (scene.subsystems[n] for n in names)) for v in sub.get("record", [])
@@ -326,6 +334,7 @@ def run_signal_scene(scene: SignalScene, *, progress=None, history=None) -> Sign
         if traj.diverged_at is not None:
             run.status, run.reason = "diverged", f"macro step {traj.diverged_at}: {traj.reason}"
         run.units = {u.label: u.info() for u in units}
+        run.loop = problem.loops.info() if problem.loops is not None else {}
     finally:
         for unit in units:
             unit.close()
@@ -399,6 +408,7 @@ def signal_dataset(run: SignalRun, *, command: str = ""):
             "iterations_max": int(its.max(initial=0)),
             "iterations_mean": float(its.mean()) if its.size else 0.0,
         }
+    attrs |= run.loop
     for name, info in run.units.items():
         for key, value in info.items():
             attrs[f"{name}_{key}"] = value

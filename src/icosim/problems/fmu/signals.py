@@ -16,8 +16,12 @@ own units of measure), its end state the same values; the state is their concate
 states.  The inputs a unit is handed over a step follow :meth:`icosim.problems.fmu.units.Unit.step`.
 
 An algebraic loop (a cycle of connections each into an input its unit's output depends on directly, by the
-units' ``ModelStructure``) is refused by name (:func:`feedthrough_loop`): the explicit coupling would hand each
-unit a value of the loop that the others' outputs at the same point contradict, and no loop solver runs yet.
+units' ``ModelStructure`` or, where it gives no dependencies, measured: :func:`feedthrough_loop`) is solved at each
+communication point, ``t0`` and every ``T_N+1``, by Newton's method without a step (:mod:`icosim.problems.fmu.loops`):
+the connections' new samples are then the loop's values there, not the outputs as the step left them (the state
+the macro step returns keeps those; the units hold the solved inputs).  Coupled implicitly, the loop's conditions
+at ``T_N+1`` are among those the corrector closes (a unit's output after its step depends on the input's value
+there); the loop solver gives the values at ``t0``.
 """
 
 from __future__ import annotations
@@ -28,64 +32,13 @@ from ...engine.graph import Connection, CouplingGraph
 from ...engine.lagrange import monomial_coefficients
 from ...engine.problem import CosimulationProblem
 from .description import check_kind
-from .errors import SceneError
+from .loops import depends_directly, feedthrough_loop, loop_solver
 from .units import Unit
 
 __all__ = ["SignalCosimulation", "ForwardUnit", "feedthrough_loop", "depends_directly"]
 
 #: The unit keys (:data:`icosim.problems.fmu.units.ROLES`) of a unit's connected inputs and outputs.
 INPUTS, OUTPUTS = "signal_input", "signal_output"
-
-
-def depends_directly(md, output: str, input_: str) -> bool:
-    """Whether ``output`` depends on ``input_`` without a step, by the unit's ``ModelStructure`` (``md``, fmpy's
-    model description): listed in its dependencies, or the dependencies not given (FMI: then it may depend on
-    every input)."""
-    for unknown in md.outputs:
-        if unknown.variable.name == output:
-            deps = unknown.dependencies
-            return deps is None or any(v.name == input_ for v in deps)
-    return True  # an output the structure does not list: it may depend on anything
-
-
-def feedthrough_loop(graph: CouplingGraph, inputs, outputs, descriptions) -> list[int] | None:
-    """A cycle of connections (their indices) each into an input that an output of its target unit fed by the next
-    connection depends on directly, or None.  ``inputs[i]``, ``outputs[i]``: unit ``i``'s connected variables by
-    index; ``descriptions[i]``: its model description."""
-    cons = graph.connections
-    after = {
-        c: [
-            d
-            for d, nxt in enumerate(cons)
-            if nxt.source == con.target
-            and depends_directly(
-                descriptions[con.target], outputs[con.target][nxt.output], inputs[con.target][con.input]
-            )
-        ]  # fmt: skip
-        for c, con in enumerate(cons)
-    }
-    state: dict[int, int] = {}  # 1: on the path, 2: done
-
-    def visit(c, path):
-        state[c] = 1
-        path.append(c)
-        for d in after[c]:
-            if state.get(d) == 1:
-                return path[path.index(d) :]
-            if d not in state:
-                found = visit(d, path)
-                if found:
-                    return found
-        path.pop()
-        state[c] = 2
-        return None
-
-    for c in range(len(cons)):
-        if c not in state:
-            found = visit(c, [])
-            if found:
-                return found
-    return None
 
 
 class ForwardUnit(Unit):
@@ -114,10 +67,13 @@ class SignalCosimulation(CosimulationProblem):
         connected ones (``inputs[i]`` lists those last), each handed its chord over a step.
     implicit : the connections closed by their conditions at ``T_N+1`` (Newton,
         :mod:`icosim.engine.connection_conditions`): each unit saves its state at ``T_N`` when it is predicted and
-        is restored to it before every further step of the macro step (units that save and restore state).
+        is restored to it before every further step of the macro step (units that save and restore state).  An
+        algebraic loop is then closed with every other connection at ``T_N+1``; its solver serves ``t0`` only.
+    loop_tolerance, loop_iterations : the algebraic loops' Newton solve (:class:`~icosim.problems.fmu.loops.LoopSolver`).
     """
 
-    def __init__(self, units, inputs, outputs, connections, k, H, *, t0=0.0, sources=None, implicit=False):
+    def __init__(self, units, inputs, outputs, connections, k, H, *, t0=0.0, sources=None, implicit=False,
+                 loop_tolerance=1e-10, loop_iterations=20):  # fmt: skip
         self.units = tuple(units)
         self.sources = tuple(map(tuple, sources)) if sources is not None else tuple(() for _ in self.units)
         self.input_names, self.output_names = tuple(map(tuple, inputs)), tuple(map(tuple, outputs))
@@ -125,13 +81,9 @@ class SignalCosimulation(CosimulationProblem):
         super().__init__(graph, k)
         self.implicit_connections = bool(implicit)
         self._saved = [None] * len(self.units)  # implicit: each unit's state at T_N
-        loop = feedthrough_loop(graph, self.input_names, self.output_names, [u.md for u in self.units])
-        if loop:
-            text = ", ".join(self.label(c) for c in loop)
-            raise SceneError(
-                f"connections: an algebraic loop (each input feeds an output of its unit directly, by the units' "
-                f"ModelStructure): {text}; explicit coupling does not solve it and loop solving is not yet supported"
-            )
+        #: the algebraic loops' solver (:mod:`icosim.problems.fmu.loops`), None without a loop
+        self.loops = loop_solver(self, INPUTS, OUTPUTS, loop_tolerance, loop_iterations)
+        self._standing: set[int] = set()  # the units standing at T_N+1 in this macro step (:meth:`connect`)
         self.H, self.t0 = float(H), float(t0)
         self.step_index = 0
         self.C_pred = np.array(monomial_coefficients(self.pred_nodes), dtype=float)
@@ -164,12 +116,18 @@ class SignalCosimulation(CosimulationProblem):
     def initial_history(self, rows=None) -> np.ndarray:
         """The coupling history at ``t0``: ``rows`` (``(k + 1, n_e)``, from ``T_0`` back) where given, else the
         connections' values at ``t0`` at every node.  Those are found by handing the outputs to the inputs until
-        they settle: without an algebraic loop, within as many passes as there are connections."""
+        they settle (without an algebraic loop, within as many passes as there are connections), or with a loop by
+        its Newton solve (:meth:`~icosim.problems.fmu.loops.LoopSolver.solve`)."""
         if rows is not None:
             rows = np.asarray(rows, dtype=float)
             for i in range(self.graph.n_subsystems):
                 self._set_inputs(i, rows[0])
             return rows
+        if self.loops is not None:  # the inputs a table feeds set first: the loop is solved with them
+            start = self.loops.start()
+            for i in range(self.graph.n_subsystems):
+                self._set_inputs(i, start)
+            return np.tile(self.loops.solve(self.t0), (self.k + 1, 1))
         e = np.zeros(self.n_coupling)
         for _ in range(len(self.graph.connections) + 1):
             e_new, _ = self.connect(
@@ -181,6 +139,18 @@ class SignalCosimulation(CosimulationProblem):
                 break
             e = e_new
         return np.tile(e, (self.k + 1, 1))
+
+    def connect(self, e, ys, units, closed=()):
+        """The connections' new samples (:meth:`~icosim.engine.problem.CosimulationProblem.connect`); with an
+        algebraic loop coupled explicitly, once every unit stands at ``T_N+1``, every connection's value solved there
+        (:mod:`icosim.problems.fmu.loops`).  Coupled implicitly, the corrector closes the loop."""
+        e, cols = super().connect(e, ys, units, closed)
+        if self.loops is not None and not self.implicit_connections:
+            self._standing.update(units)
+            if len(self._standing) == self.graph.n_subsystems:
+                self._standing.clear()
+                e, cols = self.loops.solve(self.time + self.H), list(self.loops.cols)
+        return e, cols
 
     def initial_state(self) -> np.ndarray:
         return np.concatenate([self.outputs(i) for i in range(self.graph.n_subsystems)])
