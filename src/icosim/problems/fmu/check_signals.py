@@ -1,14 +1,14 @@
 """``icosim cosim SIGNALSCENE --check``: the checks a run of signal connections makes before its first macro step,
 and that step, as a table per unit (the report of :func:`icosim.problems.fmu.check.check_scene`).
 
-Per unit: opening it as the run opens it (:func:`~icosim.problems.fmu.signal_scene.open_signal_unit`: the kind of
-unit, the connected variables, their causality, type and units of measure, the start values by the standard's
-rules, the orders of input derivatives it takes) and the variables it records.  For the scene: the connections
-(an algebraic loop by the units' ``ModelStructure``), the start (the inputs handed the outputs at ``t_start`` until
-they settle) and the first macro step.  The checks of a unit on a joint do not apply: a unit of connections is
-stepped forward only, once per macro step (no rollback), its feedthrough is read from its model description (the
-loop), and a connection has no force whose direction could be wrong.  A refusal is a row, not an exception; the
-units are closed after the first step, nothing is written.
+Per unit: opening it as the run opens it (:func:`~icosim.problems.fmu.signal_scene.open_signal_unit`: the kind of unit, the
+connected variables, their causality, type and units of measure, the start values by the standard's rules, the
+orders of input derivatives it takes) and the variables it records. For the scene: the connections (an algebraic
+loop, by the units' ``ModelStructure`` or measured, solved at ``t_start`` or refused), the start (the inputs
+handed the outputs at ``t_start`` until they settle) and the first macro step. The checks of a unit on a joint do
+not apply: a unit of connections is stepped forward only, once per macro step (no rollback), its feedthrough is
+read from its model description (the loop), and a connection has no force whose direction could be wrong. A
+refusal is a row, not an exception; the units are closed after the first step, nothing is written.
 """
 
 from __future__ import annotations
@@ -67,11 +67,14 @@ def _scene_rows(scene, SignalCosimulation, simulate, units, inputs, outputs, con
     """The connections, the start and the first macro step, as rows (a refusal ends them)."""
     c = scene.coupling
     try:
-        problem = SignalCosimulation(units, inputs, outputs, cons, c["k"], c["H"], t0=scene.t0, sources=fed)
-    except SceneError as exc:
+        problem = SignalCosimulation(units, inputs, outputs, cons, c["k"], c["H"], t0=scene.t0, sources=fed,
+                                     implicit=c["implicit"], loop_tolerance=c["loop_tolerance"],
+                                     loop_iterations=c["loop_iterations"])  # fmt: skip
+        history = problem.initial_history()
+    except SceneError as exc:  # a loop that cannot be solved at t_start
         return [asdict(Finding("connections", "refused", str(exc).split("connections: ", 1)[-1]))]
-    rows = [asdict(Finding("connections", "pass", f"{len(cons)} connections, no algebraic loop"))]
-    history = problem.initial_history()
+    loop = problem.loops.message() if problem.loops is not None else "no algebraic loop"
+    rows = [asdict(Finding("connections", "pass", f"{len(cons)} connections, {loop}"))]
     values = ", ".join(f"{problem.label(j)} = {history[0][j]:.6g}" for j in range(len(cons)))
     rows.append(asdict(Finding("start", "pass", f"inputs at t_start: {values or 'none'}")))
     try:
