@@ -158,6 +158,22 @@ def test_a_solved_loop_converges_to_the_monolithic_solution_with_order_k_plus_on
     assert abs(fit.order - (k + 1)) < 0.15, (errors, fit)
 
 
+def test_coupled_implicitly_the_corrector_closes_the_loop_with_order_two(tmp_path):
+    """Implicit coupling (k = 1) closes the loop's conditions at T_N+1 with the other connections: the loop solver
+    serves t0 only, Newton takes one iteration (the units are linear), and the run converges to the monolithic
+    solution with the order of its interpolation, 2."""
+    Hs = [4e-3, 2e-3, 1e-3]
+    ref, errors = monolithic_x(1.0), []
+    for H in Hs:
+        scene = control_loop(tmp_path, KP, H, 1)
+        scene.data["coupling"]["implicit"] = True
+        run = run_signal_scene(write(tmp_path, scene.data, f"implicit_{H:g}.yaml"))
+        assert run.loop["loop_solves"] == 1 and max(run.iterations) <= 2, (run.loop, max(run.iterations))
+        errors.append(abs(run.series["mass.x"][-1] - ref))
+    fit = asymptotic_order(Hs, errors)
+    assert abs(fit.order - 2) < 0.15, (errors, fit)
+
+
 def test_a_loop_of_gain_one_is_refused_as_ill_posed(tmp_path):
     """kp = -m: lambda = -m (r - a) and a = (... + lambda) / m make d(lambda)/d(lambda) = 1 around the loop."""
     with pytest.raises(LoopError, match=r"algebraic loop ctrl\.u -> mass\.lambda, mass\.a -> ctrl\.y is ill-posed "
