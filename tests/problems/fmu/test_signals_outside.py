@@ -27,7 +27,17 @@ import numpy as np
 import pytest
 import yaml
 from test_drives import AMPLITUDE, C1, C2, K1, K2, M1, exact
-from test_peers import DMO_UNITS, OMSIMULATOR_CS, dmo_osp, dmo_ssp, libcosim_dmo, quiet
+from test_peers import (
+    DMO_UNITS,
+    OMSIMULATOR_CS,
+    TRUCK,
+    dmo_osp,
+    dmo_ssp,
+    libcosim_dmo,
+    libcosim_truck,
+    quiet,
+    truck_osp,
+)
 from toolchains import OUTSIDE
 
 from icosim.engine.run import simulate
@@ -174,6 +184,23 @@ def test_an_osp_file_of_signal_connections_runs_as_libcosim_runs_it(tmp_path):
         run.series["system1.x1"][-1],
         peer,
     )
+
+
+def test_the_quarter_truck_s_own_file_coupled_by_signals_gives_libcosim_s_fixed_step_numbers(tmp_path):
+    """OSP's quarter truck from its own OspSystemStructure.xml (its power bond's two connections), named by a scene
+    whose coupling has no method: the bond coupled as signals, explicit Jacobi with held inputs at the file's base
+    step, is libcosim's fixed-step algorithm; libcosim runs the same file with fixedStep for its ecco."""
+    scene = tmp_path / "truck.yaml"
+    scene.write_text(yaml.safe_dump({"system": str(TRUCK / "OspSystemStructure.xml"),
+                                     "subsystems": {"chassis": {"record": ["position"]}},
+                                     "coupling": {"H": 1e-4, "k": 0, "scheme": "jacobi", "implicit": False},
+                                     "t_end": 1.0}))  # fmt: skip
+    run = run_signal_scene(load_scene(scene))
+    assert run.status == "completed" and run.times[-1] == pytest.approx(1.0)
+    x = np.asarray(run.series["chassis.position"])
+    with quiet():
+        peer = libcosim_truck(truck_osp(tmp_path / "libcosim", 1e-4), 1.0)
+    assert abs(x[-1] - peer["x"]) <= 1e-6 * np.max(np.abs(x)), (x[-1], peer)
 
 
 def test_an_ssp_archive_of_signal_connections_records_its_other_connectors(tmp_path):

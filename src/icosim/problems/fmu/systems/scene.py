@@ -18,8 +18,10 @@ own coupling.
 
 Any other connection is a signal connection: a system of signal connections alone is a signal scene
 (:func:`signal_system_data`, :mod:`icosim.problems.fmu.signal_scene`), coupled explicitly (implicitly where the
-scene's coupling says ``implicit: true``); signals beside power
-bonds or joints are refused by name before any work, never dropped.
+scene's coupling says ``implicit: true``).  A scene whose coupling names no ``method`` couples a power bond's two
+connections as signals too (``{k: 0, scheme: jacobi, implicit: false}`` is the peers' fixed-step algorithm on
+them); signals beside power bonds or joints coupled by a method are refused by name before any work, never
+dropped.
 """
 
 from __future__ import annotations
@@ -65,10 +67,16 @@ def system_scene_data(path, overlay: dict | None = None, *, where=None) -> tuple
               f"{', '.join(system.components)}")  # fmt: skip
     bonds = system.power_bonds()
     signals = [c for c in system.connections if c.power_bond is None]
-    if signals and (bonds or "joints" in overlay):
-        _fail(system.path, f"connection {signals[0].label}", "signal connections beside power bonds or joints need "
-              "implicit coupling, not yet supported: a system is coupled by signals alone or by joints alone")  # fmt: skip
-    if signals:
+    # a coupling without a method is a coupling of signals: the power bonds' connections are then signals too
+    bonds_as_signals = bool(bonds) and isinstance(overlay.get("coupling"), dict) and "method" not in overlay["coupling"]
+    if signals and not bonds_as_signals and (bonds or "joints" in overlay):
+        _fail(system.path, f"connection {signals[0].label}", "signal connections beside power bonds or joints are "
+              "not yet supported: a system is coupled by signals alone or by joints alone (a scene coupling without "
+              "a method couples the power bonds' connections as signals)")  # fmt: skip
+    if signals or bonds_as_signals:
+        if "joints" in overlay:
+            _fail(shown, "joints", "a coupling without a method couples every connection as a signal; joints need "
+                  "coupling.method")  # fmt: skip
         return signal_system_data(system, overlay, shown), system
     subsystems, joints, bonded = {}, [], {}
     for name, comp in system.components.items():
