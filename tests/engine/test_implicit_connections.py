@@ -21,7 +21,6 @@ from icosim.engine.macrostep import macro_step
 from icosim.engine.run import simulate
 from icosim.engine.schemes import get_scheme
 from icosim.engine.stages import plan
-from icosim.errors import ParameterError
 
 
 def implicit(k, H):
@@ -56,11 +55,26 @@ def test_linear_inputs_give_the_trapezoidal_rule(H):
     assert np.allclose(x, np.array([np.cos(phase), -np.sin(phase)]).T, rtol=0, atol=1e-11)
 
 
-def test_gauss_seidel_is_refused_naming_the_connection_and_the_fix():
-    with pytest.raises(ParameterError, match=r"cannot couple connection 1 \(2 -> 1\) implicitly.*use scheme jacobi"):
-        plan(get_scheme("gauss-seidel-12"), GRAPH, implicit=True)
+def test_gauss_seidel_closes_every_connection_at_its_last_stage():
+    """The conditions at ``T_N+1`` are one system in the new values whatever the order: the last stage closes them
+    all and steps again every unit a connection feeds, the earlier stage's too."""
+    p = plan(get_scheme("gauss-seidel-12"), GRAPH, implicit=True)
+    assert [(s.units, s.connections, s.corrected) for s in p.stages] == [((0,), (), ()), ((1,), (0, 1), (0, 1))]
     stage = plan(get_scheme("jacobi"), GRAPH, implicit=True).stages[0]
     assert stage.connections == (0, 1) and stage.corrected == (0, 1) and stage.joints == ()
+
+
+@pytest.mark.parametrize("k", [0, 1])
+@pytest.mark.parametrize("order", ["gauss-seidel-12", "gauss-seidel-21"])
+def test_gauss_seidel_gives_jacobis_run(k, order):
+    """Either order: Newton starts elsewhere (the later unit fed by the earlier one's new output) and reaches the
+    same solution of the same conditions: backward Euler (``k = 0``) or the trapezoidal rule (``k = 1``) to
+    rounding."""
+    H, n = 0.5, 20
+    history = np.array([[0.0, -1.0]] * (k + 1))
+    runs = [simulate(implicit(k, H), None, np.array([1.0, 0.0]), history, n, scheme=scheme, iterations=10, tol=1e-13)
+            for scheme in ("jacobi", order)]  # fmt: skip
+    assert np.allclose(runs[1].states, runs[0].states, rtol=0, atol=1e-14)
 
 
 def test_a_unit_only_read_is_not_stepped_again():

@@ -15,8 +15,8 @@ An input may be fed by a table or a constant instead (``sources``: :mod:`icosim.
 
 Coupling (:mod:`icosim.problems.fmu.signals`): ``k`` the order of the inputs' extrapolation (0: held), ``scheme``
 jacobi or gauss-seidel with ``order`` (every subsystem once), ``implicit`` false (explicit coupling) or true: the
-connections' conditions solved at ``T_N+1`` by Newton (:mod:`icosim.engine.connection_conditions`; Jacobi only),
-at most ``iterations`` (default 10) iterations until no variable changes by more than ``tol (1 + |e|)`` (``tol``
+connections' conditions solved at ``T_N+1`` by Newton (:mod:`icosim.engine.connection_conditions`; with
+gauss-seidel the same conditions, the order Newton's start only), at most ``iterations`` (default 10) iterations until no variable changes by more than ``tol (1 + |e|)`` (``tol``
 default 1e-10); then every unit must save and restore its state (Model Exchange, or Co-Simulation with
 ``canGetAndSetFMUstate``), checked before any unit opens.  Bad input is refused naming the key and what is
 allowed, before any unit is opened.
@@ -171,9 +171,6 @@ def signal_scene(path, data, system=None) -> SignalScene:
         _fail(path, "coupling.k", f"must be an integer 0 .. {MAX_K}, got {c['k']!r}")
     if c["scheme"] not in ("jacobi", "gauss-seidel"):
         _fail(path, "coupling.scheme", f"{c['scheme']!r} is not allowed; allowed: jacobi, gauss-seidel (with order)")
-    if c["scheme"] == "gauss-seidel" and c["implicit"]:
-        _fail(path, "coupling.scheme", "gauss-seidel with implicit: true: implicit coupling closes every connection "
-              "at T_N+1 together, with every unit stepped with it; allowed with implicit: jacobi")  # fmt: skip
     if c["scheme"] == "gauss-seidel":
         if not isinstance(c["order"], list) or sorted(map(str, c["order"])) != sorted(subs):
             _fail(path, "coupling.order", f"gauss-seidel needs every subsystem once, e.g. {list(subs)}; got "
