@@ -16,11 +16,12 @@ import pytest
 from test_signals import GRAPH, Integrators
 
 from icosim.engine.connection_conditions import NotConverged
-from icosim.engine.graph import Connection, CouplingGraph
+from icosim.engine.graph import Connection, CouplingGraph, Joint
 from icosim.engine.macrostep import macro_step
 from icosim.engine.run import simulate
 from icosim.engine.schemes import get_scheme
 from icosim.engine.stages import plan
+from icosim.errors import ParameterError
 
 
 def implicit(k, H):
@@ -75,6 +76,15 @@ def test_gauss_seidel_gives_jacobis_run(k, order):
     runs = [simulate(implicit(k, H), None, np.array([1.0, 0.0]), history, n, scheme=scheme, iterations=10, tol=1e-13)
             for scheme in ("jacobi", order)]  # fmt: skip
     assert np.allclose(runs[1].states, runs[0].states, rtol=0, atol=1e-14)
+
+
+def test_implicit_connections_beside_joints_are_refused_naming_why_and_the_fix():
+    """Unit 3 reads unit 1 beside the joint of units 1 and 2: the joints' levels and the connections' are not closed
+    by one corrector; explicit connections are the alternative."""
+    graph = CouplingGraph(3, [Joint(0, 1, "fd")], connections=(Connection(0, 0, 2, 0),))
+    with pytest.raises(ParameterError, match=r"beside joints are not supported.*couple the connections explicitly"):
+        plan(get_scheme("jacobi"), graph, implicit=True)
+    assert plan(get_scheme("jacobi"), graph).stages[0].joints == (0,)
 
 
 def test_a_unit_only_read_is_not_stepped_again():

@@ -185,7 +185,10 @@ def _implicit_plan(scheme: Scheme, graph: CouplingGraph) -> Plan:
     """Every connection closed at the last stage, every unit a connection feeds stepped again with it (the order
     of the stages makes the predictor only: module docstring)."""
     if graph.joints:
-        raise ParameterError("implicit signal connections together with joints are not supported: couple the "
+        raise ParameterError("implicit signal connections beside joints are not supported: the joints' method solves "
+                             "their levels (pos, vel, acc, force) and Newton the connections' (signal), and one "
+                             "corrector of both, with the blocks that join them (a joint's residual by a "
+                             "connection's variable and a connection's by a joint's), is not built; couple the "
                              "connections explicitly (implicit: false)")  # fmt: skip
     units = scheme.stages(graph.n_subsystems)
     cons = tuple(range(len(graph.connections)))
