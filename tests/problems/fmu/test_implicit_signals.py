@@ -15,6 +15,9 @@ What the tests compare follows from the method, not from numbers of the code und
   per connection and macro step (it is formed once per step);
 * --predict's spectral radius of the implicit recurrence (the built-in linear model on the identified units) is
   the decay per step the run shows;
+* Gauss-Seidel closes the same conditions (the order moves Newton's start only, docs/signals.md): with a
+  tolerance near rounding its runs are Jacobi's to rounding, in either order, and its order and predicted rho are
+  Jacobi's;
 * Co-Simulation units that cannot save their state (these units' ``canGetAndSetFMUstate`` is false), Newton that
   does not converge, and bad keys are refused by name.
 """
@@ -275,6 +278,18 @@ def test_co_simulation_units_that_save_their_state_are_coupled_implicitly(tmp_pa
         assert run.units["mass1"]["states_saved"] == n
     fit = asymptotic_order(Hs, errors)
     assert abs(fit.order - (k + 1)) < 0.2, (errors, fit)
+
+
+@pytest.mark.parametrize("order", [["mass1", "system2"], ["system2", "mass1"]])
+def test_co_simulation_units_coupled_implicitly_by_gauss_seidel_give_jacobis_run(tmp_path, order):
+    """The later stage's unit saves its state at its first step (on the earlier one's new output): the run is
+    Jacobi's to rounding, each unit saved once per step."""
+    H, t_end = 1e-2, 1.0
+    runs = [run_signal_scene(load_scene(built_dmo_scene(tmp_path, H, t_end, k=1, implicit=True, tol=1e-13, **how)))
+            for how in ({}, {"scheme": "gauss-seidel", "order": order})]  # fmt: skip
+    x = [np.array([run.series["mass1.x"], run.series["system2.x2"]]).T for run in runs]
+    assert np.max(np.abs(x[1] - x[0])) <= 1e-13 * AMPLITUDE
+    assert [runs[1].units[name]["states_saved"] for name in order] == [round(t_end / H)] * 2
 
 
 def test_the_built_units_and_omsimulators_give_one_implicit_run(tmp_path):
