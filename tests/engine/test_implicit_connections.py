@@ -16,7 +16,7 @@ import pytest
 from test_signals import GRAPH, Integrators
 
 from icosim.engine.connection_conditions import NotConverged
-from icosim.engine.graph import Connection, CouplingGraph
+from icosim.engine.graph import Connection, CouplingGraph, Joint
 from icosim.engine.macrostep import macro_step
 from icosim.engine.run import simulate
 from icosim.engine.schemes import get_scheme
@@ -56,11 +56,35 @@ def test_linear_inputs_give_the_trapezoidal_rule(H):
     assert np.allclose(x, np.array([np.cos(phase), -np.sin(phase)]).T, rtol=0, atol=1e-11)
 
 
-def test_gauss_seidel_is_refused_naming_the_connection_and_the_fix():
-    with pytest.raises(ParameterError, match=r"cannot couple connection 1 \(2 -> 1\) implicitly.*use scheme jacobi"):
-        plan(get_scheme("gauss-seidel-12"), GRAPH, implicit=True)
+def test_gauss_seidel_closes_every_connection_at_its_last_stage():
+    """The conditions at ``T_N+1`` are one system in the new values whatever the order: the last stage closes them
+    all and steps again every unit a connection feeds, the earlier stage's too."""
+    p = plan(get_scheme("gauss-seidel-12"), GRAPH, implicit=True)
+    assert [(s.units, s.connections, s.corrected) for s in p.stages] == [((0,), (), ()), ((1,), (0, 1), (0, 1))]
     stage = plan(get_scheme("jacobi"), GRAPH, implicit=True).stages[0]
     assert stage.connections == (0, 1) and stage.corrected == (0, 1) and stage.joints == ()
+
+
+@pytest.mark.parametrize("k", [0, 1])
+@pytest.mark.parametrize("order", ["gauss-seidel-12", "gauss-seidel-21"])
+def test_gauss_seidel_gives_jacobis_run(k, order):
+    """Either order: Newton starts elsewhere (the later unit fed by the earlier one's new output) and reaches the
+    same solution of the same conditions: backward Euler (``k = 0``) or the trapezoidal rule (``k = 1``) to
+    rounding."""
+    H, n = 0.5, 20
+    history = np.array([[0.0, -1.0]] * (k + 1))
+    runs = [simulate(implicit(k, H), None, np.array([1.0, 0.0]), history, n, scheme=scheme, iterations=10, tol=1e-13)
+            for scheme in ("jacobi", order)]  # fmt: skip
+    assert np.allclose(runs[1].states, runs[0].states, rtol=0, atol=1e-14)
+
+
+def test_implicit_connections_beside_joints_are_refused_naming_why_and_the_fix():
+    """Unit 3 reads unit 1 beside the joint of units 1 and 2: the joints' levels and the connections' are not closed
+    by one corrector; explicit connections are the alternative."""
+    graph = CouplingGraph(3, [Joint(0, 1, "fd")], connections=(Connection(0, 0, 2, 0),))
+    with pytest.raises(ParameterError, match=r"beside joints are not supported.*couple the connections explicitly"):
+        plan(get_scheme("jacobi"), graph, implicit=True)
+    assert plan(get_scheme("jacobi"), graph).stages[0].joints == (0,)
 
 
 def test_a_unit_only_read_is_not_stepped_again():

@@ -18,8 +18,10 @@ the Jacobian formed once per macro step, at ``e_p``; it converges when no variab
 + |e_c|)`` (absolute below one, relative above), else the step fails naming the connections
 (:class:`NotConverged`).
 
-A stage closes a connection when both its units advance in it (:func:`icosim.engine.stages.plan` with
-``implicit``): Jacobi's one stage closes every connection.
+The last stage closes every connection and steps again every unit one feeds (:func:`icosim.engine.stages.plan`
+with ``implicit``): a unit's step depends on ``e_c`` and its state at ``T_N`` only, so the conditions are one system
+in ``e_c`` in any order of the units; Gauss-Seidel's earlier stages move Newton's start (Jacobi's one stage closes
+them from ``e_p``).
 """
 
 from __future__ import annotations

@@ -24,9 +24,12 @@ work (:func:`plan`):
   conditions, one unknown.  Neighbours corrected at the same stage (Jacobi) respond through their own inputs.
 
 Signal connections are coupled explicitly (a connection's new sample is its source's output), or, with
-``implicit``, closed like joints: at the stage in which both their units advance, by their conditions at
-``T_N+1`` (:mod:`icosim.engine.connection_conditions`; ``connections`` the ones closed).  A connection whose units
-advance in different stages is refused there (Jacobi closes every connection in its one stage).
+``implicit``, closed by their conditions at ``T_N+1`` (:mod:`icosim.engine.connection_conditions`; ``connections``
+the ones closed): all of them at the last stage, every unit a connection feeds in ``corrected`` (those of earlier
+stages too: they are stepped again from ``T_N``).  The conditions hold at ``T_N+1`` with every unit's inputs the
+interpolation polynomial through the new values, a system in the new values alone: its solution is the same in
+any order of the units, which Gauss-Seidel's earlier stages change only in the predictor, Newton's start (a later
+unit fed by an earlier one's new output, docs/signals.md).
 
 >>> from icosim.engine.graph import CouplingGraph
 >>> from icosim.engine.schemes import get_scheme
@@ -179,24 +182,19 @@ def _plan(scheme: Scheme, graph: CouplingGraph, implicit: bool = False) -> Plan:
 
 
 def _implicit_plan(scheme: Scheme, graph: CouplingGraph) -> Plan:
-    """Each connection closed at the stage its units both advance in; refused where they advance apart."""
+    """Every connection closed at the last stage, every unit a connection feeds stepped again with it (the order
+    of the stages makes the predictor only: module docstring)."""
     if graph.joints:
-        raise ParameterError("implicit signal connections together with joints are not supported: couple the "
+        raise ParameterError("implicit signal connections beside joints are not supported: the joints' method solves "
+                             "their levels (pos, vel, acc, force) and Newton the connections' (signal), and one "
+                             "corrector of both, with the blocks that join them (a joint's residual by a "
+                             "connection's variable and a connection's by a joint's), is not built; couple the "
                              "connections explicitly (implicit: false)")  # fmt: skip
-    stages = []
-    for index, units in enumerate(scheme.stages(graph.n_subsystems)):
-        here = set(units)
-        cons = tuple(c for c, con in enumerate(graph.connections) if con.source in here and con.target in here)
-        apart = [c for c, con in enumerate(graph.connections) if (con.source in here) != (con.target in here)]
-        if apart:
-            raise ParameterError(
-                f"scheme {scheme.name} cannot couple {graph.describe_connection(apart[0])} implicitly: its units "
-                "advance in different stages, and the condition at T_N+1 needs both stepped with it; use scheme "
-                "jacobi (every connection closed together) or implicit: false"
-            )
-        conditions = SignalConditions(graph, cons) if cons else None
-        corrected = tuple(i for i in units if conditions is not None and i in conditions.targets)
-        stages.append(Stage(index, tuple(units), (), corrected, (), conditions, cons))
+    units = scheme.stages(graph.n_subsystems)
+    cons = tuple(range(len(graph.connections)))
+    conditions = SignalConditions(graph, cons)
+    stages = [Stage(index, tuple(u), (), (), (), None) for index, u in enumerate(units[:-1])]
+    stages.append(Stage(len(units) - 1, tuple(units[-1]), (), conditions.targets, (), conditions, cons))
     return Plan(scheme, graph, tuple(stages))
 
 

@@ -15,8 +15,8 @@ An input may be fed by a table or a constant instead (``sources``: :mod:`icosim.
 
 Coupling (:mod:`icosim.problems.fmu.signals`): ``k`` the order of the inputs' extrapolation (0: held), ``scheme``
 jacobi or gauss-seidel with ``order`` (every subsystem once), ``implicit`` false (explicit coupling) or true: the
-connections' conditions solved at ``T_N+1`` by Newton (:mod:`icosim.engine.connection_conditions`; Jacobi only),
-at most ``iterations`` (default 10) iterations until no variable changes by more than ``tol (1 + |e|)`` (``tol``
+connections' conditions solved at ``T_N+1`` by Newton (:mod:`icosim.engine.connection_conditions`; with
+gauss-seidel the same conditions, the order Newton's start only), at most ``iterations`` (default 10) iterations until no variable changes by more than ``tol (1 + |e|)`` (``tol``
 default 1e-10); then every unit must save and restore its state (Model Exchange, or Co-Simulation with
 ``canGetAndSetFMUstate``), checked before any unit opens.  An algebraic loop is solved at each communication point
 by Newton's method without a step (:mod:`icosim.problems.fmu.loops`; its ``loop_tolerance``, default 1e-10, and
@@ -41,6 +41,14 @@ __all__ = ["SignalScene", "SignalRun", "signal_scene", "open_signal_unit", "sign
 
 #: Top-level keys of a signal scene.
 SIGNAL_SCENE_KEYS = ("subsystems", "system", "connections", "sources", "coupling", "t_start", "t_end", "limits")
+#: Why ``joints`` is refused beside ``connections``, and the alternatives.
+JOINTS_BESIDE_CONNECTIONS = (
+    "joints beside connections are not supported: a scene couples its units either by joints (closed by the joint "
+    "method's corrector, icosim.problems.fmu.scene) or by connections (explicitly, or implicitly by Newton), and "
+    "no problem serves both kinds of unit and no corrector solves both kinds of condition together. Couple every "
+    "unit by connections (with coupling.implicit: true their conditions hold at T_N+1, as a joint's do) or every "
+    "unit by joints"
+)
 #: Keys of one subsystem.
 SIGNAL_SUBSYSTEM_KEYS = ("fmu", "start", "interface", "tolerance", "record")
 #: Keys of one connection.
@@ -108,11 +116,7 @@ def signal_scene(path, data, system=None) -> SignalScene:
     for key in data:
         if key not in SIGNAL_SCENE_KEYS:
             allowed = ", ".join(SIGNAL_SCENE_KEYS)
-            why = (
-                " (joints and connections together need implicit coupling, not yet supported)"
-                if key == "joints"
-                else ""
-            )
+            why = f" ({JOINTS_BESIDE_CONNECTIONS})" if key == "joints" else ""
             _fail(path, key, f"not a key of a scene with connections{why}; allowed: {allowed}")
     subs = data.get("subsystems")
     if not isinstance(subs, dict) or len(subs) < 2:
@@ -174,9 +178,6 @@ def signal_scene(path, data, system=None) -> SignalScene:
         _fail(path, "coupling.k", f"must be an integer 0 .. {MAX_K}, got {c['k']!r}")
     if c["scheme"] not in ("jacobi", "gauss-seidel"):
         _fail(path, "coupling.scheme", f"{c['scheme']!r} is not allowed; allowed: jacobi, gauss-seidel (with order)")
-    if c["scheme"] == "gauss-seidel" and c["implicit"]:
-        _fail(path, "coupling.scheme", "gauss-seidel with implicit: true: implicit coupling closes every connection "
-              "at T_N+1 together, with every unit stepped with it; allowed with implicit: jacobi")  # fmt: skip
     if c["scheme"] == "gauss-seidel":
         if not isinstance(c["order"], list) or sorted(map(str, c["order"])) != sorted(subs):
             _fail(path, "coupling.order", f"gauss-seidel needs every subsystem once, e.g. {list(subs)}; got "

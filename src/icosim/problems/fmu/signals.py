@@ -81,6 +81,7 @@ class SignalCosimulation(CosimulationProblem):
         super().__init__(graph, k)
         self.implicit_connections = bool(implicit)
         self._saved = [None] * len(self.units)  # implicit: each unit's state at T_N
+        self._saved_at = [None] * len(self.units)  # the macro step it was saved in
         #: the algebraic loops' solver (:mod:`icosim.problems.fmu.loops`), None without a loop
         self.loops = loop_solver(self, INPUTS, OUTPUTS, loop_tolerance, loop_iterations)
         self._standing: set[int] = set()  # the units standing at T_N+1 in this macro step (:meth:`connect`)
@@ -182,16 +183,23 @@ class SignalCosimulation(CosimulationProblem):
                                 f"{self.step_index + 1} (t = {self.time:.12g} s){unit.said()}")  # fmt: skip
         return y, y
 
+    def _save(self, i):
+        """The state at ``T_N`` of unit ``i`` (implicit), for the corrector's and the Jacobian's steps."""
+        if self._saved[i] is not None:
+            self.units[i].free(self._saved[i])
+        self._saved[i], self._saved_at[i] = self.units[i].save(), self.step_index
+
     def predict(self, i, state, history, *, final=False):
-        if self.implicit_connections:  # the state at T_N, for the corrector's and the Jacobian's steps
-            if self._saved[i] is not None:
-                self.units[i].free(self._saved[i])
-            self._saved[i] = self.units[i].save()
+        if self.implicit_connections:
+            self._save(i)
         return self._step(i, history[: self.k + 1], self.C_pred)
 
     def correct(self, i, state, history, e):
-        if self.implicit_connections:
-            self.units[i].restore(self._saved[i])
+        if self.implicit_connections:  # its first step in this macro step (Gauss-Seidel's later stage) saves
+            if self._saved_at[i] != self.step_index:
+                self._save(i)
+            else:
+                self.units[i].restore(self._saved[i])
         return self._step(i, self.corrector_samples(history, np.asarray(e, dtype=float)), self.C_corr)
 
     def signal_output(self, i, y, output):
