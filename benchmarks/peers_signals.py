@@ -210,6 +210,7 @@ def qc_rows(tmp: Path, args, versions) -> list:
         me = [(k, H, False, 1e-8) for k in (0, 1, 2) for H in ([1e-3] if quick else [1e-2, 4e-3, 2e-3, 1e-3, 5e-4])]
         me += [(k, H, True, 1e-8) for k in (0, 1, 2) for H in ([1e-3] if quick else [4e-3, 2e-3, 1e-3])]
         me += [] if quick else [(2, 5e-4, False, 1e-10), (1, 1e-3, False, 1e-10)]
+        me += [] if quick else [(1, H, False, 1e-6) for H in (1e-2, 4e-3, 2e-3, 1e-3)]
         for k, H, implicit, tol in sorted(me):
             base = row(system, "icosim", coupling_label(k, H, implicit, "model-exchange", tol), "model exchange", "")
             add(base, recorded(lambda t, d=decomposition, k=k, H=H, i=implicit, tol=tol: _qc_run(
