@@ -236,16 +236,23 @@ def icosim_dmo(tmp: Path, k: int, H: float, t_end: float, tolerance: float, coup
     return out | {"x1": out["x"], "x2": out.get("system2.mass2.s", math.nan)}
 
 
-def dmo_rows(tmp: Path, args, versions) -> list:
-    system, rows = "DualMassOscillator", []
-    quick = args.quick
-    cs = {"units": "co-simulation", "group": ""}
+def dmo_adder(rows: list, args):
+    """``add(base, run, H=None)``: a DualMassOscillator row measured, appended and printed."""
 
     def add(base, run, H=None):
         added(rows, attempt(base, run, T_DMO, args, dmo_error, H), f"{base['master']:11s} {base['setting']:50s}",
               lambda r: f"err x1 {r['error_x']:.2e} x2 {r['error_x2']:.2e}")  # fmt: skip
 
-    steps = [1e-3, 1e-4] if quick else [1e-3, 1e-4, 1e-5]
+    return add
+
+
+def dmo_peer_rows(tmp: Path, args, versions, system="DualMassOscillator") -> list:
+    """The peers' fixed-step runs of the units' co-simulation with OMSimulator's four connections, and
+    OMSimulator's published results."""
+    rows: list = []
+    add = dmo_adder(rows, args)
+    cs = {"units": "co-simulation", "group": ""}
+    steps = [1e-3, 1e-4] if args.quick else [1e-3, 1e-4, 1e-5]
     if available(versions, "libcosim"):
         for h in steps:
             folder = P.dmo_osp(tmp / f"dmo_lc_{h:g}", h)
@@ -268,6 +275,13 @@ def dmo_rows(tmp: Path, args, versions) -> list:
                            ("model exchange, CVODE, 1e-4", P.OMSIMULATOR_ME)]:  # fmt: skip
         rows.append(row(system, "OMSimulator", f"published: {name}", **cs)
                     | {"status": "published", "t": T_DMO, **dmo_error({"t": T_DMO, "x1": x1, "x2": x2})})  # fmt: skip
+    return rows
+
+
+def dmo_rows(tmp: Path, args, versions) -> list:
+    system, quick = "DualMassOscillator", args.quick
+    rows = dmo_peer_rows(tmp, args, versions, system)
+    add = dmo_adder(rows, args)
     # Baumgarte index 1 with mu = 10 H (with mu = 1e-3 s it diverges at H = 2.5e-3 s), first-step sensitivities
     # (exact for linear units, as these are), the Model Exchange integrator's tolerance as said
     cases = [(2, 1e-2, 1e-8, "first-step"), (2, 5e-3, 1e-8, "first-step"), (1, 1e-2, 1e-8, "first-step")]

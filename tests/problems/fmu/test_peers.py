@@ -105,16 +105,18 @@ def truck_osp(
     return folder
 
 
-def libcosim(folder: Path, t_end: float, read: dict, expose: dict | None = None) -> dict:
+def libcosim(folder: Path, t_end: float, read: dict, expose: dict | None = None, scenario: Path | None = None) -> dict:
     """libcosim on the OspSystemStructure.xml in ``folder`` to ``t_end`` (ECCO ends at the first step past it):
     the time, the last value of each of ``read`` (key -> (unit, variable)) and the doStep calls (one per unit and
     macro step).  A time-series observer of those variables alone (libcosim's last-value observer reads every
     variable of every unit after each step), and of
-    ``expose`` (unit -> variables): ECCO reads the power bonds' variables through the observed ones only."""
+    ``expose`` (unit -> variables): ECCO reads the power bonds' variables through the observed ones only.
+    ``scenario``: a libcosim scenario file (timed overrides of variables) run by its scenario manager."""
     from libcosimpy._internal import libcosimc, wrap_function
     from libcosimpy.CosimEnums import CosimVariableType
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimManipulator import CosimManipulator
     from libcosimpy.CosimObserver import CosimObserver
 
     step_numbers = wrap_function(lib=libcosimc(), funcname="cosim_observer_get_step_numbers", restype=ctypes.c_int,
@@ -124,6 +126,11 @@ def libcosim(folder: Path, t_end: float, read: dict, expose: dict | None = None)
     execution = CosimExecution.from_osp_config_file(osp_path=str(folder))
     observer = CosimObserver.create_time_series(buffer_size=2)
     execution.add_observer(observer)
+    if scenario is not None:
+        manager = CosimManipulator.create_scenario_manager()
+        execution.add_manipulator(manager)
+        if not execution.load_scenario(manager, str(scenario)):
+            raise RuntimeError(f"libcosim: the scenario {scenario} did not load")
     index = {u.name.decode(): u.index for u in execution.slave_infos()}
     refs = {u: {v.name.decode(): v.reference for v in execution.slave_variables(i)} for u, i in index.items()}
     observed = {(unit, name) for unit, name in read.values()}
