@@ -45,6 +45,7 @@ from .errors import ParameterError
 from .io.jsonio import dumps
 
 __all__ = [
+    "check_expected_orders",
     "Claim",
     "CheckKind",
     "Outcome",
@@ -377,6 +378,15 @@ def combine_holds(holds) -> bool | None:
 
 
 # -- results: CI references, files ------------------------------------------------
+
+
+def check_expected_orders(label: str, expect) -> None:
+    """Refuse an order check's ``expect`` unless it is a non-empty list of ``{k: ..., order: p}``."""
+    if not isinstance(expect, list) or not expect:
+        raise ParameterError(f"{label}: check.expect must be a non-empty list of {{k: ..., order: p}}")
+    for j, exp in enumerate(expect):
+        if not isinstance(exp, dict) or set(exp) != {"k", "order"}:
+            raise ParameterError(f"{label}: check.expect[{j}] must be {{k: ..., order: p}}, got {exp!r}")
 
 
 def reference_mismatches(verdicts) -> list[Verdict]:

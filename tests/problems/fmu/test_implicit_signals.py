@@ -32,18 +32,15 @@ from test_drives import AMPLITUDE, MASS, MOVE, exact
 from test_peers import DMO_UNITS, dmo_ssp
 from test_predict_signals import growth
 from test_signal_scene import load
-from test_signals_outside import CONNECTIONS, OM, exact_history
+from test_signals_outside import CONNECTIONS, OM, model_exchange_error
 
 from icosim.engine.connection_conditions import NotConverged
-from icosim.engine.run import simulate
 from icosim.order_fit import asymptotic_order
 from icosim.problems.fmu.build import build_unit
 from icosim.problems.fmu.errors import SceneError
-from icosim.problems.fmu.exchange import open_fmu_unit
 from icosim.problems.fmu.predict_signals import predict_signal_scene
 from icosim.problems.fmu.scene import load_scene
 from icosim.problems.fmu.signal_scene import run_signal_scene, signal_dataset
-from icosim.problems.fmu.signals import SignalCosimulation, connections_of
 
 
 def dmo_scene(tmp_path, H, t_end, interface="model-exchange", **coupling):
@@ -88,41 +85,12 @@ def test_implicit_coupling_decays_where_explicit_jacobi_grows(tmp_path, k):
         assert np.max(np.abs(x - ref)) < 0.1 * AMPLITUDE
 
 
-def model_exchange_error(k, H, t_end, scheme="jacobi"):
-    """The implicit run's largest position error at ``t_end`` from the exact coupling history (engine directly)."""
-    names = ["system1", "system2"]
-    cons, inputs, outputs = connections_of(CONNECTIONS, names)
-    starts = {"system1": {"x1_start": 0.0}, "system2": {"x2_start": 0.5}}
-    units = [
-        open_fmu_unit(
-            n,
-            OM / DMO_UNITS[n],
-            {"signal_input": inputs[i], "signal_output": outputs[i]},
-            starts[n],
-            interface="model-exchange",
-            tolerance=1e-12,
-        )  # fmt: skip
-        for i, n in enumerate(names)
-    ]
-    try:
-        problem = SignalCosimulation(units, inputs, outputs, cons, k, H, implicit=True)
-        history = problem.initial_history(exact_history(k, H))
-        traj = simulate(problem, None, problem.initial_state(), history, round(t_end / H), record=False,
-                        scheme=scheme, iterations=10, tol=1e-10)  # fmt: skip
-        assert traj.failed_at is None, traj.reason
-        x = [units[0].get(("signal_output",)).ravel()[0], units[1].get_named("mass2.s")]
-    finally:
-        for unit in units:
-            unit.close()
-    return np.max(np.abs(np.array(x) - exact([t_end])[0, :2])), problem.implicit_work
-
-
 @pytest.mark.parametrize("k, scheme", [(0, "jacobi"), (1, "jacobi"), (0, "gauss-seidel-21"), (1, "gauss-seidel-21")])
 def test_implicit_coupling_has_the_order_of_its_interpolation(k, scheme):
     """Gauss-Seidel closes the same conditions (its last stage all of them, every fed unit stepped again): the same
     order and cost."""
     Hs = [4e-3, 2e-3, 1e-3]
-    results = [model_exchange_error(k, H, 1.0, scheme) for H in Hs]
+    results = [model_exchange_error(k, H, 1.0, scheme, implicit=True) for H in Hs]
     errors = [e for e, _ in results]
     fit = asymptotic_order(Hs, errors)
     assert abs(fit.order - (k + 1)) < 0.2, (errors, fit)

@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 
 from ...errors import ParameterError
-from ...verdicts import CheckKind, Outcome, combine_holds, select, selector_text
+from ...verdicts import CheckKind, Outcome, check_expected_orders, combine_holds, select, selector_text
 
 __all__ = ["CHECKS", "check_bound", "check_orders", "QUANTITIES"]
 
@@ -96,12 +96,7 @@ def _validate_orders(label, params):
         v = params[key]
         if not isinstance(v, (int, float)) or isinstance(v, bool) or not v > 0:
             raise ParameterError(f"{label}: check.{key} must be a number > 0, got {v!r}")
-    expect = params["expect"]
-    if not isinstance(expect, list) or not expect:
-        raise ParameterError(f"{label}: check.expect must be a non-empty list of {{k: ..., order: p}}")
-    for j, exp in enumerate(expect):
-        if not isinstance(exp, dict) or set(exp) != {"k", "order"}:
-            raise ParameterError(f"{label}: check.expect[{j}] must be {{k: ..., order: p}}, got {exp!r}")
+    check_expected_orders(label, params["expect"])
 
 
 def _describe_bound(p):

@@ -23,7 +23,7 @@ import math
 import numpy as np
 
 from ...errors import ParameterError
-from ...verdicts import CheckKind, Outcome, combine_holds, select, selector_text
+from ...verdicts import CheckKind, Outcome, check_expected_orders, combine_holds, select, selector_text
 
 __all__ = ["CHECKS", "check_order", "check_growth", "check_ratio"]
 
@@ -125,12 +125,7 @@ def _positive(label, params, key):
 
 def _validate_order(label, params):
     _positive(label, params, "tolerance")
-    expect = params["expect"]
-    if not isinstance(expect, list) or not expect:
-        raise ParameterError(f"{label}: check.expect must be a non-empty list of {{k: ..., order: p}}")
-    for j, exp in enumerate(expect):
-        if not isinstance(exp, dict) or set(exp) != {"k", "order"}:
-            raise ParameterError(f"{label}: check.expect[{j}] must be {{k: ..., order: p}}, got {exp!r}")
+    check_expected_orders(label, params["expect"])
 
 
 def _validate_growth(label, params):
