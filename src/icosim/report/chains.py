@@ -7,8 +7,6 @@ Everything shown comes from the datasets the workflow wrote (``results/chains/*.
 
 from __future__ import annotations
 
-import math
-
 from ..verdicts import verdict_counts
 from . import html as rp
 from .claims import claims_table
@@ -16,11 +14,7 @@ from .claims import claims_table
 __all__ = ["chains_section", "order_rows", "limit_counts"]
 
 esc = rp.escape
-
-
-def _num(x, fmt=".3g") -> str:
-    x = float(x)
-    return format(x, fmt) if math.isfinite(x) else "—"
+_num = rp.number
 
 
 def limit_counts(stability) -> dict:

@@ -17,11 +17,7 @@ from .claims import claims_table
 __all__ = ["fmi_section", "scene_rows", "order_rows", "scene_verdicts"]
 
 esc = rp.escape
-
-
-def _num(x, fmt=".3g") -> str:
-    x = float(x)
-    return format(x, fmt) if math.isfinite(x) else "—"
+_num = rp.number
 
 
 def scene_verdicts(claims) -> dict:

@@ -9,9 +9,11 @@ from __future__ import annotations
 import base64
 import html
 import itertools
+import math
 from pathlib import Path
 
 __all__ = [
+    "number",
     "embed_image",
     "figure",
     "figure_pair",
@@ -48,6 +50,12 @@ FOLD_AT = 200
 #: zlib level of the palette PNGs: on the project's figures level 9 (``optimize``) makes them 8 % smaller
 #: than level 7 and takes six times as long (the larger part of a report section's time); the pixels are the same.
 PALETTE_ZLIB_LEVEL = 7
+
+
+def number(x, fmt: str = ".3g") -> str:
+    """``x`` formatted by ``fmt``, a dash where it is not finite (a quantity the data do not give)."""
+    x = float(x)
+    return format(x, fmt) if math.isfinite(x) else "—"
 
 
 def compact_png(data: bytes) -> bytes:

@@ -17,11 +17,7 @@ from .claims import claims_table
 __all__ = ["signals_section", "case_rows", "growth_rows", "undecided_items"]
 
 esc = rp.escape
-
-
-def _num(x, fmt=".3g") -> str:
-    x = float(x)
-    return format(x, fmt) if math.isfinite(x) else "—"
+_num = rp.number
 
 
 def _coupling(a) -> str:
