@@ -252,18 +252,25 @@ DMO_READ = {"x1": ("system1", "x1"), "x2": ("system2", "mass2.s")}
 def dmo_osp(folder: Path, step: float) -> Path:
     """A plain OspSystemStructure.xml (fixed step, the units' defaults: x1_start 0, x2_start 0.5) with
     OMSimulator's four connections."""
+    units = {n: OM / f for n, f in DMO_UNITS.items()}
+    return fixed_step_osp(folder, step, units, [(*a.split(".", 1), *b.split(".", 1)) for a, b in DMO_CONNECTIONS])
+
+
+def fixed_step_osp(folder: Path, step: float, units: dict, connections) -> Path:
+    """A plain OspSystemStructure.xml in ``folder`` (fixed step ``step``): ``units`` name -> FMU path,
+    ``connections`` as (source unit, output, target unit, input)."""
     folder.mkdir(parents=True, exist_ok=True)
-    simulators = "\n".join(f'    <Simulator name="{n}" source="{OM / f}"/>' for n, f in DMO_UNITS.items())
-    connections = "\n".join(
-        f'    <VariableConnection>\n      <Variable simulator="{a.split(".")[0]}" name="{a.split(".", 1)[1]}"/>\n'
-        f'      <Variable simulator="{b.split(".")[0]}" name="{b.split(".", 1)[1]}"/>\n    </VariableConnection>'
-        for a, b in DMO_CONNECTIONS
+    simulators = "\n".join(f'    <Simulator name="{n}" source="{f}"/>' for n, f in units.items())
+    wired = "\n".join(
+        f'    <VariableConnection>\n      <Variable simulator="{a}" name="{y}"/>\n'
+        f'      <Variable simulator="{b}" name="{u}"/>\n    </VariableConnection>'
+        for a, y, b, u in connections
     )
     (folder / "OspSystemStructure.xml").write_text(
         '<?xml version="1.0" encoding="UTF-8"?>\n'
         '<OspSystemStructure xmlns="http://opensimulationplatform.com/MSMI/OSPSystemStructure" version="0.1">\n'
         f"  <BaseStepSize>{step!r}</BaseStepSize>\n  <Algorithm>fixedStep</Algorithm>\n"
-        f"  <Simulators>\n{simulators}\n  </Simulators>\n  <Connections>\n{connections}\n  </Connections>\n"
+        f"  <Simulators>\n{simulators}\n  </Simulators>\n  <Connections>\n{wired}\n  </Connections>\n"
         "</OspSystemStructure>\n"
     )
     return folder

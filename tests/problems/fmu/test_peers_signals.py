@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_peers import libcosim, quiet
+from test_peers import fixed_step_osp, libcosim, quiet
 from test_quarter_car import CONNECTIONS, OM
 from test_quarter_car import exact as qc_exact
 
@@ -78,21 +78,8 @@ def _variable(ref: str) -> tuple[str, str]:
 def qc_osp(folder: Path, decomposition: str, step: float, t_end: float) -> tuple[Path, Path]:
     """An OspSystemStructure.xml (fixed step) of the two units with OMSimulator's connections, and a libcosim
     scenario file overriding ``wheel.z`` at the road's breakpoints."""
-    folder.mkdir(parents=True, exist_ok=True)
-    simulators = "\n".join(
-        f'    <Simulator name="{u}" source="{qc_fmu(decomposition, u)}"/>' for u in ("chassis", "wheel")
-    )
-    connections = "\n".join(
-        f'    <VariableConnection>\n      <Variable simulator="{a}" name="{y}"/>\n'
-        f'      <Variable simulator="{b}" name="{u}"/>\n    </VariableConnection>'
-        for a, y, b, u in CONNECTIONS[decomposition]
-    )
-    (folder / "OspSystemStructure.xml").write_text(
-        '<?xml version="1.0" encoding="UTF-8"?>\n'
-        '<OspSystemStructure xmlns="http://opensimulationplatform.com/MSMI/OSPSystemStructure" version="0.1">\n'
-        f"  <BaseStepSize>{step!r}</BaseStepSize>\n  <Algorithm>fixedStep</Algorithm>\n"
-        f"  <Simulators>\n{simulators}\n  </Simulators>\n  <Connections>\n{connections}\n  </Connections>\n"
-        "</OspSystemStructure>\n"
+    fixed_step_osp(
+        folder, step, {u: qc_fmu(decomposition, u) for u in ("chassis", "wheel")}, CONNECTIONS[decomposition]
     )
     events = [{"time": t, "model": "wheel", "variable": "z", "action": "override", "value": z}
               for t, z in road_events(t_end)]  # fmt: skip
