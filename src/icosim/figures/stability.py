@@ -10,6 +10,8 @@ yellow at ``rho = 1``), the ``rho = 1`` boundary, and -- in the paper's style
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from matplotlib.colors import TwoSlopeNorm
 from matplotlib.figure import Figure
@@ -18,6 +20,7 @@ from matplotlib.patches import Rectangle
 
 from ..engine.methods import parameters
 from ..studies.stability.panels import format_row_label
+from .grid import Margins, grid_axes
 
 __all__ = ["stability_figure", "drawn_variables", "panel_layout", "row_labels", "STYLES"]
 
@@ -28,6 +31,11 @@ OPEN_VERDICTS = {
     2: {"color": "#2c7bb6", "marker": "s", "label": "marginal: the proven enclosure of ρ contains 1"},
     3: {"color": "#000000", "marker": "x", "label": "undecided: no result for the point"},
 }
+#: Room for the labels (inches): row labels and tick labels left, the colour bar right, the titles on
+#: top, a panel's title above and its tick labels below it between rows.
+MARGINS = Margins(left=0.72, right=1.1, bottom=0.42, top=0.46, wspace=0.42, hspace=0.32)
+LEGEND_HEIGHT = 0.25  # inches below the grid for the legend of the open verdicts
+COLORBAR = (0.25, 0.2)  # gap to the grid and width of the colour bar (inches)
 #: TeX symbols of the ratios; the method parameters' come from the registry (:mod:`icosim.engine.methods`).
 RATIO_SYMBOLS = {
     "am21": r"$\alpha_{m21}$",
@@ -142,8 +150,16 @@ def stability_figure(
         raise ValueError("no panels to draw")
     rows, columns, place = panel_layout(panels)
     labels = row_labels(panels)
-    fig = Figure(figsize=(panel_size * len(columns) + 1.2, panel_size * len(rows) + 0.7), layout="constrained")
-    axes = fig.subplots(len(rows), len(columns), squeeze=False)
+    shown = {int(c) for ds in panels if "verdict" in ds for c in np.unique(np.asarray(ds["verdict"]))}
+    handles = [
+        Line2D([], [], ls="none", ms=4, color=kw["color"], marker=kw["marker"], label=kw["label"])
+        for code, kw in OPEN_VERDICTS.items()
+        if code in shown
+    ]
+    legend = LEGEND_HEIGHT if handles else 0.0
+    fig = Figure(figsize=(panel_size * len(columns) + 1.2, panel_size * len(rows) + 0.7))
+    margins = replace(MARGINS, bottom=MARGINS.bottom + legend)
+    axes = grid_axes(fig, len(rows), len(columns), margins)
     occupied = set(place.values())
     for (i, j), ax in np.ndenumerate(axes):
         if (i, j) not in occupied:
@@ -165,18 +181,22 @@ def stability_figure(
             ax.set_xlabel(r"$\bar\lambda_{r1}$", fontsize=7)
     _mark_zoom_regions(panels, place, columns, axes)
     if mappable is not None:
-        fig.colorbar(mappable, ax=axes, shrink=0.6, extend="max", label=r"spectral radius $\rho$")
-    shown = {int(c) for ds in panels if "verdict" in ds for c in np.unique(np.asarray(ds["verdict"]))}
-    handles = [
-        Line2D([], [], ls="none", ms=4, color=kw["color"], marker=kw["marker"], label=kw["label"])
-        for code, kw in OPEN_VERDICTS.items()
-        if code in shown
-    ]
+        fig.colorbar(mappable, cax=_colorbar_axes(fig, margins), extend="max", label=r"spectral radius $\rho$")
     if handles:
-        fig.legend(handles=handles, loc="outside lower center", ncol=len(handles), fontsize=7, frameon=False)
+        fig.legend(handles=handles, loc="lower center", ncol=len(handles), fontsize=7, frameon=False)
     if title:
         fig.suptitle(title, fontsize=9)
     return fig
+
+
+def _colorbar_axes(fig, margins):
+    """The colour bar's axes right of the grid, 60 % of its height, centred on it."""
+    width, height = fig.get_size_inches()
+    gap, bar = COLORBAR
+    grid_h = height - margins.top - margins.bottom
+    x = width - margins.right + gap
+    y = margins.bottom + 0.2 * grid_h
+    return fig.add_axes((x / width, y / height, bar / width, 0.6 * grid_h / height))
 
 
 def _mark_zoom_regions(panels, place, columns, axes):
