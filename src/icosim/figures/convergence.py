@@ -22,6 +22,7 @@ from matplotlib.lines import Line2D
 
 from ..engine.decompositions import DECOMPOSITIONS
 from ..engine.methods import METHODS, parameters
+from .grid import Margins, grid_axes
 
 __all__ = [
     "convergence_figure",
@@ -32,6 +33,10 @@ __all__ = [
     "DRAWN_VARIABLES",
     "WORK_PRECISION_VARIABLES",
 ]
+
+#: Room for the labels of :func:`convergence_figure` and :func:`slope_figure` (inches): the y label and
+#: tick labels left, the title and the panels' titles on top, tick labels, x label and legend below.
+MARGINS = Margins(left=0.8, right=0.25, bottom=0.8, top=0.55, wspace=0.15, hspace=0.32)
 
 #: The variables of a panel :func:`convergence_figure` and :func:`slope_figure` draw.
 DRAWN_VARIABLES = (
@@ -165,8 +170,8 @@ def convergence_figure(datasets: dict, layout, *, columns, rows, title="", guide
     """
     n_cols, n_rows = len(layout), len(rows)
     ylo, yhi = _limits(list(datasets.values()))
-    fig = Figure(figsize=(4.0 * n_cols + 0.6, 3.2 * n_rows + 0.9), layout="constrained")
-    axes = fig.subplots(n_rows, n_cols, squeeze=False, sharex=True, sharey=True)
+    fig = Figure(figsize=(4.0 * n_cols + 0.6, 3.2 * n_rows + 0.9))
+    axes = grid_axes(fig, n_rows, n_cols, MARGINS, sharex=True, sharey=True)
     for c, col in enumerate(layout):
         for r, (panel, index) in enumerate(col):
             ax = axes[r, c]
@@ -183,7 +188,7 @@ def convergence_figure(datasets: dict, layout, *, columns, rows, title="", guide
         Line2D([], [], ls="none", marker="x", color="0.3", mew=1.4, label="unstable at this H (no error shown)"),
         Line2D([], [], ls=":", color="0.45", label="auxiliary lines $O(H^p)$"),
     ]
-    fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=8, frameon=False)
+    fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8, frameon=False)
     if title:
         fig.suptitle(title, fontsize=11)
     return fig
@@ -225,8 +230,8 @@ def slope_figure(datasets: dict, layout, *, columns, rows, title="", tolerance=0
     values = np.concatenate([_values(ds, "local_slope").ravel() for ds in datasets.values()])
     values = values[np.isfinite(values)]
     lo, hi = (np.floor(values.min()) - 0.5, np.ceil(values.max()) + 0.5) if values.size else (0.0, 5.0)
-    fig = Figure(figsize=(4.0 * n_cols + 0.6, 3.0 * n_rows + 0.9), layout="constrained")
-    axes = fig.subplots(n_rows, n_cols, squeeze=False, sharex=True, sharey=True)
+    fig = Figure(figsize=(4.0 * n_cols + 0.6, 3.0 * n_rows + 0.9))
+    axes = grid_axes(fig, n_rows, n_cols, MARGINS, sharex=True, sharey=True)
     for c, col in enumerate(layout):
         for r, (panel, index) in enumerate(col):
             ax = axes[r, c]
@@ -240,7 +245,7 @@ def slope_figure(datasets: dict, layout, *, columns, rows, title="", tolerance=0
     handles = [
         Line2D([], [], ls="--", color="0.3", label=f"order over the smallest-H decade (band: ± {tolerance:g})"),
     ]
-    fig.legend(handles=handles, loc="outside lower center", ncol=1, fontsize=8, frameon=False)
+    fig.legend(handles=handles, loc="lower center", ncol=1, fontsize=8, frameon=False)
     if title:
         fig.suptitle(title, fontsize=11)
     return fig
