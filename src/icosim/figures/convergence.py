@@ -22,7 +22,7 @@ from matplotlib.lines import Line2D
 
 from ..engine.decompositions import DECOMPOSITIONS
 from ..engine.methods import METHODS, parameters
-from .grid import Margins, grid_axes
+from .grid import PANEL_TITLE, Margins, grid_axes
 
 __all__ = [
     "convergence_figure",
@@ -177,7 +177,7 @@ def convergence_figure(datasets: dict, layout, *, columns, rows, title="", guide
             ax = axes[r, c]
             ds = datasets[panel]
             _draw_cell(ax, ds, index, guide_orders, ylo, yhi)
-            ax.set_title(_cell_title(ds, index, rows[r], columns[c], n_cols), fontsize=9)
+            ax.set_title(_cell_title(ds, index, rows[r], columns[c], n_cols), fontsize=9, **PANEL_TITLE)
             if r == n_rows - 1:
                 ax.set_xlabel("macro-step size $H$ (s)")
             if c == 0:
@@ -237,7 +237,7 @@ def slope_figure(datasets: dict, layout, *, columns, rows, title="", tolerance=0
             ax = axes[r, c]
             _draw_slopes(ax, datasets[panel], index, tolerance)
             ax.set_ylim(max(lo, -1.0), min(hi, 8.0))
-            ax.set_title(_cell_title(datasets[panel], index, rows[r], columns[c], n_cols), fontsize=9)
+            ax.set_title(_cell_title(datasets[panel], index, rows[r], columns[c], n_cols), fontsize=9, **PANEL_TITLE)
             if r == n_rows - 1:
                 ax.set_xlabel("macro-step size $H$ (s)")
             if c == 0:

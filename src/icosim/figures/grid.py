@@ -10,7 +10,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["Margins", "grid_axes"]
+__all__ = ["Margins", "grid_axes", "PANEL_TITLE"]
+
+#: Keywords of ``Axes.set_title`` for a panel without tick labels on top: a title given its height is not
+#: moved above such labels, so matplotlib does not measure the axis for it on every draw.
+PANEL_TITLE = {"y": 1.0}
 
 
 @dataclass(frozen=True)

@@ -20,7 +20,7 @@ from matplotlib.patches import Rectangle
 
 from ..engine.methods import parameters
 from ..studies.stability.panels import format_row_label
-from .grid import Margins, grid_axes
+from .grid import PANEL_TITLE, Margins, grid_axes
 
 __all__ = ["stability_figure", "drawn_variables", "panel_layout", "row_labels", "STYLES"]
 
@@ -174,7 +174,7 @@ def stability_figure(
         mappable = mappable or m
         view, k = columns[j]
         if i == 0 or (i - 1, j) not in occupied:
-            ax.set_title(f"k = {k}" + (" (zoom)" if view == "zoom" else ""), fontsize=8)
+            ax.set_title(f"k = {k}" + (" (zoom)" if view == "zoom" else ""), fontsize=8, **PANEL_TITLE)
         if j == 0:
             ax.set_ylabel(labels[rows[i]] + "\n" + r"$\bar\lambda_{i1}$", fontsize=7)
         if i == len(rows) - 1 or (i + 1, j) not in occupied:
