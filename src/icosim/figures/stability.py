@@ -196,7 +196,8 @@ def _colorbar_axes(fig, margins):
     grid_h = height - margins.top - margins.bottom
     x = width - margins.right + gap
     y = margins.bottom + 0.2 * grid_h
-    return fig.add_axes((x / width, y / height, bar / width, 0.6 * grid_h / height))
+    # labelled as matplotlib labels the colour bar axes it makes itself
+    return fig.add_axes((x / width, y / height, bar / width, 0.6 * grid_h / height), label="<colorbar>")
 
 
 def _mark_zoom_regions(panels, place, columns, axes):
