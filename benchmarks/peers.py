@@ -215,6 +215,14 @@ def truck_rows(tmp: Path, args, versions) -> tuple[list, dict | None]:
                 control = {"control": {"tolerance": tol, "H_min": 1e-7, "H_max": 1e-2}}
                 add(row(system, "icosim", f"Baumgarte 1, k = 1, controlled, tolerance {tol:g}", solver),
                     lambda t, c=control: P.icosim_run(P.truck_scene(tmp, 1e-4, 1, t, coupling=c)))  # fmt: skip
+            # ECCO's own estimate (the power residual) in icosim, at ECCO's first step and bounds of the file
+            for tol in [1e-5, 1e-6]:
+                control = {"substeps": 4, "sensitivities": "first-step",
+                           "control": {"estimate": "power-residual", "absolute_tolerance": tol, "H_min": 1e-5,
+                                       "H_max": 1e-2}}  # fmt: skip
+                add(row(system, "icosim", f"Baumgarte 1, k = 1, power residual, tolerances {tol:g}, 4 sub-steps, "
+                        "first-step sensitivities", solver),
+                    lambda t, c=control: P.icosim_run(P.truck_scene(tmp, 1e-4, 1, t, coupling=c)))  # fmt: skip
     return rows, ref
 
 
