@@ -81,9 +81,10 @@ def _radius_and_condition(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     ``kappa = |x| |u| / |u^H x|`` (``M x = lambda x``, ``u^H M = lambda u^H``): a perturbation ``E`` moves that
     eigenvalue by at most ``kappa ||E||_2`` to first order.  One LAPACK ``geev`` per matrix gives the
-    eigenvalues and both eigenvectors from the same Schur form: the eigenvalues are those ``eigvals`` returns
-    (the same Hessenberg QR with or without eigenvectors), and the left eigenvector is that of the very
-    eigenvalue, not the inverse of the right ones (a defective eigenvalue elsewhere, the history's zeros,
+    eigenvalues and both eigenvectors from the same Schur form: the eigenvalues are ``numpy.linalg.eig``'s
+    bit for bit (the same call with the same workspace; ``eigvals`` runs the same Hessenberg QR, equal but
+    for the last bits of large matrices, seen from about 150 rows), and the left eigenvector is that of the
+    very eigenvalue, not the inverse of the right ones (a defective eigenvalue elsewhere, the history's zeros,
     leaves those without an inverse) nor one of ``M^T``'s matched by value (in a cluster of close eigenvalues
     that can be another one's).  ``kappa`` is capped at ``1/sqrt(eps)``: an eigenvalue that ill-conditioned
     is, at float64's rounding, as good as defective, and a perturbation ``delta`` moves it by about
@@ -95,7 +96,7 @@ def _radius_and_condition(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     batch, n = M.shape[:-2], M.shape[-1]
     wr, wi = np.empty(batch + (n,)), np.empty(batch + (n,))
     vl, vr = np.empty(batch + (n, n)), np.empty(batch + (n, n))
-    # the optimal workspace, as numpy.linalg.eig asks for it: the blocked reductions, and its eigenvalues
+    # the optimal workspace, as numpy.linalg.eig asks for it: its blocked reductions, so its rounding
     lwork = int(dgeev_lwork(n, compute_vl=1, compute_vr=1)[0]) if n else 1
     for idx in np.ndindex(*batch):
         wr[idx], wi[idx], vl[idx], vr[idx], info = dgeev(M[idx], compute_vl=1, compute_vr=1, lwork=lwork)
