@@ -79,24 +79,45 @@ def _spectral_radius_of(M: np.ndarray, backend: Float64 | Multiprecision) -> Any
 def _radius_and_condition(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Spectral radius of each float64 matrix and the condition number of the eigenvalue that attains it.
 
-    ``kappa = |x| |y| / |y^T x|`` (``M x = lambda x``, ``M^T y = lambda y``): a perturbation ``E`` moves that
-    eigenvalue by at most ``kappa ||E||_2`` to first order.  The eigenvalues are those ``eigvals`` returns
-    (LAPACK's ``geev`` runs the same Hessenberg QR with or without eigenvectors).  The left eigenvector is
-    taken from the eigenvectors of ``M^T`` (the eigenvalue nearest), not from the inverse of the right
-    ones: a defective eigenvalue elsewhere (the history's zeros) leaves those without an inverse.
-    ``kappa`` is capped at ``1/sqrt(eps)``: an eigenvalue that ill-conditioned is, at float64's rounding,
-    as good as defective, and a perturbation ``delta`` moves it by about ``sqrt(delta)`` (a 2 x 2 Jordan
-    block), which the cap gives; a larger Jordan block moves it further, which the disturbed runs see.
+    ``kappa = |x| |u| / |u^H x|`` (``M x = lambda x``, ``u^H M = lambda u^H``): a perturbation ``E`` moves that
+    eigenvalue by at most ``kappa ||E||_2`` to first order.  One LAPACK ``geev`` per matrix gives the
+    eigenvalues and both eigenvectors from the same Schur form: the eigenvalues are ``numpy.linalg.eig``'s
+    bit for bit (the same call with the same workspace; ``eigvals`` runs the same Hessenberg QR, equal but
+    for the last bits of large matrices, seen from about 150 rows), and the left eigenvector is that of the
+    very eigenvalue, not the inverse of the right ones (a defective eigenvalue elsewhere, the history's zeros,
+    leaves those without an inverse) nor one of ``M^T``'s matched by value (in a cluster of close eigenvalues
+    that can be another one's).  ``kappa`` is capped at ``1/sqrt(eps)``: an eigenvalue that ill-conditioned
+    is, at float64's rounding, as good as defective, and a perturbation ``delta`` moves it by about
+    ``sqrt(delta)`` (a 2 x 2 Jordan block), which the cap gives; a larger Jordan block moves it further, which
+    the disturbed runs see.
     """
-    w, X = np.linalg.eig(M)
+    from scipy.linalg.lapack import dgeev, dgeev_lwork  # here: a job that forms no radius starts faster
+
+    batch, n = M.shape[:-2], M.shape[-1]
+    wr, wi = np.empty(batch + (n,)), np.empty(batch + (n,))
+    vl, vr = np.empty(batch + (n, n)), np.empty(batch + (n, n))
+    # the optimal workspace, as numpy.linalg.eig asks for it: its blocked reductions, so its rounding
+    lwork = int(dgeev_lwork(n, compute_vl=1, compute_vr=1)[0]) if n else 1
+    for idx in np.ndindex(*batch):
+        wr[idx], wi[idx], vl[idx], vr[idx], info = dgeev(M[idx], compute_vl=1, compute_vr=1, lwork=lwork)
+        if info > 0:
+            raise np.linalg.LinAlgError("Eigenvalues did not converge")  # as numpy.linalg.eig reports it
+    w = wr + 1j * wi
     i = np.argmax(np.abs(w), axis=-1)[..., None]
-    lam = np.take_along_axis(w, i, axis=-1)
-    x = np.take_along_axis(X, i[..., None, :], axis=-1)[..., 0]
-    wt, Y = np.linalg.eig(np.swapaxes(M, -1, -2))
-    j = np.argmin(np.abs(wt - lam), axis=-1)[..., None]
-    y = np.take_along_axis(Y, j[..., None, :], axis=-1)[..., 0]
-    kappa = np.linalg.norm(x, axis=-1) * np.linalg.norm(y, axis=-1) / np.abs(np.sum(x * y, axis=-1))
-    return np.abs(lam[..., 0]), np.fmin(kappa, 1 / np.sqrt(np.finfo(float).eps))
+    lam = np.take_along_axis(w, i, axis=-1)[..., 0]
+    # a complex pair is stored as two real columns (LAPACK's layout): re + i im for the eigenvalue with
+    # positive imaginary part, re - i im for its conjugate
+    sign = np.sign(lam.imag)[..., None]
+    re = np.where(sign < 0, i - 1, i)[..., None, :]
+    im = np.where(sign > 0, i + 1, i)[..., None, :]
+
+    def vector(V: np.ndarray) -> np.ndarray:
+        part = lambda j: np.take_along_axis(V, j, axis=-1)[..., 0]  # noqa: E731
+        return part(re) + 1j * sign * part(im)
+
+    x, u = vector(vr), vector(vl)
+    kappa = np.linalg.norm(x, axis=-1) * np.linalg.norm(u, axis=-1) / np.abs(np.sum(u.conj() * x, axis=-1))
+    return np.abs(lam), np.fmin(kappa, 1 / np.sqrt(np.finfo(float).eps))
 
 
 class _PointNoise:
