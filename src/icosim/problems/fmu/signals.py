@@ -189,17 +189,18 @@ class SignalCosimulation(CosimulationProblem):
             self.units[i].free(self._saved[i])
         self._saved[i], self._saved_at[i] = self.units[i].save(), self.step_index
 
-    def predict(self, i, state, history, *, final=False):
+    def predict(self, i, state, history, *, final=False, e_new=None):
+        """Unit ``i`` with the extrapolation polynomials, or, ``e_new`` given (fed by a connection's new sample), the
+        interpolation polynomials through it; implicit: its state at ``T_N`` saved first."""
         if self.implicit_connections:
             self._save(i)
+        if e_new is not None:
+            return self._step(i, self.corrector_samples(history, np.asarray(e_new, dtype=float)), self.C_corr)
         return self._step(i, history[: self.k + 1], self.C_pred)
 
     def correct(self, i, state, history, e):
-        if self.implicit_connections:  # its first step in this macro step (Gauss-Seidel's later stage) saves
-            if self._saved_at[i] != self.step_index:
-                self._save(i)
-            else:
-                self.units[i].restore(self._saved[i])
+        if self.implicit_connections:  # restored to its state at T_N, which its predictor saved
+            self.units[i].restore(self._saved[i])
         return self._step(i, self.corrector_samples(history, np.asarray(e, dtype=float)), self.C_corr)
 
     def signal_output(self, i, y, output):
