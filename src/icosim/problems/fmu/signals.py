@@ -70,14 +70,17 @@ class SignalCosimulation(CosimulationProblem):
         is restored to it before every further step of the macro step (units that save and restore state).  An
         algebraic loop is then closed with every other connection at ``T_N+1``; its solver serves ``t0`` only.
     loop_tolerance, loop_iterations : the algebraic loops' Newton solve (:class:`~icosim.problems.fmu.loops.LoopSolver`).
+    joints, n_components : joints of the graph beside the connections, whose units a subclass serves
+        (:class:`~icosim.problems.fmu.joint_signals.JointSignalCosimulation`).
     """
 
     def __init__(self, units, inputs, outputs, connections, k, H, *, t0=0.0, sources=None, implicit=False,
-                 loop_tolerance=1e-10, loop_iterations=20):  # fmt: skip
+                 loop_tolerance=1e-10, loop_iterations=20, joints=(), n_components=1):  # fmt: skip
         self.units = tuple(units)
         self.sources = tuple(map(tuple, sources)) if sources is not None else tuple(() for _ in self.units)
         self.input_names, self.output_names = tuple(map(tuple, inputs)), tuple(map(tuple, outputs))
-        graph = CouplingGraph(len(self.units), (), names=tuple(u.label for u in self.units), connections=connections)
+        graph = CouplingGraph(len(self.units), joints, n_components, names=tuple(u.label for u in self.units),
+                              connections=connections)  # fmt: skip
         super().__init__(graph, k)
         self.implicit_connections = bool(implicit)
         self._saved = [None] * len(self.units)  # implicit: each unit's state at T_N
