@@ -54,7 +54,8 @@ from .errors import SceneError
 from .joints import NUMBERED, ORDERED_SCHEMES, check_order, driven_by, graph_message, joint_schema, scene_joints
 from .variables import quoted_number_hint
 
-__all__ = ["Scene", "load_scene", "scene_schema", "SUBSYSTEM_KEYS", "JOINT_KEYS", "COUPLING_KEYS", "SCENE_KEYS"]
+__all__ = ["Scene", "load_scene", "joint_scene", "scene_schema", "SUBSYSTEM_KEYS", "JOINT_KEYS", "COUPLING_KEYS",
+           "SCENE_KEYS"]  # fmt: skip
 
 #: Keys of one subsystem and what they hold.
 SUBSYSTEM_KEYS = {
@@ -314,8 +315,15 @@ def load_scene(path) -> Scene:
 
     path = Path(path)
     data, system = scene_data(path)
-    if is_signal_scene(data):  # units coupled by connections (icosim.problems.fmu.signal_scene)
-        return signal_scene(path, data, system)
+    if is_signal_scene(data):  # units coupled by connections (.signal_scene), or beside joints (.joint_signal_scene)
+        from .joint_signal_scene import joint_signal_scene
+
+        return (joint_signal_scene if "joints" in data else signal_scene)(path, data, system)
+    return joint_scene(path, data, system)
+
+
+def joint_scene(path, data, system=None) -> Scene:
+    """A scene of joints (or the paper's two units) from its ``data`` (read from ``path``), checked."""
     _validate(path, data)
     c = {**COUPLING_KEYS, **data["coupling"]}
     names = list(data["subsystems"])
@@ -324,11 +332,8 @@ def load_scene(path) -> Scene:
     given = {k: c[k] for k in data["coupling"] if k not in COUPLING_KEYS}
     extra = sorted(set(given) - set(spec.arguments))
     if extra:
-        _fail(
-            path,
-            f"coupling.{extra[0]}",
-            f"not a parameter of method {spec.name} (its parameters: {', '.join(spec.arguments) or 'none'})",
-        )
+        its = ", ".join(spec.arguments) or "none"
+        _fail(path, f"coupling.{extra[0]}", f"not a parameter of method {spec.name} (its parameters: {its})")
     try:
         method = spec.make(**given)
     except ParameterError as exc:
@@ -346,11 +351,8 @@ def load_scene(path) -> Scene:
     t0, t_end, H = float(data.get("t_start", 0.0)), float(data["t_end"]), float(c["H"])
     steps = (t_end - t0) / H
     if not steps >= 1 or abs(steps - round(steps)) > 1e-6 * max(1.0, steps):
-        _fail(
-            path,
-            "t_end",
-            f"t_end - t_start = {t_end - t0:g} s must be a whole number (>= 1) of macro steps H = {H:g} s",
-        )
+        whole = f"t_end - t_start = {t_end - t0:g} s must be a whole number (>= 1) of macro steps H = {H:g} s"
+        _fail(path, "t_end", whole)
     fmus = {}
     entries = {
         f"{sname}.{key}": len(v) if isinstance(v, list) else 1

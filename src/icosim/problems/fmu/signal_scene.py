@@ -258,16 +258,17 @@ def _fmu_path(scene, sub) -> Path:
     return p if p.is_absolute() else (scene.path.parent / p).resolve()
 
 
-def open_signal_unit(scene: SignalScene, name, inputs, outputs):
+def open_signal_unit(scene: SignalScene, name, inputs, outputs, path=None):
     """Unit ``name`` opened with its connected ``inputs`` and ``outputs`` (variable names); co-simulation coupled
-    explicitly is stepped forward only (no saved state), its orders of input derivatives checked before any step."""
+    explicitly is stepped forward only (no saved state), its orders of input derivatives checked before any step.
+    ``path``: its ``.fmu`` (default: the scene's ``fmu``)."""
     from .exchange import open_fmu_unit
     from .input_orders import check_input_orders
     from .signals import INPUTS, OUTPUTS, ForwardUnit
 
     c, sub = scene.coupling, scene.subsystems[name]
     keys = {k: v for k, v in ((INPUTS, inputs), (OUTPUTS, outputs)) if v}
-    start, path = dict(sub.get("start") or {}), _fmu_path(scene, sub)
+    start, path = dict(sub.get("start") or {}), path or _fmu_path(scene, sub)
     interface = sub.get("interface", "co-simulation")
     if interface == "co-simulation" and not c["implicit"]:  # no saved state
         unit = ForwardUnit(name, path, keys, start, inputs=c["inputs"], substeps=c["substeps"], t0=scene.t0)
