@@ -102,9 +102,8 @@ def joint_signal_scene(path, data, system=None) -> JointSignalScene:
         if key not in allowed:
             _fail(path, key, f"not a key of a scene of joints and connections; allowed: {', '.join(allowed)}")
     subs, joints = data.get("subsystems"), data.get("joints")
-    if not isinstance(subs, dict) or len(subs) < 3:
-        _fail(path, "subsystems", "must map at least three subsystem names (two joined, one in a connection) to "
-              "their settings")  # fmt: skip
+    if not isinstance(subs, dict) or len(subs) < 2:
+        _fail(path, "subsystems", "must map at least two subsystem names to their settings")
     joined = {n for j in joints if isinstance(j, dict) for n in j.get("between") or ()} if isinstance(joints, list) else set()
     for name, sub in subs.items():
         if name not in joined:

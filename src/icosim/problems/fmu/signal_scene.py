@@ -41,14 +41,6 @@ __all__ = ["SignalScene", "SignalRun", "signal_scene", "open_signal_unit", "sign
 
 #: Top-level keys of a signal scene.
 SIGNAL_SCENE_KEYS = ("subsystems", "system", "connections", "sources", "coupling", "t_start", "t_end", "limits")
-#: Why ``joints`` is refused beside ``connections``, and the alternatives.
-JOINTS_BESIDE_CONNECTIONS = (
-    "joints beside connections are not supported: a scene couples its units either by joints (closed by the joint "
-    "method's corrector, icosim.problems.fmu.scene) or by connections (explicitly, or implicitly by Newton), and "
-    "no problem serves both kinds of unit and no corrector solves both kinds of condition together. Couple every "
-    "unit by connections (with coupling.implicit: true their conditions hold at T_N+1, as a joint's do) or every "
-    "unit by joints"
-)
 #: Keys of one subsystem.
 SIGNAL_SUBSYSTEM_KEYS = ("fmu", "start", "interface", "tolerance", "record")
 #: Keys of one connection.
@@ -116,8 +108,7 @@ def signal_scene(path, data, system=None) -> SignalScene:
     for key in data:
         if key not in SIGNAL_SCENE_KEYS:
             allowed = ", ".join(SIGNAL_SCENE_KEYS)
-            why = f" ({JOINTS_BESIDE_CONNECTIONS})" if key == "joints" else ""
-            _fail(path, key, f"not a key of a scene with connections{why}; allowed: {allowed}")
+            _fail(path, key, f"not a key of a scene with connections; allowed: {allowed}")
     subs = data.get("subsystems")
     if not isinstance(subs, dict) or len(subs) < 2:
         _fail(path, "subsystems", "must map at least two subsystem names to their settings")
