@@ -34,7 +34,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from .connection_conditions import NotConverged, SignalConditions
-from .methods.newton import NEWTON
+from .joint_signal_conditions import JointSignalConditions
 from .schemes import JACOBI, Scheme
 from .stages import Plan, Stage
 
@@ -151,10 +151,11 @@ def _close(
     corrector of its subsystems (``ends`` and ``ys`` updated in place); returns ``e`` with them."""
     graph = problem.graph
     algebraic = p.scheme.reevaluates_leading
-    sc = stage.conditions if isinstance(stage.conditions, SignalConditions) else None  # connections: Newton
-    jc = None if isinstance(stage.conditions, SignalConditions) else stage.conditions
+    # connections (beside joints or alone): Newton's iteration, the Jacobian formed once
+    sc = stage.conditions if isinstance(stage.conditions, (SignalConditions, JointSignalConditions)) else None
+    jc = None if sc is not None else stage.conditions
     signals = sc is not None
-    rule = NEWTON if signals else method
+    rule = sc.rule(method) if sc is not None else method
     assert rule is not None
     cols = stage.column_index
     every = len(stage.columns) == graph.n_coupling  # the stage closes every joint: e itself, in its order
@@ -206,14 +207,14 @@ def _with_columns(e: Any, cols: slice | np.ndarray, values: Any) -> Any:
 
 
 def _not_converged(
-    problem: CosimulationProblem, conditions: SignalConditions, e_new: Any, e_s: Any, tol: float, n: int
-) -> NotConverged:
+    problem: CosimulationProblem, conditions: SignalConditions | JointSignalConditions, e_new: Any, e_s: Any,
+    tol: float, n: int,
+) -> NotConverged:  # fmt: skip
     bad = conditions.unconverged(e_new, e_s, tol)
     change = np.abs(np.asarray(e_new, dtype=float) - np.asarray(e_s, dtype=float))
-    text = ", ".join(f"{problem.describe_connection(c)} (change {np.max(change[..., conditions.connections.index(c)]):.3g})"
-                     for c in bad)  # fmt: skip
+    text = conditions.describe(problem, bad, change)
     return NotConverged(
-        f"implicit coupling: Newton's iteration did not converge in {n} iterations (change of a connection's "
+        f"implicit coupling: Newton's iteration did not converge in {n} iterations (change of a coupling "
         f"variable at most tol (1 + |e|), tol = {tol:g}): {text}; raise coupling.iterations or tol, or reduce H"
     )
 

@@ -38,19 +38,13 @@ from ...errors import ParameterError
 from .errors import SceneError
 from .joints import ORDERED_SCHEMES
 from .scene import COUPLING_KEYS, SCENE_KEYS, SUBSYSTEM_KEYS, Scene, joint_scene
-from .signal_scene import check_signal_subsystem, scene_connections
+from .signal_scene import IMPLICIT_DEFAULTS, check_signal_subsystem, scene_connections
 
 __all__ = ["JointSignalScene", "JointSignalRun", "joint_signal_scene", "run_joint_signal_scene",
-           "joint_signal_dataset", "IMPLICIT_BESIDE_JOINTS"]  # fmt: skip
+           "joint_signal_dataset"]  # fmt: skip
 
 #: Coupling keys of the connections beside the joints' (:data:`~icosim.problems.fmu.scene.COUPLING_KEYS`).
-SIGNAL_KEYS = {"implicit": False}
-#: Why implicit coupling is refused beside joints, and the alternative.
-IMPLICIT_BESIDE_JOINTS = (
-    "implicit coupling of connections beside joints is not supported: one corrector of the joints' levels (pos, "
-    "vel, acc, force) and the connections' (signal) together is not built; couple the connections explicitly "
-    "(implicit: false, the default), or every unit by connections"
-)
+SIGNAL_KEYS = {"implicit": False, "tol": None}
 #: A joint unit's keys that name its joint's variables (a connection may not feed or read them instead).
 _JOINT_VARIABLES = ("force", "acceleration_input", "position_input", "velocity_input", "set_position", "set_velocity")
 
@@ -114,8 +108,14 @@ def joint_signal_scene(path, data, system=None) -> JointSignalScene:
     c = {**COUPLING_KEYS, **SIGNAL_KEYS, **coupling}
     if not isinstance(c["implicit"], bool):
         _fail(path, "coupling.implicit", f"must be true or false, got {c['implicit']!r}")
-    if c["implicit"]:
-        _fail(path, "coupling.implicit", IMPLICIT_BESIDE_JOINTS)
+    if c["tol"] is not None and not c["implicit"]:
+        _fail(path, "coupling.tol", "Newton's tolerance belongs to implicit: true")
+    if c["implicit"]:  # Newton's iterations (at most) and tolerance
+        c["iterations"] = coupling.get("iterations", IMPLICIT_DEFAULTS["iterations"])
+        if c["tol"] is None:
+            c["tol"] = IMPLICIT_DEFAULTS["tol"]
+        elif isinstance(c["tol"], bool) or not isinstance(c["tol"], (int, float)) or not c["tol"] > 0:
+            _fail(path, "coupling.tol", f"must be a number > 0, got {c['tol']!r}")
     if c["control"] is not None:
         _fail(path, "coupling.control", "controlled macro steps are for a scene of joints alone; beside connections "
               "the macro step is fixed (remove control)")  # fmt: skip
@@ -191,11 +191,12 @@ class JointSignalRun:
 def run_joint_signal_scene(scene: JointSignalScene, *, cache=None, progress=None) -> JointSignalRun:
     """Open the units (the joint units checked as in a scene of joints), run the macro steps, close the units;
     ``progress(n_done)`` after each step.  A unit's refused step raises; a divergence ends the run, said."""
+    from ...engine.connection_conditions import NotConverged
     from ...engine.graph import Joint
     from ...engine.run import simulate
     from .joint_signals import JointSignalCosimulation
     from .run import SceneRun, consistent_start, divergence_bound, fmu_file, open_units
-    from .signal_scene import SignalRun, _append, open_signal_unit
+    from .signal_scene import SignalRun, _append, _check_saves_state, open_signal_unit
     from .signals import INPUTS, OUTPUTS, connections_of
 
     names, c, js = list(scene.names), scene.coupling, scene.joints
@@ -208,8 +209,10 @@ def run_joint_signal_scene(scene: JointSignalScene, *, cache=None, progress=None
         opened |= dict(zip(js.names, units))
         for name in scene.signal_units:
             i = names.index(name)
-            path = (scene.path.parent / scene.subsystems[name]["fmu"]).resolve()  # a source directory is built
-            opened[name] = open_signal_unit(scene, name, inputs[i], outputs[i], fmu_file(path, cache))
+            path = fmu_file((scene.path.parent / scene.subsystems[name]["fmu"]).resolve(), cache)  # a source: built
+            if c["implicit"]:  # stepped again from T_N: it must save and restore its state
+                _check_saves_state(scene, name, scene.subsystems[name], path)
+            opened[name] = open_signal_unit(scene, name, inputs[i], outputs[i], path)
         joints = [Joint(names.index(js.names[jt.first]), names.index(js.names[jt.second]), jt.decomposition)
                   for jt in js.graph().joints]  # fmt: skip
         try:
@@ -231,15 +234,20 @@ def run_joint_signal_scene(scene: JointSignalScene, *, cache=None, progress=None
             if progress is not None:
                 progress(n)
 
+        iterations = problem.implicit_work.iterations
         signals.times.append(scene.t0)
         _append(signals, problem, history[0], recorded)
         with np.errstate(over="ignore", invalid="ignore"):  # a diverging run is reported, not warned about
             traj = simulate(problem, scene.method, state, history, scene.n_steps, scheme=scene.scheme,
-                            iterations=c["iterations"], bound=divergence_bound(js, start.state),
-                            observe=observe)  # fmt: skip
+                            iterations=c["iterations"], bound=divergence_bound(js, start.state), observe=observe,
+                            **({"tol": c["tol"]} if c["implicit"] else {}))  # fmt: skip
         if traj.failed_at is not None:
+            if isinstance(traj.error, NotConverged):  # where: the step and its time
+                raise NotConverged(f"{scene.path}: macro step {traj.failed_at} (from t = {problem.time:.12g} s): "
+                                   f"{traj.error}") from None  # fmt: skip
             raise traj.error
         run = JointSignalRun(scene, None, signals)
+        signals.iterations, signals.jacobian_steps = iterations, problem.implicit_work.perturbed_steps
         if traj.diverged_at is not None:
             run.status = "diverged"
             t_div = scene.t0 + traj.diverged_at * float(c["H"])
@@ -282,4 +290,9 @@ def joint_signal_dataset(run: JointSignalRun, *, command: str = ""):
                              "coupling": "implicit" if run.scene.coupling["implicit"] else "explicit",
                              "connections": len(run.scene.connections), "status": run.status,
                              "reason": run.reason})  # fmt: skip
+    if run.scene.coupling["implicit"]:  # Newton's work, as a scene of connections says it
+        its = np.asarray(run.signals.iterations, dtype=float)
+        ds.attrs.update({"newton_tol": run.scene.coupling["tol"], "newton_max_iterations": run.scene.coupling["iterations"],
+                         "jacobian_steps": run.signals.jacobian_steps, "iterations_max": int(its.max(initial=0)),
+                         "iterations_mean": float(its.mean()) if its.size else 0.0})  # fmt: skip
     return ds.to_xarray()

@@ -35,6 +35,10 @@ from .signals import SignalCosimulation
 
 __all__ = ["JointOutputs", "JointSignalCosimulation"]
 
+#: Corrector steps the joint problem counts before one is final, coupled implicitly: none is (Newton's iterations
+#: and the Jacobian's perturbed steps may follow any of them).
+NEVER_FINAL = 2**62
+
 
 class JointOutputs(NamedTuple):
     """A joint unit's outputs: its port's ``(1, 4, n_d)`` and its connected outputs (None: it has none)."""
@@ -79,7 +83,8 @@ class JointSignalCosimulation(SignalCosimulation):
         #: the joint units' problem (:class:`~icosim.problems.fmu.problem.FmuCosimulation`), the same joints
         self.joints = FmuCosimulation([self.units[i] for i in self.joint_units], couplings, graph, k, H, t0=t0,
                                       perturbation=perturbation, sensitivities=sensitivities,
-                                      iterations=iterations, signal_columns=columns)  # fmt: skip
+                                      iterations=NEVER_FINAL if implicit else iterations,
+                                      signal_columns=columns)  # fmt: skip
         self.condition_scale = self.joints.condition_scale
         self.constant_sensitivities = self.joints.constant_sensitivities
         self._joint_state = None  # what the joint problem last returned: the state it advances from
@@ -105,6 +110,7 @@ class JointSignalCosimulation(SignalCosimulation):
         j = self._where.get(i)
         if j is None:
             return super().predict(i, state, history, final=final, e_new=e_new)
+        final = final and not self.implicit_connections  # implicit: every joint unit is stepped again
         end, y = self.joints.predict(j, self._joint_state, history, final=final, e_new=e_new)
         return end, self._joined(j, y)
 
@@ -121,6 +127,12 @@ class JointSignalCosimulation(SignalCosimulation):
 
     def sensitivity(self, i, state, history, e, end=None, y=None):
         return self.joints.sensitivity(self._where[i], self._joint_state, history, e, end, None if y is None else y.ports)
+
+    def output_sensitivities(self, i, state, history, e, y):
+        """A joint unit's :meth:`sensitivity` and its connected outputs' by its inputs, from the same perturbed steps
+        (:meth:`~icosim.problems.fmu.problem.FmuCosimulation.output_sensitivities`), for one corrector of both kinds of
+        condition (:mod:`icosim.engine.joint_signal_conditions`)."""
+        return self.joints.output_sensitivities(self._where[i], self._joint_state, history, e, y.ports, y.signals)
 
     def signal_output(self, i, y, output):
         return y.signals[output] if isinstance(y, JointOutputs) else y[output]

@@ -315,6 +315,15 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
         """``dy_i/du_i`` by difference quotients from the outputs ``y`` at ``e``, ``(n_dim, 1, 4, n_dim)``: unit
         ``i`` repeats its corrector step with each input component perturbed at ``T_N+1`` (restored start state,
         one ``doStep`` each) or, at its fixed end state, is re-evaluated with it (no step)."""
+        return self._sensitivity(i, history, e, end, y)[0]
+
+    def output_sensitivities(self, i, state, history, e, y, signals):
+        """:meth:`sensitivity` through the corrector step and, from the same steps, the derivatives of unit ``i``'s
+        connected outputs by its inputs, ``(n_dim, n_outputs)`` from their values ``signals`` at ``e`` (None: it
+        has none, and so is the second)."""
+        return self._sensitivity(i, history, e, None, y, signals)
+
+    def _sensitivity(self, i, history, e, end, y, signals=None):
         rows = self._samples(i, e, history)  # (k + 1, n_dim) and the connected inputs; row 0 at T_N+1
         u1 = rows[0, : self.n_dim]  # re-evaluated at the end state only where ``end`` is given
         h = self.perturbation * np.maximum(1.0, np.abs(u1))
@@ -323,6 +332,7 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
         else:
             base = self._at_end(i, end, u1) if end is not None else self._integrate(i, rows, self.C_corr)[1]
         out = np.empty((self.n_dim,) + base.shape)
+        ds = None if signals is None else np.empty((self.n_dim, len(signals)))
         for c in range(self.n_dim):
             if end is not None:
                 up = u1.copy()
@@ -333,7 +343,9 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
                 Up[0, c] += h[c]
                 yp = self._integrate(i, Up, self.C_corr)[1]
             out[c] = (yp - base) / h[c]
-        return out
+            if ds is not None:
+                ds[c] = (self.signal_values[i] - signals) / h[c]
+        return out, ds
 
     def project(self, state):
         """Mass-weighted projection of positions and velocities (Eq. 30), written into the units."""
