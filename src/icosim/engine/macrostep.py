@@ -27,7 +27,7 @@ them and a step that does not meet it fails (:class:`~icosim.engine.connection_c
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
@@ -121,6 +121,7 @@ def macro_step(
     ends: list[Any] = [None] * graph.n_subsystems
     ys: list[Any] = [None] * graph.n_subsystems
     fresh: set[int] = set()  # the columns of e that connections set in this macro step
+    seen: dict[int, frozenset] = {}  # per subsystem stepped: the columns fresh when it was
     for stage in stages:
         # step 1: the stage's subsystems with the extrapolation polynomials; those in no closed joint are final.
         # One fed by a connection out of an earlier stage: the interpolation polynomial through its new sample.
@@ -130,8 +131,12 @@ def macro_step(
                 ends[i], ys[i] = problem.predict(i, state, history, final=final, e_new=e)
             else:
                 ends[i], ys[i] = problem.predict(i, state, history, final=final)
+            seen[i] = frozenset(fresh)
         if stage.conditions is not None:
-            e = _close(problem, method, stage, p, state, history, e, ends, ys, iterations, tol)
+            # closed by Newton: a subsystem whose input a later stage's connection has set since it stepped
+            stale = [i for i in stage.corrected if i in seen and any(
+                col in fresh and col not in seen[i] for _, col in graph.signal_inputs(i))] if stage.connections else []  # fmt: skip
+            e = _close(problem, method, stage, p, state, history, e, ends, ys, iterations, tol, stale)
         if graph.connections:  # the connections out of the stage's subsystems, as they end it: their new samples
             e, fed = problem.connect(e, ys, stage.units, stage.connections)
             fresh.update(fed)
@@ -145,10 +150,12 @@ def macro_step(
 
 def _close(
     problem: CosimulationProblem, method: CouplingRule | None, stage: Stage, p: Plan, state: Any, history: Any,
-    e: Any, ends: list[Any], ys: list[Any], iterations: int, tol: float | None,
+    e: Any, ends: list[Any], ys: list[Any], iterations: int, tol: float | None, stale: Sequence[int] = (),
 ) -> Any:  # fmt: skip
     """Steps 2 and 3 of ``stage``: its closed joints' (or connections') corrected coupling variables and the
-    corrector of its subsystems (``ends`` and ``ys`` updated in place); returns ``e`` with them."""
+    corrector of its subsystems (``ends`` and ``ys`` updated in place); returns ``e`` with them.  ``stale``: the
+    subsystems stepped with inputs other than ``e``'s, stepped again with ``e`` first (Newton's residual and
+    Jacobian are formed at ``e``)."""
     graph = problem.graph
     algebraic = p.scheme.reevaluates_leading
     # connections (beside joints or alone): Newton's iteration, the Jacobian formed once
@@ -161,6 +168,8 @@ def _close(
     every = len(stage.columns) == graph.n_coupling  # the stage closes every joint: e itself, in its order
     e_held = e if every else e[..., cols]  # as the stage's predictors and the finished subsystems saw it
     J, converged = None, False
+    for i in stale:
+        ends[i], ys[i] = problem.correct(i, state, history, e)
     # connections: up to ``iterations`` Newton steps and the test of the last one (no unit steps)
     passes = iterations + 1 if signals else max(1, iterations)
     for it in range(passes):
