@@ -1,5 +1,6 @@
-"""Joints beside signal connections in one scene, coupled explicitly: two units joined by a rigid joint and a third
-fed by a connection from one of them (and, with the Reference-FMUs' StateSpace as a joint unit, feeding it back).
+"""Joints beside signal connections in one scene, coupled explicitly or implicitly: two units joined by a rigid joint
+and a third fed by a connection from one of them (and, with the Reference-FMUs' StateSpace as a joint unit, feeding
+it back).
 
 Checked against the same system as one linear ODE solved by the matrix exponential (the joint eliminated: the two
 joined masses move as one), the error converging with H at the order of the inputs' extrapolation, ``k + 1``; the
@@ -51,20 +52,22 @@ def statespace(params):
             "position": "y[1]", "velocity": "y[2]", "acceleration": "y[3]", "force": "u[1]", "force_sign": 1}  # fmt: skip
 
 
-def write(tmp_path, subsystems, connections, k, H, scheme="jacobi", method="projection", name="scene.yaml"):
+def write(tmp_path, subsystems, connections, k, H, scheme="jacobi", method="projection", implicit=False):
     coupling = {"method": method, "k": k, "H": H} | ({"index": 1, "mu": 1e-3} if method == "baumgarte" else {})
+    coupling |= {"implicit": True} if implicit else {}
     coupling |= {"scheme": scheme} if isinstance(scheme, str) else {"scheme": "gauss-seidel", "order": scheme}
     data = {"subsystems": subsystems, "joints": [{"between": ["body1", "body2"], "decomposition": "ff"}],
             "connections": connections, "coupling": coupling, "t_end": T}  # fmt: skip
-    path = tmp_path / name
+    path = tmp_path / "scene.yaml"
     path.write_text(yaml.safe_dump(data, sort_keys=False))
     return path
 
 
-def one_way(tmp_path, k, H, scheme="jacobi"):
+def one_way(tmp_path, k, H, scheme="jacobi", implicit=False):
     """body1 and body2 joined at x = 0.1 m, the sensor at rest pulled by K x1."""
     subs = {"body1": msd(M1, 0.1), "body2": msd(M2, 0.1), "sensor": msd(M3, 0.0, joint=False)}
-    return write(tmp_path, subs, [{"from": "body1.x", "to": "sensor.lambda", "factor": K}], k, H, scheme)
+    cons = [{"from": "body1.x", "to": "sensor.lambda", "factor": K}]
+    return write(tmp_path, subs, cons, k, H, scheme, implicit=implicit)
 
 
 def exact(x0, g=0.0):
@@ -117,6 +120,23 @@ def test_the_joints_run_as_the_scene_of_joints_alone(tmp_path, scheme):
     assert np.allclose(both.signals.series["sensor.lambda"], K * x1, rtol=1e-15, atol=0)
 
 
+@pytest.mark.parametrize("k", [0, 1])
+def test_implicitly_the_sensor_converges_and_the_joints_run_as_alone(tmp_path, k):
+    """Coupled implicitly, the sensor's error falls as H^(k+1); the joined masses, on which the connection does not
+    act, move as in the scene of joints alone (their conditions closed in one Newton step, a linear problem)."""
+    Hs = np.array([1e-3, 5e-4, 2.5e-4])
+    z = exact([0.1, 0.0, 0.0, 0.0])
+    errors = []
+    for H in Hs:
+        path = one_way(tmp_path, k, float(H), implicit=True)
+        run = run_joint_signal_scene(load_scene(path))
+        errors.append(abs(run.signals.series["sensor.x"][-1] - z[2]))
+        assert max(run.signals.iterations) == 1  # one Newton step, then the test
+        explicit = run_joint_signal_scene(load_scene(one_way(tmp_path, k, float(H))))
+        assert np.allclose(run.joints.states, explicit.joints.states, rtol=1e-12, atol=1e-15)
+    assert np.all(np.abs(slopes(errors, Hs)[-1:] - (k + 1)) < 0.3), errors
+
+
 def test_the_dataset_holds_the_joints_and_the_connections(tmp_path, capsys):
     path = one_way(tmp_path, 1, 1e-3)
     out = tmp_path / "run.nc"
@@ -132,33 +152,51 @@ def test_the_dataset_holds_the_joints_and_the_connections(tmp_path, capsys):
         assert ds["time"].size == round(T / 1e-3) + 1 and ds["sensor.x"].size == ds["time"].size
 
 
-def feedback(tmp_path, k, H, scheme="jacobi"):
+def feedback(tmp_path, k, H, scheme="jacobi", implicit=False):
     """body1 (msd) joined to body2 (StateSpace), both at rest; the sensor starts at 0.05 m, pulled by K x1, and
     pushes body2 by G x3."""
     subs = {"body1": msd(M1, 0.0), "body2": statespace(M2), "sensor": msd(M3, 0.05, joint=False)}
     cons = [{"from": "body1.x", "to": "sensor.lambda", "factor": K}, {"from": "sensor.x", "to": "body2.u[2]", "factor": G}]
-    return write(tmp_path, subs, cons, k, H, scheme, method="baumgarte")
+    return write(tmp_path, subs, cons, k, H, scheme, method="baumgarte", implicit=implicit)
 
 
-@pytest.mark.outside
-@pytest.mark.parametrize("k, scheme", [(0, "jacobi"), (1, "jacobi"), (0, ["sensor", "body1", "body2"])])
-def test_a_connection_into_a_joint_unit_converges_at_the_order_of_the_inputs(tmp_path, k, scheme):
-    """The sensor's force on body2 (StateSpace's second input, handed with the joint's force in the same step) and
-    body1's position into the sensor: both positions' errors at T fall as H^(k+1) (Baumgarte, index 1)."""
-    Hs = np.array([1e-3, 5e-4, 2.5e-4])
+def feedback_errors(tmp_path, k, scheme="jacobi", implicit=False, Hs=(1e-3, 5e-4, 2.5e-4)):
+    """body1's and the sensor's position errors at T, a row per H."""
     z = exact([0.0, 0.0, 0.05, 0.0], G)
     errors = []
     for H in Hs:
-        run = run_joint_signal_scene(load_scene(feedback(tmp_path, k, float(H), scheme)))
+        run = run_joint_signal_scene(load_scene(feedback(tmp_path, k, float(H), scheme, implicit)))
         assert run.status == "completed"
         errors.append([abs(run.joints.positions[-1, 0, 0] - z[0]), abs(run.signals.series["sensor.x"][-1] - z[2])])
-    errors = np.array(errors)
+    return np.array(errors)
+
+
+@pytest.mark.outside
+@pytest.mark.parametrize("k, scheme, implicit", [
+    (0, "jacobi", False), (1, "jacobi", False), (0, ["sensor", "body1", "body2"], False),
+    (0, "jacobi", True), (1, "jacobi", True), (2, "jacobi", True)])  # fmt: skip
+def test_a_connection_into_a_joint_unit_converges_at_the_order_of_the_inputs(tmp_path, k, scheme, implicit):
+    """The sensor's force on body2 (StateSpace's second input, handed with the joint's force in the same step) and
+    body1's position into the sensor: both positions' errors at T fall as H^(k+1) (Baumgarte, index 1), explicitly
+    and implicitly (the joint's and the connections' conditions closed by one corrector)."""
+    Hs = np.array([1e-3, 5e-4, 2.5e-4])
+    errors = feedback_errors(tmp_path, k, scheme, implicit, Hs)
     for column in errors.T:
         assert np.all(np.abs(slopes(column, Hs)[-1:] - (k + 1)) < 0.3), errors
 
 
+@pytest.mark.outside
+def test_implicitly_the_order_of_the_units_changes_only_newtons_start(tmp_path):
+    """Gauss-Seidel's stages (the sensor first, its new sample into body2's step) move Newton's start, not the
+    solution of the conditions at T_N+1: Jacobi's errors to within Newton's tolerance."""
+    jacobi = feedback_errors(tmp_path, 1, implicit=True, Hs=(1e-3,))
+    order = feedback_errors(tmp_path, 1, ["sensor", "body1", "body2"], implicit=True, Hs=(1e-3,))
+    assert np.allclose(order, jacobi, rtol=1e-6, atol=0), (order, jacobi)
+
+
 @pytest.mark.parametrize("change, where, says", [
-    (lambda d: d["coupling"].update(implicit=True), "coupling.implicit", "not supported"),
+    (lambda d: d["coupling"].update(tol=1e-9), "coupling.tol", "belongs to implicit: true"),
+    (lambda d: d["coupling"].update(implicit=True, tol=0), "coupling.tol", "must be a number > 0"),
     (lambda d: d["coupling"].update(implicit="yes"), "coupling.implicit", "must be true or false"),
     (lambda d: d["connections"].append({"from": "sensor.x", "to": "body2.lambda"}), "connections[1].to",
      "body2.lambda is body2's force"),
@@ -185,3 +223,17 @@ def test_predict_and_check_are_refused_naming_why(tmp_path, capsys):
     path = one_way(tmp_path, 0, 1e-3)
     assert main(["cosim", str(path), "--predict"]) == 2
     assert "joints beside connections, which --predict does not serve" in capsys.readouterr().err
+
+
+@pytest.mark.outside
+def test_implicitly_a_unit_that_cannot_save_its_state_is_refused_before_any_unit_opens(tmp_path):
+    """OpenModelica's DualMassOscillator.System1 as co-simulation (canGetAndSetFMUstate false) in the sensor's place:
+    implicit coupling steps it again from T_N."""
+    path = one_way(tmp_path, 0, 1e-3, implicit=True)
+    data = yaml.safe_load(path.read_text())
+    data["subsystems"]["sensor"] = {"fmu": str(OUTSIDE / "omsimulator" / "DualMassOscillator.System1.fmu"),
+                                    "interface": "co-simulation"}  # fmt: skip
+    data["connections"] = [{"from": "body1.x", "to": "sensor.F"}]
+    path.write_text(yaml.safe_dump(data))
+    with pytest.raises(SceneError, match=r"subsystems\.sensor: .*canGetAndSetFMUstate=false.*implicit: false"):
+        run_joint_signal_scene(load_scene(path))

@@ -203,15 +203,16 @@ def run_joint_signal_scene(scene: JointSignalScene, *, cache=None, progress=None
     cons, inputs, outputs = connections_of(scene.connections, names)
     keys = lambda i: {k: v for k, v in ((INPUTS, inputs[i]), (OUTPUTS, outputs[i])) if v}  # noqa: E731
     started = clock.perf_counter()
+    paths = {n: fmu_file((scene.path.parent / scene.subsystems[n]["fmu"]).resolve(), cache) for n in scene.signal_units}
+    for name, path in paths.items():  # coupled implicitly, stepped again from T_N: it must save its state
+        if c["implicit"]:
+            _check_saves_state(scene, name, scene.subsystems[name], path)
     opened, problem = {}, None
     try:
         units, couplings = open_units(js, cache=cache, signals={n: keys(names.index(n)) for n in js.names})
         opened |= dict(zip(js.names, units))
-        for name in scene.signal_units:
+        for name, path in paths.items():
             i = names.index(name)
-            path = fmu_file((scene.path.parent / scene.subsystems[name]["fmu"]).resolve(), cache)  # a source: built
-            if c["implicit"]:  # stepped again from T_N: it must save and restore its state
-                _check_saves_state(scene, name, scene.subsystems[name], path)
             opened[name] = open_signal_unit(scene, name, inputs[i], outputs[i], path)
         joints = [Joint(names.index(js.names[jt.first]), names.index(js.names[jt.second]), jt.decomposition)
                   for jt in js.graph().joints]  # fmt: skip
