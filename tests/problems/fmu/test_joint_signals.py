@@ -219,10 +219,13 @@ def test_bad_input_is_refused_naming_the_key(tmp_path, change, where, says):
     assert f"scene.yaml: {where}:" in str(refused.value) and says in str(refused.value), str(refused.value)
 
 
-def test_predict_and_check_are_refused_naming_why(tmp_path, capsys):
+def test_predict_check_and_tolerance_are_refused_naming_why(tmp_path, capsys):
     path = one_way(tmp_path, 0, 1e-3)
-    assert main(["cosim", str(path), "--predict"]) == 2
-    assert "joints beside connections, which --predict does not serve" in capsys.readouterr().err
+    for flag in ("--predict", "--check"):
+        assert main(["cosim", str(path), flag]) == 2
+        assert f"joints beside connections, which {flag} does not serve" in capsys.readouterr().err
+    assert main(["cosim", str(path), "--tolerance", "1e-6", "--out", str(tmp_path / "run.nc")]) == 2
+    assert "argument --tolerance:" in capsys.readouterr().err
 
 
 @pytest.mark.outside
