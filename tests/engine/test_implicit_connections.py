@@ -22,7 +22,6 @@ from icosim.engine.macrostep import macro_step
 from icosim.engine.run import simulate
 from icosim.engine.schemes import get_scheme
 from icosim.engine.stages import plan
-from icosim.errors import ParameterError
 
 
 def implicit(k, H):

@@ -35,6 +35,7 @@ import numpy as np
 from ..errors import ParameterError
 from .connection_conditions import NotConverged, SignalConditions
 from .joint_signal_conditions import JointSignalConditions
+from .residuals import Conditions
 from .schemes import JACOBI, Scheme
 from .stages import Plan, Stage
 
@@ -160,7 +161,7 @@ def _close(
     algebraic = p.scheme.reevaluates_leading
     # connections (beside joints or alone): Newton's iteration, the Jacobian formed once
     sc = stage.conditions if isinstance(stage.conditions, (SignalConditions, JointSignalConditions)) else None
-    jc = None if sc is not None else stage.conditions
+    jc = stage.conditions if isinstance(stage.conditions, Conditions) else None
     signals = sc is not None
     rule = sc.rule(method) if sc is not None else method
     assert rule is not None

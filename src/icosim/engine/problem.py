@@ -345,8 +345,8 @@ class CosimulationProblem:
         """Back to ``checkpoint`` (:meth:`checkpoint`): nothing to do where the arrays are the whole state."""
 
     # -- to be implemented by a subclass ------------------------------------------
-    def predict(self, i: int, state: Any, history: Any, *, final: bool = False) -> Any:  # pragma: no cover
-        raise NotImplementedError
+    def predict(self, i: int, state: Any, history: Any, *, final: bool = False, e_new: Any = None) -> Any:
+        raise NotImplementedError  # pragma: no cover - contract
 
     def correct(self, i: int, state: Any, history: Any, e: Any) -> Any:  # pragma: no cover - contract
         raise NotImplementedError

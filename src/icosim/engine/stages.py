@@ -191,7 +191,9 @@ def _implicit_plan(scheme: Scheme, graph: CouplingGraph) -> Plan:
     cons = tuple(range(len(graph.connections)))
     conditions: SignalConditions | JointSignalConditions = SignalConditions(graph, cons)
     if graph.joints:  # one corrector of both kinds of condition
-        conditions = JointSignalConditions(graph, tuple(sorted({i for jt in graph.joints for i in (jt.first, jt.second)})))
+        conditions = JointSignalConditions(
+            graph, tuple(sorted({i for jt in graph.joints for i in (jt.first, jt.second)}))
+        )
     joints = tuple(range(graph.n_joints))
     stages = [Stage(index, tuple(u), (), (), (), None) for index, u in enumerate(units[:-1])]
     stages.append(Stage(len(units) - 1, tuple(units[-1]), joints, conditions.targets, (), conditions, cons))

@@ -156,7 +156,10 @@ def feedback(tmp_path, k, H, scheme="jacobi", implicit=False):
     """body1 (msd) joined to body2 (StateSpace), both at rest; the sensor starts at 0.05 m, pulled by K x1, and
     pushes body2 by G x3."""
     subs = {"body1": msd(M1, 0.0), "body2": statespace(M2), "sensor": msd(M3, 0.05, joint=False)}
-    cons = [{"from": "body1.x", "to": "sensor.lambda", "factor": K}, {"from": "sensor.x", "to": "body2.u[2]", "factor": G}]
+    cons = [
+        {"from": "body1.x", "to": "sensor.lambda", "factor": K},
+        {"from": "sensor.x", "to": "body2.u[2]", "factor": G},
+    ]
     return write(tmp_path, subs, cons, k, H, scheme, method="baumgarte", implicit=implicit)
 
 

@@ -98,7 +98,11 @@ def joint_signal_scene(path, data, system=None) -> JointSignalScene:
     subs, joints = data.get("subsystems"), data.get("joints")
     if not isinstance(subs, dict) or len(subs) < 2:
         _fail(path, "subsystems", "must map at least two subsystem names to their settings")
-    joined = {n for j in joints if isinstance(j, dict) for n in j.get("between") or ()} if isinstance(joints, list) else set()
+    joined = (
+        {n for j in joints if isinstance(j, dict) for n in j.get("between") or ()}
+        if isinstance(joints, list)
+        else set()
+    )
     for name, sub in subs.items():
         if name not in joined:
             check_signal_subsystem(path, name, sub)

@@ -126,7 +126,9 @@ class JointSignalCosimulation(SignalCosimulation):
         return self._joined(j, self.joints.reevaluate(j, end, y.ports, e_old, e_new))
 
     def sensitivity(self, i, state, history, e, end=None, y=None):
-        return self.joints.sensitivity(self._where[i], self._joint_state, history, e, end, None if y is None else y.ports)
+        return self.joints.sensitivity(
+            self._where[i], self._joint_state, history, e, end, None if y is None else y.ports
+        )
 
     def output_sensitivities(self, i, state, history, e, y):
         """A joint unit's :meth:`sensitivity` and its connected outputs' by its inputs, from the same perturbed steps
