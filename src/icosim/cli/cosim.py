@@ -150,8 +150,8 @@ def _run(scene, args, out, signals=False) -> int:
     from ..problems.fmu.errors import SceneError, UnitStepError
 
     if signals == "both":
-        from ..problems.fmu.joint_signal_scene import joint_signal_dataset as dataset
-        from ..problems.fmu.joint_signal_scene import run_joint_signal_scene as run
+        from ..problems.fmu.joint_signal_run import joint_signal_dataset as dataset
+        from ..problems.fmu.joint_signal_run import run_joint_signal_scene as run
     elif signals:
         from ..problems.fmu.signal_scene import run_signal_scene as run
         from ..problems.fmu.signal_scene import signal_dataset as dataset

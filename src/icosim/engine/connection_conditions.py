@@ -119,12 +119,6 @@ class SignalConditions:
         return ", ".join(f"{problem.describe_connection(c)} (change {np.max(change[..., self.connections.index(c)]):.3g})"
                          for c in bad)  # fmt: skip
 
-    def rule(self, method: Any) -> Any:
-        """Newton's rule (:mod:`icosim.engine.methods.newton`): the connections need no joints' method."""
-        from .methods.newton import NEWTON
-
-        return NEWTON
-
     def unconverged(self, e_new: Any, e_s: Any, tol: float) -> list[int]:
         """The connections whose variable changed by more than ``tol (1 + |e_c|)`` (any point of a batch)."""
         change = np.abs(np.asarray(e_new, dtype=float) - np.asarray(e_s, dtype=float))

@@ -19,7 +19,7 @@ gives its port outputs and its connected outputs from the same steps: the first 
 signal outputs by the multipliers) and each connection's variable moved and the unit it feeds stepped again (the
 second column's: a joint unit's port outputs by the connections' inputs, and the connections' own block).
 
-The joints' method solves the conditions (:meth:`rule`): the connections' rows join every solve of the method after
+The joints' method solves the conditions (:class:`WithSignals`): the connections' rows join every solve of the method after
 the force balance, unweighted, so a solve of the method's constraint levels and the balance holds the connections'
 conditions too.  Its iteration is Newton's, with the Jacobian formed once per macro step at the predictor, to
 ``tol (1 + |e|)`` on every variable's change (:meth:`unconverged`).
@@ -126,10 +126,6 @@ class JointSignalConditions:
                for key in joint_by_joint}  # fmt: skip
         out[LEVEL] = np.concatenate([signal_rows, signal_by_signal], axis=-1)
         return out
-
-    def rule(self, method: Any) -> WithSignals:
-        """The joints' ``method`` with the connections' rows in every solve."""
-        return WithSignals(method)
 
     def unconverged(self, e_new: Any, e_s: Any, tol: float) -> list[int]:
         """The entries of :attr:`columns` (their positions) whose variable changed by more than ``tol (1 + |e|)``."""

@@ -34,7 +34,8 @@ import numpy as np
 
 from ..errors import ParameterError
 from .connection_conditions import NotConverged, SignalConditions
-from .joint_signal_conditions import JointSignalConditions
+from .joint_signal_conditions import JointSignalConditions, WithSignals
+from .methods.newton import NEWTON
 from .residuals import Conditions
 from .schemes import JACOBI, Scheme
 from .stages import Plan, Stage
@@ -163,7 +164,8 @@ def _close(
     sc = stage.conditions if isinstance(stage.conditions, (SignalConditions, JointSignalConditions)) else None
     jc = stage.conditions if isinstance(stage.conditions, Conditions) else None
     signals = sc is not None
-    rule = sc.rule(method) if sc is not None else method
+    # connections alone: Newton's rule; beside joints: the joints' method, the connections' rows in every solve
+    rule = method if sc is None else NEWTON if isinstance(sc, SignalConditions) else WithSignals(method)
     assert rule is not None
     cols = stage.column_index
     every = len(stage.columns) == graph.n_coupling  # the stage closes every joint: e itself, in its order

@@ -18,7 +18,7 @@ from toolchains import OUTSIDE
 from icosim.cli import main
 from icosim.io.netcdf import open_dataset
 from icosim.problems.fmu.errors import SceneError
-from icosim.problems.fmu.joint_signal_scene import run_joint_signal_scene
+from icosim.problems.fmu.joint_signal_run import run_joint_signal_scene
 from icosim.problems.fmu.run import run_scene
 from icosim.problems.fmu.scene import load_scene
 
