@@ -19,6 +19,11 @@ At ``t0`` the connections' values are those the units give as they open (handed 
 settle, before the joint units' states are first saved); the joints' coupling variables then follow from the joint
 problem's consistent start, the units' connected inputs holding those values.  An algebraic loop of connections is
 refused (its solver steps no joint).
+
+Coupled implicitly, every joint unit is stepped again at the last stage with the joints' and the connections'
+variables (:mod:`icosim.engine.joint_signal_conditions`), so none of its steps is final before the macro step's end,
+and :meth:`JointSignalCosimulation.output_sensitivities` gives the corrector's Jacobian the joint units' connected
+outputs by their coupling inputs from the same perturbed steps as their port outputs.
 """
 
 from __future__ import annotations
