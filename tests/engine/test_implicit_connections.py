@@ -17,11 +17,11 @@ from test_signals import GRAPH, Integrators
 
 from icosim.engine.connection_conditions import NotConverged
 from icosim.engine.graph import Connection, CouplingGraph, Joint
+from icosim.engine.joint_signal_conditions import JointSignalConditions
 from icosim.engine.macrostep import macro_step
 from icosim.engine.run import simulate
 from icosim.engine.schemes import get_scheme
 from icosim.engine.stages import plan
-from icosim.errors import ParameterError
 
 
 def implicit(k, H):
@@ -78,12 +78,15 @@ def test_gauss_seidel_gives_jacobis_run(k, order):
     assert np.allclose(runs[1].states, runs[0].states, rtol=0, atol=1e-14)
 
 
-def test_implicit_connections_beside_joints_are_refused_naming_why_and_the_fix():
-    """Unit 3 reads unit 1 beside the joint of units 1 and 2: the joints' levels and the connections' are not closed
-    by one corrector; explicit connections are the alternative."""
+def test_implicit_connections_beside_joints_are_closed_with_them_at_the_last_stage():
+    """Unit 3 reads unit 1 beside the joint of units 1 and 2: one corrector closes the joint's conditions and the
+    connection's (the joint's variables' columns first), stepping every joint unit and the unit the connection feeds
+    again; explicitly, the joint closes alone."""
     graph = CouplingGraph(3, [Joint(0, 1, "fd")], connections=(Connection(0, 0, 2, 0),))
-    with pytest.raises(ParameterError, match=r"beside joints are not supported.*couple the connections explicitly"):
-        plan(get_scheme("jacobi"), graph, implicit=True)
+    for scheme in ("jacobi", "gauss-seidel-312"):
+        last = plan(get_scheme(scheme), graph, implicit=True).stages[-1]
+        assert isinstance(last.conditions, JointSignalConditions)
+        assert (last.joints, last.connections, last.corrected, last.columns) == ((0,), (0,), (0, 1, 2), (0, 1, 2))
     assert plan(get_scheme("jacobi"), graph).stages[0].joints == (0,)
 
 

@@ -39,7 +39,9 @@ class Integrators(CosimulationProblem):
         x = state[i] + self.H * sum(c / (m + 1) for m, c in enumerate(coef))
         return x, np.array([x])
 
-    def predict(self, i, state, history, *, final=False):
+    def predict(self, i, state, history, *, final=False, e_new=None):
+        if e_new is not None:
+            return self.correct(i, state, history, e_new)
         return self._step(i, state, history[: self.k + 1], self.C_pred)
 
     def correct(self, i, state, history, e):

@@ -104,6 +104,11 @@ def run(args, parser) -> int:
         print(f"icosim cosim: note: {note}", file=sys.stderr)
     limit = float(scene.data.get("limits", {}).get("call_seconds", CALL_SECONDS))
     signals = getattr(scene, "connections", None) is not None  # units coupled by signal connections
+    both = hasattr(scene, "signal_units")  # joints beside connections (icosim.problems.fmu.joint_signal_scene)
+    if both and (args.predict or args.check):
+        flag = "--predict" if args.predict else "--check"
+        return _error(f"argument {flag}: {args.scene} joins units by joints beside connections, which {flag} does not "
+                      f"serve yet (a scene of joints or one of connections); run it without {flag}")  # fmt: skip
     if args.tolerance is not None:
         if signals:
             return _error(
@@ -120,7 +125,7 @@ def run(args, parser) -> int:
         target, leftovers = (lambda: _predict(scene, args, signals=True)), ()
     elif signals and not args.check:
         out = Path(args.out)
-        target = lambda: _run(scene, args, out, signals=True)
+        target = lambda: _run(scene, args, out, signals="both" if both else True)
         leftovers = (out.parent / f".{out.name}.*.part", out.parent / f".{out.name}.sha256.*.part")
     elif args.predict:
         target, leftovers = (lambda: _predict(scene, args)), ()
@@ -144,7 +149,10 @@ def _run(scene, args, out, signals=False) -> int:
     from ..io.netcdf import write_netcdf
     from ..problems.fmu.errors import SceneError, UnitStepError
 
-    if signals:
+    if signals == "both":
+        from ..problems.fmu.joint_signal_run import joint_signal_dataset as dataset
+        from ..problems.fmu.joint_signal_run import run_joint_signal_scene as run
+    elif signals:
         from ..problems.fmu.signal_scene import run_signal_scene as run
         from ..problems.fmu.signal_scene import signal_dataset as dataset
     else:
@@ -162,7 +170,13 @@ def _run(scene, args, out, signals=False) -> int:
         return _error(f"{exc}; no dataset written")
     tolerance = "" if args.tolerance is None else f" --tolerance {args.tolerance!r}"
     write_netcdf(dataset(result, command=f"icosim cosim {args.scene}{tolerance} --out {args.out}"), out)
-    if signals:
+    if signals == "both":  # the joints' summary and the connected variables' last values
+        from ..problems.fmu.run import run_summary
+
+        last = {key: values[-1] for key, values in result.signals.series.items()}
+        summary = {**run_summary(result.joints), "status": result.status, "out": str(out), **last}
+        text = "\n".join([_text(summary), *(f"{k}: {v}" for k, v in last.items())])
+    elif signals:
         last = {key: values[-1] for key, values in result.series.items()}
         summary = {"status": result.status, "reason": result.reason, "t": result.times[-1], "out": str(out), **last}
         if result.loop:  # an algebraic loop: the root its first solve found, and from where

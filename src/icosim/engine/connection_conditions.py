@@ -114,6 +114,11 @@ class SignalConditions:
                 dT[..., rows, j] = (self._transformed(problem, perturbed)[..., rows] - base[..., rows]) / delta
         return {LEVEL: np.eye(n) - dT}
 
+    def describe(self, problem: Any, bad: Sequence[int], change: Any) -> str:
+        """The connections ``bad`` and their variables' change (``(..., n_c)``), for a message."""
+        return ", ".join(f"{problem.describe_connection(c)} (change {np.max(change[..., self.connections.index(c)]):.3g})"
+                         for c in bad)  # fmt: skip
+
     def unconverged(self, e_new: Any, e_s: Any, tol: float) -> list[int]:
         """The connections whose variable changed by more than ``tol (1 + |e_c|)`` (any point of a batch)."""
         change = np.abs(np.asarray(e_new, dtype=float) - np.asarray(e_s, dtype=float))

@@ -11,30 +11,34 @@ subsystems advance, which joints close and who responds how.  The step counts it
 projections in the problem's :attr:`~icosim.engine.problem.CosimulationProblem.work`.
 
 Signal connections (:class:`~icosim.engine.graph.Connection`, the condition ``u_in = T(y_out)``) are coupled
-explicitly: after a stage's subsystems advanced, the connections out of them take ``T`` of their outputs at
-``T_N+1`` as their variables' new samples (:meth:`~icosim.engine.problem.CosimulationProblem.connect`); a
-subsystem of a later stage with an input so fed integrates with the interpolation polynomial through the new
-sample (Gauss-Seidel), the others with the extrapolation polynomial (Jacobi: every input extrapolated; ``k = 0``
-held).  ``method=None`` is explicit coupling: no corrector, so a graph with joints needs a method.  A problem whose
-connections are implicit (``implicit_connections``) has them closed by the corrector instead: their conditions
-``e_c = T(y(e_c))`` at ``T_N+1`` (:class:`~icosim.engine.connection_conditions.SignalConditions`) by Newton's rule
-(:mod:`icosim.engine.methods.newton`), the Jacobian from perturbed steps formed once per step; ``iterations``
-bounds the Newton iterations, ``tol`` tests them and a step that does not meet it fails
-(:class:`~icosim.engine.connection_conditions.NotConverged`).
+explicitly: after a stage's subsystems advanced (and, where the stage closes joints, were corrected), the
+connections out of them take ``T`` of their outputs at ``T_N+1`` as their variables' new samples
+(:meth:`~icosim.engine.problem.CosimulationProblem.connect`); a subsystem of a later stage with an input so fed
+integrates with the interpolation polynomial through the new sample (Gauss-Seidel: ``predict`` with ``e_new``), the
+others with the extrapolation polynomial (Jacobi: every input extrapolated; ``k = 0`` held).  Joints beside them are
+closed by the method as on a graph without connections, the joint units' signal inputs following the same
+polynomials in predictor and corrector.  ``method=None`` is explicit coupling: no corrector, so a graph with joints
+needs a method.  A problem whose connections are implicit (``implicit_connections``) has them closed by the
+corrector instead: their conditions ``e_c = T(y(e_c))`` at ``T_N+1``
+(:class:`~icosim.engine.connection_conditions.SignalConditions`) by Newton's rule (:mod:`icosim.engine.methods.newton`),
+the Jacobian from perturbed steps formed once per step; ``iterations`` bounds the Newton iterations, ``tol`` tests
+them and a step that does not meet it fails (:class:`~icosim.engine.connection_conditions.NotConverged`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from ..errors import ParameterError
 from .connection_conditions import NotConverged, SignalConditions
+from .joint_signal_conditions import JointSignalConditions, WithSignals
 from .methods.newton import NEWTON
+from .residuals import Conditions
 from .schemes import JACOBI, Scheme
-from .stages import Plan
+from .stages import Plan, Stage
 
 if TYPE_CHECKING:
     from .backends import Backend
@@ -113,75 +117,97 @@ def macro_step(
     if p is None:  # the problem's own plan (its kept Jacobians are per stage)
         p = problem.plan(scheme.scheme if isinstance(scheme, Plan) else scheme)
     stages = p.stages
-    algebraic = p.scheme.reevaluates_leading
     if method is None and any(stage.joints for stage in stages):
         raise ParameterError("joints are coupled implicitly: a graph with joints needs a coupling method")
     e = problem.extrapolate(history)
     ends: list[Any] = [None] * graph.n_subsystems
     ys: list[Any] = [None] * graph.n_subsystems
     fresh: set[int] = set()  # the columns of e that connections set in this macro step
+    seen: dict[int, frozenset] = {}  # per subsystem stepped: the columns fresh when it was
     for stage in stages:
         # step 1: the stage's subsystems with the extrapolation polynomials; those in no closed joint are final.
         # One fed by a connection out of an earlier stage: the interpolation polynomial through its new sample.
         for i in stage.units:
+            final = i not in stage.corrected
             if fresh and any(col in fresh for _, col in graph.signal_inputs(i)):
-                ends[i], ys[i] = problem.correct(i, state, history, e)
+                ends[i], ys[i] = problem.predict(i, state, history, final=final, e_new=e)
             else:
-                ends[i], ys[i] = problem.predict(i, state, history, final=i not in stage.corrected)
-        if graph.connections:  # the connections out of the stage's subsystems: their new samples
+                ends[i], ys[i] = problem.predict(i, state, history, final=final)
+            seen[i] = frozenset(fresh)
+        if stage.conditions is not None:
+            # closed by Newton: a subsystem whose input a later stage's connection has set since it stepped
+            stale = [i for i in stage.corrected if i in seen and any(
+                col in fresh and col not in seen[i] for _, col in graph.signal_inputs(i))] if stage.connections else []  # fmt: skip
+            e = _close(problem, method, stage, p, state, history, e, ends, ys, iterations, tol, stale)
+        if graph.connections:  # the connections out of the stage's subsystems, as they end it: their new samples
             e, fed = problem.connect(e, ys, stage.units, stage.connections)
             fresh.update(fed)
-        if stage.conditions is None:
-            continue
-        sc = stage.conditions if isinstance(stage.conditions, SignalConditions) else None  # connections: Newton
-        jc = None if isinstance(stage.conditions, SignalConditions) else stage.conditions
-        signals = sc is not None
-        rule = NEWTON if signals else method
-        assert rule is not None
-        cols = stage.column_index
-        every = len(stage.columns) == graph.n_coupling  # the stage closes every joint: e itself, in its order
-        e_held = e if every else e[..., cols]  # as the stage's predictors and the finished subsystems saw it
-        J, converged = None, False
-        # connections: up to ``iterations`` Newton steps and the test of the last one (no unit steps)
-        passes = iterations + 1 if signals else max(1, iterations)
-        for it in range(passes):
-            # step 2: corrected coupling variables of the closed joints (connections)
-            e_s = e if every else e_held if it == 0 else e[..., cols]
-            factors = None
-            if sc is not None:
-                r = sc.residuals(problem, ys, e_s)
-                if J is None:  # formed once per macro step, at the predictor (perturbed steps of the units)
-                    J = sc.jacobians(problem, state, history, e, ys, problem.implicit_work)
-            else:
-                y_s = problem.stack([ys[i] for i in stage.responders])
-                r = problem.residuals(y_s, e_s, jc, e_held)
-                J = problem.jacobians(state, history, e, ys, ends, stage, algebraic=algebraic)
-                factors = problem.kept_factors(stage, algebraic)
-            e_new = rule.corrected_coupling(e_s, r, J, problem.backend, factors)
-            problem.work.coupling_solves += rule.n_solves
-            if it > 0 and tol is not None:
-                converged = not sc.unconverged(e_new, e_s, tol) if sc is not None else _max_abs(e_new - e_s) <= tol
-                if converged:
-                    break  # converged: the corrector already ran with (nearly) e_new
-            if signals and it == iterations:  # connections: the last pass only tests
-                break
-            e_old, e = e, e_new if every else _with_columns(e, cols, e_new)
-            # step 3: corrector of the stage's subsystems; the finished ones' outputs follow e algebraically
-            for i in stage.corrected:
-                ends[i], ys[i] = problem.correct(i, state, history, e)
-            if algebraic:
-                for i in stage.finished:
-                    ys[i] = problem.reevaluate(i, ends[i], ys[i], e_old, e)
-        if sc is not None:
-            problem.implicit_work.iterations.append(it)
-            if tol is not None and not converged:
-                raise _not_converged(problem, sc, e_new, e_s, tol, iterations)
     y = problem.stack(ys)
     state_new = problem.join(ends)
     if method is not None and method.projection:  # step 4
         state_new = problem.project(state_new)
         problem.work.projections += 1
     return state_new, problem.shift(history, e), y
+
+
+def _close(
+    problem: CosimulationProblem, method: CouplingRule | None, stage: Stage, p: Plan, state: Any, history: Any,
+    e: Any, ends: list[Any], ys: list[Any], iterations: int, tol: float | None, stale: Sequence[int] = (),
+) -> Any:  # fmt: skip
+    """Steps 2 and 3 of ``stage``: its closed joints' (or connections') corrected coupling variables and the
+    corrector of its subsystems (``ends`` and ``ys`` updated in place); returns ``e`` with them.  ``stale``: the
+    subsystems stepped with inputs other than ``e``'s, stepped again with ``e`` first (Newton's residual and
+    Jacobian are formed at ``e``)."""
+    graph = problem.graph
+    algebraic = p.scheme.reevaluates_leading
+    # connections (beside joints or alone): Newton's iteration, the Jacobian formed once
+    sc = stage.conditions if isinstance(stage.conditions, (SignalConditions, JointSignalConditions)) else None
+    jc = stage.conditions if isinstance(stage.conditions, Conditions) else None
+    signals = sc is not None
+    # connections alone: Newton's rule; beside joints: the joints' method, the connections' rows in every solve
+    rule = method if sc is None else NEWTON if isinstance(sc, SignalConditions) else WithSignals(method)
+    assert rule is not None
+    cols = stage.column_index
+    every = len(stage.columns) == graph.n_coupling  # the stage closes every joint: e itself, in its order
+    e_held = e if every else e[..., cols]  # as the stage's predictors and the finished subsystems saw it
+    J, converged = None, False
+    for i in stale:
+        ends[i], ys[i] = problem.correct(i, state, history, e)
+    # connections: up to ``iterations`` Newton steps and the test of the last one (no unit steps)
+    passes = iterations + 1 if signals else max(1, iterations)
+    for it in range(passes):
+        # step 2: corrected coupling variables of the closed joints (connections)
+        e_s = e if every else e_held if it == 0 else e[..., cols]
+        factors = None
+        if sc is not None:
+            r = sc.residuals(problem, ys, e_s)
+            if J is None:  # formed once per macro step, at the predictor (perturbed steps of the units)
+                J = sc.jacobians(problem, state, history, e, ys, problem.implicit_work)
+        else:
+            y_s = problem.stack([ys[i] for i in stage.responders])
+            r = problem.residuals(y_s, e_s, jc, e_held)
+            J = problem.jacobians(state, history, e, ys, ends, stage, algebraic=algebraic)
+            factors = problem.kept_factors(stage, algebraic)
+        e_new = rule.corrected_coupling(e_s, r, J, problem.backend, factors)
+        problem.work.coupling_solves += rule.n_solves
+        if it > 0 and tol is not None:
+            converged = not sc.unconverged(e_new, e_s, tol) if sc is not None else _max_abs(e_new - e_s) <= tol
+            if converged:
+                break  # converged: the corrector already ran with (nearly) e_new
+        if signals and it == iterations:  # connections: the last pass only tests
+            break
+        e_old, e = e, e_new if every else _with_columns(e, cols, e_new)
+        # step 3: corrector of the stage's subsystems; the finished ones' outputs follow e algebraically
+        for i in stage.corrected:
+            ends[i], ys[i] = problem.correct(i, state, history, e)
+        if algebraic:
+            for i in stage.finished:
+                ys[i] = problem.reevaluate(i, ends[i], ys[i], e_old, e)
+    if sc is not None:
+        problem.implicit_work.iterations.append(it)
+        if tol is not None and not converged:
+            raise _not_converged(problem, sc, e_new, e_s, tol, iterations)
+    return e
 
 
 def _with_columns(e: Any, cols: slice | np.ndarray, values: Any) -> Any:
@@ -193,14 +219,14 @@ def _with_columns(e: Any, cols: slice | np.ndarray, values: Any) -> Any:
 
 
 def _not_converged(
-    problem: CosimulationProblem, conditions: SignalConditions, e_new: Any, e_s: Any, tol: float, n: int
-) -> NotConverged:
+    problem: CosimulationProblem, conditions: SignalConditions | JointSignalConditions, e_new: Any, e_s: Any,
+    tol: float, n: int,
+) -> NotConverged:  # fmt: skip
     bad = conditions.unconverged(e_new, e_s, tol)
     change = np.abs(np.asarray(e_new, dtype=float) - np.asarray(e_s, dtype=float))
-    text = ", ".join(f"{problem.describe_connection(c)} (change {np.max(change[..., conditions.connections.index(c)]):.3g})"
-                     for c in bad)  # fmt: skip
+    text = conditions.describe(problem, bad, change)
     return NotConverged(
-        f"implicit coupling: Newton's iteration did not converge in {n} iterations (change of a connection's "
+        f"implicit coupling: Newton's iteration did not converge in {n} iterations (change of a coupling "
         f"variable at most tol (1 + |e|), tol = {tol:g}): {text}; raise coupling.iterations or tol, or reduce H"
     )
 

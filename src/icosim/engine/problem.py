@@ -78,7 +78,9 @@ class CosimulationProblem:
         subsystem ``i`` integrated over the macro step with the extrapolation polynomials through the
         history (Eq. 9/35/59): its state ``end_i`` at ``T_N+1`` and its outputs ``y_i``.  ``final=True``
         says ``end_i`` is final and no gradient through its integration will be asked for (a problem that
-        computes gradients in the same pass may skip them).
+        computes gradients in the same pass may skip them).  A problem whose graph has connections also takes
+        ``e_new``: the predictor of a subsystem fed by a connection's new sample, its inputs the interpolation
+        polynomials through ``e_new`` (as :meth:`correct`, but its first integration of the macro step).
     ``correct(i, state, history, e) -> (end_i, y_i)``
         subsystem ``i`` integrated with the interpolation polynomials through :meth:`corrector_samples`
         (Eq. 11).
@@ -343,8 +345,8 @@ class CosimulationProblem:
         """Back to ``checkpoint`` (:meth:`checkpoint`): nothing to do where the arrays are the whole state."""
 
     # -- to be implemented by a subclass ------------------------------------------
-    def predict(self, i: int, state: Any, history: Any, *, final: bool = False) -> Any:  # pragma: no cover
-        raise NotImplementedError
+    def predict(self, i: int, state: Any, history: Any, *, final: bool = False, e_new: Any = None) -> Any:
+        raise NotImplementedError  # pragma: no cover - contract
 
     def correct(self, i: int, state: Any, history: Any, e: Any) -> Any:  # pragma: no cover - contract
         raise NotImplementedError

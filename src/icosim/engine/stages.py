@@ -26,7 +26,9 @@ work (:func:`plan`):
 Signal connections are coupled explicitly (a connection's new sample is its source's output), or, with
 ``implicit``, closed by their conditions at ``T_N+1`` (:mod:`icosim.engine.connection_conditions`; ``connections``
 the ones closed): all of them at the last stage, every unit a connection feeds in ``corrected`` (those of earlier
-stages too: they are stepped again from ``T_N``).  The conditions hold at ``T_N+1`` with every unit's inputs the
+stages too: they are stepped again from ``T_N``).  Joints beside implicit connections are closed with them, at the
+last stage, every joint unit corrected: one corrector of both kinds of condition
+(:mod:`icosim.engine.joint_signal_conditions`).  The conditions hold at ``T_N+1`` with every unit's inputs the
 interpolation polynomial through the new values, a system in the new values alone: its solution is the same in
 any order of the units, which Gauss-Seidel's earlier stages change only in the predictor, Newton's start (a later
 unit fed by an earlier one's new output, docs/signals.md).
@@ -52,6 +54,7 @@ from ..errors import ParameterError
 from .connection_conditions import SignalConditions
 from .decompositions import DECOMPOSITIONS
 from .graph import CouplingGraph
+from .joint_signal_conditions import JointSignalConditions
 from .residuals import Conditions
 
 if TYPE_CHECKING:
@@ -72,7 +75,7 @@ class Stage:
     joints: tuple[int, ...]
     corrected: tuple[int, ...]
     finished: tuple[int, ...]
-    conditions: Conditions | SignalConditions | None
+    conditions: Conditions | SignalConditions | JointSignalConditions | None
     connections: tuple[int, ...] = ()  # the signal connections closed implicitly here
 
     @cached_property
@@ -182,19 +185,18 @@ def _plan(scheme: Scheme, graph: CouplingGraph, implicit: bool = False) -> Plan:
 
 
 def _implicit_plan(scheme: Scheme, graph: CouplingGraph) -> Plan:
-    """Every connection closed at the last stage, every unit a connection feeds stepped again with it (the order
-    of the stages makes the predictor only: module docstring)."""
-    if graph.joints:
-        raise ParameterError("implicit signal connections beside joints are not supported: the joints' method solves "
-                             "their levels (pos, vel, acc, force) and Newton the connections' (signal), and one "
-                             "corrector of both, with the blocks that join them (a joint's residual by a "
-                             "connection's variable and a connection's by a joint's), is not built; couple the "
-                             "connections explicitly (implicit: false)")  # fmt: skip
+    """Every connection (and every joint beside them) closed at the last stage, every unit a connection feeds (and
+    every joint unit) stepped again with it (the order of the stages makes the predictor only: module docstring)."""
     units = scheme.stages(graph.n_subsystems)
     cons = tuple(range(len(graph.connections)))
-    conditions = SignalConditions(graph, cons)
+    conditions: SignalConditions | JointSignalConditions = SignalConditions(graph, cons)
+    if graph.joints:  # one corrector of both kinds of condition
+        conditions = JointSignalConditions(
+            graph, tuple(sorted({i for jt in graph.joints for i in (jt.first, jt.second)}))
+        )
+    joints = tuple(range(graph.n_joints))
     stages = [Stage(index, tuple(u), (), (), (), None) for index, u in enumerate(units[:-1])]
-    stages.append(Stage(len(units) - 1, tuple(units[-1]), (), conditions.targets, (), conditions, cons))
+    stages.append(Stage(len(units) - 1, tuple(units[-1]), joints, conditions.targets, (), conditions, cons))
     return Plan(scheme, graph, tuple(stages))
 
 

@@ -37,8 +37,6 @@ def test_a_scene_of_connections_defaults_to_held_inputs_and_jacobi(tmp_path):
     ({"coupling": {"H": 0.1, "method": "baumgarte"}}, "coupling.method", "allowed: k, scheme, order, H"),
     ({"coupling": {"H": 0.1, "scheme": "gauss-seidel"}}, "coupling.order", "every subsystem once"),
     ({"coupling": {"H": 0.1, "k": -1}}, "coupling.k", "must be an integer 0 .."),
-    ({"joints": [{"between": ["a", "b"], "decomposition": "fd"}]}, "joints",
-     "joints beside connections are not supported"),
     ({"connections": [{"from": "c.y", "to": "b.u"}]}, "connections[0].from", "with a subsystem of a, b"),
     ({"connections": [{"from": "a.y", "to": "b.u", "gain": 2}]}, "connections[0].gain", "allowed: from, to, factor"),
     ({"connections": [{"from": "a.y", "to": "b.u"}, {"from": "a.z", "to": "b.u"}]}, "connections[1].to",

@@ -225,7 +225,10 @@ class ExchangeUnit(Unit):
 
     # -- the inputs the macro step keeps with the state -----------------------------------------------
     def _set_values(self, key, values):
-        self._held[key] = list(values)
+        at = 0
+        for part in self.parts.get(key, (key,)):  # an entry's keys held apart: the latest value of each is restored
+            n = len(self.elements[part])
+            self._held[part], at = list(values[at : at + n]), at + n
         super()._set_values(key, values)
 
     # -- states: the continuous states, the time and the inputs ----------------------------------------

@@ -19,6 +19,12 @@ macro step sees are the observable part of it:
 A kinematically driven unit that takes its point's position or velocity, or has no outputs for them, is a drive
 (:mod:`icosim.problems.fmu.drives`): the problem prescribes its point's motion.
 
+Beside the joints a unit may take and give signal connections' values (a scene of joints and connections,
+:mod:`icosim.problems.fmu.joint_signals`): ``signal_columns[i]`` are the entries of the coupling variables (the
+graph's of joints and connections, whose joints' entries come first) its ``signal_input`` follows, handed over each
+step with its coupling input (the unit's entry ``coupled``), and a unit that names a ``signal_output`` has it read
+after each integration (:attr:`signal_values`).
+
 A unit's input is ``force_sign`` times the force the graph gives it (:class:`Coupling`).  The constraint
 residuals are those of the engine's dimensionless setting (``g``, ``H g'``, ``H^2 g''``), so the method
 parameters mean what they mean for the built-in models (:func:`icosim.engine.methods.engine_method`).
@@ -79,6 +85,7 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
         exact for linear units, whose sensitivities are constant).
     iterations : the macro step's corrector steps: the last one's integration is final (doStep's
         ``noSetFMUStatePriorToCurrentPoint``), as is a prediction that is not corrected.
+    signal_columns : per unit, the entries of ``e`` its connected inputs follow (module docstring); none by default.
     """
 
     def __init__(
@@ -93,6 +100,7 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
         perturbation=1e-3,
         sensitivities="each-step",
         iterations=1,
+        signal_columns=None,
     ):
         self.units, self.couplings = tuple(units), tuple(couplings)
         dims = {len(u.elements.get("position") or u.elements["reaction_force"]) for u in self.units}
@@ -132,6 +140,9 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
         self._masses = np.array([0.0 if c.mass is None else float(c.mass) for c in self.couplings])
         self._corrector_rows: tuple = (None, None, None)  # (history, e_new, their corrector samples), the last
         self._drives = self._drive_entries()
+        self.signal_columns = tuple(tuple(c) for c in signal_columns) if signal_columns else ((),) * n
+        #: per unit, its connected outputs after its latest integration or re-evaluation (None: it has none)
+        self.signal_values: list = [None] * n
 
     # -- time and the initial point -----------------------------------------------------------------
     @property
@@ -178,16 +189,25 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
         with the monomial coefficients ``C``; returns its end ``(x, v)`` and outputs ``(1, 4, n_dim)``.  ``final``:
         the macro step will not integrate the unit again from ``T_N`` (the unit is told so)."""
         restore = None if self._holds[i] == "start" else self._start[i]
-        coef = C @ U  # the input polynomial's monomial coefficients, rows m
+        coef = C @ U  # the input polynomial's monomial coefficients, rows m (connected inputs after the joints')
         self._holds[i] = "scratch"  # from here on: a refused call leaves the unit in no known state
         self.work.subsystem_integrations += 1
         if self._drives[i] is not None:
             return self._drive_step(i, coef.tolist(), self.H, self.step_index + 1, restore)
+        n = self.n_dim
+        key, u = self.couplings[i].input_key, self._scale[i] * coef
+        if self.signal_columns[i]:
+            key, u = "coupled", np.hstack([u[:, :n], coef[:, n:]])
         values = self.units[i].advance(
-            self.couplings[i].input_key, self._scale[i] * coef, self.time, self.H, step_index=self.step_index + 1,
-            restore=restore, read=self._output_keys(i), final=final and self._kept is None,
+            key, u, self.time, self.H, step_index=self.step_index + 1, restore=restore, read=self._output_keys(i),
+            final=final and self._kept is None,
         )  # fmt: skip
-        return self._outputs(i, np.add.reduce(coef), values)  # the input at T_N+1: u(1)
+        self._read_signals(i)
+        return self._outputs(i, np.add.reduce(coef[:, :n]), values)  # the input at T_N+1: u(1)
+
+    def _read_signals(self, i):
+        if "signal_output" in self.units[i].elements:
+            self.signal_values[i] = self.units[i].get(("signal_output",)).ravel()
 
     def _output_keys(self, i):
         if self._drives[i] is not None:
@@ -234,12 +254,13 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
         if self._drives[i] is not None:  # the point stands where the end state has it; its acceleration is u1
             return self._drive_outputs(i, list(end[: self.n_dim]), list(end[self.n_dim :]), list(u1))[1]
         self.units[i].set(self.couplings[i].input_key, self._scale[i] * np.asarray(u1))
+        self._read_signals(i)
         return self._outputs(i, u1)[1]
 
     # -- the problem interface -------------------------------------------------------------------------
     def _samples(self, i, e_new, history):
         """Unit ``i``'s input samples: :meth:`inputs` of ``history`` (``e_new`` None) or of
-        :meth:`corrector_samples`, ``(k + 1, n_dim)``."""
+        :meth:`corrector_samples`, ``(k + 1, n_dim)``, and the entries its connected inputs follow after them."""
         if e_new is None:
             rows = history[..., : self.k + 1, :]  # (a longer history's older samples take no part)
         else:  # the same for every unit of the macro step: formed once
@@ -247,13 +268,17 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
             if last_history is not history or last_e is not e_new:
                 rows = self.corrector_samples(history, np.asarray(e_new, dtype=float))
                 self._corrector_rows = (history, e_new, rows)
-        return np.asarray(self.inputs(i, rows), dtype=float)
+        U = np.asarray(self.inputs(i, rows), dtype=float)
+        cols = self.signal_columns[i]
+        return np.concatenate([U, np.asarray(rows, dtype=float)[..., cols]], axis=-1) if cols else U
 
-    def predict(self, i, state, history, *, final=False):
-        """Unit ``i`` with the extrapolation polynomials; its FMU state is saved only where the end is ``final``
-        (a unit that is corrected in the same stage ends at its corrector's state)."""
+    def predict(self, i, state, history, *, final=False, e_new=None):
+        """Unit ``i`` with the extrapolation polynomials (``e_new`` given: the interpolation polynomials through it, a
+        unit fed by a connection's new sample); its FMU state is saved only where the end is ``final`` (a unit that
+        is corrected in the same stage ends at its corrector's state)."""
         self._check_state(state)
-        end, y = self._integrate(i, self._samples(i, None, history), self.C_pred, final)
+        C = self.C_pred if e_new is None else self.C_corr
+        end, y = self._integrate(i, self._samples(i, e_new, history), C, final)
         if final:
             self._keep(i, end)
         return end, y
@@ -290,14 +315,24 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
         """``dy_i/du_i`` by difference quotients from the outputs ``y`` at ``e``, ``(n_dim, 1, 4, n_dim)``: unit
         ``i`` repeats its corrector step with each input component perturbed at ``T_N+1`` (restored start state,
         one ``doStep`` each) or, at its fixed end state, is re-evaluated with it (no step)."""
-        rows = self._samples(i, e, history)  # (k + 1, n_dim); row 0 at T_N+1
-        u1 = rows[0]  # re-evaluated at the end state only where ``end`` is given
+        return self._sensitivity(i, history, e, end, y)[0]
+
+    def output_sensitivities(self, i, state, history, e, y, signals):
+        """:meth:`sensitivity` through the corrector step and, from the same steps, the derivatives of unit ``i``'s
+        connected outputs by its inputs, ``(n_dim, n_outputs)`` from their values ``signals`` at ``e`` (None: it
+        has none, and so is the second)."""
+        return self._sensitivity(i, history, e, None, y, signals)
+
+    def _sensitivity(self, i, history, e, end, y, signals=None):
+        rows = self._samples(i, e, history)  # (k + 1, n_dim) and the connected inputs; row 0 at T_N+1
+        u1 = rows[0, : self.n_dim]  # re-evaluated at the end state only where ``end`` is given
         h = self.perturbation * np.maximum(1.0, np.abs(u1))
         if y is not None:
             base = y
         else:
             base = self._at_end(i, end, u1) if end is not None else self._integrate(i, rows, self.C_corr)[1]
         out = np.empty((self.n_dim,) + base.shape)
+        ds = None if signals is None else np.empty((self.n_dim, len(signals)))
         for c in range(self.n_dim):
             if end is not None:
                 up = u1.copy()
@@ -308,7 +343,9 @@ class FmuCosimulation(Checkpoints, ConsistentStart, DrivenPoints, CosimulationPr
                 Up[0, c] += h[c]
                 yp = self._integrate(i, Up, self.C_corr)[1]
             out[c] = (yp - base) / h[c]
-        return out
+            if ds is not None:
+                ds[c] = (self.signal_values[i] - signals) / h[c]
+        return out, ds
 
     def project(self, state):
         """Mass-weighted projection of positions and velocities (Eq. 30), written into the units."""

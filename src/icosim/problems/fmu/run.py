@@ -94,29 +94,31 @@ def _needed(kind, projects):
     return keys | ({"set_position", "set_velocity"} if projects else set())
 
 
-def open_unit(scene: Scene, name: str, kind: str, *, cache=None) -> Unit:
-    """The scene's unit ``name`` (driven as ``kind``), opened with its start values at ``t_start``."""
+def open_unit(scene: Scene, name: str, kind: str, *, cache=None, signals=None) -> Unit:
+    """The scene's unit ``name`` (driven as ``kind``), opened with its start values at ``t_start``; ``signals``: the
+    variables of its connections by unit key (``signal_input``, ``signal_output``), beside its joint's."""
     c, sub = scene.coupling, scene.data["subsystems"][name]
     projects = scene.method.projection or scene.data.get("initial") == "project"
-    names = {k: sub[k] for k in ROLES if k in sub and k in _needed(kind, projects)}
+    names = {k: sub[k] for k in ROLES if k in sub and k in _needed(kind, projects)} | dict(signals or {})
     unit = open_fmu_unit(name, fmu_file(scene.fmus[name], cache), names, sub.get("start", {}),
                          interface=sub.get("interface", "auto"), tolerance=sub.get("tolerance"), inputs=c["inputs"],
                          substeps=c["substeps"], t0=float(scene.data.get("t_start", 0.0)))  # fmt: skip
     return check_input_orders(scene.path, unit, c["k"])  # the orders of input derivatives it takes, before any step
 
 
-def open_units(scene: Scene, *, cache=None, inspect=True):
+def open_units(scene: Scene, *, cache=None, inspect=True, signals=None):
     """The scene's units, opened with their start values at ``t_start``, checked
     (:func:`icosim.problems.fmu.inspection.inspect_unit` per unit, :func:`~icosim.problems.fmu.inspection.joint_direction`
     for the joints, :func:`check_scheme`; a refusal raises :class:`~icosim.problems.fmu.errors.FmuError`), and their
-    couplings.  ``inspect=False`` skips the measured checks (every unit is taken to have feedthrough)."""
+    couplings.  ``inspect=False`` skips the measured checks (every unit is taken to have feedthrough).  ``signals``:
+    unit name -> the variables of its connections (:func:`open_unit`)."""
     graph = scene.graph()
     kinds = [graph.port_kind(i, 0) for i in range(graph.n_subsystems)]
     signs = scene.graph_signs()
     units, couplings = [], []
     try:
         for (name, sub), kind in zip(scene.data["subsystems"].items(), kinds):
-            unit = open_unit(scene, name, kind, cache=cache)
+            unit = open_unit(scene, name, kind, cache=cache, signals=(signals or {}).get(name))
             units.append(unit)
             Recorder(unit, sub.get("record", []))  # the names to record checked before any step
             mass = sub.get("mass")

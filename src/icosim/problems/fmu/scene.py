@@ -52,77 +52,11 @@ from .controlled import check_control, control_schema
 from .drives import role_keys
 from .errors import SceneError
 from .joints import NUMBERED, ORDERED_SCHEMES, check_order, driven_by, graph_message, joint_schema, scene_joints
+from .scene_keys import COUPLING_KEYS, JOINT_KEYS, SCENE_KEYS, SUBSYSTEM_KEYS
 from .variables import quoted_number_hint
 
-__all__ = ["Scene", "load_scene", "scene_schema", "SUBSYSTEM_KEYS", "JOINT_KEYS", "COUPLING_KEYS", "SCENE_KEYS"]
-
-#: Keys of one subsystem and what they hold.
-SUBSYSTEM_KEYS = {
-    "fmu": "the unit: an .fmu file or a source directory, relative to the scene file",
-    "start": "start values of the unit's parameters and inputs",
-    "position": "name of the position output (a drive without it: its point's position is the prescribed one)",
-    "velocity": "name of the velocity output (a drive without it: its point's velocity is the prescribed one)",
-    "acceleration": "name of the acceleration output (a drive without it: the prescribed acceleration)",
-    "force": "name of the coupling-force input (a force-driven subsystem)",
-    "acceleration_input": "name of the prescribed-acceleration input (a kinematically driven subsystem)",
-    "reaction_force": "name of the output of the force the drive exerts (a kinematically driven subsystem)",
-    "position_input": "name of the prescribed-position input (a kinematically driven subsystem: a drive)",
-    "velocity_input": "name of the prescribed-velocity input (a kinematically driven subsystem: a drive)",
-    "force_sign": "+1 or -1: with joints, the unit's input is force_sign times the sum of its joints' multipliers "
-    "(+lambda_j on a joint's first subsystem, -lambda_j on its second); without joints, the coupling force on "
-    "this subsystem is force_sign * lambda",
-    "mass": "the mass (a number, or the name of a unit variable holding it): the projection's weight",
-    "set_position": "name of a tunable parameter or input that sets the position (projection)",
-    "set_velocity": "name of a tunable parameter or input that sets the velocity (projection)",
-    "rollback_tolerance": "relative difference accepted when a restored step is repeated (default 1e-12; 0: bit for bit)",
-    "interface": "auto (default: co-simulation where the unit can roll back, else model exchange), co-simulation "
-    "or model-exchange",
-    "tolerance": "the integrator's relative tolerance of a model exchange unit (default 1e-10)",
-    "record": "names of unit variables (outputs, locals, parameters, inputs) written to the dataset as "
-    "<subsystem>.<variable>(time), read at t_start and after each accepted macro step",
-}
-
-#: Keys of one joint and what they hold.
-JOINT_KEYS = {
-    "between": "the two subsystems the joint holds together, its first and its second side: the joint's "
-    "multiplier acts with +lambda_j on the first and -lambda_j on the second",
-    "decomposition": "which side is force driven and which kinematically driven (first side, second side)",
-}
-
-#: Top-level keys of a scene and what they hold.
-SCENE_KEYS = {
-    "subsystems": "the units by name (two without joints, the first the paper's subsystem 1; any number >= 2 "
-    "with joints)",
-    "system": "an SSP or OSP system file (or its folder), relative to the scene: its components are the subsystems",
-    "joints": "the joints between the subsystems, each {between: [first, second], decomposition} (without it: "
-    "the two subsystems joined by coupling.decomposition)",
-    "coupling": "the method, decomposition (without joints), k, scheme (and order), H and their options",
-    "t_start": "the start time (s; default 0)",
-    "t_end": "the end time (s)",
-    "initial_coupling": "the coupling variables at t_start, every component (default: computed from the units)",
-    "initial": "check (default: refuse a joint whose positions or velocities differ at t_start), project (move "
-    "the units onto the joints) or as-is (run, and report the gap)",
-    "initial_tolerance": "the gap accepted at t_start, relative to max(1, the largest position or velocity)",
-    "divergence_bound": "a state (SI) beyond this ends the run as diverged (default 1e10 (1 + |state at t_start|))",
-    "limits": "call_seconds: the longest an FMI call of a unit may take; identify_seconds: the longest the "
-    "identification of one unit may take (--predict)",
-}
-
-#: Coupling keys besides the method's parameters, and their defaults.
-COUPLING_KEYS = {
-    "method": None,
-    "decomposition": None,
-    "k": None,
-    "scheme": "jacobi",
-    "order": None,
-    "H": None,
-    "iterations": 1,
-    "inputs": "auto",
-    "substeps": 16,
-    "perturbation": 1.0e-3,
-    "sensitivities": "each-step",
-    "control": None,  # controlled macro steps (icosim.problems.fmu.controlled); None: H fixed
-}
+__all__ = ["Scene", "load_scene", "joint_scene", "scene_schema", "SUBSYSTEM_KEYS", "JOINT_KEYS", "COUPLING_KEYS",
+           "SCENE_KEYS"]  # fmt: skip
 
 #: Subsystem keys that do not name unit variables.
 _NOT_NAMES = ("fmu", "start", "force_sign", "mass", "rollback_tolerance", "interface", "tolerance", "record")
@@ -314,8 +248,17 @@ def load_scene(path) -> Scene:
 
     path = Path(path)
     data, system = scene_data(path)
-    if is_signal_scene(data):  # units coupled by connections (icosim.problems.fmu.signal_scene)
+    if is_signal_scene(data) and "joints" in data:  # beside joints (.joint_signal_scene; its joints checked here)
+        from .joint_signal_scene import joint_signal_scene
+
+        return joint_signal_scene(path, data, system, joint_scene)
+    if is_signal_scene(data):  # units coupled by connections (.signal_scene)
         return signal_scene(path, data, system)
+    return joint_scene(path, data, system)
+
+
+def joint_scene(path, data, system=None) -> Scene:
+    """A scene of joints (or the paper's two units) from its ``data`` (read from ``path``), checked."""
     _validate(path, data)
     c = {**COUPLING_KEYS, **data["coupling"]}
     names = list(data["subsystems"])
@@ -324,11 +267,8 @@ def load_scene(path) -> Scene:
     given = {k: c[k] for k in data["coupling"] if k not in COUPLING_KEYS}
     extra = sorted(set(given) - set(spec.arguments))
     if extra:
-        _fail(
-            path,
-            f"coupling.{extra[0]}",
-            f"not a parameter of method {spec.name} (its parameters: {', '.join(spec.arguments) or 'none'})",
-        )
+        its = ", ".join(spec.arguments) or "none"
+        _fail(path, f"coupling.{extra[0]}", f"not a parameter of method {spec.name} (its parameters: {its})")
     try:
         method = spec.make(**given)
     except ParameterError as exc:
@@ -346,11 +286,8 @@ def load_scene(path) -> Scene:
     t0, t_end, H = float(data.get("t_start", 0.0)), float(data["t_end"]), float(c["H"])
     steps = (t_end - t0) / H
     if not steps >= 1 or abs(steps - round(steps)) > 1e-6 * max(1.0, steps):
-        _fail(
-            path,
-            "t_end",
-            f"t_end - t_start = {t_end - t0:g} s must be a whole number (>= 1) of macro steps H = {H:g} s",
-        )
+        whole = f"t_end - t_start = {t_end - t0:g} s must be a whole number (>= 1) of macro steps H = {H:g} s"
+        _fail(path, "t_end", whole)
     fmus = {}
     entries = {
         f"{sname}.{key}": len(v) if isinstance(v, list) else 1

@@ -41,14 +41,6 @@ __all__ = ["SignalScene", "SignalRun", "signal_scene", "open_signal_unit", "sign
 
 #: Top-level keys of a signal scene.
 SIGNAL_SCENE_KEYS = ("subsystems", "system", "connections", "sources", "coupling", "t_start", "t_end", "limits")
-#: Why ``joints`` is refused beside ``connections``, and the alternatives.
-JOINTS_BESIDE_CONNECTIONS = (
-    "joints beside connections are not supported: a scene couples its units either by joints (closed by the joint "
-    "method's corrector, icosim.problems.fmu.scene) or by connections (explicitly, or implicitly by Newton), and "
-    "no problem serves both kinds of unit and no corrector solves both kinds of condition together. Couple every "
-    "unit by connections (with coupling.implicit: true their conditions hold at T_N+1, as a joint's do) or every "
-    "unit by joints"
-)
 #: Keys of one subsystem.
 SIGNAL_SUBSYSTEM_KEYS = ("fmu", "start", "interface", "tolerance", "record")
 #: Keys of one connection.
@@ -116,51 +108,13 @@ def signal_scene(path, data, system=None) -> SignalScene:
     for key in data:
         if key not in SIGNAL_SCENE_KEYS:
             allowed = ", ".join(SIGNAL_SCENE_KEYS)
-            why = f" ({JOINTS_BESIDE_CONNECTIONS})" if key == "joints" else ""
-            _fail(path, key, f"not a key of a scene with connections{why}; allowed: {allowed}")
+            _fail(path, key, f"not a key of a scene with connections; allowed: {allowed}")
     subs = data.get("subsystems")
     if not isinstance(subs, dict) or len(subs) < 2:
         _fail(path, "subsystems", "must map at least two subsystem names to their settings")
     for name, sub in subs.items():
-        if not isinstance(sub, dict) or "fmu" not in sub:
-            _fail(path, f"subsystems.{name}", "must be a mapping with fmu (the unit's .fmu file)")
-        for key in sub:
-            if key not in SIGNAL_SUBSYSTEM_KEYS:
-                _fail(path, f"subsystems.{name}.{key}", f"not a key of a subsystem coupled by connections; allowed: "
-                      f"{', '.join(SIGNAL_SUBSYSTEM_KEYS)}")  # fmt: skip
-        if sub.get("interface", "co-simulation") not in _INTERFACES + ("auto",):
-            _fail(path, f"subsystems.{name}.interface", f"{sub['interface']!r} is not allowed; allowed: "
-                  f"{', '.join(_INTERFACES)}, auto")  # fmt: skip
-        if not isinstance(sub.get("record", []), list) or not all(isinstance(r, str) for r in sub.get("record", [])):
-            _fail(path, f"subsystems.{name}.record", "must be a list of variable names")
-    cons = data["connections"]
-    if not isinstance(cons, list) or not cons:
-        _fail(path, "connections", "must be a non-empty list of {from: unit.output, to: unit.input}")
-    specs, fed = [], {}
-    for n, con in enumerate(cons):
-        where = f"connections[{n}]"
-        if not isinstance(con, dict) or not {"from", "to"} <= set(con):
-            _fail(path, where, "must be a mapping with from (unit.output) and to (unit.input)")
-        for key in con:
-            if key not in CONNECTION_KEYS:
-                _fail(path, f"{where}.{key}", f"not a key of a connection; allowed: {', '.join(CONNECTION_KEYS)}")
-        ends = []
-        for key in ("from", "to"):
-            ref = con[key]
-            unit, _, var = ref.partition(".") if isinstance(ref, str) else ("", "", "")
-            if unit not in subs or not var:
-                _fail(path, f"{where}.{key}", f"{ref!r} must be <subsystem>.<variable> with a subsystem of "
-                      f"{', '.join(subs)}")  # fmt: skip
-            ends.append((unit, var))
-        if ends[0][0] == ends[1][0]:
-            _fail(path, where, f"connects {ends[0][0]} to itself: a connection joins two subsystems")
-        if ends[1] in fed:
-            _fail(path, f"{where}.to", f"{'.'.join(ends[1])} is fed already by connections[{fed[ends[1]]}]; an input "
-                  "takes one connection")  # fmt: skip
-        fed[ends[1]] = n
-        factor = _number(path, f"{where}.factor", con.get("factor", 1.0))
-        offset = _number(path, f"{where}.offset", con.get("offset", 0.0))
-        specs.append((ends[0][0], ends[0][1], ends[1][0], ends[1][1], factor, offset))
+        check_signal_subsystem(path, name, sub)
+    specs, fed = scene_connections(path, data["connections"], subs)
     from .signal_sources import sources_of
 
     sources = sources_of(path, data.get("sources", []), subs, fed)
@@ -209,6 +163,54 @@ def signal_scene(path, data, system=None) -> SignalScene:
     return SignalScene(path, data, dict(subs), specs, c, t0, t_end, system, sources)
 
 
+def check_signal_subsystem(path, name, sub) -> None:
+    """Subsystem ``name``'s settings ``sub`` as a unit coupled by connections only: its keys, interface and record."""
+    if not isinstance(sub, dict) or "fmu" not in sub:
+        _fail(path, f"subsystems.{name}", "must be a mapping with fmu (the unit's .fmu file)")
+    for key in sub:
+        if key not in SIGNAL_SUBSYSTEM_KEYS:
+            _fail(path, f"subsystems.{name}.{key}", f"not a key of a subsystem coupled by connections; allowed: "
+                  f"{', '.join(SIGNAL_SUBSYSTEM_KEYS)}")  # fmt: skip
+    if sub.get("interface", "co-simulation") not in _INTERFACES + ("auto",):
+        _fail(path, f"subsystems.{name}.interface", f"{sub['interface']!r} is not allowed; allowed: "
+              f"{', '.join(_INTERFACES)}, auto")  # fmt: skip
+    if not isinstance(sub.get("record", []), list) or not all(isinstance(r, str) for r in sub.get("record", [])):
+        _fail(path, f"subsystems.{name}.record", "must be a list of variable names")
+
+
+def scene_connections(path, cons, subs) -> tuple[list, dict]:
+    """A scene's ``connections`` checked against its subsystems ``subs`` (names): ``(source, output, target, input,
+    factor, offset)`` by name, and the inputs fed, ``(unit, input) -> connection``."""
+    if not isinstance(cons, list) or not cons:
+        _fail(path, "connections", "must be a non-empty list of {from: unit.output, to: unit.input}")
+    specs, fed = [], {}
+    for n, con in enumerate(cons):
+        where = f"connections[{n}]"
+        if not isinstance(con, dict) or not {"from", "to"} <= set(con):
+            _fail(path, where, "must be a mapping with from (unit.output) and to (unit.input)")
+        for key in con:
+            if key not in CONNECTION_KEYS:
+                _fail(path, f"{where}.{key}", f"not a key of a connection; allowed: {', '.join(CONNECTION_KEYS)}")
+        ends = []
+        for key in ("from", "to"):
+            ref = con[key]
+            unit, _, var = ref.partition(".") if isinstance(ref, str) else ("", "", "")
+            if unit not in subs or not var:
+                _fail(path, f"{where}.{key}", f"{ref!r} must be <subsystem>.<variable> with a subsystem of "
+                      f"{', '.join(subs)}")  # fmt: skip
+            ends.append((unit, var))
+        if ends[0][0] == ends[1][0]:
+            _fail(path, where, f"connects {ends[0][0]} to itself: a connection joins two subsystems")
+        if ends[1] in fed:
+            _fail(path, f"{where}.to", f"{'.'.join(ends[1])} is fed already by connections[{fed[ends[1]]}]; an input "
+                  "takes one connection")  # fmt: skip
+        fed[ends[1]] = n
+        factor = _number(path, f"{where}.factor", con.get("factor", 1.0))
+        offset = _number(path, f"{where}.offset", con.get("offset", 0.0))
+        specs.append((ends[0][0], ends[0][1], ends[1][0], ends[1][1], factor, offset))
+    return specs, fed
+
+
 def _implicit_keys(path, c):
     """``implicit`` (true or false) and Newton's ``iterations`` (an integer >= 1) and ``tol`` (> 0: a variable's change
     at most ``tol (1 + |e|)``), which belong to implicit coupling; their defaults filled in."""
@@ -247,16 +249,17 @@ def _fmu_path(scene, sub) -> Path:
     return p if p.is_absolute() else (scene.path.parent / p).resolve()
 
 
-def open_signal_unit(scene: SignalScene, name, inputs, outputs):
+def open_signal_unit(scene: SignalScene, name, inputs, outputs, path=None):
     """Unit ``name`` opened with its connected ``inputs`` and ``outputs`` (variable names); co-simulation coupled
-    explicitly is stepped forward only (no saved state), its orders of input derivatives checked before any step."""
+    explicitly is stepped forward only (no saved state), its orders of input derivatives checked before any step.
+    ``path``: its ``.fmu`` (default: the scene's ``fmu``)."""
     from .exchange import open_fmu_unit
     from .input_orders import check_input_orders
     from .signals import INPUTS, OUTPUTS, ForwardUnit
 
     c, sub = scene.coupling, scene.subsystems[name]
     keys = {k: v for k, v in ((INPUTS, inputs), (OUTPUTS, outputs)) if v}
-    start, path = dict(sub.get("start") or {}), _fmu_path(scene, sub)
+    start, path = dict(sub.get("start") or {}), path or _fmu_path(scene, sub)
     interface = sub.get("interface", "co-simulation")
     if interface == "co-simulation" and not c["implicit"]:  # no saved state
         unit = ForwardUnit(name, path, keys, start, inputs=c["inputs"], substeps=c["substeps"], t0=scene.t0)

@@ -70,14 +70,17 @@ class SignalCosimulation(CosimulationProblem):
         is restored to it before every further step of the macro step (units that save and restore state).  An
         algebraic loop is then closed with every other connection at ``T_N+1``; its solver serves ``t0`` only.
     loop_tolerance, loop_iterations : the algebraic loops' Newton solve (:class:`~icosim.problems.fmu.loops.LoopSolver`).
+    joints, n_components : joints of the graph beside the connections, whose units a subclass serves
+        (:class:`~icosim.problems.fmu.joint_signals.JointSignalCosimulation`).
     """
 
     def __init__(self, units, inputs, outputs, connections, k, H, *, t0=0.0, sources=None, implicit=False,
-                 loop_tolerance=1e-10, loop_iterations=20):  # fmt: skip
+                 loop_tolerance=1e-10, loop_iterations=20, joints=(), n_components=1):  # fmt: skip
         self.units = tuple(units)
         self.sources = tuple(map(tuple, sources)) if sources is not None else tuple(() for _ in self.units)
         self.input_names, self.output_names = tuple(map(tuple, inputs)), tuple(map(tuple, outputs))
-        graph = CouplingGraph(len(self.units), (), names=tuple(u.label for u in self.units), connections=connections)
+        graph = CouplingGraph(len(self.units), joints, n_components, names=tuple(u.label for u in self.units),
+                              connections=connections)  # fmt: skip
         super().__init__(graph, k)
         self.implicit_connections = bool(implicit)
         self._saved = [None] * len(self.units)  # implicit: each unit's state at T_N
@@ -189,17 +192,18 @@ class SignalCosimulation(CosimulationProblem):
             self.units[i].free(self._saved[i])
         self._saved[i], self._saved_at[i] = self.units[i].save(), self.step_index
 
-    def predict(self, i, state, history, *, final=False):
+    def predict(self, i, state, history, *, final=False, e_new=None):
+        """Unit ``i`` with the extrapolation polynomials, or, ``e_new`` given (fed by a connection's new sample), the
+        interpolation polynomials through it; implicit: its state at ``T_N`` saved first."""
         if self.implicit_connections:
             self._save(i)
+        if e_new is not None:
+            return self._step(i, self.corrector_samples(history, np.asarray(e_new, dtype=float)), self.C_corr)
         return self._step(i, history[: self.k + 1], self.C_pred)
 
     def correct(self, i, state, history, e):
-        if self.implicit_connections:  # its first step in this macro step (Gauss-Seidel's later stage) saves
-            if self._saved_at[i] != self.step_index:
-                self._save(i)
-            else:
-                self.units[i].restore(self._saved[i])
+        if self.implicit_connections:  # restored to its state at T_N, which its predictor saved
+            self.units[i].restore(self._saved[i])
         return self._step(i, self.corrector_samples(history, np.asarray(e, dtype=float)), self.C_corr)
 
     def signal_output(self, i, y, output):

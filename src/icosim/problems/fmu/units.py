@@ -19,6 +19,7 @@ process's exit, pythonfmu (0.6.4 to 0.7.0 at least) frees its interpreter state 
 from __future__ import annotations
 
 import collections
+import contextlib
 import math
 import tempfile
 from pathlib import Path
@@ -33,7 +34,7 @@ from .fmi import adapter
 from .measures import measure
 from .variables import VariableTable
 
-__all__ = ["Unit", "ROLES"]
+__all__ = ["Unit", "ROLES", "ENTRIES"]
 
 _STATUS = {0: "ok", 1: "warning", 2: "discard", 3: "error", 4: "fatal", 5: "pending"}
 
@@ -50,6 +51,11 @@ ROLES = {
     "set_position": ("a tunable parameter or input that sets the position (projection)", ("parameter", "input")),
     "set_velocity": ("a tunable parameter or input that sets the velocity (projection)", ("parameter", "input")),
     "signal_input": ("a connection's input", ("input",)), "signal_output": ("a connection's output", ("output",))}  # fmt: skip
+
+
+#: Entries of keys set together: a drive's inputs, the projection's, a joint unit's coupling and connections' inputs.
+ENTRIES = {"drive": DRIVE_KEYS, "projected": ("set_position", "set_velocity"),
+           "coupled": ("force", "acceleration_input", "signal_input")}  # fmt: skip
 
 
 def _listed(names) -> list:
@@ -90,16 +96,14 @@ class Unit:
             self.elements[key] = els
             self.measures[key] = [measure(label, md, key, el.variable) for el in els]
             self.factors[key] = np.array([m.factor for m in self.measures[key]])
-        #: a drive's inputs (:mod:`icosim.problems.fmu.drives`), set together as the one entry ``drive``
-        self.drive_keys = tuple(k for k in DRIVE_KEYS if k in self.elements)
-        if self.drive_keys:
-            self.elements["drive"] = [el for k in self.drive_keys for el in self.elements[k]]
-            self.factors["drive"] = np.concatenate([self.factors[k] for k in self.drive_keys])
-        #: the projection's inputs (position and velocity, those it names), set together as the entry ``projected``
-        self.projected_keys = tuple(k for k in ("set_position", "set_velocity") if k in self.elements)
-        if self.projected_keys:
-            self.elements["projected"] = [el for k in self.projected_keys for el in self.elements[k]]
-            self.factors["projected"] = np.concatenate([self.factors[k] for k in self.projected_keys])
+        self.parts = {}  # the entries (ENTRIES) of keys the unit names
+        for entry, keys in ENTRIES.items():
+            parts = tuple(k for k in keys if k in self.elements)
+            if parts and (entry != "coupled" or (len(parts) == 2 and parts[-1] == "signal_input")):
+                self.parts[entry] = parts
+                self.elements[entry] = [el for k in parts for el in self.elements[k]]
+                self.factors[entry] = np.concatenate([self.factors[k] for k in parts])
+        self.drive_keys, self.projected_keys = self.parts.get("drive", ()), self.parts.get("projected", ())
         self.interpolates = bool(getattr(md.coSimulation, "canInterpolateInputs", False)) and not self.fmi3
         if inputs == "derivatives" and not self.interpolates:
             raise FmuError(
@@ -233,11 +237,10 @@ class Unit:
             ) from None
         self.fmi.started(s.variable, s.value)
 
-    def _log2(self, env, instance, status, category, message):
+    def _log2(self, env, instance, status, category, message):  # fmpy's logger of FMI 2.0 (3.0: _log3)
         self._logged(status, message)
 
-    def _log3(self, env, status, category, message):
-        self._logged(status, message)
+    _log3 = lambda self, env, status, category, message: self._logged(status, message)  # noqa: E731
 
     def _logged(self, status, message):
         text = message.decode(errors="replace") if message else ""
@@ -257,17 +260,13 @@ class Unit:
         fmi, self.fmu, self.fmi = getattr(self, "fmi", None), None, None
         release = pythonfmu.take(self)
         if fmi is not None and not self.failed:
-            try:
+            with contextlib.suppress(Exception):
                 fmi.terminate()
-            except Exception:
-                pass
         if release is not None:
             release()  # while the library is loaded: fmpy's dlclose may unload it
         if fmi is not None and self.failed < 4:
-            try:
+            with contextlib.suppress(Exception):
                 fmi.free_instance()
-            except Exception:
-                pass
         guard.unregister(self)
         self._unpacked.cleanup()
 

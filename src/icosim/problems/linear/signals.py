@@ -187,7 +187,9 @@ class SignalLinearCosimulation(CosimulationProblem):
         u1 = coef.sum(axis=-2)  # the polynomial at tau = 1: the inputs the outputs are read with
         return end, end @ unit.C.T + u1 @ unit.D.T
 
-    def predict(self, i: int, state: Any, history: Any, *, final: bool = False) -> Any:
+    def predict(self, i: int, state: Any, history: Any, *, final: bool = False, e_new: Any = None) -> Any:
+        if e_new is not None:  # fed by a connection's new sample: the interpolation polynomial through it
+            return self.correct(i, state, history, e_new)
         return self._step(i, state, history[..., : self.k + 1, :], self.C_pred)
 
     def correct(self, i: int, state: Any, history: Any, e: Any) -> Any:
