@@ -105,6 +105,7 @@ FLOORS = (
             "icosim.studies.fmi",
             "icosim.studies.chains",
             "icosim.studies.signals",
+            "icosim.studies.peers",
         ),
     ),  # fmt: skip
     ("claims", ("icosim.claims",)),
