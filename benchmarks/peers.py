@@ -41,38 +41,23 @@ import traceback
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "tests" / "problems" / "fmu")]
 
 from test_drives import exact  # noqa: E402
-from test_drives_outside import BAUMGARTE, om_scene  # noqa: E402
+from test_drives_outside import BAUMGARTE  # noqa: E402
 from test_peers import OMSIMULATOR_CS, OMSIMULATOR_ME  # noqa: E402
 from toolchains import OUTSIDE  # noqa: E402
 
 from icosim.studies.peers import runners as P  # noqa: E402
 from icosim.studies.peers.masters import available, installed  # noqa: E402
+from icosim.studies.peers.timing import measure  # noqa: E402
 
 T_TRUCK, T_DMO = 1.0, 10.0
 UNIT_STEP = 1e-5  # the quarter truck's units' internal step in the file
 LEVELS = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7]
 TRUCK, OM = OUTSIDE / "osp-quarter-truck", OUTSIDE / "omsimulator"
-
-
-def measure(run, t_end, repeat, budget, H=None):
-    """(outcome of the last run, the minimum wall time, the number of timed runs) after a warm-up over a tenth
-    (rounded up to whole macro steps of ``H``)."""
-    with P.quiet():
-        run(t_end / 10 if H is None else math.ceil(t_end / 10 / H - 1e-9) * H)
-        walls, outcome = [], None
-        for _ in range(repeat):
-            clock = time.perf_counter()
-            outcome = run(t_end)
-            walls.append(time.perf_counter() - clock)
-            if sum(walls) > budget:
-                break
-    return outcome, min(walls), len(walls)
 
 
 def row(system, master, setting, units="", group=None):
@@ -216,11 +201,8 @@ def dmo_error(o):
 
 
 def icosim_dmo(tmp: Path, k: int, H: float, t_end: float, tolerance: float, coupling: dict) -> dict:
-    path = om_scene(tmp, "baumgarte", k, H, t_end, BAUMGARTE, tolerance=tolerance)
-    data = yaml.safe_load(path.read_text())
-    data["subsystems"]["system2"]["record"] = ["mass2.s"]
-    data["coupling"] |= coupling
-    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    path = P.dmo_scene(tmp, "baumgarte", k, H, t_end, BAUMGARTE, unit_dir=OM, tolerance=tolerance,
+                       record=("mass2.s",), coupling=coupling)  # fmt: skip
     out = P.icosim_run(path)
     return out | {"x1": out["x"], "x2": out.get("system2.mass2.s", math.nan)}
 

@@ -30,7 +30,7 @@ from ...problems.fmu.run import run_dataset_data, run_scene
 
 __all__ = [
     "quiet", "truck_osp", "libcosim", "libcosim_truck", "ecos_truck", "truck_scene", "icosim_run", "dmo_osp",
-    "fixed_step_osp", "libcosim_dmo", "dmo_ssp", "fmpy_dmo", "ecos_dmo", "TRUCK_UNITS", "TRUCK_BOND",
+    "fixed_step_osp", "libcosim_dmo", "dmo_scene", "dmo_ssp", "fmpy_dmo", "ecos_dmo", "TRUCK_UNITS", "TRUCK_BOND",
     "DMO_CONNECTIONS", "DMO_UNITS", "DMO_READ",
 ]  # fmt: skip
 
@@ -235,6 +235,42 @@ DMO_CONNECTIONS = [("system2.F", "system1.F"), ("system1.x1", "system2.x1"), ("s
 DMO_UNITS = {"system1": "DualMassOscillator.System1.fmu", "system2": "DualMassOscillator.System2.fmu"}
 #: What is read at the end: x1 (System1's output) and x2 (System2's local mass2.s).
 DMO_READ = {"x1": ("system1", "x1"), "x2": ("system2", "mass2.s")}
+
+
+def dmo_scene(
+    tmp_path: Path,
+    method: str,
+    k: int,
+    H: float,
+    t_end: float,
+    params: dict,
+    *,
+    unit_dir: Path,
+    tolerance: float | None = None,
+    record: tuple = (),
+    coupling: dict | None = None,
+) -> Path:
+    """icosim's joint scene of the DualMassOscillator: System1 and System2 as Model Exchange (the integrator's
+    ``tolerance`` where given), fd, System1 force-driven by ``F``, System2 a drive through x1, v1, a1 (its ``F``
+    the force on mass 1: ``force_sign`` 1); System2's variables ``record`` recorded; ``coupling`` keys over the
+    method's."""
+    me = {"interface": "model-exchange", **({} if tolerance is None else {"tolerance": tolerance})}
+    unit_dir = Path(unit_dir)
+    data = {
+        "subsystems": {
+            "system1": {"fmu": str(unit_dir / DMO_UNITS["system1"]), **me, "position": "x1", "velocity": "v1",
+                        "acceleration": "a1", "force": "F", "force_sign": 1},
+            "system2": {"fmu": str(unit_dir / DMO_UNITS["system2"]), **me, "position_input": "x1",
+                        "velocity_input": "v1", "acceleration_input": "a1", "reaction_force": "F", "force_sign": 1,
+                        **({"record": list(record)} if record else {})},
+        },
+        "coupling": {"method": method, "decomposition": "fd", "k": k, "H": H, "perturbation": 1.0, **params,
+                     **(coupling or {})},
+        "t_end": t_end,
+    }  # fmt: skip
+    path = tmp_path / f"dual_mass_{method}_{k}_{H:g}.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
 
 
 def dmo_osp(folder: Path, step: float, *, unit_dir: Path) -> Path:
