@@ -70,6 +70,12 @@ def series_label(master: str, series: dict) -> str:
     return label + f", {series.get('sensitivities', 'each-step')} sensitivities"
 
 
+def _interface(system: str, master: str) -> str:
+    """The units' interface a master runs: icosim the DualMassOscillator's Model Exchange (it cannot roll back
+    their co-simulation step), every other run the co-simulation units."""
+    return "model exchange" if (system, master) == ("dual_mass", "icosim") else "co-simulation"
+
+
 def _series_runs(system: str, n: int, series: dict) -> list[dict]:
     where = f"peers.systems.{system}.series[{n}]"
     master = series.get("master")
@@ -101,13 +107,15 @@ def _series_runs(system: str, n: int, series: dict) -> list[dict]:
         name = f"tolerance {value:g}" if ecco else f"{'H' if master == 'icosim' else 'h'} = {value:g}"
         step = float(series["step"]) if ecco else float(value)
         runs.append({"master": master, "series": label, "setting": f"{label}, {name}", "step": step,
-                     "tolerance": float(value) if ecco else float("nan"), "spec": dict(series)})  # fmt: skip
+                     "tolerance": float(value) if ecco else float("nan"), "interface": _interface(system, master),
+                     "spec": dict(series)})  # fmt: skip
     return runs
 
 
 def system_runs(cfg: dict, system: str) -> list[dict]:
     """The runs of ``system`` in the configured order: ``master``, ``series`` (its label), ``setting`` (the
-    run's label), ``step`` (the macro step, ECCO's initial one), ``tolerance`` (ECCO's, else NaN), ``spec``."""
+    run's label), ``step`` (the macro step, ECCO's initial one), ``tolerance`` (ECCO's, else NaN), ``interface``
+    (of the units it runs), ``spec``."""
     if system not in SYSTEMS:
         raise SceneError(f"peers.systems: {system!r}; allowed: {', '.join(SYSTEMS)}")
     runs = [r for n, s in enumerate(cfg["systems"][system]["series"]) for r in _series_runs(system, n, s)]

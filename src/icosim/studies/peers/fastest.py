@@ -14,7 +14,7 @@ __all__ = ["runs", "fastest", "not_won", "cost", "series_of", "order_of", "PEERS
 
 #: The masters beside icosim, in the order the study shows them.
 PEERS = ("libcosim", "Ecos", "FMPy")
-_TEXT = ("master", "series", "setting", "status")
+_TEXT = ("master", "series", "setting", "status", "interface")
 
 
 def runs(ds) -> list[dict]:

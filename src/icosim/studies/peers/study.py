@@ -167,7 +167,7 @@ def _dataset(cfg, system, rows, at, ref, info) -> DatasetDict:
         return np.array([float(r.get(key, default)) for r in rows], dtype=float)
 
     data = {key: ("run", np.array([str(r[key]) for r in rows], dtype=str)) for key in
-            ("master", "series", "setting", "status")}  # fmt: skip
+            ("master", "series", "setting", "status", "interface")}  # fmt: skip
     data |= {
         "step": ("run", col("step"), {"units": "s", "long_name": "macro step (ECCO: its initial one)"}),
         "tolerance": ("run", col("tolerance"), {"long_name": "ECCO's relative and absolute tolerance"}),
