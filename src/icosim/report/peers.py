@@ -69,6 +69,20 @@ def fastest_rows(ds) -> list:
     return rows
 
 
+def _cause(q: dict, interface: str) -> str:
+    """Which of icosim's cost ratios to the peer's (:func:`~icosim.studies.peers.fastest.not_won`) make it slower."""
+    do_ratio = q["macro_steps"] * q["do_steps_per_macro_step"]
+    parts = []
+    if q["macro_steps"] >= 1:
+        parts.append("icosim takes as many macro steps or more")
+    elif do_ratio > 1:
+        parts.append("its doSteps per macro step outweigh its fewer macro steps")
+    if q["wall_per_do_step"] > 1:
+        own = ", integrating the Model Exchange units included" if interface == "model exchange" else ""
+        parts.append(f"each of its doSteps costs more (the master's own work per doStep{own})")
+    return " and ".join(parts) or "the checks' probing doSteps and the start (no step count explains it)"
+
+
 def not_won_items(ds) -> list[str]:
     """Where icosim does not win (:func:`~icosim.studies.peers.fastest.not_won`), each with the two runs' cost:
     macro steps, doSteps per macro step, time per doStep."""
@@ -86,17 +100,12 @@ def not_won_items(ds) -> list[str]:
                f"{_ratio(q['do_steps_per_macro_step'])} times its doSteps per macro step, "
                f"{_ratio(do_ratio)} times its doSteps in all, at {_ratio(q['wall_per_do_step'])} times its time per "
                "doStep")  # fmt: skip
-        dominant = (
-            "its doSteps per macro step"
-            if do_ratio > 1
-            else "its time per doStep (the master's own work"
-            + (", which includes integrating the Model Exchange units)" if ic["interface"] == "model exchange" else ")")
-        )
+        verdict = _cause(q, ic["interface"])
         items.append(
             f"error ≤ {w['level']:.0e}: {peer} is {_ratio(w['ratio'])} times faster than icosim ({_setting(ic)}: "
             f"{ic['wall']:.3f} s, {c['macro_steps']:.0f} macro steps of {c['do_steps_per_macro_step']:.3g} doSteps, "
             f"{_us(c['wall_per_do_step'])} per doStep, and {c['check_steps']:.0f} probing doSteps of its checks). "
-            f"Measured cause: {why}; what outweighs icosim's fewer macro steps is {dominant}."
+            f"Measured cause: {why}: {verdict}."
         )  # fmt: skip
     return items
 

@@ -62,7 +62,8 @@ def check_agree(datasets, *, system: str, masters: list, value: float):
     holds, parts = [], []
     ends = sorted({n[4:] for r in rows for n in r if n.startswith("end_")})
     for step in sorted(set(a) & set(b)):
-        worst = max(abs(a[step][f"end_{q}"] - b[step][f"end_{q}"]) / a[step][f"error_{q}"] for q in ends)
+        error = a[step]["error"]  # the system's measure of the first master's error there
+        worst = max(abs(a[step][f"end_{q}"] - b[step][f"end_{q}"]) for q in ends) / error if error > 0 else math.nan
         ok = bool(worst < value) if math.isfinite(worst) else None
         parts.append(f"h = {step:g} s: largest difference / error {worst:.3g}")
         holds.append(ok)

@@ -33,7 +33,7 @@ from .config import CANNOT_RUN, SYSTEMS, system_runs, unit_dir
 from .masters import available, installed
 from .timing import measure
 
-__all__ = ["system_data", "truck_reference", "QUANTITIES", "MEASURES"]
+__all__ = ["system_data", "system_dataset", "truck_reference", "QUANTITIES", "MEASURES"]
 
 #: System -> the end values compared with the reference.
 QUANTITIES = {"quarter_truck": ("x", "v"), "dual_mass": ("x1", "x2")}
@@ -148,16 +148,20 @@ def system_data(cfg: dict, system: str, *, root=".") -> DatasetDict:
             else:
                 out = _measured(*_runner(system, n, run, udir, scfg, Path(tmp)), t_end, cfg)
             rows.append(run | out)
-    at = {}
     for r in rows:
         if r["status"] == "completed" and ref is not None:
-            at[id(r)] = _reference_at(system, ref, float(r["t"]), t_end)
+            r["reference"] = _reference_at(system, ref, float(r["t"]), t_end)
     info |= {"cpu_seconds": time.process_time() - started, "load_start": list(load), "load_end": list(os.getloadavg()),
              "cpus": os.cpu_count() or 0, "python": platform.python_version()}  # fmt: skip
-    return _dataset(cfg, system, rows, at, ref, info)
+    return system_dataset(cfg, system, rows, ref, info)
 
 
-def _dataset(cfg, system, rows, at, ref, info) -> DatasetDict:
+def system_dataset(cfg: dict, system: str, rows: list, ref, info: dict) -> DatasetDict:
+    """The dataset of one system from its runs: each row the configured run (:func:`~.config.system_runs`) with
+    ``status`` and, where it completed, ``t``, the end values of :data:`QUANTITIES`, ``reference`` (their reference
+    at ``t``), ``wall``, ``timed_runs``, ``do_steps``, ``macro_steps``, ``check_steps``; ``ref`` the quarter
+    truck's reference (:func:`truck_reference`) or None; ``info`` attributes (``cpu_seconds``, ``load_start``,
+    ``load_end``, ``reference``, ``version_<master>``, ...).  The errors are computed here, from the end values."""
     from ...io.netcdf import provenance_attrs
 
     nan = float("nan")
@@ -179,7 +183,7 @@ def _dataset(cfg, system, rows, at, ref, info) -> DatasetDict:
         "check_steps": ("run", col("check_steps", 0.0), {"long_name": "icosim's checks' probing doSteps"}),
     }
     for name in q:
-        end, refs = col(name), np.array([at[id(r)][name] if id(r) in at else nan for r in rows])
+        end, refs = col(name), np.array([r["reference"][name] if "reference" in r else nan for r in rows])
         data[f"end_{name}"] = ("run", end, {"long_name": f"{name} at the end of the run"})
         data[f"reference_{name}"] = ("run", refs, {"long_name": f"the reference's {name} at the run's end"})
         data[f"error_{name}"] = ("run", np.abs(end - refs))
