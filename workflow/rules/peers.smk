@@ -20,18 +20,17 @@ PEERS_CLAIMS = "results/peers/claims.json"
 PEERS_SECTION = "results/report/peers.html"
 
 
-def peers_units(wildcards):
-    """The system's unit files where they are (else the job names what is missing)."""
-    folder = peers_unit_dir(PEERS["systems"][wildcards.system], workflow.basedir)
-    return [str(folder / name) for name in PEERS_KNOWN[wildcards.system][1] if (folder / name).is_file()]
-
-
 rule peers_system:
     """Every run of one system: error against the reference, minimum wall time, doSteps, status.  Two threads:
     on the two-core machines it is measured on, no other job's work is in its wall times (Snakemake lowers them
     to --cores where fewer are given)."""
     input:
-        units=peers_units,
+        # the system's unit files where they are (else the job names what is missing)
+        units=lambda w: [
+            str(peers_unit_dir(PEERS["systems"][w.system], workflow.basedir) / name)
+            for name in PEERS_KNOWN[w.system][1]
+            if (peers_unit_dir(PEERS["systems"][w.system], workflow.basedir) / name).is_file()
+        ],
     output:
         PEERS_DATASET,
     log:
