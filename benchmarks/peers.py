@@ -51,6 +51,7 @@ from test_peers import OMSIMULATOR_CS, OMSIMULATOR_ME  # noqa: E402
 from toolchains import OUTSIDE  # noqa: E402
 
 from icosim.studies.peers import runners as P  # noqa: E402
+from icosim.studies.peers.fastest import fastest as peer_fastest  # noqa: E402
 from icosim.studies.peers.masters import available, installed  # noqa: E402
 from icosim.studies.peers.timing import measure  # noqa: E402
 
@@ -285,29 +286,18 @@ def fastest(rows: list, levels=LEVELS) -> list:
 
 
 def _fastest(rows, levels, key) -> list:
+    """icosim.studies.peers.fastest.fastest per system and group on the error ``key`` (with x2 beside x1)."""
     table = []
     done = [r for r in rows if r.get("status") == "completed"]
     for system in dict.fromkeys(r["system"] for r in done):
         for units in dict.fromkeys(r["group"] for r in done if r["system"] == system):
             group = [r for r in done if r["system"] == system and r["group"] == units]
-            for level in levels:
-                best = {}
-                for r in group:
-                    if key not in r:
-                        continue
-                    err = max(r[key], r.get("error_x2", 0.0))
-                    if err <= level and (r["master"] not in best or r["wall"] < best[r["master"]]["wall"]):
-                        best[r["master"]] = r
-                if not best:
-                    continue
-                measure = {"error_x": "x1, x2" if "error_x2" in group[0] else "position", "error_v": "velocity"}
-                entry = {"system": system, "units": units, "measure": measure[key], "level": level,
-                         "best": {m: {"setting": r["setting"], "wall": r["wall"], "do_steps": r["do_steps"]}
-                                  for m, r in best.items()}}  # fmt: skip
-                if "icosim" in best:
-                    entry["icosim_over"] = {m: best["icosim"]["wall"] / r["wall"] for m, r in best.items()
-                                            if m != "icosim"}  # fmt: skip
-                table.append(entry)
+            measured = [r | {"error": max(r[key], r.get("error_x2", 0.0))} for r in group if key in r]
+            measure = {"error_x": "x1, x2" if "error_x2" in group[0] else "position", "error_v": "velocity"}
+            for e in peer_fastest(measured, levels):
+                table.append({"system": system, "units": units, "measure": measure[key], "level": e["level"],
+                              "best": {m: {"setting": r["setting"], "wall": r["wall"], "do_steps": r["do_steps"]}
+                                       for m, r in e["best"].items()}, "icosim_over": e["icosim_over"]})  # fmt: skip
     return table
 
 

@@ -88,3 +88,19 @@ def test_a_master_not_installed_is_a_run_with_the_reason(monkeypatch):
     ds = study.system_data(cfg, "dual_mass").to_xarray()
     assert list(ds["status"].values) == [versions[m] for m in ("libcosim", "Ecos", "FMPy")]
     assert np.all(np.isnan(ds["error"].values))
+
+
+def test_the_sections_fastest_runs_and_losses_hold_on_the_measured_runs(datasets):
+    """What the report says per level, checked run by run: each master's named run is its quickest with the error
+    at most the level, and where icosim does not win the peer's run took less time."""
+    from icosim.studies.peers.fastest import fastest, not_won, runs
+
+    for ds in datasets.values():
+        rows = [r for r in runs(ds) if r["status"] == "completed"]
+        table = fastest(rows, ds.attrs["levels"])
+        for e in table:
+            for master, r in e["best"].items():
+                within = [q["wall"] for q in rows if q["master"] == master and q["error"] <= e["level"]]
+                assert r["error"] <= e["level"] and r["wall"] == min(within)
+        for w in not_won(table):
+            assert w["icosim"] is None or w["peer_run"]["wall"] < w["icosim"]["wall"]
