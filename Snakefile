@@ -12,6 +12,7 @@ configfile: "config/pendulum.yaml"
 configfile: "config/fmi.yaml"
 configfile: "config/chains.yaml"
 configfile: "config/signals.yaml"
+configfile: "config/peers.yaml"
 
 
 include: "workflow/rules/common.smk"
@@ -21,6 +22,7 @@ include: "workflow/rules/pendulum.smk"
 include: "workflow/rules/fmi.smk"
 include: "workflow/rules/chains.smk"
 include: "workflow/rules/signals.smk"
+include: "workflow/rules/peers.smk"
 include: "workflow/rules/report.smk"
 
 

@@ -21,7 +21,8 @@ stop time (icosim: ``run_scene`` in the process, the units checked first; their 
 
 A peer that is not installed, or cannot run a system, is a row with its reason.  Then, per system and error level,
 the fastest setting of each master and the ratio of icosim's time to each peer's.  The runners are those of
-tests/problems/fmu/test_peers.py.  A measurement to quote (docs/benchmarks.md), never an assertion:
+icosim.studies.peers.runners (the workflow's peers study runs them on fewer settings).  A measurement to quote
+(docs/benchmarks.md), never an assertion:
 
     python benchmarks/peers.py [--only truck,dmo] [--repeat 3] [--budget 8] [--quick] [--json FILE]
 """
@@ -29,8 +30,6 @@ tests/problems/fmu/test_peers.py.  A measurement to quote (docs/benchmarks.md), 
 from __future__ import annotations
 
 import argparse
-import importlib
-import importlib.metadata
 import json
 import math
 import os
@@ -42,50 +41,24 @@ import traceback
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "tests" / "problems" / "fmu")]
 
-import test_peers as P  # noqa: E402
 from test_drives import exact  # noqa: E402
-from test_drives_outside import BAUMGARTE, om_scene  # noqa: E402
-from toolchains import PEER_PACKAGES  # noqa: E402
+from test_drives_outside import BAUMGARTE  # noqa: E402
+from test_peers import OMSIMULATOR_CS, OMSIMULATOR_ME  # noqa: E402
+from toolchains import OUTSIDE  # noqa: E402
+
+from icosim.studies.peers import runners as P  # noqa: E402
+from icosim.studies.peers.fastest import fastest as peer_fastest  # noqa: E402
+from icosim.studies.peers.masters import available, installed  # noqa: E402
+from icosim.studies.peers.timing import measure  # noqa: E402
 
 T_TRUCK, T_DMO = 1.0, 10.0
 UNIT_STEP = 1e-5  # the quarter truck's units' internal step in the file
 LEVELS = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7]
-
-
-def installed() -> dict:
-    """Master -> its package's version, or the reason it cannot run (an import that fails names why)."""
-    found = {"icosim": importlib.metadata.version("icosim")}
-    for package, master in [("fmpy", "FMPy"), *PEER_PACKAGES.items()]:
-        try:
-            importlib.import_module(package)
-            found[master] = importlib.metadata.version(package)
-        except (ImportError, OSError) as exc:
-            found[master] = f"missing: {package} ({type(exc).__name__}: {exc})"
-    return found
-
-
-def available(versions, master) -> bool:
-    return not str(versions[master]).startswith("missing")
-
-
-def measure(run, t_end, repeat, budget, H=None):
-    """(outcome of the last run, the minimum wall time, the number of timed runs) after a warm-up over a tenth
-    (rounded up to whole macro steps of ``H``)."""
-    with P.quiet():
-        run(t_end / 10 if H is None else math.ceil(t_end / 10 / H - 1e-9) * H)
-        walls, outcome = [], None
-        for _ in range(repeat):
-            clock = time.perf_counter()
-            outcome = run(t_end)
-            walls.append(time.perf_counter() - clock)
-            if sum(walls) > budget:
-                break
-    return outcome, min(walls), len(walls)
+TRUCK, OM = OUTSIDE / "osp-quarter-truck", OUTSIDE / "omsimulator"
 
 
 def row(system, master, setting, units="", group=None):
@@ -122,8 +95,8 @@ def truck_reference(tmp: Path) -> dict:
     """libcosim fixed step, units RK4, h halved thrice, extrapolated; what shows it converges."""
     hs = [4e-5, 2e-5, 1e-5, 5e-6]
     with P.quiet():
-        runs = [P.libcosim_truck(P.truck_osp(tmp / f"ref_{h:g}", h, solver="RK4", time_step=min(h, 1e-5)), T_TRUCK)
-                for h in hs]  # fmt: skip
+        runs = [P.libcosim_truck(P.truck_osp(tmp / f"ref_{h:g}", h, unit_dir=TRUCK, solver="RK4",
+                                             time_step=min(h, 1e-5)), T_TRUCK) for h in hs]  # fmt: skip
     out = {"steps": hs}
     for key in ("x", "v", "a"):
         plain = np.array([r[key] for r in runs])
@@ -171,12 +144,12 @@ def truck_rows(tmp: Path, args, versions) -> tuple[list, dict | None]:
         if available(versions, "libcosim"):
             steps = [1e-3, 1e-4, 1e-5] if quick else [1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5]
             for h in steps if solver == "Euler" else [1e-3, 1e-4, 1e-5]:
-                folder = P.truck_osp(tmp / f"lc_{solver}_{h:g}", h, solver=solver, time_step=UNIT_STEP)
+                folder = P.truck_osp(tmp / f"lc_{solver}_{h:g}", h, unit_dir=TRUCK, solver=solver, time_step=UNIT_STEP)
                 add(row(system, "libcosim", f"fixed step {h:g}", solver),
                     lambda t, f=folder: P.libcosim_truck(f, t))  # fmt: skip
             for tol in [1e-4, 1e-6] if quick else [1e-4, 1e-5, 1e-6, 1e-7]:
-                folder = P.truck_osp(tmp / f"ecco_{solver}_{tol:g}", 1e-4, algorithm="ecco", solver=solver,
-                                     time_step=UNIT_STEP, tolerance=tol)  # fmt: skip
+                folder = P.truck_osp(tmp / f"ecco_{solver}_{tol:g}", 1e-4, unit_dir=TRUCK, algorithm="ecco",
+                                     solver=solver, time_step=UNIT_STEP, tolerance=tol)  # fmt: skip
                 label = "ECCO, the file's" if tol == 1e-6 else f"ECCO, tolerances {tol:g}"
                 add(row(system, "libcosim", label, solver), lambda t, f=folder: P.libcosim_truck(f, t))
         else:
@@ -184,7 +157,8 @@ def truck_rows(tmp: Path, args, versions) -> tuple[list, dict | None]:
         if available(versions, "Ecos"):
             for h in [1e-3, 1e-4, 1e-5]:
                 add(row(system, "Ecos", f"fixed step {h:g}", solver),
-                    lambda t, h=h, s=solver: P.ecos_truck(h, t, solver=s, time_step=UNIT_STEP))  # fmt: skip
+                    lambda t, h=h, s=solver: P.ecos_truck(h, t, unit_dir=TRUCK, solver=s,
+                                                          time_step=UNIT_STEP))  # fmt: skip
         else:
             rows.append(row(system, "Ecos", "all", solver) | {"status": versions["Ecos"]})
         if solver == "Euler":
@@ -204,17 +178,18 @@ def truck_rows(tmp: Path, args, versions) -> tuple[list, dict | None]:
             label += "" if sens == "each-step" else ", first-step sensitivities"
             coupling = {"substeps": n, "sensitivities": sens}
             add(row(system, "icosim", label, solver),
-                lambda t, H=H, k=k, c=coupling, s=solver: P.icosim_run(P.truck_scene(tmp, H, k, t, solver=s, coupling=c)),
-                H)  # fmt: skip
+                lambda t, H=H, k=k, c=coupling, s=solver: P.icosim_run(
+                    P.truck_scene(tmp, H, k, t, unit_dir=TRUCK, solver=s, coupling=c)), H)  # fmt: skip
         if solver == "Euler":
             add(
                 row(system, "icosim", "projection, k = 1, H = 0.001", solver),
-                lambda t: P.icosim_run(P.truck_scene(tmp, 1e-3, 1, t, method="projection")),
+                lambda t: P.icosim_run(P.truck_scene(tmp, 1e-3, 1, t, unit_dir=TRUCK, method="projection")),
             )
             for tol in [1e-3, 1e-5]:
                 control = {"control": {"tolerance": tol, "H_min": 1e-7, "H_max": 1e-2}}
                 add(row(system, "icosim", f"Baumgarte 1, k = 1, controlled, tolerance {tol:g}", solver),
-                    lambda t, c=control: P.icosim_run(P.truck_scene(tmp, 1e-4, 1, t, coupling=c)))  # fmt: skip
+                    lambda t, c=control: P.icosim_run(P.truck_scene(tmp, 1e-4, 1, t, unit_dir=TRUCK,
+                                                                    coupling=c)))  # fmt: skip
             # ECCO's own estimate (the power residual) in icosim, at ECCO's first step and bounds of the file
             for tol in [1e-5, 1e-6]:
                 control = {"substeps": 4, "sensitivities": "first-step",
@@ -222,7 +197,8 @@ def truck_rows(tmp: Path, args, versions) -> tuple[list, dict | None]:
                                        "H_max": 1e-2}}  # fmt: skip
                 add(row(system, "icosim", f"Baumgarte 1, k = 1, power residual, tolerances {tol:g}, 4 sub-steps, "
                         "first-step sensitivities", solver),
-                    lambda t, c=control: P.icosim_run(P.truck_scene(tmp, 1e-4, 1, t, coupling=c)))  # fmt: skip
+                    lambda t, c=control: P.icosim_run(P.truck_scene(tmp, 1e-4, 1, t, unit_dir=TRUCK,
+                                                                    coupling=c)))  # fmt: skip
     return rows, ref
 
 
@@ -235,11 +211,8 @@ def dmo_error(o):
 
 
 def icosim_dmo(tmp: Path, k: int, H: float, t_end: float, tolerance: float, coupling: dict) -> dict:
-    path = om_scene(tmp, "baumgarte", k, H, t_end, BAUMGARTE, tolerance=tolerance)
-    data = yaml.safe_load(path.read_text())
-    data["subsystems"]["system2"]["record"] = ["mass2.s"]
-    data["coupling"] |= coupling
-    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    path = P.dmo_scene(tmp, "baumgarte", k, H, t_end, BAUMGARTE, unit_dir=OM, tolerance=tolerance,
+                       record=("mass2.s",), coupling=coupling)  # fmt: skip
     out = P.icosim_run(path)
     return out | {"x1": out["x"], "x2": out.get("system2.mass2.s", math.nan)}
 
@@ -263,24 +236,24 @@ def dmo_peer_rows(tmp: Path, args, versions, system="DualMassOscillator") -> lis
     steps = [1e-3, 1e-4] if args.quick else [1e-3, 1e-4, 1e-5]
     if available(versions, "libcosim"):
         for h in steps:
-            folder = P.dmo_osp(tmp / f"dmo_lc_{h:g}", h)
+            folder = P.dmo_osp(tmp / f"dmo_lc_{h:g}", h, unit_dir=OM)
             add(row(system, "libcosim", f"fixed step {h:g}", **cs),
                 lambda t, f=folder: P.libcosim_dmo(f, t))  # fmt: skip
     else:
         rows.append(row(system, "libcosim", "all", **cs) | {"status": versions["libcosim"]})
     if available(versions, "Ecos"):
         for h in steps:
-            add(row(system, "Ecos", f"fixed step {h:g}", **cs), lambda t, h=h: P.ecos_dmo(h, t))
+            add(row(system, "Ecos", f"fixed step {h:g}", **cs), lambda t, h=h: P.ecos_dmo(h, t, unit_dir=OM))
     else:
         rows.append(row(system, "Ecos", "all", **cs) | {"status": versions["Ecos"]})
     if available(versions, "FMPy"):
-        ssp = P.dmo_ssp(tmp / "DualMassOscillator.ssp")
+        ssp = P.dmo_ssp(tmp / "DualMassOscillator.ssp", unit_dir=OM)
         for h in steps:
             add(row(system, "FMPy", f"simulate_ssp, fixed step {h:g}", **cs), lambda t, h=h: P.fmpy_dmo(ssp, h, t))
     else:
         rows.append(row(system, "FMPy", "all", **cs) | {"status": versions["FMPy"]})
-    for name, (x1, x2) in [("co-simulation, fixed step 1e-4", P.OMSIMULATOR_CS),
-                           ("model exchange, CVODE, 1e-4", P.OMSIMULATOR_ME)]:  # fmt: skip
+    for name, (x1, x2) in [("co-simulation, fixed step 1e-4", OMSIMULATOR_CS),
+                           ("model exchange, CVODE, 1e-4", OMSIMULATOR_ME)]:  # fmt: skip
         rows.append(row(system, "OMSimulator", f"published: {name}", **cs)
                     | {"status": "published", "t": T_DMO, **dmo_error({"t": T_DMO, "x1": x1, "x2": x2})})  # fmt: skip
     return rows
@@ -322,29 +295,18 @@ def fastest(rows: list, levels=LEVELS) -> list:
 
 
 def _fastest(rows, levels, key) -> list:
+    """icosim.studies.peers.fastest.fastest per system and group on the error ``key`` (with x2 beside x1)."""
     table = []
     done = [r for r in rows if r.get("status") == "completed"]
     for system in dict.fromkeys(r["system"] for r in done):
         for units in dict.fromkeys(r["group"] for r in done if r["system"] == system):
             group = [r for r in done if r["system"] == system and r["group"] == units]
-            for level in levels:
-                best = {}
-                for r in group:
-                    if key not in r:
-                        continue
-                    err = max(r[key], r.get("error_x2", 0.0))
-                    if err <= level and (r["master"] not in best or r["wall"] < best[r["master"]]["wall"]):
-                        best[r["master"]] = r
-                if not best:
-                    continue
-                measure = {"error_x": "x1, x2" if "error_x2" in group[0] else "position", "error_v": "velocity"}
-                entry = {"system": system, "units": units, "measure": measure[key], "level": level,
-                         "best": {m: {"setting": r["setting"], "wall": r["wall"], "do_steps": r["do_steps"]}
-                                  for m, r in best.items()}}  # fmt: skip
-                if "icosim" in best:
-                    entry["icosim_over"] = {m: best["icosim"]["wall"] / r["wall"] for m, r in best.items()
-                                            if m != "icosim"}  # fmt: skip
-                table.append(entry)
+            measured = [r | {"error": max(r[key], r.get("error_x2", 0.0))} for r in group if key in r]
+            measure = {"error_x": "x1, x2" if "error_x2" in group[0] else "position", "error_v": "velocity"}
+            for e in peer_fastest(measured, levels):
+                table.append({"system": system, "units": units, "measure": measure[key], "level": e["level"],
+                              "best": {m: {"setting": r["setting"], "wall": r["wall"], "do_steps": r["do_steps"]}
+                                       for m, r in e["best"].items()}, "icosim_over": e["icosim_over"]})  # fmt: skip
     return table
 
 
@@ -378,8 +340,8 @@ def main(argv=None):
     unknown = set(args.only.split(",")) - {"truck", "dmo"}
     if unknown:
         parser.error(f"--only: unknown {sorted(unknown)}; allowed: truck, dmo")
-    if not (P.OUTSIDE / "README.md").is_file():
-        parser.error(f"the other tools' units are not in {P.OUTSIDE}")
+    if not (OUTSIDE / "README.md").is_file():
+        parser.error(f"the other tools' units are not in {OUTSIDE}")
     versions = installed()
     load = os.getloadavg()
     print(f"masters: {versions}\nload average at the start: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}", flush=True)

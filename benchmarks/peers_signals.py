@@ -110,8 +110,8 @@ def measured(base, run, t_end, args, error, H):
 
 
 def dmo_signal_scene(tmp: Path, k, H, t_end, interface, implicit, tol) -> Path:
-    subs = {"system1": {"fmu": str(P.OM / P.DMO_UNITS["system1"]), "start": {"x1_start": 0.0}},
-            "system2": {"fmu": str(P.OM / P.DMO_UNITS["system2"]), "start": {"x2_start": 0.5},
+    subs = {"system1": {"fmu": str(peers.OM / P.DMO_UNITS["system1"]), "start": {"x1_start": 0.0}},
+            "system2": {"fmu": str(peers.OM / P.DMO_UNITS["system2"]), "start": {"x2_start": 0.5},
                         "record": ["mass2.s"]}}  # fmt: skip
     for sub in subs.values():
         sub["interface"] = interface
@@ -263,8 +263,8 @@ def main(argv=None):
     unknown = set(args.only.split(",")) - set(SYSTEMS)
     if unknown:
         parser.error(f"--only: unknown {sorted(unknown)}; allowed: {', '.join(SYSTEMS)}")
-    if not (P.OUTSIDE / "README.md").is_file():
-        parser.error(f"the other tools' units are not in {P.OUTSIDE}")
+    if not (peers.OUTSIDE / "README.md").is_file():
+        parser.error(f"the other tools' units are not in {peers.OUTSIDE}")
     versions = installed()
     load = os.getloadavg()
     print(f"masters: {versions}\nload average at the start: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}", flush=True)

@@ -15,7 +15,7 @@ timed runs after a warm-up, as benchmarks/peers.py measures), and two errors at 
 
 The systems: **quarter truck** (OSP's Chassis and Wheel, ``../shared/outside/osp-quarter-truck``; neither
 interpolates its inputs; the units' solver RK4 at 1e-5 s so that their own error is below the coupling's, and as
-the file sets them, Euler) joined as tests/problems/fmu/test_peers.truck_scene does, Baumgarte index 1 with
+the file sets them, Euler) joined as icosim.studies.peers.runners.truck_scene does, Baumgarte index 1 with
 ``mu = 10 H``, k = 1; **DualMassOscillator** (fmus/msd with System1's parameters and fmus/move_oscillator,
 System2's equations: tests/problems/fmu/test_drives.write, units that integrate exactly) with ``inputs:
 substeps`` forced, beside the same run with input derivatives (``inputs: derivatives``, the exact input).
@@ -42,10 +42,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "benchmarks"), str(ROOT / "tests"), str(ROOT / "tests" / "problems" / "fmu")]
 
 import peers  # noqa: E402
-import test_peers as P  # noqa: E402
 from test_drives import exact, write  # noqa: E402
 
 from icosim.problems.fmu.run import run_dataset_data, run_scene  # noqa: E402
+from icosim.studies.peers import runners as P  # noqa: E402
 
 SUBSTEPS = [1, 2, 4, 8, 16]
 REFERENCES = [64, 128]
@@ -123,7 +123,9 @@ def truck(tmp: Path, args, versions) -> list:
         for H in args.truck_H:
 
             def make(t, n=16, sens="each-step", H=H, s=solver):
-                return with_coupling(P.truck_scene(tmp, H, 1, t, solver=s), substeps=n, sensitivities=sens)
+                return with_coupling(
+                    P.truck_scene(tmp, H, 1, t, unit_dir=peers.TRUCK, solver=s), substeps=n, sensitivities=sens
+                )
 
             rows += sweep(f"quarter truck, units {solver}, H = {H:g}", make, error, T_TRUCK, args)
     return rows

@@ -65,12 +65,10 @@ def _outside_missing() -> list[str]:
     return missing
 
 
-#: The other masters the peers tests run (the ``peers`` extra) -> the package that brings each.
-PEER_PACKAGES = {"libcosimpy": "libcosim", "ecospy": "Ecos"}
-
-
 def _peers_missing() -> list[str]:
     """The outside units and fmpy, and each peer package, importable (Ecos loads TBB's shared library on import)."""
+    from icosim.studies.peers.masters import PEER_PACKAGES  # the plugin loads before icosim is needed
+
     missing = _outside_missing()
     for package, master in PEER_PACKAGES.items():
         try:

@@ -105,6 +105,7 @@ FLOORS = (
             "icosim.studies.fmi",
             "icosim.studies.chains",
             "icosim.studies.signals",
+            "icosim.studies.peers",
         ),
     ),  # fmt: skip
     ("claims", ("icosim.claims",)),
@@ -121,6 +122,7 @@ DATA_CONTRACTS = {
     "icosim.studies.convergence.curves": "panel and work-precision datasets read back as curves and rankings",
     "icosim.studies.trade.conclusions": "the trade datasets read back as the report's rows and counts",
     "icosim.studies.trade.orders": "the order fit above the pendulum's error floor (conclusions apply it)",
+    "icosim.studies.peers.fastest": "the peers datasets read back as runs, the fastest per error level and its cost",
 }
 STUDIES = FLOORS[4][1]
 

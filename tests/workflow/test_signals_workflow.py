@@ -11,7 +11,9 @@ from helpers import ROOT, copy_workflow, scheduled_jobs, snakemake, validate_con
 
 from icosim.studies.signals.config import study_cases
 
-CI = [f"config/ci/{part}.yaml" for part in ("stability", "convergence", "pendulum", "fmi", "chains", "signals")]
+CI = [
+    f"config/ci/{part}.yaml" for part in ("stability", "convergence", "pendulum", "fmi", "chains", "signals", "peers")
+]
 
 
 def ci_signals_config():

@@ -14,10 +14,11 @@ module                                       check kinds
 :mod:`icosim.studies.fmi.checks`             ``fmi_bound``, ``fmi_orders``
 :mod:`icosim.studies.chains.checks`          ``chain_two_unit``, ``chain_order``, ``chain_trend``, ``chain_placement``
 :mod:`icosim.studies.signals.checks`         ``signals_order``, ``signals_growth``, ``signals_ratio``
+:mod:`icosim.studies.peers.checks`           ``peers_order``, ``peers_agree``
 ===========================================  ==========================================================
 
 >>> sorted(CHECKS)
-['chain_order', 'chain_placement', 'chain_trend', 'chain_two_unit', 'compare', 'convergence_order', 'fmi_bound', 'fmi_orders', 'pendulum_stability', 'pointwise', 'signals_growth', 'signals_order', 'signals_ratio', 'stable_fraction', 'trend']
+['chain_order', 'chain_placement', 'chain_trend', 'chain_two_unit', 'compare', 'convergence_order', 'fmi_bound', 'fmi_orders', 'peers_agree', 'peers_order', 'pendulum_stability', 'pointwise', 'signals_growth', 'signals_order', 'signals_ratio', 'stable_fraction', 'trend']
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from .. import verdicts as _claims
 from ..studies.chains import checks as _chains
 from ..studies.convergence import checks as _convergence
 from ..studies.fmi import checks as _fmi
+from ..studies.peers import checks as _peers
 from ..studies.pendulum import checks as _pendulum
 from ..studies.signals import checks as _signals
 from ..studies.stability import checks as _stability
@@ -35,7 +37,7 @@ __all__ = ["CHECKS", "DEFAULTS", "parse_claims", "load_claims", "evaluate_claim"
 
 #: check kind -> :class:`icosim.verdicts.CheckKind`, for every part.
 CHECKS = {**_stability.CHECKS, **_convergence.CHECKS, **_pendulum.CHECKS, **_fmi.CHECKS, **_chains.CHECKS,
-          **_signals.CHECKS}  # fmt: skip
+          **_signals.CHECKS, **_peers.CHECKS}  # fmt: skip
 
 #: A claim is about the paper's coupling scheme, Jacobi, unless a selector names another.
 DEFAULTS = {"scheme": "jacobi"}

@@ -15,6 +15,7 @@ from helpers import ROOT
 from icosim.engine.methods import engine_method, make_method
 from icosim.engine.run import simulate
 from icosim.order_fit import asymptotic_order
+from icosim.problems.fmu.dual_mass import DualMass
 from icosim.problems.fmu.errors import SceneError
 from icosim.problems.fmu.predict import predict_scene
 from icosim.problems.fmu.problem import FmuCosimulation
@@ -23,7 +24,6 @@ from icosim.problems.fmu.scene import load_scene
 from icosim.problems.linear.exact import MonolithicSolution, consistent_start
 from icosim.problems.linear.model import PhysicalModel
 from icosim.problems.linear.problem import LinearCosimulation
-from icosim.studies.signals.exact import DualMass
 
 pytestmark = pytest.mark.fmu
 

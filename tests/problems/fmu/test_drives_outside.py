@@ -7,6 +7,8 @@ exponential (test_drives.exact); the orders are the built-in linear model's unde
 decomposition (test_drives.builtin_order).
 """
 
+from functools import partial
+
 import numpy as np
 import pytest
 import yaml
@@ -17,29 +19,15 @@ from icosim.order_fit import asymptotic_order
 from icosim.problems.fmu.errors import FmuError
 from icosim.problems.fmu.run import run_scene
 from icosim.problems.fmu.scene import load_scene
+from icosim.studies.peers.runners import dmo_scene
 
 pytestmark = [pytest.mark.outside, pytest.mark.fmu]
 
 UNITS = OUTSIDE / "omsimulator"
 
 
-def om_scene(tmp_path, method, k, H, t_end, params, *, tolerance=None):
-    """System1 and System2 as Model Exchange, fd; System2's F is the force on mass 1 (force_sign 1)."""
-    tol = {} if tolerance is None else {"tolerance": tolerance}
-    me = {"interface": "model-exchange", **tol}
-    data = {
-        "subsystems": {
-            "system1": {"fmu": str(UNITS / "DualMassOscillator.System1.fmu"), **me, "position": "x1",
-                        "velocity": "v1", "acceleration": "a1", "force": "F", "force_sign": 1},
-            "system2": {"fmu": str(UNITS / "DualMassOscillator.System2.fmu"), **me, "position_input": "x1",
-                        "velocity_input": "v1", "acceleration_input": "a1", "reaction_force": "F", "force_sign": 1},
-        },
-        "coupling": {"method": method, "decomposition": "fd", "k": k, "H": H, "perturbation": 1.0, **params},
-        "t_end": t_end,
-    }  # fmt: skip
-    path = tmp_path / f"dual_mass_{method}_{k}_{H:g}.yaml"
-    path.write_text(yaml.safe_dump(data, sort_keys=False))
-    return path
+#: The joint scene of the DualMassOscillator on these units (icosim.studies.peers.runners.dmo_scene).
+om_scene = partial(dmo_scene, unit_dir=UNITS)
 
 
 BAUMGARTE = {"index": 1, "mu": 1e-3}

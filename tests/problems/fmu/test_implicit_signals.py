@@ -29,7 +29,7 @@ import pytest
 import yaml
 from helpers import FMU_CACHE
 from test_drives import AMPLITUDE, MASS, MOVE, exact
-from test_peers import DMO_UNITS, dmo_ssp
+from test_peers import dmo_ssp
 from test_predict_signals import growth
 from test_signal_scene import load
 from test_signals_outside import CONNECTIONS, OM, model_exchange_error
@@ -41,6 +41,7 @@ from icosim.problems.fmu.errors import SceneError
 from icosim.problems.fmu.predict_signals import predict_signal_scene
 from icosim.problems.fmu.scene import load_scene
 from icosim.problems.fmu.signal_scene import run_signal_scene, signal_dataset
+from icosim.studies.peers.runners import DMO_UNITS
 
 
 def dmo_scene(tmp_path, H, t_end, interface="model-exchange", **coupling):

@@ -27,11 +27,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_peers import fixed_step_osp, libcosim, quiet
 from test_quarter_car import CONNECTIONS, OM
 from test_quarter_car import exact as qc_exact
 
 from icosim.order_fit import asymptotic_order
+from icosim.studies.peers.runners import fixed_step_osp, libcosim, quiet
 
 pytestmark = pytest.mark.peers
 

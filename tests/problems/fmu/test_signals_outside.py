@@ -27,17 +27,7 @@ import numpy as np
 import pytest
 import yaml
 from test_drives import AMPLITUDE, C1, C2, K1, K2, M1, exact
-from test_peers import (
-    DMO_UNITS,
-    OMSIMULATOR_CS,
-    TRUCK,
-    dmo_osp,
-    dmo_ssp,
-    libcosim_dmo,
-    libcosim_truck,
-    quiet,
-    truck_osp,
-)
+from test_peers import OMSIMULATOR_CS, TRUCK, dmo_osp, dmo_ssp, truck_osp
 from toolchains import OUTSIDE
 
 from icosim.engine.run import simulate
@@ -47,6 +37,7 @@ from icosim.problems.fmu.exchange import open_fmu_unit
 from icosim.problems.fmu.scene import load_scene
 from icosim.problems.fmu.signal_scene import run_signal_scene
 from icosim.problems.fmu.signals import SignalCosimulation, connections_of
+from icosim.studies.peers.runners import DMO_UNITS, libcosim_dmo, libcosim_truck, quiet
 
 pytestmark = pytest.mark.peers
 

@@ -1,4 +1,4 @@
-"""The DualMassOscillator's exact solution (icosim.studies.signals.exact) against an independent integration of
+"""The DualMassOscillator's exact solution (icosim.problems.fmu.dual_mass) against an independent integration of
 the Modelica equations (ReferenceSystemEq, written out here as two second-order equations), its connected outputs
 against System1's and System2's own equations, and its parameters as the Modelica source and the units' model
 descriptions declare them."""
@@ -8,7 +8,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from toolchains import OUTSIDE
 
-from icosim.studies.signals.exact import DualMass
+from icosim.problems.fmu.dual_mass import DualMass
 
 OM = OUTSIDE / "omsimulator"
 # DualMassOscillator.mo, ReferenceSystemEq: the values as the source writes them

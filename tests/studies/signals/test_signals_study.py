@@ -119,9 +119,9 @@ def direct_error(k, H, t_end):
     """The units opened and coupled without the study or a scene (icosim's problem and run loop), from the exact
     coupling history: the largest displacement error of either mass at t_end (m)."""
     from icosim.engine.run import simulate
+    from icosim.problems.fmu.dual_mass import DualMass
     from icosim.problems.fmu.exchange import open_fmu_unit
     from icosim.problems.fmu.signals import SignalCosimulation, connections_of
-    from icosim.studies.signals.exact import DualMass
 
     dmo = DualMass()
     names = ["system1", "system2"]

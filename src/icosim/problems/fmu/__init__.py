@@ -26,6 +26,7 @@ module                holds
 :mod:`.initial`       a scene's ``initial_coupling`` against the units' own
 :mod:`.record`        the variables a scene asks to record
 :mod:`.predict`       linear units identified from probing steps, the spectral radius of every scheme
+:mod:`.dual_mass`     OMSimulator's DualMassOscillator: the exact solution of its units' equations
 :mod:`.build`         units built from source (``fmus/``) with fmpy's CMake project, cached
 :mod:`.errors`        what a scene, a unit or a step can fail with
 ====================  ===========================================================================

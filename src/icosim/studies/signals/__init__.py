@@ -5,8 +5,6 @@ growth measured on unstable runs.
 ==========================  ===========================================================
 module                      holds
 ==========================  ===========================================================
-:mod:`.exact`               the oscillator's exact solution, its parameters read from
-                            the units or the Modelica source
 :mod:`.config`              its cases, checked before any job; a case's scene
 :mod:`.study`               one case over H: errors, order, prediction, growth
 :mod:`.checks`              the check kinds of its claims

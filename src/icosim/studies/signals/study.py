@@ -1,6 +1,6 @@
 """One case of the signal-coupling study (:mod:`icosim.studies.signals.config`): OMSimulator's DualMassOscillator
 on its Model Exchange units over a list of ``H``, coupled by its signal connections or by a joint, against the
-exact solution (:mod:`icosim.studies.signals.exact`); and for the connections the spectral radius predicted from
+exact solution (:mod:`icosim.problems.fmu.dual_mass`); and for the connections the spectral radius predicted from
 the identified units at every ``H`` and, at the case's ``growth_H``, the growth per macro step measured on a run.
 A dataset of the workflow's ``signals`` part, read by its claims (:mod:`icosim.studies.signals.checks`), figure
 and report section.
@@ -28,13 +28,13 @@ from ...engine.run import simulate
 from ...errors import ParameterError
 from ...io.dataset import DatasetDict
 from ...order_fit import asymptotic_order
+from ...problems.fmu.dual_mass import DualMass
 from ...problems.fmu.errors import SceneError
 from ...problems.fmu.problem import FmuCosimulation
 from ...problems.fmu.run import open_units
 from ...problems.fmu.scene import load_scene
 from ...problems.fmu.signal_scene import run_signal_scene
 from .config import CONNECTIONS, case_label, scene_data, unit_paths, write_scene
-from .exact import DualMass
 
 __all__ = ["case_data", "case_dataset", "measured_growth", "signal_errors", "joint_errors", "Prediction"]
 
