@@ -33,7 +33,6 @@ from dataclasses import dataclass, field, replace
 from fractions import Fraction
 
 import numpy as np
-import scipy.linalg
 
 from ...engine import layout
 from ...engine.decompositions import DECOMPOSITIONS, get_decomposition
@@ -254,6 +253,8 @@ class Chain:
     # -- the monolithic system -----------------------------------------------------------------------
     def full_matrices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(M, K, D)`` of all masses, segment after segment (SI)."""
+        import scipy.linalg  # here: a job that predicts a scene's rho from the chain never needs it
+
         mats = [sg.matrices() for sg in self.segments_]
         return tuple(scipy.linalg.block_diag(*(m[i] for m in mats)) for i in range(3))
 
@@ -335,6 +336,8 @@ class ChainSolution:
     def state(self, t) -> dict:
         """``x``, ``v``, ``a`` of every mass (``(..., N n)``, dimensionless) and the joint forces ``lam``
         (``(..., M)``) at the times ``t`` (macro steps)."""
+        import scipy.linalg  # here, as in full_matrices
+
         t = np.atleast_1d(np.asarray(t, dtype=float))
         z = np.stack([scipy.linalg.expm(self._A * ti) @ self._z0 for ti in t.ravel()]).reshape(t.shape + (-1,))
         nr = self.P.shape[1]

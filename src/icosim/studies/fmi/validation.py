@@ -298,7 +298,7 @@ def scene_job(scene, *, name: str, builtin: str, cache, run_path, validation_pat
     from ...io.netcdf import write_netcdf
     from ...problems.fmu.guard import CALL_SECONDS, supervised
     from ...problems.fmu.predict import predict_scene
-    from ...problems.fmu.run import open_units, run_dataset, run_scene
+    from ...problems.fmu.run import open_units, run_dataset_data, run_scene
 
     def work():
         # each unit opened once: predicted from its start (left there), then run
@@ -314,16 +314,17 @@ def scene_job(scene, *, name: str, builtin: str, cache, run_path, validation_pat
         finally:
             for unit in opened[0]:
                 unit.close()
-        ds = run_dataset(run, command=command)
+        # the DatasetDict forms: the job writes the same files without importing xarray
+        ds = run_dataset_data(run, command=command)
         write_netcdf(ds, run_path)
-        checked = scene_validation(scene, ds, name=name, builtin=builtin, cache=cache, prediction=prediction)
+        checked = scene_validation_data(scene, ds, name=name, builtin=builtin, cache=cache, prediction=prediction)
         write_netcdf(checked, validation_path)
         logging.info(
             "%s: %s after %d macro steps, %.2f s %s; predicted rho %s (%s), measured growth %s, difference to the "
             "built-in model (%s) %s",
-            name, run.status, len(run.times) - 1, run.wall_time, run.reason, float(checked["predicted_rho"]),
-            checked.attrs["predicted_verdict"], float(checked["measured_growth"]), builtin,
-            float(checked["builtin_difference"]),
+            name, run.status, len(run.times) - 1, run.wall_time, run.reason, float(checked.array("predicted_rho")),
+            checked.attrs["predicted_verdict"], float(checked.array("measured_growth")), builtin,
+            float(checked.array("builtin_difference")),
         )  # fmt: skip
 
     outputs = [Path(run_path), Path(validation_path)]
