@@ -46,6 +46,8 @@ from ...io.dataset import DatasetDict
 from ...io.netcdf import provenance_attrs
 from ...problems.pendulum.model import PendulumParameters
 from ...step_limit import LIMIT_STATUSES, Limit, stability_limit
+from .linear_study import linear_rho, linear_stability
+from .measures import config_label, measured_run
 
 __all__ = [
     "Limit",
@@ -64,8 +66,6 @@ __all__ = [
 
 def measured_predicate(settings: dict, scheme: str, method: str, decomposition: str, k: int, t_end: float):
     """``stable(H)`` of the pendulum: a run over ``t_end`` that neither diverges nor fails."""
-    # the searches import the runs (numba) and the linear model where they run: the merge job needs neither
-    from .measures import measured_run
 
     def stable(H):
         rec = measured_run(settings, scheme, method, decomposition, k, H, t_end, reference=_NO_REFERENCE)
@@ -80,8 +80,6 @@ _NO_REFERENCE = {"method": "DOP853", "rtol": 1e-6, "atol": 1e-6}
 
 def linear_predicate(settings: dict, method: str, decomposition: str, k: int, scheme="jacobi"):
     """``stable(H)`` of the linear test model at the pendulum's points: the verdict is ``stable``."""
-    from .linear_study import linear_stability
-
     params = PendulumParameters(**settings["model"])
     m = make_method(method, **settings["methods"][method])
 
@@ -94,9 +92,6 @@ def linear_predicate(settings: dict, method: str, decomposition: str, k: int, sc
 
 def limits_group(settings, scheme, method, decomposition, ks, *, scan, t_end, resolution, log=None) -> dict:
     """Measured and predicted limits of one group: ``{label: (measured Limit, predicted Limit)}``."""
-    from .linear_study import linear_rho
-    from .measures import config_label
-
     out = {}
     for k in ks:
         label = config_label(scheme, method, decomposition, k)
