@@ -357,7 +357,8 @@ def run_signal_scene(scene: SignalScene, *, progress=None, history=None) -> Sign
 
 
 def _check_saves_state(scene, name, sub, path):
-    """Implicit coupling steps each unit again from ``T_N``: a co-simulation unit must save and restore its state."""
+    """Implicit coupling steps each unit again from ``T_N``, a controlled run retries a rejected step from there: a
+    co-simulation unit must save and restore its state."""
     from .description import read_description
 
     interface = sub.get("interface", "co-simulation")
@@ -368,8 +369,10 @@ def _check_saves_state(scene, name, sub, path):
         return
     flag = "canGetAndSetFMUState" if md.fmiVersion.startswith("3.") else "canGetAndSetFMUstate"
     fix = "interface: model-exchange (the unit has it), or" if md.modelExchange is not None else ""
-    _fail(scene.path, f"subsystems.{name}", f"{path.name} declares {flag}=false, and coupling.implicit: true steps "
-          f"each unit again from T_N, restoring its state; use {fix} implicit: false")  # fmt: skip
+    why, off = (("coupling.implicit: true steps each unit again from T_N", "implicit: false") if scene.coupling["implicit"]
+                else ("coupling.control retries a rejected step from T_N", "fixed steps (no control)"))  # fmt: skip
+    _fail(scene.path, f"subsystems.{name}", f"{path.name} declares {flag}=false, and {why}, restoring its state; use "
+          f"{fix} {off}")  # fmt: skip
 
 
 def _history_rows(scene, problem, history) -> np.ndarray:
