@@ -408,7 +408,6 @@ def signal_dataset(run: SignalRun, *, command: str = ""):
     variable, the scene and the units' counters as attributes."""
     from ...io.dataset import DatasetDict
     from ...io.netcdf import provenance_attrs
-
     from .controlled import controlled_entries
 
     data = {key: (("time",), np.asarray(values, dtype=float)) for key, values in run.series.items()}
