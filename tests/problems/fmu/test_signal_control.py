@@ -34,6 +34,8 @@ from test_implicit_signals import dmo_scene, positions
 from test_quarter_car import OM as QC_OM
 from test_quarter_car import ROAD_HEIGHT, ROAD_JUMP, reference
 
+from icosim.cli import main
+from icosim.io.netcdf import open_dataset
 from icosim.problems.fmu.errors import SceneError
 from icosim.problems.fmu.scene import load_scene
 from icosim.problems.fmu.signal_scene import run_signal_scene, signal_dataset
@@ -144,3 +146,14 @@ def test_a_unit_that_cannot_save_its_state_is_refused_naming_the_control(tmp_pat
         run_signal_scene(load_scene(dmo_scene(tmp_path, 1e-3, 1.0, interface=None, control=control(1e-6))))
     for says in ("subsystems.system1", "canGetAndSetFMUstate=false", "coupling.control", "fixed steps"):
         assert says in str(refused.value), str(refused.value)
+
+
+def test_the_tolerance_option_runs_a_signal_scene_controlled(tmp_path, capsys):
+    """``icosim cosim SCENE --tolerance TOL`` on a scene without a control: the defaults (``H_min = 1e-6 H``,
+    ``H_max = t_end - t_start``), every accepted step's error norm at most 1, the steps counted in the summary."""
+    path, out = dmo_scene(tmp_path, 1e-3, 0.5, k=1), tmp_path / "run.nc"
+    assert main(["cosim", str(path), "--tolerance", "1e-5", "--out", str(out)]) == 0
+    assert "accepted_steps" in capsys.readouterr().out
+    ds = open_dataset(out)
+    assert ds.attrs["control_status"] == "stable" and np.all(ds["control_error"].values[1:] <= 1.0)
+    assert ds["time"].values[-1] == pytest.approx(0.5, abs=1e-12)

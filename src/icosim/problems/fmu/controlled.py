@@ -170,8 +170,12 @@ def at_tolerance(scene, tolerance):
             f"{DEFAULT_ESTIMATE} estimate"
         )
     control["tolerance"] = float(tolerance)
+    data = {**scene.data, "coupling": {**coupling, "control": control}}
+    if getattr(scene, "connections", None) is not None:  # a scene of signal connections keeps its checked coupling
+        check_signal_control(scene.path, {**scene.coupling, "control": control})
+        return dataclasses.replace(scene, data=data, coupling={**scene.coupling, "control": control})
     check_control(scene.path, {**scene.coupling, "control": control}, scene.graph().joints, scene.names)
-    return dataclasses.replace(scene, data={**scene.data, "coupling": {**coupling, "control": control}})
+    return dataclasses.replace(scene, data=data)
 
 
 def power_bonds(path, joints, names) -> list:
