@@ -35,10 +35,12 @@ from test_quarter_car import OM as QC_OM
 from test_quarter_car import ROAD_HEIGHT, ROAD_JUMP, reference
 
 from icosim.cli import main
+from icosim.engine.macrostep import macro_step
 from icosim.io.netcdf import open_dataset
 from icosim.problems.fmu.errors import SceneError
 from icosim.problems.fmu.scene import load_scene
-from icosim.problems.fmu.signal_scene import run_signal_scene, signal_dataset
+from icosim.problems.fmu.signal_scene import open_signal_unit, run_signal_scene, signal_dataset, signal_wiring
+from icosim.problems.fmu.signals import SignalCosimulation
 
 pytestmark = pytest.mark.outside
 
@@ -157,3 +159,30 @@ def test_the_tolerance_option_runs_a_signal_scene_controlled(tmp_path, capsys):
     ds = open_dataset(out)
     assert ds.attrs["control_status"] == "stable" and np.all(ds["control_error"].values[1:] <= 1.0)
     assert ds["time"].values[-1] == pytest.approx(0.5, abs=1e-12)
+
+
+@pytest.mark.parametrize("implicit", [False, True])
+def test_a_restored_checkpoint_repeats_the_step_bit_for_bit(tmp_path, implicit):
+    """The problem contract (docs/engine.md): from a restored checkpoint the next macro step, of another size first,
+    gives what it gave (every unit's state at T_N set again, the step's size and the time with it)."""
+    scene = load_scene(dmo_scene(tmp_path, 1e-3, 1.0, k=1, implicit=implicit, control=control(1e-4)))
+    cons, inputs, outputs, _ = signal_wiring(scene)
+    units = [open_signal_unit(scene, name, inputs[i], outputs[i]) for i, name in enumerate(scene.names)]
+    try:
+        problem = SignalCosimulation(units, inputs, outputs, cons, 1, 1e-3, implicit=implicit)
+        newton = {"iterations": 10, "tol": 1e-10} if implicit else {}
+        state, history, _ = macro_step(problem, None, problem.initial_state(), problem.initial_history(), **newton)
+        kept = problem.checkpoint()
+        first = macro_step(problem, None, state, history, **newton)
+        problem.restore(kept)
+        problem.set_macro_step(2e-3, [1e-3])
+        other = macro_step(problem, None, state, history, **newton)
+        assert problem.time == pytest.approx(3e-3, abs=1e-15)
+        problem.restore(kept)
+        assert problem.time == pytest.approx(1e-3, abs=1e-15) and problem.H == 1e-3
+        again = macro_step(problem, None, state, history, **newton)
+    finally:
+        for unit in units:
+            unit.close()
+    assert all(np.array_equal(a, b) for a, b in zip(first, again))
+    assert not np.array_equal(first[1], other[1])
