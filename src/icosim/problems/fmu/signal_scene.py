@@ -21,7 +21,9 @@ default 1e-10); then every unit must save and restore its state (Model Exchange,
 ``canGetAndSetFMUstate``), checked before any unit opens.  An algebraic loop is solved at each communication point
 by Newton's method without a step (:mod:`icosim.problems.fmu.loops`; its ``loop_tolerance``, default 1e-10, and
 ``loop_iterations``, default 20), or refused naming the loop; coupled implicitly, at ``t0`` only (the corrector
-closes it at every ``T_N+1``).  Bad input is refused naming the key and what is allowed, before any unit is opened.
+closes it at every ``T_N+1``).  ``control`` sizes the macro steps as on a scene of joints (``H`` the first step's;
+:mod:`icosim.problems.fmu.controlled`, docs/signals.md).  Bad input is refused naming the key and what is allowed,
+before any unit is opened.
 """
 
 from __future__ import annotations
