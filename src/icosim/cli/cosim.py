@@ -10,8 +10,8 @@ crashes the process stops the run the same way, naming the unit, the call and th
 written then.  A run that diverges ends with status 1 and says at which step; its dataset says so too.  The
 dataset (NetCDF, written atomically) holds ``position`` and ``velocity`` per subsystem and time, ``multiplier``
 and ``gap`` per time, the scene as JSON and each unit's provenance and counters (docs/fmi.md).
-``--tolerance TOL`` runs a scene of joints with controlled macro steps at ``TOL``
-(:func:`icosim.problems.fmu.controlled.at_tolerance`); a value that is no positive number, a scene of signal
+``--tolerance TOL`` runs a scene of joints or of signal connections with controlled macro steps at ``TOL``
+(:func:`icosim.problems.fmu.controlled.at_tolerance`); a value that is no positive number, a scene of joints beside
 connections and a control of another estimate are refused before any unit is opened.
 """
 
@@ -110,10 +110,10 @@ def run(args, parser) -> int:
         return _error(f"argument {flag}: {args.scene} joins units by joints beside connections, which {flag} does not "
                       f"serve yet (a scene of joints or one of connections); run it without {flag}")  # fmt: skip
     if args.tolerance is not None:
-        if signals:
+        if both:
             return _error(
-                f"argument --tolerance: {args.scene} couples its units by signal connections, which run at fixed "
-                "steps; a tolerance applies to a scene of joints (or run it without --tolerance)"
+                f"argument --tolerance: {args.scene} joins units by joints beside connections, which run at fixed "
+                "steps; a tolerance applies to a scene of joints or one of connections (or run it without --tolerance)"
             )
         from ..problems.fmu.controlled import at_tolerance
 
@@ -181,6 +181,8 @@ def _run(scene, args, out, signals=False) -> int:
         summary = {"status": result.status, "reason": result.reason, "t": result.times[-1], "out": str(out), **last}
         if result.loop:  # an algebraic loop: the root its first solve found, and from where
             summary["loop"] = result.loop["loop_message"]
+        if result.steps is not None:  # a controlled run: its steps
+            summary |= {"accepted_steps": len(result.steps.H), "rejected_steps": int(result.steps.n_rejected)}
         text = "\n".join(f"{k}: {v}" for k, v in summary.items())
     else:
         from ..problems.fmu.run import run_summary

@@ -10,8 +10,9 @@
   for are stable (tolerances 1e-6 to 1e-8); at looser tolerances its steps are those of the macro step's stability
   limit (found by plain time stepping), whatever the tolerance, and the error does not follow it;
 * ``--tolerance`` sets the tolerance of a scene's own control and keeps its other keys;
-* a tolerance that is no positive number, a scene of signal connections and a control of the power residual are
-  refused with status 2, naming the argument, before any unit is opened.
+* a tolerance that is no positive number and a control of the power residual are
+  refused with status 2, naming the argument, before any unit is opened (a scene of signal connections takes it:
+  test_signal_control).
 """
 
 import types
@@ -180,18 +181,6 @@ def test_a_tolerance_that_is_no_positive_number_is_refused(capsys, tmp_path, no_
     err = capsys.readouterr().err
     assert "icosim cosim: error: argument --tolerance: expected a" in err and repr(value) in err
     assert not (tmp_path / "run.nc").exists()
-
-
-def test_a_scene_of_signal_connections_is_refused(capsys, tmp_path, no_unit_opens):
-    path = tmp_path / "signals.yaml"
-    path.write_text(
-        "subsystems: {a: {fmu: a.fmu}, b: {fmu: b.fmu}}\n"
-        "connections: [{from: a.y, to: b.u}, {from: b.y, to: a.u}]\ncoupling: {H: 0.1}\nt_end: 1.0\n"
-    )
-    assert main(["cosim", str(path), "--tolerance", "1e-6", "--out", str(tmp_path / "run.nc")]) == 2
-    err = capsys.readouterr().err
-    assert err.startswith("icosim cosim: error: argument --tolerance: ") and "signal connections" in err
-    assert "a tolerance applies to a scene of joints" in err
 
 
 def test_a_control_of_the_power_residual_is_refused(capsys, tmp_path, no_unit_opens):

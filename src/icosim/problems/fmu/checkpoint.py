@@ -7,7 +7,10 @@ states at ``T_N`` themselves -- no FMI call, no copy -- with the step count, the
 and the state returned at ``T_N``; :meth:`~Checkpoints.restore` makes them the start again.  The problem keeps
 only its latest checkpoint: taking one frees the states of the one before, and the macro step's end does not free
 a start that the kept checkpoint holds.  While one is kept no unit is told that its step is final (doStep's
-``noSetFMUStatePriorToCurrentPoint``): a restore may follow.
+``noSetFMUStatePriorToCurrentPoint``): a restore may follow.  The units of
+:class:`~icosim.problems.fmu.signals.SignalCosimulation` stand at ``T_N`` between macro steps: its checkpoint
+(:class:`SignalCheckpoints`) saves their states there when it is taken.  Both change their step's size by
+:class:`MacroStepSizes`.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ import numpy as np
 from ...engine.lagrange import variable_step_polynomials
 from ...errors import StepFailure
 
-__all__ = ["Checkpoints", "FmuCheckpoint"]
+__all__ = ["Checkpoints", "FmuCheckpoint", "MacroStepSizes", "SignalCheckpoints"]
 
 
 @dataclass(frozen=True)
@@ -36,10 +39,9 @@ class FmuCheckpoint:
     starts: tuple
 
 
-class Checkpoints:
-    """The checkpoint and :meth:`set_macro_step` of :class:`~icosim.problems.fmu.problem.FmuCosimulation` (module
-    docstring), on its ``units``, ``_start``, ``_holds``, ``_ends``, ``_committed``, ``step_index``, ``_clock``,
-    ``_steps`` and ``_kept``."""
+class MacroStepSizes:
+    """:meth:`set_macro_step` of the FMU problems, on their ``step_index``, ``_clock`` (``T_N = T + (N - N') H``),
+    ``_steps`` and ``H``; the conditions' scale follows ``H`` where the problem scales its conditions."""
 
     def set_macro_step(self, H, past_steps=None):
         """Size ``H`` of the next macro step and the sizes ``H_N-1, ..., H_N-k`` of the past ones (newest first;
@@ -54,8 +56,14 @@ class Checkpoints:
         self._clock = (self.time, self.step_index)  # the time from here on: T_N + (N' - N) H
         self._steps, self.H = steps, H
         self.w_pred, self.C_pred, self.C_corr = w_pred, np.asarray(C_pred, dtype=float), np.asarray(C_corr, dtype=float)
-        self.condition_scale = (1.0, H, H**2)
+        if self.condition_scale is not None:
+            self.condition_scale = (1.0, H, H**2)
         self._jacobians.clear()
+
+
+class Checkpoints(MacroStepSizes):
+    """The checkpoint of :class:`~icosim.problems.fmu.problem.FmuCosimulation` (module docstring), on its ``units``,
+    ``_start``, ``_holds``, ``_ends``, ``_committed``, ``step_index``, ``_clock``, ``_steps`` and ``_kept``."""
 
     def checkpoint(self):
         """The problem at ``T_N``, between macro steps (module docstring)."""
@@ -101,3 +109,37 @@ class Checkpoints:
             for i, unit in enumerate(self.units):
                 if kept.starts[i] is not None and kept.starts[i] is not self._start[i]:
                     unit.free(kept.starts[i])
+
+
+class SignalCheckpoints(MacroStepSizes):
+    """The checkpoint of :class:`~icosim.problems.fmu.signals.SignalCosimulation`, whose units stand at ``T_N``
+    between macro steps and hold their states there: a checkpoint saves each unit's state at ``T_N``
+    (``fmi2GetFMUstate``, or a Model Exchange unit's states), :meth:`restore` sets them again.  As the joint
+    problem's, only the latest is kept, and while one is kept no unit is told that its step is final (on its
+    ``units``, ``step_index``, ``_clock``, ``_steps``, ``H`` and ``_kept``)."""
+
+    def checkpoint(self):
+        """The problem at ``T_N``, between macro steps: every unit's state saved."""
+        self._release()
+        self._kept = FmuCheckpoint(self.step_index, self._clock, self._steps, self.H, None,
+                                   tuple(unit.save() for unit in self.units))  # fmt: skip
+        return self._kept
+
+    def restore(self, checkpoint):
+        """Back to ``checkpoint``, the latest one taken: each unit's state at its ``T_N`` set again."""
+        if checkpoint is not self._kept:
+            raise StepFailure("an FMU problem restores only its latest checkpoint (the saved states of an older one "
+                              "are freed)")  # fmt: skip
+        for unit, saved in zip(self.units, checkpoint.starts):
+            unit.restore(saved)
+        steps = checkpoint.steps or (checkpoint.H, (checkpoint.H,) * self.k)
+        if self._steps is not None and steps != self._steps:
+            self.set_macro_step(*steps)
+        self.step_index, self._clock = checkpoint.step_index, checkpoint.clock
+
+    def _release(self):
+        """Free the kept checkpoint's saved states."""
+        kept, self._kept = self._kept, None
+        if kept is not None:
+            for unit, saved in zip(self.units, kept.starts):
+                unit.free(saved)

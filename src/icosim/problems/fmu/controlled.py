@@ -46,9 +46,12 @@ __all__ = [
     "ESTIMATE_KEYS",
     "control_schema",
     "check_control",
+    "check_signal_control",
+    "held_history",
     "control_settings",
     "power_residuals",
     "scene_steps",
+    "controlled_steps",
     "controlled_entries",
     "start_history",
     "at_tolerance",
@@ -167,8 +170,12 @@ def at_tolerance(scene, tolerance):
             f"{DEFAULT_ESTIMATE} estimate"
         )
     control["tolerance"] = float(tolerance)
+    data = {**scene.data, "coupling": {**coupling, "control": control}}
+    if getattr(scene, "connections", None) is not None:  # a scene of signal connections keeps its checked coupling
+        check_signal_control(scene.path, {**scene.coupling, "control": control})
+        return dataclasses.replace(scene, data=data, coupling={**scene.coupling, "control": control})
     check_control(scene.path, {**scene.coupling, "control": control}, scene.graph().joints, scene.names)
-    return dataclasses.replace(scene, data={**scene.data, "coupling": {**coupling, "control": control}})
+    return dataclasses.replace(scene, data=data)
 
 
 def power_bonds(path, joints, names) -> list:
@@ -202,6 +209,31 @@ def check_control(path, coupling, joints=None, names=()) -> None:
             power_bonds(path, joints, names)
 
 
+def check_signal_control(path, coupling) -> None:
+    """A scene of signal connections' ``coupling.control``: the predictor-corrector estimate only (the power residual
+    needs joints, whose two sides exchange a force and a velocity)."""
+    control = coupling.get("control")
+    if control is None:
+        return
+    if not isinstance(control, dict):
+        raise SceneError(f"{path}: coupling.control: must be a mapping with tolerance, H_min and H_max")
+    if control.get("estimate", DEFAULT_ESTIMATE) != DEFAULT_ESTIMATE:
+        raise SceneError(f"{path}: coupling.control.estimate: {control['estimate']!r} is not allowed for signal "
+                         f"connections; allowed: {DEFAULT_ESTIMATE} (the power residual needs joints)")  # fmt: skip
+    if "tolerance" not in control:
+        raise SceneError(f"{path}: coupling.control.tolerance: required (it scales the {DEFAULT_ESTIMATE} estimate)")
+    check_control(path, coupling)
+
+
+def held_history(history):
+    """The starting history of a signal scene's controlled run at a spacing ``H``, as a function of ``H``: the
+    connections' values at ``t_start`` (``history``'s first row) at every node.  The
+    first step's estimate is then of first order in ``H`` whatever ``k`` (the extrapolation of a constant): the
+    controller starts with a small step and grows it by ``fac_max`` per step."""
+    rows = np.asarray(history, dtype=float)
+    return lambda H: np.tile(rows[0], (len(rows), 1))
+
+
 def start_history(problem, start):
     """The controlled run's starting history at a spacing ``H``, as a function of ``H``: the rows
     ``e_0 - m H e'_0`` (``m = 0 .. k``) from the start's coupling variables and their rate
@@ -231,6 +263,20 @@ def scene_steps(scene, problem, start, bound, accepted):
             observe=accepted,
         )
         return traj, problem.t0 + c["H"] * np.arange(len(traj.states)), None
+    given = {k: v for k, v in scene.data["coupling"].items() if k in get_spec(c["method"]).arguments}
+    dimensional = get_spec(c["method"]).make(**given)
+    return controlled_steps(scene, problem, start.state, start.history, bound, accepted,
+                            restart=start_history(problem, start), method=scene.method,
+                            method_at=lambda H: engine_method(dimensional, H), iterations=c["iterations"])  # fmt: skip
+
+
+def controlled_steps(scene, problem, state, history, bound, accepted, *, restart, method=None, method_at=None,
+                     iterations=1, corrector_tol=None):  # fmt: skip
+    """The scene's controlled macro steps from ``state`` and ``history`` at its start (:func:`scene_steps`; a
+    scene of joints or of signal connections): ``restart(H)`` the starting history at spacing ``H``, ``method``
+    the coupling rule (None: connections only) or ``method_at(H)`` one per step size, ``iterations`` and
+    ``corrector_tol`` the macro step's corrector."""
+    c = scene.coupling
     ctl = controller(scene.path, c)
     name, settings = control_settings(scene.path, c["control"])
     estimate, tol = None, settings.get("tolerance", math.nan)
@@ -241,10 +287,7 @@ def scene_steps(scene, problem, start, bound, accepted):
         def estimate(H, history, e_p, y):
             return power_residual_estimate(power_residuals(bonds, y), H, atol, rtol)
 
-    given = {k: v for k, v in scene.data["coupling"].items() if k in get_spec(c["method"]).arguments}
-    dimensional = get_spec(c["method"]).make(**given)
-    restart = start_history(problem, start)
-    states, coupling, outputs = [start.state], [start.history[0]], [None]
+    states, coupling, outputs = [state], [history[0]], [None]
 
     def observe(n, state, history, y):
         worst = float(np.max(np.abs(state)))
@@ -260,8 +303,8 @@ def scene_steps(scene, problem, start, bound, accepted):
 
     steps = adaptive_macro_steps(
         problem,
-        scene.method,
-        start.state,
+        method,
+        state,
         restart(float(c["H"])),
         t_end=float(scene.data["t_end"]) - problem.t0,
         H0=float(c["H"]),
@@ -269,11 +312,12 @@ def scene_steps(scene, problem, start, bound, accepted):
         tol=float(tol),
         estimate=estimate,
         restart=restart,
-        method_at=lambda H: engine_method(dimensional, H),
+        method_at=method_at,
         observe=observe,
         on_accept=on_accept,
         scheme=scene.scheme,
-        iterations=c["iterations"],
+        iterations=iterations,
+        corrector_tol=corrector_tol,
     )
     traj = Trajectory(states, coupling, outputs, steps=len(steps.H))
     if steps.status == "failed":  # a step that could not be computed even at H_min, or too many steps

@@ -34,7 +34,7 @@ import numpy as np
 
 from ...engine.graph import CouplingGraph, Joint
 from ...engine.problem import CosimulationProblem
-from ...errors import ParameterError
+from ...errors import ParameterError, StepFailure
 from .problem import FmuCosimulation
 from .signals import SignalCosimulation
 
@@ -125,6 +125,11 @@ class JointSignalCosimulation(SignalCosimulation):
             return super().correct(i, state, history, e)
         end, y = self.joints.correct(j, self._joint_state, history, e)
         return end, self._joined(j, y)
+
+    def checkpoint(self):
+        """Refused: the joint units' saved states live in :attr:`joints` (its own checkpoint), which the signal
+        problem's checkpoint does not take; such a scene runs at fixed steps."""
+        raise StepFailure("a scene of joints beside connections takes no checkpoint: it runs at fixed steps")
 
     def reevaluate(self, i, end, y, e_old, e_new):
         j = self._where[i]

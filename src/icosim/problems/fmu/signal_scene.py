@@ -21,7 +21,9 @@ default 1e-10); then every unit must save and restore its state (Model Exchange,
 ``canGetAndSetFMUstate``), checked before any unit opens.  An algebraic loop is solved at each communication point
 by Newton's method without a step (:mod:`icosim.problems.fmu.loops`; its ``loop_tolerance``, default 1e-10, and
 ``loop_iterations``, default 20), or refused naming the loop; coupled implicitly, at ``t0`` only (the corrector
-closes it at every ``T_N+1``).  Bad input is refused naming the key and what is allowed, before any unit is opened.
+closes it at every ``T_N+1``).  ``control`` sizes the macro steps as on a scene of joints (``H`` the first step's;
+:mod:`icosim.problems.fmu.controlled`, docs/signals.md).  Bad input is refused naming the key and what is allowed,
+before any unit is opened.
 """
 
 from __future__ import annotations
@@ -48,7 +50,7 @@ CONNECTION_KEYS = ("from", "to", "factor", "offset")
 #: Coupling keys and their defaults (``H`` required).
 SIGNAL_COUPLING_KEYS = {"k": 0, "scheme": "jacobi", "order": None, "H": None, "implicit": False, "inputs": "auto",
                         "substeps": 1, "iterations": None, "tol": None, "loop_tolerance": 1e-10,
-                        "loop_iterations": 20}  # fmt: skip
+                        "loop_iterations": 20, "control": None}  # fmt: skip
 #: Newton's iterations and tolerance of implicit coupling by default (docs/signals.md).
 IMPLICIT_DEFAULTS = {"iterations": 10, "tol": 1e-10}
 _INTERFACES = ("co-simulation", "model-exchange")
@@ -152,8 +154,11 @@ def signal_scene(path, data, system=None) -> SignalScene:
     if "t_end" not in data:
         _fail(path, "t_end", "required: the end time (s)")
     t_end = _number(path, "t_end", data["t_end"])
+    from .controlled import check_signal_control
+
+    check_signal_control(path, c)  # controlled: H is the first step's size
     steps = (t_end - t0) / c["H"]
-    if not steps >= 1 or abs(steps - round(steps)) > 1e-6 * max(1.0, steps):
+    if c["control"] is None and (not steps >= 1 or abs(steps - round(steps)) > 1e-6 * max(1.0, steps)):
         _fail(path, "t_end", f"t_end - t_start = {t_end - t0:g} s must be a whole number (>= 1) of macro steps "
               f"H = {c['H']:g} s")  # fmt: skip
     used = {u for s in specs for u in (s[0], s[2])} | {s[0] for s in sources}
@@ -242,6 +247,7 @@ class SignalRun:
     iterations: list = field(default_factory=list)  # implicit: Newton's iterations of each macro step
     jacobian_steps: int = 0  # implicit: the units' perturbed steps of the Jacobians
     loop: dict = field(default_factory=dict)  # the algebraic loop's solve (LoopSolver.info), empty without one
+    steps: object = None  # a controlled run's accepted steps (icosim.engine.control.driver.AdaptiveSteps)
 
 
 def _fmu_path(scene, sub) -> Path:
@@ -261,7 +267,7 @@ def open_signal_unit(scene: SignalScene, name, inputs, outputs, path=None):
     keys = {k: v for k, v in ((INPUTS, inputs), (OUTPUTS, outputs)) if v}
     start, path = dict(sub.get("start") or {}), path or _fmu_path(scene, sub)
     interface = sub.get("interface", "co-simulation")
-    if interface == "co-simulation" and not c["implicit"]:  # no saved state
+    if interface == "co-simulation" and not c["implicit"] and c["control"] is None:  # no saved state
         unit = ForwardUnit(name, path, keys, start, inputs=c["inputs"], substeps=c["substeps"], t0=scene.t0)
         return check_input_orders(scene.path, unit, c["k"])
     unit = open_fmu_unit(name, path, keys, start, interface=interface, tolerance=sub.get("tolerance"),
@@ -283,7 +289,7 @@ def signal_wiring(scene: SignalScene):
     for unit, var, source in scene.sources:
         inputs[names.index(unit)].append(var)
         fed[names.index(unit)].append(source)
-    if scene.coupling["implicit"]:  # before any unit opens
+    if scene.coupling["implicit"] or scene.coupling["control"] is not None:  # before any unit opens
         for name in names:
             _check_saves_state(scene, name, scene.subsystems[name], _fmu_path(scene, scene.subsystems[name]))
     return cons, inputs, outputs, fed
@@ -296,6 +302,7 @@ def run_signal_scene(scene: SignalScene, *, progress=None, history=None) -> Sign
     every point (a start from rest in the past)."""
     from ...engine.connection_conditions import NotConverged
     from ...engine.run import simulate
+    from .controlled import controlled_steps, held_history
     from .signals import SignalCosimulation
 
     names, c = list(scene.names), scene.coupling
@@ -327,8 +334,13 @@ def run_signal_scene(scene: SignalScene, *, progress=None, history=None) -> Sign
         run.times.append(scene.t0)
         _append(run, problem, history[0], recorded)
         newton = {"iterations": c["iterations"], "tol": c["tol"]} if c["implicit"] else {}
-        traj = simulate(problem, None, problem.initial_state(), history, scene.n_steps, scheme=scene.scheme,
-                        observe=observe, record=False, **newton)  # fmt: skip
+        if c["control"] is None:
+            traj = simulate(problem, None, problem.initial_state(), history, scene.n_steps, scheme=scene.scheme,
+                            observe=observe, record=False, **newton)  # fmt: skip
+        else:  # the joint scenes' controlled run (icosim.problems.fmu.controlled)
+            traj, _, run.steps = controlled_steps(scene, problem, problem.initial_state(), history, np.inf, observe,
+                                                  restart=held_history(history), iterations=c["iterations"] or 1,
+                                                  corrector_tol=c["tol"])  # fmt: skip
         run.iterations, run.jacobian_steps = problem.implicit_work.iterations, problem.implicit_work.perturbed_steps
         if traj.failed_at is not None and traj.error is not None:
             if isinstance(traj.error, NotConverged):  # where: the step and its time
@@ -347,7 +359,8 @@ def run_signal_scene(scene: SignalScene, *, progress=None, history=None) -> Sign
 
 
 def _check_saves_state(scene, name, sub, path):
-    """Implicit coupling steps each unit again from ``T_N``: a co-simulation unit must save and restore its state."""
+    """Implicit coupling steps each unit again from ``T_N``, a controlled run retries a rejected step from there: a
+    co-simulation unit must save and restore its state."""
     from .description import read_description
 
     interface = sub.get("interface", "co-simulation")
@@ -358,8 +371,10 @@ def _check_saves_state(scene, name, sub, path):
         return
     flag = "canGetAndSetFMUState" if md.fmiVersion.startswith("3.") else "canGetAndSetFMUstate"
     fix = "interface: model-exchange (the unit has it), or" if md.modelExchange is not None else ""
-    _fail(scene.path, f"subsystems.{name}", f"{path.name} declares {flag}=false, and coupling.implicit: true steps "
-          f"each unit again from T_N, restoring its state; use {fix} implicit: false")  # fmt: skip
+    why, off = (("coupling.implicit: true steps each unit again from T_N", "implicit: false") if scene.coupling["implicit"]
+                else ("coupling.control retries a rejected step from T_N", "fixed steps (no control)"))  # fmt: skip
+    _fail(scene.path, f"subsystems.{name}", f"{path.name} declares {flag}=false, and {why}, restoring its state; use "
+          f"{fix} {off}")  # fmt: skip
 
 
 def _history_rows(scene, problem, history) -> np.ndarray:
@@ -395,8 +410,11 @@ def signal_dataset(run: SignalRun, *, command: str = ""):
     variable, the scene and the units' counters as attributes."""
     from ...io.dataset import DatasetDict
     from ...io.netcdf import provenance_attrs
+    from .controlled import controlled_entries
 
     data = {key: (("time",), np.asarray(values, dtype=float)) for key, values in run.series.items()}
+    entries, controlled = controlled_entries(run)
+    data |= entries
     ds = DatasetDict(data, coords={"time": ("time", np.asarray(run.times), {"units": "s"})})
     attrs = provenance_attrs(run.scene.data, title=f"FMU scene {run.scene.path.name}", command=command)
     attrs["scene_json"] = attrs["config_json"]
@@ -412,7 +430,7 @@ def signal_dataset(run: SignalRun, *, command: str = ""):
             "iterations_max": int(its.max(initial=0)),
             "iterations_mean": float(its.mean()) if its.size else 0.0,
         }
-    attrs |= run.loop
+    attrs |= run.loop | controlled
     for name, info in run.units.items():
         for key, value in info.items():
             attrs[f"{name}_{key}"] = value

@@ -31,6 +31,7 @@ import numpy as np
 from ...engine.graph import Connection, CouplingGraph
 from ...engine.lagrange import monomial_coefficients
 from ...engine.problem import CosimulationProblem
+from .checkpoint import SignalCheckpoints
 from .description import check_kind
 from .loops import depends_directly, feedthrough_loop, loop_solver
 from .units import Unit
@@ -51,7 +52,7 @@ class ForwardUnit(Unit):
         check_kind(self.label, self.path, md, saves_state=False)
 
 
-class SignalCosimulation(CosimulationProblem):
+class SignalCosimulation(SignalCheckpoints, CosimulationProblem):
     """Units (:class:`~icosim.problems.fmu.units.Unit`, opened with their connected inputs under
     :data:`INPUTS` and outputs under :data:`OUTPUTS`) coupled by ``connections``.
 
@@ -90,6 +91,7 @@ class SignalCosimulation(CosimulationProblem):
         self._standing: set[int] = set()  # the units standing at T_N+1 in this macro step (:meth:`connect`)
         self.H, self.t0 = float(H), float(t0)
         self.step_index = 0
+        self._clock, self._steps, self._kept = (self.t0, 0), None, None  # SignalCheckpoints: T_N's origin, sizes
         self.C_pred = np.array(monomial_coefficients(self.pred_nodes), dtype=float)
         self.C_corr = np.array(monomial_coefficients(self.corr_nodes), dtype=float)
 
@@ -103,7 +105,7 @@ class SignalCosimulation(CosimulationProblem):
 
     @property
     def time(self) -> float:
-        return self.t0 + self.step_index * self.H
+        return self._clock[0] + (self.step_index - self._clock[1]) * self.H  # T_0 + N H while H is fixed
 
     def outputs(self, i: int) -> np.ndarray:
         """Unit ``i``'s connected outputs as it stands."""
@@ -172,10 +174,9 @@ class SignalCosimulation(CosimulationProblem):
                 n = max(len(coefficients), 2)
                 coefficients = np.hstack([np.pad(coefficients, ((0, n - len(coefficients)), (0, 0))),
                                           np.pad(chords, ((0, n - 2), (0, 0)))])  # fmt: skip
-            unit.step(INPUTS, coefficients, self.time, self.H, step_index=self.step_index + 1,
-                      final=not self.implicit_connections)  # fmt: skip
+            unit.step(INPUTS, coefficients, self.time, self.H, step_index=self.step_index + 1, final=self._final)
         else:  # a unit fed by no connection: nothing to hand it
-            unit._do_step(self.time, self.H, self.step_index + 1, not self.implicit_connections)
+            unit._do_step(self.time, self.H, self.step_index + 1, self._final)
             unit.t = self.time + self.H
         y = self.outputs(i)
         if not np.isfinite(y).all():
@@ -185,6 +186,11 @@ class SignalCosimulation(CosimulationProblem):
             raise UnitStepError(f"unit {unit.label} returned {self.output_names[i][bad]} = {y[bad]!r} in macro step "
                                 f"{self.step_index + 1} (t = {self.time:.12g} s){unit.said()}")  # fmt: skip
         return y, y
+
+    @property
+    def _final(self) -> bool:
+        """No state before the step's end will be restored: coupled explicitly and no checkpoint kept."""
+        return not self.implicit_connections and self._kept is None
 
     def _save(self, i):
         """The state at ``T_N`` of unit ``i`` (implicit), for the corrector's and the Jacobian's steps."""
