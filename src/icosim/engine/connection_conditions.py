@@ -26,7 +26,7 @@ them from ``e_p``).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
@@ -94,11 +94,21 @@ class SignalConditions:
         per column the unit it feeds stepped once more with the variable moved by ``p max(1, |e_c|)`` (forward
         differences, ``p`` the problem's :attr:`~icosim.engine.problem.CosimulationProblem.connection_perturbation`;
         the unit restores its state at ``T_N`` itself)."""
-        cons, graph = self.graph.connections, self.graph
-        e = np.asarray(e, dtype=float)
         n = len(self.connections)
         base = self._transformed(problem, ys)
         dT = np.zeros(base.shape[:-1] + (n, n))
+        for j, perturbed, delta, rows in self.perturbed_outputs(problem, state, history, e, ys, work):
+            if rows:
+                dT[..., rows, j] = (self._transformed(problem, perturbed)[..., rows] - base[..., rows]) / delta
+        return {LEVEL: np.eye(n) - dT}
+
+    def perturbed_outputs(self, problem: Any, state: Any, history: Any, e: Any, ys: Sequence[Any],
+                          work: ImplicitWork | None = None) -> Iterator[tuple[int, list[Any], float, list[int]]]:  # fmt: skip
+        """Per connection ``j``: the outputs ``ys`` with the unit it feeds stepped once more, its variable moved by
+        ``delta = p max(1, |e_c|)``, and the rows (connections) that unit's outputs feed -- the forward differences
+        of every Jacobian by the connections' variables."""
+        cons, graph = self.graph.connections, self.graph
+        e = np.asarray(e, dtype=float)
         for j, c in enumerate(self.connections):
             col, unit = graph.connection_column(c), cons[c].target
             delta = problem.connection_perturbation * max(1.0, float(np.max(np.abs(e[..., col]), initial=0.0)))
@@ -109,10 +119,7 @@ class SignalConditions:
                 work.perturbed_steps += 1
             perturbed = list(ys)
             perturbed[unit] = y_unit
-            rows = [d for d, c_d in enumerate(self.connections) if cons[c_d].source == unit]
-            if rows:
-                dT[..., rows, j] = (self._transformed(problem, perturbed)[..., rows] - base[..., rows]) / delta
-        return {LEVEL: np.eye(n) - dT}
+            yield j, perturbed, delta, [d for d, c_d in enumerate(self.connections) if cons[c_d].source == unit]
 
     def describe(self, problem: Any, bad: Sequence[int], change: Any) -> str:
         """The connections ``bad`` and their variables' change (``(..., n_c)``), for a message."""

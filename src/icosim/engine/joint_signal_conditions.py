@@ -102,17 +102,8 @@ class JointSignalConditions:
         signal_by_signal = np.zeros(base.shape[:-1] + (n_c, n_c))
         y0 = problem.stack([ys[i] for i in self.responders])
         r0 = problem.residuals(y0, np.zeros(n_j), self.joints)
-        for j, c in enumerate(self.connections):
-            col, unit = graph.connection_column(c), cons[c].target
-            delta = problem.connection_perturbation * max(1.0, float(np.max(np.abs(e[..., col]), initial=0.0)))
-            moved = np.array(e, copy=True)
-            moved[..., col] += delta
-            _, y_unit = problem.correct(unit, state, history, moved)
-            if work is not None:
-                work.perturbed_steps += 1
-            perturbed = list(ys)
-            perturbed[unit] = y_unit
-            rows = [d for d, c_d in enumerate(self.connections) if cons[c_d].source == unit]
+        for j, perturbed, delta, rows in self.signals.perturbed_outputs(problem, state, history, e, ys, work):
+            unit = cons[self.connections[j]].target
             if rows:
                 moved_T = self.signals._transformed(problem, perturbed)
                 signal_by_signal[..., rows, j] = -(moved_T[..., rows] - base[..., rows]) / delta
