@@ -126,8 +126,9 @@ def load(directory: Path) -> list[dict]:
 
 def attribute(records: list[dict]) -> dict:
     """Exclusive CPU seconds and job processes per part (``stability``, ``convergence``, ``pendulum``,
-    ``rest``, ``snakemake``, ``unrecorded``), and the root's total: ``{"parts": {part: {"cpu", "jobs"}}, "root_cpu",
-    "processes", "roots"}``."""
+    ``rest``, ``snakemake``, ``unrecorded``) and per rule (a job's rule, else its script's name; the processes
+    a job starts count for it), and the root's total: ``{"parts": {part: {"cpu", "jobs"}}, "rules": {rule:
+    {"cpu", "jobs"}}, "root_cpu", "processes", "roots"}``."""
     by_key = {(r["pid"], r["start"]): r for r in records}
     parent = {}
     for key, r in by_key.items():
@@ -151,15 +152,34 @@ def attribute(records: list[dict]) -> dict:
                 part_of[key] = "snakemake" if _is_snakemake(r["argv"]) else "rest"
         return part_of[key]
 
+    rule_of = {}
+
+    def rule(key):
+        if key not in rule_of:
+            r = by_key[key]
+            script = job_script(r["argv"])
+            if script is not None:
+                rule_of[key] = r["rule"] or script
+            else:
+                rule_of[key] = rule(parent[key]) if parent[key] is not None else None
+        return rule_of[key]
+
     parts = {name: dict(cpu=0.0, jobs=0) for name in (*PARTS, "rest", "snakemake", "unrecorded")}
+    rules: dict[str, dict] = {}
     for key, r in by_key.items():
         name = part(key)
+        is_job = job_script(r["argv"]) is not None
         if name == "snakemake":  # its children's unrecorded CPU is no CPU of Snakemake's own
             parts[name]["cpu"] += r["self"]
             parts["unrecorded"]["cpu"] += r["children"] - recorded_below[key]
         else:
-            parts[name]["cpu"] += r["self"] + r["children"] - recorded_below[key]
-        parts[name]["jobs"] += job_script(r["argv"]) is not None
+            cpu = r["self"] + r["children"] - recorded_below[key]
+            parts[name]["cpu"] += cpu
+            if rule(key) is not None:
+                entry = rules.setdefault(rule(key), dict(cpu=0.0, jobs=0))
+                entry["cpu"] += cpu
+                entry["jobs"] += is_job
+        parts[name]["jobs"] += is_job
     roots = [key for key, up in parent.items() if up is None]
     root_cpu = sum(by_key[k]["self"] + by_key[k]["children"] for k in roots)
-    return dict(parts=parts, root_cpu=root_cpu, processes=len(by_key), roots=len(roots))
+    return dict(parts=parts, rules=rules, root_cpu=root_cpu, processes=len(by_key), roots=len(roots))

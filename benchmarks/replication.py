@@ -180,7 +180,7 @@ def run_tree(commit, label, ci, cores, targets=(), keep=None) -> dict:
         processes=got["processes"],
         load=run.load[0],
     )
-    return dict(label=label, method="one run", parts=parts, total=total)
+    return dict(label=label, method="one run", parts=parts, rules=got["rules"], total=total)
 
 
 def _mean(a: dict, b: dict, label: str) -> dict:
@@ -190,7 +190,13 @@ def _mean(a: dict, b: dict, label: str) -> dict:
         return {k: (x[k] + y[k]) / 2 for k in x if k in y and isinstance(x[k], (int, float))}
 
     parts = {part: mean(a["parts"][part], b["parts"][part]) for part in a["parts"]}
-    return dict(label=label, method=a["method"], parts=parts, total=mean(a["total"], b["total"]))
+    mean_run = dict(label=label, method=a["method"], parts=parts, total=mean(a["total"], b["total"]))
+    if "rules" in a and "rules" in b:
+        empty = dict(cpu=0.0, jobs=0)
+        mean_run["rules"] = {
+            r: mean(a["rules"].get(r, empty), b["rules"].get(r, empty)) for r in a["rules"] | b["rules"]
+        }
+    return mean_run
 
 
 def print_by_part(rows, new, old, old_name):
@@ -248,6 +254,23 @@ def print_one_run(rows, new, old, old_name):
         print(f"  {part:<13} CPU  {n['cpu'] / o:.2f}" if o else f"  {part:<13} CPU  {n['cpu']:.1f} s against none")
 
 
+def print_rules(new, old, old_name):
+    """CPU seconds and jobs per rule in the two trees (the older tree's the mean of its runs), largest first;
+    the rules are each tree's own (they were renamed and split between the trees)."""
+    print(f"CPU per rule: this tree | {old_name} (mean of its two runs)")
+    left = sorted(new.get("rules", {}).items(), key=lambda item: -item[1]["cpu"])
+    right = sorted(old.get("rules", {}).items(), key=lambda item: -item[1]["cpu"])
+    for i in range(max(len(left), len(right))):
+        cells = []
+        for side in (left, right):
+            if i < len(side):
+                name, r = side[i]
+                cells.append(f"{name:<44}{r['cpu']:>8.1f}{r['jobs']:>6.0f}")
+            else:
+                cells.append(" " * 58)
+        print(" | ".join(cells).rstrip())
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(
         description=__doc__.splitlines()[0]
@@ -293,6 +316,7 @@ def main(argv=None):
     else:
         print(f"{scope}, {config} configuration, one `snakemake -c{args.cores}` per tree from a clean results/")
         print_one_run(rows, new, old, args.old)
+        print_rules(new, old, args.old)
     print("(the replication speed target: wall and CPU <= 0.30 on the same machine)")
     if args.json:
         with open(args.json, "w") as fh:
