@@ -57,12 +57,16 @@ def tree(commit: str | None, whole: bool = False):
     """A clean copy of the workflow: the working tree (``commit=None``) or ``git worktree`` of a commit.
     With ``whole``, the working tree's copy holds every file (tests, tools, docs), as a worktree does."""
     tmp = Path(tempfile.mkdtemp(prefix="icosim-bench-"))
+    path = tmp / "tree"
+    # the configurations name the other tools' units beside the clone (../shared): the copy sees the same
+    if (ROOT.parent / "shared").exists():
+        (tmp / "shared").symlink_to((ROOT.parent / "shared").resolve())
     try:
         if commit is None:
-            _copy_working_tree(tmp, whole)
-            yield tmp
+            path.mkdir()
+            _copy_working_tree(path, whole)
+            yield path
         else:
-            path = tmp / "tree"
             subprocess.run(
                 ["git", "-C", str(ROOT), "worktree", "add", "--detach", str(path), commit],
                 check=True,
