@@ -47,8 +47,9 @@ run (with ``--by-part``: part after part).  The newer tree's extra studies (Gaus
 studies, ...) are then not in the comparison.
 
 ``--json FILE`` writes one entry per run (and the older tree's mean): ``label``, ``method`` (``one run``
-or ``by part``), ``parts`` (per part ``cpu``, ``kernel``; one run: ``jobs``; by part: ``wall``, ``load``)
-and ``total`` (``wall``, ``cpu``, ``kernel``; one run: ``attributed``, ``processes``, ``load``).
+or ``by part``), ``parts`` (per part ``cpu``, ``kernel``; one run: ``jobs``; by part: ``wall``, ``load``),
+``rules`` (one run: per rule ``cpu`` and ``jobs``, a job's processes counted for its rule) and ``total``
+(``wall``, ``cpu``, ``kernel``; one run: ``attributed``, ``processes``, ``load``).
 """
 
 from __future__ import annotations
