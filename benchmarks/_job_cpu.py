@@ -138,31 +138,28 @@ def attribute(records: list[dict]) -> dict:
         if up is not None:
             recorded_below[up] += by_key[key]["self"] + by_key[key]["children"]
 
-    part_of = {}
+    owner_of = {}
+
+    def owner(key):
+        """The process a record counts for: its nearest job at or above it, else its root."""
+        if key not in owner_of:
+            if job_script(by_key[key]["argv"]) is not None or parent[key] is None:
+                owner_of[key] = key
+            else:
+                owner_of[key] = owner(parent[key])
+        return owner_of[key]
 
     def part(key):
-        if key not in part_of:
-            r = by_key[key]
-            script = job_script(r["argv"])
-            if script is not None:
-                part_of[key] = job_part(script, r["rule"])
-            elif parent[key] is not None:
-                part_of[key] = part(parent[key])
-            else:
-                part_of[key] = "snakemake" if _is_snakemake(r["argv"]) else "rest"
-        return part_of[key]
-
-    rule_of = {}
+        r = by_key[owner(key)]
+        script = job_script(r["argv"])
+        if script is not None:
+            return job_part(script, r["rule"])
+        return "snakemake" if _is_snakemake(r["argv"]) else "rest"
 
     def rule(key):
-        if key not in rule_of:
-            r = by_key[key]
-            script = job_script(r["argv"])
-            if script is not None:
-                rule_of[key] = r["rule"] or script
-            else:
-                rule_of[key] = rule(parent[key]) if parent[key] is not None else None
-        return rule_of[key]
+        r = by_key[owner(key)]
+        script = job_script(r["argv"])
+        return (r["rule"] or script) if script is not None else None
 
     parts = {name: dict(cpu=0.0, jobs=0) for name in (*PARTS, "rest", "snakemake", "unrecorded")}
     rules: dict[str, dict] = {}
