@@ -32,7 +32,7 @@ rule chains_dataset:
         "logs/chains/{part}.log",
     wildcard_constraints:
         part="|".join(CHAINS_PARTS),
-    priority: 15  # the stability part is the longest job of the workflow: started late, it runs alone at the end
+    priority: 15  # the stability part is the longest job of the workflow: started late, it would run alone at the end
     conda:
         "../envs/icosim.yaml"
     params:
