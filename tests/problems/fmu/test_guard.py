@@ -129,10 +129,11 @@ def test_the_200th_unit_of_a_scene_is_timed_and_named(capsys, tmp_path):
     assert status == 2 and "unit u200 crashed the process in fmi2DoStep (SIGSEGV, macro step 3, t = 0.002 s)" in err
     assert not out.exists()
     path = chain_scene(tmp_path, 200, faulty(7))
-    data = yaml.safe_load(path.read_text()) | {"limits": {"call_seconds": 1.0}}
+    # the limit is met by every call that returns, on a loaded machine too (200 units are instantiated in turn)
+    data = yaml.safe_load(path.read_text()) | {"limits": {"call_seconds": 3.0}}
     path.write_text(yaml.safe_dump(data))
     status, err, out = cosim(capsys, tmp_path, path)
-    assert status == 2 and "unit u200 did not return from fmi2DoStep within 1 s (macro step 3, t = 0.002 s)" in err
+    assert status == 2 and "unit u200 did not return from fmi2DoStep within 3 s (macro step 3, t = 0.002 s)" in err
     assert not out.exists() and not list(tmp_path.glob(".run.nc*"))
     status, err, out = cosim(capsys, tmp_path, chain_scene(tmp_path, 200, {}))
     assert status == 0, err
