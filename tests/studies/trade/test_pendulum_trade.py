@@ -409,6 +409,28 @@ def test_linear_prediction_is_the_policys_verdict(monkeypatch):
     assert [info["verdict"] for H, ok, info in lim.evaluations if H == lim.H_unstable] == ["undecided"]
 
 
+def test_measured_predicate_runs_without_a_reference(monkeypatch):
+    """The limit search's runs solve no reference: their records are those of a run with one, the errors NaN."""
+    from icosim.problems.pendulum.config import run_settings
+    from icosim.studies.trade import measures
+    from icosim.studies.trade.stability_limit import measured_predicate
+
+    settings = run_settings(CFG, ["projection"])
+    with_errors = measures.measured_run(
+        settings, "jacobi", "projection", "ff", 1, 5e-3, 0.01, reference=dict(CFG["trade"]["reference"])
+    )
+
+    def no_reference(*args, **kwargs):
+        raise AssertionError("the limit search solved a reference")
+
+    monkeypatch.setattr(measures, "reference_solution", no_reference)
+    ok, rec = measured_predicate(settings, "jacobi", "projection", "ff", 1, 0.01)(5e-3)
+    assert ok and math.isnan(rec["error_max"]) and math.isnan(rec["error_rms"])
+    assert math.isfinite(with_errors["error_max"])
+    untimed = set(rec) - {"error_max", "error_rms", "cpu_seconds"}
+    assert {key: rec[key] for key in untimed} == {key: with_errors[key] for key in untimed}
+
+
 def test_fixed_at_error_is_exact_for_a_power_law():
     """error = C H^p, N = T/H: log-log interpolation between grid points is exact."""
     T, C, p = 1.0, 3.0, 2.0
