@@ -25,9 +25,11 @@ def save_figure(fig, *paths, dpi: int = 110):
     labels beside their tick labels; both are in figure or axes coordinates, so they are kept for the
     other files instead of computed again.  ``fig`` has no layout engine afterwards
     (:func:`_drop_layout_engine`) and its axis labels stay where the first file put them
-    (:func:`_keep_axis_labels`).  The files show what matplotlib draws (``tests/figures/test_figures.py``); a
-    PNG's pixels are compressed with :data:`PNG_ZLIB`.
+    (:func:`_keep_axis_labels`).  Its log axes make ticks only within their view (:func:`_ticks_in_view`).
+    The files show what matplotlib draws (``tests/figures/test_figures.py``); a PNG's pixels are compressed
+    with :data:`PNG_ZLIB`.
     """
+    _ticks_in_view(fig)
     fig.set_dpi(dpi)  # the first file is drawn at the figure's own resolution: positions read from it hold
     for i, path in enumerate(paths):
         fmt = Path(path).suffix.lstrip(".").lower()
@@ -38,6 +40,22 @@ def save_figure(fig, *paths, dpi: int = 110):
         if i == 0:
             _drop_layout_engine(fig)
             _keep_axis_labels(fig)
+
+
+def _ticks_in_view(fig):
+    """Give every log axis of ``fig`` :class:`.ticks.InViewLocator` s (once: shared axes share their locators)."""
+    from matplotlib.ticker import LogLocator
+
+    from .ticks import InViewLocator
+
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            for get, put in (
+                (axis.get_major_locator, axis.set_major_locator),
+                (axis.get_minor_locator, axis.set_minor_locator),
+            ):
+                if isinstance(get(), LogLocator):
+                    put(InViewLocator(get()))
 
 
 def _lay_out(fig):
