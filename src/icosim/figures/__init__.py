@@ -36,6 +36,7 @@ def save_figure(fig, *paths, dpi: int = 110):
         with atomic_path(path) as tmp:
             if i == 0 and fmt == "png":
                 _lay_out(fig)
+                _keep_axis_labels(fig, without_text=True)
             fig.savefig(tmp, format=fmt, dpi=dpi, metadata=_metadata(fmt), **_encoding(fmt))
         if i == 0:
             _drop_layout_engine(fig)
@@ -87,16 +88,20 @@ def _drop_layout_engine(fig):
         fig.set_layout_engine(None)
 
 
-def _keep_axis_labels(fig):
+def _keep_axis_labels(fig, without_text=False):
     """Keep every axis label where the last draw put it (:meth:`matplotlib.axis.Axis.set_label_coords`).
 
     Matplotlib places the labels on each draw from the bounding boxes of the tick labels (every tick
     label of the axis measured again); once drawn, their place in axes coordinates does not change
-    with the resolution, so the next file uses it as it is.
+    with the resolution, so the next file uses it as it is.  With ``without_text``, before the first
+    draw (once laid out), only the labels without text, as the inner panels of a grid have: they draw
+    nothing wherever they are, so their axes' tick labels need not be measured for them.
     """
     for ax in fig.axes:
         for axis in (ax.xaxis, ax.yaxis):
             label = axis.label
+            if without_text and label.get_text():
+                continue
             x, y = ax.transAxes.inverted().transform(label.get_transform().transform(label.get_position()))
             axis.set_label_coords(x, y)
 
