@@ -25,7 +25,7 @@ def save_figure(fig, *paths, dpi: int = 110):
     labels beside their tick labels; both are in figure or axes coordinates, so they are kept for the
     other files instead of computed again.  ``fig`` has no layout engine afterwards
     (:func:`_drop_layout_engine`) and its axis labels stay where the first file put them
-    (:func:`_keep_axis_labels`).  Its log axes make ticks only within their view (:func:`_ticks_in_view`).
+    (:func:`_keep_axis_labels`; those without text from before the first draw).  Its log axes make ticks only within their view (:func:`_ticks_in_view`).
     The files show what matplotlib draws (``tests/figures/test_figures.py``); a PNG's pixels are compressed
     with :data:`PNG_ZLIB`.
     """
