@@ -91,3 +91,20 @@ def test_labels_keep_their_place_at_another_resolution(tmp_path):
             if text.get_text():
                 a, b = text.get_window_extent(), same.get_window_extent()
                 assert abs(a.x0 - b.x0) < 0.5 and abs(a.y0 - b.y0) < 0.5, (text.get_text(), a, b)
+
+
+def test_a_log_axis_makes_only_the_ticks_in_its_view(tmp_path):
+    """Saved, a log axis from 2e-6 to 3e-3 makes one tick per decade 1e-5 ... 1e-3 and one minor tick at each
+    m * 10^e (m = 2 ... 9) inside the view (counted here from the definition), and draws those matplotlib draws."""
+    fig = Figure(figsize=(4, 3))
+    ax = fig.subplots()
+    ax.plot([2e-6, 3e-3], [1, 2])
+    ax.set_xscale("log")
+    ax.set_xlim(2e-6, 3e-3)
+    plain = io.BytesIO()
+    fig.savefig(plain, format="png", dpi=90)
+    save_figure(fig, tmp_path / "a.png", dpi=90)
+    minor = [m * 10.0**e for e in range(-6, -2) for m in range(2, 10) if 2e-6 <= m * 10.0**e <= 3e-3]
+    np.testing.assert_allclose(ax.xaxis.get_majorticklocs(), [1e-5, 1e-4, 1e-3])
+    np.testing.assert_allclose(ax.xaxis.get_minorticklocs(), minor)
+    assert np.array_equal(_pixels((tmp_path / "a.png").read_bytes()), _pixels(plain.getvalue()))

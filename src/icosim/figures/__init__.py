@@ -25,19 +25,38 @@ def save_figure(fig, *paths, dpi: int = 110):
     labels beside their tick labels; both are in figure or axes coordinates, so they are kept for the
     other files instead of computed again.  ``fig`` has no layout engine afterwards
     (:func:`_drop_layout_engine`) and its axis labels stay where the first file put them
-    (:func:`_keep_axis_labels`).  The files show what matplotlib draws (``tests/figures/test_figures.py``); a
-    PNG's pixels are compressed with :data:`PNG_ZLIB`.
+    (:func:`_keep_axis_labels`; those without text from before the first draw).  Its log axes make ticks only within their view (:func:`_ticks_in_view`).
+    The files show what matplotlib draws (``tests/figures/test_figures.py``); a PNG's pixels are compressed
+    with :data:`PNG_ZLIB`.
     """
+    _ticks_in_view(fig)
     fig.set_dpi(dpi)  # the first file is drawn at the figure's own resolution: positions read from it hold
     for i, path in enumerate(paths):
         fmt = Path(path).suffix.lstrip(".").lower()
         with atomic_path(path) as tmp:
             if i == 0 and fmt == "png":
                 _lay_out(fig)
+                _keep_axis_labels(fig, without_text=True)
             fig.savefig(tmp, format=fmt, dpi=dpi, metadata=_metadata(fmt), **_encoding(fmt))
         if i == 0:
             _drop_layout_engine(fig)
             _keep_axis_labels(fig)
+
+
+def _ticks_in_view(fig):
+    """Give every log axis of ``fig`` :class:`.ticks.InViewLocator` s (once: shared axes share their locators)."""
+    from matplotlib.ticker import LogLocator
+
+    from .ticks import InViewLocator
+
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            for get, put in (
+                (axis.get_major_locator, axis.set_major_locator),
+                (axis.get_minor_locator, axis.set_minor_locator),
+            ):
+                if isinstance(get(), LogLocator):
+                    put(InViewLocator(get()))
 
 
 def _lay_out(fig):
@@ -69,16 +88,20 @@ def _drop_layout_engine(fig):
         fig.set_layout_engine(None)
 
 
-def _keep_axis_labels(fig):
+def _keep_axis_labels(fig, without_text=False):
     """Keep every axis label where the last draw put it (:meth:`matplotlib.axis.Axis.set_label_coords`).
 
     Matplotlib places the labels on each draw from the bounding boxes of the tick labels (every tick
     label of the axis measured again); once drawn, their place in axes coordinates does not change
-    with the resolution, so the next file uses it as it is.
+    with the resolution, so the next file uses it as it is.  With ``without_text``, before the first
+    draw (once laid out), only the labels without text, as the inner panels of a grid have: they draw
+    nothing wherever they are, so their axes' tick labels need not be measured for them.
     """
     for ax in fig.axes:
         for axis in (ax.xaxis, ax.yaxis):
             label = axis.label
+            if without_text and label.get_text():
+                continue
             x, y = ax.transAxes.inverted().transform(label.get_transform().transform(label.get_position()))
             axis.set_label_coords(x, y)
 
