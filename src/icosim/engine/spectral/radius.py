@@ -37,6 +37,7 @@ one point with every derived quantity formed at ``digits`` significant digits.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any, Literal, overload
 
@@ -152,21 +153,120 @@ def _each_alone(f: Callable[[np.ndarray], Sequence[Any]], M: np.ndarray, batch: 
     return tuple(outs)
 
 
-def _disturbed_spread(
-    problem: Any, method: CouplingMethod | None, scheme: Scheme, rho: np.ndarray, rng: Any, rel: float
-) -> np.ndarray:
-    """``|rho_d - rho|`` of one disturbed run (exponential blocks and amplification matrix; inf where the
-    disturbed matrix is not finite)."""
-    be = problem.backend
-    Md = matrix_of(problem.disturbed(rng, rel), method, scheme)
+def _matrices(problems: Sequence[Any], method: CouplingMethod | None, scheme: Scheme) -> list[np.ndarray]:
+    """The matrices of a problem and its disturbed copies: in one batched macro step where the problem lays them
+    side by side (``side_by_side``: a new leading axis, the same values per point as each alone), else one by one."""
+    beside = getattr(problems[0], "side_by_side", None)
+    if beside is None or len(problems) == 1:
+        return [matrix_of(p, method, scheme) for p in problems]
+    return list(matrix_of(beside(problems[1:]), method, scheme))
+
+
+def _spread(Md: np.ndarray, z: np.ndarray, rho: np.ndarray, rel: float) -> np.ndarray:
+    """``|rho_d - rho|`` of one disturbed run: the matrix ``Md`` of the disturbed exponential blocks, itself
+    disturbed by the standard normal draws ``z`` at ``rel`` of its largest entry (inf where it is not finite)."""
     ok = np.all(np.isfinite(Md), axis=(-1, -2))
     Md = np.where(ok[..., None, None], Md, 0.0)
     norm = np.max(np.abs(Md), axis=(-1, -2), keepdims=True)
-    Md = Md + rel * norm * rng.standard_normal(Md.shape)
+    Md = Md + rel * norm * z
     ok &= np.all(np.isfinite(Md), axis=(-1, -2))  # entries near the float64 limit overflow with the noise
     Md = np.where(ok[..., None, None], Md, 0.0)
-    rho_d = np.where(ok, _spectral_radius_of(Md, be), np.nan)
+    rho_d = np.where(ok, _spectral_radius_of(Md, Float64()), np.nan)
     return np.where(ok, np.abs(rho_d - rho), np.inf)
+
+
+class Float64Radius:
+    """The float64 spectral radius and its error estimate (module docstring) at the points of ``family``, as
+    :func:`spectral_radius_float64` gives them: the plain and the first disturbed matrices of every point formed
+    in one batched macro step, the eigenvalues when asked for, of the points asked for (``pointwise`` only: each
+    point's numbers are those it gets alone, so the points left out change nothing).
+
+    ``second_ahead`` (``pointwise`` only): the second disturbed run's matrices are formed in that same macro step
+    for every point, not afterwards for the points that need it -- cheaper where most do (points near
+    ``rho = 1``); the draws are those of a second run formed afterwards.
+    """
+
+    def __init__(
+        self,
+        family: LinearFamily,
+        method: CouplingMethod | None,
+        *,
+        seed: int = 0,
+        scheme: str | Scheme = JACOBI,
+        doubt: float = DOUBT,
+        pointwise: bool = False,
+        second_ahead: bool = False,
+    ):
+        if second_ahead and not pointwise:
+            raise ValueError("a second run formed ahead draws as pointwise runs do")
+        self.family, self.method, self.scheme = family, method, get_scheme(scheme)
+        self.doubt, self.pointwise = doubt, pointwise
+        family.check(method, self.scheme)
+        self.rel = DISTURBANCE * Float64.eps
+        with np.errstate(all="ignore"):
+            problem = family.problem(Float64())
+            rng = np.random.default_rng(seed)
+            noise = _PointNoise(rng, family.shape) if pointwise else rng
+            n = problem.n_state
+            disturbed = problem.disturbed(noise, self.rel)
+            runs = [problem, disturbed]
+            # the draws in the order the estimate takes them: a run's blocks, then its matrix
+            self.z = [noise.standard_normal(family.shape + (n, n))]
+            self._after_first = copy.deepcopy(rng)  # where a second run formed afterwards starts drawing
+            if second_ahead:
+                runs.append(problem.disturbed(noise, self.rel))
+                self.z.append(noise.standard_normal(family.shape + (n, n)))
+            self.M, *self.Md = _matrices(runs, method, self.scheme)
+            self.nu = problem.generator_norm()
+
+    def __call__(self, mask: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """``(rho, err)`` at every point (of the family's shape), or (``pointwise``) at the points where the
+        boolean array ``mask`` holds (flat, in C order)."""
+        shape = self.family.shape
+        if mask is None:
+            pick = lambda a: a  # noqa: E731
+        elif not self.pointwise:
+            raise ValueError("points apart need pointwise draws")
+        else:
+            pick = lambda a: np.broadcast_to(a, shape + np.shape(a)[len(shape) :])[mask] if np.ndim(a) else a  # noqa: E731
+        with np.errstate(all="ignore"):
+            return self._estimate(mask, pick)
+
+    def _estimate(self, mask, pick):
+        M = pick(self.M)
+        finite = np.all(np.isfinite(M), axis=(-1, -2))
+        M_safe = np.where(finite[..., None, None], M, 0.0)
+        points = finite.shape
+        rho, kappa = (
+            _each_alone(_radius_and_condition, M_safe, points) if self.pointwise else _radius_and_condition(M_safe)
+        )
+        rho = np.where(finite, rho, np.nan)
+        spread = _spread(pick(self.Md[0]), pick(self.z[0]), rho, self.rel)
+        # the second disturbed run only where the first one's estimate, ``doubt`` times over, reaches |rho - 1|:
+        # elsewhere no second spread seen on the project's grids came near deciding (docs/engine.md)
+        frobenius = lambda M: (np.linalg.norm(M, axis=(-2, -1)),)  # noqa: E731
+        (norm,) = _each_alone(frobenius, M_safe, points) if self.pointwise else frobenius(M_safe)
+        amplified = kappa * pick(self.nu) * norm  # kappa nu ||M||_F
+        floor = FLOOR * Float64.eps * np.maximum(amplified, 1.0)
+        twice = np.isfinite(rho) & np.isfinite(spread) & ~(self.doubt * (SAFETY * spread + floor) < np.abs(rho - 1))
+        if twice.any():
+            if len(self.Md) > 1:
+                Md, z = pick(self.Md[1])[twice], pick(self.z[1])[twice]
+            else:
+                where = twice
+                if mask is not None:
+                    where = np.zeros(self.family.shape, dtype=bool)
+                    where[mask] = twice
+                subset = self.family.subset(where)
+                rng = copy.deepcopy(self._after_first)
+                noise = _PointNoise(rng, subset.shape) if self.pointwise else rng
+                (Md,) = _matrices([subset.problem(Float64()).disturbed(noise, self.rel)], self.method, self.scheme)
+                z = noise.standard_normal(Md.shape)
+            again = _spread(Md, z, rho[twice], self.rel)
+            spread[twice] = np.fmax(spread[twice], again)
+            spread[twice] = np.where(np.isfinite(again), spread[twice], np.inf)
+        err = SAFETY * spread + floor
+        return rho, np.where(np.isfinite(rho), err, np.inf)
 
 
 @overload
@@ -214,40 +314,16 @@ def spectral_radius_float64(
     -- else the draws are independent over the grid and follow its shape).  Non-finite values are
     returned as they are (never raised), so one bad point cannot spoil a grid.
     """
+    if error_estimate:
+        return Float64Radius(family, method, seed=seed, scheme=scheme, doubt=doubt, pointwise=pointwise)()
     be = Float64()
     scheme = get_scheme(scheme)
     family.check(method, scheme)
     with np.errstate(all="ignore"):
-        problem = family.problem(be)
-        M = matrix_of(problem, method, scheme)
+        M = matrix_of(family.problem(be), method, scheme)
         finite = np.all(np.isfinite(M), axis=(-1, -2))
         M_safe = np.where(finite[..., None, None], M, 0.0)
-        if not error_estimate:
-            return np.where(finite, _spectral_radius_of(M_safe, be), np.nan), None
-        rho, kappa = (
-            _each_alone(_radius_and_condition, M_safe, family.shape) if pointwise else _radius_and_condition(M_safe)
-        )
-        rho = np.where(finite, rho, np.nan)
-        rng = np.random.default_rng(seed)
-        noise = _PointNoise(rng, family.shape) if pointwise else rng
-        rel = DISTURBANCE * be.eps
-        spread = _disturbed_spread(problem, method, scheme, rho, noise, rel)
-        # the second disturbed run only where the first one's estimate, ``doubt`` times over, reaches |rho - 1|:
-        # elsewhere no second spread seen on the project's grids came near deciding (docs/engine.md)
-        frobenius = lambda M: (np.linalg.norm(M, axis=(-2, -1)),)  # noqa: E731
-        (norm,) = _each_alone(frobenius, M_safe, family.shape) if pointwise else frobenius(M_safe)
-        amplified = kappa * problem.generator_norm() * norm  # kappa nu ||M||_F
-        floor = FLOOR * be.eps * np.maximum(amplified, 1.0)
-        twice = np.isfinite(rho) & np.isfinite(spread) & ~(doubt * (SAFETY * spread + floor) < np.abs(rho - 1))
-        if twice.any():
-            subset = family.subset(twice)
-            rerun = _PointNoise(rng, subset.shape) if pointwise else rng
-            again = _disturbed_spread(subset.problem(be), method, scheme, rho[twice], rerun, rel)
-            spread[twice] = np.fmax(spread[twice], again)
-            spread[twice] = np.where(np.isfinite(again), spread[twice], np.inf)
-        err = SAFETY * spread + floor
-        err = np.where(np.isfinite(rho), err, np.inf)
-    return rho, err
+        return np.where(finite, _spectral_radius_of(M_safe, be), np.nan), None
 
 
 def spectral_radius_mp(

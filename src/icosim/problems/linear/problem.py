@@ -151,6 +151,23 @@ class LinearCosimulation(CosimulationProblem):
         p._jacobians = {}  # its own Jacobians, with their own factors
         return p
 
+    def side_by_side(self, copies):
+        """This problem and ``copies`` of it (:meth:`disturbed`: only their exponential blocks differ) as one, on a
+        new leading axis (this one first), for one macro step to form all their matrices; every point's values
+        are those it gets alone (a block the same at every point is repeated over the points)."""
+        problems = (self, *copies)
+        lead = np.broadcast_shapes(*(sub.blocks.shape[:-2] for p in problems for sub in p.subsystems))
+        p = copy.copy(self)
+        subs = []
+        for i, sub in enumerate(self.subsystems):
+            s = copy.copy(sub)
+            blocks = [q.subsystems[i].blocks for q in problems]
+            s.set_blocks(np.stack([np.broadcast_to(E, lead + E.shape[-2:]) for E in blocks]))
+            subs.append(s)
+        p.subsystems = tuple(subs)
+        p._jacobians = {}
+        return p
+
     def generator_norm(self):
         """``nu = max(1, ||A||_1)`` over the subsystems, ``A`` the matrix whose exponential a subsystem's blocks
         are (per point; :meth:`~icosim.problems.linear.subsystems.LinearSubsystem.norm_bound`)."""
