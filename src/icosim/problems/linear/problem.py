@@ -156,7 +156,14 @@ class LinearCosimulation(CosimulationProblem):
         new leading axis (this one first), for one macro step to form all their matrices; every point's values
         are those it gets alone (a block the same at every point is repeated over the points)."""
         problems = (self, *copies)
-        lead = np.broadcast_shapes(*(sub.blocks.shape[:-2] for p in problems for sub in p.subsystems))
+        # the points' axes and the basis vectors' (a family's problem's last batch axis, of length one)
+        params = [
+            a for sub in self.subsystems for a in sub.gain + [c for row in sub.stiffness + sub.damping for c in row]
+        ]
+        lead = np.broadcast_shapes(
+            (1,), *(np.shape(a) for a in params if a is not None),
+            *(sub.blocks.shape[:-2] for p in problems for sub in p.subsystems),
+        )  # fmt: skip
         p = copy.copy(self)
         subs = []
         for i, sub in enumerate(self.subsystems):
