@@ -38,6 +38,7 @@ one point with every derived quantity formed at ``digits`` significant digits.
 from __future__ import annotations
 
 import copy
+import math
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any, Literal, overload
 
@@ -153,11 +154,18 @@ def _each_alone(f: Callable[[np.ndarray], Sequence[Any]], M: np.ndarray, batch: 
     return tuple(outs)
 
 
-def _matrices(problems: Sequence[Any], method: CouplingMethod | None, scheme: Scheme) -> list[np.ndarray]:
-    """The matrices of a problem and its disturbed copies: in one batched macro step where the problem lays them
-    side by side (``side_by_side``: a new leading axis, the same values per point as each alone), else one by one."""
+#: Points times rows up to which a problem and its disturbed copy are formed side by side: a macro step that
+#: small costs its calls, not its arithmetic; a larger one costs the arithmetic, which a batch twice as large
+#: does not make cheaper.
+SIDE_BY_SIDE = 4096
+
+
+def _matrices(problems: Sequence[Any], method: CouplingMethod | None, scheme: Scheme, points: int) -> list[np.ndarray]:
+    """The matrices of a problem over ``points`` points and its disturbed copies: in one batched macro step where
+    the problem lays them side by side (``side_by_side``: a new leading axis, the same values per point as each
+    alone) and the batch is small (:data:`SIDE_BY_SIDE`), else one by one."""
     beside = getattr(problems[0], "side_by_side", None)
-    if beside is None or len(problems) == 1:
+    if beside is None or len(problems) == 1 or points * problems[0].n_state > SIDE_BY_SIDE:
         return [matrix_of(p, method, scheme) for p in problems]
     return list(matrix_of(beside(problems[1:]), method, scheme))
 
@@ -178,12 +186,9 @@ def _spread(Md: np.ndarray, z: np.ndarray, rho: np.ndarray, rel: float) -> np.nd
 class Float64Radius:
     """The float64 spectral radius and its error estimate (module docstring) at the points of ``family``, as
     :func:`spectral_radius_float64` gives them: the plain and the first disturbed matrices of every point formed
-    in one batched macro step, the eigenvalues when asked for, of the points asked for (``pointwise`` only: each
-    point's numbers are those it gets alone, so the points left out change nothing).
-
-    ``second_ahead`` (``pointwise`` only): the second disturbed run's matrices are formed in that same macro step
-    for every point, not afterwards for the points that need it -- cheaper where most do (points near
-    ``rho = 1``); the draws are those of a second run formed afterwards.
+    at once (side by side in one batched macro step where that is cheaper: :func:`_matrices`), the eigenvalues
+    when asked for, of the points asked for (``pointwise`` only: each point's numbers are those it gets alone, so
+    the points left out change nothing).
     """
 
     def __init__(
@@ -195,10 +200,7 @@ class Float64Radius:
         scheme: str | Scheme = JACOBI,
         doubt: float = DOUBT,
         pointwise: bool = False,
-        second_ahead: bool = False,
     ):
-        if second_ahead and not pointwise:
-            raise ValueError("a second run formed ahead draws as pointwise runs do")
         self.family, self.method, self.scheme = family, method, get_scheme(scheme)
         self.doubt, self.pointwise = doubt, pointwise
         family.check(method, self.scheme)
@@ -209,14 +211,10 @@ class Float64Radius:
             noise = _PointNoise(rng, family.shape) if pointwise else rng
             n = problem.n_state
             disturbed = problem.disturbed(noise, self.rel)
-            runs = [problem, disturbed]
             # the draws in the order the estimate takes them: a run's blocks, then its matrix
-            self.z = [noise.standard_normal(family.shape + (n, n))]
-            self._after_first = copy.deepcopy(rng)  # where a second run formed afterwards starts drawing
-            if second_ahead:
-                runs.append(problem.disturbed(noise, self.rel))
-                self.z.append(noise.standard_normal(family.shape + (n, n)))
-            self.M, *self.Md = _matrices(runs, method, self.scheme)
+            self.z = noise.standard_normal(family.shape + (n, n))
+            self._after_first = copy.deepcopy(rng)  # where the second run starts drawing
+            self.M, self.Md = _matrices([problem, disturbed], method, self.scheme, math.prod(family.shape))
             self.nu = problem.generator_norm()
 
     def __call__(self, mask: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -241,7 +239,7 @@ class Float64Radius:
             _each_alone(_radius_and_condition, M_safe, points) if self.pointwise else _radius_and_condition(M_safe)
         )
         rho = np.where(finite, rho, np.nan)
-        spread = _spread(pick(self.Md[0]), pick(self.z[0]), rho, self.rel)
+        spread = _spread(pick(self.Md), pick(self.z), rho, self.rel)
         # the second disturbed run only where the first one's estimate, ``doubt`` times over, reaches |rho - 1|:
         # elsewhere no second spread seen on the project's grids came near deciding (docs/engine.md)
         frobenius = lambda M: (np.linalg.norm(M, axis=(-2, -1)),)  # noqa: E731
@@ -250,18 +248,15 @@ class Float64Radius:
         floor = FLOOR * Float64.eps * np.maximum(amplified, 1.0)
         twice = np.isfinite(rho) & np.isfinite(spread) & ~(self.doubt * (SAFETY * spread + floor) < np.abs(rho - 1))
         if twice.any():
-            if len(self.Md) > 1:
-                Md, z = pick(self.Md[1])[twice], pick(self.z[1])[twice]
-            else:
-                where = twice
-                if mask is not None:
-                    where = np.zeros(self.family.shape, dtype=bool)
-                    where[mask] = twice
-                subset = self.family.subset(where)
-                rng = copy.deepcopy(self._after_first)
-                noise = _PointNoise(rng, subset.shape) if self.pointwise else rng
-                (Md,) = _matrices([subset.problem(Float64()).disturbed(noise, self.rel)], self.method, self.scheme)
-                z = noise.standard_normal(Md.shape)
+            where = twice
+            if mask is not None:
+                where = np.zeros(self.family.shape, dtype=bool)
+                where[mask] = twice
+            subset = self.family.subset(where)
+            rng = copy.deepcopy(self._after_first)
+            noise = _PointNoise(rng, subset.shape) if self.pointwise else rng
+            Md = matrix_of(subset.problem(Float64()).disturbed(noise, self.rel), self.method, self.scheme)
+            z = noise.standard_normal(Md.shape)
             again = _spread(Md, z, rho[twice], self.rel)
             spread[twice] = np.fmax(spread[twice], again)
             spread[twice] = np.where(np.isfinite(again), spread[twice], np.inf)

@@ -63,9 +63,9 @@ def largest_stable_H(chain, method, k: int, scheme: str, scan, resolution: float
     def batch(Hs):
         todo = [H for H in Hs if H not in known]
         radius = None
-        if todo:  # near rho = 1 most points take the second disturbed run: formed with the first
+        if todo:  # the matrices now, a point's eigenvalues when the bisection checks it
             family = ChainFamily(chain.with_H(np.array(todo)), k)
-            radius = Float64Radius(family, method, scheme=scheme, pointwise=True, second_ahead=True)
+            radius = Float64Radius(family, method, scheme=scheme, pointwise=True)
         return _Verdicts(Hs, known, todo, radius)
 
     return stability_limit(None, scan, resolution=resolution, batch=batch, ahead=ahead), rho, err
