@@ -52,7 +52,16 @@ if TYPE_CHECKING:
     from ..methods.base import CouplingMethod
     from .family import LinearFamily
 
-__all__ = ["spectral_radius_float64", "spectral_radius_mp", "SAFETY", "DISTURBANCE", "DOUBT", "FLOOR"]
+__all__ = [
+    "spectral_radius_float64",
+    "Float64Radius",
+    "spectral_radius_mp",
+    "SAFETY",
+    "DISTURBANCE",
+    "DOUBT",
+    "FLOOR",
+    "SIDE_BY_SIDE",
+]
 
 
 #: Safety factor on the measured spread of disturbed float64 results.
@@ -185,10 +194,10 @@ def _spread(Md: np.ndarray, z: np.ndarray, rho: np.ndarray, rel: float) -> np.nd
 
 class Float64Radius:
     """The float64 spectral radius and its error estimate (module docstring) at the points of ``family``, as
-    :func:`spectral_radius_float64` gives them: the plain and the first disturbed matrices of every point formed
-    at once (side by side in one batched macro step where that is cheaper: :func:`_matrices`), the eigenvalues
-    when asked for, of the points asked for (``pointwise`` only: each point's numbers are those it gets alone, so
-    the points left out change nothing).
+    :func:`spectral_radius_float64` gives them.  The plain and the first disturbed matrices of every point are
+    formed when it is made (side by side in one batched macro step where that is cheaper: :func:`_matrices`), the
+    eigenvalues when it is called, of the points asked for -- with ``pointwise`` draws a point's numbers are those
+    it gets alone, so the points left out change nothing.
     """
 
     def __init__(
@@ -209,12 +218,10 @@ class Float64Radius:
             problem = family.problem(Float64())
             rng = np.random.default_rng(seed)
             noise = _PointNoise(rng, family.shape) if pointwise else rng
-            n = problem.n_state
-            disturbed = problem.disturbed(noise, self.rel)
-            # the draws in the order the estimate takes them: a run's blocks, then its matrix
-            self.z = noise.standard_normal(family.shape + (n, n))
-            self._after_first = copy.deepcopy(rng)  # where the second run starts drawing
+            disturbed = problem.disturbed(noise, self.rel)  # the run's draws: its blocks, then its matrix
             self.M, self.Md = _matrices([problem, disturbed], method, self.scheme, math.prod(family.shape))
+            self.z = noise.standard_normal(self.Md.shape)
+            self._after_first = copy.deepcopy(rng)  # where the second run starts drawing
             self.nu = problem.generator_norm()
 
     def __call__(self, mask: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
