@@ -56,7 +56,8 @@ def solve_small(J: np.ndarray, b: np.ndarray) -> np.ndarray:
 
     Sizes 1 and 2 use closed forms, so a singular point yields inf/nan for that
     point only instead of aborting a whole grid (the precision policy then
-    catches it).  Larger systems use LU (numpy) or mpmath's ``lu_solve``.
+    catches it).  Larger systems use LU (numpy; a float64 matrix that serves many right-hand sides, factored
+    once: :func:`_factored_once`) or mpmath's ``lu_solve``.
     """
     n = J.shape[-1]
     if n > 2 and J.dtype == np.float64 and b.dtype == np.float64 and _serves_many(J, b):
