@@ -228,12 +228,14 @@ class Float64Radius:
         """``(rho, err)`` at every point (of the family's shape), or (``pointwise``) at the points where the
         boolean array ``mask`` holds (flat, in C order)."""
         shape = self.family.shape
-        if mask is None:
-            pick = lambda a: a  # noqa: E731
-        elif not self.pointwise:
+        if mask is not None and not self.pointwise:
             raise ValueError("points apart need pointwise draws")
-        else:
-            pick = lambda a: np.broadcast_to(a, shape + np.shape(a)[len(shape) :])[mask] if np.ndim(a) else a  # noqa: E731
+
+        def pick(a):  # the asked-for points of an array over the family (a number: the same at every point)
+            if mask is None or not np.ndim(a):
+                return a
+            return np.broadcast_to(a, shape + np.shape(a)[len(shape) :])[mask]
+
         with np.errstate(all="ignore"):
             return self._estimate(mask, pick)
 
