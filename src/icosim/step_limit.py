@@ -21,6 +21,7 @@ point).  If no scan point is unstable, ``H_max`` is censored at the largest scan
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 __all__ = ["Limit", "stability_limit", "halvings", "LIMIT_STATUSES"]
@@ -62,11 +63,13 @@ def halvings(lo: float, hi: float, depth: int, resolution: float) -> list[float]
 def stability_limit(stable, scan, *, resolution: float = 0.02, batch=None, ahead: int = 2) -> Limit:
     """Upper edge of the first stable band of ``stable(H)`` at or above ``scan[0]`` (module docstring).
 
-    ``stable(H)`` returns a bool or ``(bool, info)``.  ``batch(Hs)``, if given, returns those outcomes for a
-    list of step sizes at once (``stable`` is then not called): the scan in one call, and the bisection the step
-    sizes of its next ``ahead`` halvings in one call (:func:`halvings`), checking only those on its path, so the
-    step sizes checked and the result are those of ``stable`` one at a time -- if an outcome does not depend on
-    the other step sizes of its batch.
+    ``stable(H)`` returns a bool or ``(bool, info)``.  ``batch(Hs)``, if given, returns those outcomes (an
+    iterable, or a sequence) for a list of step sizes at once (``stable`` is then not called): the scan in one
+    call, and the bisection the step sizes of its next ``ahead`` halvings in one call (:func:`halvings`), checking
+    only those on its path, so the step sizes checked and the result are those of ``stable`` one at a time -- if
+    an outcome does not depend on the other step sizes of its batch.  Of a sequence only the outcomes of the step
+    sizes checked are read (by index), so one that computes an outcome when it is read spends nothing on the
+    others.
 
     >>> one = stability_limit(lambda H: H <= 0.0123, [1e-3, 1e-2, 1e-1], resolution=0.02)
     >>> many = stability_limit(None, [1e-3, 1e-2, 1e-1], resolution=0.02, batch=lambda Hs: [H <= 0.0123 for H in Hs])
@@ -82,9 +85,12 @@ def stability_limit(stable, scan, *, resolution: float = 0.02, batch=None, ahead
     def check(H, ahead_of=None):
         if H not in known:
             todo = [H] if batch is None else [h for h in (ahead_of or [H]) if h not in known]
-            outs = [stable(H)] if batch is None else list(batch(todo))
-            known.update(zip(todo, outs))
-        out = known[H]
+            outs = [stable(H)] if batch is None else batch(todo)
+            if not isinstance(outs, Sequence):  # an iterable of outcomes: read whole
+                outs = list(outs)
+            known.update((h, (outs, i)) for i, h in enumerate(todo))
+        outs, i = known[H]
+        out = outs[i]  # read only for the step sizes checked
         ok, info = out if isinstance(out, tuple) else (out, None)
         evals.append((H, bool(ok), info))
         return bool(ok)

@@ -4,6 +4,7 @@ closed forms for sizes 1 and 2, LU for larger ones, and a float64 matrix factore
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -55,9 +56,12 @@ def solve_small(J: np.ndarray, b: np.ndarray) -> np.ndarray:
 
     Sizes 1 and 2 use closed forms, so a singular point yields inf/nan for that
     point only instead of aborting a whole grid (the precision policy then
-    catches it).  Larger systems use LU (numpy) or mpmath's ``lu_solve``.
+    catches it).  Larger systems use LU (numpy; a float64 matrix that serves many right-hand sides, factored
+    once: :func:`_factored_once`) or mpmath's ``lu_solve``.
     """
     n = J.shape[-1]
+    if n > 2 and J.dtype == np.float64 and b.dtype == np.float64 and _serves_many(J, b):
+        return _factored_once(J, b)
     if J.shape[:-1] != b.shape:  # (a single point's shapes agree: no broadcast to pay for)
         J, b = np.broadcast_arrays(J, b[..., None])
         b = b[..., 0]
@@ -76,6 +80,40 @@ def solve_small(J: np.ndarray, b: np.ndarray) -> np.ndarray:
     out = np.empty(b.shape, dtype=object)
     for idx in np.ndindex(b.shape[:-1]):
         out[idx] = _gauss(J[idx].tolist(), b[idx].tolist())
+    return out
+
+
+#: Right-hand sides per matrix from which :func:`solve_small` factors each matrix once.
+MANY = 16
+
+
+def _serves_many(J: np.ndarray, b: np.ndarray) -> bool:
+    """Whether each matrix of ``J`` serves at least :data:`MANY` right-hand sides of ``b`` (the basis vectors an
+    amplification matrix is formed from: one coupling matrix per point)."""
+    lead = np.broadcast_shapes(J.shape[:-2], b.shape[:-1])
+    return math.prod(lead) >= MANY * math.prod(J.shape[:-2])
+
+
+def _factored_once(J: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``J x = b`` with each matrix of ``J`` LU-factored once (LAPACK ``getrf``) and every right-hand side it
+    serves solved alone (``getrs``): the two halves of ``gesv``, which :func:`numpy.linalg.solve` calls for each
+    right-hand side and its own copy of the matrix, so the same numbers.  A singular matrix raises as there."""
+    from scipy.linalg.lapack import dgetrf, dgetrs  # here: most jobs solve no system larger than 2
+
+    n = J.shape[-1]
+    lead = np.broadcast_shapes(J.shape[:-2], b.shape[:-1])
+    J = J.reshape((1,) * (len(lead) - J.ndim + 2) + J.shape)
+    b = np.broadcast_to(b, lead + (n,))
+    out = np.empty(lead + (n,))
+    for jdx in np.ndindex(*J.shape[:-2]):
+        lu, piv, info = dgetrf(J[jdx])
+        if info > 0:
+            raise np.linalg.LinAlgError("Singular matrix")
+        # the right-hand sides this matrix serves: every index along the axes it is broadcast over
+        served = tuple(slice(None) if m == 1 else i for i, m in zip(jdx, J.shape[:-2]))
+        rhs, x = b[served], out[served]
+        for idx in np.ndindex(*rhs.shape[:-1]):
+            x[idx] = dgetrs(lu, piv, rhs[idx])[0]
     return out
 
 

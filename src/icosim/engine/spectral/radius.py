@@ -37,6 +37,8 @@ one point with every derived quantity formed at ``digits`` significant digits.
 
 from __future__ import annotations
 
+import copy
+import math
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any, Literal, overload
 
@@ -50,7 +52,16 @@ if TYPE_CHECKING:
     from ..methods.base import CouplingMethod
     from .family import LinearFamily
 
-__all__ = ["spectral_radius_float64", "spectral_radius_mp", "SAFETY", "DISTURBANCE", "DOUBT", "FLOOR"]
+__all__ = [
+    "spectral_radius_float64",
+    "Float64Radius",
+    "spectral_radius_mp",
+    "SAFETY",
+    "DISTURBANCE",
+    "DOUBT",
+    "FLOOR",
+    "SIDE_BY_SIDE",
+]
 
 
 #: Safety factor on the measured spread of disturbed float64 results.
@@ -152,21 +163,114 @@ def _each_alone(f: Callable[[np.ndarray], Sequence[Any]], M: np.ndarray, batch: 
     return tuple(outs)
 
 
-def _disturbed_spread(
-    problem: Any, method: CouplingMethod | None, scheme: Scheme, rho: np.ndarray, rng: Any, rel: float
-) -> np.ndarray:
-    """``|rho_d - rho|`` of one disturbed run (exponential blocks and amplification matrix; inf where the
-    disturbed matrix is not finite)."""
-    be = problem.backend
-    Md = matrix_of(problem.disturbed(rng, rel), method, scheme)
+#: Points times rows up to which a problem and its disturbed copy are formed side by side: a macro step that
+#: small costs its calls, not its arithmetic; a larger one costs the arithmetic, which a batch twice as large
+#: does not make cheaper.
+SIDE_BY_SIDE = 4096
+
+
+def _matrices(problems: Sequence[Any], method: CouplingMethod | None, scheme: Scheme, points: int) -> list[np.ndarray]:
+    """The matrices of a problem over ``points`` points and its disturbed copies: in one batched macro step where
+    the problem lays them side by side (``side_by_side``: a new leading axis, the same values per point as each
+    alone) and the batch is small (:data:`SIDE_BY_SIDE`), else one by one."""
+    beside = getattr(problems[0], "side_by_side", None)
+    if beside is None or len(problems) == 1 or points * problems[0].n_state > SIDE_BY_SIDE:
+        return [matrix_of(p, method, scheme) for p in problems]
+    return list(matrix_of(beside(problems[1:]), method, scheme))
+
+
+def _spread(Md: np.ndarray, z: np.ndarray, rho: np.ndarray, rel: float) -> np.ndarray:
+    """``|rho_d - rho|`` of one disturbed run: the matrix ``Md`` of the disturbed exponential blocks, itself
+    disturbed by the standard normal draws ``z`` at ``rel`` of its largest entry (inf where it is not finite)."""
     ok = np.all(np.isfinite(Md), axis=(-1, -2))
     Md = np.where(ok[..., None, None], Md, 0.0)
     norm = np.max(np.abs(Md), axis=(-1, -2), keepdims=True)
-    Md = Md + rel * norm * rng.standard_normal(Md.shape)
+    Md = Md + rel * norm * z
     ok &= np.all(np.isfinite(Md), axis=(-1, -2))  # entries near the float64 limit overflow with the noise
     Md = np.where(ok[..., None, None], Md, 0.0)
-    rho_d = np.where(ok, _spectral_radius_of(Md, be), np.nan)
+    rho_d = np.where(ok, _spectral_radius_of(Md, Float64()), np.nan)
     return np.where(ok, np.abs(rho_d - rho), np.inf)
+
+
+class Float64Radius:
+    """The float64 spectral radius and its error estimate (module docstring) at the points of ``family``, as
+    :func:`spectral_radius_float64` gives them.  The plain and the first disturbed matrices of every point are
+    formed when it is made (side by side in one batched macro step where that is cheaper: :func:`_matrices`), the
+    eigenvalues when it is called, of the points asked for -- with ``pointwise`` draws a point's numbers are those
+    it gets alone, so the points left out change nothing.
+    """
+
+    def __init__(
+        self,
+        family: LinearFamily,
+        method: CouplingMethod | None,
+        *,
+        seed: int = 0,
+        scheme: str | Scheme = JACOBI,
+        doubt: float = DOUBT,
+        pointwise: bool = False,
+    ):
+        self.family, self.method, self.scheme = family, method, get_scheme(scheme)
+        self.doubt, self.pointwise = doubt, pointwise
+        family.check(method, self.scheme)
+        self.rel = DISTURBANCE * Float64.eps
+        with np.errstate(all="ignore"):
+            problem = family.problem(Float64())
+            rng = np.random.default_rng(seed)
+            noise = _PointNoise(rng, family.shape) if pointwise else rng
+            disturbed = problem.disturbed(noise, self.rel)  # the run's draws: its blocks, then its matrix
+            self.M, self.Md = _matrices([problem, disturbed], method, self.scheme, math.prod(family.shape))
+            self.z = noise.standard_normal(self.Md.shape)
+            self._after_first = copy.deepcopy(rng)  # where the second run starts drawing
+            self.nu = problem.generator_norm()
+
+    def __call__(self, mask: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """``(rho, err)`` at every point (of the family's shape), or (``pointwise``) at the points where the
+        boolean array ``mask`` holds (flat, in C order)."""
+        shape = self.family.shape
+        if mask is not None and not self.pointwise:
+            raise ValueError("points apart need pointwise draws")
+
+        def pick(a):  # the asked-for points of an array over the family (a number: the same at every point)
+            if mask is None or not np.ndim(a):
+                return a
+            return np.broadcast_to(a, shape + np.shape(a)[len(shape) :])[mask]
+
+        with np.errstate(all="ignore"):
+            return self._estimate(mask, pick)
+
+    def _estimate(self, mask, pick):
+        M = pick(self.M)
+        finite = np.all(np.isfinite(M), axis=(-1, -2))
+        M_safe = np.where(finite[..., None, None], M, 0.0)
+        points = finite.shape
+        rho, kappa = (
+            _each_alone(_radius_and_condition, M_safe, points) if self.pointwise else _radius_and_condition(M_safe)
+        )
+        rho = np.where(finite, rho, np.nan)
+        spread = _spread(pick(self.Md), pick(self.z), rho, self.rel)
+        # the second disturbed run only where the first one's estimate, ``doubt`` times over, reaches |rho - 1|:
+        # elsewhere no second spread seen on the project's grids came near deciding (docs/engine.md)
+        frobenius = lambda M: (np.linalg.norm(M, axis=(-2, -1)),)  # noqa: E731
+        (norm,) = _each_alone(frobenius, M_safe, points) if self.pointwise else frobenius(M_safe)
+        amplified = kappa * pick(self.nu) * norm  # kappa nu ||M||_F
+        floor = FLOOR * Float64.eps * np.maximum(amplified, 1.0)
+        twice = np.isfinite(rho) & np.isfinite(spread) & ~(self.doubt * (SAFETY * spread + floor) < np.abs(rho - 1))
+        if twice.any():
+            where = twice
+            if mask is not None:
+                where = np.zeros(self.family.shape, dtype=bool)
+                where[mask] = twice
+            subset = self.family.subset(where)
+            rng = copy.deepcopy(self._after_first)
+            noise = _PointNoise(rng, subset.shape) if self.pointwise else rng
+            Md = matrix_of(subset.problem(Float64()).disturbed(noise, self.rel), self.method, self.scheme)
+            z = noise.standard_normal(Md.shape)
+            again = _spread(Md, z, rho[twice], self.rel)
+            spread[twice] = np.fmax(spread[twice], again)
+            spread[twice] = np.where(np.isfinite(again), spread[twice], np.inf)
+        err = SAFETY * spread + floor
+        return rho, np.where(np.isfinite(rho), err, np.inf)
 
 
 @overload
@@ -214,40 +318,16 @@ def spectral_radius_float64(
     -- else the draws are independent over the grid and follow its shape).  Non-finite values are
     returned as they are (never raised), so one bad point cannot spoil a grid.
     """
+    if error_estimate:
+        return Float64Radius(family, method, seed=seed, scheme=scheme, doubt=doubt, pointwise=pointwise)()
     be = Float64()
     scheme = get_scheme(scheme)
     family.check(method, scheme)
     with np.errstate(all="ignore"):
-        problem = family.problem(be)
-        M = matrix_of(problem, method, scheme)
+        M = matrix_of(family.problem(be), method, scheme)
         finite = np.all(np.isfinite(M), axis=(-1, -2))
         M_safe = np.where(finite[..., None, None], M, 0.0)
-        if not error_estimate:
-            return np.where(finite, _spectral_radius_of(M_safe, be), np.nan), None
-        rho, kappa = (
-            _each_alone(_radius_and_condition, M_safe, family.shape) if pointwise else _radius_and_condition(M_safe)
-        )
-        rho = np.where(finite, rho, np.nan)
-        rng = np.random.default_rng(seed)
-        noise = _PointNoise(rng, family.shape) if pointwise else rng
-        rel = DISTURBANCE * be.eps
-        spread = _disturbed_spread(problem, method, scheme, rho, noise, rel)
-        # the second disturbed run only where the first one's estimate, ``doubt`` times over, reaches |rho - 1|:
-        # elsewhere no second spread seen on the project's grids came near deciding (docs/engine.md)
-        frobenius = lambda M: (np.linalg.norm(M, axis=(-2, -1)),)  # noqa: E731
-        (norm,) = _each_alone(frobenius, M_safe, family.shape) if pointwise else frobenius(M_safe)
-        amplified = kappa * problem.generator_norm() * norm  # kappa nu ||M||_F
-        floor = FLOOR * be.eps * np.maximum(amplified, 1.0)
-        twice = np.isfinite(rho) & np.isfinite(spread) & ~(doubt * (SAFETY * spread + floor) < np.abs(rho - 1))
-        if twice.any():
-            subset = family.subset(twice)
-            rerun = _PointNoise(rng, subset.shape) if pointwise else rng
-            again = _disturbed_spread(subset.problem(be), method, scheme, rho[twice], rerun, rel)
-            spread[twice] = np.fmax(spread[twice], again)
-            spread[twice] = np.where(np.isfinite(again), spread[twice], np.inf)
-        err = SAFETY * spread + floor
-        err = np.where(np.isfinite(rho), err, np.inf)
-    return rho, err
+        return np.where(finite, _spectral_radius_of(M_safe, be), np.nan), None
 
 
 def spectral_radius_mp(

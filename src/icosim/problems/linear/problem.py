@@ -151,6 +151,30 @@ class LinearCosimulation(CosimulationProblem):
         p._jacobians = {}  # its own Jacobians, with their own factors
         return p
 
+    def side_by_side(self, copies):
+        """This problem and ``copies`` of it (:meth:`disturbed`: only their exponential blocks differ) as one, on a
+        new leading axis (this one first), for one macro step to form all their matrices; every point's values
+        are those it gets alone (a block the same at every point is repeated over the points)."""
+        problems = (self, *copies)
+        # the points' axes and the basis vectors' (a family's problem's last batch axis, of length one)
+        params = [
+            a for sub in self.subsystems for a in sub.gain + [c for row in sub.stiffness + sub.damping for c in row]
+        ]
+        lead = np.broadcast_shapes(
+            (1,), *(np.shape(a) for a in params if a is not None),
+            *(sub.blocks.shape[:-2] for p in problems for sub in p.subsystems),
+        )  # fmt: skip
+        p = copy.copy(self)
+        subs = []
+        for i, sub in enumerate(self.subsystems):
+            s = copy.copy(sub)
+            blocks = [q.subsystems[i].blocks for q in problems]
+            s.set_blocks(np.stack([np.broadcast_to(E, lead + E.shape[-2:]) for E in blocks]))
+            subs.append(s)
+        p.subsystems = tuple(subs)
+        p._jacobians = {}
+        return p
+
     def generator_norm(self):
         """``nu = max(1, ||A||_1)`` over the subsystems, ``A`` the matrix whose exponential a subsystem's blocks
         are (per point; :meth:`~icosim.problems.linear.subsystems.LinearSubsystem.norm_bound`)."""

@@ -6,9 +6,9 @@ error estimate over a geometric scan of ``H`` (one batched call per configuratio
 the estimate's disturbances are the same for every point of a batch, so no verdict depends on the other step
 sizes computed with it.  A step size is **stable** where ``rho + error < 1``: a point float64 cannot decide
 counts as not stable.  The largest stable ``H`` is the upper edge of the first stable band at or above the
-scan's first point, bisected to the configured resolution (:func:`icosim.step_limit.stability_limit`, the step
-sizes of the next two halvings in one batched call), so ``rho < 1`` holds at ``H_max`` and not at
-``H_unstable``, its neighbour above.
+scan's first point, bisected to the configured resolution (:func:`icosim.step_limit.stability_limit`: the
+matrices of the next two halvings' step sizes in one batched macro step, the eigenvalues only of those it checks),
+so ``rho < 1`` holds at ``H_max`` and not at ``H_unstable``, its neighbour above.
 
 For two units of single masses the chain is the paper's two-mass model: the dataset holds that model's ``rho``
 computed from its own parameters (:class:`~icosim.problems.linear.model.PhysicalModel`), the comparison the
@@ -19,10 +19,11 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
-from ...engine.spectral.radius import spectral_radius_float64
+from ...engine.spectral.radius import Float64Radius, spectral_radius_float64
 from ...io.dataset import DatasetDict
 from ...io.netcdf import provenance_attrs
 from ...problems.linear.chain import ChainFamily
@@ -51,7 +52,8 @@ def rho_over_H(chain, method, k: int, scheme: str):
 
 def largest_stable_H(chain, method, k: int, scheme: str, scan, resolution: float, *, ahead: int = 2):
     """The :class:`~icosim.step_limit.Limit` of ``rho + error < 1`` over ``H``, and ``(rho, error)`` over the
-    scan.  The scan's points are computed in one batch, the bisection's ``ahead`` halvings at a time
+    scan.  The scan's points are computed in one batch; the bisection forms the matrices of its next ``ahead``
+    halvings' step sizes in one batched macro step and the eigenvalues only of those it checks
     (:func:`~icosim.step_limit.stability_limit`'s ``batch``; ``ahead=1``: one point at a time, the same
     result)."""
     scan = np.asarray(scan, dtype=float)
@@ -60,12 +62,32 @@ def largest_stable_H(chain, method, k: int, scheme: str, scan, resolution: float
 
     def batch(Hs):
         todo = [H for H in Hs if H not in known]
-        if todo:
-            r, e = rho_over_H(chain.with_H(np.array(todo)), method, k, scheme)
-            known.update({H: (float(ri), float(ei)) for H, ri, ei in zip(todo, r, e)})
-        return [(bool(known[H][0] + known[H][1] < 1), {"rho": known[H][0], "error": known[H][1]}) for H in Hs]
+        radius = None
+        if todo:  # the matrices now, a point's eigenvalues when the bisection checks it
+            family = ChainFamily(chain.with_H(np.array(todo)), k)
+            radius = Float64Radius(family, method, scheme=scheme, pointwise=True)
+        return _Verdicts(Hs, known, todo, radius)
 
     return stability_limit(None, scan, resolution=resolution, batch=batch, ahead=ahead), rho, err
+
+
+class _Verdicts(Sequence):
+    """``rho + error < 1`` at the step sizes ``Hs``, a point's ``(rho, error)`` computed when its verdict is read
+    (``radius`` over the step sizes ``todo``, the others ``known``)."""
+
+    def __init__(self, Hs, known, todo, radius):
+        self.Hs, self.known, self.todo, self.radius = list(Hs), known, list(todo), radius
+
+    def __len__(self):
+        return len(self.Hs)
+
+    def __getitem__(self, i):
+        H = self.Hs[i]
+        if H not in self.known:
+            r, e = self.radius(np.arange(len(self.todo)) == self.todo.index(H))
+            self.known[H] = (float(r[0]), float(e[0]))
+        rho, err = self.known[H]
+        return bool(rho + err < 1), {"rho": rho, "error": err}
 
 
 def two_mass_rho(kind: list, decomposition: str, method, k: int, scheme: str, H) -> np.ndarray:
