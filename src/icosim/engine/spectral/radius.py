@@ -231,7 +231,7 @@ class Float64Radius:
         if mask is not None and not self.pointwise:
             raise ValueError("points apart need pointwise draws")
 
-        def pick(a):  # the asked-for points of an array over the family (a number: the same at every point)
+        def pick(a: Any) -> Any:  # the asked-for points of an array over the family (a number: the same at every point)
             if mask is None or not np.ndim(a):
                 return a
             return np.broadcast_to(a, shape + np.shape(a)[len(shape) :])[mask]
@@ -239,7 +239,7 @@ class Float64Radius:
         with np.errstate(all="ignore"):
             return self._estimate(mask, pick)
 
-    def _estimate(self, mask, pick):
+    def _estimate(self, mask: np.ndarray | None, pick: Callable[[Any], Any]) -> tuple[np.ndarray, np.ndarray]:
         M = pick(self.M)
         finite = np.all(np.isfinite(M), axis=(-1, -2))
         M_safe = np.where(finite[..., None, None], M, 0.0)
