@@ -125,17 +125,19 @@ def test_gauss_seidel_coupled_implicitly_is_jacobi_to_rounding(tmp_path, k, sche
     assert [runs[1].units[name]["states_saved"] for name in ("system1", "system2")] == [n, n]
 
 
-def test_the_ssp_form_coupled_implicitly_follows_the_exact_solution_to_ten_seconds(tmp_path):
+def test_the_ssp_form_coupled_implicitly_follows_the_exact_solution_to_two_seconds(tmp_path):
     """OMSimulator's system of the DualMassOscillator as an SSP archive (its four connections), its units' Model
     Exchange interfaces chosen by the scene, coupled implicitly at H = 1e-3 with k = 2: the positions follow the exact
-    solution over OMSimulator's own 10 s within 1e-6 of the amplitude (the coupling's error of order 3 in H)."""
+    solution within 1e-6 of the amplitude (the coupling's error of order 3 in H; with k = 1 it exceeds that bound).
+    Two seconds hold the error's largest part: it peaks in the first half second and shrinks as the dampers take
+    the oscillation's energy."""
     scene = tmp_path / "scene.yaml"
     me = {"interface": "model-exchange"}
     scene.write_text(yaml.safe_dump({"system": str(dmo_ssp(tmp_path / "DualMassOscillator.ssp")),
                                      "subsystems": {"system1": me, "system2": me},
-                                     "coupling": {"H": 1e-3, "k": 2, "implicit": True}, "t_end": 10.0}))  # fmt: skip
+                                     "coupling": {"H": 1e-3, "k": 2, "implicit": True}, "t_end": 2.0}))  # fmt: skip
     run = run_signal_scene(load_scene(scene))
-    assert run.status == "completed" and run.times[-1] == pytest.approx(10.0)
+    assert run.status == "completed" and run.times[-1] == pytest.approx(2.0)
     error = np.max(np.abs(positions(run) - exact(np.asarray(run.times))[:, :2]))
     assert error <= 1e-6 * AMPLITUDE, error
 
