@@ -33,13 +33,15 @@ om_scene = partial(dmo_scene, unit_dir=UNITS)
 BAUMGARTE = {"index": 1, "mu": 1e-3}
 
 
-def test_dual_mass_oscillator_meets_the_exact_solution_at_10_s(tmp_path):
-    """Baumgarte index 1, k = 2, H = 1e-3 from the computed start, as a user runs it: x1 at t = 10 s within 1e-6
-    of the amplitude of the exact solution (OMSimulator's own tests are 7e-3 off it at H = 1e-4)."""
-    run = run_scene(om_scene(tmp_path, "baumgarte", 2, 1e-3, 10.0, BAUMGARTE))
-    assert run.status == "completed"
+def test_dual_mass_oscillator_follows_the_exact_solution(tmp_path):
+    """Baumgarte index 1, k = 2, H = 1e-3 from the computed start, as a user runs it: x1 at every step within 1e-6
+    of the amplitude of the exact solution (OMSimulator's own tests are 7e-3 off it at H = 1e-4; with k = 1 the
+    bound fails).  Two seconds hold the error's largest part: it peaks in the first second and shrinks as the
+    dampers take the oscillation's energy."""
+    run = run_scene(om_scene(tmp_path, "baumgarte", 2, 1e-3, 2.0, BAUMGARTE))
+    assert run.status == "completed" and run.times[-1] == pytest.approx(2.0)
     assert run.units["system2"]["interface"] == "model-exchange"
-    assert abs(run.states[-1, 0, 0] - exact([10.0])[0, 0]) < 1e-6 * AMPLITUDE
+    assert np.max(np.abs(run.states[:, 0, 0] - exact(run.times)[:, 0])) < 1e-6 * AMPLITUDE
 
 
 def test_the_c_unit_is_system2(tmp_path):
