@@ -16,23 +16,27 @@ __all__ = ["solve_small", "Factored", "KeptFactors"]
 
 class Factored:
     """A float64 coupling matrix ``J`` (one point or a stack) made ready for many right-hand sides: sizes 1 and 2
-    as :func:`solve_small` (closed forms), larger ones LU-factored once (LAPACK ``getrf``, then ``getrs`` per
-    solve: the two halves of ``gesv``, which :func:`numpy.linalg.solve` calls)."""
+    as :func:`solve_small` (closed forms), a larger single matrix LU-factored once (LAPACK ``getrf``, then
+    ``getrs`` per right-hand side: the two halves of ``gesv``, which :func:`numpy.linalg.solve` calls for each
+    right-hand side, so the same numbers).  A singular matrix raises as there."""
 
     def __init__(self, J: np.ndarray) -> None:
         self.J = J
         self.lu = None
         if J.shape[-1] > 2 and J.ndim == 2:
-            from scipy.linalg import lu_factor
+            from scipy.linalg.lapack import dgetrf  # here: most jobs solve no system larger than 2
 
-            self.lu = lu_factor(J, check_finite=False)
+            lu, piv, info = dgetrf(J)
+            if info > 0:
+                raise np.linalg.LinAlgError("Singular matrix")
+            self.lu = (lu, piv)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         if self.lu is None or b.ndim != 1:
             return solve_small(self.J, b)
-        from scipy.linalg import lu_solve
+        from scipy.linalg.lapack import dgetrs
 
-        return lu_solve(self.lu, b, check_finite=False)
+        return dgetrs(*self.lu, b)[0]
 
 
 class KeptFactors:
@@ -95,25 +99,20 @@ def _serves_many(J: np.ndarray, b: np.ndarray) -> bool:
 
 
 def _factored_once(J: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``J x = b`` with each matrix of ``J`` LU-factored once (LAPACK ``getrf``) and every right-hand side it
-    serves solved alone (``getrs``): the two halves of ``gesv``, which :func:`numpy.linalg.solve` calls for each
-    right-hand side and its own copy of the matrix, so the same numbers.  A singular matrix raises as there."""
-    from scipy.linalg.lapack import dgetrf, dgetrs  # here: most jobs solve no system larger than 2
-
+    """``J x = b`` with each matrix of ``J`` factored once (:class:`Factored`) and every right-hand side it serves
+    solved alone."""
     n = J.shape[-1]
     lead = np.broadcast_shapes(J.shape[:-2], b.shape[:-1])
     J = J.reshape((1,) * (len(lead) - J.ndim + 2) + J.shape)
     b = np.broadcast_to(b, lead + (n,))
     out = np.empty(lead + (n,))
     for jdx in np.ndindex(*J.shape[:-2]):
-        lu, piv, info = dgetrf(J[jdx])
-        if info > 0:
-            raise np.linalg.LinAlgError("Singular matrix")
+        factored = Factored(J[jdx])
         # the right-hand sides this matrix serves: every index along the axes it is broadcast over
         served = tuple(slice(None) if m == 1 else i for i, m in zip(jdx, J.shape[:-2]))
         rhs, x = b[served], out[served]
         for idx in np.ndindex(*rhs.shape[:-1]):
-            x[idx] = dgetrs(lu, piv, rhs[idx])[0]
+            x[idx] = factored.solve(rhs[idx])
     return out
 
 
